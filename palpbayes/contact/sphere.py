@@ -1,0 +1,71 @@
+"""Exact rigid sphere on an elastic half-space (Sneddon 1965).
+
+With contact radius a and sphere radius R (u = a/R < 1):
+
+    d = (a/2)·ln((R+a)/(R-a)) = a·artanh(u)
+    F = (E*/2)·[(R²+a²)·ln((R+a)/(R-a)) - 2·a·R] = E*·R²·[(1+u²)·artanh(u) - u]
+
+Reference: I. N. Sneddon, Int. J. Eng. Sci. 3 (1965) 47-57, eqs. 6.8-6.9.  For d/R -> 0 this
+tends to Hertz, F = (4/3)·E*·sqrt(R)·d^(3/2); at d/R = 0.3 it gives 3.0 % less force.
+There is no power-law form: least squares and the posterior use the shape function directly,
+which is still linear in E*.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["contact_radius", "shape"]
+
+_SERIES_LIMIT = 0.1  # below this u the force bracket is summed as a series (no cancellation)
+_SERIES_TERMS = np.arange(1, 10)
+_SERIES_COEF = 4.0 * _SERIES_TERMS / ((2 * _SERIES_TERMS + 1) * (2 * _SERIES_TERMS - 1))
+
+
+def _solve_t(d: np.ndarray) -> np.ndarray:
+    """t = artanh(a/R) solving t·tanh(t) = d/R (Newton, 6 steps from sqrt(d) or d)."""
+    t = np.where(d < 1.0, np.sqrt(d), d)
+    pos = d > 0
+    for _ in range(6):
+        th = np.tanh(t)
+        step = (t * th - d) / np.where(pos, th + t * (1.0 - th * th), 1.0)
+        t = np.where(pos, t - step, 0.0)
+    return t
+
+
+def contact_radius(depth: np.ndarray, radius: float) -> np.ndarray:
+    """Contact radius a [m] for indentation depth d [m] of a sphere of radius R [m].
+
+    Solves d/R = u·artanh(u) for u = a/R through t = artanh(u), t·tanh(t) = d/R, by Newton's
+    method started at sqrt(d/R) (small depths) or d/R (large); six steps reach machine
+    precision for 1e-14 <= d/R <= 10 (tested).  Non-positive depths give 0.
+    """
+    d = np.clip(np.asarray(depth, dtype=float), 0.0, None) / radius
+    return np.tanh(_solve_t(d)) * radius
+
+
+def _bracket(u: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """(1+u²)·t - u with t = artanh(u); a series 4k/((2k+1)(2k-1))·u^(2k+1) for small u."""
+    u = np.asarray(u, dtype=float)
+    out = np.asarray((1.0 + u * u) * t - u, dtype=float).copy()
+    small = u < _SERIES_LIMIT
+    if np.any(small):
+        us = u[small][..., None]
+        out[small] = np.sum(_SERIES_COEF * us ** (2 * _SERIES_TERMS + 1), axis=-1)
+    return out
+
+
+def shape(depth: np.ndarray, radius: float) -> np.ndarray:
+    """F/E* for the exact sphere [m²]; 0 for non-positive depth.
+
+    Parameters
+    ----------
+    depth
+        [m] Indentation depth.
+    radius
+        [m] Sphere radius R.
+    """
+    d = np.clip(np.asarray(depth, dtype=float), 0.0, None) / radius
+    t = _solve_t(d)
+    out = radius * radius * _bracket(np.tanh(t), t)
+    return out if out.ndim else out[()]

@@ -1,0 +1,232 @@
+"""Read and write indentation traces as CSV (DESIGN §5).
+
+The canonical file has the columns ``time_s, z_m, force_n`` (SI, z up, force positive when
+pressing) or, instead of ``z_m``, the joint angles ``q0_rad … q5_rad`` from which z follows by
+forward kinematics.  Other files are read through a column mapping, unit and sign options::
+
+    read_trace("run.csv", columns={"time": "t", "z": "Z", "force": "Fz"},
+               units={"z": "mm", "force": "mN"}, force_sign=-1)
+
+Columns named ``<quantity>_<unit>`` (``z_mm``, ``force_mn``, ``time_ms``) are recognised
+without options.  Every problem is raised as :class:`~palpbayes.errors.DataFileError` naming the
+file, the column or value, and the fix.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..contact import Tip
+from ..errors import DataFileError, InputError
+from ..trace import IndentationTrace
+from .atomic import write_csv_atomic
+from .units import FORCE_UNITS, LENGTH_UNITS, TIME_UNITS, force_factor, length_factor, time_factor
+
+__all__ = ["read_trace", "write_trace", "trace_from_frame", "check_plausible",
+           "MAX_Z_SPAN_M", "MAX_FORCE_N"]
+
+_QUANTITIES = {"time": TIME_UNITS, "z": LENGTH_UNITS, "force": FORCE_UNITS}
+_FACTORS = {"time": time_factor, "z": length_factor, "force": force_factor}
+
+#: Plausibility limits: a palpation moves the tip by less than this [m] ...
+MAX_Z_SPAN_M = 0.5
+#: ... and presses with less than this [N] (soft materials; pass ``check=False`` to skip).
+MAX_FORCE_N = 500.0
+
+
+def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: str | None,
+                 source: str) -> tuple[str, str]:
+    """Return (column name, unit) for ``quantity`` ('time', 'z' or 'force')."""
+    if explicit is not None:
+        if explicit not in df.columns:
+            raise DataFileError(
+                source, f"column {explicit!r} (given for {quantity}) is missing; "
+                f"the file has {', '.join(map(str, df.columns))}",
+                "fix the column mapping",
+            )
+        return explicit, unit or ("s" if quantity == "time" else "m" if quantity == "z" else "N")
+    lower = {str(c).strip().lower(): c for c in df.columns}
+    for u in _QUANTITIES[quantity]:
+        name = f"{quantity}_{u}".lower()
+        if name in lower:
+            return lower[name], unit or u
+    if quantity in lower:
+        return lower[quantity], unit or ("s" if quantity == "time" else
+                                         "m" if quantity == "z" else "N")
+    canon = {"time": "time_s", "z": "z_m", "force": "force_n"}[quantity]
+    raise DataFileError(
+        source,
+        f"missing column '{canon}' (for {quantity}); the file has "
+        f"{', '.join(map(str, df.columns)) or 'no columns'}",
+        f"rename the column or map it, e.g. --{quantity}-column NAME",
+    )
+
+
+def _numeric(df: pd.DataFrame, col: str, source: str) -> np.ndarray:
+    values = pd.to_numeric(df[col], errors="coerce")
+    bad = values.isna() & df[col].notna()
+    if bad.any():
+        i = int(np.argmax(bad.to_numpy()))
+        raise DataFileError(
+            source,
+            f"column {col!r} has a non-numeric value {df[col].iloc[i]!r} at data row {i + 1}",
+            "remove or repair that row",
+        )
+    arr = values.to_numpy(dtype=float)
+    if np.isnan(arr).any():
+        i = int(np.argmax(np.isnan(arr)))
+        raise DataFileError(source, f"column {col!r} is empty (NaN) at data row {i + 1}",
+                            "remove or repair that row")
+    return arr
+
+
+def check_plausible(trace: IndentationTrace) -> None:
+    """Reject traces whose units or signs cannot be right for a palpation.
+
+    Raises :class:`DataFileError` when z spans more than :data:`MAX_Z_SPAN_M`, when |force|
+    exceeds :data:`MAX_FORCE_N`, or when the force during loading is mostly negative (sign
+    flipped).
+    """
+    src = trace.source or trace.trace_id
+    span = float(np.ptp(trace.z))
+    if span > MAX_Z_SPAN_M:
+        raise DataFileError(
+            src, f"z spans {span:g} m, more than a palpation can ({MAX_Z_SPAN_M} m)",
+            "is z in mm? give the z unit, e.g. --z-unit mm",
+        )
+    fmax = float(np.max(np.abs(trace.force)))
+    if fmax > MAX_FORCE_N:
+        raise DataFileError(
+            src, f"|force| reaches {fmax:g} N, implausible for soft-material palpation",
+            "is force in mN? give the force unit, e.g. --force-unit mN",
+        )
+    load = trace.loading_segment()
+    f = load.force
+    top = f[int(0.9 * f.size):]  # the deepest 10 % of the loading
+    if np.median(top) < 0 and abs(np.median(top)) > 3 * np.std(f[: max(3, f.size // 10)]):
+        raise DataFileError(
+            src, f"force is negative ({np.median(top):.3g} N) at the deepest indentation; "
+            "the compressive force must be positive",
+            "flip the force sign with --force-sign -1",
+        )
+
+
+def trace_from_frame(
+    df: pd.DataFrame,
+    source: str,
+    *,
+    columns: dict[str, str] | None = None,
+    units: dict[str, str] | None = None,
+    force_sign: float = 1.0,
+    z_sign: float = 1.0,
+    check: bool = True,
+    tool_offset: float = 0.0,
+    **metadata,
+) -> IndentationTrace:
+    """Build a trace from a parsed table; see :func:`read_trace` for the options."""
+    columns = dict(columns or {})
+    units = dict(units or {})
+    unknown = set(columns) | set(units)
+    unknown -= {"time", "z", "force"}
+    if unknown:
+        raise InputError(f"unknown quantity {sorted(unknown)}; use time, z and force")
+    if force_sign not in (1, -1, 1.0, -1.0) or z_sign not in (1, -1, 1.0, -1.0):
+        raise InputError("force_sign and z_sign must be +1 or -1")
+    if df.shape[0] == 0:
+        raise DataFileError(source, "no data rows (header only or empty)",
+                            "check that the recording was saved")
+    lower = {str(c).strip().lower() for c in df.columns}
+    if "z" not in columns and not any(c.startswith("z") for c in lower) and "q0_rad" in lower:
+        from .rtde import trace_from_joint_frame
+
+        return trace_from_joint_frame(df, source, tool_offset=tool_offset, **metadata)
+    arrays = {}
+    for q in ("time", "z", "force"):
+        col, unit = _find_column(df, q, columns.get(q), units.get(q), source)
+        try:
+            factor = _FACTORS[q](unit)
+        except InputError as exc:
+            raise DataFileError(source, f"column {col!r}: {exc}") from None
+        arrays[q] = _numeric(df, col, source) * factor
+    trace = IndentationTrace(
+        time=arrays["time"],
+        z=z_sign * arrays["z"],
+        force=force_sign * arrays["force"],
+        source=source,
+        **metadata,
+    )
+    if check:
+        check_plausible(trace)
+    return trace
+
+
+def read_trace(
+    path: str | os.PathLike,
+    *,
+    columns: dict[str, str] | None = None,
+    units: dict[str, str] | None = None,
+    force_sign: float = 1.0,
+    z_sign: float = 1.0,
+    tip: Tip | None = None,
+    check: bool = True,
+    delimiter: str | None = ",",
+    **metadata,
+) -> IndentationTrace:
+    """Read one trace CSV into an :class:`~palpbayes.trace.IndentationTrace` (SI units).
+
+    Parameters
+    ----------
+    path
+        CSV file; lines starting with ``#`` are comments.
+    columns
+        Mapping from quantity (``time``, ``z``, ``force``) to the file's column name.
+    units
+        Mapping from quantity to unit: time s/ms/min, z m/mm/um/nm, force N/mN/uN/nN/kN.
+    force_sign, z_sign
+        +1 or -1: multiply force (to make pressing positive) or z (to make up positive).
+    tip
+        The indenter, stored in the trace.
+    check
+        Apply :func:`check_plausible` (units and sign sanity).
+    delimiter
+        Column separator; None to sniff it.
+    **metadata
+        Stored on the trace (``trace_id``, ``specimen``, ``material``, ``thickness`` ...).
+
+    Raises
+    ------
+    DataFileError
+        Missing file or column, non-numeric or non-finite cell, empty file, time not strictly
+        increasing, implausible units or flipped sign.  The message names the file.
+    """
+    path = Path(path)
+    source = str(path)
+    if not path.is_file():
+        raise DataFileError(source, "file not found", "check the path")
+    if path.stat().st_size == 0:
+        raise DataFileError(source, "file is empty", "check that the recording was saved")
+    try:
+        df = pd.read_csv(path, comment="#", sep=delimiter,
+                         engine="c" if delimiter else "python", skipinitialspace=True)
+    except pd.errors.EmptyDataError:
+        raise DataFileError(source, "file is empty", "check that the recording was saved") from None
+    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise DataFileError(source, f"not a readable CSV ({exc})".replace("\n", " ")) from None
+    metadata.setdefault("trace_id", path.stem)
+    return trace_from_frame(df, source, columns=columns, units=units, force_sign=force_sign,
+                            z_sign=z_sign, check=check, tip=tip, **metadata)
+
+
+def write_trace(trace: IndentationTrace, path: str | os.PathLike, *,
+                float_format: str = "%.10g") -> Path:
+    """Write the canonical CSV ``time_s, z_m, force_n`` atomically; return the path.
+
+    ``float_format`` "%.10g" keeps z to 1e-10 m and force to 10 significant digits; use
+    "%.17g" for a bit-exact round trip.
+    """
+    df = pd.DataFrame({"time_s": trace.time, "z_m": trace.z, "force_n": trace.force})
+    return write_csv_atomic(df, path, float_format=float_format)
