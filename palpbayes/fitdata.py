@@ -1,0 +1,230 @@
+"""The data a fit sees: loading segment, contact onset, admissible surface range, fit window.
+
+Shared by the least-squares baseline and the Bayesian model so both fit the same points.
+
+Rules (DESIGN §2):
+
+* only the loading segment is used (approach + indentation, no hold/retract);
+* the *contact onset* z_c is where the measured force last lies within ±F_unc before it stays
+  above it (linear interpolation between the two samples).  The paper's constraint
+  −F_unc <= F(z_surf) <= F_unc then admits z_surf in [z_c, z_top], z_top the start of the
+  approach;
+* for a tip with ``fit_fraction`` f > 0 (the paper uses f = 0.2 for the flat punch) only samples
+  with z <= z_c − f·(z_c − z_min) are fitted, a window fixed once from z_c so the objective is a
+  smooth function of z_surf;  with f = 0 every loading sample (approach included) is fitted.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .contact import Tip, check_nu, exponent, shape
+from .errors import InputError, NoContactError
+from .trace import IndentationTrace
+
+__all__ = ["ModelSpec", "FitData", "prepare", "DEFAULT_F_UNC", "default_fit_fraction"]
+
+#: The paper's sensor uncertainty F_unc [N]: 48 mN peak-to-peak.
+DEFAULT_F_UNC = 48e-3
+
+
+def default_fit_fraction(tip: Tip) -> float:
+    """Paper's default: 0.2 of the penetration skipped for the flat punch, 0 otherwise."""
+    return 0.2 if tip.kind == "flat" else 0.0
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """Contact model: tip, Poisson ratio and optional finite-thickness correction.
+
+    Parameters
+    ----------
+    tip
+        The indenter.
+    nu
+        Poisson ratio [-] used to turn E* into E (and in the thickness correction).
+    thickness
+        [m] Specimen thickness for the finite-thickness correction, None for a half-space.
+    bonded
+        Specimen bonded to its base (finite-thickness correction only).
+    """
+
+    tip: Tip
+    nu: float = 0.3
+    thickness: float | None = None
+    bonded: bool = True
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "nu", check_nu(self.nu))
+
+    @property
+    def exponent(self) -> float | None:
+        """Exponent m of F = k·d^m on a half-space, None for the exact sphere."""
+        return exponent(self.tip) if self.thickness is None else None
+
+    def shape(self, depth: np.ndarray) -> np.ndarray:
+        """F/E* [m²] at depth [m] (with the thickness correction if requested)."""
+        return shape(depth, self.tip, thickness_m=self.thickness, nu=self.nu,
+                     bonded=self.bonded)
+
+    def shape_derivative(self, depth: np.ndarray) -> np.ndarray:
+        """d(F/E*)/dd [m] by central differences (step 1e-9 m, one-sided at d = 0)."""
+        h = 1e-9
+        d = np.asarray(depth, dtype=float)
+        return (self.shape(d + h) - self.shape(np.maximum(d - h, 0.0))) / (
+            d + h - np.maximum(d - h, 0.0)
+        )
+
+    def to_E(self, Estar):
+        """Young's modulus E = E*·(1 − nu²) [Pa]."""
+        return Estar * (1.0 - self.nu**2)
+
+    def describe(self) -> str:
+        th = "half-space" if self.thickness is None else f"h={self.thickness * 1e3:g} mm " + (
+            "bonded" if self.bonded else "non-bonded")
+        return f"{self.tip.describe()}, nu={self.nu:g}, {th}"
+
+
+@dataclass(frozen=True)
+class FitData:
+    """Points to fit and the surface constraint.
+
+    Attributes
+    ----------
+    z, force
+        [m], [N] fitted samples (window applied).
+    z_contact
+        [m] Contact onset z_c: lower end of the admissible surface range.
+    z_top
+        [m] Highest loading sample: upper end of the admissible range.
+    z_min
+        [m] Deepest loading sample.
+    f_unc
+        [N] Sensor uncertainty used in the constraint.
+    fit_fraction
+        Fraction of the penetration skipped at the start of contact.
+    loading
+        The whole loading segment (for the constraint and plots).
+    model
+        The contact model.
+    """
+
+    z: np.ndarray
+    force: np.ndarray
+    z_contact: float
+    z_top: float
+    z_min: float
+    f_unc: float
+    fit_fraction: float
+    loading: IndentationTrace
+    model: ModelSpec
+
+    @property
+    def n_points(self) -> int:
+        return int(self.z.size)
+
+    @property
+    def shape(self) -> Callable[[np.ndarray], np.ndarray]:
+        return self.model.shape
+
+    def measured_force_at(self, z_surf: float | np.ndarray) -> np.ndarray:
+        """Measured force [N] where the tip passed ``z_surf`` (interpolated on the loading)."""
+        z = self.loading.z[::-1]
+        f = self.loading.force[::-1]
+        order = np.argsort(z, kind="stable")
+        return np.interp(z_surf, z[order], f[order])
+
+
+def _contact_onset(z: np.ndarray, f: np.ndarray, f_unc: float, source: str) -> float:
+    inside = np.abs(f) <= f_unc
+    if inside.all():
+        raise NoContactError(
+            f"{source}: the force never leaves ±{f_unc * 1e3:g} mN, so the tip never reaches the "
+            f"surface (max force {f.max() * 1e3:.3g} mN); check the recording or lower --f-unc"
+        )
+    if not inside.any():
+        raise InputError(
+            f"{source}: the force is outside ±{f_unc * 1e3:g} mN from the first sample "
+            f"({f[0] * 1e3:.3g} mN), so no surface height satisfies the paper's constraint; "
+            "tare the force sensor before the approach or raise --f-unc"
+        )
+    last = int(np.flatnonzero(inside)[-1])
+    if last == f.size - 1:
+        raise NoContactError(
+            f"{source}: the force is back within ±{f_unc * 1e3:g} mN at the deepest point; the "
+            "tip does not stay in contact (is the force sign flipped? try --force-sign -1)"
+        )
+    # interpolate where |F| crosses f_unc between samples `last` and `last + 1`
+    f0, f1 = f[last], f[last + 1]
+    target = np.sign(f1) * f_unc
+    w = 0.0 if f1 == f0 else float(np.clip((target - f0) / (f1 - f0), 0.0, 1.0))
+    return float(z[last] + w * (z[last + 1] - z[last]))
+
+
+def prepare(
+    trace: IndentationTrace,
+    model: ModelSpec,
+    *,
+    f_unc: float = DEFAULT_F_UNC,
+    fit_fraction: float | None = None,
+    max_depth: float | None = None,
+) -> FitData:
+    """Select the loading segment, the contact onset and the fit window of ``trace``.
+
+    Parameters
+    ----------
+    trace
+        The measurement (SI).
+    model
+        Contact model.
+    f_unc
+        [N] Sensor uncertainty of the constraint |F(z_surf)| <= F_unc (paper: 48 mN).
+    fit_fraction
+        Fraction of the penetration (from the contact onset) left out; None for the paper's
+        default (:func:`default_fit_fraction`).
+    max_depth
+        [m] Drop samples deeper than this below the contact onset (None: keep all).
+
+    Raises
+    ------
+    NoContactError
+        If the force never rises above ``f_unc`` or the trace has too few contact samples.
+    InputError
+        If no surface height satisfies the constraint, or an option is out of range.
+    """
+    if not (np.isfinite(f_unc) and f_unc > 0):
+        raise InputError(f"F_unc must be a positive force in newtons, got {f_unc!r}")
+    if fit_fraction is None:
+        fit_fraction = default_fit_fraction(model.tip)
+    if not 0.0 <= fit_fraction < 1.0:
+        raise InputError(f"fit fraction {fit_fraction!r} must lie in [0, 1)")
+    source = trace.source or trace.trace_id
+    loading = trace.loading_segment()
+    z, f = loading.z, loading.force
+    z_c = _contact_onset(z, f, f_unc, source)
+    z_min = float(z.min())
+    keep = np.ones(z.size, dtype=bool)
+    if fit_fraction > 0:
+        keep &= z <= z_c - fit_fraction * (z_c - z_min)
+    if max_depth is not None:
+        keep &= z >= z_c - max_depth
+    n_contact = int(np.count_nonzero(keep & (z < z_c)))
+    if n_contact < 5:
+        raise NoContactError(
+            f"{source}: only {n_contact} sample(s) in contact inside the fit window; the "
+            "indentation is too shallow or the window too narrow"
+        )
+    return FitData(
+        z=np.ascontiguousarray(z[keep]),
+        force=np.ascontiguousarray(f[keep]),
+        z_contact=z_c,
+        z_top=float(z.max()),
+        z_min=z_min,
+        f_unc=float(f_unc),
+        fit_fraction=float(fit_fraction),
+        loading=loading,
+        model=model,
+    )
