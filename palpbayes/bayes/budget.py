@@ -1,0 +1,168 @@
+"""Uncertainty budget of E in the style of GUM Supplement 1 (JCGM 101:2008).
+
+A single trace identifies E* (and z_surf, sigma, F0) but not the inputs that turn it into the
+material's Young's modulus.  Each input gets a stated distribution and is propagated by Monte
+Carlo, one independent input draw per posterior draw:
+
+    E = E*·(1 − nu²) · f_R(eps_R) / g_F · f_C(C)
+
+=================  =====================================  ===================================
+input              default distribution                   effect
+=================  =====================================  ===================================
+Poisson ratio nu   Uniform(nu − 0.05, nu + 0.05) in        factor 1 − nu² (DESIGN §8: PE foam
+                   [0, 0.4999] (half_width=0 fixes it)     estimates 0.27-0.33)
+tip radius         Uniform ±1 % (machining tolerance)     E* ∝ 1/g(R): refit of the model curve
+force gain         Normal(1, 1 %) (calibration)           E* ∝ 1/gain
+compliance C       Uniform(0, 2e-6 m/N) robot + sensor    depth d − C·F: refit of the curve
+=================  =====================================  ===================================
+
+"Refit" means: the posterior-median model curve F̂ = E*·s(d) is refitted with the perturbed
+model s', E*' = E*·Σ s·s' / Σ s'² (least squares with E* linear), tabulated on a grid of the
+perturbation and interpolated.  Because the factors multiply, their logarithms add and, the
+inputs being independent, the variance of ln E is the sum of the variances of the logarithms of
+the factors: the *share* of each input is its term over the total.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ..errors import InputError
+from ..fitdata import FitData, ModelSpec
+
+__all__ = ["BudgetSpec", "Budget", "propagate"]
+
+
+@dataclass(frozen=True)
+class BudgetSpec:
+    """Distributions of the inputs a trace cannot identify (see module docstring).
+
+    Parameters
+    ----------
+    nu_range
+        (lo, hi) of a uniform Poisson ratio; None: model nu ± ``nu_half_width``.
+    nu_half_width
+        Half-width around the model's nu when ``nu_range`` is None (0 fixes nu).
+    radius_tolerance
+        Relative half-width of the uniform tip-radius error (0.01 = ±1 %).
+    gain_sd
+        Relative standard deviation of the force-sensor gain.
+    compliance_max
+        [m/N] Upper bound of the uniform series compliance.
+    """
+
+    nu_range: tuple[float, float] | None = None
+    nu_half_width: float = 0.05
+    radius_tolerance: float = 0.01
+    gain_sd: float = 0.01
+    compliance_max: float = 2e-6
+
+    def nu_bounds(self, nu: float) -> tuple[float, float]:
+        lo, hi = self.nu_range if self.nu_range is not None else (
+            nu - self.nu_half_width, nu + self.nu_half_width)
+        lo, hi = max(lo, 0.0), min(hi, 0.4999)
+        if not 0.0 <= lo <= hi < 0.5:
+            raise InputError(f"Poisson-ratio range ({lo}, {hi}) must lie within [0, 0.5)")
+        return lo, hi
+
+    @staticmethod
+    def none() -> BudgetSpec:
+        """A budget with every input fixed (statistical uncertainty only)."""
+        return BudgetSpec(nu_half_width=0.0, radius_tolerance=0.0, gain_sd=0.0,
+                          compliance_max=0.0)
+
+
+@dataclass
+class Budget:
+    """Propagated draws and the variance table.
+
+    Attributes
+    ----------
+    E
+        Draws of E with every input [Pa], same shape as the posterior draws of E*.
+    table
+        One row per input: ``input, distribution, rel_sd_pct, share_pct``.
+    """
+
+    E: np.ndarray
+    table: pd.DataFrame
+
+
+def _refit_factor(model: ModelSpec, depth: np.ndarray, alt_shape) -> float:
+    s = model.shape(depth)
+    s2 = alt_shape(depth)
+    return float(s @ s2 / (s2 @ s2))
+
+
+def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
+              rng: np.random.Generator) -> Budget:
+    """Propagate the budget over posterior draws ``estar`` [Pa] (any shape).
+
+    Parameters
+    ----------
+    estar
+        Posterior draws of E* [Pa].
+    data
+        The fitted data (depths of the fitted points).
+    z_surf
+        [m] Posterior median surface height (sets the depths of the model curve).
+    spec
+        Input distributions.
+    rng
+        Random generator for the input draws.
+    """
+    model = data.model
+    shape = estar.shape
+    n = estar.size
+    depth = np.clip(z_surf - data.z, 0.0, None)
+    depth = depth[depth > 0]
+    e_med = float(np.median(estar))
+
+    lo, hi = spec.nu_bounds(model.nu)
+    nu = rng.uniform(lo, hi, n) if hi > lo else np.full(n, model.nu)
+    log_terms = {"E* (posterior)": np.log(estar.ravel()),
+                 "Poisson ratio": np.log1p(-nu**2)}
+    rows = [("E* (posterior)", "posterior draws"),
+            ("Poisson ratio", f"Uniform({lo:.3g}, {hi:.3g})" if hi > lo else f"fixed {lo:.3g}")]
+
+    tol = spec.radius_tolerance
+    if tol > 0 and model.tip.kind != "cone":
+        grid = np.linspace(-tol, tol, 9)
+        fac = [_refit_factor(model, depth, ModelSpec(model.tip.scaled(1 + e), model.nu,
+                                                     model.thickness, model.bonded).shape)
+               for e in grid]
+        eps = rng.uniform(-tol, tol, n)
+        log_terms["tip radius"] = np.log(np.interp(eps, grid, fac))
+        rows.append(("tip radius", f"Uniform(±{tol * 100:g} %)"))
+    if spec.gain_sd > 0:
+        gain = rng.normal(1.0, spec.gain_sd, n)
+        log_terms["force gain"] = -np.log(gain)
+        rows.append(("force gain", f"Normal(1, {spec.gain_sd * 100:g} %)"))
+    if spec.compliance_max > 0:
+        grid = np.linspace(0.0, spec.compliance_max, 9)
+        f_hat = e_med * model.shape(depth)
+        fac = []
+        for c in grid:
+            # the curve as measured with compliance c: the real depth is d − c·F
+            real = np.clip(depth - c * f_hat, 0.0, None)
+            s_true = model.shape(real)
+            s_meas = model.shape(depth)
+            fac.append(float(s_meas @ s_meas / (s_true @ s_meas)) if s_true @ s_meas > 0
+                       else 1.0)
+        C = rng.uniform(0.0, spec.compliance_max, n)
+        log_terms["compliance"] = np.log(np.interp(C, grid, fac))
+        rows.append(("compliance", f"Uniform(0, {spec.compliance_max:g} m/N)"))
+
+    total = np.sum(list(log_terms.values()), axis=0)
+    variances = {k: float(np.var(v)) for k, v in log_terms.items()}
+    var_total = sum(variances.values())
+    table = pd.DataFrame(
+        [{"input": name, "distribution": dist,
+          "rel_sd_pct": 100 * np.sqrt(variances[name]),
+          "share_pct": 100 * variances[name] / var_total if var_total > 0 else np.nan}
+         for name, dist in rows]
+    )
+    return Budget(E=np.exp(total).reshape(shape), table=table)

@@ -1,0 +1,93 @@
+"""Convergence diagnostics with arviz (R-hat, bulk/tail ESS, HDI) plus emcee's tau.
+
+Walkers are treated as chains (as ``arviz.from_emcee`` does).  A fit is *converged* when
+max R-hat <= 1.01 (Vehtari et al. 2021, rank-normalised split R-hat), min bulk and tail ESS >= 400
+and the sampler did not stop at its step cap before tau was stable.
+
+Written against arviz 0.2x (Python 3.11, InferenceData API: ``az.from_dict``, ``az.rhat``,
+``az.ess``, ``az.hdi``); on arviz >= 1.0 the same calls are made through the compatibility of
+``arviz`` with ``xarray`` Datasets (values are read as plain numpy arrays).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Diagnostics", "RHAT_MAX", "ESS_MIN", "import_arviz", "compute_diagnostics"]
+
+RHAT_MAX = 1.01
+ESS_MIN = 400.0
+
+
+def import_arviz():
+    """Import arviz with its import-time FutureWarning (refactor notice) silenced."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FutureWarning)
+        warnings.simplefilter("ignore", DeprecationWarning)
+        import arviz as az
+    return az
+
+
+@dataclass(frozen=True)
+class Diagnostics:
+    """Per-parameter and overall convergence figures."""
+
+    rhat: dict[str, float]
+    ess_bulk: dict[str, float]
+    ess_tail: dict[str, float]
+    tau: dict[str, float]
+    acceptance: float
+    n_steps: int
+    hit_cap: bool
+
+    @property
+    def rhat_max(self) -> float:
+        return float(max(self.rhat.values()))
+
+    @property
+    def ess_min(self) -> float:
+        return float(min(min(self.ess_bulk.values()), min(self.ess_tail.values())))
+
+    @property
+    def converged(self) -> bool:
+        return (np.isfinite(self.rhat_max) and self.rhat_max <= RHAT_MAX
+                and self.ess_min >= ESS_MIN and not self.hit_cap)
+
+    def problems(self) -> list[str]:
+        """Human-readable reasons why the fit is not converged (empty if it is)."""
+        out = []
+        if not (self.rhat_max <= RHAT_MAX):
+            worst = max(self.rhat, key=self.rhat.get)
+            out.append(f"R-hat {self.rhat_max:.3f} > {RHAT_MAX} ({worst})")
+        if not (self.ess_min >= ESS_MIN):
+            out.append(f"ESS {self.ess_min:.0f} < {ESS_MIN:.0f}")
+        if self.hit_cap:
+            out.append(f"step cap reached ({self.n_steps} steps) before tau was stable")
+        return out
+
+
+def _values(ds, name: str) -> float:
+    return float(np.asarray(ds[name]).max())
+
+
+def compute_diagnostics(idata, names: list[str], tau: np.ndarray, acceptance: float,
+                        n_steps: int, hit_cap: bool) -> Diagnostics:
+    """R-hat, bulk/tail ESS of ``names`` in ``idata.posterior`` plus emcee's figures."""
+    az = import_arviz()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        rhat = az.rhat(idata, var_names=names)
+        bulk = az.ess(idata, var_names=names, method="bulk")
+        tail = az.ess(idata, var_names=names, method="tail")
+    return Diagnostics(
+        rhat={n: _values(rhat, n) for n in names},
+        ess_bulk={n: float(np.asarray(bulk[n]).min()) for n in names},
+        ess_tail={n: float(np.asarray(tail[n]).min()) for n in names},
+        tau=dict(zip(names, map(float, tau), strict=True)),
+        acceptance=acceptance,
+        n_steps=n_steps,
+        hit_cap=hit_cap,
+    )

@@ -1,0 +1,167 @@
+"""The result of a Bayesian fit: draws, diagnostics, budget, tables and netCDF persistence."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..fitdata import FitData
+from ..io.atomic import write_with
+from .budget import Budget
+from .diagnostics import Diagnostics, import_arviz
+
+__all__ = ["BayesResult", "LEVEL"]
+
+#: Probability content of the reported central intervals.
+LEVEL = 0.9
+
+
+def _central(x: np.ndarray, level: float = LEVEL) -> tuple[float, float]:
+    a = (1 - level) / 2
+    lo, hi = np.quantile(x, [a, 1 - a])
+    return float(lo), float(hi)
+
+
+@dataclass
+class BayesResult:
+    """Posterior of one trace.
+
+    Attributes
+    ----------
+    idata
+        arviz ``InferenceData`` (posterior: ``E_star``, ``E`` (at the model's nu), ``E_total``
+        (with the budget), ``z_surf``, ``sigma``, ``F0`` [, ``phi`` | ``nu_t``]).
+    diagnostics
+        Convergence figures.
+    budget
+        Uncertainty budget (draws and variance table).
+    data
+        The fitted data.
+    noise
+        Noise model name.
+    trace_id
+        Identifier.
+    lsq
+        The least-squares result the walkers started from.
+    warnings
+        Flags raised during the fit (non-convergence, prior-dominated, bimodal surface).
+    """
+
+    idata: object
+    diagnostics: Diagnostics
+    budget: Budget
+    data: FitData
+    noise: str
+    trace_id: str
+    lsq: object = None
+    warnings: list[str] = field(default_factory=list)
+
+    # ----------------------------------------------------------------- access
+    def draws(self, name: str) -> np.ndarray:
+        """All draws of a posterior variable, flattened over walkers."""
+        return np.asarray(self.idata.posterior[name]).ravel()
+
+    @property
+    def converged(self) -> bool:
+        return self.diagnostics.converged and not self.warnings
+
+    def summary(self) -> pd.DataFrame:
+        """Per-parameter table: mean, sd, median, central 90 % interval, 90 % HDI, R-hat, ESS."""
+        az = import_arviz()
+        names = [n for n in ("E_total", "E", "E_star", "z_surf", "sigma", "F0", "phi", "nu_t")
+                 if n in self.idata.posterior]
+        rows = []
+        for n in names:
+            x = self.draws(n)
+            lo, hi = _central(x)
+            hdi = np.asarray(az.hdi(x, hdi_prob=LEVEL))
+            rows.append({
+                "parameter": n, "unit": _UNITS[n], "mean": float(x.mean()),
+                "sd": float(x.std(ddof=1)), "median": float(np.median(x)),
+                "q05": lo, "q95": hi, "hdi90_lo": float(hdi[0]), "hdi90_hi": float(hdi[1]),
+                "rhat": self.diagnostics.rhat.get(_SAMPLED.get(n, n), np.nan),
+                "ess_bulk": self.diagnostics.ess_bulk.get(_SAMPLED.get(n, n), np.nan),
+                "ess_tail": self.diagnostics.ess_tail.get(_SAMPLED.get(n, n), np.nan),
+                # E and E_total are monotone in E_star: rank diagnostics are E_star's
+            })
+        return pd.DataFrame(rows).set_index("parameter")
+
+    def summary_row(self) -> dict:
+        """One row of ``summary.csv`` (DESIGN §7): E with the full budget."""
+        E = self.draws("E_total")
+        Es = self.draws("E")
+        z = self.draws("z_surf")
+        lo, hi = _central(E)
+        slo, shi = _central(Es)
+        d = self.diagnostics
+        return {
+            "trace_id": self.trace_id,
+            "method": "bayes",
+            "tip": self.data.model.tip.kind,
+            "n_points": self.data.n_points,
+            "E_pa": float(np.median(E)),
+            "E_sd_pa": float(E.std(ddof=1)),
+            "E_lo_pa": lo,
+            "E_hi_pa": hi,
+            "Estar_pa": float(np.median(self.draws("E_star"))),
+            "z_surf_m": float(np.median(z)),
+            "z_surf_sd_m": float(z.std(ddof=1)),
+            "sigma_n": float(np.median(self.draws("sigma"))),
+            "converged": bool(self.converged),
+            "rhat_max": d.rhat_max,
+            "ess_min": d.ess_min,
+            "nu": self.data.model.nu,
+            "E_stat_pa": float(np.median(Es)),
+            "E_stat_sd_pa": float(Es.std(ddof=1)),
+            "E_stat_lo_pa": slo,
+            "E_stat_hi_pa": shi,
+            "noise_model": self.noise,
+            "tau_max": float(max(d.tau.values())),
+            "acceptance": d.acceptance,
+            "n_steps": d.n_steps,
+            "flags": "; ".join(self.warnings + d.problems()),
+        }
+
+    # ----------------------------------------------------------------- predictive
+    def predictive(self, z: np.ndarray | None = None, n_draws: int = 200, noise: bool = False,
+                   level: float = LEVEL, seed: int = 0) -> pd.DataFrame:
+        """Posterior-predictive force curve on ``z`` [m] (default: the fitted samples).
+
+        Returns a DataFrame with ``z_m, depth_m`` (from the median surface), ``median_n``,
+        ``lo_n``, ``hi_n`` (central ``level`` band of the mean curve, or of new observations
+        when ``noise`` is True).
+        """
+        z = self.data.z if z is None else np.asarray(z, dtype=float)
+        rng = np.random.default_rng(seed)
+        post = self.idata.posterior
+        flat = {n: np.asarray(post[n]).ravel() for n in ("E_star", "z_surf", "F0", "sigma")}
+        idx = rng.choice(flat["E_star"].size, size=min(n_draws, flat["E_star"].size),
+                         replace=False)
+        curves = np.array([
+            flat["E_star"][i] * self.data.shape(flat["z_surf"][i] - z) + flat["F0"][i]
+            for i in idx
+        ])
+        if noise:
+            curves = curves + rng.normal(0, 1, curves.shape) * flat["sigma"][idx][:, None]
+        a = (1 - level) / 2
+        lo, med, hi = np.quantile(curves, [a, 0.5, 1 - a], axis=0)
+        zs = float(np.median(flat["z_surf"]))
+        return pd.DataFrame({"z_m": z, "depth_m": zs - z, "median_n": med, "lo_n": lo,
+                             "hi_n": hi})
+
+    # ----------------------------------------------------------------- persistence
+    def to_netcdf(self, path: str | os.PathLike) -> Path:
+        """Write the InferenceData (h5netcdf engine) atomically; arviz can open it."""
+        def _write(tmp: Path) -> None:
+            self.idata.to_netcdf(str(tmp), engine="h5netcdf")
+
+        return write_with(_write, path, suffix=".nc")
+
+
+_UNITS = {"E_total": "Pa", "E": "Pa", "E_star": "Pa", "z_surf": "m", "sigma": "N", "F0": "N",
+          "phi": "-", "nu_t": "-"}
+_SAMPLED = {"E_total": "E_star", "E": "E_star"}
