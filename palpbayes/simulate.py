@@ -1,0 +1,720 @@
+"""Synthetic palpation traces and Instron compression curves, with misspecification knobs.
+
+The simulator draws data from a *known* truth so that every estimator in palpbayes can be checked
+against it (bias, interval coverage, simulation-based calibration).  Conventions (DESIGN §1, §5):
+SI units; z is up, the tip moves down into the specimen, depth d = z_surf - z; the force is the
+compressive normal force, positive when pressing.
+
+Force model of one trace (every term optional except the contact law)::
+
+    F_rec(t) = F_true(t) + F0 + drift·t + e(t)
+    F_true   = E*·s(delta)·xi(delta),          E* = E/(1 - nu²)
+    delta    = z_surf - z_cmd(t) - C·F_true     (series compliance C, solved implicitly)
+    z_rec(t) = z_cmd(t) + b + eta(t)            (registration offset b, encoder noise eta)
+    e(t)     = phi·e(t-1) + sqrt(1 - phi²)·sigma·w(t),  w ~ N(0, 1),  e(0) = sigma·w(0)
+
+with s(d) the tip's shape function (:func:`palpbayes.contact.shape`, optionally with the bonded
+finite-thickness factor), xi the strain-stiffening factor (:func:`stiffening_factor`) and
+sigma = noise_pp / :data:`PP_TO_SIGMA`.
+
+**Peak-to-peak to sigma.**  A sensor's "peak-to-peak noise" is read as ±3 sigma, the band that
+holds 99.7 % of Gaussian samples, so sigma = pp/6: the paper's 48 mN gives sigma = 8 mN (the
+value DESIGN §3 uses).  Note that the *observed* range of N samples grows with N (about 6.4
+sigma for N = 800 and 7.2 sigma for N = 3840), so a range measured over a long record overstates
+the ±3 sigma convention; ``tests/test_simulate.py`` checks both facts.
+
+Paper numbers (:data:`PAPER_MATERIALS`, :data:`PAPER_TIPS`, :data:`PAPER_ROBOT_ESTIMATES`) are
+those of DESIGN §2 (UR3e robotic palpation of polyethylene foam, Instron 4502 ground truth).
+Campaign folders are written by :func:`simulate_campaign` (in :mod:`palpbayes.simulate_campaign`,
+re-exported here).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import NamedTuple
+
+import numpy as np
+import pandas as pd
+from scipy.signal import lfilter
+
+from . import noise as _noise
+from .contact import Tip, check_nu, effective_modulus, shape
+from .errors import GeometryError, InputError
+from .io.atomic import write_text_atomic
+from .noise import PP_TO_SIGMA
+from .trace import IndentationTrace
+
+__all__ = [
+    "PP_TO_SIGMA",
+    "sigma_from_pp",
+    "Material",
+    "RobotEstimate",
+    "PAPER_MATERIALS",
+    "PAPER_TIPS",
+    "PAPER_ROBOT_ESTIMATES",
+    "PAPER_SURFACE_ERROR_M",
+    "paper_robot_estimates_frame",
+    "STIFFENING_STRAIN0",
+    "stiffening_factor",
+    "true_force",
+    "solve_series_compliance",
+    "ar1_noise",
+    "simulate_trace",
+    "toe_compression",
+    "simulate_compression_test",
+    "write_compression_export",
+]
+# simulate_campaign, simulate_palpation_series and rest_modulus live in
+# palpbayes.simulate_campaign and are re-exported lazily (module __getattr__ at the end), so
+# ``from palpbayes.simulate import simulate_campaign`` works without an import cycle.
+
+# ----------------------------------------------------------------------------- constants
+
+def sigma_from_pp(pp: float) -> float:
+    """Gaussian noise sd [N] from a peak-to-peak band [N]: sigma = pp / 6 (±3 sigma).
+
+    :data:`PP_TO_SIGMA` = 6 comes from :mod:`palpbayes.noise` (the one place the convention
+    lives); this wrapper adds input validation.
+
+    >>> round(sigma_from_pp(48e-3), 12)  # the paper's sensor: 48 mN p-p -> 8 mN
+    0.008
+    """
+    v = _finite(pp, "peak-to-peak noise [N]")
+    if v < 0:
+        raise InputError(f"peak-to-peak noise {pp!r} N must be non-negative")
+    return _noise.sigma_from_pp(v)
+
+
+@dataclass(frozen=True)
+class Material:
+    """A foam specimen material with its ground truth.
+
+    Attributes
+    ----------
+    name
+        Label (used in file names).
+    E_pa, E_sd_pa
+        [Pa] Young's modulus (Instron mean) and its between-specimen sd.
+    thickness_m
+        [m] Specimen height h.
+    width_m, length_m
+        [m] Block footprint.
+    """
+
+    name: str
+    E_pa: float
+    E_sd_pa: float
+    thickness_m: float
+    width_m: float = 0.05
+    length_m: float = 0.05
+
+
+class RobotEstimate(NamedTuple):
+    """One published robot estimate (DESIGN §2); err_pct = (GT - E)/GT·100."""
+
+    material: str
+    tip: str
+    E_kPa: float
+    sd_kPa: float
+    err_pct: float
+
+
+#: The paper's foam specimens (DESIGN §2): Instron 4502 E ± sd (50 mm/min, 25 Hz, up to 5 mm),
+#: polyethylene foam blocks 50 × 50 mm, White 30 mm, Pink and Grey 20 mm thick.
+PAPER_MATERIALS: MappingProxyType[str, Material] = MappingProxyType({
+    "White": Material("White", 111e3, 13e3, 0.030),
+    "Pink": Material("Pink", 136e3, 14e3, 0.020),
+    "Grey": Material("Grey", 194e3, 17e3, 0.020),
+})
+
+#: The paper's tips (DESIGN §2): flat punch radius 10 mm, sphere radius 10 mm (simulated with
+#: the exact Sneddon law; the paper fitted it with Hertz), paraboloid radius 11.7 mm.
+PAPER_TIPS: MappingProxyType[str, Tip] = MappingProxyType({
+    "flat": Tip("flat", radius=0.010),
+    "sphere": Tip("sphere", radius=0.010),
+    "paraboloid": Tip("paraboloid", radius=0.0117),
+})
+
+#: The paper's published robot estimates E ± sd [kPa] and error vs ground truth [%] (DESIGN §2),
+#: as printed (err = (GT - E)/GT).  ``pandas.DataFrame(PAPER_ROBOT_ESTIMATES)`` gives the table.
+#: Caution: the printed sphere errors do not follow from the printed E and GT: recomputed they
+#: are -11.5 / -5.9 / -4.2 % against the printed -10.8 / -4.1 / -5.9 % (Pink and Grey look
+#: swapped); flat and paraboloid agree to 0.1 %.  Tables should recompute err from E_kPa.
+PAPER_ROBOT_ESTIMATES: tuple[RobotEstimate, ...] = (
+    RobotEstimate("White", "flat", 119.6, 10.8, -7.7),
+    RobotEstimate("Pink", "flat", 154.5, 9.4, -13.6),
+    RobotEstimate("Grey", "flat", 227.5, 7.4, -17.2),
+    RobotEstimate("White", "sphere", 123.8, 7.4, -10.8),
+    RobotEstimate("Pink", "sphere", 144.0, 12.7, -4.1),
+    RobotEstimate("Grey", "sphere", 202.2, 20.3, -5.9),
+    RobotEstimate("White", "paraboloid", 104.8, 6.3, 5.5),
+    RobotEstimate("Pink", "paraboloid", 123.2, 10.8, 9.4),
+    RobotEstimate("Grey", "paraboloid", 174.0, 19.6, 10.3),
+)
+
+#: The paper's mean surface-position error [m] by tip (DESIGN §2).
+PAPER_SURFACE_ERROR_M: MappingProxyType[str, float] = MappingProxyType(
+    {"sphere": 0.38e-3, "paraboloid": 0.39e-3}
+)
+
+
+def paper_robot_estimates_frame() -> pd.DataFrame:
+    """A fresh table of :data:`PAPER_ROBOT_ESTIMATES`: material, tip, E_kPa, sd_kPa, err_pct."""
+    return pd.DataFrame(PAPER_ROBOT_ESTIMATES, columns=RobotEstimate._fields)
+
+
+# ----------------------------------------------------------------------------- validation
+
+
+def _finite(value, what: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{what} {value!r} is not a number") from None
+    if not math.isfinite(v):
+        raise InputError(f"{what} must be finite, got {value!r}")
+    return v
+
+
+def _positive(value, what: str) -> float:
+    v = _finite(value, what)
+    if v <= 0:
+        raise InputError(f"{what} must be positive, got {value!r}")
+    return v
+
+
+def _nonneg(value, what: str) -> float:
+    v = _finite(value, what)
+    if v < 0:
+        raise InputError(f"{what} must be non-negative, got {value!r}")
+    return v
+
+
+def _phi(value) -> float:
+    v = _finite(value, "AR(1) coefficient phi")
+    if not -1.0 < v < 1.0:
+        raise InputError(f"AR(1) coefficient phi = {value!r} must lie in (-1, 1)")
+    return v
+
+
+# ----------------------------------------------------------------------------- force model
+
+#: Nominal strain d/h below which the stiffening law is inactive.
+STIFFENING_STRAIN0 = 0.05
+
+
+def stiffening_factor(depth, thickness: float | None, stiffening: float) -> np.ndarray:
+    """Strain-stiffening factor xi(d) = exp(beta·max(0, d/h - 0.05)) [-].
+
+    A phenomenological misspecification knob (secant modulus E_eff = E·xi): linear up to the
+    nominal strain d/h = :data:`STIFFENING_STRAIN0`, exponentially stiffer beyond.  beta = 5 at
+    the paper's depth d/h = 0.1 gives xi = exp(0.25) = 1.28.  It is monotone in d, so the force
+    stays monotone and the compliance solve keeps its bracket.
+
+    Parameters
+    ----------
+    depth
+        [m] Indentation depth d.
+    thickness
+        [m] Specimen thickness h (needed when ``stiffening`` != 0).
+    stiffening
+        beta [-], >= 0; 0 switches the law off (factor exactly 1).
+    """
+    d = np.asarray(depth, dtype=float)
+    if stiffening == 0:
+        return np.ones_like(d)
+    if thickness is None:
+        raise GeometryError("strain stiffening needs the specimen thickness (give thickness=)")
+    return np.exp(stiffening * np.maximum(0.0, d / thickness - STIFFENING_STRAIN0))
+
+
+def true_force(
+    depth,
+    E: float,
+    nu: float,
+    tip: Tip,
+    *,
+    thickness: float | None = None,
+    finite_thickness: bool = False,
+    bonded: bool = True,
+    stiffening: float = 0.0,
+) -> np.ndarray:
+    """The simulator's noise-free force F = E*·s(d)·xi(d) [N] (0 for d <= 0).
+
+    s is :func:`palpbayes.contact.shape`, with the bonded Dimitriadis/Hayes finite-thickness
+    factor when ``finite_thickness``; xi is :func:`stiffening_factor`.  With both off this is
+    exactly :func:`palpbayes.contact.force`.
+    """
+    d = np.asarray(depth, dtype=float)
+    h = thickness if finite_thickness else None
+    if finite_thickness and thickness is None:
+        raise GeometryError("finite_thickness=True needs the specimen thickness (give thickness=)")
+    s = shape(d, tip, thickness_m=h, nu=nu, bonded=bonded)
+    f = effective_modulus(E, nu) * s
+    if stiffening != 0:
+        f = f * stiffening_factor(d, thickness, stiffening)
+    return f
+
+
+def solve_series_compliance(d_cmd, force_of_depth, compliance: float,
+                            iterations: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """Solve F = g(d_cmd - C·F) for the actual depth and force with series compliance C.
+
+    The tip sits C·F above its commanded position, so the actual depth delta solves
+    r(delta) = delta + C·g(delta) - d_cmd = 0.  r is strictly increasing for any non-decreasing
+    force law g with g(0) = 0, and r(0) = -d_cmd <= 0 <= r(d_cmd) = C·g(d_cmd): the root is
+    bracketed in [0, d_cmd].  Vectorised bisection with ``iterations`` = 64 halvings reaches the
+    floating-point resolution of delta (width d_cmd·2^-64); it cannot fail or overshoot.
+
+    Parameters
+    ----------
+    d_cmd
+        [m] Commanded depth z_surf - z_cmd (array).
+    force_of_depth
+        g(d) [N], vectorised, non-decreasing, 0 for d <= 0.
+    compliance
+        C [m/N] >= 0; 0 returns (d_cmd, g(d_cmd)) without iterating.
+
+    Returns
+    -------
+    delta, force
+        [m], [N] Actual depth and contact force F = g(delta).
+    """
+    d_cmd = np.asarray(d_cmd, dtype=float)
+    if compliance == 0:
+        return d_cmd, force_of_depth(d_cmd)
+    delta = np.minimum(d_cmd, 0.0)  # out of contact: the tip is where it was sent
+    pos = d_cmd > 0
+    dc = d_cmd[pos]
+    lo, hi = np.zeros_like(dc), dc.copy()
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        r = mid + compliance * force_of_depth(mid) - dc
+        above = r > 0
+        hi = np.where(above, mid, hi)
+        lo = np.where(above, lo, mid)
+    delta[pos] = 0.5 * (lo + hi)
+    return delta, force_of_depth(delta)
+
+
+def ar1_noise(n: int, sigma: float, phi: float, w: np.ndarray) -> np.ndarray:
+    """Stationary Gaussian AR(1) noise from standard normal draws ``w`` (length n).
+
+    e(0) = sigma·w(0), e(t) = phi·e(t-1) + sqrt(1 - phi²)·sigma·w(t), so every e(t) has sd sigma
+    whatever phi, and corr(e(t), e(t-k)) = phi^k.
+    """
+    w = np.asarray(w, dtype=float)[:n]
+    if phi == 0:
+        return sigma * w
+    e = np.empty(n)
+    e[0] = sigma * w[0]
+    e[1:], _ = lfilter([math.sqrt(1.0 - phi * phi) * sigma], [1.0, -phi], w[1:],
+                       zi=[phi * e[0]])
+    return e
+
+
+# ----------------------------------------------------------------------------- motion
+
+
+def _motion(travel: float, speed: float, rate: float, hold: float,
+            retract: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Sample times t_k = k/rate (k = 1..N) and distance moved down s(t_k) [m].
+
+    Down at ``speed`` for travel/speed, hold, then (optionally) back up at ``speed``.  N =
+    ceil(T·rate) for the programme's duration T, so the last sample falls at or after the end;
+    samples past the end stay at the final position.
+    """
+    t_down = travel / speed
+    t_end = t_down + hold + (t_down if retract else 0.0)
+    n = max(3, math.ceil(t_end * rate - 1e-6))
+    t = np.arange(1, n + 1) / rate
+    s = np.minimum(speed * t, travel)
+    s[np.isclose(s, travel, rtol=1e-12, atol=0.0)] = travel
+    if retract:
+        up = np.clip(speed * (t - t_down - hold), 0.0, travel)
+        up[np.isclose(up, travel, rtol=1e-12, atol=0.0)] = travel
+        s = s - up
+    return t, s
+
+
+# ----------------------------------------------------------------------------- traces
+
+
+def simulate_trace(
+    E: float,
+    tip: Tip,
+    *,
+    nu: float = 0.3,
+    z_surf: float = 0.1,
+    thickness: float | None = None,
+    depth: float | None = None,
+    approach: float = 1e-3,
+    speed: float = 50 / 60e3,
+    rate: float = 800.0,
+    hold: float = 0.0,
+    retract: bool = False,
+    noise_pp: float = 48e-3,
+    noise_ar1: float = 0.0,
+    force_offset: float = 0.0,
+    drift: float = 0.0,
+    position_noise: float = 0.0,
+    repeatability: float = 0.0,
+    compliance: float = 0.0,
+    finite_thickness: bool = False,
+    bonded: bool = True,
+    stiffening: float = 0.0,
+    rng: np.random.Generator | int | None = None,
+    trace_id: str = "sim",
+    specimen: str = "",
+    material: str = "",
+    repetition: int | None = None,
+    rest_time: float | None = None,
+) -> IndentationTrace:
+    """Simulate one palpation: a tip driven down into an elastic specimen at constant speed.
+
+    The tip starts ``approach`` above the surface, moves down at ``speed`` to the depth
+    ``depth`` below it, optionally holds and retracts at the same speed, and is sampled at
+    ``rate`` at t_k = k/rate, k = 1..N (a sample at the end of each sampling period, so the
+    deepest point is recorded).  With the defaults on a 30 mm specimen (depth 3 mm, approach
+    1 mm, 50 mm/min, 800 Hz) the trace has exactly 4 mm / (0.8333 mm/s) · 800 Hz = **3840
+    samples**, the benchmark trace size.  The model is given in the module docstring.
+
+    Parameters
+    ----------
+    E
+        [Pa] Young's modulus.
+    tip
+        The indenter (tip ``sphere`` is the exact Sneddon law).
+    nu
+        Poisson ratio [-].
+    z_surf
+        [m] Surface height in the robot's commanded frame.
+    thickness
+        [m] Specimen thickness h (for the default depth, ``finite_thickness``, ``stiffening``).
+    depth
+        [m] Commanded maximum depth; default 10 % of ``thickness`` (required without it).
+    approach
+        [m] Height above the surface where the motion starts.
+    speed
+        [m/s] Tip speed (default 50 mm/min).
+    rate
+        [Hz] Sample rate.
+    hold
+        [s] Hold at the deepest point.
+    retract
+        Move back up to the start after the hold.
+    noise_pp
+        [N] Peak-to-peak force noise; sigma = noise_pp/6 (:func:`sigma_from_pp`).
+    noise_ar1
+        AR(1) coefficient phi of the force noise, |phi| < 1 (marginal sd stays sigma).
+    force_offset
+        [N] Constant force offset F0 (sensor tare error).
+    drift
+        [N/s] Linear force drift, F += drift·t.
+    position_noise
+        [m] White noise sd on the recorded z (encoder/kinematic jitter).
+    repeatability
+        [m] Half-range of a uniform per-trace offset b of the recorded z (robot repeatability,
+        e.g. 3e-5 for the UR3e); it shifts the surface seen in the recorded frame to z_surf + b.
+    compliance
+        [m/N] Series compliance C of robot and sensor: the tip sits C·F above the recorded
+        position; solved by :func:`solve_series_compliance`.
+    finite_thickness, bonded
+        Apply the finite-thickness correction (Dimitriadis 2002 / Hayes 1972, bonded by
+        default) to the truth; needs ``thickness``.
+    stiffening
+        beta of :func:`stiffening_factor` (0 = linear elastic); needs ``thickness``.
+    rng
+        numpy Generator or seed.  The draws are made in a fixed order whatever the options
+        (one uniform for b, N normals for the force, N normals for z), so the same seed gives
+        the same noise across misspecification settings (common random numbers).
+    trace_id, specimen, material, repetition, rest_time
+        Labels stored in the trace.
+
+    Returns
+    -------
+    IndentationTrace
+        z recorded (up positive), force positive when pressing.  ``metadata`` holds the truth:
+        ``E_true``, ``Estar_true``, ``nu``, ``z_surf_true`` (surface in the *recorded* frame,
+        z_surf + b, what a perfect fit recovers), ``z_surf_commanded``, ``z_offset_true`` (b),
+        ``sigma_true``, ``noise_pp``, ``phi_true``, ``force_offset_true``, ``drift_true``,
+        ``position_noise_true``, ``repeatability``, ``compliance_true``, ``finite_thickness``,
+        ``bonded``, ``stiffening``, ``depth_true``, ``max_force_true``, motion settings, and
+        ``seed`` when ``rng`` was an int.
+
+    Raises
+    ------
+    InputError, GeometryError
+        Non-positive E, speed or rate, missing depth and thickness, |phi| >= 1, negative noise,
+        an invalid nu, or a finite-thickness request for a tip without a correction.
+    """
+    if not isinstance(tip, Tip):
+        raise InputError(f"tip must be a palpbayes.contact.Tip, got {type(tip).__name__}")
+    E = _positive(E, "Young's modulus E [Pa]")
+    nu = check_nu(nu)
+    z_surf = _finite(z_surf, "surface height z_surf [m]")
+    if thickness is not None:
+        thickness = _positive(thickness, "specimen thickness [m]")
+    if depth is None:
+        if thickness is None:
+            raise InputError("give the indentation depth (depth=) or the specimen thickness "
+                             "(thickness=, depth defaults to 10 % of it)")
+        depth = 0.1 * thickness
+    depth = _positive(depth, "indentation depth [m]")
+    approach = _nonneg(approach, "approach distance [m]")
+    speed = _positive(speed, "speed [m/s]")
+    rate = _positive(rate, "sample rate [Hz]")
+    hold = _nonneg(hold, "hold time [s]")
+    sigma = sigma_from_pp(noise_pp)
+    phi = _phi(noise_ar1)
+    force_offset = _finite(force_offset, "force offset [N]")
+    drift = _finite(drift, "force drift [N/s]")
+    position_noise = _nonneg(position_noise, "position noise [m]")
+    repeatability = _nonneg(repeatability, "repeatability [m]")
+    compliance = _nonneg(compliance, "compliance [m/N]")
+    stiffening = _nonneg(stiffening, "stiffening beta")
+    law = {"nu": nu, "tip": tip, "thickness": thickness, "finite_thickness": finite_thickness,
+           "bonded": bool(bonded), "stiffening": stiffening}
+    true_force(np.array([depth]), E, **law)  # validate geometry before drawing anything
+
+    gen = np.random.default_rng(rng)
+    t, s = _motion(approach + depth, speed, rate, hold, retract)
+    n = t.size
+    u = gen.uniform(-1.0, 1.0)
+    w_force = gen.standard_normal(n)
+    w_z = gen.standard_normal(n)
+
+    z_cmd = (z_surf + approach) - s
+    d_cmd = z_surf - z_cmd
+    delta, f_true = solve_series_compliance(
+        d_cmd, lambda d: true_force(d, E, **law), compliance)
+    b = repeatability * u + 0.0  # + 0.0: no negative zero in the truth tables
+    z_rec = z_cmd + b + position_noise * w_z
+    f_rec = f_true + force_offset + drift * t + ar1_noise(n, sigma, phi, w_force)
+
+    metadata = {
+        "simulated": True,
+        "E_true": E,
+        "Estar_true": float(effective_modulus(E, nu)),
+        "nu": nu,
+        "z_surf_true": z_surf + b,
+        "z_surf_commanded": z_surf,
+        "z_offset_true": b,
+        "sigma_true": sigma,
+        "noise_pp": float(noise_pp),
+        "phi_true": phi,
+        "force_offset_true": force_offset,
+        "drift_true": drift,
+        "position_noise_true": position_noise,
+        "repeatability": repeatability,
+        "compliance_true": compliance,
+        "finite_thickness": bool(finite_thickness),
+        "bonded": bool(bonded),
+        "stiffening": stiffening,
+        "depth_true": depth,
+        "max_depth_actual": float(delta.max()),
+        "max_force_true": float(f_true.max()),
+        "approach": approach,
+        "speed": speed,
+        "rate": rate,
+        "hold": hold,
+        "retract": bool(retract),
+    }
+    if isinstance(rng, int | np.integer):
+        metadata["seed"] = int(rng)
+    return IndentationTrace(
+        time=t, z=z_rec, force=f_rec, tip=tip, trace_id=trace_id, specimen=specimen,
+        material=material, thickness=thickness, repetition=repetition, rest_time=rest_time,
+        source=f"simulated trace {trace_id!r}", metadata=metadata,
+    )
+
+
+# ----------------------------------------------------------------------------- compression
+
+
+def toe_compression(x, toe: float) -> np.ndarray:
+    """Effective compression [m] of a block with ``toe`` [m] of slack, smooth (C¹) toe.
+
+    u(x) = x²/(4·toe) for 0 <= x < 2·toe, and x - toe beyond; u and du/dx are continuous at
+    x = 2·toe, and the linear part extrapolates to zero at x = toe.  toe = 0 gives u = x.
+    """
+    x = np.clip(np.asarray(x, dtype=float), 0.0, None)
+    if toe == 0:
+        return x
+    return np.where(x < 2.0 * toe, x * x / (4.0 * toe), x - toe)
+
+
+def simulate_compression_test(
+    E: float,
+    *,
+    width: float = 0.05,
+    length: float = 0.05,
+    height: float,
+    speed: float = 50 / 60e3,
+    rate: float = 25.0,
+    max_compression: float = 5e-3,
+    toe: float = 0.2e-3,
+    noise_n: float = 0.02,
+    rng: np.random.Generator | int | None = None,
+    specimen: str = "",
+    material: str = "",
+) -> pd.DataFrame:
+    """Simulate an unconfined uniaxial compression test (Instron 4502 style).
+
+    The crosshead moves down at ``speed`` from first touch (x = 0) to ``max_compression``,
+    sampled at ``rate`` at t_k = k/rate, k = 0..N.  Load (linear elastic, frictionless
+    platens)::
+
+        F(x) = E·A/h·u(x) + noise,   A = width·length,   u = toe_compression(x, toe)
+
+    so beyond x = 2·toe the curve is a line of slope E·A/h [N/m] through (toe, 0).
+
+    Parameters
+    ----------
+    E
+        [Pa] Young's modulus of the block.
+    width, length, height
+        [m] Block dimensions (height is the loading direction).
+    speed
+        [m/s] Crosshead speed (default 50 mm/min).
+    rate
+        [Hz] Sample rate (default 25 Hz).
+    max_compression
+        [m] Final crosshead travel.
+    toe
+        [m] Slack before full contact (quadratic toe of length 2·toe).
+    noise_n
+        [N] Load-cell noise sd (white Gaussian).
+    rng
+        numpy Generator or seed.
+    specimen, material
+        Labels, stored in ``df.attrs``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``time_s``, ``compression_m``, ``force_n`` (both positive in compression);
+        ``attrs`` holds the truth (``E_true_pa``, ``area_m2``, ``height_m``, ``width_m``,
+        ``length_m``, ``stiffness_n_per_m``, ``toe_m``, ``noise_n``, ``speed_m_per_s``,
+        ``specimen``, ``material``).
+    """
+    E = _positive(E, "Young's modulus E [Pa]")
+    width = _positive(width, "block width [m]")
+    length = _positive(length, "block length [m]")
+    height = _positive(height, "block height [m]")
+    speed = _positive(speed, "crosshead speed [m/s]")
+    rate = _positive(rate, "sample rate [Hz]")
+    max_compression = _positive(max_compression, "maximum compression [m]")
+    if max_compression >= height:
+        raise InputError(f"maximum compression {max_compression} m must be below the block "
+                         f"height {height} m")
+    toe = _nonneg(toe, "toe length [m]")
+    noise_n = _nonneg(noise_n, "load-cell noise sd [N]")
+    gen = np.random.default_rng(rng)
+    n = math.ceil(max_compression / speed * rate - 1e-6)
+    t = np.arange(n + 1) / rate
+    x = np.minimum(speed * t, max_compression)
+    area = width * length
+    k = E * area / height
+    f = k * toe_compression(x, toe) + noise_n * gen.standard_normal(t.size)
+    df = pd.DataFrame({"time_s": t, "compression_m": x, "force_n": f})
+    df.attrs.update({
+        "E_true_pa": E, "area_m2": area, "height_m": height, "width_m": width,
+        "length_m": length, "stiffness_n_per_m": k, "toe_m": toe, "noise_n": noise_n,
+        "speed_m_per_s": speed, "specimen": specimen, "material": material,
+    })
+    return df
+
+
+def _mm(x: float) -> str:
+    return f"{x * 1e3:.6g}"
+
+
+def write_compression_export(
+    df: pd.DataFrame,
+    path,
+    *,
+    width: float | None = None,
+    length: float | None = None,
+    height: float | None = None,
+    speed: float | None = None,
+    sample_name: str | None = None,
+):
+    """Write an Instron-like export of a compression test (atomic); return the path.
+
+    Layout (the style of the Instron exports in ``shared/data/phantom-compression``)::
+
+        <sample_name>
+        Compression test;
+        Block Width: 50mm;
+        Block Length: 50mm;
+        Block Height: 30mm;
+        Speed (mm/min): 50;
+        Machine: INSTRON 4502 (simulated);
+        Load cell: 1kN;
+        Time (s),Extension (mm),Load (kN)
+        0.000000,0.000000,-0.00001234
+        ...
+
+    Extension and load are **negative in compression** (Instron convention).  Extension is
+    written to 1 nm (6 decimals in mm), load to 1e-8 kN = 10 uN, time to 1 us.
+
+    Parameters
+    ----------
+    df
+        From :func:`simulate_compression_test` (columns ``time_s``, ``compression_m``,
+        ``force_n``, positive in compression).
+    path
+        Output file.
+    width, length, height
+        [m] Block dimensions; default from ``df.attrs``.
+    speed
+        [m/s] Crosshead speed; default from ``df.attrs``.
+    sample_name
+        First header line; default ``df.attrs['specimen']``.
+    """
+    missing = [c for c in ("time_s", "compression_m", "force_n") if c not in df.columns]
+    if missing:
+        raise InputError(f"compression table lacks column(s) {', '.join(missing)}")
+    attrs = df.attrs
+    vals = {}
+    for key, given, attr in (("width", width, "width_m"), ("length", length, "length_m"),
+                             ("height", height, "height_m"), ("speed", speed, "speed_m_per_s")):
+        v = given if given is not None else attrs.get(attr)
+        if v is None:
+            raise InputError(f"give the block {key} for the export header")
+        vals[key] = _positive(v, f"block {key}")
+    name = sample_name if sample_name is not None else attrs.get("specimen") or "sample"
+    header = [
+        str(name),
+        "Compression test;",
+        f"Block Width: {_mm(vals['width'])}mm;",
+        f"Block Length: {_mm(vals['length'])}mm;",
+        f"Block Height: {_mm(vals['height'])}mm;",
+        f"Speed (mm/min): {vals['speed'] * 60e3:.6g};",
+        "Machine: INSTRON 4502 (simulated);",
+        "Load cell: 1kN;",
+        "Time (s),Extension (mm),Load (kN)",
+    ]
+    ext = -df["compression_m"].to_numpy(dtype=float) * 1e3 + 0.0  # + 0.0 turns -0.0 into 0.0
+    load = -df["force_n"].to_numpy(dtype=float) * 1e-3 + 0.0
+    rows = [f"{t:.6f},{e:.6f},{f:.8f}"
+            for t, e, f in zip(df["time_s"].to_numpy(dtype=float), ext, load, strict=True)]
+    return write_text_atomic("\n".join(header + rows) + "\n", path)
+
+
+# ----------------------------------------------------------------------------- re-exports
+
+_CAMPAIGN_NAMES = ("simulate_campaign", "simulate_palpation_series", "rest_modulus")
+
+
+def __getattr__(name: str):
+    """Lazy re-export of the campaign functions from :mod:`palpbayes.simulate_campaign`."""
+    if name in _CAMPAIGN_NAMES:
+        from . import simulate_campaign as _campaign
+
+        return getattr(_campaign, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

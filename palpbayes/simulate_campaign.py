@@ -1,0 +1,402 @@
+"""Synthetic campaigns: a folder of palpation traces, Instron exports and the truth behind them.
+
+:func:`simulate_campaign` writes the layout of DESIGN §5::
+
+    OUT_DIR/
+      manifest.csv                 one row per trace (palpbayes.io.manifest columns)
+      traces/<trace_id>.csv        time_s, z_m, force_n   (trace ids like White_flat_r01)
+      groundtruth/manifest.csv     file, specimen, material, area_m2, height_m
+      groundtruth/<Material>_S<k>.csv   Instron-like compression exports
+      truth.csv                    the true parameters of every trace
+      truth_groundtruth.csv        the true modulus of every compression specimen
+      truth_materials.csv          material, E_pa, E_sd_pa, thickness_m, nu, width_m, length_m
+
+:func:`simulate_palpation_series` simulates repeated palpation of one specimen with the
+rest-time stiffening law of DESIGN §2.  Both are re-exported by :mod:`palpbayes.simulate`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import zlib
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .contact import Tip, check_nu
+from .errors import InputError, OutputExistsError
+from .io.atomic import write_csv_atomic
+from .io.manifest import write_manifest
+from .io.trace_csv import write_trace
+from .simulate import (
+    PAPER_MATERIALS,
+    PAPER_TIPS,
+    Material,
+    _positive,
+    simulate_compression_test,
+    simulate_trace,
+    write_compression_export,
+)
+from .trace import IndentationTrace
+
+__all__ = ["simulate_campaign", "simulate_palpation_series", "rest_modulus", "child_seed"]
+
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*$")
+
+#: simulate_trace options a campaign passes through (the others it sets itself).
+_PASS_THROUGH = frozenset({
+    "approach", "speed", "rate", "hold", "retract", "drift", "position_noise", "repeatability",
+    "compliance", "finite_thickness", "bonded", "stiffening", "depth",
+})
+
+
+def child_seed(seed: int, *keys: str | int) -> np.random.SeedSequence:
+    """The child of ``SeedSequence(seed)`` addressed by ``keys`` in its spawn tree.
+
+    ``SeedSequence(seed).spawn(n)[i]`` is ``SeedSequence(seed, spawn_key=(i,))``; here the spawn
+    key is built from the labels (CRC32 of strings, integers as they are), so a trace's stream
+    depends only on (seed, material, tip, repetition): adding repetitions, materials or tips
+    leaves every other trace's noise unchanged, and streams stay statistically independent.
+    """
+    key = tuple(zlib.crc32(k.encode()) if isinstance(k, str) else int(k) for k in keys)
+    return np.random.SeedSequence(seed, spawn_key=key)
+
+
+def _check_seed(seed) -> int:
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise InputError(f"seed {seed!r} must be a non-negative integer")
+    return int(seed)
+
+
+def _check_count(value, what: str, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+        raise InputError(f"{what} {value!r} must be an integer >= {minimum}")
+    return int(value)
+
+
+def _check_name(name: str, what: str) -> str:
+    if not _NAME.match(str(name)):
+        raise InputError(f"{what} name {name!r} is not usable in a file name; use letters, "
+                         "digits, '_' and '-'")
+    return str(name)
+
+
+def _prepare_out_dir(out: Path, overwrite: bool) -> None:
+    """Refuse a non-empty folder unless ``overwrite``; then drop a previous campaign's files."""
+    if out.exists() and not out.is_dir():
+        raise OutputExistsError(f"{out} exists and is not a folder; choose another OUT_DIR")
+    if out.is_dir() and any(out.iterdir()):
+        if not overwrite:
+            raise OutputExistsError(
+                f"output folder {out} is not empty; use --force (overwrite=True) to write "
+                "into it, or choose an empty folder")
+        if (out / "truth.csv").is_file():  # a previous simulated campaign: remove its traces
+            for sub in ("traces", "groundtruth"):
+                for f in sorted((out / sub).glob("*.csv")):
+                    f.unlink()
+
+
+def _manifest_row(trace_id: str, file: str, specimen: str, material: str, tip: Tip,
+                  thickness: float, repetition: int, rest_time: float | None) -> dict:
+    return {
+        "trace_id": trace_id,
+        "file": file,
+        "specimen": specimen,
+        "material": material,
+        "tip": tip.kind,
+        "radius_m": tip.radius if tip.radius is not None else np.nan,
+        "half_angle_deg": math.degrees(tip.half_angle) if tip.half_angle is not None else np.nan,
+        "profile_c": tip.c if tip.c is not None else np.nan,
+        "profile_n": tip.n if tip.n is not None else np.nan,
+        "thickness_m": thickness,
+        "repetition": repetition,
+        "rest_time_s": np.nan if rest_time is None else rest_time,
+    }
+
+
+def _truth_row(trace: IndentationTrace, tip_name: str) -> dict:
+    m = trace.metadata
+    return {
+        "trace_id": trace.trace_id,
+        "material": trace.material,
+        "tip": trace.tip.kind,
+        "tip_name": tip_name,
+        "specimen": trace.specimen,
+        "repetition": trace.repetition,
+        "E_true_pa": m["E_true"],
+        "nu": m["nu"],
+        "Estar_true_pa": m["Estar_true"],
+        "z_surf_true_m": m["z_surf_true"],
+        "z_offset_true_m": m["z_offset_true"],
+        "sigma_true_n": m["sigma_true"],
+        "noise_pp_n": m["noise_pp"],
+        "phi_true": m["phi_true"],
+        "force_offset_true_n": m["force_offset_true"],
+        "drift_true_n_per_s": m["drift_true"],
+        "position_noise_true_m": m["position_noise_true"],
+        "repeatability_m": m["repeatability"],
+        "compliance_true_m_per_n": m["compliance_true"],
+        "finite_thickness": m["finite_thickness"],
+        "stiffening": m["stiffening"],
+        "thickness_m": trace.thickness,
+        "depth_m": m["depth_true"],
+        "max_force_true_n": m["max_force_true"],
+        "n_points": trace.n_points,
+    }
+
+
+def _draw_modulus(gen: np.random.Generator, mat: Material) -> float:
+    E = mat.E_pa + mat.E_sd_pa * gen.standard_normal()
+    if E <= 0:
+        raise InputError(f"material {mat.name}: drew a non-positive modulus {E:g} Pa; the sd "
+                         f"{mat.E_sd_pa:g} Pa is too large for the mean {mat.E_pa:g} Pa")
+    return float(E)
+
+
+def simulate_campaign(
+    out_dir: str | os.PathLike,
+    *,
+    seed: int = 0,
+    repetitions: int = 3,
+    materials: Mapping[str, Material] = PAPER_MATERIALS,
+    tips: Mapping[str, Tip] = PAPER_TIPS,
+    nu: float = 0.3,
+    gt_specimens: int = 5,
+    noise_pp: float = 48e-3,
+    noise_ar1: float = 0.0,
+    force_offset_sd: float = 5e-3,
+    z_surf: float = 0.1,
+    z_surf_halfwidth: float = 1e-3,
+    rest_time: float | None = 60.0,
+    overwrite: bool = False,
+    float_format: str = "%.10g",
+    **trace_options,
+) -> Path:
+    """Write a synthetic palpation campaign folder (layout in the module docstring).
+
+    For every material m, tip and repetition r = 1..``repetitions`` one trace is simulated at a
+    new specimen location with its own modulus E_i ~ Normal(E_m, sd_m), surface height
+    z_surf_i ~ Uniform(z_surf ± z_surf_halfwidth) and force offset F0_i ~ Normal(0,
+    force_offset_sd); depth 10 % of the thickness, approach 1 mm, 50 mm/min, 800 Hz, Gaussian
+    noise ``noise_pp`` p-p (sigma = pp/6), half-space physics (as the paper).  The defaults
+    match the package's default model, which is therefore well specified.  ``gt_specimens``
+    compression blocks per material are drawn from the same Normal(E_m, sd_m).
+
+    Each trace and block has its own random stream, :func:`child_seed` (seed, kind, material,
+    tip, repetition): the same seed gives byte-identical files (no timestamps), and changing
+    ``repetitions`` leaves the other traces unchanged.  Files are written atomically.
+
+    Parameters
+    ----------
+    out_dir
+        Output folder (created; must be empty unless ``overwrite``).
+    seed
+        Non-negative integer.
+    repetitions
+        Traces per (material, tip), >= 1.
+    materials, tips
+        Name -> :class:`~palpbayes.simulate.Material` / :class:`~palpbayes.contact.Tip`.
+    nu
+        True Poisson ratio [-].
+    gt_specimens
+        Compression tests per material (0 for none).
+    noise_pp, noise_ar1
+        [N] Peak-to-peak force noise and its AR(1) coefficient.
+    force_offset_sd
+        [N] sd of the per-trace force offset.
+    z_surf, z_surf_halfwidth
+        [m] Centre and half-width of the uniform surface height.
+    rest_time
+        [s] Rest time recorded before every trace (manifest ``rest_time_s``).
+    overwrite
+        Write into a non-empty folder (a previous campaign's traces are removed first).
+    float_format
+        Number format of the trace CSVs; "%.10g" keeps z to 1e-10 m and force to 10
+        significant digits.
+    **trace_options
+        Passed to :func:`~palpbayes.simulate.simulate_trace`: approach, speed, rate, hold,
+        retract, depth, drift, position_noise, repeatability, compliance, finite_thickness,
+        bonded, stiffening.
+
+    Returns
+    -------
+    Path
+        ``out_dir``.
+
+    Raises
+    ------
+    OutputExistsError
+        ``out_dir`` is not empty and ``overwrite`` is False.
+    InputError
+        Bad seed, counts, names or options.
+    """
+    seed = _check_seed(seed)
+    repetitions = _check_count(repetitions, "repetitions", 1)
+    gt_specimens = _check_count(gt_specimens, "gt_specimens", 0)
+    nu = check_nu(nu)
+    unknown = set(trace_options) - _PASS_THROUGH
+    if unknown:
+        raise InputError(f"unknown trace option(s) {', '.join(sorted(unknown))}; allowed: "
+                         f"{', '.join(sorted(_PASS_THROUGH))}")
+    if not materials or not tips:
+        raise InputError("a campaign needs at least one material and one tip")
+    for name in materials:
+        _check_name(name, "material")
+    for name in tips:
+        _check_name(name, "tip")
+    if force_offset_sd < 0 or z_surf_halfwidth < 0:
+        raise InputError("force_offset_sd and z_surf_halfwidth must be non-negative")
+
+    out = Path(out_dir)
+    traces, manifest, truth = [], [], []  # simulate first: bad options fail before any write
+    for mname, mat in materials.items():
+        for tname, tip in tips.items():
+            for rep in range(1, repetitions + 1):
+                gen = np.random.default_rng(child_seed(seed, "trace", mname, tname, rep))
+                E_i = _draw_modulus(gen, mat)
+                zs = z_surf + z_surf_halfwidth * gen.uniform(-1.0, 1.0)
+                f0 = force_offset_sd * gen.standard_normal()
+                tid = f"{mname}_{tname}_r{rep:02d}"
+                trace = simulate_trace(
+                    E_i, tip, nu=nu, z_surf=zs, thickness=mat.thickness_m, noise_pp=noise_pp,
+                    noise_ar1=noise_ar1, force_offset=f0, rng=gen, trace_id=tid,
+                    specimen=mname, material=mname, repetition=rep, rest_time=rest_time,
+                    **trace_options)
+                traces.append(trace)
+                manifest.append(_manifest_row(tid, f"traces/{tid}.csv", mname, mname, tip,
+                                              mat.thickness_m, rep, rest_time))
+                truth.append(_truth_row(trace, tname))
+    tests = _simulate_groundtruth(seed, materials, gt_specimens)
+    _prepare_out_dir(out, overwrite)
+    for trace in traces:
+        write_trace(trace, out / "traces" / f"{trace.trace_id}.csv", float_format=float_format)
+    write_manifest(pd.DataFrame(manifest), out / "manifest.csv")
+    write_csv_atomic(pd.DataFrame(truth), out / "truth.csv")
+    _write_groundtruth(out, tests)
+    mats = pd.DataFrame([{"material": k, "E_pa": m.E_pa,
+                          "E_sd_pa": m.E_sd_pa, "thickness_m": m.thickness_m, "nu": nu,
+                          "width_m": m.width_m, "length_m": m.length_m}
+                         for k, m in materials.items()])
+    write_csv_atomic(mats, out / "truth_materials.csv")
+    return out
+
+
+def _simulate_groundtruth(seed: int, materials: Mapping[str, Material],
+                          n: int) -> list[tuple[str, pd.DataFrame, float]]:
+    """(specimen name, compression table, true E) for ``n`` blocks per material."""
+    tests = []
+    for mname, mat in materials.items():
+        for k in range(1, n + 1):
+            gen = np.random.default_rng(child_seed(seed, "groundtruth", mname, k))
+            E = _draw_modulus(gen, mat)
+            name = f"{mname}_S{k}"
+            df = simulate_compression_test(E, width=mat.width_m, length=mat.length_m,
+                                           height=mat.thickness_m, rng=gen, specimen=name,
+                                           material=mname)
+            tests.append((name, df, E))
+    return tests
+
+
+def _write_groundtruth(out: Path, tests: list[tuple[str, pd.DataFrame, float]]) -> None:
+    if not tests:
+        return
+    rows, truth = [], []
+    for name, df, E in tests:
+        a = df.attrs
+        write_compression_export(df, out / "groundtruth" / f"{name}.csv", sample_name=name)
+        rows.append({"file": f"{name}.csv", "specimen": name, "material": a["material"],
+                     "area_m2": a["area_m2"], "height_m": a["height_m"]})
+        truth.append({"file": f"groundtruth/{name}.csv", "specimen": name,
+                      "material": a["material"], "E_true_pa": E, "toe_m": a["toe_m"],
+                      "noise_n": a["noise_n"]})
+    write_csv_atomic(pd.DataFrame(rows), out / "groundtruth" / "manifest.csv",
+                     float_format="%.10g")
+    write_csv_atomic(pd.DataFrame(truth), out / "truth_groundtruth.csv")
+
+
+# ----------------------------------------------------------------------------- stiffening
+
+
+def rest_modulus(rest_time, c: Sequence[float]) -> np.ndarray:
+    """E(t) = c1·exp(c2·t) + c3·exp(c4·t) [Pa], t the rest time since the last excitation [s].
+
+    The repeated-palpation stiffening law of DESIGN §2 (c1, c3 in Pa; c2, c4 in 1/s).
+    """
+    c1, c2, c3, c4 = (float(v) for v in c)
+    t = np.asarray(rest_time, dtype=float)
+    return c1 * np.exp(c2 * t) + c3 * np.exp(c4 * t)
+
+
+def simulate_palpation_series(
+    E0: float,
+    tip: Tip,
+    rest_times: Sequence[float | None],
+    c: Sequence[float] | None = None,
+    *,
+    rng: np.random.Generator | int | None = None,
+    trace_prefix: str = "series",
+    specimen: str = "",
+    material: str = "",
+    **trace_options,
+) -> list[IndentationTrace]:
+    """Repeated palpations of one specimen with rest-time dependent stiffening.
+
+    Palpation i has modulus E_i = c1·exp(c2·t_i) + c3·exp(c4·t_i) (:func:`rest_modulus`) with
+    t_i = ``rest_times[i]`` the rest since the previous excitation; a rest time of None or inf
+    marks a fresh (fully rested) specimen with modulus ``E0``.  The default
+    c = (E0, 0, 0.25·E0, -1/30 s⁻¹) is E0 plus 25 % right after an excitation, relaxing with
+    a 30 s time constant; with explicit c, E0 should equal the law's limit for consistency.
+
+    Parameters
+    ----------
+    E0
+        [Pa] Modulus of the rested specimen.
+    tip
+        The indenter.
+    rest_times
+        [s] Rest before each palpation.
+    c
+        (c1 [Pa], c2 [1/s], c3 [Pa], c4 [1/s]).
+    rng
+        Generator or seed; palpation i uses the i-th child stream (``Generator.spawn``).
+    trace_prefix
+        Trace ids are ``<prefix>_p01``, ``_p02`` ...
+    specimen, material
+        Labels.
+    **trace_options
+        Passed to :func:`~palpbayes.simulate.simulate_trace` (thickness or depth required).
+
+    Returns
+    -------
+    list of IndentationTrace
+        ``rest_time`` set; ``metadata`` adds ``stiffening_c`` (c1..c4) and ``E_rest_law``.
+    """
+    E0 = _positive(E0, "rested modulus E0 [Pa]")
+    if c is None:
+        c = (E0, 0.0, 0.25 * E0, -1.0 / 30.0)
+    c = tuple(float(v) for v in c)
+    if len(c) != 4 or not all(math.isfinite(v) for v in c):
+        raise InputError(f"stiffening coefficients c must be four finite numbers, got {c!r}")
+    times = list(rest_times)
+    if not times:
+        raise InputError("give at least one rest time")
+    gens = np.random.default_rng(rng).spawn(len(times))
+    out = []
+    for i, (t, gen) in enumerate(zip(times, gens, strict=True), start=1):
+        fresh = t is None or math.isinf(float(t))
+        if not fresh and (not math.isfinite(float(t)) or float(t) < 0):
+            raise InputError(f"rest time {t!r} s must be non-negative (None for a fresh specimen)")
+        E = E0 if fresh else float(rest_modulus(float(t), c))
+        if E <= 0:
+            raise InputError(f"the stiffening law gives E = {E:g} Pa at rest time {t} s; "
+                             "check the coefficients c")
+        trace = simulate_trace(E, tip, rng=gen, trace_id=f"{trace_prefix}_p{i:02d}",
+                               specimen=specimen, material=material, repetition=i,
+                               rest_time=None if fresh else float(t), **trace_options)
+        trace.metadata.update({"stiffening_c": c, "E_rest_law": E, "E0": E0})
+        out.append(trace)
+    return out
