@@ -137,10 +137,12 @@ def test_z_from_tcp_does_not_need_joints(tmp_path, data):
 def test_force_sign_and_axis(tmp_path, data):
     t, q, z, force = data
     path = write(rtde_frame(t, q, z, force, force_raw_sign=+1.0), tmp_path / "plus.csv", ",")
-    # Default -1 turns the +Fz reaction negative: rejected with the fix in the message.
+    # A fixed -1 turns the +Fz reaction negative: rejected with the fix in the message.
     with pytest.raises(DataFileError, match=r"force_sign=\+1") as err:
-        read_rtde(path, tool_offset=OFFSET)
+        read_rtde(path, tool_offset=OFFSET, force_sign=-1)
     assert str(path) in str(err.value)
+    # The default ("auto") picks the sign that makes pressing positive.
+    assert read_rtde(path, tool_offset=OFFSET).metadata["force_sign"] == 1.0
     np.testing.assert_allclose(read_rtde(path, force_sign=1).force, force, atol=1e-12)
     auto = read_rtde(path, force_sign="auto")
     np.testing.assert_allclose(auto.force, force, atol=1e-12)
@@ -148,7 +150,8 @@ def test_force_sign_and_axis(tmp_path, data):
     minus = write(rtde_frame(t, q, z, force), tmp_path / "minus.csv", ",")
     assert read_rtde(minus, force_sign="auto").metadata["force_sign"] == -1.0
     # Unchecked, the sign is applied as asked.
-    np.testing.assert_allclose(read_rtde(path, check=False).force, -force, atol=1e-12)
+    np.testing.assert_allclose(read_rtde(path, check=False, force_sign=-1).force, -force,
+                               atol=1e-12)
     tr = read_rtde(path, force_axis=0, force_sign=1)
     np.testing.assert_allclose(tr.force, 0.5 * force, atol=1e-12)
     assert tr.metadata["force_column"] == "actual_TCP_force_0"

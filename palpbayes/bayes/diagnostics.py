@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Diagnostics", "RHAT_MAX", "ESS_MIN", "import_arviz", "compute_diagnostics"]
+__all__ = ["Diagnostics", "RHAT_MAX", "ESS_MIN", "import_arviz", "compute_diagnostics",
+           "chain_passes"]
 
 RHAT_MAX = 1.01
 ESS_MIN = 400.0
@@ -91,3 +92,19 @@ def compute_diagnostics(idata, names: list[str], tau: np.ndarray, acceptance: fl
         n_steps=n_steps,
         hit_cap=hit_cap,
     )
+
+
+def chain_passes(chain: np.ndarray) -> bool:
+    """True if every parameter of ``chain`` (walkers, draws, ndim) has R-hat <= RHAT_MAX and
+    bulk and tail ESS >= ESS_MIN (arviz, walkers as chains).  Used as the sampler's stop test.
+    """
+    az = import_arviz()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        for k in range(chain.shape[-1]):
+            x = chain[..., k]
+            if not az.rhat(x) <= RHAT_MAX:
+                return False
+            if az.ess(x, method="bulk") < ESS_MIN or az.ess(x, method="tail") < ESS_MIN:
+                return False
+    return True

@@ -12,7 +12,7 @@ from ..fitdata import DEFAULT_F_UNC, FitData, ModelSpec, prepare
 from ..lsq import LSQResult, fit_lsq_data
 from ..trace import IndentationTrace
 from .budget import BudgetSpec, propagate
-from .diagnostics import compute_diagnostics, import_arviz
+from .diagnostics import chain_passes, compute_diagnostics, import_arviz
 from .likelihood import TraceLikelihood
 from .priors import PriorSpec, param_names
 from .result import BayesResult
@@ -118,7 +118,8 @@ def fit_bayes_data(
     if bad.any():
         raise FitError(f"{trace_id}: {int(bad.sum())} initial walker(s) have zero posterior "
                        "density; the least-squares start lies outside the prior")
-    chains = run_emcee(log_prob, p0, settings, int(sampler_ss.generate_state(1)[0]))
+    chains = run_emcee(log_prob, p0, settings, int(sampler_ss.generate_state(1)[0]),
+                       accept=chain_passes)
     post = _posterior_dict(chains.samples, names, data.model.nu)
     bud = propagate(post["E_star"], data, float(np.median(post["z_surf"])), budget,
                     np.random.default_rng(budget_ss))

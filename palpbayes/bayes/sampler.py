@@ -6,9 +6,10 @@ stretch move, and walker R-hat below 1.01 after ~ 2,000 steps against ~ 4,000.
 
 Stopping rule (emcee's autocorrelation tutorial): every ``check_every`` steps the integrated
 autocorrelation time tau of each parameter is estimated; sampling stops once the chain is longer
-than ``tau_factor``·tau (default 100, as in the tutorial) for every parameter and tau changed by less than ``tau_rtol`` since the
-last check, or at ``max_steps``.  Burn-in ``ceil(2·max tau)`` is discarded and the chain thinned
-by ``max(1, floor(min tau / 2))``.
+than ``tau_factor``·tau (default 100, as in the tutorial) for every parameter and tau changed
+by less than ``tau_rtol`` since the last check — and, when an ``accept`` test is given (the
+fit passes R-hat <= 1.01 and ESS >= 400), that test passes — or at ``max_steps``.  Burn-in
+``ceil(2·max tau)`` is discarded and the chain thinned by ``max(1, floor(min tau / 2))``.
 
 Seeding: emcee has no ``seed`` argument and copies NumPy's global state when built, so the
 sampler's own ``RandomState`` is replaced by one seeded from ``seed`` (DESIGN §8).
@@ -17,6 +18,7 @@ sampler's own ``RandomState`` is replaced by one seeded from ``seed`` (DESIGN §
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import emcee
@@ -98,8 +100,17 @@ def _moves(kind: str):
     raise ValueError(f"unknown moves {kind!r}; use 'stretch' or 'de'")
 
 
-def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | None
-              ) -> ChainResult:
+def _burn_thin(tau: np.ndarray, n_steps: int) -> tuple[int, int]:
+    if np.all(np.isfinite(tau)):
+        burn = min(int(np.ceil(2 * float(np.max(tau)))), n_steps // 2)
+        thin = max(1, int(np.floor(0.5 * float(np.min(tau)))))
+    else:
+        burn, thin = n_steps // 4, 1
+    return burn, thin
+
+
+def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | None,
+              accept: Callable[[np.ndarray], bool] | None = None) -> ChainResult:
     """Sample ``log_prob`` (vectorised over walkers) from the initial ensemble ``p0``.
 
     Parameters
@@ -112,6 +123,9 @@ def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | N
         Sampler settings.
     seed
         Seed of the sampler's random state.
+    accept
+        Optional extra test on the burnt-in, thinned chain (walkers, draws, ndim), e.g. R-hat
+        and ESS thresholds; sampling goes on while it fails (up to ``max_steps``).
     """
     n_walkers, ndim = p0.shape
     sampler = emcee.EnsembleSampler(n_walkers, ndim, log_prob, vectorize=True,
@@ -121,7 +135,6 @@ def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | N
     if progress is None:
         progress = sys.stderr.isatty()
     old_tau = np.full(ndim, np.inf)
-    tau = np.full(ndim, np.nan)
     hit_cap = True
     for _ in sampler.sample(p0, iterations=settings.max_steps, progress=progress):
         it = sampler.iteration
@@ -129,15 +142,18 @@ def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | N
             continue
         tau = sampler.get_autocorr_time(tol=0)
         stable = np.all(np.abs(old_tau - tau) / tau < settings.tau_rtol)
-        if np.all(tau * settings.tau_factor < it) and stable:
-            hit_cap = False
-            break
         old_tau = tau
-    if not np.all(np.isfinite(tau)) or hit_cap:
-        tau = sampler.get_autocorr_time(tol=0)
-    tmax = float(np.max(tau)) if np.all(np.isfinite(tau)) else sampler.iteration / 4
-    burn = min(int(np.ceil(2 * tmax)), sampler.iteration // 2)
-    thin = max(1, int(np.floor(0.5 * float(np.min(tau))))) if np.all(np.isfinite(tau)) else 1
+        if not (np.all(tau * settings.tau_factor < it) and stable):
+            continue
+        if accept is not None:
+            burn, thin = _burn_thin(tau, it)
+            chain = np.swapaxes(sampler.get_chain(discard=burn, thin=thin), 0, 1)
+            if not accept(chain):
+                continue
+        hit_cap = False
+        break
+    tau = sampler.get_autocorr_time(tol=0)
+    burn, thin = _burn_thin(tau, sampler.iteration)
     chain = sampler.get_chain(discard=burn, thin=thin)  # (draws, walkers, ndim)
     lp = sampler.get_log_prob(discard=burn, thin=thin)
     return ChainResult(

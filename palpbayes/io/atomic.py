@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -14,6 +15,27 @@ from pathlib import Path
 import pandas as pd
 
 __all__ = ["atomic_path", "write_csv_atomic", "write_text_atomic"]
+
+
+def _process_umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+#: The umask at import (read once: changing it is not thread-safe).
+_UMASK = _process_umask()
+
+
+def _final_mode(path: Path) -> int:
+    """Permissions for the finished file: those of the file it replaces, else 0o666 & ~umask.
+
+    (``mkstemp`` creates its file with 0o600, which would otherwise leak into the result.)
+    """
+    try:
+        return stat.S_IMODE(path.stat().st_mode)
+    except OSError:
+        return 0o666 & ~_UMASK
 
 
 @contextlib.contextmanager
@@ -30,6 +52,7 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     tmp_path = Path(tmp)
     try:
         yield tmp_path
+        os.chmod(tmp_path, _final_mode(path))
         os.replace(tmp_path, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):

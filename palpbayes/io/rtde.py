@@ -29,10 +29,11 @@ UR documents ``actual_TCP_force`` as the generalised external force at the TCP, 
 base frame.  Whether pressing down on a specimen shows up as +Fz or -Fz depends on the
 controller generation, the sensor (built-in e-Series sensor, CB3 current-based estimate, or an
 add-on sensor feeding the field) and its zeroing, and reports disagree.  The compressive force is
-therefore ``force_sign × actual_TCP_force_{force_axis}`` with ``force_sign = -1`` by default;
-pass ``force_sign=+1`` when your setup reports the reaction as +Fz, or ``force_sign="auto"`` to
-choose the sign that makes the force grow as the tip goes down.  With ``check=True`` (default)
-a trace whose force is negative at the deepest indentation is rejected with that advice.
+therefore ``force_sign × actual_TCP_force_{force_axis}``; the default ``force_sign="auto"``
+chooses the sign that makes the force grow as the tip goes down (the physics of pressing, not a
+guess about the controller), and the chosen sign is stored in ``trace.metadata["force_sign"]``.
+Pass ``force_sign=+1`` or ``-1`` to fix it; with ``check=True`` (default) a trace whose force is
+then negative at the deepest indentation is rejected with the advice to flip it.
 """
 
 from __future__ import annotations
@@ -231,7 +232,7 @@ def read_rtde(
     tool_offset: float | tuple[float, float, float] = 0.0,
     dh: DHParameters = UR3E,
     z_source: Literal["q", "tcp"] = "q",
-    force_sign: float | Literal["auto"] = -1.0,
+    force_sign: float | Literal["auto"] = "auto",
     force_axis: int = 2,
     tip: Tip | None = None,
     trace_id: str | None = None,

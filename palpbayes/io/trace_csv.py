@@ -81,6 +81,10 @@ def _numeric(df: pd.DataFrame, col: str, source: str) -> np.ndarray:
         i = int(np.argmax(np.isnan(arr)))
         raise DataFileError(source, f"column {col!r} is empty (NaN) at data row {i + 1}",
                             "remove or repair that row")
+    if np.isinf(arr).any():
+        i = int(np.argmax(np.isinf(arr)))
+        raise DataFileError(source, f"column {col!r} is infinite at data row {i + 1}",
+                            "remove or repair that row")
     return arr
 
 
@@ -140,10 +144,14 @@ def trace_from_frame(
         raise DataFileError(source, "no data rows (header only or empty)",
                             "check that the recording was saved")
     lower = {str(c).strip().lower() for c in df.columns}
-    if "z" not in columns and not any(c.startswith("z") for c in lower) and "q0_rad" in lower:
+    has_q = any(c.startswith("q0_") for c in lower)
+    if "z" not in columns and not any(c.startswith("z") for c in lower) and has_q:
         from .rtde import trace_from_joint_frame
 
-        return trace_from_joint_frame(df, source, tool_offset=tool_offset, **metadata)
+        joint_units = {k: v for k, v in units.items() if k in ("time", "force")}
+        return trace_from_joint_frame(df, source, tool_offset=tool_offset,
+                                      units=joint_units or None, force_sign=force_sign,
+                                      check=check, **metadata)
     arrays = {}
     for q in ("time", "z", "force"):
         col, unit = _find_column(df, q, columns.get(q), units.get(q), source)

@@ -1,0 +1,162 @@
+"""``palpbayes fit INPUT --out DIR``: least squares and/or Bayes on a trace or a manifest."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
+from ..bayes.priors import NOISE_MODELS
+from ..contact import TIP_KINDS, Tip, check_nu
+from ..errors import InputError
+from ..fitjob import METHODS, FitOptions
+from ..io.manifest import is_manifest
+
+__all__ = ["register", "run", "add_model_options", "options_from_args", "trace_from_args"]
+
+
+def add_model_options(p: argparse.ArgumentParser) -> None:
+    """Options shared by ``fit`` and ``report``: model, priors, budget, sampler."""
+    g = p.add_argument_group("model")
+    g.add_argument("--method", choices=METHODS, default="bayes",
+                   help="bayes (default), lsq (the paper's baseline) or both")
+    g.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
+    nu = g.add_mutually_exclusive_group()
+    nu.add_argument("--nu", type=float, default=None,
+                    help="Poisson ratio (default 0.3; the budget varies it by ±0.05)")
+    nu.add_argument("--nu-range", type=float, nargs=2, metavar=("LO", "HI"),
+                    help="uniform Poisson-ratio range for the budget (fit at its midpoint)")
+    g.add_argument("--noise", choices=NOISE_MODELS, default="gaussian",
+                   help="noise model of the Bayesian fit (default gaussian)")
+    g.add_argument("--noise-pp", type=float, default=48e-3, metavar="N",
+                   help="sensor peak-to-peak noise [N] (default 0.048; sigma prior = pp/6)")
+    g.add_argument("--f-unc", type=float, default=None, metavar="N",
+                   help="surface constraint |F(z_surf)| <= F_unc [N] (default: --noise-pp)")
+    g.add_argument("--fit-fraction", type=float, default=None,
+                   help="fraction of the penetration skipped (default 0.2 flat, 0 others)")
+    g.add_argument("--max-depth", type=float, default=None, metavar="M",
+                   help="fit only down to this depth below the contact onset [m]")
+    g.add_argument("--finite-thickness", action="store_true",
+                   help="apply the finite-thickness correction (Dimitriadis / Hayes)")
+    g.add_argument("--non-bonded", action="store_true",
+                   help="specimen not bonded to its base (finite-thickness correction)")
+    g.add_argument("--radius-tolerance", type=float, default=0.01,
+                   help="relative tip-radius tolerance of the budget (default 0.01)")
+    g.add_argument("--gain-sd", type=float, default=0.01,
+                   help="relative force-gain sd of the budget (default 0.01)")
+    g.add_argument("--compliance-max", type=float, default=2e-6, metavar="M_PER_N",
+                   help="upper bound of the series compliance of the budget [m/N]")
+    g.add_argument("--strict", action="store_true",
+                   help="make non-converged or flagged Bayesian fits an error")
+    g.add_argument("--max-steps", type=int, default=20000, help="emcee step cap")
+    g.add_argument("--workers", type=int, default=None,
+                   help="worker processes (default: all cores)")
+    g.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bars (default: only on a terminal)")
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "fit", help="fit E to a trace CSV or a campaign manifest",
+        description="Fit the elastic modulus of one trace or of every trace of a manifest. "
+        "Writes DIR/summary.csv (one row per trace x method) and DIR/posterior/<id>.nc.",
+    )
+    p.add_argument("input", metavar="INPUT", help="trace CSV or campaign manifest CSV")
+    p.add_argument("--out", required=True, metavar="DIR", help="results folder")
+    p.add_argument("--force", action="store_true", help="overwrite an existing results folder")
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted run, keeping finished traces")
+    add_model_options(p)
+    t = p.add_argument_group("single trace (ignored for a manifest)")
+    t.add_argument("--tip", choices=TIP_KINDS, help="tip kind")
+    t.add_argument("--radius", type=float, metavar="M", help="tip radius [m]")
+    t.add_argument("--half-angle", type=float, metavar="DEG", help="cone half-angle [deg]")
+    t.add_argument("--profile-c", type=float, help="power-law profile c of f = c*r^n")
+    t.add_argument("--profile-n", type=float, help="power-law profile n of f = c*r^n")
+    t.add_argument("--thickness", type=float, metavar="M", help="specimen thickness [m]")
+    t.add_argument("--material", default="", help="material label")
+    c = p.add_argument_group("columns and units (single trace)")
+    for q, unit in (("time", "s"), ("z", "m"), ("force", "N")):
+        c.add_argument(f"--{q}-column", metavar="NAME", help=f"column holding {q}")
+        c.add_argument(f"--{q}-unit", metavar="UNIT", help=f"unit of {q} (default {unit})")
+    c.add_argument("--force-sign", type=float, choices=(1.0, -1.0), default=1.0,
+                   help="-1 if pressing gives negative force")
+    c.add_argument("--z-sign", type=float, choices=(1.0, -1.0), default=1.0,
+                   help="-1 if z is down-positive")
+
+
+def options_from_args(args: argparse.Namespace) -> FitOptions:
+    """Build :class:`FitOptions` from parsed arguments (validated)."""
+    if args.nu_range is not None:
+        lo, hi = args.nu_range
+        check_nu(lo), check_nu(hi)
+        if hi < lo:
+            raise InputError(f"--nu-range {lo} {hi}: LO must not exceed HI")
+        nu, budget_nu = 0.5 * (lo + hi), (lo, hi)
+    else:
+        nu, budget_nu = check_nu(0.3 if args.nu is None else args.nu), None
+    for name in ("noise_pp", "radius_tolerance", "gain_sd", "compliance_max"):
+        v = getattr(args, name)
+        if not (math.isfinite(v) and v >= 0):
+            raise InputError(f"--{name.replace('_', '-')} {v!r} must be a non-negative number")
+    if not args.noise_pp > 0:
+        raise InputError("--noise-pp must be positive (the sensor's peak-to-peak noise in N)")
+    if args.workers is not None and args.workers < 1:
+        raise InputError(f"--workers {args.workers} must be at least 1")
+    budget = BudgetSpec(nu_range=budget_nu, radius_tolerance=args.radius_tolerance,
+                        gain_sd=args.gain_sd, compliance_max=args.compliance_max)
+    settings = SamplerSettings(max_steps=args.max_steps, progress=args.progress)
+    return FitOptions(
+        method=args.method, nu=nu, thickness_correction=args.finite_thickness,
+        bonded=not args.non_bonded, f_unc=args.f_unc if args.f_unc is not None else args.noise_pp,
+        fit_fraction=args.fit_fraction, max_depth=args.max_depth, noise=args.noise,
+        priors=PriorSpec(noise_pp=args.noise_pp), budget=budget, settings=settings,
+        seed=args.seed, strict=args.strict,
+    )
+
+
+def trace_from_args(args: argparse.Namespace):
+    """Read the single trace named by ``args.input`` with the tip and column options."""
+    from ..io.trace_csv import read_trace
+
+    if args.tip is None:
+        raise InputError(f"{args.input}: a single trace needs --tip ({', '.join(TIP_KINDS)}) "
+                         "and its size (--radius M, --half-angle DEG or --profile-c/-n)")
+    tip = Tip(args.tip, radius=args.radius,
+              half_angle=None if args.half_angle is None else math.radians(args.half_angle),
+              c=args.profile_c, n=args.profile_n)
+    columns = {q: getattr(args, f"{q}_column") for q in ("time", "z", "force")
+               if getattr(args, f"{q}_column")}
+    units = {q: getattr(args, f"{q}_unit") for q in ("time", "z", "force")
+             if getattr(args, f"{q}_unit")}
+    return read_trace(args.input, columns=columns, units=units, force_sign=args.force_sign,
+                      z_sign=args.z_sign, tip=tip, thickness=args.thickness,
+                      material=args.material)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..campaign import fit_campaign
+
+    options = options_from_args(args)
+    path = Path(args.input)
+    if not path.exists():
+        raise InputError(f"{path}: file not found")
+    source = path if is_manifest(path) else [trace_from_args(args)]
+    if args.progress is not None:
+        options = options.with_progress(args.progress)
+    summary = fit_campaign(source, args.out, options, workers=args.workers, resume=args.resume,
+                           force=args.force, progress=args.progress)
+    cols = ["trace_id", "method", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa", "converged"]
+    show = summary[cols].copy()
+    for c in ("E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa"):
+        show[c.replace("_pa", "_kPa")] = show.pop(c) / 1e3
+    print(show.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
+    flagged = summary[(summary["method"] == "bayes") & (summary["converged"] == False)]  # noqa: E712
+    if len(flagged):
+        print(f"warning: {len(flagged)} Bayesian fit(s) not converged or flagged; see the "
+              "'flags' column of summary.csv")
+    print(f"wrote {Path(args.out) / 'summary.csv'}")
+    return 0
+
+

@@ -1,0 +1,141 @@
+"""One fitting job: a trace, its model and the chosen methods -> summary rows (+ posterior).
+
+This is the unit of work that ``palpbayes fit`` runs for a single trace and that
+:mod:`palpbayes.campaign` distributes over worker processes.  It does no output itself except
+the per-trace netCDF when ``posterior_dir`` is given (written atomically).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from .bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
+from .errors import ConvergenceWarning
+from .fitdata import DEFAULT_F_UNC, ModelSpec, prepare
+from .lsq import LSQResult, fit_lsq_data
+from .trace import IndentationTrace
+
+__all__ = ["FitOptions", "FitOutcome", "fit_trace", "SUMMARY_COLUMNS", "METHODS"]
+
+METHODS = ("bayes", "lsq", "both")
+
+#: Columns of ``summary.csv`` in order (DESIGN §7 first, then extras).
+SUMMARY_COLUMNS = [
+    "trace_id", "method", "tip", "n_points", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa",
+    "Estar_pa", "z_surf_m", "z_surf_sd_m", "sigma_n", "converged", "rhat_max", "ess_min",
+    "material", "specimen", "repetition", "rest_time_s", "nu", "noise_model",
+    "E_stat_pa", "E_stat_sd_pa", "E_stat_lo_pa", "E_stat_hi_pa", "k", "m", "rss_n2",
+    "constraint_active", "tau_max", "acceptance", "n_steps", "flags",
+]
+
+
+@dataclass(frozen=True)
+class FitOptions:
+    """Everything a fit needs besides the trace (picklable, for worker processes).
+
+    Parameters
+    ----------
+    method
+        ``"bayes"``, ``"lsq"`` or ``"both"``.
+    nu
+        Poisson ratio used for E = E*·(1 − nu²).
+    thickness_correction
+        Apply the finite-thickness correction with the trace's thickness.
+    bonded
+        Specimen bonded to the base (thickness correction only).
+    f_unc
+        [N] Sensor uncertainty (surface constraint and F0 prior).
+    fit_fraction
+        Fraction of the penetration skipped (None: 0.2 for flat, 0 otherwise).
+    max_depth
+        [m] Only fit samples shallower than this below the contact onset.
+    noise
+        Noise model of the Bayesian fit.
+    priors, budget, settings
+        Bayesian settings.
+    seed
+        Base seed; each trace's seed is derived from it and the trace id.
+    strict
+        Make non-convergence an error.
+    """
+
+    method: str = "bayes"
+    nu: float = 0.3
+    thickness_correction: bool = False
+    bonded: bool = True
+    f_unc: float = DEFAULT_F_UNC
+    fit_fraction: float | None = None
+    max_depth: float | None = None
+    noise: str = "gaussian"
+    priors: PriorSpec = field(default_factory=PriorSpec)
+    budget: BudgetSpec = field(default_factory=BudgetSpec)
+    settings: SamplerSettings = field(default_factory=SamplerSettings)
+    seed: int = 0
+    strict: bool = False
+
+    def with_progress(self, progress: bool | None) -> FitOptions:
+        return replace(self, settings=replace(self.settings, progress=progress))
+
+
+@dataclass
+class FitOutcome:
+    """Rows for ``summary.csv`` and the result objects of one trace."""
+
+    rows: list[dict]
+    lsq: LSQResult | None = None
+    bayes: BayesResult | None = None
+    posterior_path: Path | None = None
+
+
+def trace_seed(base: int, trace_id: str) -> int:
+    """A per-trace seed from the base seed and the trace id (independent of trace order)."""
+    words = np.frombuffer(trace_id.encode("utf-8"), dtype=np.uint8).astype(np.uint32)
+    return int(np.random.SeedSequence([int(base), *words.tolist()]).generate_state(1)[0])
+
+
+def fit_trace(trace: IndentationTrace, options: FitOptions,
+              posterior_dir: str | Path | None = None) -> FitOutcome:
+    """Fit one trace with the requested method(s).
+
+    The least-squares fit always runs (the Bayesian walkers start from it); its row is
+    returned for ``method`` "lsq" or "both".
+    """
+    if trace.tip is None:
+        from .errors import GeometryError
+
+        raise GeometryError(f"{trace.source or trace.trace_id}: no tip geometry; give --tip and "
+                            "its size")
+    thickness = trace.thickness if options.thickness_correction else None
+    if options.thickness_correction and thickness is None:
+        from .errors import GeometryError
+
+        raise GeometryError(f"{trace.trace_id}: the thickness correction needs the specimen "
+                            "thickness (--thickness or the manifest's thickness_m)")
+    model = ModelSpec(trace.tip, nu=options.nu, thickness=thickness, bonded=options.bonded)
+    data = prepare(trace, model, f_unc=options.f_unc, fit_fraction=options.fit_fraction,
+                   max_depth=options.max_depth)
+    lsq = fit_lsq_data(data, trace_id=trace.trace_id)
+    meta = {"material": trace.material, "specimen": trace.specimen,
+            "repetition": trace.repetition, "rest_time_s": trace.rest_time}
+    rows = []
+    if options.method in ("lsq", "both"):
+        rows.append({**lsq.summary_row(), **meta})
+    bayes = None
+    path = None
+    if options.method in ("bayes", "both"):
+        with warnings.catch_warnings():
+            if not options.strict:
+                warnings.simplefilter("ignore", ConvergenceWarning)  # flagged in the row
+            bayes = fit_bayes_data(
+                data, noise=options.noise, priors=options.priors, budget=options.budget,
+                settings=options.settings, seed=trace_seed(options.seed, trace.trace_id),
+                strict=options.strict, trace_id=trace.trace_id, lsq=lsq,
+            )
+        rows.append({**bayes.summary_row(), **meta})
+        if posterior_dir is not None:
+            path = bayes.to_netcdf(Path(posterior_dir) / f"{trace.trace_id}.nc")
+    return FitOutcome(rows=rows, lsq=lsq, bayes=bayes, posterior_path=path)

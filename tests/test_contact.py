@@ -1,0 +1,194 @@
+"""Contact laws: MDR general law vs closed forms, exact Sneddon sphere, thickness corrections."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from palpbayes.contact import (
+    LAWS,
+    Tip,
+    check_nu,
+    cone,
+    exponent,
+    flat,
+    force,
+    k_from_modulus,
+    mdr,
+    modulus_from_k,
+    paraboloid,
+    shape,
+    sphere,
+    thickness_factor,
+)
+from palpbayes.contact.thickness import dimitriadis_coefficients, hayes_kappa
+from palpbayes.errors import GeometryError
+
+DEPTHS = np.linspace(1e-6, 3e-3, 500)
+TIPS = [
+    Tip("flat", radius=0.01),
+    Tip("paraboloid", radius=0.0117),
+    Tip("sphere", radius=0.01),
+    Tip("cone", half_angle=math.radians(70)),
+    Tip("power", c=250.0, n=2.5),
+]
+
+
+def rel(a, b):
+    return np.max(np.abs(np.asarray(a) / np.asarray(b) - 1))
+
+
+def test_hess_factor_known_values():
+    # kappa_1 = pi/2 (cone), kappa_2 = 2 (paraboloid), kappa_4 = 8/3 (Popov & Hess 2015, tab. 3.1)
+    assert mdr.hess_factor(1) == pytest.approx(np.pi / 2, rel=1e-14)
+    assert mdr.hess_factor(2) == pytest.approx(2.0, rel=1e-14)
+    assert mdr.hess_factor(4) == pytest.approx(8.0 / 3.0, rel=1e-14)
+
+
+def test_mdr_equals_paraboloid_closed_form():
+    R = 0.0117
+    assert rel(mdr.shape(DEPTHS, c=1 / (2 * R), n=2), paraboloid.shape(DEPTHS, R)) < 1e-12
+
+
+def test_mdr_equals_cone_closed_form():
+    alpha = math.radians(65)
+    assert rel(mdr.shape(DEPTHS, c=1 / math.tan(alpha), n=1), cone.shape(DEPTHS, alpha)) < 1e-12
+
+
+def test_mdr_tends_to_flat_punch():
+    # f = (r/a)^n is a flat punch of radius a as n -> inf; the error falls like ln(n)/n.
+    # (with a = 1 length unit so that c = a^-n = 1 does not overflow)
+    a = 1.0
+    errors = [rel(mdr.shape(DEPTHS, c=1.0, n=n), flat.shape(DEPTHS, a)) for n in
+              (1e2, 1e4, 1e6)]
+    assert errors[0] > errors[1] > errors[2]
+    assert errors[2] < 5e-5  # ~ |ln d|/n with d in units of a
+    # and the contact-radius form F = 2n/(n+1)·E*·a·d is exact for every n
+    n = 7.0
+    c = 3.0e5
+    a_n = (DEPTHS / (mdr.hess_factor(n) * c)) ** (1 / n)
+    assert rel(mdr.shape(DEPTHS, c, n), 2 * n / (n + 1) * a_n * DEPTHS) < 1e-12
+
+
+def test_registry_power_laws_match_modules():
+    for tip in TIPS:
+        law = LAWS[tip.kind]
+        s = law.shape(DEPTHS, tip)
+        if tip.kind != "sphere":
+            assert rel(s, law.prefactor(tip) * DEPTHS ** law.exponent(tip)) < 1e-12
+    assert exponent(Tip("sphere", radius=0.01)) is None
+
+
+def test_sneddon_parametric_oracle():
+    # independent evaluation of Sneddon's parametric form at chosen contact radii
+    R = 0.01
+    a = np.linspace(0.05, 0.95, 200) * R  # the direct formula cancels below
+    log = np.log((R + a) / (R - a))
+    d = a / 2 * log
+    F = 0.5 * ((R**2 + a**2) * log - 2 * a * R)
+    assert rel(sphere.shape(d, R), F) < 1e-10
+    assert rel(sphere.contact_radius(d, R), a) < 1e-12
+
+
+def test_sneddon_tends_to_hertz_and_is_three_percent_below_at_0p3():
+    R = 0.01
+    ratios = [float(sphere.shape(x * R, R) / paraboloid.shape(x * R, R)) for x in
+              (1e-8, 1e-5, 1e-3, 0.1, 0.3)]
+    assert abs(ratios[0] - 1) < 1e-8
+    assert abs(ratios[1] - 1) < 2e-6
+    assert all(np.diff(ratios) < 0)  # the deficit grows with depth
+    assert 0.02 < 1 - ratios[-1] < 0.031  # 3.0 % at d/R = 0.3 (DESIGN §1)
+
+
+def test_force_zero_for_non_positive_depth_and_vectorised():
+    d = np.array([[-1e-3, 0.0], [1e-4, 2e-3]])
+    for tip in TIPS:
+        F = force(d, 1e5, 0.3, tip)
+        assert F.shape == d.shape
+        assert F[0, 0] == 0 and F[0, 1] == 0
+        assert np.all(F[1] > 0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    d1=st.floats(1e-6, 5e-3), d2=st.floats(1e-6, 5e-3),
+    E=st.floats(1e2, 1e9), scale=st.floats(1.01, 10.0),
+    tip_index=st.integers(0, len(TIPS) - 1),
+)
+def test_monotone_and_scaling_laws(d1, d2, E, scale, tip_index):
+    tip = TIPS[tip_index]
+    lo, hi = sorted((d1, d2))
+    if hi > lo:
+        assert force(hi, E, 0.3, tip) > force(lo, E, 0.3, tip)
+    assert force(lo, scale * E, 0.3, tip) == pytest.approx(scale * force(lo, E, 0.3, tip),
+                                                            rel=1e-12)
+    m = exponent(tip)
+    if m is not None:  # F ∝ d^m
+        assert force(scale * lo, E, 0.3, tip) == pytest.approx(
+            scale**m * force(lo, E, 0.3, tip), rel=1e-10)
+
+
+def test_k_modulus_round_trip_and_paper_sphere_formula():
+    R, nu, k = 0.01, 0.3, 1.7e4
+    tip = Tip("paraboloid", radius=R)
+    assert modulus_from_k(k, nu, tip) == pytest.approx(k * 3 * (1 - nu**2) / (4 * np.sqrt(R)))
+    assert k_from_modulus(modulus_from_k(k, nu, tip), nu, tip) == pytest.approx(k, rel=1e-14)
+    with pytest.raises(GeometryError, match="no power-law form"):
+        modulus_from_k(k, nu, Tip("sphere", radius=R))
+
+
+@pytest.mark.parametrize("bonded, expected", [
+    (True, [1.133, 1.283, 0.769, -0.0975]),
+    (False, [0.884, 0.781, 0.386, 0.0048]),
+])
+def test_dimitriadis_nu_half_matches_published_coefficients(bonded, expected):
+    c = dimitriadis_coefficients(0.5, bonded)
+    np.testing.assert_allclose(c[1:], expected, atol=2e-3)
+    # the 4·a0²/pi (instead of /pi²) bug would give c2 ≈ 4.03 for the bonded case
+    assert c[2] < 1.5
+
+
+def test_dimitriadis_factor_applied_in_shape():
+    tip = Tip("paraboloid", radius=0.01)
+    d, h, nu = 2e-3, 0.02, 0.3
+    chi = np.sqrt(0.01 * d) / h
+    c = dimitriadis_coefficients(nu, True)
+    expected = sum(ci * chi**i for i, ci in enumerate(c))
+    assert shape(d, tip, thickness_m=h, nu=nu) == pytest.approx(
+        expected * paraboloid.shape(d, 0.01), rel=1e-14)
+    assert expected > 1.1  # a 20 mm layer stiffens the response by > 10 %
+
+
+def test_hayes_table_nodes_and_range():
+    for a_h, k3, k5 in [(0.2, 1.207, 1.281), (0.6, 1.785, 2.213), (1.0, 2.484, 3.619)]:
+        assert hayes_kappa(a_h, 1.0, 0.3) == pytest.approx(k3, abs=1e-12)
+        assert hayes_kappa(a_h, 1.0, 0.5) == pytest.approx(k5, abs=1e-12)
+    mid = hayes_kappa(0.4, 1.0, 0.4)
+    assert mid == pytest.approx(0.5 * (1.473 + 1.684), abs=1e-12)
+    with pytest.raises(GeometryError, match="outside Hayes"):
+        hayes_kappa(1.5, 1.0, 0.3)
+    with pytest.raises(GeometryError, match="0.2..0.5"):
+        hayes_kappa(0.5, 1.0, 0.1)
+    with pytest.raises(GeometryError, match="no finite-thickness correction for tip 'cone'"):
+        thickness_factor(1e-3, Tip("cone", half_angle=1.0), 0.02, 0.3)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"kind": "wedge", "radius": 1.0}, "unknown tip kind"),
+    ({"kind": "sphere"}, "radius.*missing"),
+    ({"kind": "flat", "radius": -0.01}, "positive"),
+    ({"kind": "flat", "radius": float("nan")}, "positive"),
+    ({"kind": "cone", "half_angle": 2.0}, "below pi/2"),
+    ({"kind": "power", "c": 1.0}, "exponent n is missing"),
+])
+def test_tip_validation(kwargs, match):
+    with pytest.raises(GeometryError, match=match):
+        Tip(**kwargs)
+
+
+@pytest.mark.parametrize("nu", [-0.1, 0.5, 0.7, float("nan"), "x"])
+def test_poisson_ratio_range(nu):
+    with pytest.raises(GeometryError, match="Poisson ratio"):
+        check_nu(nu)
