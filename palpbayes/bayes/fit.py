@@ -72,9 +72,10 @@ def _flags(post: dict, data: FitData, priors: PriorSpec) -> list[str]:
     z = post["z_surf"]
     if np.std(z) > 0.2 * (hi - lo) / np.sqrt(12):
         out.append("prior-dominated z_surf: the data barely constrain the surface")
-    e_lo, e_hi = priors.Estar_bounds
-    if np.quantile(post["E_star"], 0.01) < 1.5 * e_lo or np.quantile(post["E_star"], 0.99) > \
-            e_hi / 1.5:
+    # a bound within 3 posterior sd of the median of log E*: the prior truncates the posterior
+    log_e = np.log(post["E_star"])
+    med, sd = np.median(log_e), np.std(log_e)
+    if min(med - np.log(priors.Estar_bounds[0]), np.log(priors.Estar_bounds[1]) - med) < 3 * sd:
         out.append("E* posterior reaches the prior bound")
     return out
 

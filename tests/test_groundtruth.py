@@ -1,0 +1,319 @@
+"""Ground truth from compression tests: the real phantoms, synthetic curves, manifests, CLI."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from palpbayes.errors import DataFileError, InputError
+from palpbayes.groundtruth import (
+    PER_FILE_COLUMNS,
+    SUMMARY_COLUMNS,
+    analyse,
+    collect_tests,
+    fit_modulus,
+    read_groundtruth_manifest,
+    scan_inputs,
+)
+from palpbayes.io.atomic import write_csv_atomic
+from palpbayes.io.instron import CompressionTest, read_compression_test
+
+PHANTOMS = Path(__file__).parents[2] / "shared" / "data" / "phantom-compression"
+#: published_moduli.csv label -> folder / material label of the exports
+FOLDER = {"EF50_12.5T": "EF50_12_5T", "EF30_0T": "EF30_0T", "EF10_50T": "EF10_50T"}
+
+
+def need_phantoms() -> Path:
+    if not (PHANTOMS / "published_moduli.csv").is_file():
+        pytest.skip(f"real phantom data not found at {PHANTOMS} (shared/data is not checked out "
+                    "next to the repository)")
+    return PHANTOMS
+
+
+# ----------------------------------------------------------------------------- synthetic
+
+
+def curve(E=150e3, *, width=0.04, length=0.06, height=0.025, toe=0.05e-3, noise=0.02,
+          max_compression=4e-3, rate=25.0, speed=50 / 60e3, seed=0):
+    """Linear-elastic block with a quadratic toe of length 2·toe (slack toe) and white noise.
+
+    Returns time [s], compression [m], load [N] (positive in compression) and the stiffness.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(max_compression / speed * rate) + 1) / rate
+    x = speed * t
+    u = np.where(x < 2 * toe, x * x / (4 * toe), x - toe) if toe > 0 else x
+    k = E * width * length / height
+    return t, x, k * u + noise * rng.standard_normal(t.size), k
+
+
+def export(path: Path, t, x, f, *, header=True, width=0.04, length=0.06, height=0.025,
+           footer=False) -> Path:
+    """Simulator-style export: extension and load negative in compression, mm and kN."""
+    lines = [path.stem, "Compression test;"]
+    if header:
+        lines += [f"Block Width: {width * 1e3:g}mm;", f"Block Length: {length * 1e3:g}mm;",
+                  f"Block Height: {height * 1e3:g}mm;"]
+    lines += ["Speed (mm/min): 50;", "Machine: INSTRON 4502 (simulated);",
+              "Time (s),Extension (mm),Load (kN)"]
+    lines += [f"{a:.4f},{-b * 1e3:.6f},{-c * 1e-3:.9f}" for a, b, c in zip(t, x, f, strict=True)]
+    if footer:
+        lines += ["", "End of test;"]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_synthetic_export_recovers_E_within_1pct(tmp_path):
+    E = 150e3
+    t, x, f, _ = curve(E, seed=1)
+    path = export(tmp_path / "Foam_S1.csv", t, x, f, footer=True)
+    fit = fit_modulus(read_compression_test(path))
+    assert abs(fit.E_pa / E - 1) < 0.01
+    assert 0 < fit.E_sd_pa < 0.01 * E
+    assert fit.strain_toe == pytest.approx(0.05e-3 / 0.025, abs=2e-4)  # toe offset = toe / h
+    assert fit.strain_lo == pytest.approx(fit.strain_toe, abs=2 * 50 / 60e3 / 25 / 0.025)
+    assert fit.strain_hi == pytest.approx(fit.strain_toe + 0.05, abs=2 * 50 / 60e3 / 25 / 0.025)
+    assert fit.r2 > 0.999 and fit.n_points > 30
+    assert (fit.file, fit.specimen, fit.material) == (str(path), "Foam_S1", "Foam")
+
+
+def test_exact_line_and_regression_standard_error():
+    h, A = 0.02, 1e-3
+    x = np.linspace(0, 0.004, 201)
+    exact = CompressionTest(np.arange(201.0), x, 2e5 * A / h * (x - 1e-4), "s", "m", A, h)
+    fit = fit_modulus(exact)
+    assert fit.E_pa == pytest.approx(2e5, rel=1e-10) and fit.r2 == pytest.approx(1, abs=1e-12)
+    assert fit.strain_toe == pytest.approx(1e-4 / h, rel=1e-9)
+    noisy = CompressionTest(exact.time_s, x, exact.load_n + np.random.default_rng(2).normal(
+        0, 0.05, 201), "s", "m", A, h)
+    fit = fit_modulus(noisy)
+    eps, sig = noisy.strain, noisy.stress_pa
+    used = (eps >= fit.strain_lo) & (eps <= fit.strain_hi)
+    ref = stats.linregress(eps[used], sig[used])
+    assert used.sum() == fit.n_points
+    assert fit.E_pa == pytest.approx(ref.slope, rel=1e-12)
+    assert fit.E_sd_pa == pytest.approx(ref.stderr, rel=1e-9)
+    assert fit.r2 == pytest.approx(ref.rvalue**2, rel=1e-9)
+
+
+def test_standard_error_is_calibrated_for_white_noise():
+    """(E - E_true) / E_sd over 200 noise draws is standard normal (sd within 4 sigma of 1)."""
+    t, x, _, k = curve(toe=0.0, noise=0.0)
+    z = []
+    for seed in range(200):
+        f = k * x + np.random.default_rng(seed).normal(0, 0.3, x.size)
+        fit = fit_modulus(CompressionTest(t, x, f, "s", "m", 0.04 * 0.06, 0.025))
+        z.append((fit.E_pa - 150e3) / fit.E_sd_pa)
+    z = np.asarray(z)
+    assert abs(z.mean()) < 4 / math.sqrt(z.size)
+    assert abs(z.std(ddof=1) - 1) < 4 / math.sqrt(2 * z.size)
+
+
+def test_toe_handling_on_a_long_toe():
+    """A 2.4 %-strain toe: skip_toe is exact, the default keeps the upper toe and reads low,
+    a fit from the measured origin is far off."""
+    t, x, f, k = curve(toe=0.3e-3, noise=0.0)
+    test = CompressionTest(t, x, f, "s", "m", 0.04 * 0.06, 0.025)
+    exact = fit_modulus(test, skip_toe=True)
+    assert exact.E_pa == pytest.approx(150e3, rel=1e-9)
+    assert exact.strain_toe == pytest.approx(0.3e-3 / 0.025, rel=1e-9)
+    assert exact.strain_lo >= 2 * exact.strain_toe
+    default = fit_modulus(test)
+    assert -0.05 < default.E_pa / 150e3 - 1 < -0.01
+    raw = fit_modulus(test, toe_compensation=False)
+    assert raw.E_pa / 150e3 - 1 < -0.10 and raw.strain_lo == 0.0
+    assert raw.strain_hi == pytest.approx(0.05, abs=2e-3)
+
+
+def test_window_errors():
+    t, x, f, _ = curve(max_compression=1e-3)  # 4 % strain only
+    test = CompressionTest(t, x, f, "s", "m", 0.04 * 0.06, 0.025, source="short.csv")
+    with pytest.raises(DataFileError, match=r"short\.csv: the test reaches only 4 % strain.*"
+                                            r"narrower strain window"):
+        fit_modulus(test)
+    assert fit_modulus(test, (0.0, 0.03)).n_points > 10
+    with pytest.raises(InputError, match="did you give percent"):
+        fit_modulus(test, (0, 5))
+    with pytest.raises(InputError, match="0 <= lo < hi"):
+        fit_modulus(test, (0.03, 0.01))
+    with pytest.raises(DataFileError, match=r"short\.csv: only \d point"):
+        fit_modulus(test, (0.0, 0.0005))
+    backwards = CompressionTest(t, x, -f, "s", "m", 0.04 * 0.06, 0.025, source="neg.csv")
+    with pytest.raises(DataFileError, match=r"neg\.csv: the load does not rise"):
+        fit_modulus(backwards)
+
+
+def test_unloading_branch_is_ignored():
+    t, x, f, k = curve(toe=0.0, noise=0.0)
+    xx = np.concatenate([x, x[::-1][1:]])
+    ff = np.concatenate([f, 0.5 * f[::-1][1:]])  # hysteresis: a softer unloading curve
+    fit = fit_modulus(CompressionTest(np.arange(xx.size) / 25.0, xx, ff, "s", "m",
+                                      0.04 * 0.06, 0.025))
+    assert fit.E_pa == pytest.approx(150e3, rel=1e-9)
+
+
+# ----------------------------------------------------------------------------- real phantoms
+
+
+@pytest.fixture(scope="module")
+def phantom_tables():
+    root = need_phantoms()
+    return analyse(root), pd.read_csv(root / "published_moduli.csv")
+
+
+def test_real_phantoms_match_published_moduli(phantom_tables):
+    (per_file, summary), published = phantom_tables
+    assert list(per_file.columns) == PER_FILE_COLUMNS
+    assert list(summary.columns) == SUMMARY_COLUMNS
+    assert len(per_file) == 30 and set(summary["material"]) == set(FOLDER.values())
+    # the window used is reported, in the summary and per file
+    assert (summary["window_lo"] == 0.0).all() and (summary["window_hi"] == 0.05).all()
+    assert (per_file["strain_hi"] - per_file["strain_toe"]).between(0.049, 0.0505).all()
+    s = summary.set_index("material")
+    for _, pub in published.iterrows():
+        row = s.loc[FOLDER[pub["sample_label"]]]
+        E_pub = pub["elastic_modulus_mean_kPa"] * 1e3
+        assert row["n"] == 10
+        assert abs(row["E_mean_pa"] / E_pub - 1) < 0.10, (pub["sample_label"], row["E_mean_pa"])
+        assert row["E_sem_pa"] == pytest.approx(row["E_sd_pa"] / math.sqrt(10))
+        group = per_file.loc[per_file["material"] == row.name, "E_pa"]
+        assert row["E_sd_pa"] == pytest.approx(group.std(ddof=1))
+        assert row["strain_lo"] == per_file.loc[group.index, "strain_lo"].min()
+    assert (per_file["r2"] > 0.99).all()
+    assert per_file["strain_toe"].between(-0.002, 0.012).all()
+    assert (per_file["E_sd_pa"] < 0.01 * per_file["E_pa"]).all()  # a lower bound: tiny
+
+
+def test_real_phantoms_authors_convention():
+    """README: a plain linear fit over 0-5 % of measured strain lands within a few percent."""
+    root = need_phantoms()
+    published = pd.read_csv(root / "published_moduli.csv")
+    for _, pub in published.iterrows():
+        folder = root / FOLDER[pub["sample_label"]]
+        _, summary = analyse(folder, toe_compensation=False)
+        E = summary["E_mean_pa"].iloc[0]
+        assert abs(E / (pub["elastic_modulus_mean_kPa"] * 1e3) - 1) < 0.05
+        assert summary["strain_hi"].iloc[0] <= 0.05
+
+
+# ----------------------------------------------------------------------------- inputs
+
+
+def _campaign(tmp_path: Path) -> Path:
+    """groundtruth/ with two materials: headers without geometry, a manifest that gives it."""
+    gt = tmp_path / "camp" / "groundtruth"
+    gt.mkdir(parents=True)
+    rows = []
+    for mat, E in (("White", 111e3), ("Grey", 194e3)):
+        for k in (1, 2):
+            t, x, f, _ = curve(E, width=0.05, length=0.05, height=0.02, seed=k)
+            export(gt / f"{mat}_S{k}.csv", t, x, f, header=False)
+            rows.append({"file": f"{mat}_S{k}.csv", "specimen": f"{mat}_S{k}",
+                         "material": f"{mat} foam", "area_m2": 0.0025, "height_m": 0.02})
+    pd.DataFrame(rows).to_csv(gt / "manifest.csv", index=False)
+    pd.DataFrame({"sample_label": ["x"], "E_kPa": [1.0]}).to_csv(gt / "published.csv",
+                                                               index=False)
+    return gt / "manifest.csv"
+
+
+def test_manifest_folder_and_labels(tmp_path):
+    manifest = _campaign(tmp_path)
+    tests = read_groundtruth_manifest(manifest)
+    assert [t.specimen for t in tests] == ["White_S1", "White_S2", "Grey_S1", "Grey_S2"]
+    assert {t.material for t in tests} == {"White foam", "Grey foam"}
+    assert all(t.area_m2 == 0.0025 and t.height_m == 0.02 for t in tests)
+    # a folder: the manifest's tests once each, the other CSV skipped
+    manifests, files, skipped = scan_inputs([tmp_path / "camp"])
+    assert manifests == [manifest] and files == [] and [p.name for p in skipped] == [
+        "published.csv"]
+    per_file, summary = analyse([tmp_path / "camp"])
+    assert len(per_file) == 4 and list(summary["n"]) == [2, 2]
+    assert list(summary["material"]) == ["White foam", "Grey foam"]
+    assert (abs(summary["E_mean_pa"] / np.array([111e3, 194e3]) - 1) < 0.01).all()
+    # label mappings override
+    per_file, summary = analyse(manifest, materials={"White_S1": "A", "White_S2.csv": "A"},
+                                specimens={"Grey_S1": "g1"})
+    assert list(summary["material"]) == ["A", "Grey foam"] and "g1" in set(per_file["specimen"])
+    # without the manifest the headers lack geometry: the error names the file and the fix
+    with pytest.raises(DataFileError, match=r"White_S1\.csv: .*cross-section.*--area-m2"):
+        collect_tests(manifest.parent / "White_S1.csv")
+    tests = collect_tests(manifest.parent / "White_S1.csv", area_m2=0.0025, height_m=0.02)
+    assert tests[0].material == "White"
+
+
+def test_bad_manifests(tmp_path):
+    manifest = _campaign(tmp_path)
+    df = pd.read_csv(manifest)
+    bad = manifest.with_name("bad.csv")
+    df.assign(file=["White_S1.csv", "nope.csv", "Grey_S1.csv", "Grey_S2.csv"]).to_csv(
+        bad, index=False)
+    with pytest.raises(DataFileError, match=r"bad\.csv: line 3: test file 'nope\.csv' not found"):
+        read_groundtruth_manifest(bad)
+    df.assign(area_m2=["0.0025", "big", "", "0.0025"]).to_csv(bad, index=False)
+    with pytest.raises(DataFileError, match=r"bad\.csv: line 3, column 'area_m2': 'big'"):
+        read_groundtruth_manifest(bad)
+    df.drop(columns="file").to_csv(bad, index=False)
+    with pytest.raises(DataFileError, match="no 'file' column"):
+        read_groundtruth_manifest(bad)
+    df.iloc[:0].to_csv(bad, index=False)
+    with pytest.raises(DataFileError, match="lists no tests"):
+        read_groundtruth_manifest(bad)
+
+
+def test_nothing_to_analyse(tmp_path):
+    (tmp_path / "notes.csv").write_text("a,b\nx,y\n")
+    with pytest.raises(DataFileError, match="no compression tests found; skipped 1 other CSV"):
+        analyse([tmp_path])
+    with pytest.raises(DataFileError, match="no such file or folder"):
+        analyse([tmp_path / "absent"])
+
+
+# ----------------------------------------------------------------------------- command line
+
+
+def _cli(argv: list[str]):
+    from palpbayes.cli import groundtruth as cli_gt
+
+    parser = argparse.ArgumentParser()
+    cli_gt.register(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["groundtruth", *argv])
+    return cli_gt.run(args)
+
+
+def test_cli_writes_tables_and_reports_the_window(tmp_path, capsys):
+    manifest = _campaign(tmp_path)
+    out = tmp_path / "out"
+    assert _cli([str(manifest.parent), "--out", str(out), "--strain-window", "0", "4"]) == 0
+    text = capsys.readouterr().out
+    assert "strain window: 0-4 % engineering strain measured from the toe offset" in text
+    assert "White foam" in text and "1 other CSV file(s) skipped" in text
+    per_file = pd.read_csv(out / "groundtruth.csv")
+    summary = pd.read_csv(out / "groundtruth_summary.csv")
+    assert list(per_file.columns) == PER_FILE_COLUMNS and len(per_file) == 4
+    assert list(summary.columns) == SUMMARY_COLUMNS and (summary["window_hi"] == 0.04).all()
+    assert sorted(p.name for p in out.iterdir()) == ["groundtruth.csv",
+                                                     "groundtruth_summary.csv"]
+    # a single test with geometry options; the result replaces the old one
+    assert _cli([str(manifest.parent / "Grey_S1.csv"), "--out", str(out), "--area-m2", "0.0025",
+                 "--height-m", "0.02", "--skip-toe"]) == 0
+    assert len(pd.read_csv(out / "groundtruth.csv")) == 1
+    assert "points below twice the toe offset skipped" in capsys.readouterr().out
+    with pytest.raises(InputError, match="--strain-window takes percent"):
+        _cli([str(manifest), "--out", str(out), "--strain-window", "5", "1"])
+    with pytest.raises(InputError, match="--area-m2 must be a positive"):
+        _cli([str(manifest), "--out", str(out), "--area-m2", "-1"])
+
+
+def test_atomic_write_leaves_old_file_on_failure(tmp_path):
+    target = tmp_path / "groundtruth.csv"
+    write_csv_atomic(pd.DataFrame({"a": [1]}), target)
+    with pytest.raises(TypeError):
+        write_csv_atomic(pd.DataFrame({"a": [2]}), target, no_such_option=True)
+    assert pd.read_csv(target)["a"].tolist() == [1]
+    assert [p.name for p in tmp_path.iterdir()] == ["groundtruth.csv"]
