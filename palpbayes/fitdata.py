@@ -130,6 +130,15 @@ class FitData:
     def shape(self) -> Callable[[np.ndarray], np.ndarray]:
         return self.model.shape
 
+    def blocks(self, n_rows: int, max_elements: int = 1 << 22) -> list[slice]:
+        """Slices over ``n_rows`` trial surfaces so that rows × n_points <= ``max_elements``.
+
+        Keeps the (trial surface × sample) work arrays of least squares and of the likelihood
+        table below ~32 MB whatever the trace length.
+        """
+        step = max(1, max_elements // max(self.n_points, 1))
+        return [slice(i, min(i + step, n_rows)) for i in range(0, n_rows, step)]
+
     def measured_force_at(self, z_surf: float | np.ndarray) -> np.ndarray:
         """Measured force [N] where the tip passed ``z_surf`` (interpolated on the loading)."""
         z = self.loading.z[::-1]

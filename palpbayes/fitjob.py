@@ -115,7 +115,9 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
 
         raise GeometryError(f"{trace.trace_id}: the thickness correction needs the specimen "
                             "thickness (--thickness or the manifest's thickness_m)")
-    model = ModelSpec(trace.tip, nu=options.nu, thickness=thickness, bonded=options.bonded)
+    # a manifest's per-row nu (trace.metadata["nu"]) overrides the run's option
+    nu = trace.metadata.get("nu", options.nu)
+    model = ModelSpec(trace.tip, nu=nu, thickness=thickness, bonded=options.bonded)
     data = prepare(trace, model, f_unc=options.f_unc, fit_fraction=options.fit_fraction,
                    max_depth=options.max_depth)
     lsq = fit_lsq_data(data, trace_id=trace.trace_id)

@@ -116,9 +116,12 @@ def profile_rss(data: FitData, z_surf: np.ndarray) -> tuple[np.ndarray, np.ndarr
     Vectorised: ``z_surf`` of shape (M,) gives arrays of shape (M,).
     """
     zs = np.atleast_1d(np.asarray(z_surf, dtype=float))
-    s = data.shape(zs[:, None] - data.z[None, :])
-    sf = s @ data.force
-    ss = np.einsum("ij,ij->i", s, s)
+    sf = np.empty(zs.size)
+    ss = np.empty(zs.size)
+    for rows in data.blocks(zs.size):  # bounded memory for very long traces
+        s = data.shape(zs[rows, None] - data.z[None, :])
+        sf[rows] = s @ data.force
+        ss[rows] = np.einsum("ij,ij->i", s, s)
     ff = float(data.force @ data.force)
     with np.errstate(divide="ignore", invalid="ignore"):
         estar = np.where(ss > 0, sf / ss, 0.0)

@@ -22,18 +22,23 @@ __all__ = ["fit_bayes", "fit_bayes_data", "initial_ensemble"]
 
 
 def initial_ensemble(lsq: LSQResult, data: FitData, noise: str, n_walkers: int,
-                     z_bounds: tuple[float, float], rng: np.random.Generator) -> np.ndarray:
+                     z_bounds: tuple[float, float], rng: np.random.Generator,
+                     estar_bounds: tuple[float, float] = (0.0, np.inf)) -> np.ndarray:
     """Walkers in a small Gaussian ball around the least-squares solution.
 
     Scales: the least-squares standard errors of log E* and z_surf (floored), 1/sqrt(2n) for
-    log sigma, sigma/sqrt(n) for F0; z_surf is reflected into the prior support.
+    log sigma, sigma/sqrt(n) for F0; z_surf is reflected into the prior support and log E*
+    moved inside the prior bounds when the least-squares value lies outside them.
     """
     n = data.n_points
     sigma = max(lsq.rms, 1e-9)
     rel_e = lsq.Estar_sd / lsq.Estar if np.isfinite(lsq.Estar_sd) else 1e-3
     z_sd = lsq.z_surf_sd if np.isfinite(lsq.z_surf_sd) else 1e-7
-    center = [np.log(lsq.Estar), lsq.z_surf, np.log(sigma), 0.0]
     scale = [max(rel_e, 1e-6), max(z_sd, 1e-10), 1.0 / np.sqrt(2 * n), sigma / np.sqrt(n)]
+    e_lo = np.log(estar_bounds[0]) + 5 * scale[0] if estar_bounds[0] > 0 else -np.inf
+    e_hi = np.log(estar_bounds[1]) - 5 * scale[0]
+    log_e = float(np.clip(np.log(lsq.Estar), e_lo, e_hi)) if e_lo < e_hi else np.log(lsq.Estar)
+    center = [log_e, lsq.z_surf, np.log(sigma), 0.0]
     if noise == "ar1":
         center.append(0.0)
         scale.append(0.05)
@@ -114,7 +119,8 @@ def fit_bayes_data(
         return lp
 
     n_walkers = max(settings.n_walkers, 2 * len(names) + 2)
-    p0 = initial_ensemble(lsq, data, noise, n_walkers, zb, np.random.default_rng(init_ss))
+    p0 = initial_ensemble(lsq, data, noise, n_walkers, zb, np.random.default_rng(init_ss),
+                          priors.Estar_bounds)
     bad = ~np.isfinite(log_prob(p0))
     if bad.any():
         raise FitError(f"{trace_id}: {int(bad.sum())} initial walker(s) have zero posterior "
@@ -126,7 +132,17 @@ def fit_bayes_data(
                     np.random.default_rng(budget_ss))
     post["E_total"] = bud.E
     az = import_arviz()
-    idata = az.from_dict(
+    with warnings.catch_warnings():
+        # heavy thinning of a short chain can leave fewer draws than walkers: fine for us
+        warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
+        idata = _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed,
+                          lsq, noise)
+    return _finish(idata, post, chains, data, trace_id, priors, bud, lsq, noise, strict)
+
+
+def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, lsq, noise):
+    """arviz InferenceData of the draws, with the fit's settings as attributes."""
+    return az.from_dict(
         posterior=post,
         sample_stats={"lp": chains.log_prob},
         observed_data={"force": data.force},
@@ -152,6 +168,10 @@ def fit_bayes_data(
             "thin": chains.thin,
         },
     )
+
+
+def _finish(idata, post, chains, data, trace_id, priors, bud, lsq, noise, strict):
+    """Diagnostics, flags and the warning (or error in strict mode)."""
     diag_names = [n for n in ("E_star", "z_surf", "sigma", "F0", "phi", "nu_t") if n in post]
     diag = compute_diagnostics(idata, diag_names, chains.tau, chains.acceptance,
                                chains.n_steps, chains.hit_cap)
@@ -162,7 +182,7 @@ def fit_bayes_data(
         msg = f"{trace_id}: Bayesian fit flagged as not converged: {problems}"
         if strict:
             raise ConvergenceError(msg)
-        warnings.warn(msg, ConvergenceWarning, stacklevel=2)
+        warnings.warn(msg, ConvergenceWarning, stacklevel=3)
     return result
 
 

@@ -122,10 +122,9 @@ class TraceLikelihood:
     def _build_table(self) -> CubicSpline:
         grid = self.grid()
         stats = np.empty((grid.size, 9 if self._ar1 else 3))
-        for i in range(0, grid.size, 64):  # blocks bound the memory to 64 × N
-            zs = grid[i:i + 64]
-            s = self.data.shape(zs[:, None] - self._z[None, :])
-            stats[i:i + 64] = _quad_forms(s, self._F, self._ar1)
+        for rows in self.data.blocks(grid.size):  # bounded memory for long traces
+            s = self.data.shape(grid[rows, None] - self._z[None, :])
+            stats[rows] = _quad_forms(s, self._F, self._ar1)
         return CubicSpline(grid, stats, axis=0)
 
     def statistics(self, z_surf: np.ndarray, direct: bool = False) -> np.ndarray:
@@ -133,8 +132,11 @@ class TraceLikelihood:
         z_surf = np.atleast_1d(z_surf)
         if self._spline is not None and not direct:
             return self._spline(z_surf)
-        s = self.data.shape(z_surf[:, None] - self._z[None, :])
-        return _quad_forms(s, self._F, self._ar1)
+        out = np.empty((z_surf.size, 9 if self._ar1 else 3))
+        for rows in self.data.blocks(z_surf.size):
+            s = self.data.shape(z_surf[rows, None] - self._z[None, :])
+            out[rows] = _quad_forms(s, self._F, self._ar1)
+        return out
 
     def __call__(self, theta: np.ndarray, direct: bool = False) -> np.ndarray:
         """Log-likelihood for θ of shape (W, ndim) (or (ndim,)); returns shape (W,)."""
@@ -159,13 +161,15 @@ class TraceLikelihood:
                 - 0.5 * quad / sigma**2)
 
     def _student(self, estar, zs, sigma, f0, nu_t) -> np.ndarray:
-        s = self.data.shape(zs[:, None] - self._z[None, :])
-        r = (self._F[None, :] - estar[:, None] * s - f0[:, None]) / sigma[:, None]
         n = self._F.size
         nu = nu_t
+        tail = np.empty(zs.size)
+        for rows in self.data.blocks(zs.size):
+            s = self.data.shape(zs[rows, None] - self._z[None, :])
+            r = (self._F[None, :] - estar[rows, None] * s - f0[rows, None]) / sigma[rows, None]
+            tail[rows] = np.log1p(r * r / nu[rows, None]).sum(axis=1)
         return (n * (gammaln((nu + 1) / 2) - gammaln(nu / 2) - 0.5 * np.log(nu * np.pi))
-                - n * np.log(sigma)
-                - 0.5 * (nu + 1) * np.log1p(r * r / nu[:, None]).sum(axis=1))
+                - n * np.log(sigma) - 0.5 * (nu + 1) * tail)
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
         """Residuals F − model [N] for one parameter vector."""

@@ -154,6 +154,7 @@ def load_trace(row: pd.Series, **read_options) -> IndentationTrace:
         thickness=_opt(row, "thickness_m"),
         repetition=None if rep is None else int(rep),
         rest_time=_opt(row, "rest_time_s"),
+        metadata={} if _opt(row, "nu") is None else {"nu": _opt(row, "nu")},
         **read_options,
     )
 

@@ -1,0 +1,123 @@
+"""``palpbayes report [INPUT] [-o FILE.pdf]``: the PDF report of a campaign (DESIGN §7).
+
+INPUT is one of
+
+* a results folder (it has ``summary.csv``): the report is built from it as it is;
+* a campaign folder (it has ``manifest.csv``) or a campaign manifest: the campaign is fitted
+  with both methods, its ground truth analysed (if it has ``groundtruth/``) and compared, into
+  ``--out`` (default ``palpbayes-results/`` in the current folder; a folder fitted before from
+  the same campaign with the same options is reused), then the report is built;
+* nothing: the shipped example campaign ``data/example-campaign`` of a source checkout.
+
+The PDF goes to ``-o FILE.pdf`` (default ``report.pdf`` in the results folder).  See
+:mod:`palpbayes.report` for the pages.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..errors import InputError
+from .fit import add_model_options, options_from_args
+
+__all__ = ["register", "run", "resolve_input", "DEFAULT_OUT"]
+
+#: Results folder for a campaign INPUT when ``--out`` is not given.
+DEFAULT_OUT = "palpbayes-results"
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``report`` subcommand to an argparse ``subparsers`` object; return its parser."""
+    p = subparsers.add_parser(
+        "report",
+        help="PDF report of a results folder or a campaign (no INPUT: the shipped example)",
+        description=(
+            "Write a multi-page PDF report: settings, the comparison of ground truth, least "
+            "squares and Bayes per material and tip (the paper's Table III), a page per "
+            "material and tip with the force-depth fit and posteriors, convergence "
+            "diagnostics, the uncertainty budget and the methods. INPUT is a results folder "
+            "(with summary.csv), a campaign folder or manifest (fitted first, into --out), or "
+            "nothing for the shipped example campaign."),
+    )
+    p.add_argument("input", nargs="?", metavar="INPUT", default=None,
+                   help="results folder, campaign folder or campaign manifest (default: the "
+                        "shipped example campaign)")
+    p.add_argument("-o", "--output", metavar="FILE.pdf", default=None,
+                   help="the PDF to write (default: report.pdf in the results folder)")
+    p.add_argument("--out", metavar="DIR", default=None,
+                   help=f"results folder when INPUT is a campaign (default ./{DEFAULT_OUT})")
+    p.add_argument("--force", action="store_true",
+                   help="refit a campaign into --out even if it holds results")
+    add_model_options(p)
+    # the report compares the two methods: fit both unless told otherwise
+    p.set_defaults(method="both", func=run)
+    return p
+
+
+def resolve_input(value: str | None) -> tuple[str, Path]:
+    """Classify INPUT: ``("results", folder)`` or ``("campaign", manifest)``.
+
+    Raises
+    ------
+    InputError
+        INPUT does not exist or is neither a results folder, a campaign folder nor a
+        manifest; no INPUT and no shipped example.
+    """
+    from ..io.manifest import is_manifest
+    from ..report import example_campaign_dir
+
+    if value is None:
+        return "campaign", example_campaign_dir() / "manifest.csv"
+    p = Path(value)
+    if not p.exists():
+        raise InputError(f"{p}: no such file or folder")
+    if p.is_dir():
+        if (p / "summary.csv").is_file():
+            return "results", p
+        if (p / "manifest.csv").is_file():
+            return "campaign", p / "manifest.csv"
+        raise InputError(f"{p}: neither a results folder (summary.csv) nor a campaign folder "
+                         "(manifest.csv)")
+    if is_manifest(p):
+        return "campaign", p
+    raise InputError(f"{p}: not a campaign manifest (a CSV with 'file' and 'tip' columns); "
+                     "give a results folder, a campaign folder or a manifest")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Fit if needed, build the report, print a short summary and the PDF's path."""
+    from ..report import build_report, load_results, run_pipeline, summary_table
+
+    kind, path = resolve_input(args.input)
+    if args.output is not None and not str(args.output).lower().endswith(".pdf"):
+        raise InputError(f"-o {args.output}: the report is a PDF; give a name ending in .pdf")
+    if kind == "campaign":
+        options = options_from_args(args)
+        out = Path(args.out) if args.out is not None else Path.cwd() / DEFAULT_OUT
+        print(f"fitting campaign {path} into {out} (methods: {options.method}, seed "
+              f"{options.seed})")
+        run_pipeline(path, out, options, workers=args.workers, force=args.force,
+                     progress=args.progress)
+        results = out
+    else:
+        if args.out is not None:
+            raise InputError(f"--out is for a campaign INPUT; {path} is already a results "
+                             "folder (use -o FILE.pdf to choose the report's name)")
+        results = path
+    res = load_results(results)
+    info = build_report(res, args.output, seed=args.seed)
+    table = summary_table(res)
+    keep = [c for c in ("Material", "Tip", "GT E ± sd", "LS E ± sd", "Bayes E ± sd",
+                        "Bayes new 90 %", "Bayes covers", "LS mean E ± sd (traces)",
+                        "Bayes mean E ± sd (traces)") if c in table.columns]
+    if len(table):
+        print("E [kPa]:")
+        print(table[keep].to_string(index=False))
+    flagged = f"{info.n_flagged} flagged" if info.n_flagged else "all converged"
+    line = f"report: {info.n_pages} pages, {info.n_traces} traces, Bayesian fits {flagged}"
+    if info.n_pooled_flagged:
+        line += f"; {info.n_pooled_flagged} pooled group(s) not converged (marked (!))"
+    print(line)
+    print(f"wrote {info.path}")
+    return 0

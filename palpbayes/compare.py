@@ -1,0 +1,353 @@
+"""Comparison tables: ground truth vs the paper's least squares vs the Bayesian model.
+
+:func:`compare_campaign` reads a results folder written by :func:`palpbayes.campaign.fit_campaign`
+and writes, atomically,
+
+* ``comparison.csv`` — one row per material × tip × method (:data:`COMPARISON_COLUMNS`);
+* ``pooled.csv`` — the hierarchical details of every Bayesian group
+  (:meth:`palpbayes.pooling.PooledEstimate.row`);
+* ``budget.csv`` — per material × tip, each input's share of the variance of log E of the
+  pooled estimate (``material, tip, input, distribution, rel_sd_pct, share_pct``);
+* ``stiffening.csv`` — only when some material × tip has Bayesian fits at
+  :data:`STIFFENING_MIN_REST_TIMES` or more distinct positive rest times: the stiffening law
+  fitted to them (:func:`palpbayes.stiffening.fit_stiffening_summary`,
+  :meth:`~palpbayes.stiffening.StiffeningResult.row`).
+
+What the numbers are
+--------------------
+least squares (``lsq``), as the paper: ``E_pa`` ± ``E_sd_pa`` is the mean ± sd over the traces;
+``E_lo_pa``/``E_hi_pa`` the 90 % t interval of the mean, mean ± t(0.95, n − 1)·sd/sqrt(n);
+``E_new_*`` the 90 % t prediction interval of a new specimen, mean ± t·sd·sqrt(1 + 1/n).
+
+Bayes (``bayes``), hierarchical pooling (:mod:`palpbayes.pooling`): ``E_pa``, ``E_sd_pa`` and the
+90 % interval describe exp(mu)·f, the material's median modulus with the shared uncertainty
+budget f; ``E_new_*`` the posterior predictive exp(mu + tau·z)·f of a new specimen.
+
+Against the ground truth (Instron mean GT ± sd over specimens):
+
+* ``rel_err_pct`` = 100·(GT − E)/GT (the paper's convention);
+* ``gt_in_interval``: GT inside the 90 % interval *for a new specimen* (``E_new_lo_pa`` …
+  ``E_new_hi_pa``) — the posterior predictive for Bayes and the t prediction interval for least
+  squares, so both methods are judged by the same kind of interval: each Instron specimen and
+  each palpated location is one draw from the material's population;
+* ``z_score`` = (E − GT)/sqrt(sd² + GT_sd²) with sd the spread of a single specimen as each
+  method sees it: the sd over traces (lsq) and the predictive sd ``E_new_sd_pa`` (bayes).
+
+``paper_*`` are the paper's published robot (least-squares) estimates for White/Pink/Grey ×
+flat/sphere/paraboloid (:data:`palpbayes.simulate.PAPER_ROBOT_ESTIMATES`); ``paper_err_pct`` is
+recomputed from the printed E and the paper's Instron means, because the printed sphere errors
+do not follow from the printed values (see that constant's note).
+
+Reference values are read by :mod:`palpbayes.reference`, the per-trace posteriors by
+:mod:`palpbayes.pooling_inputs`; the text layout is :mod:`palpbayes.compare_text`.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from .bayes.budget import BudgetSpec
+from .bayes.result import LEVEL
+from .campaign import POSTERIOR_DIR, read_settings
+from .compare_text import format_comparison
+from .errors import DataFileError, FitError
+from .fitdata import ModelSpec
+from .fitjob import trace_seed
+from .io.atomic import write_csv_atomic
+from .io.manifest import tip_from_row
+from .pooling import TAU_PRIOR_SD, central, log_normal_summary, pool_group
+from .pooling_inputs import fitdata_from_posterior, posterior_attrs, read_posterior
+from .reference import gt_columns, load_groundtruth, paper_columns, paper_estimates
+
+__all__ = ["COMPARISON_COLUMNS", "STIFFENING_MIN_REST_TIMES", "Comparison", "compare_campaign",
+           "load_groundtruth", "paper_estimates", "format_comparison", "read_posterior"]
+
+COMPARISON_COLUMNS = [
+    "material", "tip", "method", "n_traces", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa",
+    "E_new_pa", "E_new_lo_pa", "E_new_hi_pa", "gt_E_pa", "gt_sd_pa", "rel_err_pct",
+    "gt_in_interval", "z_score", "residual_n2", "converged_all", "paper_E_pa", "paper_sd_pa",
+    "paper_err_pct", "z_surf_err_mean_m",
+    # extras
+    "E_new_sd_pa", "tau", "gt_n", "n_failed", "flags",
+]
+#: A material × tip gets a stiffening fit when its Bayesian rows span this many rest times.
+STIFFENING_MIN_REST_TIMES = 3
+BUDGET_COLUMNS = ["material", "tip", "input", "distribution", "rel_sd_pct", "share_pct"]
+
+
+@dataclass
+class Comparison:
+    """Tables of one results folder (see module docstring)."""
+
+    comparison: pd.DataFrame
+    pooled: pd.DataFrame
+    budget: pd.DataFrame
+    groundtruth: pd.DataFrame | None
+    groundtruth_source: str | None
+    results_dir: Path
+    stiffening: pd.DataFrame | None = None
+
+    def format(self) -> str:
+        """The comparison in the paper's layout (:func:`format_comparison`)."""
+        return format_comparison(self.comparison, self.groundtruth_source)
+
+
+# ----------------------------------------------------------------------------- inputs
+
+
+def _campaign_dir(res: Path, settings: dict) -> Path | None:
+    rel, ab = settings.get("campaign_dir_relative"), settings.get("campaign_dir")
+    for cand in ((res / rel) if rel else None, Path(ab) if ab else None):
+        if cand is not None and cand.is_dir():
+            return cand.resolve()
+    return None
+
+
+def _read_summary(res: Path) -> pd.DataFrame:
+    path = res / "summary.csv"
+    if not path.is_file():
+        raise DataFileError(res, "no summary.csv in this folder",
+                            "give the --out folder of 'palpbayes fit' on a campaign manifest")
+    df = pd.read_csv(path, dtype={"trace_id": str, "material": str, "tip": str,
+                                  "method": str, "flags": str})
+    missing = {"trace_id", "method", "tip", "material", "E_pa"} - set(df.columns)
+    if missing:
+        raise DataFileError(path, f"lacks column(s) {', '.join(sorted(missing))}")
+    df["material"] = df["material"].fillna("")
+    df["flags"] = df["flags"].fillna("") if "flags" in df.columns else ""
+    return df
+
+
+def _budget_spec(fields: dict) -> BudgetSpec:
+    b = dict(fields.get("budget") or {})
+    if b.get("nu_range") is not None:
+        b["nu_range"] = tuple(b["nu_range"])
+    try:
+        return BudgetSpec(**b)
+    except TypeError:
+        return BudgetSpec()
+
+
+def _order(values: pd.Series, preferred: list[str]) -> list[str]:
+    seen = list(dict.fromkeys(values))
+    return [v for v in preferred if v in seen] + [v for v in seen if v not in preferred]
+
+
+def _as_bool(v) -> bool:
+    return str(v).strip().lower() in ("true", "1", "1.0")
+
+
+# ----------------------------------------------------------------------------- groups
+
+
+def _lsq_row(g: pd.DataFrame, level: float) -> dict:
+    ok = g[np.isfinite(g["E_pa"])]
+    E = ok["E_pa"].to_numpy(float)
+    n = E.size
+    row = {"n_traces": n, "n_failed": len(g) - n, "converged_all": n == len(g) and n > 0,
+           "residual_n2": float(ok["rss_n2"].mean()) if "rss_n2" in ok and n else np.nan}
+    if n == 0:
+        return row
+    mean = float(E.mean())
+    sd = float(E.std(ddof=1)) if n > 1 else np.nan
+    t = float(stats.t.ppf(0.5 + level / 2, n - 1)) if n > 1 else np.nan
+    half, half_new = t * sd / np.sqrt(n), t * sd * np.sqrt(1 + 1 / n)
+    row.update({"E_pa": mean, "E_sd_pa": sd, "E_lo_pa": mean - half, "E_hi_pa": mean + half,
+                "E_new_pa": mean, "E_new_sd_pa": sd * np.sqrt(1 + 1 / n) if n > 1 else np.nan,
+                "E_new_lo_pa": mean - half_new, "E_new_hi_pa": mean + half_new})
+    return row
+
+
+def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None, fields: dict,
+                 budget: BudgetSpec, seed: int, tau_prior_sd: float, settings, level: float
+                 ) -> tuple[dict, dict | None, pd.DataFrame | None]:
+    material, tip = g["material"].iloc[0], g["tip"].iloc[0]
+    ids, ms, ss, meds = [], [], [], []
+    for tid, E in zip(g["trace_id"], g["E_pa"], strict=True):
+        path = res / POSTERIOR_DIR / f"{tid}.nc"
+        if not (np.isfinite(E) and path.is_file()):
+            continue
+        idata = read_posterior(path)
+        m, s = log_normal_summary(np.asarray(idata.posterior["E"]))
+        ids.append(tid)
+        ms.append(m)
+        ss.append(s)
+        meds.append((float(np.median(np.asarray(idata.posterior["z_surf"]))),
+                     float(np.median(np.asarray(idata.posterior["E_star"])))))
+    flags = []
+    conv = g["converged"].map(_as_bool) if "converged" in g else pd.Series(False, index=g.index)
+    row = {"n_traces": len(ids), "n_failed": len(g) - len(ids)}
+    if not ids:
+        row.update({"converged_all": False, "flags": "no Bayesian posterior to pool"})
+        return row, None, None
+    data = z_med = e_med = None
+    spec = budget
+    i_rep = int(np.argmin(np.abs(np.asarray(ms) - np.median(ms))))
+    if geometry is not None and ids[i_rep] in geometry.index:
+        grow = geometry.loc[ids[i_rep]]
+        idata = read_posterior(res / POSTERIOR_DIR / f"{ids[i_rep]}.nc")
+        attrs = posterior_attrs(idata)
+        thick = grow.get("thickness_m") if fields.get("thickness_correction") else None
+        model = ModelSpec(tip_from_row(grow), nu=float(attrs.get("nu", fields.get("nu", 0.3))),
+                          thickness=None if thick is None or pd.isna(thick) else float(thick),
+                          bonded=bool(fields.get("bonded", True)))
+        data = fitdata_from_posterior(idata, model)
+        z_med, e_med = meds[i_rep]
+    else:
+        spec = None
+        flags.append("uncertainty budget not applied (no traces.csv geometry)")
+    pooled = pool_group(ms, ss, material=material, tip=tip, data=data, z_surf=z_med,
+                        estar=e_med, budget=spec, tau_prior_sd=tau_prior_sd,
+                        seed=trace_seed(seed, f"pool/{material}/{tip}"), settings=settings)
+    if not pooled.posterior.converged:
+        flags.append("pooled chain not converged: " + "; ".join(
+            pooled.posterior.diagnostics.problems()))
+    n_conv = int(conv[g["trace_id"].isin(ids)].sum())
+    if n_conv < len(ids):
+        flags.append(f"{len(ids) - n_conv} trace fit(s) not converged")
+    lo, hi = central(pooled.E, level)
+    nlo, nhi = central(pooled.E_new, level)
+    row.update({
+        "E_pa": float(np.median(pooled.E)), "E_sd_pa": float(np.std(pooled.E, ddof=1)),
+        "E_lo_pa": lo, "E_hi_pa": hi, "E_new_pa": float(np.median(pooled.E_new)),
+        "E_new_sd_pa": float(np.std(pooled.E_new, ddof=1)), "E_new_lo_pa": nlo,
+        "E_new_hi_pa": nhi, "tau": float(np.median(pooled.posterior.tau)),
+        "converged_all": bool(n_conv == len(g) and pooled.posterior.converged),
+        "flags": "; ".join(flags),
+    })
+    prow = {**pooled.row(level), "representative_trace": ids[i_rep],
+            "budget_applied": spec is not None}
+    btab = pooled.budget.assign(material=material, tip=tip)[BUDGET_COLUMNS]
+    return row, prow, btab
+
+
+# ----------------------------------------------------------------------------- main
+
+
+def compare_campaign(
+    results_dir: str | os.PathLike,
+    *,
+    groundtruth: str | os.PathLike | None = None,
+    seed: int | None = None,
+    tau_prior_sd: float = TAU_PRIOR_SD,
+    pooling_settings=None,
+    level: float = LEVEL,
+    write: bool = True,
+) -> Comparison:
+    """Pool, compare with ground truth and the paper, and write the tables (module docstring).
+
+    Parameters
+    ----------
+    results_dir
+        Folder written by :func:`palpbayes.campaign.fit_campaign`.
+    groundtruth
+        Ground truth (see :func:`load_groundtruth`); None: the campaign's ``groundtruth/``.
+    seed
+        Seed of the pooling samplers (default: the fit's seed from ``settings.json``); each
+        group's seed is derived from it and the group's labels.
+    tau_prior_sd
+        Scale of the half-normal prior of tau (:mod:`palpbayes.pooling`).
+    pooling_settings
+        :class:`~palpbayes.bayes.SamplerSettings` of the pooling sampler (default
+        :data:`palpbayes.pooling.POOLING_SETTINGS`).
+    level
+        Probability content of the intervals (0.9).
+    write
+        Write ``comparison.csv``, ``pooled.csv`` and ``budget.csv`` into ``results_dir``.
+
+    Raises
+    ------
+    DataFileError
+        No ``summary.csv`` in ``results_dir``, or unreadable ground truth.
+    """
+    res = Path(results_dir)
+    summary = _read_summary(res)
+    settings = read_settings(res)
+    fields = settings.get("options_fields") or {}
+    budget = _budget_spec(fields)
+    seed = int(settings.get("seed", 0) if seed is None else seed)
+    geometry = None
+    if (res / "traces.csv").is_file():
+        geometry = pd.read_csv(res / "traces.csv", dtype={"trace_id": str, "material": str,
+                                                          "tip": str, "specimen": str})
+        geometry = geometry.set_index("trace_id", drop=False)
+    camp = _campaign_dir(res, settings)
+    gt, gt_source = load_groundtruth(groundtruth, camp)
+    truth = None
+    if camp is not None and (camp / "truth.csv").is_file():
+        truth = pd.read_csv(camp / "truth.csv", dtype={"trace_id": str}).set_index("trace_id")
+    paper = paper_estimates()
+
+    order_src = geometry if geometry is not None else summary
+    materials = _order(order_src["material"].fillna(""), ["White", "Pink", "Grey"])
+    tips = _order(order_src["tip"], ["flat", "sphere", "paraboloid"])
+    rows, pooled_rows, budgets = [], [], []
+    for mat in materials:
+        for tip in tips:
+            grp = summary[(summary["material"] == mat) & (summary["tip"] == tip)]
+            for method in ("lsq", "bayes"):
+                g = grp[grp["method"] == method]
+                if g.empty:
+                    continue
+                if method == "lsq":
+                    row = _lsq_row(g, level)
+                else:
+                    row, prow, btab = _bayes_group(g, res, geometry, fields, budget, seed,
+                                                   tau_prior_sd, pooling_settings, level)
+                    if prow is not None:
+                        pooled_rows.append(prow)
+                        budgets.append(btab)
+                row = {"material": mat, "tip": tip, "method": method, **row}
+                row.update(gt_columns(row, gt, mat))
+                row.update(paper_columns(paper, mat, tip))
+                if truth is not None and "z_surf_true_m" in truth:
+                    ok = g[g["trace_id"].isin(truth.index) & np.isfinite(g["z_surf_m"])]
+                    err = np.abs(ok["z_surf_m"].to_numpy(float)
+                                 - truth.loc[ok["trace_id"], "z_surf_true_m"].to_numpy(float))
+                    row["z_surf_err_mean_m"] = float(err.mean()) if err.size else np.nan
+                rows.append(row)
+    if not rows:
+        raise FitError(f"{res / 'summary.csv'} has no lsq or bayes rows to compare")
+    comparison = pd.DataFrame(rows, columns=COMPARISON_COLUMNS)
+    pooled = pd.DataFrame(pooled_rows)
+    budget_tab = pd.concat(budgets, ignore_index=True) if budgets else pd.DataFrame(
+        columns=BUDGET_COLUMNS)
+    stiff = _stiffening(summary, materials, tips, seed)
+    if write:
+        write_csv_atomic(comparison, res / "comparison.csv")
+        write_csv_atomic(pooled, res / "pooled.csv")
+        write_csv_atomic(budget_tab, res / "budget.csv")
+        if stiff is not None:
+            write_csv_atomic(stiff, res / "stiffening.csv")
+    return Comparison(comparison=comparison, pooled=pooled, budget=budget_tab, groundtruth=gt,
+                      groundtruth_source=gt_source, results_dir=res, stiffening=stiff)
+
+
+def _stiffening(summary: pd.DataFrame, materials: list[str], tips: list[str], seed: int
+                ) -> pd.DataFrame | None:
+    """Stiffening law per material × tip with enough distinct rest times (None if none)."""
+    from .stiffening import fit_stiffening_summary
+
+    if "rest_time_s" not in summary or "E_stat_pa" not in summary:
+        return None
+    rows = []
+    for mat in materials:
+        for tip in tips:
+            g = summary[(summary["material"] == mat) & (summary["tip"] == tip)
+                        & (summary["method"] == "bayes")]
+            t = pd.to_numeric(g["rest_time_s"], errors="coerce")
+            ok = np.isfinite(t) & (t > 0) & np.isfinite(g["E_stat_pa"].astype(float))
+            if t[ok].nunique() < STIFFENING_MIN_REST_TIMES:
+                continue
+            fit = fit_stiffening_summary(g, method="bayes",
+                                         seed=trace_seed(seed, f"stiffening/{mat}/{tip}"))
+            rows.append({"material": mat, "tip": tip, "method": "bayes", **fit.row()})
+    return pd.DataFrame(rows) if rows else None
+
+

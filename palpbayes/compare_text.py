@@ -1,0 +1,78 @@
+"""Plain-text rendering of the comparison table in the paper's layout (no plotting)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["format_comparison"]
+
+
+def _pm(e, sd) -> str:
+    if e is None or not np.isfinite(e):
+        return "-"
+    return f"{e / 1e3:.1f} ± {sd / 1e3:.1f}" if sd is not None and np.isfinite(sd) else \
+        f"{e / 1e3:.1f}"
+
+
+def format_comparison(df: pd.DataFrame, groundtruth_source: str | None = None) -> str:
+    """The comparison as text in the paper's layout: rows material, columns tip × method.
+
+    Cells are E ± sd [kPa]: least squares mean ± sd over traces (the paper's convention);
+    Bayes the posterior-predictive median ± sd for a new specimen.  A second block gives the
+    error (GT − E)/GT [%] with ``*`` when GT lies outside the 90 % interval for a new specimen;
+    a third the paper's published robot estimates where the labels match.
+    """
+    if df.empty:
+        return "(no rows)"
+    mats = list(dict.fromkeys(df["material"]))
+    tips = list(dict.fromkeys(df["tip"]))
+    methods = [m for m in ("lsq", "bayes") if m in set(df["method"])]
+    label = {"lsq": "LSQ", "bayes": "Bayes"}
+
+    def cell(mat, tip, method, kind):
+        r = df[(df["material"] == mat) & (df["tip"] == tip) & (df["method"] == method)]
+        if r.empty:
+            return "-"
+        r = r.iloc[0]
+        if kind == "E":
+            return _pm(r["E_new_pa"], r["E_new_sd_pa"]) if method == "bayes" else \
+                _pm(r["E_pa"], r["E_sd_pa"])
+        if kind == "err":
+            if not np.isfinite(r["rel_err_pct"]):
+                return "-"
+            miss = "*" if r["gt_in_interval"] is False or r["gt_in_interval"] == 0 else " "
+            return f"{r['rel_err_pct']:+.1f}{miss}"
+        return _pm(r["paper_E_pa"], r["paper_sd_pa"]) if method == "lsq" else ""
+
+    def block(kind, with_gt):
+        cols = pd.MultiIndex.from_tuples(
+            ([("GT", "Instron")] if with_gt else [])
+            + [(t, label[m]) for t in tips for m in methods
+               if kind != "paper" or m == "lsq"])
+        body = []
+        for mat in mats:
+            line = []
+            if with_gt:
+                g = df[df["material"] == mat].iloc[0]
+                line.append(_pm(g["gt_E_pa"], g["gt_sd_pa"]))
+            line += [cell(mat, t, m, kind) for t in tips for m in methods
+                     if kind != "paper" or m == "lsq"]
+            body.append(line)
+        return pd.DataFrame(body, index=pd.Index(mats, name="material"), columns=cols
+                            ).to_string()
+
+    out = ["E [kPa], mean ± sd (LSQ: over traces, as the paper; Bayes: posterior predictive "
+           "for a new specimen, pooled with the uncertainty budget)", block("E", True)]
+    if df["rel_err_pct"].notna().any():
+        out += ["", "error (GT - E)/GT [%]; * = GT outside the 90 % interval for a new specimen",
+                block("err", False)]
+    src = groundtruth_source or "none found (give --groundtruth)"
+    out += ["", f"ground truth: {src}"]
+    if df["paper_E_pa"].notna().any():
+        out += ["", "paper's robot estimates (least squares) [kPa]", block("paper", False)]
+    bad = df[~df["converged_all"].fillna(False).astype(bool)]
+    for _, r in bad.iterrows():
+        out.append(f"warning: {r['material']} {r['tip']} {r['method']}: not every fit converged"
+                   + (f" ({r['flags']})" if isinstance(r["flags"], str) and r["flags"] else ""))
+    return "\n".join(out)

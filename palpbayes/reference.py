@@ -1,0 +1,119 @@
+"""Reference values a campaign is compared with: the Instron ground truth and the paper.
+
+* :func:`load_groundtruth` finds and reads the per-material ground truth (a
+  ``groundtruth_summary.csv`` of ``palpbayes groundtruth``, or compression exports analysed with
+  :func:`palpbayes.groundtruth.analyse`);
+* :func:`paper_estimates` gives the paper's published robot estimates
+  (:data:`palpbayes.simulate.PAPER_ROBOT_ESTIMATES`) with the error recomputed from the printed
+  E and the paper's Instron means;
+* :func:`gt_columns` / :func:`paper_columns` fill the reference columns of one comparison row
+  (definitions in :mod:`palpbayes.compare`).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .errors import DataFileError
+
+__all__ = ["load_groundtruth", "paper_estimates", "gt_columns", "paper_columns"]
+
+
+def paper_estimates() -> pd.DataFrame:
+    """The paper's robot estimates: ``material, tip, paper_E_pa, paper_sd_pa, paper_err_pct``."""
+    from .simulate import PAPER_MATERIALS, PAPER_ROBOT_ESTIMATES
+
+    rows = []
+    for r in PAPER_ROBOT_ESTIMATES:
+        gt = PAPER_MATERIALS[r.material].E_pa
+        E = r.E_kPa * 1e3
+        rows.append({"material": r.material, "tip": r.tip, "paper_E_pa": E,
+                     "paper_sd_pa": r.sd_kPa * 1e3, "paper_err_pct": 100 * (gt - E) / gt})
+    return pd.DataFrame(rows)
+
+
+def _gt_from_file(p: Path) -> pd.DataFrame:
+    from .groundtruth import analyse, summarise
+
+    try:
+        cols = {str(c).strip() for c in pd.read_csv(p, nrows=0).columns}
+    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise DataFileError(p, f"cannot be read as CSV ({exc})") from None
+    if {"material", "E_mean_pa"} <= cols:  # groundtruth_summary.csv
+        df = pd.read_csv(p, dtype={"material": str})
+        df.columns = [str(c).strip() for c in df.columns]
+        if "E_sd_pa" not in df.columns:
+            raise DataFileError(p, "ground-truth summary lacks column E_sd_pa")
+        return df
+    if {"material", "E_pa", "file"} <= cols:  # groundtruth.csv, one row per test
+        df = pd.read_csv(p, dtype={"material": str})
+        return summarise(df)
+    return analyse([p])[1]
+
+
+def load_groundtruth(spec: str | os.PathLike | None, campaign_dir: Path | None
+                     ) -> tuple[pd.DataFrame | None, str | None]:
+    """Per-material ground truth (``material, E_mean_pa, E_sd_pa`` …) and where it came from.
+
+    ``spec``: a ``groundtruth_summary.csv`` or ``groundtruth.csv`` written by ``palpbayes
+    groundtruth``, a ground-truth manifest, a compression export, or a folder of them (analysed
+    with :func:`palpbayes.groundtruth.analyse` and its default strain window).  None: the
+    ``groundtruth/`` folder of the campaign, if any.  Returns (None, None) when there is none.
+    """
+    from .groundtruth import analyse
+
+    if spec is not None:
+        p = Path(spec)
+        if p.is_dir():
+            if (p / "groundtruth_summary.csv").is_file():
+                return _gt_from_file(p / "groundtruth_summary.csv"), str(
+                    p / "groundtruth_summary.csv")
+            return analyse([p])[1], f"{p} (analysed)"
+        if not p.is_file():
+            raise DataFileError(p, "ground truth not found", "give a groundtruth_summary.csv, "
+                                "a ground-truth manifest or a folder of compression exports")
+        return _gt_from_file(p), str(p)
+    if campaign_dir is not None and (campaign_dir / "groundtruth").is_dir():
+        folder = campaign_dir / "groundtruth"
+        return analyse([folder])[1], f"{folder} (analysed)"
+    return None, None
+
+
+def gt_columns(row: dict, gt: pd.DataFrame | None, material: str) -> dict:
+    if gt is None or gt.empty:
+        return {}
+    hit = gt[gt["material"].astype(str) == material]
+    if hit.empty:
+        hit = gt[gt["material"].astype(str).str.lower() == material.lower()]
+    if hit.empty:
+        return {}
+    g_mean = float(hit["E_mean_pa"].iloc[0])
+    g_sd = float(hit["E_sd_pa"].iloc[0]) if pd.notna(hit["E_sd_pa"].iloc[0]) else 0.0
+    out = {"gt_E_pa": g_mean, "gt_sd_pa": g_sd,
+           "gt_n": int(hit["n"].iloc[0]) if "n" in hit else np.nan}
+    E = row.get("E_pa", np.nan)
+    if not np.isfinite(E):
+        return out
+    spread = row.get("E_new_sd_pa") if row["method"] == "bayes" else row.get("E_sd_pa")
+    spread = np.nan if spread is None else float(spread)
+    lo, hi = row.get("E_new_lo_pa", np.nan), row.get("E_new_hi_pa", np.nan)
+    out.update({
+        "rel_err_pct": 100.0 * (g_mean - E) / g_mean,
+        "gt_in_interval": bool(lo <= g_mean <= hi) if np.isfinite(lo) and np.isfinite(hi)
+        else np.nan,
+        "z_score": (E - g_mean) / np.sqrt(spread**2 + g_sd**2) if np.isfinite(spread)
+        else np.nan,
+    })
+    return out
+
+
+def paper_columns(paper: pd.DataFrame, material: str, tip: str) -> dict:
+    hit = paper[(paper["material"].str.lower() == str(material).lower())
+                & (paper["tip"] == tip)]
+    if hit.empty:
+        return {}
+    return {k: float(hit[k].iloc[0]) for k in ("paper_E_pa", "paper_sd_pa", "paper_err_pct")}

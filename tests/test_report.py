@@ -1,0 +1,318 @@
+"""The PDF report, its CLI and the plotting functions.
+
+A small synthetic campaign (2 foams × 1 tip × 2 repetitions, 2 compression tests per foam) is
+fitted once through ``palpbayes report CAMPAIGN`` (module fixture, ~20 s); the tests read the
+PDF back (pypdf when installed) and check what a reader would look for: page titles, units on
+the axes, bands that contain their medians.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.collections import PolyCollection
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
+
+from palpbayes import plots
+from palpbayes.cli import main
+from palpbayes.report import (
+    REPORT_NAME,
+    build_report,
+    load_fit,
+    load_results,
+    summary_table,
+)
+from palpbayes.simulate import PAPER_MATERIALS, PAPER_TIPS
+from palpbayes.simulate_campaign import simulate_campaign
+
+GROUP_TITLES = ["White · sphere", "Pink · sphere"]
+FIXED_TITLES = ["Summary: ground truth vs least squares vs Bayes",
+                "Comparison per material and tip", "Convergence diagnostics",
+                "Uncertainty budget", "Methods"]
+
+
+def _pdf_pages(path: Path) -> list[str]:
+    """Text of each page (pypdf), or empty strings counted from the page objects."""
+    try:
+        import pypdf
+    except ImportError:
+        raw = path.read_bytes()
+        n = len(re.findall(rb"/Type\s*/Page[^s]", raw))
+        return [""] * n
+    reader = pypdf.PdfReader(str(path))
+    return [p.extract_text() or "" for p in reader.pages]
+
+
+@pytest.fixture(scope="module")
+def campaign(tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp("campaign")
+    return simulate_campaign(
+        root / "camp", seed=5, repetitions=2, gt_specimens=2,
+        materials={k: PAPER_MATERIALS[k] for k in ("White", "Pink")},
+        tips={"sphere": PAPER_TIPS["sphere"]})
+
+
+@pytest.fixture(scope="module")
+def fitted(campaign, tmp_path_factory):
+    """``palpbayes report CAMPAIGN --out RES -o PDF`` run once; (results dir, pdf, stdout)."""
+    out = tmp_path_factory.mktemp("results") / "res"
+    pdf = out.parent / "campaign-report.pdf"
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rc = main(["report", str(campaign), "--out", str(out), "-o", str(pdf),
+                   "--workers", "1", "--seed", "3"])
+    assert rc == 0
+    return out, pdf, buf.getvalue()
+
+
+# ----------------------------------------------------------------------------- report
+
+
+def test_campaign_report_pipeline_writes_every_table(fitted):
+    out, pdf, stdout = fitted
+    for name in ("summary.csv", "comparison.csv", "pooled.csv", "budget.csv",
+                 "groundtruth.csv", "groundtruth_summary.csv", "settings.json"):
+        assert (out / name).is_file(), name
+    assert len(list((out / "posterior").glob("*.nc"))) == 4
+    comp = pd.read_csv(out / "comparison.csv")
+    assert set(comp["method"]) == {"lsq", "bayes"}
+    assert comp["gt_E_pa"].notna().all()
+    assert pdf.is_file()
+    assert f"wrote {pdf}" in stdout
+    assert "report: " in stdout and "pages" in stdout
+
+
+def test_pdf_pages_and_titles(fitted):
+    out, pdf, _ = fitted
+    pages = _pdf_pages(pdf)
+    # title, summary, comparison, 2 groups, diagnostics, walkers, budget, methods (1-2 pages)
+    assert 9 <= len(pages) <= 11
+    if not any(pages):
+        pytest.skip("pypdf not installed: page count checked, titles not")
+    text = "\n".join(pages)
+    assert "palpbayes report" in pages[0] and "Contents" in pages[0]
+    for title in FIXED_TITLES:
+        assert title in text, title
+    for title in GROUP_TITLES:
+        mat, tip = title.split(" · ")
+        assert any(mat in p and tip in p and "Representative trace" in p for p in pages), title
+    # the summary table is a real table with the numbers of comparison.csv (kPa)
+    comp = pd.read_csv(out / "comparison.csv")
+    r = comp[(comp["material"] == "White") & (comp["method"] == "bayes")].iloc[0]
+    assert f"{r['E_pa'] / 1e3:.1f} ± {r['E_sd_pa'] / 1e3:.1f}" in pages[1]
+    assert f"{r['gt_E_pa'] / 1e3:.1f} ± {r['gt_sd_pa'] / 1e3:.1f}" in pages[1]
+    # every page has its number; methods page states the priors table
+    assert all(f"page {i} / {len(pages)}" in p for i, p in enumerate(pages, 1))
+    assert "log_Estar" in text and "Uniform" in text
+    assert ("All 4 Bayesian fits converged" in text) or ("NOT converged" in text)
+
+
+def test_report_from_results_folder_cli(fitted, tmp_path, capsys):
+    out, _, _ = fitted
+    pdf = tmp_path / "again.pdf"
+    assert main(["report", str(out), "-o", str(pdf)]) == 0
+    assert pdf.is_file() and pdf.stat().st_size < 3_000_000
+    assert f"wrote {pdf}" in capsys.readouterr().out
+    # default name inside the results folder
+    info = build_report(out)
+    assert info.path == out / REPORT_NAME and info.path.is_file()
+    assert info.titles[1].startswith("Summary") and info.n_traces == 4
+
+
+def test_rerun_on_the_same_campaign_reuses_the_fits(fitted, campaign, tmp_path):
+    out, _, _ = fitted
+    before = {p.name: p.stat().st_mtime_ns for p in (out / "posterior").glob("*.nc")}
+    assert main(["report", str(campaign), "--out", str(out), "-o", str(tmp_path / "r.pdf"),
+                 "--workers", "1", "--seed", "3"]) == 0
+    after = {p.name: p.stat().st_mtime_ns for p in (out / "posterior").glob("*.nc")}
+    assert before == after
+    # other options on the same folder: refused without --force (exit 2, one line)
+    assert main(["report", str(campaign), "--out", str(out), "-o", str(tmp_path / "s.pdf"),
+                 "--workers", "1", "--seed", "4"]) == 2
+
+
+def test_report_input_errors(tmp_path, capsys, monkeypatch, fitted):
+    assert main(["report", str(tmp_path / "missing")]) == 2
+    assert "no such file" in capsys.readouterr().err
+    (tmp_path / "empty").mkdir()
+    assert main(["report", str(tmp_path / "empty")]) == 2
+    assert "neither a results folder" in capsys.readouterr().err
+    out, _, _ = fitted
+    assert main(["report", str(out), "-o", str(tmp_path / "r.txt")]) == 2
+    assert main(["report", str(out), "--out", str(tmp_path / "x")]) == 2
+    # no INPUT and no shipped example (e.g. an installed wheel): a clear input error
+    import palpbayes
+
+    monkeypatch.setattr(palpbayes, "__file__", str(tmp_path / "site" / "palpbayes" /
+                                                   "__init__.py"))
+    assert main(["report"]) == 2
+    assert "shipped example campaign is not at" in capsys.readouterr().err
+
+
+def test_summary_table_without_comparison(fitted, tmp_path):
+    out, _, _ = fitted
+    res = load_results(out)
+    res.comparison = None
+    tab = summary_table(res)
+    assert list(tab["Material"]) == ["White", "Pink"]
+    assert "Bayes mean E ± sd (traces)" in tab.columns
+    full = summary_table(load_results(out))
+    assert {"GT E ± sd", "LS E ± sd", "Bayes E ± sd", "Bayes new 90 %", "Bayes covers",
+            "Paper E ± sd"} <= set(full.columns)
+    assert set(full["Bayes covers"]) <= {"yes", "NO"}
+
+
+def test_plotting_modules_do_not_use_pyplot():
+    code = ("import sys, palpbayes.plots, palpbayes.report, palpbayes.cli.report; "
+            "print('matplotlib.pyplot' in sys.modules)")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert res.stdout.strip() == "False"
+
+
+# ----------------------------------------------------------------------------- plots
+
+
+@pytest.fixture(scope="module")
+def fit(fitted):
+    out, _, _ = fitted
+    return load_fit(out, "White_sphere_r01")
+
+
+def _band_contains(ax, band_label: str, line_label: str) -> None:
+    coll = [c for c in ax.collections
+            if isinstance(c, PolyCollection) and band_label in str(c.get_label())]
+    line = [ln for ln in ax.lines if ln.get_label() == line_label]
+    assert coll and line, (band_label, line_label)
+    verts = coll[0].get_paths()[0].vertices
+    x, y = line[0].get_xdata(), line[0].get_ydata()
+    for xi, yi in list(zip(x, y, strict=True))[::15]:
+        at = verts[np.isclose(verts[:, 0], xi, rtol=0, atol=1e-12), 1]
+        assert at.size >= 2
+        assert at.min() - 1e-12 <= yi <= at.max() + 1e-12
+
+
+def test_force_depth_plot_units_and_band(fit):
+    fig = plots.plot_force_depth(fit)
+    assert isinstance(fig, Figure)
+    ax = fig.axes[0]
+    assert "[mm]" in ax.get_xlabel() and "Depth" in ax.get_xlabel()
+    assert ax.get_ylabel() == "Force, F [N]"
+    labels = ax.get_legend_handles_labels()[1]
+    assert "least squares" in labels and "Bayes posterior median" in labels
+    _band_contains(ax, "credible band", "Bayes posterior median")
+    _band_contains(ax, "predictive", "Bayes posterior median")
+    # the force-depth data are plotted in mm and N: the deepest point is ~3 mm (White: 30 mm)
+    data = [ln for ln in ax.lines if str(ln.get_label()).startswith("data")][0]
+    assert 2.0 < np.max(data.get_xdata()) < 4.0
+    assert np.max(data.get_ydata()) == pytest.approx(fit.data.force.max())
+    assert len(ax.child_axes) == 1  # the zoom on the contact onset
+    inset = ax.child_axes[0]
+    assert inset.get_xlim()[0] < 0 < inset.get_xlim()[1]
+
+
+def test_plots_draw_on_a_given_axes(fit):
+    fig = Figure()
+    ax = fig.add_subplot()
+    assert plots.plot_residuals(fit, ax=ax) is fig
+    assert ax.get_ylabel().endswith("[mN]") and "[mm]" in ax.get_xlabel()
+
+
+def test_posterior_plots(fit):
+    fig = plots.plot_posterior(fit, truth={"E": 110e3})
+    ax_e, ax_z, ax_pair = fig.axes[:3]
+    assert ax_e.get_xlabel() == "Young's modulus, E [kPa]"
+    assert "[µm]" in ax_z.get_xlabel() and "[µm]" in ax_pair.get_xlabel()
+    assert "[kPa]" in ax_pair.get_ylabel()
+    # the posterior median line lies inside the shaded central 90 % interval, in kPa
+    med = np.median(fit.draws("E_total")) / 1e3
+    assert any(np.allclose(ln.get_xdata(), med) for ln in ax_e.lines)
+    lo, hi = np.quantile(fit.draws("E_total") / 1e3, [0.05, 0.95])
+    spans = [p for p in ax_e.patches if isinstance(p, Rectangle)]
+    assert any(np.isclose(p.get_x(), lo) and np.isclose(p.get_x() + p.get_width(), hi)
+               for p in spans)
+    assert lo < med < hi
+    # z_surf relative to its median: the posterior is centred on 0 µm
+    z = (fit.draws("z_surf") - np.median(fit.draws("z_surf"))) * 1e6
+    assert abs(np.median(z)) < 1e-9
+
+
+def test_walkers_plot(fit):
+    fig = plots.plot_walkers(fit)
+    axes = fig.axes
+    assert len(axes) == 4
+    units = [a.get_ylabel() for a in axes]
+    assert units[0] == "E* [kPa]" and units[2] == "sigma [mN]" and units[3] == "F0 [mN]"
+    n_walkers = fit.idata.posterior.sizes["chain"]
+    assert all(len(a.lines) == n_walkers for a in axes)
+    assert "Sampler step" in axes[-1].get_xlabel()
+    assert "R-hat" in axes[0].get_title(loc="left")
+
+
+def test_budget_plots(fitted):
+    out, _, _ = fitted
+    budget = pd.read_csv(out / "budget.csv")
+    fig = plots.plot_budget(budget)
+    ax = fig.axes[0]
+    assert "[%]" in ax.get_xlabel()
+    # stacked bars: the shares of each group add up to 100 %
+    widths: dict[float, float] = {}
+    for p in ax.patches:
+        widths[round(p.get_y(), 6)] = widths.get(round(p.get_y(), 6), 0.0) + p.get_width()
+    assert len(widths) == 2
+    assert all(w == pytest.approx(100.0, abs=1e-6) for w in widths.values())
+    one = budget[budget["material"] == "White"].drop(columns=["material", "tip"])
+    fig1 = plots.plot_budget(one)
+    assert [t.get_text() for t in fig1.axes[0].get_yticklabels()] == list(one["input"])
+
+
+def test_comparison_and_forest_plots(fitted):
+    out, _, _ = fitted
+    comp = pd.read_csv(out / "comparison.csv")
+    fig = plots.plot_comparison(comp)
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == "Young's modulus, E [kPa]"
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["sphere", "sphere"]
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("ground truth" in t for t in legend)
+    assert any("paper" in t for t in legend)
+    # each method's thick interval contains its estimate (kPa)
+    for _, r in comp.iterrows():
+        assert r["E_lo_pa"] <= r["E_pa"] <= r["E_hi_pa"]
+    summary = pd.read_csv(out / "summary.csv")
+    pooled = pd.read_csv(out / "pooled.csv").iloc[0]
+    sub = summary[summary["material"] == pooled["material"]]
+    fig = plots.plot_forest(sub, pooled, gt=(110e3, 10e3), title="x")
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == "Young's modulus, E [kPa]"
+    ticks = [t.get_text() for t in ax.get_yticklabels()]
+    assert "pooled mean" in ticks and "new specimen" in ticks
+
+
+def test_stiffening_plot_with_a_fit_object():
+    class Fake:
+        preferred = "single"
+
+        def predict(self, t, level=0.9):
+            m = 100e3 + 30e3 * np.exp(-np.asarray(t) / 30)
+            return pd.DataFrame({"t_s": t, "median_pa": m, "lo_pa": m - 1e3, "hi_pa": m + 1e3})
+
+    t = np.array([1.0, 10, 30, 100])
+    E = 100e3 + 30e3 * np.exp(-t / 30)
+    fig = plots.plot_stiffening(t, E, E_lo=E - 500, E_hi=E + 500, fit=Fake(),
+                                rested=(100e3, 99e3, 101e3))
+    ax = fig.axes[0]
+    assert ax.get_xlabel().endswith("[s]") and ax.get_ylabel().endswith("[kPa]")
+    line = [ln for ln in ax.lines if "fitted" in ln.get_label()][0]
+    assert np.max(line.get_ydata()) == pytest.approx(130.0, rel=1e-3)
+    _band_contains(ax, "credible band", line.get_label())
