@@ -49,7 +49,7 @@ import pandas as pd
 from . import __version__
 from . import errors as _errors
 from .errors import FitError, InputError, OutputExistsError
-from .fitjob import SUMMARY_COLUMNS, FitOptions, fit_trace
+from .fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable, fit_trace
 from .io.atomic import write_csv_atomic, write_text_atomic
 from .io.manifest import MANIFEST_COLUMNS, read_manifest
 from .trace import IndentationTrace
@@ -384,6 +384,8 @@ def fit_campaign(
         raise InputError(
             f"cannot resume {out}: it was fitted with other options ({old.get('options')}); "
             "use --force to refit everything with the new options")
+    for t in traces:  # bad input (geometry, nu, no contact) fails before anything is written
+        check_fittable(t, options)
     if force:
         _clear_outputs(out)
     out.mkdir(parents=True, exist_ok=True)

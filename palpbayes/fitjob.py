@@ -14,12 +14,12 @@ from pathlib import Path
 import numpy as np
 
 from .bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
-from .errors import ConvergenceWarning
-from .fitdata import DEFAULT_F_UNC, ModelSpec, prepare
+from .errors import ConvergenceWarning, GeometryError
+from .fitdata import DEFAULT_F_UNC, FitData, ModelSpec, prepare
 from .lsq import LSQResult, fit_lsq_data
 from .trace import IndentationTrace
 
-__all__ = ["FitOptions", "FitOutcome", "fit_trace", "SUMMARY_COLUMNS", "METHODS"]
+__all__ = ["FitOptions", "FitOutcome", "fit_trace", "check_fittable", "SUMMARY_COLUMNS", "METHODS"]
 
 METHODS = ("bayes", "lsq", "both")
 
@@ -97,6 +97,25 @@ def trace_seed(base: int, trace_id: str) -> int:
     return int(np.random.SeedSequence([int(base), *words.tolist()]).generate_state(1)[0])
 
 
+def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
+    """The trace's prepared fit data; raises the :class:`InputError` a fit would raise.
+
+    Cheap (no fitting): geometry, Poisson ratio, thickness, contact onset and fit window.
+    """
+    if trace.tip is None:
+        raise GeometryError(f"{trace.source or trace.trace_id}: no tip geometry; give --tip and "
+                            "its size")
+    thickness = trace.thickness if options.thickness_correction else None
+    if options.thickness_correction and thickness is None:
+        raise GeometryError(f"{trace.trace_id}: the thickness correction needs the specimen "
+                            "thickness (--thickness or the manifest's thickness_m)")
+    # a manifest's per-row nu (trace.metadata["nu"]) overrides the run's option
+    nu = trace.metadata.get("nu", options.nu)
+    model = ModelSpec(trace.tip, nu=nu, thickness=thickness, bonded=options.bonded)
+    return prepare(trace, model, f_unc=options.f_unc, fit_fraction=options.fit_fraction,
+                   max_depth=options.max_depth)
+
+
 def fit_trace(trace: IndentationTrace, options: FitOptions,
               posterior_dir: str | Path | None = None) -> FitOutcome:
     """Fit one trace with the requested method(s).
@@ -104,22 +123,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     The least-squares fit always runs (the Bayesian walkers start from it); its row is
     returned for ``method`` "lsq" or "both".
     """
-    if trace.tip is None:
-        from .errors import GeometryError
-
-        raise GeometryError(f"{trace.source or trace.trace_id}: no tip geometry; give --tip and "
-                            "its size")
-    thickness = trace.thickness if options.thickness_correction else None
-    if options.thickness_correction and thickness is None:
-        from .errors import GeometryError
-
-        raise GeometryError(f"{trace.trace_id}: the thickness correction needs the specimen "
-                            "thickness (--thickness or the manifest's thickness_m)")
-    # a manifest's per-row nu (trace.metadata["nu"]) overrides the run's option
-    nu = trace.metadata.get("nu", options.nu)
-    model = ModelSpec(trace.tip, nu=nu, thickness=thickness, bonded=options.bonded)
-    data = prepare(trace, model, f_unc=options.f_unc, fit_fraction=options.fit_fraction,
-                   max_depth=options.max_depth)
+    data = check_fittable(trace, options)
     lsq = fit_lsq_data(data, trace_id=trace.trace_id)
     meta = {"material": trace.material, "specimen": trace.specimen,
             "repetition": trace.repetition, "rest_time_s": trace.rest_time}

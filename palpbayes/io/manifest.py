@@ -92,7 +92,7 @@ def read_manifest(path: str | os.PathLike) -> pd.DataFrame:
     for col in MANIFEST_COLUMNS:
         if col not in df.columns:
             df[col] = np.nan
-    df["specimen"] = df["specimen"].fillna("")
+    df["specimen"] = df["specimen"].astype(object).where(df["specimen"].notna(), "")
     dup = df["trace_id"][df["trace_id"].duplicated()]
     if not dup.empty:
         raise DataFileError(path, f"trace_id {dup.iloc[0]!r} appears more than once",
