@@ -385,7 +385,13 @@ def fit_campaign(
             f"cannot resume {out}: it was fitted with other options ({old.get('options')}); "
             "use --force to refit everything with the new options")
     for t in traces:  # bad input (geometry, nu, no contact) fails before anything is written
-        check_fittable(t, options)
+        try:
+            check_fittable(t, options)
+        except InputError as exc:
+            if t.trace_id in str(exc):
+                raise
+            exc.args = (f"trace {t.trace_id!r}: {exc}",)  # keep the class, name the trace
+            raise
     if force:
         _clear_outputs(out)
     out.mkdir(parents=True, exist_ok=True)

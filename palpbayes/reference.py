@@ -25,7 +25,7 @@ __all__ = ["load_groundtruth", "paper_estimates", "gt_columns", "paper_columns"]
 
 def paper_estimates() -> pd.DataFrame:
     """The paper's robot estimates: ``material, tip, paper_E_pa, paper_sd_pa, paper_err_pct``."""
-    from .simulate import PAPER_MATERIALS, PAPER_ROBOT_ESTIMATES
+    from .paper import PAPER_MATERIALS, PAPER_ROBOT_ESTIMATES
 
     rows = []
     for r in PAPER_ROBOT_ESTIMATES:
