@@ -72,7 +72,7 @@ import numpy as np
 import pandas as pd
 
 from .bayes.budget import BudgetSpec
-from .bayes.diagnostics import Diagnostics, compute_diagnostics, import_arviz
+from .bayes.diagnostics import Diagnostics, chain_passes, compute_diagnostics, import_arviz
 from .bayes.result import LEVEL
 from .bayes.sampler import SamplerSettings, run_emcee
 from .errors import FitError, InputError
@@ -244,7 +244,8 @@ def sample_hierarchical(m, s, *, tau_prior_sd: float = TAU_PRIOR_SD, seed: int |
     def log_prob(theta: np.ndarray) -> np.ndarray:
         return hierarchical_log_posterior(theta, m, s, tau_prior_sd)
 
-    chains = run_emcee(log_prob, p0, settings, int(run_ss.generate_state(1)[0]))
+    chains = run_emcee(log_prob, p0, settings, int(run_ss.generate_state(1)[0]),
+                       accept=chain_passes)
     az = import_arviz()
     post = {"mu": chains.samples[..., 0], "log_tau": chains.samples[..., 1]}
     with warnings.catch_warnings():  # short, heavily thinned chains: fewer draws than walkers
