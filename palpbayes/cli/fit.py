@@ -20,7 +20,8 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
     """Options shared by ``fit`` and ``report``: model, priors, budget, sampler."""
     g = p.add_argument_group("model")
     g.add_argument("--method", choices=METHODS, default="bayes",
-                   help="bayes, lsq (the paper's baseline) or both (default: bayes for fit, both for report)")
+                   help="bayes, lsq (the paper's baseline) or both "
+                   "(default: bayes for fit, both for report)")
     g.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
     nu = g.add_mutually_exclusive_group()
     nu.add_argument("--nu", type=float, default=None,
