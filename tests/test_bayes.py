@@ -151,3 +151,16 @@ def test_seed_reproducible_and_step_cap_is_flagged():
     # even the short chain locates the AR(1) coefficient
     assert abs(np.median(a.draws("phi")) - 0.6) < 0.05
     assert math.isfinite(a.diagnostics.rhat_max)
+
+
+def test_bimodality_detector():
+    from palpbayes.bayes.fit import is_bimodal
+
+    rng = np.random.default_rng(0)
+    one = rng.normal(0, 1e-6, 4000)
+    two = np.concatenate([rng.normal(0, 1e-6, 3000), rng.normal(50e-6, 1e-6, 1000)])
+    heavy = rng.standard_t(3, 4000) * 1e-6
+    assert not is_bimodal(one)
+    assert is_bimodal(two)
+    assert not is_bimodal(heavy)  # heavy tails are not a second mode
+    assert not is_bimodal(np.concatenate([one, [1.0]]))  # a lone outlier is not a mode

@@ -3,6 +3,8 @@
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from palpbayes.contact import Tip, force
 from palpbayes.errors import DataFileError, NoContactError
@@ -131,3 +133,23 @@ def test_manifest_round_trip_and_missing_file(tmp_path):
     write_manifest(rows, tmp_path / "neg.csv")
     with pytest.raises(DataFileError, match="radius.*positive"):
         read_manifest(tmp_path / "neg.csv")
+
+
+@settings(max_examples=25, deadline=None)
+@given(z_unit=st.sampled_from(["m", "mm", "um", "cm"]),
+       f_unit=st.sampled_from(["N", "mN", "uN", "kN"]),
+       t_unit=st.sampled_from(["s", "ms"]), sign=st.sampled_from([1.0, -1.0]))
+def test_unit_and_sign_round_trip_property(tmp_path_factory, z_unit, f_unit, t_unit, sign):
+    """Writing SI values in any unit/sign and reading them back with that option is lossless."""
+    from palpbayes.io.units import force_factor, length_factor, time_factor
+
+    tr = make_trace(n=2400)
+    d = tmp_path_factory.mktemp("units")
+    pd.DataFrame({"t": tr.time / time_factor(t_unit), "zz": tr.z / length_factor(z_unit),
+                  "f": sign * tr.force / force_factor(f_unit)}).to_csv(
+        d / "x.csv", index=False, float_format="%.17g")
+    back = read_trace(d / "x.csv", columns={"time": "t", "z": "zz", "force": "f"},
+                      units={"time": t_unit, "z": z_unit, "force": f_unit}, force_sign=sign)
+    np.testing.assert_allclose(back.time, tr.time, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(back.z, tr.z, rtol=1e-14)
+    np.testing.assert_allclose(back.force, tr.force, rtol=1e-13, atol=1e-15)

@@ -18,7 +18,7 @@ from .priors import PriorSpec, param_names
 from .result import BayesResult
 from .sampler import SamplerSettings, run_emcee
 
-__all__ = ["fit_bayes", "fit_bayes_data", "initial_ensemble"]
+__all__ = ["fit_bayes", "fit_bayes_data", "initial_ensemble", "is_bimodal"]
 
 
 def initial_ensemble(lsq: LSQResult, data: FitData, noise: str, n_walkers: int,
@@ -70,9 +70,30 @@ def _posterior_dict(samples: np.ndarray, names: list[str], nu: float) -> dict[st
     return post
 
 
+def is_bimodal(x: np.ndarray, gap: float = 6.0, min_mass: float = 0.05) -> bool:
+    """True if the sorted draws ``x`` have an empty gap wider than ``gap`` robust sd (MAD of
+    the larger side) with at least ``min_mass`` of the draws on each side of it.
+    """
+    x = np.sort(np.ravel(x))
+    n = x.size
+    if n < 20:
+        return False
+    lo_i, hi_i = int(min_mass * n), int((1 - min_mass) * n)
+    d = np.diff(x)[lo_i:hi_i]
+    if d.size == 0:
+        return False
+    i = lo_i + int(np.argmax(d))
+    left, right = x[: i + 1], x[i + 1:]
+    big = left if left.size >= right.size else right
+    scale = 1.4826 * np.median(np.abs(big - np.median(big)))
+    return bool(scale > 0 and x[i + 1] - x[i] > gap * scale)
+
+
 def _flags(post: dict, data: FitData, priors: PriorSpec) -> list[str]:
-    """Failure modes a converged chain can still show (prior-dominated, at a bound)."""
+    """Failure modes a converged chain can still show (bimodal, prior-dominated, at a bound)."""
     out = []
+    if is_bimodal(post["z_surf"]):
+        out.append("bimodal z_surf: two separated surface heights fit the data")
     lo, hi = data.z_contact, data.z_top
     z = post["z_surf"]
     if np.std(z) > 0.2 * (hi - lo) / np.sqrt(12):
