@@ -92,6 +92,24 @@ def test_sneddon_parametric_oracle():
     assert rel(sphere.contact_radius(d, R), a) < 1e-12
 
 
+def test_sneddon_against_50_digit_evaluation():
+    # Sneddon's parametric form evaluated in 50-digit decimal arithmetic (artanh through ln),
+    # from u = a/R = 1e-7 (d/R = 1e-14, where float64 cancels) to u = 0.9999 (d/R ~ 5)
+    from decimal import Decimal, getcontext
+
+    getcontext().prec = 50
+    us = [Decimal(10) ** Decimal(e / 4) for e in range(-28, 0)] + [Decimal("0.9999")]
+    d, s = [], []
+    for u in us:
+        t = ((1 + u) / (1 - u)).ln() / 2
+        d.append(float(u * t))
+        s.append(float((1 + u * u) * t - u))
+    d, s = np.array(d), np.array(s)
+    assert d.min() < 2e-14 and d.max() > 4
+    assert rel(sphere.shape(d, 1.0), s) < 1e-13
+    assert rel(sphere.contact_radius(d, 1.0), [float(u) for u in us]) < 1e-13
+
+
 def test_sneddon_tends_to_hertz_and_is_three_percent_below_at_0p3():
     R = 0.01
     ratios = [float(sphere.shape(x * R, R) / paraboloid.shape(x * R, R)) for x in

@@ -23,35 +23,49 @@ _SERIES_COEF = 4.0 * _SERIES_TERMS / ((2 * _SERIES_TERMS + 1) * (2 * _SERIES_TER
 
 
 def _solve_t(d: np.ndarray) -> np.ndarray:
-    """t = artanh(a/R) solving t·tanh(t) = d/R (Newton, 6 steps from sqrt(d) or d)."""
-    t = np.where(d < 1.0, np.sqrt(d), d)
-    pos = d > 0
-    for _ in range(6):
+    """t = artanh(a/R) solving t·tanh(t) = d/R.
+
+    Started from the inverse series t² = x + x²/3 + 4x³/45 + O(x⁴) for x = d/R < 1.5 (and
+    x/tanh(x) above), then three Halley steps (cubic convergence): machine precision for
+    1e-14 <= d/R <= 10 (tested against a 50-digit evaluation).
+    """
+    x = np.asarray(d, dtype=float)
+    t = np.where(x < 1.5, np.sqrt(x * (1.0 + x * (1.0 / 3.0 + x * (4.0 / 45.0)))),
+                 x / np.tanh(np.maximum(x, 1.0)))
+    pos = x > 0
+    for _ in range(3):
         th = np.tanh(t)
-        step = (t * th - d) / np.where(pos, th + t * (1.0 - th * th), 1.0)
-        t = np.where(pos, t - step, 0.0)
-    return t
+        sech2 = 1.0 - th * th
+        f = t * th - x
+        f1 = th + t * sech2
+        f2 = 2.0 * sech2 * (1.0 - t * th)
+        t = t - 2.0 * f * f1 / np.where(pos, 2.0 * f1 * f1 - f * f2, 1.0)
+    return np.where(pos, t, 0.0)
 
 
 def contact_radius(depth: np.ndarray, radius: float) -> np.ndarray:
     """Contact radius a [m] for indentation depth d [m] of a sphere of radius R [m].
 
-    Solves d/R = u·artanh(u) for u = a/R through t = artanh(u), t·tanh(t) = d/R, by Newton's
-    method started at sqrt(d/R) (small depths) or d/R (large); six steps reach machine
-    precision for 1e-14 <= d/R <= 10 (tested).  Non-positive depths give 0.
+    Solves d/R = u·artanh(u) for u = a/R through t = artanh(u), t·tanh(t) = d/R (Halley's
+    method from the inverse series, see :func:`_solve_t`).  Non-positive depths give 0.
     """
     d = np.clip(np.asarray(depth, dtype=float), 0.0, None) / radius
     return np.tanh(_solve_t(d)) * radius
 
 
 def _bracket(u: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """(1+u²)·t - u with t = artanh(u); a series 4k/((2k+1)(2k-1))·u^(2k+1) for small u."""
+    """(1+u²)·t - u with t = artanh(u); for small u the series Σ 4k/((2k+1)(2k-1))·u^(2k+1),
+    summed by Horner's rule in u², which avoids the cancellation of the direct form."""
     u = np.asarray(u, dtype=float)
     out = np.asarray((1.0 + u * u) * t - u, dtype=float).copy()
     small = u < _SERIES_LIMIT
     if np.any(small):
-        us = u[small][..., None]
-        out[small] = np.sum(_SERIES_COEF * us ** (2 * _SERIES_TERMS + 1), axis=-1)
+        us = u[small]
+        u2 = us * us
+        acc = np.full_like(us, _SERIES_COEF[-1])
+        for c in _SERIES_COEF[-2::-1]:
+            acc = acc * u2 + c
+        out[small] = acc * u2 * us
     return out
 
 
