@@ -164,3 +164,43 @@ def test_bimodality_detector():
     assert is_bimodal(two)
     assert not is_bimodal(heavy)  # heavy tails are not a second mode
     assert not is_bimodal(np.concatenate([one, [1.0]]))  # a lone outlier is not a mode
+
+
+def test_log_posterior_rhat_catches_a_walker_off_a_thin_ridge():
+    """A walker displaced across a long thin ridge (the flat punch's z_surf-F0 ridge) leaves every
+    parameter's marginal unchanged, so parameter R-hat and ESS pass; the log posterior shows it."""
+    from palpbayes.bayes.diagnostics import chain_passes
+
+    rng = np.random.default_rng(1)
+    along = rng.standard_normal((24, 600))
+    across = 0.01 * rng.standard_normal((24, 600))
+
+    def xy(c):
+        return np.stack([(along + c) / np.sqrt(2), (along - c) / np.sqrt(2)], axis=-1)
+
+    def lp(c):
+        return -0.5 * (along**2 + (c / 0.01) ** 2)
+
+    assert chain_passes(xy(across), lp(across))
+    off = across.copy()
+    off[3] += 5 * 0.01  # one walker five narrow-direction sd off the ridge
+    assert chain_passes(xy(off))  # the parameters alone do not see it
+    assert not chain_passes(xy(off), lp(off))
+
+
+def test_diagnostics_include_log_posterior_and_moves_are_selectable():
+    from palpbayes.bayes.sampler import MOVES
+
+    tr = simulate_trace(E_TRUE, TIPS["paraboloid"], thickness=0.02, rng=3)
+    res = fit_bayes(tr, seed=2, budget=BudgetSpec.none(),
+                    settings=SamplerSettings(moves="de-snooker"))
+    assert "lp" in res.diagnostics.rhat
+    assert res.diagnostics.rhat_max >= res.diagnostics.rhat["lp"]
+    assert res.diagnostics.converged, res.diagnostics.problems()
+    assert set(MOVES) == {"de", "de-snooker", "stretch"}
+    from palpbayes.errors import InputError
+
+    with pytest.raises(InputError, match="unknown moves"):
+        SamplerSettings(moves="walk")
+    with pytest.raises(InputError, match="max_steps"):
+        SamplerSettings(max_steps=0)
