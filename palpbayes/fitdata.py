@@ -6,9 +6,10 @@ Rules (DESIGN §2):
 
 * only the loading segment is used (approach + indentation, no hold/retract);
 * the *contact onset* z_c is where the measured force last lies within ±F_unc before it stays
-  above it (linear interpolation between the two samples).  The paper's constraint
-  −F_unc <= F(z_surf) <= F_unc then admits z_surf in [z_c, z_top], z_top the start of the
-  approach;
+  above it (linear interpolation between the two samples), read along the samples where the
+  tip reaches a new deepest point (:func:`first_passage`; all samples when z is monotone).
+  The paper's constraint −F_unc <= F(z_surf) <= F_unc then admits z_surf in [z_c, z_top],
+  z_top the start of the approach;
 * for a tip with ``fit_fraction`` f > 0 (the paper uses f = 0.2 for the flat punch) only samples
   with z <= z_c − f·(z_c − z_min) are fitted, a window fixed once from z_c so the objective is a
   smooth function of z_surf;  with f = 0 every loading sample (approach included) is fitted.
@@ -25,7 +26,8 @@ from .contact import Tip, check_nu, exponent, shape
 from .errors import InputError, NoContactError
 from .trace import IndentationTrace
 
-__all__ = ["ModelSpec", "FitData", "prepare", "DEFAULT_F_UNC", "default_fit_fraction"]
+__all__ = ["ModelSpec", "FitData", "prepare", "first_passage", "DEFAULT_F_UNC",
+           "default_fit_fraction"]
 
 #: The paper's sensor uncertainty F_unc [N]: 48 mN peak-to-peak.
 DEFAULT_F_UNC = 48e-3
@@ -140,11 +142,26 @@ class FitData:
         return [slice(i, min(i + step, n_rows)) for i in range(0, n_rows, step)]
 
     def measured_force_at(self, z_surf: float | np.ndarray) -> np.ndarray:
-        """Measured force [N] where the tip passed ``z_surf`` (interpolated on the loading)."""
-        z = self.loading.z[::-1]
-        f = self.loading.force[::-1]
-        order = np.argsort(z, kind="stable")
-        return np.interp(z_surf, z[order], f[order])
+        """Measured force [N] when the tip first passed ``z_surf`` on the way down.
+
+        First passage in time order: the force is interpolated over the samples where the tip
+        reaches a new deepest point, so a noisy, locally non-monotone z (robot position noise)
+        gives the force of the same approach that defines the contact onset, not a mixture of
+        samples sorted by height.  For monotone z this is plain interpolation of F(z).
+        """
+        z, f = first_passage(self.loading.z, self.loading.force)
+        return np.interp(z_surf, z[::-1], f[::-1])
+
+
+def first_passage(z: np.ndarray, force: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The samples (in time order) where the tip reaches a new deepest point [m], [N].
+
+    z is strictly decreasing along them; with monotone z these are all samples.  The contact
+    onset and the force "where the tip passes z_surf" (the paper's constraint) are both read
+    from this sequence, so they agree when robot position noise makes z locally non-monotone.
+    """
+    keep = np.flatnonzero(np.diff(np.minimum.accumulate(z), prepend=np.inf) < 0)
+    return z[keep], force[keep]
 
 
 def _contact_onset(z: np.ndarray, f: np.ndarray, f_unc: float, source: str) -> float:
@@ -213,7 +230,7 @@ def prepare(
     source = trace.source or trace.trace_id
     loading = trace.loading_segment()
     z, f = loading.z, loading.force
-    z_c = _contact_onset(z, f, f_unc, source)
+    z_c = _contact_onset(*first_passage(z, f), f_unc, source)
     z_min = float(z.min())
     keep = np.ones(z.size, dtype=bool)
     if fit_fraction > 0:
