@@ -50,7 +50,9 @@ class LSQResult:
     z_surf, z_surf_sd
         [m] Surface height and its standard error.
     rss
-        [N²] The paper's objective L = Σ (F_j − k·d_j^m)² at the optimum.
+        [N²] The paper's objective L = Σ (F_j − k·d_j^m)² (eq. 12) at the optimum: the residual
+        the paper tabulates (Table II); ``summary.csv`` column ``rss_n2``, averaged per
+        material × tip in the comparison's ``residual_n2``.
     rms
         [N] Root-mean-square residual sqrt(L/n).
     n_points
