@@ -204,3 +204,23 @@ def test_diagnostics_include_log_posterior_and_moves_are_selectable():
         SamplerSettings(moves="walk")
     with pytest.raises(InputError, match="max_steps"):
         SamplerSettings(max_steps=0)
+
+
+def test_cell_scale_indentation_in_si():
+    """The E* prior is scale-free: an AFM-like indentation of a cell (E = 2 kPa, 5 um bead,
+    1 um deep, nN forces, 0.3 nN p-p noise) fits with the same code once the noise spec and
+    F_unc are given in newtons."""
+    from palpbayes.bayes import PriorSpec
+
+    E, nu, pp = 2e3, 0.45, 0.3e-9
+    tr = simulate_trace(E, Tip("paraboloid", radius=5e-6), nu=nu, z_surf=20e-6, depth=1e-6,
+                        approach=0.5e-6, speed=2e-6, rate=2000.0, noise_pp=pp, rng=8)
+    assert 5e-9 < tr.force.max() < 1e-8  # nanonewtons
+    res = fit_bayes(tr, ModelSpec(tr.tip, nu=nu), f_unc=pp, priors=PriorSpec(noise_pp=pp),
+                    budget=BudgetSpec.none(), seed=4)
+    E_draws = res.draws("E")
+    lo, hi = np.quantile(E_draws, [0.05, 0.95])
+    assert lo <= E <= hi
+    assert np.median(E_draws) == pytest.approx(E, rel=0.02)
+    assert np.median(res.draws("sigma")) == pytest.approx(pp / 6, rel=0.1)
+    assert res.diagnostics.converged, res.diagnostics.problems()
