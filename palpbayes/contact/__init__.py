@@ -40,6 +40,8 @@ __all__ = [
     "k_from_modulus",
     "modulus_from_k",
     "check_nu",
+    "check_tip_plausible",
+    "MAX_TIP_RADIUS_M",
     "half_angle_from_degrees",
     "thickness_factor",
 ]
@@ -126,6 +128,36 @@ def check_nu(nu: float) -> float:
             "give a value such as 0.3 for foam or 0.49 for silicone"
         )
     return v
+
+
+#: [m] Largest plausible tip radius for palpation; a larger radius was almost surely given in mm.
+MAX_TIP_RADIUS_M = 0.1
+
+
+def _mm_as_metres(value: float) -> str:
+    """``value`` divided by 1000, written like 0.010 or 0.0117 (the value if it was in mm)."""
+    v = value * 1e-3
+    text = f"{v:.3f}"
+    return text if abs(float(text) - v) <= 1e-12 else f"{v:.4g}"
+
+
+def check_tip_plausible(tip: Tip) -> None:
+    """Reject a tip whose size cannot be meant for palpation (a unit slip).
+
+    A radius (flat, paraboloid, sphere) above :data:`MAX_TIP_RADIUS_M` = 0.1 m is taken for a
+    value in millimetres given as metres (``--radius 10`` for a 10 mm tip).
+
+    Raises
+    ------
+    GeometryError
+        Naming the radius and the value in metres it probably should be.
+    """
+    if tip.radius is not None and tip.radius > MAX_TIP_RADIUS_M:
+        raise GeometryError(
+            f"tip radius {tip.radius:g} m is implausibly large for palpation (more than "
+            f"{MAX_TIP_RADIUS_M:g} m); --radius is in metres (so is the manifest's radius_m): "
+            f"did you mean {_mm_as_metres(tip.radius)}?"
+        )
 
 
 def half_angle_from_degrees(degrees) -> float:
