@@ -15,6 +15,10 @@ Comparison tables (ground truth vs least squares vs Bayes) are made from this fo
 
 Failure policy
 --------------
+* Every trace is read and passes :func:`palpbayes.fitjob.check_fittable` (geometry, units,
+  contact, fit window, the contact model at every depth a fit evaluates) and the output folder
+  must be creatable before anything is written; only then does ``force=True`` remove the
+  previous results.  Bad input found there leaves the results folder as it was.
 * A trace whose *input* is bad (:class:`~palpbayes.errors.InputError`: unreadable file, no
   contact, missing geometry) fails the whole run with an error naming the trace — bad input is
   exit status 2, and a campaign silently missing traces would bias every table.  Finished traces
