@@ -15,6 +15,10 @@ Comparison tables (ground truth vs least squares vs Bayes) are made from this fo
 
 Failure policy
 --------------
+* Every trace is read and passes :func:`palpbayes.fitjob.check_fittable` (geometry, units,
+  contact, fit window, the contact model at every depth a fit evaluates) and the output folder
+  must be creatable before anything is written; only then does ``force=True`` remove the
+  previous results.  Bad input found there leaves the results folder as it was.
 * A trace whose *input* is bad (:class:`~palpbayes.errors.InputError`: unreadable file, no
   contact, missing geometry) fails the whole run with an error naming the trace — bad input is
   exit status 2, and a campaign silently missing traces would bias every table.  Finished traces
@@ -74,23 +78,38 @@ OUTPUT_FILES = ("summary.csv", "settings.json", "traces.csv", "comparison.csv", 
 # ----------------------------------------------------------------------------- source
 
 
-def load_source(source: str | os.PathLike | Sequence[IndentationTrace]
+def load_source(source: str | os.PathLike | Sequence[IndentationTrace],
+                read_options: dict | None = None,
                 ) -> tuple[list[IndentationTrace], Path | None]:
     """Traces of a manifest path or a list of traces, and the manifest path (None for a list).
+
+    Parameters
+    ----------
+    source
+        Campaign manifest path, or a sequence of :class:`~palpbayes.trace.IndentationTrace`.
+    read_options
+        Reader options applied to every trace file of a manifest (``columns``, ``units``,
+        ``force_sign``, ``z_sign``; see :func:`palpbayes.io.trace_csv.read_trace`).  Only for
+        a manifest: traces given as objects are already read.
 
     Raises
     ------
     InputError
-        Duplicate or unusable trace ids, a trace without tip geometry, an empty source, or any
-        error of :func:`palpbayes.io.manifest.read_manifest` / the trace reader.
+        Duplicate or unusable trace ids, a trace without tip geometry, an empty source, read
+        options with a list of traces, or any error of
+        :func:`palpbayes.io.manifest.read_manifest` / the trace reader.
     """
+    read_options = dict(read_options or {})
     if isinstance(source, str | os.PathLike):
         path = Path(source).resolve()
         df = read_manifest(path)
         from .io.manifest import load_trace
 
-        traces = [load_trace(row) for _, row in df.iterrows()]
+        traces = [load_trace(row, **read_options) for _, row in df.iterrows()]
     else:
+        if read_options:
+            raise InputError("read options (columns, units, signs) apply to a manifest's "
+                             "files; read the traces with them instead")
         path = None
         traces = list(source)
         bad = [t for t in traces if not isinstance(t, IndentationTrace)]
@@ -150,7 +169,8 @@ def read_settings(out_dir: str | os.PathLike) -> dict:
                                     "delete it and rerun with --force") from None
 
 
-def _settings(options: FitOptions, source: Path | None, out: Path, n: int) -> dict:
+def _settings(options: FitOptions, source: Path | None, out: Path, n: int,
+              read_options: dict | None = None) -> dict:
     camp = None if source is None else source.parent
     rec = options_record(options)
     return {
@@ -163,6 +183,7 @@ def _settings(options: FitOptions, source: Path | None, out: Path, n: int) -> di
         "campaign_dir": None if camp is None else str(camp),
         "campaign_dir_relative": None if camp is None else os.path.relpath(camp, out.resolve()),
         "n_traces": n,
+        "read_options": json.loads(json.dumps(read_options or {}, sort_keys=True, default=str)),
     }
 
 
@@ -172,6 +193,12 @@ def _check_out_dir(out: Path, resume: bool, force: bool) -> None:
                          "--resume keeps finished traces")
     if out.exists() and not out.is_dir():
         raise OutputExistsError(f"{out} exists and is not a folder; choose another output folder")
+    for parent in out.absolute().parents:  # nearest existing ancestor must be a folder
+        if parent.exists():
+            if not parent.is_dir():
+                raise InputError(f"cannot create output folder {out}: {parent} is a file, not a "
+                                 "folder; choose another --out")
+            break
     if out.is_dir() and any(out.iterdir()) and not (resume or force):
         raise OutputExistsError(
             f"output folder {out} is not empty; use --force to refit and replace its results, "
@@ -332,8 +359,14 @@ def fit_campaign(
     resume: bool = False,
     force: bool = False,
     progress: bool | None = None,
+    read_options: dict | None = None,
 ) -> pd.DataFrame:
     """Fit every trace of a campaign and write the results folder (module docstring).
+
+    Nothing is written, and with ``force`` nothing is removed, until every trace has been read
+    and has passed :func:`palpbayes.fitjob.check_fittable` (geometry, units, contact, fit
+    window, the contact model over every depth a fit evaluates) and the output folder can be
+    created.
 
     Parameters
     ----------
@@ -352,6 +385,10 @@ def fit_campaign(
         Replace the results of a previous run in a non-empty ``out_dir``.
     progress
         Progress bar over traces on stderr; None: only when stderr is a terminal.
+    read_options
+        Reader options for every trace file of a manifest (``columns``, ``units``,
+        ``force_sign``, ``z_sign``; see :func:`load_source`); recorded in ``settings.json``,
+        and resuming with other read options is refused.
 
     Returns
     -------
@@ -371,19 +408,23 @@ def fit_campaign(
     options = options or FitOptions()
     out = Path(out_dir)
     _check_out_dir(out, resume, force)
-    traces, src = load_source(source)
+    traces, src = load_source(source, read_options)
     if workers is None:
         workers = os.cpu_count() or 1
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InputError(f"workers {workers!r} must be a positive integer")
     options = options.with_progress(False)  # one bar over traces, none per fit
 
-    settings = _settings(options, src, out, len(traces))
+    settings = _settings(options, src, out, len(traces), read_options)
     old = read_settings(out) if resume else {}
     if resume and old and old.get("options") != settings["options"]:
         raise InputError(
             f"cannot resume {out}: it was fitted with other options ({old.get('options')}); "
             "use --force to refit everything with the new options")
+    if resume and old and old.get("read_options", {}) != settings["read_options"]:
+        raise InputError(
+            f"cannot resume {out}: its traces were read with other column/unit/sign options "
+            f"({old.get('read_options', {})}); use --force to refit everything with the new ones")
     for t in traces:  # bad input (geometry, nu, no contact) fails before anything is written
         try:
             check_fittable(t, options)
@@ -392,11 +433,16 @@ def fit_campaign(
                 raise
             exc.args = (f"trace {t.trace_id!r}: {exc}",)  # keep the class, name the trace
             raise
+    # every check passed: only now create the folder and (with force) remove the old results
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / PARTIAL_DIR).mkdir(exist_ok=True)
+        (out / POSTERIOR_DIR).mkdir(exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create output folder {out} ({exc.strerror or exc}); choose "
+                         "another --out") from None
     if force:
         _clear_outputs(out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / PARTIAL_DIR).mkdir(exist_ok=True)
-    (out / POSTERIOR_DIR).mkdir(exist_ok=True)
     write_text_atomic(json.dumps(settings, indent=2) + "\n", out / "settings.json")
     write_csv_atomic(pd.DataFrame([_geometry_row(t) for t in traces],
                                   columns=MANIFEST_COLUMNS), out / "traces.csv",

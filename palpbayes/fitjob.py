@@ -100,20 +100,94 @@ def trace_seed(base: int, trace_id: str) -> int:
 def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     """The trace's prepared fit data; raises the :class:`InputError` a fit would raise.
 
-    Cheap (no fitting): geometry, Poisson ratio, thickness, contact onset and fit window.
+    Cheap (no fitting): geometry, Poisson ratio, thickness, contact onset and fit window, unit
+    plausibility, and the contact model (with its finite-thickness correction) evaluated at the
+    deepest depth any fit of this trace evaluates, so that no :class:`GeometryError` can arise
+    once fitting has started.
+
+    Checks, besides those of :func:`palpbayes.fitdata.prepare`:
+
+    * tip size plausible (:func:`palpbayes.contact.check_tip_plausible`: radius <= 0.1 m);
+    * indentation depth (contact onset to deepest point) at most the specimen thickness, when
+      the thickness is known (z in the wrong unit);
+    * paraboloid and sphere: depth (contact onset to deepest fitted point) at most the tip
+      radius R, the limit of the Hertz and Sneddon laws;
+    * the model's shape function finite and positive at the deepest admissible depth
+      d = z_top − min(z) (surface at the start of the approach): this evaluates the
+      finite-thickness correction over its whole range (Dimitriadis chi <= 1, Hayes a/h <= 1
+      and 0.2 <= nu <= 0.5, no correction for cone and power tips), also with the tip radius
+      scaled by the budget's tolerance when the Bayesian fit runs.
+
+    Raises
+    ------
+    GeometryError
+        Missing or implausible geometry, depth beyond thickness or radius, or a correction
+        outside its range.
+    NoContactError, InputError
+        As :func:`palpbayes.fitdata.prepare`.
     """
-    if trace.tip is None:
-        raise GeometryError(f"{trace.source or trace.trace_id}: no tip geometry; give --tip and "
-                            "its size")
+    from .contact import check_tip_plausible
+
+    src = trace.source or trace.trace_id
+    tip = trace.tip
+    if tip is None:
+        raise GeometryError(f"{src}: no tip geometry; give --tip and its size")
+    try:
+        check_tip_plausible(tip)
+    except GeometryError as exc:
+        raise GeometryError(f"{src}: {exc}") from None
     thickness = trace.thickness if options.thickness_correction else None
     if options.thickness_correction and thickness is None:
-        raise GeometryError(f"{trace.trace_id}: the thickness correction needs the specimen "
+        raise GeometryError(f"{src}: the thickness correction needs the specimen "
                             "thickness (--thickness or the manifest's thickness_m)")
     # a manifest's per-row nu (trace.metadata["nu"]) overrides the run's option
     nu = trace.metadata.get("nu", options.nu)
-    model = ModelSpec(trace.tip, nu=nu, thickness=thickness, bonded=options.bonded)
-    return prepare(trace, model, f_unc=options.f_unc, fit_fraction=options.fit_fraction,
+    model = ModelSpec(tip, nu=nu, thickness=thickness, bonded=options.bonded)
+    data = prepare(trace, model, f_unc=options.f_unc, fit_fraction=options.fit_fraction,
                    max_depth=options.max_depth)
+
+    depth = data.z_contact - float(data.loading.z.min())
+    if trace.thickness is not None and depth > trace.thickness:
+        raise GeometryError(
+            f"{src}: the indentation depth {depth * 1e3:.4g} mm (contact onset to deepest "
+            f"point) exceeds the specimen thickness {trace.thickness * 1e3:.4g} mm; is z in "
+            "another unit (give it, e.g. --z-unit mm or --z-unit cm)? or check the thickness "
+            "(--thickness, thickness_m, in metres)"
+        )
+    fitted = data.z_contact - float(data.z.min())
+    if tip.kind in ("paraboloid", "sphere") and fitted > tip.radius:
+        law = "Hertz" if tip.kind == "paraboloid" else "Sneddon sphere"
+        raise GeometryError(
+            f"{src}: the indentation depth {fitted * 1e3:.4g} mm (contact onset to deepest "
+            f"fitted point) exceeds the tip radius {tip.radius * 1e3:.4g} mm, outside the "
+            f"{law} law's validity; is z in another unit (give it, e.g. --z-unit mm or "
+            "--z-unit cm)? or fit a shallower window (--max-depth M)"
+        )
+
+    # the depths every fit evaluates: up to the deepest fitted point below the contact onset
+    # (what the data say), and up to z_top - min(z) (trial surfaces up to the start of the
+    # approach, tried by the least-squares grid and the likelihood table)
+    deepest = data.z_top - float(data.z.min())
+    approach = (f"; fits try every surface up to the start of the recorded approach, i.e. "
+                f"depths up to {deepest * 1e3:.4g} mm (indentation {fitted * 1e3:.4g} mm): "
+                "cropping a long approach from the file lowers this")
+    models = [("", model)]
+    tol = options.budget.radius_tolerance
+    if options.method in ("bayes", "both") and tol > 0 and tip.kind != "cone":
+        models.append((f" (with the tip radius scaled by the budget's +{tol * 100:g} % "
+                       "tolerance)", replace(model, tip=tip.scaled(1.0 + tol))))
+    for note, m in models:
+        for d, where in ((max(fitted, 0.0), ""), (deepest, approach)):
+            try:
+                s = m.shape(np.array([d]))
+            except GeometryError as exc:
+                raise GeometryError(f"{src}: {exc}{note}{where}") from None
+            if not (np.all(np.isfinite(s)) and np.all(s > 0)):
+                raise GeometryError(
+                    f"{src}: the contact model ({m.describe()}) gives no positive force at "
+                    f"depth {d * 1e3:.4g} mm{note}; check the tip geometry and thickness{where}"
+                )
+    return data
 
 
 def fit_trace(trace: IndentationTrace, options: FitOptions,

@@ -6,12 +6,13 @@ depth is d = z_surf - z; force is the compressive normal force, positive when pr
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .contact import Tip
-from .errors import DataFileError, NoContactError
+from .errors import DataFileError, InputError, NoContactError
 
 __all__ = ["IndentationTrace"]
 
@@ -49,7 +50,13 @@ class IndentationTrace:
     ------
     DataFileError
         If arrays differ in length, have fewer than 3 samples, hold NaN/inf, or time is not
-        strictly increasing.  The message names ``source``.
+        strictly increasing; if ``thickness`` or ``rest_time`` is not a positive (non-negative)
+        number or ``repetition`` not a whole number.  The message names ``source``.
+
+    Notes
+    -----
+    The arrays are stored read-only.  An array the caller can still write to is copied first,
+    so the caller's own arrays are never frozen (nor can they change the trace afterwards).
     """
 
     time: np.ndarray
@@ -69,7 +76,9 @@ class IndentationTrace:
         where = self.source or f"trace {self.trace_id!r}"
         arrays = {}
         for name in ("time", "z", "force"):
-            a = np.ascontiguousarray(getattr(self, name), dtype=float)
+            a = np.asarray(getattr(self, name), dtype=float)
+            if not (a.flags.c_contiguous and _frozen(a)):
+                a = np.array(a, dtype=float, order="C")  # our own copy, safe to freeze
             if a.ndim != 1:
                 raise DataFileError(where, f"column '{name}' must be one-dimensional")
             bad = ~np.isfinite(a)
@@ -104,8 +113,25 @@ class IndentationTrace:
                 "strictly increasing",
                 "sort the rows by time and drop duplicated samples",
             )
-        if self.thickness is not None and not (np.isfinite(self.thickness) and self.thickness > 0):
-            raise DataFileError(where, f"thickness {self.thickness!r} m must be positive")
+        for name, must, example in (("thickness", "positive", "0.02 [m]"),
+                                    ("rest_time", "non-negative", "60.0 [s]")):
+            v = getattr(self, name)
+            if v is None:
+                continue
+            if isinstance(v, bool) or not isinstance(v, numbers.Real):
+                raise DataFileError(where, f"{name} {v!r} is not a number",
+                                    f"give it as a number, e.g. {name}={example}")
+            if not (np.isfinite(v) and (v > 0 if must == "positive" else v >= 0)):
+                unit = "m" if name == "thickness" else "s"
+                raise DataFileError(where, f"{name} {v!r} {unit} must be {must}")
+            object.__setattr__(self, name, float(v))
+        rep = self.repetition
+        if rep is not None:
+            if isinstance(rep, bool) or not isinstance(rep, numbers.Real) or \
+                    not (np.isfinite(rep) and float(rep) == round(float(rep))):
+                raise DataFileError(where, f"repetition {rep!r} is not a whole number",
+                                    "number the repetitions 1, 2, 3 ...")
+            object.__setattr__(self, "repetition", int(rep))
 
     # ------------------------------------------------------------------ properties
     @property
@@ -133,21 +159,46 @@ class IndentationTrace:
         if end < 3:
             raise NoContactError(
                 f"{self.source or self.trace_id}: the tip never moves down (deepest point at "
-                f"sample {end - 1}); is z up-positive? use the z sign option"
+                f"sample {end - 1}); is z down-positive? flip it with --z-sign -1 (z_sign=-1 "
+                "in the API)"
             )
         return self._slice(slice(0, end))
 
     def depth_window(
         self, z_surf: float, depth_min: float = 0.0, depth_max: float = np.inf
     ) -> IndentationTrace:
-        """Samples whose depth d = z_surf - z lies in [depth_min, depth_max] [m]."""
+        """Samples whose depth d = z_surf - z lies in [depth_min, depth_max] [m].
+
+        Raises
+        ------
+        InputError
+            If fewer than 3 samples lie in the window (the message names the window).
+        """
         d = z_surf - self.z
         keep = (d >= depth_min) & (d <= depth_max)
+        self._check_window(keep, f"have a depth in [{depth_min * 1e3:.4g}, "
+                           f"{depth_max * 1e3:.4g}] mm below z_surf = {z_surf * 1e3:.6g} mm")
         return self._slice(keep)
 
     def above(self, z_min: float) -> IndentationTrace:
-        """Samples with z >= z_min [m] (drop the deepest part)."""
-        return self._slice(self.z >= z_min)
+        """Samples with z >= z_min [m] (drop the deepest part).
+
+        Raises
+        ------
+        InputError
+            If fewer than 3 samples lie above ``z_min``.
+        """
+        keep = self.z >= z_min
+        self._check_window(keep, f"have z >= {z_min * 1e3:.6g} mm")
+        return self._slice(keep)
+
+    def _check_window(self, keep: np.ndarray, what: str) -> None:
+        n = int(np.count_nonzero(keep))
+        if n < 3:
+            raise InputError(
+                f"{self.source or self.trace_id}: only {n} of {self.n_points} samples {what}; "
+                "a trace needs at least 3: widen the window"
+            )
 
     def _slice(self, index) -> IndentationTrace:
         return replace(
@@ -165,3 +216,14 @@ class IndentationTrace:
             f"z {self.z.min() * 1e3:.3f}..{self.z.max() * 1e3:.3f} mm, "
             f"F {self.force.min():.3g}..{self.force.max():.3g} N)"
         )
+
+
+def _frozen(a: np.ndarray) -> bool:
+    """True if neither ``a`` nor any array it views can be written to (safe to keep)."""
+    while isinstance(a, np.ndarray):
+        if a.flags.writeable:
+            return False
+        if a.base is None:
+            return True
+        a = a.base
+    return False  # a view of a foreign buffer (bytes, mmap): copy to be safe

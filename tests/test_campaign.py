@@ -14,14 +14,26 @@ import palpbayes.pooling as pooling
 from palpbayes.bayes import SamplerSettings
 from palpbayes.cli import main
 from palpbayes.compare import COMPARISON_COLUMNS, compare_campaign, format_comparison
-from palpbayes.errors import FitError, InputError, NoContactError, OutputExistsError
-from palpbayes.fitjob import SUMMARY_COLUMNS, FitOptions
+from palpbayes.contact import Tip
+from palpbayes.errors import (
+    DataFileError,
+    FitError,
+    GeometryError,
+    InputError,
+    NoContactError,
+    OutputExistsError,
+)
+from palpbayes.fitdata import ModelSpec, prepare
+from palpbayes.fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable
 from palpbayes.io.manifest import iter_traces
+from palpbayes.io.trace_csv import write_trace
+from palpbayes.lsq import fit_lsq_data
 from palpbayes.simulate import (
     PAPER_MATERIALS,
     PAPER_TIPS,
     simulate_campaign,
     simulate_palpation_series,
+    simulate_trace,
 )
 
 #: Plumbing only: short chains (flagged as not converged, which the tables must show).
@@ -213,6 +225,132 @@ def test_fit_error_is_recorded_and_does_not_stop_the_campaign(traces, tmp_path, 
         campaign.fit_campaign(traces[:3], tmp_path / "strict", replace(OPTS, strict=True),
                               workers=1)
     assert (tmp_path / "strict" / "summary.csv").is_file()
+
+
+# ----------------------------------------------------------------------------- pre-check
+
+
+@pytest.fixture(scope="module")
+def sphere_trace():
+    """Sphere R = 10 mm, 2 mm into a 20 mm specimen after a 1 mm approach."""
+    return simulate_trace(136e3, Tip("sphere", radius=0.01), thickness=0.02, rng=1,
+                          trace_id="sph")
+
+
+@pytest.mark.parametrize("tip, thickness, nu, match", [
+    (Tip("cone", half_angle=np.radians(70)), 0.02, 0.3, "no finite-thickness correction"),
+    (Tip("power", c=50.0, n=2.0), 0.02, 0.3, "no finite-thickness correction"),
+    (Tip("flat", radius=0.03), 0.02, 0.3, "outside Hayes' table"),
+    (Tip("flat", radius=0.01), 0.02, 0.1, "outside the Hayes correction's range"),
+    (Tip("sphere", radius=0.01), 0.004, 0.3, "Dimitriadis"),
+])
+def test_precheck_evaluates_the_thickness_correction(sphere_trace, tip, thickness, nu, match):
+    """These used to pass check_fittable and fail inside the fit, after outputs were written."""
+    tr = sphere_trace.replace(tip=tip, thickness=thickness)
+    opts = FitOptions(method="lsq", thickness_correction=True, nu=nu)
+    with pytest.raises(GeometryError, match=match):
+        check_fittable(tr.replace(metadata={}), opts)
+    check_fittable(tr.replace(metadata={}), replace(opts, thickness_correction=False))
+
+
+def test_precheck_covers_every_depth_the_fit_evaluates(sphere_trace):
+    """chi <= 1 at the fitted depth but > 1 for trial surfaces up in the approach: the fit
+    itself raises there, so the pre-check must refuse the trace too (and say why)."""
+    tr = sphere_trace.replace(metadata={})
+    opts = FitOptions(method="lsq", thickness_correction=False)
+    data = check_fittable(tr, opts)
+    fitted = data.z_contact - data.z.min()
+    deepest = data.z_top - data.z.min()
+    h = np.sqrt(0.01 * 0.5 * (fitted + deepest))  # chi = 1 between the two depths
+    tr_h = tr.replace(thickness=h)
+    model = ModelSpec(tr.tip, nu=0.3, thickness=h)
+    with pytest.raises(GeometryError, match="Dimitriadis"):  # what the fit would do
+        fit_lsq_data(prepare(tr_h, model))
+    with pytest.raises(GeometryError, match="start of the recorded approach"):
+        check_fittable(tr_h, replace(opts, thickness_correction=True))
+    # a thickness that passes the pre-check also passes the fit
+    ok = tr.replace(thickness=1.01 * np.sqrt(0.01 * deepest) / 0.99)
+    check_fittable(ok, replace(opts, thickness_correction=True, method="bayes"))
+    fit_lsq_data(prepare(ok, ModelSpec(tr.tip, nu=0.3, thickness=ok.thickness)))
+
+
+def test_precheck_includes_the_budget_radius_tolerance(sphere_trace):
+    tr = sphere_trace.replace(metadata={})
+    data = check_fittable(tr, FitOptions(method="lsq"))
+    deepest = data.z_top - data.z.min()
+    tr = tr.replace(thickness=np.sqrt(0.01 * deepest) / 0.997)  # chi 0.997; +1 % radius: 1.002
+    check_fittable(tr, FitOptions(method="lsq", thickness_correction=True))
+    with pytest.raises(GeometryError, match="budget's \\+1 % tolerance"):
+        check_fittable(tr, FitOptions(method="bayes", thickness_correction=True))
+
+
+@pytest.mark.parametrize("change, match", [
+    ({"tip": Tip("sphere", radius=10.0)}, "did you mean 0.010"),
+    ({"thickness": 0.001}, "exceeds the specimen thickness"),
+    ({"tip": Tip("paraboloid", radius=0.001)}, "exceeds the tip radius"),
+])
+def test_precheck_catches_unit_slips(sphere_trace, change, match):
+    with pytest.raises(GeometryError, match=match):
+        check_fittable(sphere_trace.replace(**change), FitOptions(method="lsq"))
+
+
+def test_force_keeps_old_results_when_a_trace_fails_the_precheck(traces, tmp_path):
+    out = tmp_path / "res"
+    campaign.fit_campaign(traces[:1], out, replace(OPTS, method="lsq"), workers=1)
+    before = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    cone = traces[1].replace(tip=Tip("cone", half_angle=np.radians(70)))
+    with pytest.raises(GeometryError, match=f"{cone.trace_id}.*tip 'cone'"):
+        campaign.fit_campaign([traces[0], cone], out,
+                              replace(OPTS, method="lsq", thickness_correction=True),
+                              workers=1, force=True)
+    after = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert after == before
+
+
+def test_output_folder_below_a_file(traces, tmp_path):
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(InputError, match="is a file, not a folder"):
+        campaign.fit_campaign(traces[:1], tmp_path / "f" / "res", OPTS, workers=1)
+
+
+def test_manifest_read_options_reach_every_trace(tmp_path):
+    """Column, unit and sign options apply to a manifest's traces; resume must not mix them."""
+    camp = tmp_path / "camp"
+    camp.mkdir()
+    rows = []
+    for i in range(2):
+        tr = simulate_trace(136e3, Tip("sphere", radius=0.01), thickness=0.02, rng=i + 1)
+        pd.DataFrame({"t": tr.time, "height_mm": tr.z * 1e3, "fz": -tr.force}).to_csv(
+            camp / f"r{i}.csv", index=False, float_format="%.17g")
+        rows.append({"trace_id": f"r{i}", "file": f"r{i}.csv", "material": "W",
+                     "tip": "sphere", "radius_m": 0.01, "thickness_m": 0.02})
+    pd.DataFrame(rows).to_csv(camp / "manifest.csv", index=False)
+    read = {"columns": {"time": "t", "z": "height_mm", "force": "fz"}, "units": {"z": "mm"},
+            "force_sign": -1.0}
+    opts = replace(OPTS, method="lsq")
+    with pytest.raises(DataFileError, match="missing column 'time_s'"):
+        campaign.fit_campaign(camp / "manifest.csv", tmp_path / "a", opts, workers=1)
+    assert not (tmp_path / "a").exists()
+    summary = campaign.fit_campaign(camp / "manifest.csv", tmp_path / "a", opts, workers=1,
+                                    read_options=read)
+    assert np.allclose(summary["E_pa"], 136e3, rtol=0.01)
+    assert campaign.read_settings(tmp_path / "a")["read_options"]["force_sign"] == -1.0
+    with pytest.raises(InputError, match="other column/unit/sign options"):
+        campaign.fit_campaign(camp / "manifest.csv", tmp_path / "a", opts, workers=1,
+                              resume=True, read_options=dict(read, units={"z": "mm", "time": "s"}))
+    with pytest.raises(InputError, match="apply to a manifest"):
+        campaign.fit_campaign([simulate_trace(136e3, Tip("sphere", radius=0.01), depth=2e-3)],
+                              tmp_path / "b", opts, read_options=read)
+
+
+def test_bad_manifest_number_writes_nothing(tmp_path):
+    tr = simulate_trace(136e3, Tip("sphere", radius=0.01), thickness=0.02, rng=1)
+    write_trace(tr, tmp_path / "a.csv")
+    pd.DataFrame([{"trace_id": "a", "file": "a.csv", "material": "W", "tip": "sphere",
+                   "radius_m": "abc"}]).to_csv(tmp_path / "manifest.csv", index=False)
+    with pytest.raises(DataFileError, match="column 'radius_m' holds 'abc'"):
+        campaign.fit_campaign(tmp_path / "manifest.csv", tmp_path / "res", OPTS)
+    assert not (tmp_path / "res").exists()
 
 
 # ----------------------------------------------------------------------------- comparison

@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -62,10 +63,18 @@ def _bad_csv(tmp_path, tr, case):
         df = df[df["z_m"] > tr.metadata["z_surf_true"] + 1e-4]
     elif case == "flipped":
         df["force_n"] = -df["force_n"]
+    elif case in ("cm", "cm_thick"):
+        df["z_m"] = df["z_m"] * 100  # cm values in a metre column (span 0.3 "m" passes)
     if case == "empty":
         p.write_text("")
     elif case == "header":
         p.write_text("time_s,z_m,force_n\n")
+    elif case == "semicolon_dc":
+        df.to_csv(p, sep=";", decimal=",", index=False)
+    elif case == "comma_dc":
+        p.write_text("time_s,z_m,force_n\n" + "".join(
+            f"{t:.5f},{z:.7f},{f:.4f}\n".replace(".", ",")
+            for t, z, f in zip(df["time_s"], df["z_m"], df["force_n"], strict=True)))
     else:
         df.to_csv(p, index=False)
     return p
@@ -85,13 +94,19 @@ CASES = {
     "decreasing": "time decreases at data row 102",
     "nocontact": "never leaves",
     "flipped": "--force-sign -1",
+    "semicolon_dc": "non-numeric value '0,00125' at data row 1: the file uses decimal commas",
+    "comma_dc": "3 more field\\(s\\) than the header \\(3 columns\\); decimal commas",
+    "cm": "indentation depth 176.8 mm .*exceeds the tip radius 10 mm.*--z-unit",
+    "cm_thick": "indentation depth 176.8 mm .*exceeds the specimen thickness 20 mm.*--z-unit",
 }
+#: Extra command-line arguments of some cases.
+CASE_ARGS = {"cm_thick": ["--thickness", "0.02"]}
 
 
 @pytest.mark.parametrize("case", list(CASES))
 def test_bad_trace_files(tmp_path, capsys, good, case):
     path = _bad_csv(tmp_path, good[0], case)
-    rc, err, out = _run(tmp_path, capsys, [str(path), *TIP])
+    rc, err, out = _run(tmp_path, capsys, [str(path), *TIP, *CASE_ARGS.get(case, [])])
     assert rc == 2
     assert len(err.splitlines()) == 1, err
     assert str(path) in err
@@ -106,11 +121,160 @@ def test_bad_trace_files(tmp_path, capsys, good, case):
     (TIP + ["--nu", "0.5"], "Poisson ratio nu = 0.5 is outside \\[0, 0.5\\)"),
     (TIP + ["--nu", "-0.1"], "outside \\[0, 0.5\\)"),
     (TIP + ["--nu-range", "0.2", "0.6"], "outside \\[0, 0.5\\)"),
+    (["--tip", "cone", "--half-angle", "95"],
+     "cone half-angle 95.0 deg must lie strictly between 0 and 90 deg"),
+    (["--tip", "cone", "--half-angle", "0"], "half-angle 0.0 deg must lie strictly between"),
 ])
 def test_bad_options(tmp_path, capsys, good, args, match):
     rc, err, out = _run(tmp_path, capsys, [str(good[1]), *args])
     assert rc == 2 and len(err.splitlines()) == 1 and re.search(match, err), err
     assert not out.exists()
+
+
+#: Geometry the pre-check must refuse before anything is written (the trace file is named).
+GEOMETRY = {
+    "cone_thickness": (["--tip", "cone", "--half-angle", "70", "--thickness", "0.02",
+                        "--finite-thickness"],
+                       "no finite-thickness correction for tip 'cone'.*drop --finite-thickness"),
+    "power_thickness": (["--tip", "power", "--profile-c", "50", "--profile-n", "2",
+                         "--thickness", "0.02", "--finite-thickness"],
+                        "no finite-thickness correction for tip 'power'"),
+    "flat_a_over_h": (["--tip", "flat", "--radius", "0.03", "--thickness", "0.02",
+                       "--finite-thickness"], "a/h = 1.5 \\(a = 30 mm, h = 20 mm\\) is outside"),
+    "flat_hayes_nu": (["--tip", "flat", "--radius", "0.01", "--thickness", "0.02",
+                       "--finite-thickness", "--nu", "0.1"],
+                      "Poisson ratio 0.1 is outside the Hayes correction's range 0.2..0.5"),
+    "flat_non_bonded": (["--tip", "flat", "--radius", "0.01", "--thickness", "0.02",
+                         "--finite-thickness", "--non-bonded"], "no non-bonded"),
+    "dimitriadis_chi": (["--tip", "sphere", "--radius", "0.01", "--thickness", "0.004",
+                         "--finite-thickness"],
+                        "chi = sqrt\\(R\\*d\\)/h = 1.05 at depth d = 1.77 mm .*exceeds 1"),
+    "dimitriadis_approach": (["--tip", "sphere", "--radius", "0.01", "--thickness", "0.005",
+                              "--finite-thickness"],
+                             "chi = .* = 1.1 at depth d = 3 mm .*start of the recorded "
+                             "approach, i.e. depths up to 2.999 mm"),
+    "radius_mm": (["--tip", "sphere", "--radius", "10"],
+                  "tip radius 10 m is implausibly large.*--radius is in metres.*did you mean "
+                  "0.010\\?"),
+    "flat_radius_mm": (["--tip", "flat", "--radius", "10"], "did you mean 0.010\\?"),
+    "thinner_than_depth": (TIP + ["--thickness", "0.001"],
+                           "indentation depth 1.768 mm .*exceeds the specimen thickness 1 mm"),
+    "deeper_than_radius": (["--tip", "paraboloid", "--radius", "0.001"],
+                           "exceeds the tip radius 1 mm, outside the Hertz law's validity"),
+}
+
+
+@pytest.mark.parametrize("case", list(GEOMETRY))
+def test_bad_geometry_is_refused_before_writing(tmp_path, capsys, good, case):
+    args, match = GEOMETRY[case]
+    rc, err, out = _run(tmp_path, capsys, [str(good[1]), *args])
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert str(good[1]) in err and re.search(match, err), err
+    assert not out.exists()
+
+
+def test_failed_precheck_keeps_previous_results_with_force(tmp_path, capsys, good):
+    """Issue: a bad model that escaped the pre-check deleted the old results under --force and
+    left settings.json + traces.csv of the failed run."""
+    rc, _, out = _run(tmp_path, capsys, [str(good[1]), *TIP])
+    assert rc == 0
+    before = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert Path("summary.csv") in before
+    rc, err, _ = _run(tmp_path, capsys, [str(good[1]), *GEOMETRY["cone_thickness"][0],
+                                         "--force"])
+    assert rc == 2 and len(err.splitlines()) == 1 and "tip 'cone'" in err, err
+    after = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert after == before
+
+
+def _manifest(tmp_path, tr, rows, name="manifest.csv", frame=None):
+    camp = tmp_path / "camp"
+    camp.mkdir(exist_ok=True)
+    (frame if frame is not None else _frame(tr)).to_csv(camp / "a.csv", index=False)
+    base = {"trace_id": "a", "file": "a.csv", "material": "W", "tip": "sphere",
+            "radius_m": "0.01", "thickness_m": "0.02", "repetition": "1"}
+    pd.DataFrame([{**base, **r} for r in rows]).to_csv(camp / name, index=False)
+    return camp / name
+
+
+#: Manifest cells that must be refused: (changed cells, expected message).
+MANIFEST_CASES = {
+    "radius_text": ({"radius_m": "abc"}, "row 1 \\(trace 'a'\\): column 'radius_m' holds "
+                    "'abc', which is not a number \\(write a plain number in metres"),
+    "repetition_text": ({"repetition": "first"},
+                        "column 'repetition' holds 'first', which is not a number"),
+    "repetition_fraction": ({"repetition": "1.5"}, "column 'repetition' is 1.5, not a whole"),
+    "thickness_unit": ({"thickness_m": "2cm"}, "column 'thickness_m' holds '2cm'"),
+    "thickness_negative": ({"thickness_m": "-0.02"}, "column 'thickness_m' is -0.02, which "
+                           "must be positive"),
+    "empty_trace_id": ({"trace_id": ""}, "row 1: column 'trace_id' is empty"),
+    "empty_material": ({"material": ""}, "column 'material' is empty"),
+    "cone_angle": ({"tip": "cone", "radius_m": "", "half_angle_deg": "95"},
+                   "cone half-angle 95.0 deg must lie strictly between 0 and 90 deg"),
+    "radius_mm": ({"radius_m": "10"}, "tip radius 10 m is implausibly large.*did you mean "
+                  "0.010\\?"),
+}
+
+
+@pytest.mark.parametrize("case", list(MANIFEST_CASES))
+def test_bad_manifest_cells(tmp_path, capsys, good, case):
+    cells, match = MANIFEST_CASES[case]
+    m = _manifest(tmp_path, good[0], [cells])
+    rc, err, out = _run(tmp_path, capsys, [str(m)])
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    named = str(m) if case != "radius_mm" else str(m.parent / "a.csv")
+    assert named in err and re.search(match, err), err
+    assert not out.exists()
+
+
+def test_manifest_traces_get_the_sign_and_unit_options(tmp_path, capsys, good):
+    tr = good[0]
+    raw = pd.DataFrame({"time_s": tr.time, "z_mm": tr.z * 1e3, "force_n": -tr.force})
+    m = _manifest(tmp_path, tr, [{}], frame=raw)
+    rc, err, out = _run(tmp_path, capsys, [str(m)])
+    assert rc == 2 and len(err.splitlines()) == 1, err  # the advice names the option ...
+    assert str(m.parent / "a.csv") in err and "--force-sign -1" in err, err
+    assert not out.exists()
+    rc, err, out = _run(tmp_path, capsys, [str(m), "--force-sign", "-1"])  # ... which works
+    assert rc == 0, err
+    summary = pd.read_csv(out / "summary.csv")
+    assert summary["E_pa"].iloc[0] == pytest.approx(136e3, rel=0.01)
+    # the column and unit options reach the manifest's traces too
+    raw.rename(columns={"z_mm": "height"}).to_csv(m.parent / "a.csv", index=False)
+    rc, err, out2 = _run(tmp_path / "x", capsys, [str(m), "--force-sign", "-1",
+                                                 "--z-column", "height", "--z-unit", "mm"])
+    assert rc == 0, err
+    assert pd.read_csv(out2 / "summary.csv")["E_pa"].iloc[0] == summary["E_pa"].iloc[0]
+
+
+def test_output_below_a_file(tmp_path, capsys, good):
+    blocker = tmp_path / "results"
+    blocker.write_text("not a folder")
+    rc = main(["fit", str(good[1]), *TIP, "--out", str(blocker / "sub"), "--method", "lsq"])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert f"cannot create output folder {blocker / 'sub'}: {blocker} is a file" in err
+    assert blocker.read_text() == "not a folder"
+
+
+def test_folder_as_input(tmp_path, capsys, good):
+    folder = tmp_path / "camp"
+    folder.mkdir()
+    rc, err, out = _run(tmp_path, capsys, [str(folder), *TIP])
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert f"{folder}: is a folder, not a file" in err and "not found" not in err
+    m = _manifest(tmp_path, good[0], [{}])
+    rc, err, out = _run(tmp_path, capsys, [str(m.parent)])
+    assert rc == 2 and f"did you mean {m}?" in err, err
+    assert not out.exists()
+
+
+def test_semicolon_separated_trace_is_read(tmp_path, capsys, good):
+    p = tmp_path / "semi.csv"
+    _frame(good[0]).to_csv(p, sep=";", index=False, float_format="%.17g")
+    rc, err, out = _run(tmp_path, capsys, [str(p), *TIP])
+    assert rc == 0, err
+    assert pd.read_csv(out / "summary.csv")["E_pa"].iloc[0] == pytest.approx(136e3, rel=0.01)
 
 
 def test_manifest_with_missing_file(tmp_path, capsys, good):

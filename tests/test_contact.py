@@ -9,12 +9,15 @@ from hypothesis import strategies as st
 
 from palpbayes.contact import (
     LAWS,
+    MAX_TIP_RADIUS_M,
     Tip,
     check_nu,
+    check_tip_plausible,
     cone,
     exponent,
     flat,
     force,
+    half_angle_from_degrees,
     k_from_modulus,
     mdr,
     modulus_from_k,
@@ -23,7 +26,12 @@ from palpbayes.contact import (
     sphere,
     thickness_factor,
 )
-from palpbayes.contact.thickness import dimitriadis_coefficients, hayes_kappa
+from palpbayes.contact.thickness import (
+    DIMITRIADIS_CHI_MAX,
+    dimitriadis_coefficients,
+    dimitriadis_factor,
+    hayes_kappa,
+)
 from palpbayes.errors import GeometryError
 
 DEPTHS = np.linspace(1e-6, 3e-3, 500)
@@ -138,7 +146,7 @@ def test_force_zero_for_non_positive_depth_and_vectorised():
 def test_monotone_and_scaling_laws(d1, d2, E, scale, tip_index):
     tip = TIPS[tip_index]
     lo, hi = sorted((d1, d2))
-    if hi > lo:
+    if hi > lo * (1 + 1e-12):  # depths one ulp apart may round to the same force
         assert force(hi, E, 0.3, tip) > force(lo, E, 0.3, tip)
     assert force(lo, scale * E, 0.3, tip) == pytest.approx(scale * force(lo, E, 0.3, tip),
                                                             rel=1e-12)
@@ -191,6 +199,60 @@ def test_hayes_table_nodes_and_range():
         hayes_kappa(0.5, 1.0, 0.1)
     with pytest.raises(GeometryError, match="no finite-thickness correction for tip 'cone'"):
         thickness_factor(1e-3, Tip("cone", half_angle=1.0), 0.02, 0.3)
+
+
+def test_thickness_messages_name_the_cli_switch_and_the_api():
+    """The switch to drop is --finite-thickness (not --thickness); API users get theirs."""
+    for call in (lambda: thickness_factor(1e-3, Tip("cone", half_angle=1.0), 0.02, 0.3),
+                 lambda: thickness_factor(1e-3, Tip("power", c=250.0, n=2.5), 0.02, 0.3),
+                 lambda: hayes_kappa(0.03, 0.02, 0.3),
+                 lambda: hayes_kappa(0.01, 0.02, 0.1),
+                 lambda: dimitriadis_factor(3e-3, 0.01, 0.004, 0.3)):
+        with pytest.raises(GeometryError) as info:
+            call()
+        msg = str(info.value)
+        assert "--finite-thickness" in msg and "thickness_correction=False" in msg, msg
+        assert "without --thickness" not in msg
+
+
+@pytest.mark.parametrize("bonded", [True, False])
+@pytest.mark.parametrize("nu", [0.0, 0.3, 0.45])
+def test_dimitriadis_refuses_chi_above_one(nu, bonded):
+    R, h = 0.01, 0.01
+    d_one = (DIMITRIADIS_CHI_MAX * h) ** 2 / R  # chi = 1 exactly
+    ok = dimitriadis_factor(np.array([0.0, 0.5 * d_one, d_one]), R, h, nu, bonded)
+    assert np.all(ok >= 1.0) and np.all(np.diff(ok) > 0)  # a stiffening correction up to chi 1
+    with pytest.raises(GeometryError, match=r"chi = sqrt\(R\*d\)/h = 1\.1 .*exceeds 1"):
+        dimitriadis_factor(np.array([0.5 * d_one, 1.21 * d_one]), R, h, nu, bonded)
+    with pytest.raises(GeometryError, match="Dimitriadis"):  # through the public shape function
+        shape(1.21 * d_one, Tip("sphere", radius=R), thickness_m=h, nu=nu, bonded=bonded)
+
+
+def test_unchecked_dimitriadis_series_goes_negative_where_it_is_now_refused():
+    """Why the range check exists: at nu = 0.3 the bonded series is negative at chi = 2.6."""
+    c = dimitriadis_coefficients(0.3, True)
+    assert np.polyval(c[::-1], 2.6) < 0
+    with pytest.raises(GeometryError):
+        dimitriadis_factor((2.6 * 0.02) ** 2 / 0.01, 0.01, 0.02, 0.3)
+
+
+def test_half_angle_from_degrees_reports_degrees():
+    assert half_angle_from_degrees(70) == pytest.approx(math.radians(70))
+    for bad in (95, 90, 0, -5, float("nan")):
+        with pytest.raises(GeometryError, match=r"deg must lie strictly between 0 and 90 deg"):
+            half_angle_from_degrees(bad)
+    with pytest.raises(GeometryError, match="'steep' deg is not a number"):
+        half_angle_from_degrees("steep")
+
+
+def test_tip_radius_in_mm_given_as_metres_is_caught():
+    check_tip_plausible(Tip("sphere", radius=0.01))
+    check_tip_plausible(Tip("cone", half_angle=1.0))
+    check_tip_plausible(Tip("flat", radius=MAX_TIP_RADIUS_M))
+    with pytest.raises(GeometryError, match=r"--radius is in metres.*did you mean 0\.010\?"):
+        check_tip_plausible(Tip("sphere", radius=10))
+    with pytest.raises(GeometryError, match=r"did you mean 0\.0117\?"):
+        check_tip_plausible(Tip("paraboloid", radius=11.7))
 
 
 @pytest.mark.parametrize("kwargs, match", [

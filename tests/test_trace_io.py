@@ -7,8 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from palpbayes.contact import Tip, force
-from palpbayes.errors import DataFileError, NoContactError
-from palpbayes.io.manifest import iter_traces, read_manifest, write_manifest
+from palpbayes.errors import DataFileError, InputError, NoContactError
+from palpbayes.io.manifest import is_manifest, iter_traces, read_manifest, write_manifest
 from palpbayes.io.trace_csv import read_trace, write_trace
 from palpbayes.trace import IndentationTrace
 
@@ -151,5 +151,158 @@ def test_unit_and_sign_round_trip_property(tmp_path_factory, z_unit, f_unit, t_u
     back = read_trace(d / "x.csv", columns={"time": "t", "z": "zz", "force": "f"},
                       units={"time": t_unit, "z": z_unit, "force": f_unit}, force_sign=sign)
     np.testing.assert_allclose(back.time, tr.time, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(back.z, tr.z, rtol=1e-14)
+    np.testing.assert_allclose(back.force, tr.force, rtol=1e-13, atol=1e-15)
+
+
+# ----------------------------------------------------------------------------- separators
+
+
+@pytest.mark.parametrize("sep", [";", "\t"])
+def test_semicolon_and_tab_separated_files_are_read(tmp_path, sep):
+    tr = make_trace()
+    canonical = read_trace(write_trace(tr, tmp_path / "c.csv", float_format="%.17g"))
+    pd.DataFrame({"time_s": tr.time, "z_m": tr.z, "force_n": tr.force}).to_csv(
+        tmp_path / "x.csv", sep=sep, index=False, float_format="%.17g")
+    back = read_trace(tmp_path / "x.csv")
+    np.testing.assert_array_equal(back.z, canonical.z)
+    np.testing.assert_array_equal(back.force, canonical.force)
+
+
+def test_decimal_commas_are_named(tmp_path):
+    tr = make_trace()
+    df = pd.DataFrame({"time_s": tr.time, "z_m": tr.z, "force_n": tr.force})
+    df.to_csv(tmp_path / "semi.csv", sep=";", decimal=",", index=False)
+    with pytest.raises(DataFileError, match=r"non-numeric value '0,0' at data row 1: the "
+                       r"file uses decimal commas \(write decimal points"):
+        read_trace(tmp_path / "semi.csv")
+    # comma-separated with decimal commas: pandas would silently make the extra fields an index
+    (tmp_path / "comma.csv").write_text("time_s,z_m,force_n\n0,0,0,1,0,003\n0,1,0,099,0,2\n"
+                                        "0,2,0,098,0,4\n")
+    with pytest.raises(DataFileError, match=r"3 more field\(s\) than the header \(3 columns\); "
+                       "decimal commas"):
+        read_trace(tmp_path / "comma.csv")
+
+
+def test_folder_instead_of_file(tmp_path):
+    with pytest.raises(DataFileError, match="is a folder, not a trace file"):
+        read_trace(tmp_path)
+    (tmp_path / "manifest.csv").write_text("trace_id,file,material,tip\n")
+    with pytest.raises(DataFileError, match=f"did you mean {tmp_path / 'manifest.csv'}"):
+        read_trace(tmp_path)
+    with pytest.raises(DataFileError, match="is a folder, not a manifest file"):
+        read_manifest(tmp_path)
+
+
+# ----------------------------------------------------------------------------- the trace object
+
+
+def test_trace_does_not_freeze_or_share_the_callers_arrays():
+    t = np.arange(10.0)
+    z = 1.0 - 0.1 * t
+    f = 0.1 * t
+    tr = IndentationTrace(t, z, f)
+    assert t.flags.writeable and z.flags.writeable and f.flags.writeable
+    z[0] = 99.0  # the caller's array is still theirs ...
+    assert tr.z[0] == 1.0  # ... and the trace does not change with it
+    assert not tr.z.flags.writeable
+    seg = tr.loading_segment()  # a view of the trace's own read-only arrays is not copied
+    assert np.shares_memory(seg.z, tr.z)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"thickness": "0.02"}, "thickness '0.02' is not a number"),
+    ({"thickness": -0.02}, "thickness -0.02 m must be positive"),
+    ({"rest_time": "60 s"}, "rest_time '60 s' is not a number"),
+    ({"rest_time": -1.0}, "must be non-negative"),
+    ({"repetition": 1.5}, "repetition 1.5 is not a whole number"),
+])
+def test_trace_metadata_types_raise_package_errors(kwargs, match):
+    t = np.arange(5.0)
+    with pytest.raises(DataFileError, match=match):
+        IndentationTrace(t, -t, t, **kwargs)
+    ok = IndentationTrace(t, -t, t, thickness=np.float64(0.02), repetition=np.int64(2))
+    assert ok.thickness == 0.02 and ok.repetition == 2 and isinstance(ok.repetition, int)
+
+
+def test_narrow_depth_window_names_the_window_not_the_file():
+    tr = make_trace().replace(source="run.csv")
+    with pytest.raises(InputError, match=r"only \d of 2400 samples have a depth in "
+                       r"\[0, 0\.001\] mm.*widen the window") as info:
+        tr.depth_window(0.1, 0.0, 1e-6)
+    assert "whole recording" not in str(info.value)
+    with pytest.raises(InputError, match="have z >= "):
+        tr.above(1.0)
+    assert tr.depth_window(0.1, 0.0, 5e-4).n_points > 3
+
+
+def test_tip_never_moving_down_names_the_z_sign_option():
+    t = np.arange(10.0)
+    with pytest.raises(NoContactError, match="--z-sign -1"):
+        IndentationTrace(t, t, np.zeros(10)).loading_segment()
+
+
+# ----------------------------------------------------------------------------- manifests
+
+
+def _manifest(tmp_path, **changes):
+    write_trace(make_trace(), tmp_path / "a.csv")
+    row = {"trace_id": "a", "file": "a.csv", "specimen": "S1", "material": "White",
+           "tip": "paraboloid", "radius_m": "0.0117", "thickness_m": "0.03",
+           "repetition": "1", "rest_time_s": "60"}
+    row.update(changes)
+    path = tmp_path / "manifest.csv"
+    pd.DataFrame([row]).to_csv(path, index=False)
+    return path
+
+
+@pytest.mark.parametrize("changes, match", [
+    ({"radius_m": "abc"}, r"row 1 \(trace 'a'\): column 'radius_m' holds 'abc', which is not a "
+     r"number \(write a plain number in metres, e\.g\. 0\.01"),
+    ({"repetition": "first"}, r"column 'repetition' holds 'first', which is not a number "
+     r"\(write a whole number"),
+    ({"repetition": "1.5"}, "column 'repetition' is 1.5, not a whole number"),
+    ({"thickness_m": "2cm"}, "column 'thickness_m' holds '2cm', which is not a number"),
+    ({"thickness_m": "0"}, "column 'thickness_m' is 0, which must be positive"),
+    ({"rest_time_s": "-3"}, "column 'rest_time_s' is -3, which must be non-negative"),
+    ({"rest_time_s": "inf"}, "column 'rest_time_s' is inf, not a finite number"),
+    ({"nu": "0.3x"}, "column 'nu' holds '0.3x'"),
+    ({"half_angle_deg": "70deg", "tip": "cone"}, "column 'half_angle_deg' holds '70deg'"),
+    ({"trace_id": ""}, r"row 1: column 'trace_id' is empty \(give every row its trace_id"),
+    ({"trace_id": "  "}, "column 'trace_id' is empty"),
+    ({"material": ""}, r"row 1 \(trace 'a'\): column 'material' is empty"),
+    ({"tip": ""}, "column 'tip' is empty"),
+    ({"file": ""}, "column 'file' is empty"),
+    ({"tip": "cone", "radius_m": "", "half_angle_deg": "95"},
+     "cone half-angle 95.0 deg must lie strictly between 0 and 90 deg"),
+])
+def test_manifest_cells_are_validated(tmp_path, changes, match):
+    path = _manifest(tmp_path, **changes)
+    with pytest.raises(DataFileError, match=match) as info:
+        read_manifest(path)
+    assert str(path) in str(info.value)
+
+
+def test_manifest_numbers_parse_and_semicolon_manifest(tmp_path):
+    path = _manifest(tmp_path)
+    df = read_manifest(path)
+    assert df["radius_m"].dtype == float and df["repetition"].iloc[0] == 1.0
+    (loaded,) = list(iter_traces(df))
+    assert loaded.repetition == 1 and loaded.thickness == 0.03 and loaded.rest_time == 60.0
+    pd.read_csv(path).to_csv(tmp_path / "semi.csv", sep=";", index=False)
+    assert is_manifest(tmp_path / "semi.csv")
+    assert read_manifest(tmp_path / "semi.csv")["trace_id"].tolist() == ["a"]
+
+
+def test_manifest_traces_take_the_read_options(tmp_path):
+    tr = make_trace()
+    pd.DataFrame({"t": tr.time, "zz": tr.z * 1e3, "f": -tr.force}).to_csv(
+        tmp_path / "a.csv", index=False, float_format="%.17g")
+    pd.DataFrame([{"trace_id": "a", "file": "a.csv", "material": "W", "tip": "paraboloid",
+                   "radius_m": 0.0117}]).to_csv(tmp_path / "m.csv", index=False)
+    with pytest.raises(DataFileError, match="missing column 'time_s'"):
+        list(iter_traces(tmp_path / "m.csv"))
+    (back,) = iter_traces(tmp_path / "m.csv", columns={"time": "t", "z": "zz", "force": "f"},
+                          units={"z": "mm"}, force_sign=-1)
     np.testing.assert_allclose(back.z, tr.z, rtol=1e-14)
     np.testing.assert_allclose(back.force, tr.force, rtol=1e-13, atol=1e-15)

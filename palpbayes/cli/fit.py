@@ -8,12 +8,13 @@ from pathlib import Path
 
 from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
 from ..bayes.priors import NOISE_MODELS
-from ..contact import TIP_KINDS, Tip, check_nu
-from ..errors import InputError
+from ..contact import TIP_KINDS, Tip, check_nu, half_angle_from_degrees
+from ..errors import DataFileError, InputError
 from ..fitjob import METHODS, FitOptions
 from ..io.manifest import is_manifest
 
-__all__ = ["register", "run", "add_model_options", "options_from_args", "trace_from_args"]
+__all__ = ["register", "run", "add_model_options", "options_from_args", "trace_from_args",
+           "read_options_from_args"]
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:
@@ -77,7 +78,7 @@ def register(subparsers) -> None:
     t.add_argument("--profile-n", type=float, help="power-law profile n of f = c*r^n")
     t.add_argument("--thickness", type=float, metavar="M", help="specimen thickness [m]")
     t.add_argument("--material", default="", help="material label")
-    c = p.add_argument_group("columns and units (single trace)")
+    c = p.add_argument_group("columns, units and signs (every trace, also of a manifest)")
     for q, unit in (("time", "s"), ("z", "m"), ("force", "N")):
         c.add_argument(f"--{q}-column", metavar="NAME", help=f"column holding {q}")
         c.add_argument(f"--{q}-unit", metavar="UNIT", help=f"unit of {q} (default {unit})")
@@ -117,6 +118,25 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
     )
 
 
+def read_options_from_args(args: argparse.Namespace) -> dict:
+    """Reader options (``columns``, ``units``, ``force_sign``, ``z_sign``) from the column,
+    unit and sign arguments; only those the user gave (empty dict: the canonical file)."""
+    opts: dict = {}
+    columns = {q: getattr(args, f"{q}_column") for q in ("time", "z", "force")
+               if getattr(args, f"{q}_column")}
+    units = {q: getattr(args, f"{q}_unit") for q in ("time", "z", "force")
+             if getattr(args, f"{q}_unit")}
+    if columns:
+        opts["columns"] = columns
+    if units:
+        opts["units"] = units
+    if args.force_sign != 1.0:
+        opts["force_sign"] = args.force_sign
+    if args.z_sign != 1.0:
+        opts["z_sign"] = args.z_sign
+    return opts
+
+
 def trace_from_args(args: argparse.Namespace):
     """Read the single trace named by ``args.input`` with the tip and column options."""
     from ..io.trace_csv import read_trace
@@ -124,16 +144,22 @@ def trace_from_args(args: argparse.Namespace):
     if args.tip is None:
         raise InputError(f"{args.input}: a single trace needs --tip ({', '.join(TIP_KINDS)}) "
                          "and its size (--radius M, --half-angle DEG or --profile-c/-n)")
-    tip = Tip(args.tip, radius=args.radius,
-              half_angle=None if args.half_angle is None else math.radians(args.half_angle),
+    half_angle = None if args.half_angle is None else half_angle_from_degrees(args.half_angle)
+    tip = Tip(args.tip, radius=args.radius, half_angle=half_angle,
               c=args.profile_c, n=args.profile_n)
-    columns = {q: getattr(args, f"{q}_column") for q in ("time", "z", "force")
-               if getattr(args, f"{q}_column")}
-    units = {q: getattr(args, f"{q}_unit") for q in ("time", "z", "force")
-             if getattr(args, f"{q}_unit")}
-    return read_trace(args.input, columns=columns, units=units, force_sign=args.force_sign,
-                      z_sign=args.z_sign, tip=tip, thickness=args.thickness,
-                      material=args.material)
+    return read_trace(args.input, tip=tip, thickness=args.thickness, material=args.material,
+                      **read_options_from_args(args))
+
+
+def _check_input_path(path: Path) -> None:
+    """INPUT must be an existing file; a folder gets its own message (and the manifest in it)."""
+    if path.is_dir():
+        manifest = path / "manifest.csv"
+        fix = (f"did you mean {manifest}?" if manifest.is_file() else
+               "give a trace CSV or a campaign manifest CSV")
+        raise DataFileError(path, "is a folder, not a file", fix)
+    if not path.exists():
+        raise DataFileError(path, "file not found", "check the path")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -141,13 +167,17 @@ def run(args: argparse.Namespace) -> int:
 
     options = options_from_args(args)
     path = Path(args.input)
-    if not path.exists():
-        raise InputError(f"{path}: file not found")
-    source = path if is_manifest(path) else [trace_from_args(args)]
+    _check_input_path(path)
+    read_options = read_options_from_args(args)
+    if is_manifest(path):  # the column/unit/sign options apply to every trace of the manifest
+        source, manifest_options = path, read_options
+    else:
+        source, manifest_options = [trace_from_args(args)], None
     if args.progress is not None:
         options = options.with_progress(args.progress)
     summary = fit_campaign(source, args.out, options, workers=args.workers, resume=args.resume,
-                           force=args.force, progress=args.progress)
+                           force=args.force, progress=args.progress,
+                           read_options=manifest_options)
     cols = ["trace_id", "method", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa", "converged"]
     show = summary[cols].copy()
     for c in ("E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa"):

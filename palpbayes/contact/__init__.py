@@ -40,6 +40,9 @@ __all__ = [
     "k_from_modulus",
     "modulus_from_k",
     "check_nu",
+    "check_tip_plausible",
+    "MAX_TIP_RADIUS_M",
+    "half_angle_from_degrees",
     "thickness_factor",
 ]
 
@@ -127,6 +130,61 @@ def check_nu(nu: float) -> float:
     return v
 
 
+#: [m] Largest plausible tip radius for palpation; a larger radius was almost surely given in mm.
+MAX_TIP_RADIUS_M = 0.1
+
+
+def _mm_as_metres(value: float) -> str:
+    """``value`` divided by 1000, written like 0.010 or 0.0117 (the value if it was in mm)."""
+    v = value * 1e-3
+    text = f"{v:.3f}"
+    return text if abs(float(text) - v) <= 1e-12 else f"{v:.4g}"
+
+
+def check_tip_plausible(tip: Tip) -> None:
+    """Reject a tip whose size cannot be meant for palpation (a unit slip).
+
+    A radius (flat, paraboloid, sphere) above :data:`MAX_TIP_RADIUS_M` = 0.1 m is taken for a
+    value in millimetres given as metres (``--radius 10`` for a 10 mm tip).
+
+    Raises
+    ------
+    GeometryError
+        Naming the radius and the value in metres it probably should be.
+    """
+    if tip.radius is not None and tip.radius > MAX_TIP_RADIUS_M:
+        raise GeometryError(
+            f"tip radius {tip.radius:g} m is implausibly large for palpation (more than "
+            f"{MAX_TIP_RADIUS_M:g} m); --radius is in metres (so is the manifest's radius_m): "
+            f"did you mean {_mm_as_metres(tip.radius)}?"
+        )
+
+
+def half_angle_from_degrees(degrees) -> float:
+    """A cone half-opening angle given in degrees, validated, as radians [rad].
+
+    The command line (``--half-angle``) and the manifest (``half_angle_deg``) give the angle in
+    degrees while :class:`Tip` takes radians; validating here keeps the error in the user's
+    unit.
+
+    Raises
+    ------
+    GeometryError
+        If the angle is not a number strictly between 0 and 90 degrees.
+    """
+    try:
+        v = float(degrees)
+    except (TypeError, ValueError):
+        raise GeometryError(f"cone half-angle {degrees!r} deg is not a number "
+                            "(give --half-angle / half_angle_deg in degrees, e.g. 70)") from None
+    if not (math.isfinite(v) and 0.0 < v < 90.0):
+        raise GeometryError(
+            f"cone half-angle {degrees!r} deg must lie strictly between 0 and 90 deg (the "
+            "half-opening angle, axis to flank, in degrees: --half-angle / half_angle_deg)"
+        )
+    return math.radians(v)
+
+
 def effective_modulus(E, nu: float):
     """E* = E/(1-nu²) [Pa]."""
     return E / (1.0 - nu * nu)
@@ -149,7 +207,8 @@ def thickness_factor(
     ------
     GeometryError
         For cone and power-law tips (no published correction implemented), for a non-bonded
-        flat punch, or outside the correction's range.
+        flat punch, or outside the correction's range (Dimitriadis: chi = sqrt(R·d)/h <= 1;
+        Hayes: a/h <= 1 and 0.2 <= nu <= 0.5).
     """
     if not (thickness_m is not None and math.isfinite(thickness_m) and thickness_m > 0):
         raise GeometryError(f"specimen thickness {thickness_m!r} m must be positive")
@@ -159,11 +218,15 @@ def thickness_factor(
     if tip.kind == "flat":
         if not bonded:
             raise GeometryError(
-                "no non-bonded finite-thickness correction for the flat punch; use bonded=True"
+                "no non-bonded finite-thickness correction for the flat punch; drop "
+                "--non-bonded (bonded=True in the API) or switch the correction off (drop "
+                "--finite-thickness)"
             )
         return np.full_like(depth, thickness.hayes_kappa(tip.radius, thickness_m, nu))
     raise GeometryError(
-        f"no finite-thickness correction for tip '{tip.kind}'; fit without --thickness"
+        f"no finite-thickness correction for tip '{tip.kind}' (only paraboloid, sphere and flat "
+        "have one); switch the correction off: drop --finite-thickness on the command line "
+        "(thickness_correction=False, or thickness_m=None, in the API)"
     )
 
 

@@ -6,7 +6,12 @@ in E*, so least squares and the posterior keep their structure.
 * Paraboloid / sphere: Dimitriadis et al., *Biophys. J.* 82 (2002) 2798-2810, eqs. 11-12 with
   chi = sqrt(R·d)/h, for general nu, bonded or non-bonded to the base.  The series is derived
   for small chi and is accurate to a few percent up to chi ~ 1 (validity stated in the paper as
-  contact radius well below the thickness).  At nu = 0.5 the general form gives the bonded
+  contact radius well below the thickness).  **Validity enforced here: chi <= 1**
+  (:data:`DIMITRIADIS_CHI_MAX`); beyond it the truncated series is no longer a correction but
+  an artefact of the truncation: at nu = 0.3 the bonded factor peaks near chi = 1.65 and turns
+  negative at chi = 2.5 (nu = 0: at chi = 2.1), so :func:`dimitriadis_factor` raises
+  :class:`~palpbayes.errors.GeometryError` rather than return it.  At nu = 0.5 the general form
+  gives the bonded
   factor 1 + 1.133·chi + 1.283·chi² + 0.769·chi³ - 0.0975·chi⁴; the paper's printed table has
   +0.0975.  **palpbayes uses the general form (minus sign)**; the term is below 0.1 % for
   chi < 0.3.  A public implementation writes 4·a0²/pi instead of 4·a0²/pi²: this one does not
@@ -32,7 +37,11 @@ __all__ = [
     "hayes_kappa",
     "HAYES_A_OVER_H",
     "HAYES_KAPPA",
+    "DIMITRIADIS_CHI_MAX",
 ]
+
+#: Largest chi = sqrt(R·d)/h at which the Dimitriadis et al. (2002) series is used [-].
+DIMITRIADIS_CHI_MAX = 1.0
 
 
 def dimitriadis_coefficients(nu: float, bonded: bool = True) -> np.ndarray:
@@ -80,8 +89,25 @@ def dimitriadis_factor(
         Poisson ratio [-].
     bonded
         Layer bonded to the base (True) or free to slip (False).
+
+    Raises
+    ------
+    GeometryError
+        If chi = sqrt(R·d)/h exceeds :data:`DIMITRIADIS_CHI_MAX` (= 1) at any depth: the series
+        is outside its validity (Dimitriadis et al. 2002; see the module notes).
     """
-    chi = np.sqrt(radius * np.clip(np.asarray(depth, dtype=float), 0.0, None)) / thickness
+    d = np.clip(np.asarray(depth, dtype=float), 0.0, None)
+    chi = np.sqrt(radius * d) / thickness
+    if chi.size and np.nanmax(chi) > DIMITRIADIS_CHI_MAX:
+        i = int(np.nanargmax(chi))
+        raise GeometryError(
+            f"finite-thickness correction out of range: chi = sqrt(R*d)/h = "
+            f"{chi.flat[i]:.3g} at depth d = {d.flat[i] * 1e3:.3g} mm (R = {radius * 1e3:g} mm, "
+            f"h = {thickness * 1e3:g} mm) exceeds {DIMITRIADIS_CHI_MAX:g}, the validity of "
+            "Dimitriadis' series; check the thickness (--thickness, thickness_m), fit a "
+            "shallower window (--max-depth) or switch the correction off (drop "
+            "--finite-thickness; thickness_correction=False in the API)"
+        )
     c = dimitriadis_coefficients(nu, bonded)
     return c[0] + chi * (c[1] + chi * (c[2] + chi * (c[3] + chi * c[4])))
 
@@ -119,13 +145,16 @@ def hayes_kappa(radius: float, thickness: float, nu: float) -> float:
     ratio = radius / thickness
     if not 0.0 <= ratio <= 1.0:
         raise GeometryError(
-            f"flat-punch radius/thickness a/h = {ratio:.3g} is outside Hayes' table (0..1); "
-            "switch off the finite-thickness correction or check --thickness"
+            f"flat-punch radius/thickness a/h = {ratio:.3g} (a = {radius * 1e3:g} mm, h = "
+            f"{thickness * 1e3:g} mm) is outside Hayes' table (0..1); check the thickness "
+            "(--thickness, thickness_m) or switch the correction off (drop --finite-thickness; "
+            "thickness_correction=False in the API)"
         )
     if not 0.2 <= nu <= 0.5:
         raise GeometryError(
-            f"Poisson ratio {nu} is outside the Hayes correction's range 0.2..0.5; "
-            "switch off the finite-thickness correction for this nu"
+            f"Poisson ratio {nu:g} is outside the Hayes correction's range 0.2..0.5; give "
+            "--nu in that range or switch the correction off for this nu (drop "
+            "--finite-thickness; thickness_correction=False in the API)"
         )
     k03, k05 = (float(s(ratio)) for s in _HAYES_SPLINES)
     w = (nu - 0.3) / 0.2

@@ -19,6 +19,11 @@ Columns (SI units; file paths relative to the manifest's folder):
 
 Optional: ``nu`` (Poisson ratio for that row).  A manifest is recognised by its ``file`` and
 ``tip`` columns.
+
+:func:`read_manifest` validates every row before any trace is read: ``trace_id``, ``file``,
+``material`` and ``tip`` must not be empty, the numeric columns (:data:`NUMERIC_COLUMNS`) must
+hold plain numbers in the units above (``0.02``, not ``2cm``), ``repetition`` a whole number.
+Errors name the manifest, the row, the column and the value.
 """
 
 from __future__ import annotations
@@ -31,15 +36,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..contact import Tip
+from ..contact import Tip, half_angle_from_degrees
 from ..errors import DataFileError, GeometryError, InputError
 from ..trace import IndentationTrace
 from .atomic import write_csv_atomic
-from .trace_csv import read_trace
+from .trace_csv import read_trace, sniff_delimiter
 
 __all__ = [
     "MANIFEST_COLUMNS",
     "REQUIRED_COLUMNS",
+    "NUMERIC_COLUMNS",
     "is_manifest",
     "read_manifest",
     "write_manifest",
@@ -53,35 +59,92 @@ MANIFEST_COLUMNS = [
     "profile_c", "profile_n", "thickness_m", "repetition", "rest_time_s",
 ]
 REQUIRED_COLUMNS = ["trace_id", "file", "material", "tip"]
+#: Numeric columns: (unit named in messages, example value, whole numbers only).
+NUMERIC_COLUMNS = {
+    "radius_m": ("metres", "0.01", False),
+    "half_angle_deg": ("degrees", "70", False),
+    "profile_c": ("m^(1-n)", "50", False),
+    "profile_n": ("-", "2", False),
+    "thickness_m": ("metres", "0.02", False),
+    "repetition": ("a whole number", "1", True),
+    "rest_time_s": ("seconds", "60", False),
+    "nu": ("-", "0.3", False),
+}
 
 
 def is_manifest(path: str | os.PathLike) -> bool:
     """True if ``path`` is a CSV whose header has the manifest's ``file`` and ``tip`` columns."""
     try:
-        header = pd.read_csv(path, nrows=0, comment="#").columns
+        header = pd.read_csv(path, nrows=0, comment="#", sep=sniff_delimiter(path)).columns
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError, OSError):
         return False
     names = {str(c).strip() for c in header}
     return {"file", "tip"} <= names
 
 
+def _blank(v) -> bool:
+    """True for a missing or empty (whitespace-only) cell."""
+    if isinstance(v, str):
+        return v.strip() == ""
+    try:
+        return bool(pd.isna(v))
+    except (TypeError, ValueError):  # array-like cell
+        return False
+
+
+def _numeric_columns(df: pd.DataFrame, path: Path) -> None:
+    """Convert the numeric columns to float in place; a text cell raises naming row and value."""
+    for col, (unit, example, whole) in NUMERIC_COLUMNS.items():
+        if col not in df.columns:
+            continue
+        raw = df[col]
+        values = pd.to_numeric(raw, errors="coerce")
+        for i in range(len(df)):
+            v, x = raw.iloc[i], values.iloc[i]
+            if _blank(v):
+                continue
+            where = f"row {i + 1} (trace {df['trace_id'].iloc[i]!r}): column {col!r}"
+            shown = repr(v.strip()) if isinstance(v, str) else f"{float(x):g}"
+            fix = (f"write a whole number, e.g. {example}" if whole else
+                   f"write a plain number in {unit}, e.g. {example}") + ", or leave it empty"
+            if pd.isna(x):
+                raise DataFileError(path, f"{where} holds {shown}, which is not a number", fix)
+            if not math.isfinite(float(x)):
+                raise DataFileError(path, f"{where} is {shown}, not a finite number", fix)
+            if whole and float(x) != round(float(x)):
+                raise DataFileError(path, f"{where} is {shown}, not a whole number", fix)
+        df[col] = values.astype(float)
+
+
 def read_manifest(path: str | os.PathLike) -> pd.DataFrame:
     """Read and validate a manifest; ``file`` becomes an absolute path.
+
+    The separator (comma, semicolon or tab) is detected from the header line.  The numeric
+    columns (:data:`NUMERIC_COLUMNS`) are returned as float.
 
     Raises
     ------
     DataFileError
-        Missing columns, duplicated ``trace_id``, a referenced trace file that does not exist,
-        or a row whose tip geometry is invalid (the message names the row and trace).
+        Missing columns, an empty ``trace_id``/``file``/``material``/``tip`` cell, text in a
+        numeric column (e.g. ``2cm``), a non-whole ``repetition``, a non-positive
+        ``thickness_m`` or negative ``rest_time_s``, duplicated ``trace_id``, a referenced trace
+        file that does not exist, or a row whose tip geometry is invalid (the message names the
+        row, the trace, the column and the value).
     """
     path = Path(path)
+    if path.is_dir():
+        raise DataFileError(path, "is a folder, not a manifest file",
+                            f"did you mean {path / 'manifest.csv'}?")
     if not path.is_file():
         raise DataFileError(path, "manifest not found", "check the path")
     try:
-        df = pd.read_csv(path, comment="#", dtype={"trace_id": str, "specimen": str,
-                                                  "material": str, "tip": str, "file": str})
+        df = pd.read_csv(path, comment="#", sep=sniff_delimiter(path),
+                         dtype={"trace_id": str, "specimen": str, "material": str, "tip": str,
+                                "file": str})
     except pd.errors.EmptyDataError:
         raise DataFileError(path, "manifest is empty") from None
+    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise DataFileError(path, f"not a readable CSV ({exc})".replace("\n", " ")) from None
     df.columns = [str(c).strip() for c in df.columns]
     missing = [c for c in REQUIRED_COLUMNS if c not in df.columns]
     if missing:
@@ -89,45 +152,72 @@ def read_manifest(path: str | os.PathLike) -> pd.DataFrame:
                             f"a manifest needs {', '.join(REQUIRED_COLUMNS)}")
     if df.empty:
         raise DataFileError(path, "manifest has no rows")
+    for i in range(len(df)):
+        for col in REQUIRED_COLUMNS:
+            if _blank(df[col].iloc[i]):
+                tid = df["trace_id"].iloc[i]
+                who = "" if _blank(tid) else f" (trace {str(tid).strip()!r})"
+                fix = f"give every row its {col}"
+                if col == "trace_id":
+                    fix += ", a unique name used for the output file names"
+                raise DataFileError(path, f"row {i + 1}{who}: column {col!r} is empty", fix)
+    for col in REQUIRED_COLUMNS:
+        df[col] = df[col].astype(str).str.strip()
     for col in MANIFEST_COLUMNS:
         if col not in df.columns:
             df[col] = np.nan
     df["specimen"] = df["specimen"].astype(object).where(df["specimen"].notna(), "")
+    _numeric_columns(df, path)
     dup = df["trace_id"][df["trace_id"].duplicated()]
     if not dup.empty:
         raise DataFileError(path, f"trace_id {dup.iloc[0]!r} appears more than once",
                             "give every row its own trace_id")
     files = []
     for i, row in df.iterrows():
+        where = f"row {i + 1} (trace {row['trace_id']!r})"
         f = Path(str(row["file"]))
         if not f.is_absolute():
             f = path.parent / f
         if not f.is_file():
             raise DataFileError(
-                path, f"row {i + 1} (trace {row['trace_id']!r}) points to missing file {f}",
+                path, f"{where} points to missing file {f}",
                 "fix the 'file' column or restore the file",
             )
         files.append(str(f))
         try:
             tip_from_row(row)
         except GeometryError as exc:
-            raise DataFileError(path, f"row {i + 1} (trace {row['trace_id']!r}): {exc}") from None
+            raise DataFileError(path, f"{where}: {exc}") from None
+        for col, ok, must in (("thickness_m", lambda v: v > 0, "positive"),
+                              ("rest_time_s", lambda v: v >= 0, "non-negative")):
+            v = row[col]
+            if pd.notna(v) and not ok(v):
+                unit, example, _ = NUMERIC_COLUMNS[col]
+                raise DataFileError(path, f"{where}: column {col!r} is {v:g}, which must be "
+                                    f"{must}", f"give it in {unit}, e.g. {example}, or leave "
+                                    "it empty")
         if "nu" in df.columns and pd.notna(row.get("nu")):
             from ..contact import check_nu
 
             try:
                 check_nu(row["nu"])
             except InputError as exc:
-                raise DataFileError(path, f"row {i + 1}: {exc}") from None
+                raise DataFileError(path, f"{where}: {exc}") from None
     df["file"] = files
     return df
 
 
 def _opt(row: pd.Series, col: str) -> float | None:
+    """The float in ``col`` of a row, None when the column is absent or the cell empty."""
     v = row.get(col)
-    if v is None or (isinstance(v, float) and math.isnan(v)) or v == "":
+    if _blank(v):
         return None
-    return float(v)
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        raise DataFileError(None, f"trace {row.get('trace_id')!r}: column {col!r} holds {v!r}, "
+                            "which is not a number", "validate the table with read_manifest "
+                            "first") from None
 
 
 def tip_from_row(row: pd.Series) -> Tip:
@@ -136,14 +226,18 @@ def tip_from_row(row: pd.Series) -> Tip:
     return Tip(
         str(row["tip"]),
         radius=_opt(row, "radius_m"),
-        half_angle=None if angle is None else math.radians(angle),
+        half_angle=None if angle is None else half_angle_from_degrees(angle),
         c=_opt(row, "profile_c"),
         n=_opt(row, "profile_n"),
     )
 
 
 def load_trace(row: pd.Series, **read_options) -> IndentationTrace:
-    """Read the trace of one (validated) manifest row with its metadata."""
+    """Read the trace of one (validated) manifest row with its metadata.
+
+    ``read_options`` (``columns``, ``units``, ``force_sign``, ``z_sign``, ...) go to
+    :func:`palpbayes.io.trace_csv.read_trace` for the row's file.
+    """
     rep = _opt(row, "repetition")
     return read_trace(
         row["file"],

@@ -261,8 +261,9 @@ def read_rtde(
     force_sign
         Multiplier (+1 or -1) turning ``actual_TCP_force_{force_axis}`` into the compressive
         force, positive when pressing; ``"auto"`` picks the sign that makes the force larger
-        at the deepest point than at the start.  Default -1 (see the module notes: the sign
-        UR reports when pressing down differs between setups — check your first trace).
+        at the deepest point than at the start.  Default ``"auto"`` (see the module notes: the
+        sign UR reports when pressing down differs between setups — check your first trace;
+        the sign chosen is in ``trace.metadata["force_sign"]``).
     force_axis
         Component of ``actual_TCP_force`` (base frame) along the indentation: 0, 1 or 2
         (default 2, vertical indentation).

@@ -8,13 +8,15 @@ forward kinematics.  Other files are read through a column mapping, unit and sig
                units={"z": "mm", "force": "mN"}, force_sign=-1)
 
 Columns named ``<quantity>_<unit>`` (``z_mm``, ``force_mn``, ``time_ms``) are recognised
-without options.  Every problem is raised as :class:`~palpbayes.errors.DataFileError` naming the
-file, the column or value, and the fix.
+without options.  The separator (comma, semicolon or tab) is detected from the header line;
+decimal commas are not read but reported as such.  Every problem is raised as
+:class:`~palpbayes.errors.DataFileError` naming the file, the column or value, and the fix.
 """
 
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +29,7 @@ from .atomic import write_csv_atomic
 from .units import FORCE_UNITS, LENGTH_UNITS, TIME_UNITS, force_factor, length_factor, time_factor
 
 __all__ = ["read_trace", "write_trace", "trace_from_frame", "check_plausible",
-           "MAX_Z_SPAN_M", "MAX_FORCE_N"]
+           "sniff_delimiter", "MAX_Z_SPAN_M", "MAX_FORCE_N"]
 
 _QUANTITIES = {"time": TIME_UNITS, "z": LENGTH_UNITS, "force": FORCE_UNITS}
 _FACTORS = {"time": time_factor, "z": length_factor, "force": force_factor}
@@ -36,6 +38,40 @@ _FACTORS = {"time": time_factor, "z": length_factor, "force": force_factor}
 MAX_Z_SPAN_M = 0.5
 #: ... and presses with less than this [N] (soft materials; pass ``check=False`` to skip).
 MAX_FORCE_N = 500.0
+
+
+_SEPARATORS = {",": "comma", ";": "semicolon", "\t": "tab"}
+_DECIMAL_COMMA = re.compile(r"^\s*[-+]?\d*,\d+(?:[eE][-+]?\d+)?\s*$")
+
+
+def _header_line(path: Path) -> str:
+    """First line that is neither empty nor a ``#`` comment ('' if none)."""
+    with open(path, encoding="utf-8", errors="replace", newline="") as fh:
+        for i, line in enumerate(fh):
+            if line.strip() and not line.lstrip().startswith("#"):
+                return line.rstrip("\r\n")
+            if i > 10_000:
+                break
+    return ""
+
+
+def sniff_delimiter(path: str | os.PathLike) -> str:
+    """The column separator of a CSV file from its header line: ``','``, ``';'`` or tab.
+
+    The most frequent of the three in the header wins (comma on a tie or when none occurs,
+    e.g. a one-column file).  Unreadable files give ``','`` (the reader then reports them).
+    """
+    try:
+        header = _header_line(Path(path))
+    except OSError:
+        return ","
+    counts = {sep: header.count(sep) for sep in _SEPARATORS}
+    best = max(counts, key=lambda sep: (counts[sep], sep == ","))
+    return best if counts[best] > 0 else ","
+
+
+def _is_decimal_comma(value) -> bool:
+    return isinstance(value, str) and bool(_DECIMAL_COMMA.match(value))
 
 
 def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: str | None,
@@ -71,9 +107,17 @@ def _numeric(df: pd.DataFrame, col: str, source: str) -> np.ndarray:
     bad = values.isna() & df[col].notna()
     if bad.any():
         i = int(np.argmax(bad.to_numpy()))
+        value = df[col].iloc[i]
+        if _is_decimal_comma(value):
+            raise DataFileError(
+                source,
+                f"column {col!r} has a non-numeric value {value!r} at data row {i + 1}: the "
+                "file uses decimal commas",
+                "write decimal points, e.g. save it from a spreadsheet set to an English locale",
+            )
         raise DataFileError(
             source,
-            f"column {col!r} has a non-numeric value {df[col].iloc[i]!r} at data row {i + 1}",
+            f"column {col!r} has a non-numeric value {value!r} at data row {i + 1}",
             "remove or repair that row",
         )
     arr = values.to_numpy(dtype=float)
@@ -181,7 +225,7 @@ def read_trace(
     z_sign: float = 1.0,
     tip: Tip | None = None,
     check: bool = True,
-    delimiter: str | None = ",",
+    delimiter: str | None = "auto",
     **metadata,
 ) -> IndentationTrace:
     """Read one trace CSV into an :class:`~palpbayes.trace.IndentationTrace` (SI units).
@@ -201,32 +245,54 @@ def read_trace(
     check
         Apply :func:`check_plausible` (units and sign sanity).
     delimiter
-        Column separator; None to sniff it.
+        Column separator; ``"auto"`` (default) detects comma, semicolon or tab from the header
+        line (:func:`sniff_delimiter`); None lets pandas sniff it (slower).
     **metadata
         Stored on the trace (``trace_id``, ``specimen``, ``material``, ``thickness`` ...).
 
     Raises
     ------
     DataFileError
-        Missing file or column, non-numeric or non-finite cell, empty file, time not strictly
-        increasing, implausible units or flipped sign.  The message names the file.
+        Missing file or column, a folder instead of a file, non-numeric or non-finite cell,
+        decimal commas, empty file, time not strictly increasing, implausible units or flipped
+        sign.  The message names the file.
     """
     path = Path(path)
     source = str(path)
+    if path.is_dir():
+        manifest = path / "manifest.csv"
+        raise DataFileError(source, "is a folder, not a trace file",
+                            f"did you mean {manifest}?" if manifest.is_file()
+                            else "give the path of a trace CSV")
     if not path.is_file():
         raise DataFileError(source, "file not found", "check the path")
     if path.stat().st_size == 0:
         raise DataFileError(source, "file is empty", "check that the recording was saved")
+    if delimiter == "auto":
+        delimiter = sniff_delimiter(path)
     try:
         df = pd.read_csv(path, comment="#", sep=delimiter,
                          engine="c" if delimiter else "python", skipinitialspace=True)
     except pd.errors.EmptyDataError:
         raise DataFileError(source, "file is empty", "check that the recording was saved") from None
     except (pd.errors.ParserError, UnicodeDecodeError) as exc:
-        raise DataFileError(source, f"not a readable CSV ({exc})".replace("\n", " ")) from None
+        raise DataFileError(source, f"not a readable CSV ({exc})".replace("\n", " ")
+                            + _extra_fields_hint(delimiter)) from None
+    if not isinstance(df.index, pd.RangeIndex):  # rows longer than the header became an index
+        raise DataFileError(
+            source, f"the data rows have {df.index.nlevels} more field(s) than the header "
+            f"({len(df.columns)} columns){_extra_fields_hint(delimiter)}",
+            "write decimal points, or repair the header",
+        )
     metadata.setdefault("trace_id", path.stem)
     return trace_from_frame(df, source, columns=columns, units=units, force_sign=force_sign,
                             z_sign=z_sign, check=check, tip=tip, **metadata)
+
+
+def _extra_fields_hint(delimiter: str | None) -> str:
+    if delimiter == ",":
+        return ("; decimal commas in a comma-separated file? '0,5' reads as two fields")
+    return ""
 
 
 def write_trace(trace: IndentationTrace, path: str | os.PathLike, *,
