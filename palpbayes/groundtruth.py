@@ -3,18 +3,18 @@
 Engineering quantities: strain eps = compression / initial height [-], stress sigma = load /
 initial cross-section [Pa], both positive in compression.
 
-The rule (in the spirit of ISO 844 and ASTM D575 / D3574: the modulus is the slope of the
-initial, nearly linear part of the stress-strain curve, with the strain origin corrected for the
-toe region before full platen contact, the zero-point construction of ASTM D638 Annex A1)
------------------------------------------------------------------------------------------------
+The rule
+--------
 1. Only the loading branch is used: samples up to the first maximum of the compression.
 2. A straight line ``sigma = E·(eps - eps0)`` is fitted by ordinary least squares to the points
    whose *toe-compensated* strain ``eps - eps0`` lies in the window ``[lo, hi]``
-   (default 0-5 %).  ``eps0``, the toe offset, is where the fitted line reaches zero stress;
-   because the window depends on ``eps0`` the fit is iterated from ``eps0 = 0`` until the set of
-   points no longer changes (a fixed point; typically 2-4 iterations).  The line's intercept
-   absorbs a load offset, so neither the toe nor a tare error biases the slope the way a fit
-   through the measured origin would (-13 % on the EF50 phantom).
+   (default 0-5 %).  ``eps0``, the toe offset, is where the fitted line reaches zero stress
+   (the zero-point construction of ASTM D638 Annex A1: the linear part is extended to zero
+   stress and strains are measured from there); because the window depends on ``eps0`` the
+   fit is iterated from ``eps0 = 0`` until the set of points no longer changes (a fixed point;
+   typically 2-4 iterations).  The line's intercept absorbs a load offset, so neither the toe
+   nor a tare error biases the slope the way a fit through the measured origin would (-13 %
+   on the EF50 phantom).
 3. ``toe_compensation=False`` applies the window to the measured strain instead (the fitted line
    still has an intercept).  ``skip_toe=True`` further drops the points below ``2·eps0`` in
    measured strain: that is where a toe that grows quadratically and joins the line tangentially
@@ -23,16 +23,53 @@ toe region before full platen contact, the zero-point construction of ASTM D638 
    slope 1-2.3 % low when the toe spans 1.3-2 % strain (the simulator's 0.2 mm slack on its
    30 / 20 mm blocks; its campaigns are analysed exactly with ``skip_toe=True``).
 
-Why the default keeps the upper toe and uses 0-5 %: the silicone phantoms stiffen with strain
-(their tangent modulus grows ~2 % per 1 % strain, as a neo-Hookean solid does), so a window
-that starts further from the toe reads a higher modulus; the published moduli of the shipped
-phantoms were obtained from a plain 0-5 % fit that *includes* the toe.  With the default, the
-shipped Instron 5900 exports give (mean ± sd of ten tests, published value in brackets)
-EF10_50T 15.98 ± 0.39 kPa (15.52 ± 0.40, +3.0 %), EF30_0T 103.5 ± 4.9 kPa (97.26 ± 4.16,
-+6.4 %), EF50_12_5T 121.8 ± 1.9 kPa (111.1 ± 6.44, +9.6 %); ``skip_toe=True`` gives +3.1, +7.2
-and +12.9 %, and a window of 0-2 % with ``skip_toe=True`` -0.7, -0.5 and +5.2 %.  The spread
-of these numbers is the real method uncertainty of a "linear modulus" of a non-linear material;
-report the window with every modulus.
+Every test also gets, from :func:`analyse`:
+
+* ``E_plain_pa`` (``E_plain_sd_pa``): the plain fit, the same window applied to the *measured*
+  strain, i.e. from the first sample of the export, toe included.  This is the convention of
+  the phantom dataset: its README says the authors' window is not stated and that a linear fit
+  over 0-5 % strain lands within a few percent of their table;
+* ``E_window_spread_pa``: max - min of E over three nearby windows
+  (:func:`sensitivity_windows`: 0-3, 0-5 and 1-6 % for the default), with the options of
+  ``E_pa``.  The summary gives the mean of the per-test spreads.
+
+Which number to compare with what
+---------------------------------
+The silicone phantoms stiffen with strain (their tangent modulus grows ~2 % per 1 % strain, as
+a neo-Hookean solid does), so a "linear modulus" depends on which part of the curve the window
+covers, and toe compensation moves the window up the curve by eps0.  On the shipped Instron
+5900 exports (mean ± sd of ten tests; published value, then difference):
+
+=============  ========================  ========================  ============  ============
+phantom        E_pa (toe-compensated)    E_plain_pa (plain)        published     window spread
+=============  ========================  ========================  ============  ============
+EF10_50T       15.98 ± 0.39 kPa, +3.0 %  15.94 ± 0.44 kPa, +2.7 %  15.52 ± 0.40  0.76 kPa (4.8 %)
+EF30_0T        103.5 ± 4.9 kPa, +6.4 %   101.8 ± 3.9 kPa, +4.7 %   97.26 ± 4.16  9.2 kPa (8.8 %)
+EF50_12_5T     121.8 ± 1.9 kPa, +9.6 %   112.0 ± 7.9 kPa, +0.8 %   111.1 ± 6.44  13.1 kPa (10.7 %)
+=============  ========================  ========================  ============  ============
+
+* Compare the **published table** with ``E_plain_mean_pa``: it is the published convention, so
+  the difference measures the data, not a difference of definitions (toe compensation alone
+  moves EF50 by +8.8 %, which is a change of convention, not an error of the published value).
+* Use ``E_mean_pa`` (toe-compensated, the default) as the ground truth of one's own tests and
+  of ``palpbayes compare``: it does not depend on where the machine started recording, on a
+  tare offset or on platen seating, which differ between set-ups; quote
+  ``E_window_spread_pa`` with it as the method uncertainty of a linear modulus of a non-linear
+  material, and always report the window (the summary's ``rule`` column names it).
+* ``skip_toe=True`` gives +3.1, +7.2 and +12.9 % against the published values, and a window of
+  0-2 % with ``skip_toe=True`` -0.7, -0.5 and +5.2 %.
+
+Standards
+---------
+No standard defines this slope modulus for soft silicone, and the 0-5 % window is taken from
+the dataset, not from a standard.  ISO 7743 (Rubber, vulcanized or thermoplastic -
+Determination of compression stress-strain properties) is the test method for rubber in
+compression (test pieces, lubricated or bonded plates); ASTM D575 (Rubber properties in
+compression) measures the force at a specified deflection (method A) or the deflection at a
+specified force (method B), not a modulus; ASTM D3574 (flexible urethane foams) gives
+force-deflection values; ISO 844 defines a compressive modulus, but for *rigid* cellular
+plastics.  The only construction borrowed from a standard is the toe compensation of ASTM D638
+(tensile properties of plastics), Annex A1.
 
 Inputs
 ------
@@ -111,6 +148,8 @@ __all__ = [
     "GroundTruthFit",
     "fit_modulus",
     "hac_slope_se",
+    "sensitivity_windows",
+    "describe_rule",
     "analyse",
     "summarise",
     "collect_tests",
@@ -129,10 +168,14 @@ _RHO_MAX = 0.97
 
 #: Columns of the per-file table, in order.
 PER_FILE_COLUMNS = ["file", "specimen", "material", "E_pa", "E_sd_pa", "strain_lo", "strain_hi",
-                    "strain_toe", "r2", "n_points", "E_ols_sd_pa", "resid_acf1", "hac_lags"]
+                    "strain_toe", "r2", "n_points", "E_ols_sd_pa", "resid_acf1", "hac_lags",
+                    "E_plain_pa", "E_plain_sd_pa", "E_window_spread_pa"]
 #: Columns of the per-material summary, in order.
 SUMMARY_COLUMNS = ["material", "n", "E_mean_pa", "E_sd_pa", "E_sem_pa", "strain_lo",
-                   "strain_hi", "window_lo", "window_hi"]
+                   "strain_hi", "window_lo", "window_hi", "E_plain_mean_pa", "E_plain_sd_pa",
+                   "E_window_spread_pa", "rule"]
+#: Extra per-file columns :func:`analyse` adds to the :class:`GroundTruthFit` fields.
+_EXTRA_COLUMNS = ("E_plain_pa", "E_plain_sd_pa", "E_window_spread_pa")
 
 
 @dataclass(frozen=True)
@@ -191,9 +234,10 @@ class GroundTruthFit:
     hac_lags: int = 0
 
     def as_row(self) -> dict:
-        """The per-file table row (:data:`PER_FILE_COLUMNS`)."""
+        """The per-file table row (:data:`PER_FILE_COLUMNS`; the columns :func:`analyse` adds,
+        ``E_plain_pa``, ``E_plain_sd_pa`` and ``E_window_spread_pa``, are NaN here)."""
         d = asdict(self)
-        return {k: d[k] for k in PER_FILE_COLUMNS}
+        return {k: d.get(k, math.nan) for k in PER_FILE_COLUMNS}
 
 
 # ----------------------------------------------------------------------------- fitting
@@ -396,26 +440,73 @@ def _label(test: CompressionTest, mapping: Mapping[str, str] | None) -> str | No
     return None
 
 
+def sensitivity_windows(
+    strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW,
+) -> tuple[tuple[float, float], ...]:
+    """The windows of the window-sensitivity figure ``E_window_spread_pa``.
+
+    For a window [lo, hi] of width w: [lo, lo + 0.6·w] (shorter), [lo, hi] (the window) and
+    [lo + 0.2·w, hi + 0.2·w] (shifted up); 0-3 %, 0-5 % and 1-6 % for the default 0-5 %.
+    """
+    lo, hi = _check_window(strain_window)
+    w = hi - lo
+    return ((lo, round(lo + 0.6 * w, 12)), (lo, hi),
+            (round(lo + 0.2 * w, 12), round(hi + 0.2 * w, 12)))
+
+
+def _pct_range(window: Sequence[float]) -> str:
+    return f"{100 * window[0]:g}-{100 * window[1]:g} %"
+
+
+def describe_rule(strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW,
+                  toe_compensation: bool = True, skip_toe: bool = False) -> str:
+    """One line naming the rule behind the ``E_*`` columns (written to the summary's ``rule``)."""
+    window = _check_window(strain_window)
+    if toe_compensation:
+        origin = ("strain measured from the toe offset (zero-point construction of ASTM D638 "
+                  "Annex A1)")
+        if skip_toe:
+            origin += ", points below twice the toe offset skipped"
+    else:
+        origin = "of measured strain (no toe compensation)"
+    spread = ", ".join(_pct_range(w) for w in sensitivity_windows(window))
+    return (f"E: least-squares slope of engineering stress on engineering strain over "
+            f"{_pct_range(window)} {origin}; E_plain: the same window of measured strain, the "
+            f"phantom dataset's 0-5 % convention (compare with its published table); E_sd per "
+            f"test: prewhitened Newey-West HAC; window spread: range of E over {spread}")
+
+
 def summarise(per_file: pd.DataFrame,
-              strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW) -> pd.DataFrame:
+              strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW, *,
+              toe_compensation: bool = True, skip_toe: bool = False) -> pd.DataFrame:
     """Per-material summary of a per-file table.
 
     Parameters
     ----------
     per_file
-        Table with at least ``material``, ``E_pa``, ``strain_lo``, ``strain_hi``.
+        Table with at least ``material``, ``E_pa``, ``strain_lo``, ``strain_hi``; ``E_plain_pa``
+        and ``E_window_spread_pa`` when present (else the summary's columns are NaN).
     strain_window
         [-] The fit window used, written to ``window_lo`` / ``window_hi``.
+    toe_compensation, skip_toe
+        The options used (for the ``rule`` column).
 
     Returns
     -------
     pandas.DataFrame
         :data:`SUMMARY_COLUMNS`: ``n``; ``E_mean_pa``, ``E_sd_pa`` (sd over the tests, ddof = 1,
         empty when n = 1) and ``E_sem_pa`` (sd / sqrt(n)) [Pa]; ``strain_lo`` / ``strain_hi``
-        the lowest and highest measured strain fitted in any test [-]; the window [-].  Groups
-        are in order of first appearance.
+        the lowest and highest measured strain fitted in any test [-]; the window [-];
+        ``E_plain_mean_pa`` / ``E_plain_sd_pa`` the same for the plain fits (the dataset
+        authors' convention, module docstring); ``E_window_spread_pa`` the mean over the tests
+        of each test's window spread [Pa]; ``rule`` (:func:`describe_rule`).  Groups are in
+        order of first appearance.
     """
     lo, hi = _check_window(strain_window)
+    per_file = per_file.copy()
+    for col in _EXTRA_COLUMNS:
+        if col not in per_file:
+            per_file[col] = np.nan
     g = per_file.groupby("material", sort=False)
     n = g["E_pa"].size()
     sd = g["E_pa"].std(ddof=1)
@@ -429,8 +520,37 @@ def summarise(per_file: pd.DataFrame,
         "strain_hi": g["strain_hi"].max().to_numpy(),
         "window_lo": lo,
         "window_hi": hi,
+        "E_plain_mean_pa": g["E_plain_pa"].mean().to_numpy(),
+        "E_plain_sd_pa": g["E_plain_pa"].std(ddof=1).to_numpy(),
+        "E_window_spread_pa": g["E_window_spread_pa"].mean().to_numpy(),
+        "rule": describe_rule((lo, hi), toe_compensation, skip_toe),
     })
     return out[SUMMARY_COLUMNS]
+
+
+def _variants(test: CompressionTest, fit: GroundTruthFit, window: tuple[float, float],
+              toe_compensation: bool, skip_toe: bool) -> dict:
+    """The plain fit and the window spread of one test (NaN where a fit is impossible)."""
+    out = dict.fromkeys(_EXTRA_COLUMNS, math.nan)
+    if toe_compensation:
+        try:
+            plain = fit_modulus(test, window, toe_compensation=False)
+            out["E_plain_pa"], out["E_plain_sd_pa"] = plain.E_pa, plain.E_sd_pa
+        except DataFileError:
+            pass
+    else:
+        out["E_plain_pa"], out["E_plain_sd_pa"] = fit.E_pa, fit.E_sd_pa
+    values = []
+    for w in sensitivity_windows(window):
+        if w == window:
+            values.append(fit.E_pa)
+            continue
+        try:
+            values.append(fit_modulus(test, w, toe_compensation, skip_toe=skip_toe).E_pa)
+        except DataFileError:
+            return out  # a window the test cannot fill: no spread
+    out["E_window_spread_pa"] = float(max(values) - min(values))
+    return out
 
 
 def analyse(
@@ -466,7 +586,12 @@ def analyse(
     Returns
     -------
     per_file : pandas.DataFrame
-        One row per test, :data:`PER_FILE_COLUMNS` (E in [Pa], strains [-]).
+        One row per test, :data:`PER_FILE_COLUMNS` (E in [Pa], strains [-]): the fit of
+        :func:`fit_modulus` plus ``E_plain_pa`` / ``E_plain_sd_pa``, the same window of
+        *measured* strain (the dataset authors' convention; equal to ``E_pa`` when
+        ``toe_compensation`` is False), and ``E_window_spread_pa``, max - min of E over
+        :func:`sensitivity_windows` with the same options (NaN when the test does not reach
+        one of them, or the plain fit is impossible).
     summary : pandas.DataFrame
         One row per material, :data:`SUMMARY_COLUMNS` (see :func:`summarise`).
     """
@@ -480,7 +605,10 @@ def analyse(
             test = replace(test, specimen=spec if spec is not None else test.specimen,
                            material=mat if mat is not None else test.material)
         fit = fit_modulus(test, window, toe_compensation, skip_toe=skip_toe)
-        rows.append(fit.as_row())
+        rows.append({**fit.as_row(),
+                     **_variants(test, fit, window, toe_compensation, skip_toe)})
     per_file = pd.DataFrame(rows, columns=PER_FILE_COLUMNS)
     per_file["n_points"] = per_file["n_points"].astype(int)
-    return per_file, summarise(per_file, window)
+    per_file["hac_lags"] = per_file["hac_lags"].astype(int)
+    return per_file, summarise(per_file, window, toe_compensation=toe_compensation,
+                               skip_toe=skip_toe)
