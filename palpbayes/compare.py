@@ -21,7 +21,12 @@ least squares (``lsq``), as the paper: ``E_pa`` ± ``E_sd_pa`` is the mean ± sd
 
 Bayes (``bayes``), hierarchical pooling (:mod:`palpbayes.pooling`): ``E_pa``, ``E_sd_pa`` and the
 90 % interval describe exp(mu)·f, the material's median modulus with the shared uncertainty
-budget f; ``E_new_*`` the posterior predictive exp(mu + tau·z)·f of a new specimen.
+budget f; ``E_new_*`` the posterior predictive exp(mu + tau·z)·f of a new specimen.  The
+pooling input of trace i is the *statistical* posterior of E (netCDF variable ``E``), never the
+budgeted ``E_total``: the budget is shared by the traces of a group and applied once, to the
+pooled draws.  ``tau_prior_sd`` is the scale of tau's half-normal prior.  ``E_new_sd_pa`` is
+the sd of the predictive draws; with few traces it is dominated by tau's heavy right tail, so
+the text table and ``z_score`` use the 90 % interval instead.
 
 Against the ground truth (Instron mean GT ± sd over specimens):
 
@@ -30,8 +35,14 @@ Against the ground truth (Instron mean GT ± sd over specimens):
   ``E_new_hi_pa``) — the posterior predictive for Bayes and the t prediction interval for least
   squares, so both methods are judged by the same kind of interval: each Instron specimen and
   each palpated location is one draw from the material's population;
-* ``z_score`` = (E − GT)/sqrt(sd² + GT_sd²) with sd the spread of a single specimen as each
-  method sees it: the sd over traces (lsq) and the predictive sd ``E_new_sd_pa`` (bayes).
+* ``z_score`` = (E − GT)/sqrt(sd_new² + GT_sd²), one definition for both methods: sd_new
+  (column ``E_new_sd_eq_pa``) = (``E_new_hi_pa`` − ``E_new_lo_pa``)/(2·1.645), the
+  normal-equivalent sd of the same 90 % new-specimen interval that ``gt_in_interval`` uses,
+  i.e. the spread a user would quote for a new specimen with that method.  It is neither the
+  sd over traces (which ignores that the mean of n traces is itself uncertain) nor the sd of
+  the Bayesian predictive draws ``E_new_sd_pa`` (inflated by the heavy right tail of tau when
+  a group has few traces).  With GT_sd = 0 and a symmetric interval, |z| > 1.645 exactly
+  when GT is outside the interval.
 
 ``paper_*`` are the paper's published robot (least-squares) estimates for White/Pink/Grey ×
 flat/sphere/paraboloid (:data:`palpbayes.simulate.PAPER_ROBOT_ESTIMATES`); ``paper_err_pct`` is
@@ -63,7 +74,13 @@ from .io.atomic import write_csv_atomic
 from .io.manifest import tip_from_row
 from .pooling import TAU_PRIOR_SD, central, log_normal_summary, pool_group
 from .pooling_inputs import fitdata_from_posterior, posterior_attrs, read_posterior
-from .reference import gt_columns, load_groundtruth, paper_columns, paper_estimates
+from .reference import (
+    gt_columns,
+    load_groundtruth,
+    new_specimen_sd,
+    paper_columns,
+    paper_estimates,
+)
 
 __all__ = ["COMPARISON_COLUMNS", "STIFFENING_MIN_REST_TIMES", "Comparison", "compare_campaign",
            "load_groundtruth", "paper_estimates", "format_comparison", "read_posterior"]
@@ -74,7 +91,7 @@ COMPARISON_COLUMNS = [
     "gt_in_interval", "z_score", "residual_n2", "converged_all", "paper_E_pa", "paper_sd_pa",
     "paper_err_pct", "z_surf_err_mean_m",
     # extras
-    "E_new_sd_pa", "tau", "gt_n", "n_failed", "flags",
+    "E_new_sd_pa", "tau", "gt_n", "n_failed", "flags", "E_new_sd_eq_pa", "tau_prior_sd",
 ]
 #: A material × tip gets a stiffening fit when its Bayesian rows span this many rest times.
 STIFFENING_MIN_REST_TIMES = 3
@@ -218,6 +235,7 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None, fiel
         "E_lo_pa": lo, "E_hi_pa": hi, "E_new_pa": float(np.median(pooled.E_new)),
         "E_new_sd_pa": float(np.std(pooled.E_new, ddof=1)), "E_new_lo_pa": nlo,
         "E_new_hi_pa": nhi, "tau": float(np.median(pooled.posterior.tau)),
+        "tau_prior_sd": pooled.posterior.tau_prior_sd,
         "converged_all": bool(n_conv == len(g) and pooled.posterior.converged),
         "flags": "; ".join(flags),
     })
@@ -304,7 +322,9 @@ def compare_campaign(
                         pooled_rows.append(prow)
                         budgets.append(btab)
                 row = {"material": mat, "tip": tip, "method": method, **row}
-                row.update(gt_columns(row, gt, mat))
+                row["E_new_sd_eq_pa"] = new_specimen_sd(row.get("E_new_lo_pa", np.nan),
+                                                        row.get("E_new_hi_pa", np.nan), level)
+                row.update(gt_columns(row, gt, mat, level))
                 row.update(paper_columns(paper, mat, tip))
                 if truth is not None and "z_surf_true_m" in truth:
                     ok = g[g["trace_id"].isin(truth.index) & np.isfinite(g["z_surf_m"])]

@@ -15,13 +15,42 @@ def _pm(e, sd) -> str:
         f"{e / 1e3:.1f}"
 
 
-def format_comparison(df: pd.DataFrame, groundtruth_source: str | None = None) -> str:
+def _interval(e, lo, hi) -> str:
+    if e is None or not np.isfinite(e):
+        return "-"
+    if lo is None or hi is None or not (np.isfinite(lo) and np.isfinite(hi)):
+        return f"{e / 1e3:.1f}"
+    return f"{e / 1e3:.1f} [{lo / 1e3:.1f}, {hi / 1e3:.1f}]"
+
+
+def _tau_prior_line(df: pd.DataFrame, tau_prior_sd: float | None) -> str | None:
+    if "bayes" not in set(df["method"]):
+        return None
+    values = []
+    if "tau_prior_sd" in df.columns:
+        values = sorted({float(v) for v in df.loc[df["method"] == "bayes", "tau_prior_sd"]
+                         if pd.notna(v)})
+    if not values and tau_prior_sd is not None:
+        values = [float(tau_prior_sd)]
+    prior = (" or ".join(f"HalfNormal({v:g})" for v in values) if values
+             else "half-normal (scale not recorded)")
+    return ("Bayes pooling: log E_i ~ Normal(mu, tau²) over the traces of a material × tip; flat "
+            f"prior on mu, tau ~ {prior} on the log-E scale; the systematic budget is applied "
+            "once per group.")
+
+
+def format_comparison(df: pd.DataFrame, groundtruth_source: str | None = None,
+                      tau_prior_sd: float | None = None) -> str:
     """The comparison as text in the paper's layout: rows material, columns tip × method.
 
-    Cells are E ± sd [kPa]: least squares mean ± sd over traces (the paper's convention);
-    Bayes the posterior-predictive median ± sd for a new specimen.  A second block gives the
-    error (GT − E)/GT [%] with ``*`` when GT lies outside the 90 % interval for a new specimen;
-    a third the paper's published robot estimates where the labels match.
+    Cells [kPa]: least squares mean ± sd over traces (the paper's convention); Bayes the
+    posterior-predictive median for a new specimen with its central 90 % interval
+    ``[E_new_lo, E_new_hi]`` -- not ± sd: with few traces the predictive draws have a heavy
+    right tail from tau, and their sd overstates the spread of a new specimen.  A second block
+    gives the error (GT − E)/GT [%] with ``*`` when GT lies outside the 90 % interval for a new
+    specimen; a third the paper's published robot estimates where the labels match.  A line
+    states the prior of tau: the ``tau_prior_sd`` column of the Bayesian rows, else the
+    ``tau_prior_sd`` argument.
     """
     if df.empty:
         return "(no rows)"
@@ -36,8 +65,8 @@ def format_comparison(df: pd.DataFrame, groundtruth_source: str | None = None) -
             return "-"
         r = r.iloc[0]
         if kind == "E":
-            return _pm(r["E_new_pa"], r["E_new_sd_pa"]) if method == "bayes" else \
-                _pm(r["E_pa"], r["E_sd_pa"])
+            return _interval(r["E_new_pa"], r["E_new_lo_pa"], r["E_new_hi_pa"]) \
+                if method == "bayes" else _pm(r["E_pa"], r["E_sd_pa"])
         if kind == "err":
             if not np.isfinite(r["rel_err_pct"]):
                 return "-"
@@ -62,8 +91,12 @@ def format_comparison(df: pd.DataFrame, groundtruth_source: str | None = None) -
         return pd.DataFrame(body, index=pd.Index(mats, name="material"), columns=cols
                             ).to_string()
 
-    out = ["E [kPa], mean ± sd (LSQ: over traces, as the paper; Bayes: posterior predictive "
-           "for a new specimen, pooled with the uncertainty budget)", block("E", True)]
+    out = ["E [kPa]: GT and LSQ mean ± sd (LSQ over traces, as the paper); Bayes posterior-"
+           "predictive median [90 % interval] for a new specimen, pooled with the uncertainty "
+           "budget", block("E", True)]
+    prior = _tau_prior_line(df, tau_prior_sd)
+    if prior:
+        out.append(prior)
     if df["rel_err_pct"].notna().any():
         out += ["", "error (GT - E)/GT [%]; * = GT outside the 90 % interval for a new specimen",
                 block("err", False)]

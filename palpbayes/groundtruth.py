@@ -3,18 +3,18 @@
 Engineering quantities: strain eps = compression / initial height [-], stress sigma = load /
 initial cross-section [Pa], both positive in compression.
 
-The rule (in the spirit of ISO 844 and ASTM D575 / D3574: the modulus is the slope of the
-initial, nearly linear part of the stress-strain curve, with the strain origin corrected for the
-toe region before full platen contact, the zero-point construction of ASTM D638 Annex A1)
------------------------------------------------------------------------------------------------
+The rule
+--------
 1. Only the loading branch is used: samples up to the first maximum of the compression.
 2. A straight line ``sigma = E·(eps - eps0)`` is fitted by ordinary least squares to the points
    whose *toe-compensated* strain ``eps - eps0`` lies in the window ``[lo, hi]``
-   (default 0-5 %).  ``eps0``, the toe offset, is where the fitted line reaches zero stress;
-   because the window depends on ``eps0`` the fit is iterated from ``eps0 = 0`` until the set of
-   points no longer changes (a fixed point; typically 2-4 iterations).  The line's intercept
-   absorbs a load offset, so neither the toe nor a tare error biases the slope the way a fit
-   through the measured origin would (-13 % on the EF50 phantom).
+   (default 0-5 %).  ``eps0``, the toe offset, is where the fitted line reaches zero stress
+   (the zero-point construction of ASTM D638 Annex A1: the linear part is extended to zero
+   stress and strains are measured from there); because the window depends on ``eps0`` the
+   fit is iterated from ``eps0 = 0`` until the set of points no longer changes (a fixed point;
+   typically 2-4 iterations).  The line's intercept absorbs a load offset, so neither the toe
+   nor a tare error biases the slope the way a fit through the measured origin would (-13 %
+   on the EF50 phantom).
 3. ``toe_compensation=False`` applies the window to the measured strain instead (the fitted line
    still has an intercept).  ``skip_toe=True`` further drops the points below ``2·eps0`` in
    measured strain: that is where a toe that grows quadratically and joins the line tangentially
@@ -23,25 +23,101 @@ toe region before full platen contact, the zero-point construction of ASTM D638 
    slope 1-2.3 % low when the toe spans 1.3-2 % strain (the simulator's 0.2 mm slack on its
    30 / 20 mm blocks; its campaigns are analysed exactly with ``skip_toe=True``).
 
-Why the default keeps the upper toe and uses 0-5 %: the silicone phantoms stiffen with strain
-(their tangent modulus grows ~2 % per 1 % strain, as a neo-Hookean solid does), so a window
-that starts further from the toe reads a higher modulus; the published moduli of the shipped
-phantoms were obtained from a plain 0-5 % fit that *includes* the toe.  With the default, the
-shipped Instron 5900 exports give (mean ± sd of ten tests, published value in brackets)
-EF10_50T 15.98 ± 0.39 kPa (15.52 ± 0.40, +3.0 %), EF30_0T 103.5 ± 4.9 kPa (97.26 ± 4.16,
-+6.4 %), EF50_12_5T 121.8 ± 1.9 kPa (111.1 ± 6.44, +9.6 %); ``skip_toe=True`` gives +3.1, +7.2
-and +12.9 %, and a window of 0-2 % with ``skip_toe=True`` -0.7, -0.5 and +5.2 %.  The spread
-of these numbers is the real method uncertainty of a "linear modulus" of a non-linear material;
-report the window with every modulus.
+Every test also gets, from :func:`analyse`:
+
+* ``E_plain_pa`` (``E_plain_sd_pa``): the plain fit, the same window applied to the *measured*
+  strain, i.e. from the first sample of the export, toe included.  This is the convention of
+  the phantom dataset: its README says the authors' window is not stated and that a linear fit
+  over 0-5 % strain lands within a few percent of their table;
+* ``E_window_spread_pa``: max - min of E over three nearby windows
+  (:func:`sensitivity_windows`: 0-3, 0-5 and 1-6 % for the default), with the options of
+  ``E_pa``.  The summary gives the mean of the per-test spreads.
+
+Which number to compare with what
+---------------------------------
+The silicone phantoms stiffen with strain (their tangent modulus grows ~2 % per 1 % strain, as
+a neo-Hookean solid does), so a "linear modulus" depends on which part of the curve the window
+covers, and toe compensation moves the window up the curve by eps0.  On the shipped Instron
+5900 exports (mean ± sd of ten tests; published value, then difference):
+
+=============  ========================  ========================  ============  ============
+phantom        E_pa (toe-compensated)    E_plain_pa (plain)        published     window spread
+=============  ========================  ========================  ============  ============
+EF10_50T       15.98 ± 0.39 kPa, +3.0 %  15.94 ± 0.44 kPa, +2.7 %  15.52 ± 0.40  0.76 kPa (4.8 %)
+EF30_0T        103.5 ± 4.9 kPa, +6.4 %   101.8 ± 3.9 kPa, +4.7 %   97.26 ± 4.16  9.2 kPa (8.8 %)
+EF50_12_5T     121.8 ± 1.9 kPa, +9.6 %   112.0 ± 7.9 kPa, +0.8 %   111.1 ± 6.44  13.1 kPa (10.7 %)
+=============  ========================  ========================  ============  ============
+
+* Compare the **published table** with ``E_plain_mean_pa``: it is the published convention, so
+  the difference measures the data, not a difference of definitions (toe compensation alone
+  moves EF50 by +8.8 %, which is a change of convention, not an error of the published value).
+* Use ``E_mean_pa`` (toe-compensated, the default) as the ground truth of one's own tests and
+  of ``palpbayes compare``: it does not depend on where the machine started recording, on a
+  tare offset or on platen seating, which differ between set-ups; quote
+  ``E_window_spread_pa`` with it as the method uncertainty of a linear modulus of a non-linear
+  material, and always report the window (the summary's ``rule`` column names it).
+* ``skip_toe=True`` gives +3.1, +7.2 and +12.9 % against the published values, and a window of
+  0-2 % with ``skip_toe=True`` -0.7, -0.5 and +5.2 %.
+
+Standards
+---------
+No standard defines this slope modulus for soft silicone, and the 0-5 % window is taken from
+the dataset, not from a standard.  ISO 7743 (Rubber, vulcanized or thermoplastic -
+Determination of compression stress-strain properties) is the test method for rubber in
+compression (test pieces, lubricated or bonded plates); ASTM D575 (Rubber properties in
+compression) measures the force at a specified deflection (method A) or the deflection at a
+specified force (method B), not a modulus; ASTM D3574 (flexible urethane foams) gives
+force-deflection values; ISO 844 defines a compressive modulus, but for *rigid* cellular
+plastics.  The only construction borrowed from a standard is the toe compensation of ASTM D638
+(tensile properties of plastics), Annex A1.
+
+Inputs
+------
+Finding the exports (files, folders, ground-truth manifests) is
+:mod:`palpbayes.io.groundtruth_inputs`; :func:`collect_tests`, :func:`scan_inputs`,
+:func:`read_groundtruth_manifest` and :func:`is_groundtruth_manifest` are re-exported here.
 
 Uncertainty
 -----------
-``E_sd_pa`` is the standard error of the fitted slope from the residual covariance of the
-regression, ``sqrt(s² / sum((eps - mean eps)²))`` with ``s² = RSS / (n - 2)``.  It is a **lower
-bound** on the real uncertainty: the residuals of a curve sampled at 10-25 Hz are correlated,
-and the window choice, the non-linearity and the geometry (area, height) are not in it.  The
-specimen-to-specimen scatter of a material (``E_sd_pa`` of the summary, ddof = 1) is the
-number to compare with palpation estimates.
+``E_sd_pa`` is a heteroskedasticity- and autocorrelation-consistent (HAC) standard error of
+the slope: the Newey & West (1987) estimator with the Bartlett kernel, prewhitened by an AR(1)
+filter (Andrews & Monahan 1992) and with the bandwidth of Andrews' (1991) AR(1) plug-in rule.
+With ``v_t = (eps_t - mean eps)·u_t`` (``u`` the residuals, in time order):
+
+1. prewhiten: ``rho = sum v_t v_(t-1) / sum v_(t-1)²``, clipped to [0, 0.97], and
+   ``e_t = v_t - rho·v_(t-1)``.  0.97 is the bound Andrews & Monahan put on the prewhitening
+   filter against near-unit roots; a negative estimate is set to 0 (no prewhitening) because
+   in a short window it is mostly noise and would shrink the estimate below the white-noise
+   value (with 37 points and white noise, (E - E_true)/E_sd_pa then has sd 1.24 instead of
+   1.02);
+2. bandwidth: ``L = floor(1.1447·(alpha·m)^(1/3))`` with ``alpha = 4 r² / ((1 - r)²(1 + r)²)``,
+   ``r`` the lag-1 autocorrelation of ``e`` (clipped likewise) and ``m = n - 1``; at most
+   ``m - 1``;
+3. ``S_e = sum_(|j| <= L) (1 - |j|/(L + 1)) sum_t e_t e_(t-j)`` (times ``n/m``), recoloured:
+   ``S = S_e / (1 - rho)²``;
+4. ``E_sd_pa = sqrt(S · n/(n - 2)) / sum((eps - mean eps)²)``.
+
+Why: the residuals of a 0-5 % line through a curve sampled at 10 Hz are mostly curvature
+(lag-1 autocorrelation ``resid_acf1`` 0.80-0.93 on the EF30 and EF50 phantoms, up to 0.89 on
+EF10), so the ordinary-least-squares standard error ``sqrt(s² / sum((eps - mean eps)²))``,
+``s² = RSS/(n - 2)``, which assumes independent residuals, is too small.  It is kept as
+``E_ols_sd_pa``; on the shipped phantoms ``E_sd_pa / E_ols_sd_pa`` has median 4.3 (1.1-10.0;
+EF50 4.3-6.5, EF30 1.9-10.0, EF10 1.1-7.2) and ``E_sd_pa`` is 0.1-4.0 % of E.  Calibration
+(tests/test_groundtruth.py): on straight lines with AR(1) residuals, the 90 % interval
+``E ± 1.645·E_sd_pa`` covers the true slope in 87 % of 200-point lines at phi = 0.6 (the OLS
+interval: 59 %); with 90 points (the phantoms' 0-5 % windows) it covers 85 % at phi = 0.5,
+79 % at phi = 0.8 and 72 % at phi = 0.9 (2000 replicates each): with few effectively
+independent points no HAC estimate is reliable, so treat ``E_sd_pa`` as an order of magnitude
+when ``resid_acf1`` is above ~0.9.
+
+What it does not contain: the choice of window (see ``E_window_spread_pa``), the
+non-linearity, and the geometry (area, height).  The specimen-to-specimen scatter of a
+material (``E_sd_pa`` of the summary, ddof = 1) is the number to compare with palpation
+estimates.
+
+References: Newey, W.K. & West, K.D. (1987), Econometrica 55(3), 703-708; Andrews, D.W.K.
+(1991), Econometrica 59(3), 817-858; Andrews, D.W.K. & Monahan, J.C. (1992), Econometrica
+60(4), 953-966.
 """
 
 from __future__ import annotations
@@ -56,7 +132,13 @@ import numpy as np
 import pandas as pd
 
 from .errors import DataFileError, FitError, InputError
-from .io.instron import CompressionTest, looks_like_compression_test, read_compression_test
+from .io.groundtruth_inputs import (
+    collect_tests,
+    is_groundtruth_manifest,
+    read_groundtruth_manifest,
+    scan_inputs,
+)
+from .io.instron import CompressionTest
 
 __all__ = [
     "DEFAULT_STRAIN_WINDOW",
@@ -65,6 +147,9 @@ __all__ = [
     "SUMMARY_COLUMNS",
     "GroundTruthFit",
     "fit_modulus",
+    "hac_slope_se",
+    "sensitivity_windows",
+    "describe_rule",
     "analyse",
     "summarise",
     "collect_tests",
@@ -78,13 +163,19 @@ DEFAULT_STRAIN_WINDOW: tuple[float, float] = (0.0, 0.05)
 #: A window with fewer points than this is refused.
 MIN_POINTS = 5
 _MAX_ITERATIONS = 100
+#: Bound on the AR(1) prewhitening coefficient and the bandwidth's autocorrelation.
+_RHO_MAX = 0.97
 
 #: Columns of the per-file table, in order.
 PER_FILE_COLUMNS = ["file", "specimen", "material", "E_pa", "E_sd_pa", "strain_lo", "strain_hi",
-                    "strain_toe", "r2", "n_points"]
+                    "strain_toe", "r2", "n_points", "E_ols_sd_pa", "resid_acf1", "hac_lags",
+                    "E_plain_pa", "E_plain_sd_pa", "E_window_spread_pa"]
 #: Columns of the per-material summary, in order.
 SUMMARY_COLUMNS = ["material", "n", "E_mean_pa", "E_sd_pa", "E_sem_pa", "strain_lo",
-                   "strain_hi", "window_lo", "window_hi"]
+                   "strain_hi", "window_lo", "window_hi", "E_plain_mean_pa", "E_plain_sd_pa",
+                   "E_window_spread_pa", "rule"]
+#: Extra per-file columns :func:`analyse` adds to the :class:`GroundTruthFit` fields.
+_EXTRA_COLUMNS = ("E_plain_pa", "E_plain_sd_pa", "E_window_spread_pa")
 
 
 @dataclass(frozen=True)
@@ -96,8 +187,8 @@ class GroundTruthFit:
     E_pa
         [Pa] Young's modulus, the slope of the fitted line.
     E_sd_pa
-        [Pa] Standard error of the slope from the regression residuals (a lower bound on the
-        real uncertainty, see the module docstring).
+        [Pa] Standard error of the slope, prewhitened Newey-West (HAC) estimate (module
+        docstring): valid for autocorrelated residuals.
     strain_lo, strain_hi
         [-] Range of *measured* engineering strain covered by the fitted points.
     strain_toe
@@ -113,6 +204,15 @@ class GroundTruthFit:
         was False).
     toe_compensation, skip_toe
         The options used.
+    E_ols_sd_pa
+        [Pa] The ordinary-least-squares standard error of the slope (assumes independent
+        residuals; too small when they are correlated).
+    resid_acf1
+        [-] Lag-1 sample autocorrelation of the residuals of the fit,
+        ``sum u_t u_(t-1) / sum u_t²`` (0 for independent residuals, near 1 for a smooth
+        curvature).
+    hac_lags
+        Bandwidth L (number of lags) of the HAC estimate.
     """
 
     E_pa: float
@@ -129,11 +229,15 @@ class GroundTruthFit:
     window_hi: float = DEFAULT_STRAIN_WINDOW[1]
     toe_compensation: bool = True
     skip_toe: bool = False
+    E_ols_sd_pa: float = math.nan
+    resid_acf1: float = math.nan
+    hac_lags: int = 0
 
     def as_row(self) -> dict:
-        """The per-file table row (:data:`PER_FILE_COLUMNS`)."""
+        """The per-file table row (:data:`PER_FILE_COLUMNS`; the columns :func:`analyse` adds,
+        ``E_plain_pa``, ``E_plain_sd_pa`` and ``E_window_spread_pa``, are NaN here)."""
         d = asdict(self)
-        return {k: d[k] for k in PER_FILE_COLUMNS}
+        return {k: d.get(k, math.nan) for k in PER_FILE_COLUMNS}
 
 
 # ----------------------------------------------------------------------------- fitting
@@ -153,8 +257,67 @@ def _check_window(strain_window: Sequence[float]) -> tuple[float, float]:
     return lo, hi
 
 
-def _linfit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
-    """Slope, intercept, slope standard error and R² of an ordinary least-squares line."""
+def _clip_rho(r: float) -> float:
+    return float(min(max(r, 0.0), _RHO_MAX)) if math.isfinite(r) else 0.0
+
+
+def _lag1(a: np.ndarray) -> float:
+    """Lag-1 autoregression coefficient sum a_t a_(t-1) / sum a_(t-1)² (0 if undefined)."""
+    den = float(a[:-1] @ a[:-1]) if a.size > 1 else 0.0
+    return float(a[1:] @ a[:-1]) / den if den > 0 else 0.0
+
+
+def _acf1(u: np.ndarray) -> float:
+    """Lag-1 sample autocorrelation sum u_t u_(t-1) / sum u_t² of a mean-zero series."""
+    u = u - u.mean()
+    den = float(u @ u)
+    return float(u[1:] @ u[:-1]) / den if den > 0 and u.size > 1 else math.nan
+
+
+def hac_slope_se(x: np.ndarray, resid: np.ndarray) -> tuple[float, int]:
+    """Prewhitened Newey-West standard error of an OLS slope and its bandwidth (lags).
+
+    Bartlett kernel, AR(1) prewhitening of the scores ``(x - mean x)·resid`` (coefficient
+    clipped to [0, 0.97]; Andrews & Monahan 1992) and Andrews' (1991) AR(1) plug-in bandwidth
+    ``floor(1.1447·(alpha·m)^(1/3))``, ``alpha = 4 r²/((1 - r)²(1 + r)²)``; small-sample factor
+    n/(n - 2).  Steps in the module docstring.
+
+    Parameters
+    ----------
+    x
+        Regressor, in the order the samples were taken.
+    resid
+        OLS residuals of the fit, same order.
+
+    Returns
+    -------
+    se : float
+        Standard error of the slope (0 for an exact line).
+    lags : int
+        The bandwidth L.
+    """
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    if n < 4:
+        return math.nan, 0
+    dx = x - x.mean()
+    sxx = float(dx @ dx)
+    v = dx * np.asarray(resid, dtype=float)
+    rho = _clip_rho(_lag1(v))
+    e = v[1:] - rho * v[:-1]
+    m = e.size
+    r = _clip_rho(_lag1(e))
+    alpha = 4.0 * r * r / ((1.0 - r) ** 2 * (1.0 + r) ** 2)
+    lags = int(min(math.floor(1.1447 * (alpha * m) ** (1.0 / 3.0)), m - 1))
+    s_e = float(e @ e)
+    for j in range(1, lags + 1):
+        s_e += 2.0 * (1.0 - j / (lags + 1.0)) * float(e[j:] @ e[:-j])
+    s = max(s_e, 0.0) * (n / m) / (1.0 - rho) ** 2
+    return math.sqrt(s * n / (n - 2)) / sxx, lags
+
+
+def _linfit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float, np.ndarray]:
+    """Slope, intercept, OLS slope standard error, R² and residuals of a least-squares line."""
     n = x.size
     xm, ym = x.mean(), y.mean()
     dx, dy = x - xm, y - ym
@@ -166,7 +329,7 @@ def _linfit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
     tss = float(dy @ dy)
     se = math.sqrt(rss / (n - 2) / sxx) if n > 2 else math.nan
     r2 = 1.0 - rss / tss if tss > 0 else math.nan
-    return slope, float(intercept), se, r2
+    return slope, float(intercept), se, r2, resid
 
 
 def fit_modulus(
@@ -225,7 +388,7 @@ def fit_modulus(
                 f"{_pct(lo)}-{_pct(hi)}, toe offset {_pct(eps0)}); at least {MIN_POINTS} "
                 "are needed", "use a wider strain window or check the units and the geometry",
             )
-        slope, intercept, se, r2 = _linfit(eps[mask], sig[mask])
+        slope, intercept, se, r2, resid = _linfit(eps[mask], sig[mask])
         if not (math.isfinite(slope) and slope > 0):
             raise DataFileError(
                 where, f"the load does not rise with compression between {_pct(shift + start)} "
@@ -248,225 +411,20 @@ def fit_modulus(
             f"{_pct(lo)}-{_pct(hi)} needs {_pct(need)} (toe offset {_pct(eps0)})",
             "use a narrower strain window",
         )
+    hac_se, lags = hac_slope_se(eps[mask], resid)
     return GroundTruthFit(
-        E_pa=float(slope), E_sd_pa=float(se),
+        E_pa=float(slope), E_sd_pa=float(hac_se),
         strain_lo=float(eps[mask].min()), strain_hi=float(eps[mask].max()),
         strain_toe=float(eps0), r2=float(r2), n_points=n,
         file=test.source, specimen=test.specimen, material=test.material,
         window_lo=lo, window_hi=hi, toe_compensation=bool(toe_compensation),
-        skip_toe=bool(skip_toe),
+        skip_toe=bool(skip_toe), E_ols_sd_pa=float(se), resid_acf1=_acf1(resid),
+        hac_lags=int(lags),
     )
 
 
 def _pct(x: float) -> str:
     return f"{100 * x:.3g} %"
-
-
-# ----------------------------------------------------------------------------- inputs
-
-
-def _csv_columns(path: Path) -> list[str] | None:
-    try:
-        return [str(c).strip() for c in pd.read_csv(path, nrows=0).columns]
-    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError, OSError,
-            ValueError):
-        return None
-
-
-def is_groundtruth_manifest(path: str | os.PathLike) -> bool:
-    """True if ``path`` is a CSV with a ``file`` column and ``area_m2`` or ``height_m``.
-
-    (A palpation campaign manifest, which has a ``tip`` column, is not one.)
-    """
-    cols = _csv_columns(Path(path))
-    return bool(cols) and "file" in cols and "tip" not in cols and \
-        bool({"area_m2", "height_m"} & set(cols))
-
-
-def _optional_float(value, manifest: Path, line: int, column: str) -> float | None:
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return None
-    text = str(value).strip()
-    if text == "" or text.lower() == "nan":
-        return None
-    try:
-        v = float(text)
-    except ValueError:
-        v = math.nan
-    if not (math.isfinite(v) and v > 0):
-        raise DataFileError(manifest, f"line {line}, column {column!r}: {text!r} is not a "
-                            "positive number [SI units]",
-                            "write the value in metres (squared for the area) or leave it "
-                            "empty to use the file's header")
-    return v
-
-
-def _manifest_rows(path: Path) -> pd.DataFrame:
-    if not path.is_file():
-        raise DataFileError(path, "manifest not found", "check the path")
-    try:
-        df = pd.read_csv(path, dtype=str, keep_default_na=False)
-    except pd.errors.EmptyDataError:
-        raise DataFileError(path, "the manifest is empty",
-                            "write a header 'file,specimen,material,area_m2,height_m' and one "
-                            "row per test") from None
-    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
-        raise DataFileError(path, f"cannot be parsed as CSV ({exc})") from None
-    df.columns = [str(c).strip() for c in df.columns]
-    if "file" not in df.columns:
-        raise DataFileError(path, f"the manifest has no 'file' column (it has "
-                            f"{', '.join(df.columns)})",
-                            "columns: file, specimen, material, area_m2, height_m")
-    if df.empty:
-        raise DataFileError(path, "the manifest lists no tests", "add one row per test")
-    return df
-
-
-def _manifest_files(path: Path) -> list[Path]:
-    df = _manifest_rows(path)
-    return [(path.parent / str(f).strip()) for f in df["file"]]
-
-
-def read_groundtruth_manifest(
-    path: str | os.PathLike,
-    *,
-    area_m2: float | None = None,
-    height_m: float | None = None,
-) -> list[CompressionTest]:
-    """Read the tests listed in a ground-truth manifest.
-
-    Columns: ``file`` (required; relative to the manifest's folder or absolute) and, optional
-    (empty cells fall back to the file), ``specimen``, ``material``, ``area_m2`` [m²] and
-    ``height_m`` [m].
-
-    Parameters
-    ----------
-    path
-        The manifest CSV.
-    area_m2, height_m
-        [m²], [m] Geometry for every test, overriding the manifest and the headers.
-
-    Returns
-    -------
-    list of CompressionTest
-
-    Raises
-    ------
-    DataFileError
-        Missing manifest or ``file`` column, no rows, a listed file that does not exist or a
-        bad geometry cell (naming the manifest line), or an error in a listed file.
-    """
-    path = Path(path)
-    df = _manifest_rows(path)
-    tests = []
-    for i, row in enumerate(df.to_dict("records")):
-        line = i + 2
-        name = str(row["file"]).strip()
-        if not name:
-            raise DataFileError(path, f"line {line}: empty 'file' cell", "name the test file")
-        file = path.parent / name
-        if not file.is_file():
-            raise DataFileError(path, f"line {line}: test file {name!r} not found (looked for "
-                                f"{file})", "file paths are relative to the manifest's folder")
-        area = area_m2 if area_m2 is not None else _optional_float(
-            row.get("area_m2"), path, line, "area_m2")
-        height = height_m if height_m is not None else _optional_float(
-            row.get("height_m"), path, line, "height_m")
-        labels = {k: str(row[k]).strip() for k in ("specimen", "material")
-                  if k in row and str(row[k]).strip()}
-        tests.append(read_compression_test(file, area_m2=area, height_m=height, **labels))
-    return tests
-
-
-def scan_inputs(
-    inputs: Iterable[str | os.PathLike],
-) -> tuple[list[Path], list[Path], list[Path]]:
-    """Sort input paths into (manifests, test files, skipped files).
-
-    Folders are searched recursively for ``*.csv`` (hidden files skipped).  A CSV found there
-    is a manifest (:func:`is_groundtruth_manifest`), a compression test
-    (:func:`~palpbayes.io.instron.looks_like_compression_test`) or skipped (published tables,
-    palpation traces, results).  Test files listed by a manifest are left to the manifest.
-    Files named explicitly are never skipped: a file that is neither a manifest nor a test is
-    read as a test, so its error is reported.
-
-    Raises
-    ------
-    DataFileError
-        An input path that does not exist.
-    """
-    manifests: list[Path] = []
-    tests: list[Path] = []
-    skipped: list[Path] = []
-    for item in inputs:
-        p = Path(item)
-        if p.is_dir():
-            for f in sorted(p.rglob("*.csv")):
-                if any(part.startswith(".") for part in f.relative_to(p).parts):
-                    continue
-                if is_groundtruth_manifest(f):
-                    manifests.append(f)
-                elif looks_like_compression_test(f):
-                    tests.append(f)
-                else:
-                    skipped.append(f)
-        elif p.is_file():
-            (manifests if is_groundtruth_manifest(p) else tests).append(p)
-        else:
-            raise DataFileError(p, "no such file or folder", "check the path")
-    listed = {f.resolve() for m in manifests for f in _manifest_files(m)}
-    unique: dict[Path, Path] = {}
-    for f in tests:
-        r = f.resolve()
-        if r not in listed and r not in unique:
-            unique[r] = f
-    return _dedupe(manifests), list(unique.values()), skipped
-
-
-def _dedupe(paths: list[Path]) -> list[Path]:
-    out: dict[Path, Path] = {}
-    for p in paths:
-        out.setdefault(p.resolve(), p)
-    return list(out.values())
-
-
-def collect_tests(
-    inputs: str | os.PathLike | CompressionTest | Iterable[str | os.PathLike | CompressionTest],
-    *,
-    area_m2: float | None = None,
-    height_m: float | None = None,
-) -> list[CompressionTest]:
-    """Read every compression test named by ``inputs`` (files, folders, manifests, tests).
-
-    Parameters
-    ----------
-    inputs
-        One or several paths (see :func:`scan_inputs`) or :class:`CompressionTest` objects.
-    area_m2, height_m
-        [m²], [m] Geometry for every file read, overriding manifests and headers.
-
-    Raises
-    ------
-    DataFileError
-        No test found, or an error in a file.
-    """
-    if isinstance(inputs, str | os.PathLike | CompressionTest):
-        inputs = [inputs]
-    items = list(inputs)
-    given = [t for t in items if isinstance(t, CompressionTest)]
-    paths = [p for p in items if not isinstance(p, CompressionTest)]
-    manifests, files, skipped = scan_inputs(paths)
-    tests = list(given)
-    for m in manifests:
-        tests.extend(read_groundtruth_manifest(m, area_m2=area_m2, height_m=height_m))
-    tests.extend(read_compression_test(f, area_m2=area_m2, height_m=height_m) for f in files)
-    if not tests:
-        where = ", ".join(str(p) for p in paths) or None
-        extra = f"; skipped {len(skipped)} other CSV file(s)" if skipped else ""
-        raise DataFileError(where, f"no compression tests found{extra}",
-                            "a test export has a column row with displacement and load "
-                            "columns, e.g. 'Time (s),Compression (mm),Load (N)'")
-    return tests
 
 
 # ----------------------------------------------------------------------------- tables
@@ -482,26 +440,73 @@ def _label(test: CompressionTest, mapping: Mapping[str, str] | None) -> str | No
     return None
 
 
+def sensitivity_windows(
+    strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW,
+) -> tuple[tuple[float, float], ...]:
+    """The windows of the window-sensitivity figure ``E_window_spread_pa``.
+
+    For a window [lo, hi] of width w: [lo, lo + 0.6·w] (shorter), [lo, hi] (the window) and
+    [lo + 0.2·w, hi + 0.2·w] (shifted up); 0-3 %, 0-5 % and 1-6 % for the default 0-5 %.
+    """
+    lo, hi = _check_window(strain_window)
+    w = hi - lo
+    return ((lo, round(lo + 0.6 * w, 12)), (lo, hi),
+            (round(lo + 0.2 * w, 12), round(hi + 0.2 * w, 12)))
+
+
+def _pct_range(window: Sequence[float]) -> str:
+    return f"{100 * window[0]:g}-{100 * window[1]:g} %"
+
+
+def describe_rule(strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW,
+                  toe_compensation: bool = True, skip_toe: bool = False) -> str:
+    """One line naming the rule behind the ``E_*`` columns (written to the summary's ``rule``)."""
+    window = _check_window(strain_window)
+    if toe_compensation:
+        origin = ("strain measured from the toe offset (zero-point construction of ASTM D638 "
+                  "Annex A1)")
+        if skip_toe:
+            origin += ", points below twice the toe offset skipped"
+    else:
+        origin = "of measured strain (no toe compensation)"
+    spread = ", ".join(_pct_range(w) for w in sensitivity_windows(window))
+    return (f"E: least-squares slope of engineering stress on engineering strain over "
+            f"{_pct_range(window)} {origin}; E_plain: the same window of measured strain, the "
+            f"phantom dataset's 0-5 % convention (compare with its published table); E_sd per "
+            f"test: prewhitened Newey-West HAC; window spread: range of E over {spread}")
+
+
 def summarise(per_file: pd.DataFrame,
-              strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW) -> pd.DataFrame:
+              strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW, *,
+              toe_compensation: bool = True, skip_toe: bool = False) -> pd.DataFrame:
     """Per-material summary of a per-file table.
 
     Parameters
     ----------
     per_file
-        Table with at least ``material``, ``E_pa``, ``strain_lo``, ``strain_hi``.
+        Table with at least ``material``, ``E_pa``, ``strain_lo``, ``strain_hi``; ``E_plain_pa``
+        and ``E_window_spread_pa`` when present (else the summary's columns are NaN).
     strain_window
         [-] The fit window used, written to ``window_lo`` / ``window_hi``.
+    toe_compensation, skip_toe
+        The options used (for the ``rule`` column).
 
     Returns
     -------
     pandas.DataFrame
         :data:`SUMMARY_COLUMNS`: ``n``; ``E_mean_pa``, ``E_sd_pa`` (sd over the tests, ddof = 1,
         empty when n = 1) and ``E_sem_pa`` (sd / sqrt(n)) [Pa]; ``strain_lo`` / ``strain_hi``
-        the lowest and highest measured strain fitted in any test [-]; the window [-].  Groups
-        are in order of first appearance.
+        the lowest and highest measured strain fitted in any test [-]; the window [-];
+        ``E_plain_mean_pa`` / ``E_plain_sd_pa`` the same for the plain fits (the dataset
+        authors' convention, module docstring); ``E_window_spread_pa`` the mean over the tests
+        of each test's window spread [Pa]; ``rule`` (:func:`describe_rule`).  Groups are in
+        order of first appearance.
     """
     lo, hi = _check_window(strain_window)
+    per_file = per_file.copy()
+    for col in _EXTRA_COLUMNS:
+        if col not in per_file:
+            per_file[col] = np.nan
     g = per_file.groupby("material", sort=False)
     n = g["E_pa"].size()
     sd = g["E_pa"].std(ddof=1)
@@ -515,8 +520,37 @@ def summarise(per_file: pd.DataFrame,
         "strain_hi": g["strain_hi"].max().to_numpy(),
         "window_lo": lo,
         "window_hi": hi,
+        "E_plain_mean_pa": g["E_plain_pa"].mean().to_numpy(),
+        "E_plain_sd_pa": g["E_plain_pa"].std(ddof=1).to_numpy(),
+        "E_window_spread_pa": g["E_window_spread_pa"].mean().to_numpy(),
+        "rule": describe_rule((lo, hi), toe_compensation, skip_toe),
     })
     return out[SUMMARY_COLUMNS]
+
+
+def _variants(test: CompressionTest, fit: GroundTruthFit, window: tuple[float, float],
+              toe_compensation: bool, skip_toe: bool) -> dict:
+    """The plain fit and the window spread of one test (NaN where a fit is impossible)."""
+    out = dict.fromkeys(_EXTRA_COLUMNS, math.nan)
+    if toe_compensation:
+        try:
+            plain = fit_modulus(test, window, toe_compensation=False)
+            out["E_plain_pa"], out["E_plain_sd_pa"] = plain.E_pa, plain.E_sd_pa
+        except DataFileError:
+            pass
+    else:
+        out["E_plain_pa"], out["E_plain_sd_pa"] = fit.E_pa, fit.E_sd_pa
+    values = []
+    for w in sensitivity_windows(window):
+        if w == window:
+            values.append(fit.E_pa)
+            continue
+        try:
+            values.append(fit_modulus(test, w, toe_compensation, skip_toe=skip_toe).E_pa)
+        except DataFileError:
+            return out  # a window the test cannot fill: no spread
+    out["E_window_spread_pa"] = float(max(values) - min(values))
+    return out
 
 
 def analyse(
@@ -552,7 +586,12 @@ def analyse(
     Returns
     -------
     per_file : pandas.DataFrame
-        One row per test, :data:`PER_FILE_COLUMNS` (E in [Pa], strains [-]).
+        One row per test, :data:`PER_FILE_COLUMNS` (E in [Pa], strains [-]): the fit of
+        :func:`fit_modulus` plus ``E_plain_pa`` / ``E_plain_sd_pa``, the same window of
+        *measured* strain (the dataset authors' convention; equal to ``E_pa`` when
+        ``toe_compensation`` is False), and ``E_window_spread_pa``, max - min of E over
+        :func:`sensitivity_windows` with the same options (NaN when the test does not reach
+        one of them, or the plain fit is impossible).
     summary : pandas.DataFrame
         One row per material, :data:`SUMMARY_COLUMNS` (see :func:`summarise`).
     """
@@ -566,7 +605,10 @@ def analyse(
             test = replace(test, specimen=spec if spec is not None else test.specimen,
                            material=mat if mat is not None else test.material)
         fit = fit_modulus(test, window, toe_compensation, skip_toe=skip_toe)
-        rows.append(fit.as_row())
+        rows.append({**fit.as_row(),
+                     **_variants(test, fit, window, toe_compensation, skip_toe)})
     per_file = pd.DataFrame(rows, columns=PER_FILE_COLUMNS)
     per_file["n_points"] = per_file["n_points"].astype(int)
-    return per_file, summarise(per_file, window)
+    per_file["hac_lags"] = per_file["hac_lags"].astype(int)
+    return per_file, summarise(per_file, window, toe_compensation=toe_compensation,
+                               skip_toe=skip_toe)

@@ -54,6 +54,16 @@ radius and compliance factors depend on the depths and force level, which the tr
 group share up to a few per cent).  E_new, the posterior predictive of a new specimen, is what
 compares with the Instron mean ± sd.
 
+Reporting E_new
+---------------
+With a handful of traces the posterior of tau keeps a long right tail (the half-normal prior
+allows tau up to ~1 and two or three traces cannot exclude it), and exp(mu + tau·z) turns that
+tail into rare, very large draws: the sd of the E_new draws (``E_new_sd_pa``) then describes
+the tail, not the spread of a typical new specimen.  Quote the central 90 % interval
+(``E_new_lo_pa`` … ``E_new_hi_pa``) and the median instead, as :mod:`palpbayes.compare_text`
+and the ``z_score`` of :mod:`palpbayes.compare` do, and state the prior of tau
+(``tau_prior_sd`` in ``pooled.csv`` and ``comparison.csv``).
+
 References
 ----------
 Lunn, D., Barrett, J., Sweeting, M. & Thompson, S. (2013). Fully Bayesian hierarchical modelling

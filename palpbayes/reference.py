@@ -17,10 +17,13 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy import stats
 
+from .bayes.result import LEVEL
 from .errors import DataFileError
 
-__all__ = ["load_groundtruth", "paper_estimates", "gt_columns", "paper_columns"]
+__all__ = ["load_groundtruth", "paper_estimates", "gt_columns", "paper_columns",
+           "new_specimen_sd"]
 
 
 def paper_estimates() -> pd.DataFrame:
@@ -83,7 +86,32 @@ def load_groundtruth(spec: str | os.PathLike | None, campaign_dir: Path | None
     return None, None
 
 
-def gt_columns(row: dict, gt: pd.DataFrame | None, material: str) -> dict:
+def new_specimen_sd(lo: float, hi: float, level: float = LEVEL) -> float:
+    """Normal-equivalent sd of a central ``level`` interval [lo, hi]: (hi - lo)/(2·z).
+
+    z = Phi^-1((1 + level)/2) (1.645 at 90 %).  NaN unless lo and hi are finite.
+    """
+    if lo is None or hi is None or not (np.isfinite(lo) and np.isfinite(hi)):
+        return np.nan
+    return float((hi - lo) / (2.0 * stats.norm.ppf(0.5 + level / 2.0)))
+
+
+def gt_columns(row: dict, gt: pd.DataFrame | None, material: str, level: float = LEVEL
+               ) -> dict:
+    """The ground-truth columns of one comparison row (definitions in :mod:`palpbayes.compare`).
+
+    ``row`` needs ``method``, ``E_pa`` and the method's central ``level`` interval for a new
+    specimen, ``E_new_lo_pa`` / ``E_new_hi_pa``.  Both methods are treated alike:
+
+    * ``gt_in_interval``: E_new_lo <= GT mean <= E_new_hi;
+    * ``z_score`` = (E - GT mean)/sqrt(sd_new² + GT sd²) with sd_new = (E_new_hi - E_new_lo)/
+      (2·1.645) (:func:`new_specimen_sd`), the normal-equivalent sd of the new-specimen
+      interval -- not the sd over traces (least squares) or the sd of the posterior-predictive
+      draws (Bayes, inflated by the heavy right tail of tau).  A missing GT sd counts as 0.
+
+    Returns {} when there is no ground truth for ``material`` (matched exactly, else ignoring
+    case); only the GT columns when E is not finite.
+    """
     if gt is None or gt.empty:
         return {}
     hit = gt[gt["material"].astype(str) == material]
@@ -98,15 +126,16 @@ def gt_columns(row: dict, gt: pd.DataFrame | None, material: str) -> dict:
     E = row.get("E_pa", np.nan)
     if not np.isfinite(E):
         return out
-    spread = row.get("E_new_sd_pa") if row["method"] == "bayes" else row.get("E_sd_pa")
-    spread = np.nan if spread is None else float(spread)
     lo, hi = row.get("E_new_lo_pa", np.nan), row.get("E_new_hi_pa", np.nan)
+    lo = np.nan if lo is None else float(lo)
+    hi = np.nan if hi is None else float(hi)
+    spread = new_specimen_sd(lo, hi, level)
     out.update({
         "rel_err_pct": 100.0 * (g_mean - E) / g_mean,
         "gt_in_interval": bool(lo <= g_mean <= hi) if np.isfinite(lo) and np.isfinite(hi)
         else np.nan,
-        "z_score": (E - g_mean) / np.sqrt(spread**2 + g_sd**2) if np.isfinite(spread)
-        else np.nan,
+        "z_score": (E - g_mean) / np.sqrt(spread**2 + g_sd**2)
+        if np.isfinite(spread) and spread**2 + g_sd**2 > 0 else np.nan,
     })
     return out
 

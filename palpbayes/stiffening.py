@@ -18,12 +18,15 @@ Model and priors
 * sigma_x ≥ 0, an extra scatter beyond the per-trace uncertainties s_i (location-to-location
   variation, unmodelled drift), is half-normal with scale 0.1·median(E).
 
-Identifiability
----------------
+Identifiability and the three outcomes
+--------------------------------------
+Three laws are fitted (same priors): the double law, the single exponential plus constant
+E = c0 + c1·e^(c2·t) and a constant E = c0 (no stiffening).  The *simplest law that passes its
+checks* is reported (``preferred``), starting from the double law.
+
 A sum of two exponentials is notoriously ill-conditioned (Lanczos' example): the double law is
 reported as *identifiable* only when all of these hold, otherwise ``identifiable`` is False and
-``message`` says which failed, and the single exponential plus constant
-E = c0 + c1·e^(c2·t) (same priors) is the preferred description:
+``message`` says which failed:
 
 1. at least six distinct rest times (five parameters);
 2. the Bayesian information criterion prefers the double law by more than 2
@@ -31,7 +34,27 @@ E = c0 + c1·e^(c2·t) (same priors) is the preferred description:
 3. both amplitudes' 90 % intervals exclude zero;
 4. the time scales are separated: the 5 % quantile of T4/T2 exceeds :data:`MIN_RATIO` (1.5);
 5. the slow time scale is resolved: its 95 % quantile is below 10·max t (else the slow term
-   is a constant over the data).
+   is a constant over the data);
+6. its sampler converged (R-hat, ESS; :mod:`palpbayes.bayes.diagnostics`).
+
+The single exponential is the fallback only when it passes the same kind of checks
+(``single_identifiable``):
+
+1. at least four distinct rest times (four parameters);
+2. BIC prefers it over the constant by more than 2 (k = 4 vs 2);
+3. the 90 % interval of its amplitude c1 excludes zero;
+4. its time scale T = −1/c2 is resolved within the observed rest times: its 90 % interval lies
+   inside [smallest positive t, largest t] (a faster decay is over before the first rest
+   time, a slower one is a straight line or a constant over the data);
+5. its sampler converged.
+
+Otherwise the outcome is **no stiffening detected**: ``preferred = "constant"``, and the
+message gives E = mean ± sd of the estimates (with the 90 % interval of the constant law's
+c0).  Before the single law was checked it was recommended whenever the double law failed:
+on constant data (100 kPa, 10 % scatter, eight rest times) an audit got c0 = 183 kPa,
+c1 = −97 kPa and a 20,500 s time scale, far beyond the data.
+
+Every sampler runs until R-hat and ESS pass (or the step cap), since convergence is a check.
 """
 
 from __future__ import annotations
@@ -43,7 +66,7 @@ import numpy as np
 import pandas as pd
 from scipy import optimize
 
-from .bayes.diagnostics import compute_diagnostics, import_arviz
+from .bayes.diagnostics import chain_passes, compute_diagnostics, import_arviz
 from .bayes.result import LEVEL
 from .bayes.sampler import SamplerSettings, run_emcee
 from .errors import InputError
@@ -75,15 +98,26 @@ def double_exponential(t, c) -> np.ndarray:
 def _basis(model: str, logT: np.ndarray, t: np.ndarray) -> np.ndarray:
     """(W, n, k) basis functions; amplitudes multiply them linearly."""
     ex = np.exp(-t[None, None, :] / np.exp(logT)[:, :, None])  # (W, nT, n)
-    if model == "single":
-        ex = np.concatenate([np.ones_like(ex[:, :1]), ex], axis=1)
+    if model in ("single", "constant"):
+        ones = np.ones((ex.shape[0], 1, t.size))
+        ex = np.concatenate([ones, ex], axis=1)
     return np.swapaxes(ex, 1, 2)
 
 
 def _split(model: str, theta: np.ndarray):
     if model == "double":
         return theta[:, [0, 2]], theta[:, [1, 3]], theta[:, 4]
+    if model == "constant":
+        return theta[:, [0]], theta[:, 1:1], theta[:, 1]
     return theta[:, [0, 1]], theta[:, [2]], theta[:, 3]
+
+
+#: Number of parameters (amplitudes, time scales, sigma_x) of each law.
+_N_PARAMS = {"double": 5, "single": 4, "constant": 2}
+_NAMES = {"double": ["c1", "logT2", "c3", "logT4", "sigma_x"],
+          "single": ["c0", "c1", "logT", "sigma_x"], "constant": ["c0", "sigma_x"]}
+_AMP_IDX = {"double": [0, 2], "single": [0, 1], "constant": [0]}
+_T_IDX = {"double": [1, 3], "single": [2], "constant": []}
 
 
 def _log_like(model, theta, t, y, s):
@@ -111,10 +145,10 @@ def _log_post(model, theta, t, y, s, bounds):
 def _profile(model, logT, log_sx, t, y, s):
     """Max over amplitudes (weighted least squares) at fixed time scales and sigma_x."""
     sx = np.exp(log_sx)
-    B = _basis(model, np.atleast_2d(logT), t)[0]
+    B = _basis(model, np.asarray(logT, dtype=float).reshape(1, -1), t)[0]
     w = 1.0 / np.sqrt(s**2 + sx**2)
     amp, *_ = np.linalg.lstsq(B * w[:, None], y * w, rcond=None)
-    theta = np.concatenate([amp, logT, [sx]]) if model == "single" else \
+    theta = np.concatenate([amp, logT, [sx]]) if model != "double" else \
         np.array([amp[0], logT[0], amp[1], logT[1], sx])
     return float(_log_like(model, theta[None, :], t, y, s)[0]), theta
 
@@ -124,7 +158,9 @@ def _mle(model, t, y, s, bounds) -> tuple[float, np.ndarray]:
     lo, hi = bounds
     grid = np.linspace(lo, hi, 25)
     sx_grid = np.log(np.array([1e-4, 0.003, 0.01, 0.03, 0.1, 0.3]))
-    if model == "single":
+    if model == "constant":
+        starts = [(np.zeros(0), q) for q in sx_grid]
+    elif model == "single":
         starts = [(np.array([g]), q) for g in grid for q in sx_grid]
     else:
         starts = [(np.array([a, b]), q) for i, a in enumerate(grid) for b in grid[i + 1:]
@@ -151,10 +187,9 @@ def _sample(model, theta0, t, y, s, bounds, settings, seed):
     nw = max(settings.n_walkers, 2 * theta0.size + 2)
     th = np.array(theta0, dtype=float)
     amp, logT, _ = _split(model, th[None, :])
-    th[np.isin(np.arange(th.size), [0, 2] if model == "double" else [0, 1])] = np.clip(
-        amp[0], -0.9 * _AMP, 0.9 * _AMP)
+    th[_AMP_IDX[model]] = np.clip(amp[0], -0.9 * _AMP, 0.9 * _AMP)
     lo, hi = bounds
-    idx_T = [1, 3] if model == "double" else [2]
+    idx_T = _T_IDX[model]
     th[idx_T] = np.clip(logT[0], lo + 0.05, hi - 0.05)
     th[-1] = max(th[-1], 1e-3)
     scale = np.full(th.size, 1e-3)
@@ -170,9 +205,10 @@ def _sample(model, theta0, t, y, s, bounds, settings, seed):
     bad = ~np.isfinite(lp(p0))
     if bad.any():  # pragma: no cover - the start is inside the support by construction
         raise InputError("stiffening fit: could not start the walkers inside the prior")
-    ch = run_emcee(lp, p0, settings, int(np.random.SeedSequence(seed).generate_state(1)[0]))
-    names = (["c1", "logT2", "c3", "logT4", "sigma_x"] if model == "double"
-             else ["c0", "c1", "logT", "sigma_x"])
+    # run until R-hat and ESS pass (or the step cap): convergence is one of the checks
+    ch = run_emcee(lp, p0, settings, int(np.random.SeedSequence(seed).generate_state(1)[0]),
+                   accept=chain_passes)
+    names = _NAMES[model]
     post = {n: ch.samples[..., i] for i, n in enumerate(names)}
     with warnings.catch_warnings():  # short, heavily thinned chains: fewer draws than walkers
         warnings.filterwarnings("ignore", "More chains", UserWarning)
@@ -197,23 +233,32 @@ class StiffeningResult:
     Attributes
     ----------
     identifiable
-        True when the two exponentials are resolved (module docstring, checks 1-5).
+        True when the two exponentials are resolved (module docstring, double-law checks 1-6,
+        convergence included).
     message
-        One paragraph: what was found and, if not identifiable, why.
+        One paragraph: what was found and, for a simpler law, why the richer ones failed.
     preferred
-        ``"double"`` or ``"single"`` (the law to use for prediction).
-    double, single
+        ``"double"``, ``"single"`` or ``"constant"`` (no stiffening detected): the law to use
+        for prediction.
+    double, single, constant
         Parameter tables (``parameter, unit, median, sd, lo, hi``; 90 % intervals) of the
-        double law (c1 [Pa], c2 [1/s], c3 [Pa], c4 [1/s], sigma_x [Pa]) and of
-        E = c0 + c1·e^(c2·t) (c0, c1 [Pa], c2 [1/s], sigma_x [Pa]).
-    draws, single_draws
+        double law (c1 [Pa], c2 [1/s], c3 [Pa], c4 [1/s], sigma_x [Pa]), of
+        E = c0 + c1·e^(c2·t) (c0, c1 [Pa], c2 [1/s], sigma_x [Pa]) and of E = c0 (c0,
+        sigma_x [Pa]).
+    draws, single_draws, constant_draws
         Posterior draws in the same units (keys as the ``parameter`` column).
-    bic_double, bic_single
+    bic_double, bic_single, bic_constant
         BIC of each law (lower is better).
     converged
-        Both samplers passed R-hat/ESS.
+        The preferred law's sampler passed R-hat/ESS (``converged_laws`` has all three).
     n_points, n_distinct
         Estimates used and distinct rest times.
+    reasons, single_reasons
+        Failed checks of the double and of the single law.
+    single_identifiable
+        The single exponential passes its checks (module docstring).
+    E_mean_pa, E_sd_pa
+        [Pa] Mean and sd (ddof 1) of the estimates.
     """
 
     identifiable: bool
@@ -229,16 +274,35 @@ class StiffeningResult:
     n_points: int
     n_distinct: int
     reasons: list[str] = field(default_factory=list)
+    single_identifiable: bool = False
+    single_reasons: list[str] = field(default_factory=list)
+    constant: pd.DataFrame | None = None
+    constant_draws: dict[str, np.ndarray] = field(default_factory=dict)
+    bic_constant: float = np.nan
+    converged_laws: dict[str, bool] = field(default_factory=dict)
+    E_mean_pa: float = np.nan
+    E_sd_pa: float = np.nan
+
+    @property
+    def stiffening_detected(self) -> bool:
+        """False when the outcome is a constant modulus (no stiffening law passed its checks)."""
+        return self.preferred != "constant"
+
+    def _table_of(self, model: str) -> pd.DataFrame:
+        return {"double": self.double, "single": self.single, "constant": self.constant}[model]
 
     def row(self) -> dict:
         """One row of ``stiffening.csv``: verdict, BICs and the preferred law's medians."""
-        tab = (self.double if self.preferred == "double" else self.single).set_index(
-            "parameter")["median"]
+        tab = self._table_of(self.preferred).set_index("parameter")["median"]
         out = {"n_points": self.n_points, "n_distinct": self.n_distinct,
                "identifiable": self.identifiable, "preferred": self.preferred}
         for k in ("c0", "c1", "c2", "c3", "c4", "sigma_x"):
             out[k] = float(tab[k]) if k in tab.index else np.nan
         out.update({"bic_double": self.bic_double, "bic_single": self.bic_single,
+                    "bic_constant": self.bic_constant,
+                    "stiffening_detected": self.stiffening_detected,
+                    "single_identifiable": self.single_identifiable,
+                    "E_mean_pa": self.E_mean_pa, "E_sd_pa": self.E_sd_pa,
                     "converged": self.converged, "message": self.message})
         return out
 
@@ -250,6 +314,8 @@ class StiffeningResult:
             d = self.draws
             curves = (d["c1"][:, None] * np.exp(d["c2"][:, None] * t)
                       + d["c3"][:, None] * np.exp(d["c4"][:, None] * t))
+        elif model == "constant":
+            curves = np.repeat(self.constant_draws["c0"][:, None], t.size, axis=1)
         else:
             d = self.single_draws
             curves = d["c0"][:, None] + d["c1"][:, None] * np.exp(d["c2"][:, None] * t)
@@ -267,10 +333,62 @@ def _table(draws: dict, units: dict, level: float) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _double_reasons(draws, bic_d, bic_s, n_distinct, t_max, diag, level) -> list[str]:
+    reasons = []
+    if n_distinct < 6:
+        reasons.append(f"only {n_distinct} distinct rest times; five parameters need six or more")
+    d_bic = float(bic_s - bic_d)
+    if d_bic <= 2:
+        reasons.append(f"BIC does not prefer two exponentials over one plus a constant "
+                       f"(BIC_single - BIC_double = {d_bic:.1f} <= 2)")
+    for name in ("c1", "c3"):
+        _, _, lo, hi = _q(draws[name], level)
+        if lo <= 0 <= hi:
+            reasons.append(f"the {int(level * 100)} % interval of amplitude {name} includes 0")
+    T2, T4 = -1.0 / draws["c2"], -1.0 / draws["c4"]
+    ratio = np.quantile(T4 / T2, 0.05)
+    if ratio < MIN_RATIO:
+        reasons.append(f"the rates are not separated (5 % quantile of c2/c4 = {ratio:.2f} < "
+                       f"{MIN_RATIO}, i.e. c2 ≈ c4)")
+    slow = float(np.quantile(T4, 0.95))
+    if slow > 10 * t_max:
+        reasons.append(f"the slow term is indistinguishable from a constant over rest times up "
+                       f"to {t_max:g} s (its time scale reaches {slow:.3g} s)")
+    if not diag.converged:
+        reasons.append("its sampler did not converge (" + "; ".join(diag.problems()) + "), a "
+                       "usual symptom of a degenerate double exponential")
+    return reasons
+
+
+def _single_reasons(draws, bic_s, bic_c, n_distinct, t_min, t_max, diag, level) -> list[str]:
+    reasons = []
+    if n_distinct < 4:
+        reasons.append(f"only {n_distinct} distinct rest times; four parameters need four or "
+                       "more")
+    d_bic = float(bic_c - bic_s)
+    if d_bic <= 2:
+        reasons.append(f"BIC does not prefer one exponential over a constant "
+                       f"(BIC_constant - BIC_single = {d_bic:.1f} <= 2)")
+    _, _, lo, hi = _q(draws["c1"], level)
+    if lo <= 0 <= hi:
+        reasons.append(f"the {int(level * 100)} % interval of amplitude c1 includes 0")
+    a = (1 - level) / 2
+    T_lo, T_hi = (float(v) for v in np.quantile(-1.0 / draws["c2"], [a, 1 - a]))
+    if T_lo < t_min or T_hi > t_max:
+        reasons.append(f"its time scale is not resolved within the rest times {t_min:g}-{t_max:g}"
+                       f" s (its {int(level * 100)} % interval is {T_lo:.3g}-{T_hi:.3g} s)")
+    if not diag.converged:
+        reasons.append("its sampler did not converge (" + "; ".join(diag.problems()) + ")")
+    return reasons
+
+
 def fit_stiffening(rest_time, E, E_sd=None, *, seed: int | None = 0,
                    settings: SamplerSettings | None = None, level: float = LEVEL
                    ) -> StiffeningResult:
-    """Fit E(t) = c1·e^(c2·t) + c3·e^(c4·t) and the single exponential + constant.
+    """Fit E(t) = c1·e^(c2·t) + c3·e^(c4·t), the single exponential + constant and a constant.
+
+    The preferred law is the double law if it is identifiable, else the single law if it
+    passes its checks, else the constant ("no stiffening detected"); module docstring.
 
     Parameters
     ----------
@@ -281,7 +399,7 @@ def fit_stiffening(rest_time, E, E_sd=None, *, seed: int | None = 0,
     E_sd
         [Pa] Its standard uncertainty (None: zero, the extra scatter absorbs the noise).
     seed
-        Seed of both samplers.
+        Seed of the samplers.
     settings
         emcee settings (default :data:`STIFFENING_SETTINGS`).
     level
@@ -307,68 +425,72 @@ def fit_stiffening(rest_time, E, E_sd=None, *, seed: int | None = 0,
     if not scale > 0:
         raise InputError("the modulus estimates are all zero")
     ys, ss = y / scale, s / scale
-    t_max = float(t.max())
-    bounds = (float(np.log(pos.min() / 5.0)), float(np.log(100.0 * t_max)))
+    t_min, t_max = float(pos.min()), float(t.max())
+    bounds = (float(np.log(t_min / 5.0)), float(np.log(100.0 * t_max)))
     n, n_distinct = t.size, int(np.unique(t).size)
-    ss_seed = np.random.SeedSequence(seed).spawn(2)
+    # seeds: the first two children as before (double, single), a third for the constant
+    ss_seed = np.random.SeedSequence(seed).spawn(3)
     seeds = [int(x.generate_state(1)[0]) for x in ss_seed]
 
-    ll_d, th_d = _mle("double", t, ys, ss, bounds)
-    ll_s, th_s = _mle("single", t, ys, ss, bounds)
-    bic_d = 5 * np.log(n) - 2 * ll_d
-    bic_s = 4 * np.log(n) - 2 * ll_s
-    raw_d, diag_d = _sample("double", th_d, t, ys, ss, bounds, settings, seeds[0])
-    raw_s, diag_s = _sample("single", th_s, t, ys, ss, bounds, settings, seeds[1])
+    fits = {}
+    for model, seed_k in zip(("double", "single", "constant"), seeds, strict=True):
+        ll, theta = _mle(model, t, ys, ss, bounds)
+        raw, diag = _sample(model, theta, t, ys, ss, bounds, settings, seed_k)
+        fits[model] = (_N_PARAMS[model] * np.log(n) - 2 * ll, raw, diag)
+    bic_d, raw_d, diag_d = fits["double"]
+    bic_s, raw_s, diag_s = fits["single"]
+    bic_c, raw_c, diag_c = fits["constant"]
 
-    T2, T4 = np.exp(raw_d["logT2"]), np.exp(raw_d["logT4"])
-    draws = {"c1": raw_d["c1"] * scale, "c2": -1.0 / T2, "c3": raw_d["c3"] * scale,
-             "c4": -1.0 / T4, "sigma_x": raw_d["sigma_x"] * scale}
+    draws = {"c1": raw_d["c1"] * scale, "c2": -1.0 / np.exp(raw_d["logT2"]),
+             "c3": raw_d["c3"] * scale, "c4": -1.0 / np.exp(raw_d["logT4"]),
+             "sigma_x": raw_d["sigma_x"] * scale}
     single = {"c0": raw_s["c0"] * scale, "c1": raw_s["c1"] * scale,
               "c2": -1.0 / np.exp(raw_s["logT"]), "sigma_x": raw_s["sigma_x"] * scale}
+    constant = {"c0": raw_c["c0"] * scale, "sigma_x": raw_c["sigma_x"] * scale}
     units = {"c0": "Pa", "c1": "Pa", "c2": "1/s", "c3": "Pa", "c4": "1/s", "sigma_x": "Pa"}
 
-    reasons = []
-    if n_distinct < 6:
-        reasons.append(f"only {n_distinct} distinct rest times; five parameters need six or more")
-    d_bic = float(bic_s - bic_d)
-    if d_bic <= 2:
-        reasons.append(f"BIC does not prefer two exponentials over one plus a constant "
-                       f"(BIC_single - BIC_double = {d_bic:.1f} <= 2)")
-    for name in ("c1", "c3"):
-        _, _, lo, hi = _q(draws[name], level)
-        if lo <= 0 <= hi:
-            reasons.append(f"the {int(level * 100)} % interval of amplitude {name} includes 0")
-    ratio = np.quantile(T4 / T2, 0.05)
-    if ratio < MIN_RATIO:
-        reasons.append(f"the rates are not separated (5 % quantile of c2/c4 = {ratio:.2f} < "
-                       f"{MIN_RATIO}, i.e. c2 ≈ c4)")
-    slow = float(np.quantile(T4, 0.95))
-    if slow > 10 * t_max:
-        reasons.append(f"the slow term is indistinguishable from a constant over rest times up "
-                       f"to {t_max:g} s (its time scale reaches {slow:.3g} s)")
+    reasons = _double_reasons(draws, bic_d, bic_s, n_distinct, t_max, diag_d, level)
+    single_reasons = _single_reasons(single, bic_s, bic_c, n_distinct, t_min, t_max, diag_s,
+                                     level)
     identifiable = not reasons
-    converged = bool(diag_d.converged and diag_s.converged)
+    single_ok = not single_reasons
+    preferred = "double" if identifiable else ("single" if single_ok else "constant")
+    pct = f"{int(level * 100)} %"
+    mean, sd = float(y.mean()), float(y.std(ddof=1))
     if identifiable:
         med = {k: float(np.median(v)) for k, v in draws.items()}
         message = (f"two exponentials resolved from {n} estimates: time scales "
                    f"{-1 / med['c2']:.3g} s and {-1 / med['c4']:.3g} s, amplitudes "
-                   f"{med['c1']:.4g} and {med['c3']:.4g} Pa (BIC favours them by {d_bic:.1f})")
+                   f"{med['c1']:.4g} and {med['c3']:.4g} Pa (BIC favours them by "
+                   f"{float(bic_s - bic_d):.1f})")
     else:
-        sm = {k: float(np.median(v)) for k, v in single.items()}
         message = ("E(t) = c1·e^(c2·t) + c3·e^(c4·t) is not identifiable from these data: "
-                   + "; ".join(reasons) + ". Use the single exponential E = c0 + c1·e^(c2·t): "
-                   f"c0 = {sm['c0']:.4g} Pa, c1 = {sm['c1']:.4g} Pa, time scale "
-                   f"{-1 / sm['c2']:.3g} s.")
-    if not converged:
-        problems = diag_d.problems() + diag_s.problems()
-        message += (" Sampler diagnostics failed (" + "; ".join(problems) + "), a usual "
-                    "symptom of a degenerate double exponential.")
+                   + "; ".join(reasons) + ".")
+        if single_ok:
+            q = {k: _q(v, level) for k, v in single.items()}
+            T = -1.0 / single["c2"]
+            T_lo, T_hi = np.quantile(T, [(1 - level) / 2, (1 + level) / 2])
+            message += (f" Use the single exponential E = c0 + c1·e^(c2·t): c0 = "
+                        f"{q['c0'][0]:.4g} Pa, c1 = {q['c1'][0]:.4g} Pa ({pct} interval "
+                        f"{q['c1'][2]:.4g} to {q['c1'][3]:.4g}), time scale "
+                        f"{float(np.median(T)):.3g} s ({pct} interval {T_lo:.3g}-{T_hi:.3g} s); "
+                        f"BIC favours it over a constant by {float(bic_c - bic_s):.1f}.")
+        else:
+            _, _, c_lo, c_hi = _q(constant["c0"], level)
+            message += (" A single exponential E = c0 + c1·e^(c2·t) is not supported either: "
+                        + "; ".join(single_reasons) + f". No stiffening detected: E = "
+                        f"{mean / 1e3:.4g} ± {sd / 1e3:.3g} kPa (mean ± sd of {n} estimates; "
+                        f"{pct} interval of the constant {c_lo / 1e3:.4g}-{c_hi / 1e3:.4g} kPa).")
+    converged_laws = {"double": bool(diag_d.converged), "single": bool(diag_s.converged),
+                      "constant": bool(diag_c.converged)}
     return StiffeningResult(
-        identifiable=identifiable, message=message,
-        preferred="double" if identifiable else "single",
+        identifiable=identifiable, message=message, preferred=preferred,
         double=_table(draws, units, level), single=_table(single, units, level),
         draws=draws, single_draws=single, bic_double=float(bic_d), bic_single=float(bic_s),
-        converged=converged, n_points=n, n_distinct=n_distinct, reasons=reasons,
+        converged=converged_laws[preferred], n_points=n, n_distinct=n_distinct,
+        reasons=reasons, single_identifiable=single_ok, single_reasons=single_reasons,
+        constant=_table(constant, units, level), constant_draws=constant,
+        bic_constant=float(bic_c), converged_laws=converged_laws, E_mean_pa=mean, E_sd_pa=sd,
     )
 
 

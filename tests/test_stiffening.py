@@ -33,6 +33,7 @@ def test_two_separated_exponentials_are_identified():
     E, sd = _data(c)
     r = fit_stiffening(REST, E, sd, seed=1, settings=SHORT)
     assert r.identifiable and r.preferred == "double", r.message
+    assert r.converged and r.converged_laws["double"] and r.stiffening_detected
     assert "resolved" in r.message
     for name, value in zip(("c1", "c2", "c3", "c4"), c, strict=True):
         assert _covers(r.double, name, value), (name, r.double)
@@ -48,12 +49,46 @@ def test_constant_plus_exponential_is_reported_not_identifiable():
     E, sd = _data(c, seed=2)
     r = fit_stiffening(REST, E, sd, seed=2, settings=SHORT)
     assert not r.identifiable and r.preferred == "single"
+    assert r.single_identifiable and not r.single_reasons and r.stiffening_detected
+    assert r.converged and r.converged_laws["single"]
     assert "not identifiable" in r.message and "constant" in r.message
+    assert "Use the single exponential" in r.message and "No stiffening" not in r.message
+    assert r.bic_constant > r.bic_single + 2
     assert _covers(r.single, "c0", E0)
     assert _covers(r.single, "c1", 0.25 * E0)
     assert _covers(r.single, "c2", -1 / 30)
     assert r.predict(60.0)["median_pa"].iloc[0] == pytest.approx(
         double_exponential(60.0, c), rel=0.01)
+    row = r.row()
+    assert row["preferred"] == "single" and row["stiffening_detected"]
+    assert row["c0"] == pytest.approx(E0, rel=0.02) and np.isnan(row["c3"])
+
+
+def test_constant_data_give_no_stiffening():
+    """100 kPa with 10 % scatter at eight rest times: neither law passes its checks.
+
+    Before the single law was checked it was recommended anyway (with seed 0 here:
+    c0 = 418 kPa, c1 = -316 kPa, time scale 23,200 s)."""
+    rest = np.array([5.0, 10.0, 20.0, 40.0, 80.0, 160.0, 320.0, 640.0])
+    rng = np.random.default_rng(0)
+    E = 100e3 * (1 + 0.1 * rng.standard_normal(rest.size))
+    r = fit_stiffening(rest, E, np.full(rest.size, 1e3), seed=0, settings=SHORT)
+    assert r.preferred == "constant" and not r.stiffening_detected, r.message
+    assert not r.identifiable and not r.single_identifiable
+    assert any("BIC does not prefer one exponential over a constant" in x
+               for x in r.single_reasons), r.single_reasons
+    assert any("time scale is not resolved" in x for x in r.single_reasons), r.single_reasons
+    assert "Use the single exponential" not in r.message
+    assert f"No stiffening detected: E = {E.mean() / 1e3:.4g} ± {E.std(ddof=1) / 1e3:.3g} kPa" \
+        in r.message
+    assert r.E_mean_pa == pytest.approx(E.mean()) and r.E_sd_pa == pytest.approx(E.std(ddof=1))
+    assert _covers(r.constant, "c0", E.mean()) and _covers(r.constant, "c0", 100e3)
+    pred = r.predict([0.0, 100.0, 600.0])
+    assert np.ptp(pred["median_pa"]) == 0.0  # a flat law
+    row = r.row()
+    assert row["preferred"] == "constant" and not row["stiffening_detected"]
+    assert row["c0"] == pytest.approx(E.mean(), rel=0.03) and np.isnan(row["c1"])
+    assert row["bic_constant"] - row["bic_single"] <= 2  # BIC: no evidence for a decay
 
 
 def test_equal_rates_are_detected():
@@ -93,6 +128,7 @@ def test_series_from_the_simulator_fitted_by_least_squares():
     r = fit_stiffening_summary(summary, method="lsq", material="White", seed=4, settings=SHORT)
     assert r.n_points == len(rest)
     assert not r.identifiable  # c2 = 0: a constant plus one exponential
+    assert r.preferred == "single" and r.single_identifiable, r.single_reasons
     single = r.single.set_index("parameter")["median"]
     assert single["c0"] == pytest.approx(E0, rel=0.03)
     assert single["c1"] == pytest.approx(0.25 * E0, rel=0.15)
