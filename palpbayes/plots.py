@@ -29,7 +29,7 @@ Functions
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -38,6 +38,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+
+from .results import MATERIAL_ORDER, TIP_ORDER, ordered
 
 __all__ = [
     "METHOD_COLORS",
@@ -720,16 +722,6 @@ def plot_budget(table: pd.DataFrame, *, ax: Axes | None = None,
 # ----------------------------------------------------------------------------- comparison
 
 
-def _ordered(values: Iterable[str], preferred: Sequence[str]) -> list[str]:
-    vals = list(dict.fromkeys(str(v) for v in values))
-    first = [p for p in preferred if p in vals]
-    return first + [v for v in vals if v not in first]
-
-
-_TIP_ORDER = ("flat", "sphere", "paraboloid", "cone", "power")
-_MATERIAL_ORDER = ("White", "Pink", "Grey")
-
-
 def plot_comparison(
     comparison: pd.DataFrame,
     *,
@@ -765,8 +757,8 @@ def plot_comparison(
     """
     fig, ax = _fig_ax(ax, (10.0, 4.5))
     df = comparison.copy()
-    materials = _ordered(df["material"], _MATERIAL_ORDER)
-    tips = _ordered(df["tip"], _TIP_ORDER)
+    materials = ordered(df["material"], MATERIAL_ORDER)
+    tips = ordered(df["tip"], TIP_ORDER)
     slots = list(methods) + (["paper"] if show_paper and "paper_E_pa" in df else [])
     width = 0.8 / max(len(slots), 1)
     xticks, xlabels, handles = [], [], {}

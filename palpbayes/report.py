@@ -1,10 +1,9 @@
 """The PDF report of a results folder: what a researcher attaches to a lab notebook.
 
-:func:`build_report` reads a results folder written by :func:`palpbayes.campaign.fit_campaign`
-and the compare step (``summary.csv``, ``posterior/*.nc``, ``settings.json``, ``traces.csv`` and,
-when present, ``comparison.csv``, ``pooled.csv``, ``budget.csv``, ``stiffening.csv``,
-``groundtruth.csv`` / ``groundtruth_summary.csv``) and writes a multi-page PDF (A4 landscape,
-written atomically):
+:func:`build_report` reads a results folder (:mod:`palpbayes.results`: ``summary.csv``,
+``posterior/*.nc``, ``settings.json``, ``traces.csv`` and, when present, ``comparison.csv``,
+``pooled.csv``, ``budget.csv``, ``stiffening.csv``, ``groundtruth.csv`` /
+``groundtruth_summary.csv``) and writes a multi-page PDF (A4 landscape, written atomically):
 
 1. title page: campaign, date, palpbayes version, settings;
 2. summary table in the layout of the paper's Table III: ground truth, least squares and Bayes
@@ -22,8 +21,10 @@ written atomically):
    ``stiffening.csv`` when present;
 8. methods: models, priors, noise model, least squares, pooling, ground-truth window.
 
-:func:`run_pipeline` fits a campaign folder first (both methods, ground truth when the campaign
-has ``groundtruth/``, comparison), as ``palpbayes report CAMPAIGN`` does.
+This module only draws: reading a results folder is :mod:`palpbayes.results`, fitting a campaign
+first (``palpbayes report CAMPAIGN``) is :func:`palpbayes.pipeline.run_pipeline`.  Both modules'
+public names used by notebooks (``load_results``, ``load_fit``, ``ResultsFolder``,
+``run_pipeline``, ``example_campaign_dir``) are re-exported here for compatibility.
 
 Matplotlib is used through its object API only (figures are rendered by the PDF backend;
 :mod:`matplotlib.pyplot` is never imported), so the report works under any backend.
@@ -32,14 +33,13 @@ Matplotlib is used through its object API only (figures are rendered by the PDF 
 from __future__ import annotations
 
 import datetime as _dt
-import json
 import math
 import os
 import textwrap
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -47,22 +47,29 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from . import __version__, plots
-from .errors import DataFileError, InputError
-
-if TYPE_CHECKING:
-    from .bayes.result import BayesResult
-    from .fitjob import FitOptions
+from .errors import InputError
+from .pipeline import example_campaign_dir, run_pipeline
+from .results import (
+    MATERIAL_ORDER,
+    TIP_ORDER,
+    ResultsFolder,
+    load_fit,
+    load_results,
+    ordered,
+)
 
 __all__ = [
     "PAGE_SIZE",
     "REPORT_NAME",
     "RASTER_DPI",
-    "ResultsFolder",
+    "STIFFENING_MIN_REST_TIMES",
     "ReportInfo",
-    "load_results",
-    "load_fit",
     "summary_table",
     "build_report",
+    # re-exported from palpbayes.results and palpbayes.pipeline (notebooks import them here)
+    "ResultsFolder",
+    "load_results",
+    "load_fit",
     "example_campaign_dir",
     "run_pipeline",
 ]
@@ -80,195 +87,6 @@ _MONO = "DejaVu Sans Mono"
 #: A material × tip group gets a stiffening page when it has this many distinct rest times.
 STIFFENING_MIN_REST_TIMES = 3
 
-
-# ----------------------------------------------------------------------------- reading
-
-
-_STR_COLUMNS = ("trace_id", "material", "tip", "method", "flags", "specimen", "file", "input",
-                "distribution", "representative_trace")
-
-
-def _read_csv(path: Path) -> pd.DataFrame | None:
-    """A table with its label columns as strings (missing labels as ''), or None."""
-    if not path.is_file():
-        return None
-    try:
-        head = pd.read_csv(path, nrows=0).columns
-        df = pd.read_csv(path, dtype={c: str for c in _STR_COLUMNS if c in head})
-        for c in ("material", "flags", "specimen"):
-            if c in df.columns:
-                df[c] = df[c].fillna("")
-        return df
-    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as exc:
-        raise DataFileError(path, f"cannot be read as CSV ({exc})",
-                            "rerun the step that writes it") from None
-
-
-@dataclass
-class ResultsFolder:
-    """The tables of a results folder (None for a file that is not there).
-
-    Attributes
-    ----------
-    path
-        The folder.
-    summary
-        ``summary.csv``: one row per trace × method (:data:`palpbayes.fitjob.SUMMARY_COLUMNS`).
-    settings
-        ``settings.json`` as a dict ({} if absent).
-    traces
-        ``traces.csv``: geometry and file of every trace.
-    comparison, pooled, budget, stiffening
-        The compare step's tables.
-    groundtruth, groundtruth_summary
-        Per-test and per-material ground truth.
-    """
-
-    path: Path
-    summary: pd.DataFrame
-    settings: dict = field(default_factory=dict)
-    traces: pd.DataFrame | None = None
-    comparison: pd.DataFrame | None = None
-    pooled: pd.DataFrame | None = None
-    budget: pd.DataFrame | None = None
-    stiffening: pd.DataFrame | None = None
-    groundtruth: pd.DataFrame | None = None
-    groundtruth_summary: pd.DataFrame | None = None
-
-    @property
-    def options(self) -> dict:
-        """The fit options (``settings.json`` ``options_fields``)."""
-        return dict(self.settings.get("options_fields") or {})
-
-    @property
-    def name(self) -> str:
-        """Campaign name: the campaign folder's name, else the results folder's."""
-        camp = self.settings.get("campaign_dir")
-        return Path(camp).name if camp else self.path.resolve().name
-
-    def groups(self) -> list[tuple[str, str]]:
-        """(material, tip) pairs in a stable order (paper order first)."""
-        df = self.summary
-        mats = plots._ordered(df["material"].fillna("").astype(str), plots._MATERIAL_ORDER)
-        tips = plots._ordered(df["tip"].astype(str), plots._TIP_ORDER)
-        have = set(zip(df["material"].fillna("").astype(str), df["tip"].astype(str),
-                       strict=True))
-        return [(m, t) for m in mats for t in tips if (m, t) in have]
-
-    def bayes_rows(self) -> pd.DataFrame:
-        return self.summary[self.summary["method"] == "bayes"]
-
-
-def load_results(path: str | os.PathLike) -> ResultsFolder:
-    """Read the tables of a results folder.
-
-    Raises
-    ------
-    InputError
-        ``path`` has no ``summary.csv``.
-    """
-    p = Path(path)
-    summary = _read_csv(p / "summary.csv")
-    if summary is None:
-        raise InputError(f"{p}: no summary.csv; run 'palpbayes fit' first, or give a campaign "
-                         "folder or manifest to fit it")
-    if summary.empty:
-        raise DataFileError(p / "summary.csv", "has no rows")
-    settings: dict = {}
-    if (p / "settings.json").is_file():
-        try:
-            settings = json.loads((p / "settings.json").read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise DataFileError(p / "settings.json", f"not valid JSON ({exc})") from None
-    return ResultsFolder(
-        path=p, summary=summary, settings=settings,
-        traces=_read_csv(p / "traces.csv"), comparison=_read_csv(p / "comparison.csv"),
-        pooled=_read_csv(p / "pooled.csv"), budget=_read_csv(p / "budget.csv"),
-        stiffening=_read_csv(p / "stiffening.csv"),
-        groundtruth=_read_csv(p / "groundtruth.csv"),
-        groundtruth_summary=_read_csv(p / "groundtruth_summary.csv"),
-    )
-
-
-def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> BayesResult:
-    """Rebuild the Bayesian result of one trace from its netCDF posterior (for plots).
-
-    The fitted points come from re-reading the trace file (``traces.csv``) with the options of
-    ``settings.json``, so the plots also show the loading samples outside the fit window; if the
-    file is gone or its points differ from the stored ones, the stored fitted points
-    (``constant_data.z``, ``observed_data.force``) are used alone.  The least-squares fit is
-    recomputed on the same points (deterministic, milliseconds).  ``budget`` is None: the
-    per-trace budget table is not stored (``budget.csv`` holds the group budgets).
-
-    Returns
-    -------
-    palpbayes.bayes.BayesResult
-    """
-    from .bayes.diagnostics import compute_diagnostics
-    from .bayes.result import BayesResult
-    from .compare import read_posterior
-    from .fitdata import FitData, ModelSpec, prepare
-    from .io.manifest import load_trace, tip_from_row
-    from .lsq import fit_lsq_data
-    from .pooling import posterior_attrs
-    from .trace import IndentationTrace
-
-    res = results if isinstance(results, ResultsFolder) else load_results(results)
-    path = res.path / "posterior" / f"{trace_id}.nc"
-    if not path.is_file():
-        raise InputError(f"{path}: no posterior for trace {trace_id!r}")
-    idata = read_posterior(path)
-    attrs = posterior_attrs(idata)
-    opts = res.options
-    z_fit = np.asarray(idata.constant_data["z"], dtype=float).ravel()
-    f_fit = np.asarray(idata.observed_data["force"], dtype=float).ravel()
-    nu = float(attrs.get("nu", opts.get("nu", 0.3)))
-    row = None
-    if res.traces is not None:
-        sel = res.traces[res.traces["trace_id"].astype(str) == trace_id]
-        row = sel.iloc[0] if len(sel) else None
-    if row is None:
-        raise InputError(f"{res.path}: traces.csv has no row for {trace_id!r}; cannot rebuild "
-                         "the contact model")
-    thickness = None
-    if opts.get("thickness_correction"):
-        thickness = float(row["thickness_m"])
-    model = ModelSpec(tip_from_row(row), nu=nu, thickness=thickness,
-                      bonded=bool(opts.get("bonded", True)))
-    data = None
-    f_unc = float(attrs.get("f_unc_n", opts.get("f_unc", 0.048)))
-    fraction = attrs.get("fit_fraction", opts.get("fit_fraction"))
-    file = str(row.get("file", "") or "")
-    if file and Path(file).is_file():
-        try:
-            trace = load_trace(row)
-            cand = prepare(trace, model, f_unc=f_unc,
-                           fit_fraction=None if fraction is None else float(fraction),
-                           max_depth=opts.get("max_depth"))
-            if cand.z.shape == z_fit.shape and np.allclose(cand.z, z_fit, rtol=0, atol=1e-12) \
-                    and np.allclose(cand.force, f_fit, rtol=0, atol=1e-12):
-                data = cand
-        except InputError:
-            data = None
-    if data is None:
-        zc, zt = (float(v) for v in np.asarray(attrs["z_admissible_m"]).ravel()[:2])
-        loading = IndentationTrace(np.arange(z_fit.size, dtype=float), z_fit, f_fit,
-                                   trace_id=trace_id)
-        data = FitData(z=z_fit, force=f_fit, z_contact=zc, z_top=zt, z_min=float(z_fit.min()),
-                       f_unc=f_unc, fit_fraction=float(fraction or 0.0), loading=loading,
-                       model=model)
-    names = [n for n in ("E_star", "z_surf", "sigma", "F0", "phi", "nu_t")
-             if n in idata.posterior]
-    srow = res.summary[(res.summary["trace_id"].astype(str) == trace_id)
-                       & (res.summary["method"] == "bayes")]
-    acc = float(srow["acceptance"].iloc[0]) if len(srow) else float("nan")
-    steps = int(srow["n_steps"].iloc[0]) if len(srow) and pd.notna(srow["n_steps"].iloc[0]) \
-        else int(attrs.get("n_steps", 0))
-    diag = compute_diagnostics(idata, names, np.full(len(names), np.nan), acc, steps, False)
-    lsq = fit_lsq_data(data, trace_id=trace_id)
-    return BayesResult(idata=idata, diagnostics=diag, budget=None, data=data,
-                       noise=str(attrs.get("noise_model", "gaussian")), trace_id=trace_id,
-                       lsq=lsq, warnings=[])
 
 
 # ----------------------------------------------------------------------------- tables
@@ -357,8 +175,8 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
 
 
 def _comparison_groups(comp: pd.DataFrame) -> list[tuple[str, str]]:
-    mats = plots._ordered(comp["material"].astype(str), plots._MATERIAL_ORDER)
-    tips = plots._ordered(comp["tip"].astype(str), plots._TIP_ORDER)
+    mats = ordered(comp["material"].astype(str), MATERIAL_ORDER)
+    tips = ordered(comp["tip"].astype(str), TIP_ORDER)
     have = set(zip(comp["material"].astype(str), comp["tip"].astype(str), strict=True))
     return [(m, t) for m in mats for t in tips if (m, t) in have]
 
@@ -1102,85 +920,3 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     return ReportInfo(path=out, titles=titles, n_traces=int(res.summary["trace_id"].nunique()),
                       n_flagged=int(len(_flagged(res))) if len(b) else 0,
                       n_pooled_flagged=n_pool)
-
-
-# ----------------------------------------------------------------------------- pipeline
-
-
-def example_campaign_dir() -> Path:
-    """The shipped example campaign (``data/example-campaign`` beside the package).
-
-    Raises
-    ------
-    InputError
-        The folder is not there (e.g. a non-editable install, which ships the package only).
-    """
-    import palpbayes
-
-    p = Path(palpbayes.__file__).resolve().parents[1] / "data" / "example-campaign"
-    if not (p / "manifest.csv").is_file():
-        raise InputError(
-            f"the shipped example campaign is not at {p} (it comes with a source checkout, "
-            "not with an installed wheel); give a campaign folder, manifest or results folder, "
-            "or make one with 'palpbayes simulate DIR'")
-    return p
-
-
-def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
-                 options: FitOptions | None = None, *,
-                 workers: int | None = None, force: bool = False,
-                 progress: bool | None = None) -> Path:
-    """Fit a campaign (both methods), analyse its ground truth and compare; return out_dir.
-
-    Steps: :func:`palpbayes.campaign.fit_campaign` (``palpbayes fit``); when the campaign folder
-    has ``groundtruth/``, :func:`palpbayes.groundtruth.analyse` written to ``groundtruth.csv``
-    and ``groundtruth_summary.csv`` (``palpbayes groundtruth``); then
-    :func:`palpbayes.compare.compare_campaign` (``palpbayes compare OUT``).  A results folder
-    fitted before from the same source with the same options is reused (the campaign's
-    resume); different options need ``force``.
-
-    Parameters
-    ----------
-    manifest
-        Campaign manifest CSV.
-    out_dir
-        Results folder.
-    options
-        :class:`~palpbayes.fitjob.FitOptions` (default: both methods, package defaults).
-    workers, force, progress
-        As for :func:`~palpbayes.campaign.fit_campaign`.
-    """
-    from .campaign import fit_campaign, read_settings
-    from .fitjob import FitOptions
-
-    manifest = Path(manifest).resolve()
-    out = Path(out_dir)
-    options = options or FitOptions(method="both")
-    resume = False
-    if not force and out.is_dir() and any(out.iterdir()):
-        old = read_settings(out)
-        if not old:
-            from .errors import OutputExistsError
-
-            raise OutputExistsError(f"output folder {out} is not empty and holds no palpbayes "
-                                    "results; choose another --out or use --force")
-        if old.get("source") and Path(old["source"]).resolve() != manifest:
-            raise InputError(f"{out} holds results of another campaign ({old['source']}); "
-                             "choose another --out or use --force to replace them")
-        resume = True
-    fit_campaign(manifest, out, options, workers=workers, resume=resume, force=force,
-                 progress=progress)
-    gt_dir = manifest.parent / "groundtruth"
-    if gt_dir.is_dir():  # for the report (compare analyses the same folder at full precision)
-        from .cli.groundtruth import PER_FILE_NAME, SUMMARY_NAME
-        from .groundtruth import analyse
-        from .io.atomic import write_csv_atomic
-
-        per_file, per_group = analyse(gt_dir)
-        write_csv_atomic(per_file, out / PER_FILE_NAME, float_format="%.10g")
-        write_csv_atomic(per_group, out / SUMMARY_NAME, float_format="%.10g")
-    from .compare import compare_campaign
-
-    # exactly `palpbayes compare OUT`: the campaign's groundtruth/ is found via settings.json
-    compare_campaign(out)
-    return out

@@ -10,7 +10,7 @@ INPUT is one of
 * nothing: the shipped example campaign ``data/example-campaign`` of a source checkout.
 
 The PDF goes to ``-o FILE.pdf`` (default ``report.pdf`` in the results folder).  See
-:mod:`palpbayes.report` for the pages.
+:mod:`palpbayes.report` for the pages and :mod:`palpbayes.pipeline` for the fitting.
 """
 
 from __future__ import annotations
@@ -65,7 +65,7 @@ def resolve_input(value: str | None) -> tuple[str, Path]:
         manifest; no INPUT and no shipped example.
     """
     from ..io.manifest import is_manifest
-    from ..report import example_campaign_dir
+    from ..pipeline import example_campaign_dir
 
     if value is None:
         return "campaign", example_campaign_dir() / "manifest.csv"
@@ -87,7 +87,9 @@ def resolve_input(value: str | None) -> tuple[str, Path]:
 
 def run(args: argparse.Namespace) -> int:
     """Fit if needed, build the report, print a short summary and the PDF's path."""
-    from ..report import build_report, load_results, run_pipeline, summary_table
+    from ..pipeline import run_pipeline
+    from ..report import build_report, summary_table
+    from ..results import load_results
 
     kind, path = resolve_input(args.input)
     if args.output is not None and not str(args.output).lower().endswith(".pdf"):
