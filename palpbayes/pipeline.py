@@ -18,6 +18,7 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from . import __version__
 from .errors import InputError, OutputExistsError
 from .results import PER_FILE_NAME, SUMMARY_NAME
 
@@ -26,7 +27,7 @@ if TYPE_CHECKING:
 
     from .fitjob import FitOptions
 
-__all__ = ["example_campaign_dir", "run_pipeline", "write_groundtruth"]
+__all__ = ["example_campaign_dir", "run_pipeline", "write_groundtruth", "check_reusable"]
 
 
 def write_groundtruth(per_file: pd.DataFrame, per_group: pd.DataFrame,
@@ -64,6 +65,39 @@ def example_campaign_dir() -> Path:
     return p
 
 
+def check_reusable(out_dir: str | os.PathLike, manifest: str | os.PathLike) -> None:
+    """Refuse to reuse a non-empty ``out_dir`` that is not this campaign's, by this version.
+
+    Reuse (the campaign's resume) keeps every finished fit, so it is only safe when the folder
+    holds palpbayes results (``settings.json``) of the same campaign manifest written by the
+    same palpbayes version (``settings.json`` ``palpbayes_version``): another version may fit
+    differently.  Different fit options are refused later by
+    :func:`palpbayes.campaign.fit_campaign`.
+
+    Raises
+    ------
+    OutputExistsError
+        The folder holds no palpbayes results.
+    InputError
+        Another campaign, or another (or unrecorded) palpbayes version.
+    """
+    from .campaign import read_settings
+
+    out = Path(out_dir)
+    old = read_settings(out)
+    if not old:
+        raise OutputExistsError(f"output folder {out} is not empty and holds no palpbayes "
+                                "results; choose another --out or use --force")
+    if old.get("source") and Path(old["source"]).resolve() != Path(manifest).resolve():
+        raise InputError(f"{out} holds results of another campaign ({old['source']}); "
+                         "choose another --out or use --force to replace them")
+    version = old.get("palpbayes_version")
+    if version != __version__:
+        raise InputError(f"{out} was fitted by palpbayes {version or '(unrecorded version)'}, "
+                         f"this is {__version__}: its fits are not reused; use --force to refit "
+                         "them, or choose another --out")
+
+
 def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
                  options: FitOptions | None = None, *,
                  workers: int | None = None, force: bool = False,
@@ -74,8 +108,8 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
     has ``groundtruth/``, :func:`palpbayes.groundtruth.analyse` written to ``groundtruth.csv``
     and ``groundtruth_summary.csv`` (``palpbayes groundtruth``); then
     :func:`palpbayes.compare.compare_campaign` (``palpbayes compare OUT``).  A results folder
-    fitted before from the same source with the same options is reused (the campaign's
-    resume); different options need ``force``.
+    fitted before from the same source with the same options by the same palpbayes version is
+    reused (the campaign's resume); anything else needs ``force`` (:func:`check_reusable`).
 
     Parameters
     ----------
@@ -88,7 +122,7 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
     workers, force, progress
         As for :func:`~palpbayes.campaign.fit_campaign`.
     """
-    from .campaign import fit_campaign, read_settings
+    from .campaign import fit_campaign
     from .fitjob import FitOptions
 
     manifest = Path(manifest).resolve()
@@ -96,13 +130,7 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
     options = options or FitOptions(method="both")
     resume = False
     if not force and out.is_dir() and any(out.iterdir()):
-        old = read_settings(out)
-        if not old:
-            raise OutputExistsError(f"output folder {out} is not empty and holds no palpbayes "
-                                    "results; choose another --out or use --force")
-        if old.get("source") and Path(old["source"]).resolve() != manifest:
-            raise InputError(f"{out} holds results of another campaign ({old['source']}); "
-                             "choose another --out or use --force to replace them")
+        check_reusable(out, manifest)
         resume = True
     fit_campaign(manifest, out, options, workers=workers, resume=resume, force=force,
                  progress=progress)

@@ -6,7 +6,8 @@ INPUT is one of
 * a campaign folder (it has ``manifest.csv``) or a campaign manifest: the campaign is fitted
   with both methods, its ground truth analysed (if it has ``groundtruth/``) and compared, into
   ``--out`` (default ``palpbayes-results/`` in the current folder; a folder fitted before from
-  the same campaign with the same options is reused), then the report is built;
+  the same campaign with the same options by the same palpbayes version is reused), then the
+  report is built;
 * nothing: the shipped example campaign ``data/example-campaign`` of a source checkout.
 
 The PDF goes to ``-o FILE.pdf`` (default ``report.pdf`` in the results folder).  See
