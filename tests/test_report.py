@@ -86,6 +86,10 @@ def test_campaign_report_pipeline_writes_every_table(fitted):
     assert len(list((out / "posterior").glob("*.nc"))) == 4
     comp = pd.read_csv(out / "comparison.csv")
     assert set(comp["method"]) == {"lsq", "bayes"}
+    # sphere traces: the paper's Hertz fit beside every row, a few per cent below E
+    summ = pd.read_csv(out / "summary.csv")
+    assert summ["E_hertz_pa"].notna().all()
+    assert ((summ["E_hertz_rel_diff"] < 0) & (summ["E_hertz_rel_diff"] > -0.06)).all()
     assert comp["gt_E_pa"].notna().all()
     assert pdf.is_file()
     assert f"wrote {pdf}" in stdout
