@@ -214,6 +214,18 @@ def test_summary_table_without_comparison(fitted, tmp_path):
         assert -6.0 < delta < 0.0
 
 
+def test_compare_cli_says_what_its_bayes_cells_are(fitted, tmp_path, capsys):
+    import shutil
+
+    out, _, _ = fitted
+    copy = tmp_path / "res"
+    shutil.copytree(out, copy)
+    assert main(["compare", str(copy)]) == 0
+    text = capsys.readouterr().out
+    assert "NEW SPECIMEN" in text and "'Bayes material E ± sd'" in text
+    assert "none found" not in text  # the campaign's ground truth was found and analysed
+
+
 def test_summary_page_states_coverage_and_paper_error_basis(fitted):
     _, pdf, stdout = fitted
     pages = _pdf_pages(pdf)
