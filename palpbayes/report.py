@@ -5,21 +5,31 @@
 ``pooled.csv``, ``budget.csv``, ``stiffening.csv``, ``groundtruth.csv`` /
 ``groundtruth_summary.csv``) and writes a multi-page PDF (A4 landscape, written atomically):
 
-1. title page: campaign, date, palpbayes version, settings;
-2. summary table in the layout of the paper's Table III: ground truth, least squares and Bayes
-   E ± sd per material × tip, errors, whether each interval covers the ground truth, and the
-   paper's robot numbers;
+1. title page: campaign, date, palpbayes version, the results folder it was built from,
+   settings, contents;
+2. summary table in the layout of the paper's Table III (units in the headers): ground truth,
+   least squares and Bayes E ± sd per material × tip, errors, whether each new-specimen
+   interval covers the ground truth (with the overall count), the paper's robot numbers and,
+   for spheres, the paper's Hertz fit of the same traces;
 3. the same comparison as a figure;
 4. one page per material × tip: force-depth data of a representative trace with the
    posterior-predictive band and the least-squares curve, residuals, posterior of E and of
-   (E, z_surf), per-trace intervals with the pooled result;
+   (E, z_surf), per-trace intervals with the pooled result; sphere pages also state the
+   paper's Hertz fit (``summary.csv`` ``E_hertz_pa``) against the exact Sneddon law;
 5. convergence diagnostics (every non-converged or flagged fit, or the statement that all
    converged with the largest R-hat and smallest ESS) and the walkers of the worst fit;
 6. the uncertainty budget (table and chart);
 7. the stiffening law E(t) vs rest time (:mod:`palpbayes.stiffening`) for every material × tip
    whose palpations have at least :data:`STIFFENING_MIN_REST_TIMES` distinct rest times, and
    ``stiffening.csv`` when present;
-8. methods: models, priors, noise model, least squares, pooling, ground-truth window.
+8. methods: models, priors, noise model, least squares, the sampler's stopping rule (numbers
+   from ``settings.json``), pooling (:data:`palpbayes.pooling.POOLING_SETTINGS`, tau prior from
+   ``pooled.csv``), ground-truth window.
+
+Tables continue on further pages beyond :data:`TABLE_ROWS_PER_PAGE` rows ('… (continued, 2/3)'),
+comparison charts beyond :data:`CHART_GROUPS_PER_PAGE` material × tip groups (whole materials
+per page) and budget pages beyond :data:`BUDGET_GROUPS_PER_PAGE` groups, so a campaign of any
+size stays readable.
 
 This module only draws: reading a results folder is :mod:`palpbayes.results`, fitting a campaign
 first (``palpbayes report CAMPAIGN``) is :func:`palpbayes.pipeline.run_pipeline`.  Both modules'
@@ -64,6 +74,9 @@ __all__ = [
     "RASTER_DPI",
     "STIFFENING_MIN_REST_TIMES",
     "TABLE_ROWS_PER_PAGE",
+    "CHART_GROUPS_PER_PAGE",
+    "BUDGET_GROUPS_PER_PAGE",
+    "MOVES_TEXT",
     "ReportInfo",
     "summary_table",
     "coverage_counts",
