@@ -78,7 +78,9 @@ from palpbayes import plots
 from palpbayes.cli import build_parser
 from palpbayes.cli.fit import options_from_args
 from palpbayes.compare import format_comparison, paper_estimates
-from palpbayes.report import example_campaign_dir, load_results, run_pipeline, summary_table
+from palpbayes.pipeline import example_campaign_dir, run_pipeline
+from palpbayes.report import summary_table
+from palpbayes.results import load_results
 
 from tqdm import TqdmWarning
 
@@ -135,21 +137,42 @@ display(gt_kpa)
     md("""
 ## Table III: ground truth vs least squares vs Bayes
 
-The layout of the paper's Table III.  *LS* is the paper's constrained least squares, mean ± sd
-over the three repetitions; *Bayes* the hierarchical pooling of the per-trace posteriors with the
-uncertainty budget (median ± sd of the material's modulus).  *new 90 %* is the interval for a
-new specimen — least squares' t prediction interval, Bayes' posterior predictive — which is
-what should contain the ground truth: every compression block and every palpated location is
-one draw from the material.  `err %` = (GT − E)/GT as in the paper; *Paper* are the published
-robot numbers.  `(!)` marks a group whose pooled chain or a trace fit did not pass the
-convergence checks.
+The layout of the paper's Table III, as on the report's summary page.  *LS* is the paper's
+constrained least squares, mean ± sd over the three repetitions; *Bayes material E* the
+hierarchical pooling of the per-trace posteriors with the uncertainty budget (median ± sd of
+the **material's modulus**).  *new specimen 90 %* is the interval for a **new specimen** —
+least squares' t prediction interval, Bayes' posterior predictive — which is what should
+contain the ground truth: every compression block and every palpated location is one draw from
+the material.  `err` = (GT − E)/GT as in the paper; *Paper* are the published robot numbers,
+with the paper's error relative to the paper's own Instron ground truth.  *Hertz LS* is the
+paper's choice for the sphere (least squares with the Hertz law at the sphere's radius on the
+same traces) and its difference from the exact Sneddon law.  `(!)` marks a group whose pooled
+chain or a trace fit did not pass the convergence checks.
 """),
     code("""
 table3 = summary_table(res)
 display(table3)
 """),
+    md("""
+The two Bayesian quantities side by side: the pooled **material** modulus (what the report's
+*Bayes material E ± sd* shows) and the posterior predictive for a **new specimen** (wider: it
+adds the scatter between specimens, tau).  The text layout of `palpbayes compare` below prints
+the new-specimen prediction in its *Bayes* cells.
+"""),
     code("""
-print(format_comparison(res.comparison))
+bay = res.comparison[res.comparison["method"] == "bayes"]
+display(pd.DataFrame({
+    "material": bay["material"], "tip": bay["tip"],
+    "Bayes material E ± sd [kPa]": [f"{e / 1e3:.1f} ± {s / 1e3:.1f}"
+                                    for e, s in zip(bay["E_pa"], bay["E_sd_pa"])],
+    "Bayes new specimen E ± sd [kPa]": [f"{e / 1e3:.1f} ± {s / 1e3:.1f}"
+                                        for e, s in zip(bay["E_new_pa"], bay["E_new_sd_pa"])],
+}))
+"""),
+    code("""
+# the ground truth analysed by run_pipeline: the campaign's compression tests
+gt_source = f"{CAMPAIGN / 'groundtruth'} (analysed; {OUT / 'groundtruth_summary.csv'})"
+print(format_comparison(res.comparison, groundtruth_source=gt_source))
 """),
     md("""
 ## How often the intervals cover the ground truth

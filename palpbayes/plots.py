@@ -29,7 +29,7 @@ Functions
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -38,6 +38,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+
+from .results import MATERIAL_ORDER, TIP_ORDER, ordered
 
 __all__ = [
     "METHOD_COLORS",
@@ -236,7 +238,9 @@ def plot_force_depth(
     axes = [ax]
     if inset:
         dmax = float(zs - data.z.min())
-        ins = ax.inset_axes([0.6, 0.08, 0.38, 0.4])
+        # upper left, above the flat approach and the start of the loading curve (which rises
+        # to the upper right); the legend goes to the lower right, below the curve
+        ins = ax.inset_axes([0.07, 0.5, 0.34, 0.36])
         axes.append(ins)
     for k, a in enumerate(axes):
         ms = 1.5 if k == 0 else 2.5
@@ -269,7 +273,7 @@ def plot_force_depth(
     ax.set_xlabel("Depth below posterior-median surface, d [mm]")
     ax.set_ylabel("Force, F [N]")
     ax.set_title(_title(result), fontsize="medium")
-    ax.legend(loc="upper left", fontsize="x-small", frameon=False)
+    ax.legend(loc="lower right", fontsize="x-small", frameon=False)
     return fig
 
 
@@ -325,7 +329,13 @@ def plot_residuals(
     ax.set_xlabel("Depth below posterior-median surface, d [mm]")
     ax.set_ylabel("Residual, F − F_fit [mN]")
     ax.set_title("Residuals", fontsize="medium")
-    ax.legend(loc="lower left", fontsize="x-small", frameon=False, ncol=2)
+    # room for the legend below the points: it must not hide residuals
+    lo = min(float(np.min(rb)), -2 * sigma * _MN)
+    hi = max(float(np.max(rb)), 2 * sigma * _MN)
+    span = hi - lo if hi > lo else 1.0
+    ax.set_ylim(lo - 0.42 * span, hi + 0.05 * span)
+    ax.legend(loc="lower left", fontsize="x-small", frameon=False, ncol=2,
+              borderaxespad=0.3)
     return fig
 
 
@@ -640,7 +650,7 @@ def plot_walkers(result: Any, var_names: Sequence[str] | None = None, *,
             ax.plot(steps, w, lw=0.3, alpha=0.5, color=METHOD_COLORS["bayes"], rasterized=True)
         ax.set_ylabel(f"{label} [{unit}]", fontsize="small")
         if diag is not None and name in getattr(diag, "rhat", {}):
-            ax.set_title(f"{name}: R-hat {diag.rhat[name]:.3f}, ESS bulk "
+            ax.set_title(f"{name}: R-hat {diag.rhat[name]:.4f}, ESS bulk "
                          f"{diag.ess_bulk[name]:.0f}, tail {diag.ess_tail[name]:.0f}",
                          fontsize="small", loc="left")
     axes[-1].set_xlabel(f"Sampler step (after burn-in {burn}, thinned by {thin})")
@@ -720,16 +730,6 @@ def plot_budget(table: pd.DataFrame, *, ax: Axes | None = None,
 # ----------------------------------------------------------------------------- comparison
 
 
-def _ordered(values: Iterable[str], preferred: Sequence[str]) -> list[str]:
-    vals = list(dict.fromkeys(str(v) for v in values))
-    first = [p for p in preferred if p in vals]
-    return first + [v for v in vals if v not in first]
-
-
-_TIP_ORDER = ("flat", "sphere", "paraboloid", "cone", "power")
-_MATERIAL_ORDER = ("White", "Pink", "Grey")
-
-
 def plot_comparison(
     comparison: pd.DataFrame,
     *,
@@ -765,8 +765,8 @@ def plot_comparison(
     """
     fig, ax = _fig_ax(ax, (10.0, 4.5))
     df = comparison.copy()
-    materials = _ordered(df["material"], _MATERIAL_ORDER)
-    tips = _ordered(df["tip"], _TIP_ORDER)
+    materials = ordered(df["material"], MATERIAL_ORDER)
+    tips = ordered(df["tip"], TIP_ORDER)
     slots = list(methods) + (["paper"] if show_paper and "paper_E_pa" in df else [])
     width = 0.8 / max(len(slots), 1)
     xticks, xlabels, handles = [], [], {}

@@ -1,29 +1,40 @@
 """The PDF report of a results folder: what a researcher attaches to a lab notebook.
 
-:func:`build_report` reads a results folder written by :func:`palpbayes.campaign.fit_campaign`
-and the compare step (``summary.csv``, ``posterior/*.nc``, ``settings.json``, ``traces.csv`` and,
-when present, ``comparison.csv``, ``pooled.csv``, ``budget.csv``, ``stiffening.csv``,
-``groundtruth.csv`` / ``groundtruth_summary.csv``) and writes a multi-page PDF (A4 landscape,
-written atomically):
+:func:`build_report` reads a results folder (:mod:`palpbayes.results`: ``summary.csv``,
+``posterior/*.nc``, ``settings.json``, ``traces.csv`` and, when present, ``comparison.csv``,
+``pooled.csv``, ``budget.csv``, ``stiffening.csv``, ``groundtruth.csv`` /
+``groundtruth_summary.csv``) and writes a multi-page PDF (A4 landscape, written atomically):
 
-1. title page: campaign, date, palpbayes version, settings;
-2. summary table in the layout of the paper's Table III: ground truth, least squares and Bayes
-   E ± sd per material × tip, errors, whether each interval covers the ground truth, and the
-   paper's robot numbers;
+1. title page: campaign, date, palpbayes version, the results folder it was built from,
+   settings, contents;
+2. summary table in the layout of the paper's Table III (units in the headers): ground truth,
+   least squares and Bayes E ± sd per material × tip, errors, whether each new-specimen
+   interval covers the ground truth (with the overall count), the paper's robot numbers and,
+   for spheres, the paper's Hertz fit of the same traces;
 3. the same comparison as a figure;
 4. one page per material × tip: force-depth data of a representative trace with the
    posterior-predictive band and the least-squares curve, residuals, posterior of E and of
-   (E, z_surf), per-trace intervals with the pooled result;
+   (E, z_surf), per-trace intervals with the pooled result; sphere pages also state the
+   paper's Hertz fit (``summary.csv`` ``E_hertz_pa``) against the exact Sneddon law;
 5. convergence diagnostics (every non-converged or flagged fit, or the statement that all
    converged with the largest R-hat and smallest ESS) and the walkers of the worst fit;
 6. the uncertainty budget (table and chart);
 7. the stiffening law E(t) vs rest time (:mod:`palpbayes.stiffening`) for every material × tip
    whose palpations have at least :data:`STIFFENING_MIN_REST_TIMES` distinct rest times, and
    ``stiffening.csv`` when present;
-8. methods: models, priors, noise model, least squares, pooling, ground-truth window.
+8. methods: models, priors, noise model, least squares, the sampler's stopping rule (numbers
+   from ``settings.json``), pooling (:data:`palpbayes.pooling.POOLING_SETTINGS`, tau prior from
+   ``pooled.csv``), ground-truth window.
 
-:func:`run_pipeline` fits a campaign folder first (both methods, ground truth when the campaign
-has ``groundtruth/``, comparison), as ``palpbayes report CAMPAIGN`` does.
+Tables continue on further pages beyond :data:`TABLE_ROWS_PER_PAGE` rows ('… (continued, 2/3)'),
+comparison charts beyond :data:`CHART_GROUPS_PER_PAGE` material × tip groups (whole materials
+per page) and budget pages beyond :data:`BUDGET_GROUPS_PER_PAGE` groups, so a campaign of any
+size stays readable.
+
+This module only draws: reading a results folder is :mod:`palpbayes.results`, fitting a campaign
+first (``palpbayes report CAMPAIGN``) is :func:`palpbayes.pipeline.run_pipeline`.  Both modules'
+public names used by notebooks (``load_results``, ``load_fit``, ``ResultsFolder``,
+``run_pipeline``, ``example_campaign_dir``) are re-exported here for compatibility.
 
 Matplotlib is used through its object API only (figures are rendered by the PDF backend;
 :mod:`matplotlib.pyplot` is never imported), so the report works under any backend.
@@ -32,14 +43,13 @@ Matplotlib is used through its object API only (figures are rendered by the PDF 
 from __future__ import annotations
 
 import datetime as _dt
-import json
 import math
 import os
 import textwrap
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -47,22 +57,39 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from . import __version__, plots
-from .errors import DataFileError, InputError
-
-if TYPE_CHECKING:
-    from .bayes.result import BayesResult
-    from .fitjob import FitOptions
+from .errors import InputError
+from .pipeline import example_campaign_dir, run_pipeline
+from .results import (
+    MATERIAL_ORDER,
+    TIP_ORDER,
+    ResultsFolder,
+    load_fit,
+    load_results,
+    ordered,
+)
 
 __all__ = [
     "PAGE_SIZE",
     "REPORT_NAME",
     "RASTER_DPI",
-    "ResultsFolder",
+    "STIFFENING_MIN_REST_TIMES",
+    "TABLE_ROWS_PER_PAGE",
+    "CHART_GROUPS_PER_PAGE",
+    "BUDGET_GROUPS_PER_PAGE",
+    "MOVES_TEXT",
     "ReportInfo",
+    "summary_table",
+    "coverage_counts",
+    "GT_COL",
+    "LS_E_COL",
+    "BAYES_E_COL",
+    "BAYES_NEW_COL",
+    "HERTZ_COL",
+    "build_report",
+    # re-exported from palpbayes.results and palpbayes.pipeline (notebooks import them here)
+    "ResultsFolder",
     "load_results",
     "load_fit",
-    "summary_table",
-    "build_report",
     "example_campaign_dir",
     "run_pipeline",
 ]
@@ -79,196 +106,14 @@ _KPA = 1e-3
 _MONO = "DejaVu Sans Mono"
 #: A material × tip group gets a stiffening page when it has this many distinct rest times.
 STIFFENING_MIN_REST_TIMES = 3
+#: Rows of a table page at most (summary, diagnostics, budget, ...): longer tables continue
+#: on further pages, and the charts beside them are split the same way.
+TABLE_ROWS_PER_PAGE = 15
+#: Material × tip groups drawn at most in one comparison chart.
+CHART_GROUPS_PER_PAGE = 12
+#: Groups per uncertainty-budget page (its table and its chart share the page).
+BUDGET_GROUPS_PER_PAGE = 10
 
-
-# ----------------------------------------------------------------------------- reading
-
-
-_STR_COLUMNS = ("trace_id", "material", "tip", "method", "flags", "specimen", "file", "input",
-                "distribution", "representative_trace")
-
-
-def _read_csv(path: Path) -> pd.DataFrame | None:
-    """A table with its label columns as strings (missing labels as ''), or None."""
-    if not path.is_file():
-        return None
-    try:
-        head = pd.read_csv(path, nrows=0).columns
-        df = pd.read_csv(path, dtype={c: str for c in _STR_COLUMNS if c in head})
-        for c in ("material", "flags", "specimen"):
-            if c in df.columns:
-                df[c] = df[c].fillna("")
-        return df
-    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as exc:
-        raise DataFileError(path, f"cannot be read as CSV ({exc})",
-                            "rerun the step that writes it") from None
-
-
-@dataclass
-class ResultsFolder:
-    """The tables of a results folder (None for a file that is not there).
-
-    Attributes
-    ----------
-    path
-        The folder.
-    summary
-        ``summary.csv``: one row per trace × method (:data:`palpbayes.fitjob.SUMMARY_COLUMNS`).
-    settings
-        ``settings.json`` as a dict ({} if absent).
-    traces
-        ``traces.csv``: geometry and file of every trace.
-    comparison, pooled, budget, stiffening
-        The compare step's tables.
-    groundtruth, groundtruth_summary
-        Per-test and per-material ground truth.
-    """
-
-    path: Path
-    summary: pd.DataFrame
-    settings: dict = field(default_factory=dict)
-    traces: pd.DataFrame | None = None
-    comparison: pd.DataFrame | None = None
-    pooled: pd.DataFrame | None = None
-    budget: pd.DataFrame | None = None
-    stiffening: pd.DataFrame | None = None
-    groundtruth: pd.DataFrame | None = None
-    groundtruth_summary: pd.DataFrame | None = None
-
-    @property
-    def options(self) -> dict:
-        """The fit options (``settings.json`` ``options_fields``)."""
-        return dict(self.settings.get("options_fields") or {})
-
-    @property
-    def name(self) -> str:
-        """Campaign name: the campaign folder's name, else the results folder's."""
-        camp = self.settings.get("campaign_dir")
-        return Path(camp).name if camp else self.path.resolve().name
-
-    def groups(self) -> list[tuple[str, str]]:
-        """(material, tip) pairs in a stable order (paper order first)."""
-        df = self.summary
-        mats = plots._ordered(df["material"].fillna("").astype(str), plots._MATERIAL_ORDER)
-        tips = plots._ordered(df["tip"].astype(str), plots._TIP_ORDER)
-        have = set(zip(df["material"].fillna("").astype(str), df["tip"].astype(str),
-                       strict=True))
-        return [(m, t) for m in mats for t in tips if (m, t) in have]
-
-    def bayes_rows(self) -> pd.DataFrame:
-        return self.summary[self.summary["method"] == "bayes"]
-
-
-def load_results(path: str | os.PathLike) -> ResultsFolder:
-    """Read the tables of a results folder.
-
-    Raises
-    ------
-    InputError
-        ``path`` has no ``summary.csv``.
-    """
-    p = Path(path)
-    summary = _read_csv(p / "summary.csv")
-    if summary is None:
-        raise InputError(f"{p}: no summary.csv; run 'palpbayes fit' first, or give a campaign "
-                         "folder or manifest to fit it")
-    if summary.empty:
-        raise DataFileError(p / "summary.csv", "has no rows")
-    settings: dict = {}
-    if (p / "settings.json").is_file():
-        try:
-            settings = json.loads((p / "settings.json").read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise DataFileError(p / "settings.json", f"not valid JSON ({exc})") from None
-    return ResultsFolder(
-        path=p, summary=summary, settings=settings,
-        traces=_read_csv(p / "traces.csv"), comparison=_read_csv(p / "comparison.csv"),
-        pooled=_read_csv(p / "pooled.csv"), budget=_read_csv(p / "budget.csv"),
-        stiffening=_read_csv(p / "stiffening.csv"),
-        groundtruth=_read_csv(p / "groundtruth.csv"),
-        groundtruth_summary=_read_csv(p / "groundtruth_summary.csv"),
-    )
-
-
-def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> BayesResult:
-    """Rebuild the Bayesian result of one trace from its netCDF posterior (for plots).
-
-    The fitted points come from re-reading the trace file (``traces.csv``) with the options of
-    ``settings.json``, so the plots also show the loading samples outside the fit window; if the
-    file is gone or its points differ from the stored ones, the stored fitted points
-    (``constant_data.z``, ``observed_data.force``) are used alone.  The least-squares fit is
-    recomputed on the same points (deterministic, milliseconds).  ``budget`` is None: the
-    per-trace budget table is not stored (``budget.csv`` holds the group budgets).
-
-    Returns
-    -------
-    palpbayes.bayes.BayesResult
-    """
-    from .bayes.diagnostics import compute_diagnostics
-    from .bayes.result import BayesResult
-    from .compare import read_posterior
-    from .fitdata import FitData, ModelSpec, prepare
-    from .io.manifest import load_trace, tip_from_row
-    from .lsq import fit_lsq_data
-    from .pooling import posterior_attrs
-    from .trace import IndentationTrace
-
-    res = results if isinstance(results, ResultsFolder) else load_results(results)
-    path = res.path / "posterior" / f"{trace_id}.nc"
-    if not path.is_file():
-        raise InputError(f"{path}: no posterior for trace {trace_id!r}")
-    idata = read_posterior(path)
-    attrs = posterior_attrs(idata)
-    opts = res.options
-    z_fit = np.asarray(idata.constant_data["z"], dtype=float).ravel()
-    f_fit = np.asarray(idata.observed_data["force"], dtype=float).ravel()
-    nu = float(attrs.get("nu", opts.get("nu", 0.3)))
-    row = None
-    if res.traces is not None:
-        sel = res.traces[res.traces["trace_id"].astype(str) == trace_id]
-        row = sel.iloc[0] if len(sel) else None
-    if row is None:
-        raise InputError(f"{res.path}: traces.csv has no row for {trace_id!r}; cannot rebuild "
-                         "the contact model")
-    thickness = None
-    if opts.get("thickness_correction"):
-        thickness = float(row["thickness_m"])
-    model = ModelSpec(tip_from_row(row), nu=nu, thickness=thickness,
-                      bonded=bool(opts.get("bonded", True)))
-    data = None
-    f_unc = float(attrs.get("f_unc_n", opts.get("f_unc", 0.048)))
-    fraction = attrs.get("fit_fraction", opts.get("fit_fraction"))
-    file = str(row.get("file", "") or "")
-    if file and Path(file).is_file():
-        try:
-            trace = load_trace(row)
-            cand = prepare(trace, model, f_unc=f_unc,
-                           fit_fraction=None if fraction is None else float(fraction),
-                           max_depth=opts.get("max_depth"))
-            if cand.z.shape == z_fit.shape and np.allclose(cand.z, z_fit, rtol=0, atol=1e-12) \
-                    and np.allclose(cand.force, f_fit, rtol=0, atol=1e-12):
-                data = cand
-        except InputError:
-            data = None
-    if data is None:
-        zc, zt = (float(v) for v in np.asarray(attrs["z_admissible_m"]).ravel()[:2])
-        loading = IndentationTrace(np.arange(z_fit.size, dtype=float), z_fit, f_fit,
-                                   trace_id=trace_id)
-        data = FitData(z=z_fit, force=f_fit, z_contact=zc, z_top=zt, z_min=float(z_fit.min()),
-                       f_unc=f_unc, fit_fraction=float(fraction or 0.0), loading=loading,
-                       model=model)
-    names = [n for n in ("E_star", "z_surf", "sigma", "F0", "phi", "nu_t")
-             if n in idata.posterior]
-    srow = res.summary[(res.summary["trace_id"].astype(str) == trace_id)
-                       & (res.summary["method"] == "bayes")]
-    acc = float(srow["acceptance"].iloc[0]) if len(srow) else float("nan")
-    steps = int(srow["n_steps"].iloc[0]) if len(srow) and pd.notna(srow["n_steps"].iloc[0]) \
-        else int(attrs.get("n_steps", 0))
-    diag = compute_diagnostics(idata, names, np.full(len(names), np.nan), acc, steps, False)
-    lsq = fit_lsq_data(data, trace_id=trace_id)
-    return BayesResult(idata=idata, diagnostics=diag, budget=None, data=data,
-                       noise=str(attrs.get("noise_model", "gaussian")), trace_id=trace_id,
-                       lsq=lsq, warnings=[])
 
 
 # ----------------------------------------------------------------------------- tables
@@ -311,18 +156,55 @@ def _interval(lo: Any, hi: Any, digits: int = 0) -> str:
     return f"[{float(lo) * _KPA:.{digits}f}, {float(hi) * _KPA:.{digits}f}]"
 
 
-def summary_table(results: ResultsFolder) -> pd.DataFrame:
-    """The report's summary table (strings, kPa), one row per material × tip.
+#: Column headers of the comparison-based summary table (units in the headers).
+GT_COL = "GT E ± sd [kPa]"
+LS_E_COL = "LS E ± sd [kPa]"
+BAYES_E_COL = "Bayes material E ± sd [kPa]"
+BAYES_NEW_COL = "Bayes new specimen 90 % [kPa]"
+HERTZ_COL = "Hertz LS E [kPa] (Δ vs LS)"
 
-    From ``comparison.csv`` when present: ground truth, least squares and Bayes E ± sd, their
-    relative error and whether their interval covers the ground truth, the Bayesian
-    new-specimen interval and the paper's robot numbers.  Without it, per-group means of the
-    per-trace estimates of ``summary.csv``.
+
+def _hertz_of_group(results: ResultsFolder, mat: str, tip: str
+                    ) -> tuple[float, float, float, int] | None:
+    """The paper's Hertz fit of a sphere group from ``summary.csv``'s least-squares rows.
+
+    Returns (mean E_hertz [Pa], its sd over traces [Pa], mean (E_hertz − E)/E of the same
+    rows [-], number of traces), or None when the group has no finite ``E_hertz_pa`` (other
+    tips; results written before the column existed).
+    """
+    s = results.summary
+    if "E_hertz_pa" not in s:
+        return None
+    sub = s[(s["material"].fillna("").astype(str) == mat) & (s["tip"].astype(str) == tip)]
+    for method in ("lsq", "bayes"):
+        rows = sub[(sub["method"] == method)]
+        eh = pd.to_numeric(rows["E_hertz_pa"], errors="coerce")
+        ok = eh.notna()
+        if ok.any():
+            rel = pd.to_numeric(rows.loc[ok, "E_hertz_rel_diff"], errors="coerce")
+            sd = float(eh[ok].std(ddof=1)) if ok.sum() > 1 else float("nan")
+            return float(eh[ok].mean()), sd, float(rel.mean()), int(ok.sum())
+    return None
+
+
+def summary_table(results: ResultsFolder) -> pd.DataFrame:
+    """The report's summary table (strings; units in the column headers), one row per
+    material × tip.
+
+    From ``comparison.csv`` when present: ground truth, least squares E ± sd (mean ± sd over
+    the traces) and Bayes' pooled *material* modulus (median ± sd), each method's relative
+    error and whether its interval for a *new specimen* covers the ground truth, that interval,
+    and the paper's robot numbers with the paper's own error.  When some group is a sphere with
+    the paper's Hertz fit recorded (``summary.csv`` ``E_hertz_pa``), a column gives its
+    mean over the traces and its difference from the least-squares (Sneddon) E.  Without
+    ``comparison.csv``, per-group means of the per-trace estimates of ``summary.csv``.
     """
     comp = results.comparison
     rows = []
     if comp is not None and not comp.empty:
-        for mat, tip in _comparison_groups(comp):
+        groups = _comparison_groups(comp)
+        hertz = {g: _hertz_of_group(results, *g) for g in groups}
+        for mat, tip in groups:
             sub = comp[(comp["material"].astype(str) == mat) & (comp["tip"].astype(str) == tip)]
             by = {str(r["method"]): r for _, r in sub.iterrows()}
             any_row = sub.iloc[0]
@@ -330,18 +212,29 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
             row = {
                 "Material": mat, "Tip": tip,
                 "n": str(int(any_row["n_traces"])) if _isnum(any_row.get("n_traces")) else "–",
-                "GT E ± sd": _pm(any_row.get("gt_E_pa"), any_row.get("gt_sd_pa")),
+                GT_COL: _pm(any_row.get("gt_E_pa"), any_row.get("gt_sd_pa")),
             }
-            for label, r in (("LS", lsq), ("Bayes", bay)):
-                row[f"{label} E ± sd"] = "–" if r is None else _pm(r["E_pa"], r["E_sd_pa"])
-                row[f"{label} new 90 %"] = "–" if r is None else _interval(
+            for label, r, e_col, new_col in (
+                    ("LS", lsq, LS_E_COL, "LS new specimen 90 % [kPa]"),
+                    ("Bayes", bay, BAYES_E_COL, BAYES_NEW_COL)):
+                row[e_col] = "–" if r is None else _pm(r["E_pa"], r["E_sd_pa"])
+                row[new_col] = "–" if r is None else _interval(
                     r.get("E_new_lo_pa"), r.get("E_new_hi_pa"))
-                row[f"{label} err %"] = "–" if r is None else _fmt(r.get("rel_err_pct"))
-                row[f"{label} covers"] = "–" if r is None else _yesno(r.get("gt_in_interval"))
-            row["Paper E ± sd"] = _pm(any_row.get("paper_E_pa"), any_row.get("paper_sd_pa"))
-            row["Paper err %"] = _fmt(any_row.get("paper_err_pct"))
+                row[f"{label} err [%]"] = "–" if r is None else _fmt(r.get("rel_err_pct"))
+                row[f"{label} covers GT"] = "–" if r is None else _yesno(r.get("gt_in_interval"))
+            row["Paper E ± sd [kPa]"] = _pm(any_row.get("paper_E_pa"),
+                                            any_row.get("paper_sd_pa"))
+            row["Paper err [%] (vs paper's GT)"] = _fmt(any_row.get("paper_err_pct"))
+            if any(h is not None for h in hertz.values()):
+                h = hertz[(mat, tip)]
+                row[HERTZ_COL] = "–"
+                if h is not None:
+                    ls_e = float(lsq["E_pa"]) if lsq is not None and _isnum(lsq["E_pa"]) \
+                        else float("nan")
+                    d = (h[0] - ls_e) / ls_e if math.isfinite(ls_e) and ls_e else h[2]
+                    row[HERTZ_COL] = f"{_fmt(h[0] * _KPA)} ({100 * d:+.1f} %)"
             if bay is not None and not _truthy(bay.get("converged_all")):
-                row["Bayes E ± sd"] += " (!)"
+                row[BAYES_E_COL] += " (!)"
             rows.append(row)
         return pd.DataFrame(rows)
     s = results.summary
@@ -350,46 +243,74 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
         row = {"Material": mat, "Tip": tip, "n": str(sub["trace_id"].nunique())}
         for label, m in (("LS", "lsq"), ("Bayes", "bayes")):
             e = sub.loc[sub["method"] == m, "E_pa"].astype(float)
-            row[f"{label} mean E ± sd (traces)"] = _pm(e.mean(), e.std(ddof=1)) if len(e) \
-                else "–"
+            row[f"{label} mean E ± sd over traces [kPa]"] = _pm(e.mean(), e.std(ddof=1)) \
+                if len(e) else "–"
         rows.append(row)
     return pd.DataFrame(rows)
 
 
+def coverage_counts(results: ResultsFolder) -> dict[str, tuple[int, int]]:
+    """Per method, (groups whose new-specimen interval covers the ground truth, groups with a
+    ground truth), from ``comparison.csv`` ({} without it)."""
+    comp = results.comparison
+    out: dict[str, tuple[int, int]] = {}
+    if comp is None or comp.empty or "gt_in_interval" not in comp:
+        return out
+    for method in ("bayes", "lsq"):
+        sub = comp[(comp["method"] == method)]
+        if "gt_E_pa" in sub:
+            sub = sub[pd.to_numeric(sub["gt_E_pa"], errors="coerce").notna()]
+        if len(sub):
+            out[method] = (int(sub["gt_in_interval"].map(_truthy).sum()), int(len(sub)))
+    return out
+
+
 def _comparison_groups(comp: pd.DataFrame) -> list[tuple[str, str]]:
-    mats = plots._ordered(comp["material"].astype(str), plots._MATERIAL_ORDER)
-    tips = plots._ordered(comp["tip"].astype(str), plots._TIP_ORDER)
+    mats = ordered(comp["material"].astype(str), MATERIAL_ORDER)
+    tips = ordered(comp["tip"].astype(str), TIP_ORDER)
     have = set(zip(comp["material"].astype(str), comp["tip"].astype(str), strict=True))
     return [(m, t) for m in mats for t in tips if (m, t) in have]
 
 
 def _draw_table(ax: Axes, df: pd.DataFrame, *, fontsize: float = 8.0,
                 highlight: Callable[[int, str, str], str | None] | None = None,
-                col_weights: Sequence[float] | None = None, row_height: float | None = None
-                ) -> None:
+                col_weights: Sequence[float] | None = None, row_height: float | None = None,
+                wrap_header: int | None = None) -> None:
     """A real table (matplotlib ``table``) filling ``ax`` from the top, header shaded.
 
-    Column widths follow the longest string of each column (or ``col_weights``).
-    ``highlight(row, column, text)`` may return a cell colour.
+    Column widths follow the longest string (or header line) of each column, or
+    ``col_weights``.  ``wrap_header``: wrap the headers to lines of this many characters; the
+    header row grows to fit them.  ``highlight(row, column, text)`` may return a cell colour
+    (``column`` is the unwrapped header).
     """
     ax.set_axis_off()
     cols = [str(c) for c in df.columns]
+    heads = ["\n".join(textwrap.wrap(c, wrap_header) or [c]) if wrap_header else c
+             for c in cols]
     text = [[str(v) for v in row] for row in df.itertuples(index=False)]
     if col_weights is None:
-        col_weights = [max([len(c)] + [len(r[j]) for r in text]) + 2
-                       for j, c in enumerate(cols)]
+        # bold header text is ~15 % wider than the cells' regular text
+        col_weights = [max([1.15 * len(x) for x in heads[j].split("\n")]
+                           + [len(r[j]) for r in text]) + 2 for j in range(len(cols))]
     w = np.asarray(col_weights, dtype=float)
     w = w / w.sum()
     n = len(text) + 1
     h = row_height if row_height is not None else min(1.0 / n, 0.06)
-    tab = ax.table(cellText=text or [[""] * len(cols)], colLabels=cols, colWidths=list(w),
-                   cellLoc="center", colLoc="center", bbox=[0.0, 1.0 - h * n, 1.0, h * n])
+    lines = max(x.count("\n") + 1 for x in heads) if heads else 1
+    fig_h = ax.figure.get_size_inches()[1] if ax.figure is not None else PAGE_SIZE[1]
+    ax_pt = fig_h * ax.get_position().height * 72.0
+    hh = max(h, (1.25 * lines + 0.9) * fontsize / ax_pt) if ax_pt > 0 else h
+    total = hh + h * (n - 1)
+    tab = ax.table(cellText=text or [[""] * len(cols)], colLabels=heads, colWidths=list(w),
+                   cellLoc="center", colLoc="center", bbox=[0.0, 1.0 - total, 1.0, total])
     tab.auto_set_font_size(False)
     tab.set_fontsize(fontsize)
     for (r, c), cell in tab.get_celld().items():
         cell.set_edgecolor("0.75")
         cell.set_linewidth(0.5)
+        cell.PAD = 0.04  # of the cell width, each side (matplotlib's 0.1 wastes a fifth)
         if r == 0:
+            cell.set_height(cell.get_height() * hh / h)
             cell.set_facecolor("#e8eef4")
             cell.get_text().set_fontweight("bold")
         elif r % 2 == 0:
@@ -400,6 +321,21 @@ def _draw_table(ax: Axes, df: pd.DataFrame, *, fontsize: float = 8.0,
                 cell.set_facecolor(color)
 
 
+def _chunks(n: int, per_page: int = 0) -> list[slice]:
+    """Slices of ``n`` rows into pages of at most ``per_page`` (default
+    :data:`TABLE_ROWS_PER_PAGE`) rows, balanced (27 rows at 15 → 14 + 13); [slice(0, 0)] for
+    none."""
+    per_page = per_page or TABLE_ROWS_PER_PAGE
+    k = max(1, math.ceil(n / per_page))
+    bounds = np.linspace(0, n, k + 1).round().astype(int)
+    return [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+def _continued(title: str, k: int, n: int) -> str:
+    """Title of page ``k`` (0-based) of ``n``: the first as is, then 'title (continued, 2/3)'."""
+    return title if k == 0 or n <= 1 else f"{title} (continued, {k + 1}/{n})"
+
+
 # ----------------------------------------------------------------------------- pages
 
 
@@ -407,6 +343,8 @@ def _draw_table(ax: Axes, df: pd.DataFrame, *, fontsize: float = 8.0,
 class _Page:
     title: str
     build: Callable[[Figure], None]
+    #: Most rows of any table (or groups of a chart) drawn on the page (0: none).
+    rows: int = 0
 
 
 def _new_page() -> Figure:
@@ -440,7 +378,8 @@ def _text_lines(fig: Figure, lines: Sequence[tuple[str, str]], *, top: float = 0
 def _wrap(text: str, width: int) -> list[str]:
     out: list[str] = []
     for para in text.split("\n"):
-        out.extend(textwrap.wrap(para, width) or [""])
+        # no breaks inside 'R-hat', 'post-burn-in', 'de-snooker'
+        out.extend(textwrap.wrap(para, width, break_on_hyphens=False) or [""])
     return out
 
 
@@ -480,13 +419,20 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     s = res.settings
     pri = o.get("priors") or {}
     bud = o.get("budget") or {}
-    smp = o.get("settings") or {}
+    smp, _ = _sampler_settings(o.get("settings"))
     if o.get("thickness_correction"):
         thick = "on (" + ("bonded" if o.get("bonded", True) else "non-bonded") + ")"
     else:
         thick = "off (half-space, as the paper)"
     frac = o.get("fit_fraction")
-    frac = "paper default (0.2 flat, 0 others)" if frac is None else f"{frac:g}"
+    if frac is None:
+        from .contact import Tip
+        from .fitdata import default_fit_fraction
+
+        flat = default_fit_fraction(Tip("flat", radius=1.0))
+        frac = f"paper default ({flat:g} flat, 0 others)"
+    else:
+        frac = f"{frac:g}"
     depth = o.get("max_depth")
     depth = "none" if depth is None else f"{1e3 * float(depth):g} mm"
     nu_b = bud.get("nu_range") or f"nu ± {bud.get('nu_half_width')}"
@@ -505,9 +451,11 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
               f"±{_fmt(100 * float(bud.get('radius_tolerance', 0)), 1)} %; force gain sd "
               f"{_fmt(100 * float(bud.get('gain_sd', 0)), 1)} %; compliance "
               f"0–{bud.get('compliance_max')} m/N"),
-        ("t", f"Sampler: emcee, {smp.get('n_walkers')} walkers, moves '{smp.get('moves')}', "
-              f"{smp.get('min_steps')}–{smp.get('max_steps')} steps, stopping when the chain "
-              f"is longer than {smp.get('tau_factor')}·tau and tau is stable"),
+        ("t", f"Sampler: emcee, {smp.get('n_walkers')} walkers, moves '{smp.get('moves')}' "
+              f"({MOVES_TEXT.get(str(smp.get('moves')), 'see emcee')}), "
+              f"{_range(smp.get('min_steps'), smp.get('max_steps'))} steps, chain longer than "
+              f"{float(smp.get('tau_factor')):g}·tau, R-hat and ESS checked before stopping "
+              "(the stopping rule in full on the Methods page)"),
     ]
 
 
@@ -518,6 +466,8 @@ def _page_title(res: ResultsFolder, created: str, contents: list[str]) -> _Page:
         fig.text(0.5, 0.66, "Elastic modulus from robotic palpation: least squares vs Bayes, "
                  "compared with compression ground truth", ha="center", fontsize=11,
                  color="0.3")
+        fig.text(0.5, 0.62, f"Built from the results folder {_shown(res.path)}", ha="center",
+                 fontsize=11, fontweight="bold", color="0.2")
         s = res.settings
         n_tr = res.summary["trace_id"].nunique()
         groups = res.groups()
@@ -535,23 +485,63 @@ def _page_title(res: ResultsFolder, created: str, contents: list[str]) -> _Page:
             *[("t", ln) for _, txt in _settings_lines(res) for ln in _wrap(txt, 92)],
         ]
         _text_lines(fig, info, top=0.56, left=0.06, size=10)
-        toc = [("h", "Contents")] + [("t", f"{i:>2}   {textwrap.shorten(t, 50)}")
-                                     for i, t in enumerate(contents, 1) if i > 1]
-        if len(toc) > 30:
-            toc = [*toc[:29], ("t", f"     … {len(contents)} pages in all")]
-        _text_lines(fig, toc, top=0.56, left=0.66, size=8.5)
+        size = 8.5
+        fits = int((0.56 - 0.06) * PAGE_SIZE[1] * 72 / (size * 1.45)) - 2
+        toc = [("h", "Contents")] + _toc_lines(contents, fits)
+        _text_lines(fig, toc, top=0.56, left=0.66, size=size)
     return _Page("", build)
 
 
+def _toc_lines(contents: Sequence[str], max_lines: int) -> list[tuple[str, str]]:
+    """Contents lines: page number and title (wrapped, never cut), the title page left out.
+
+    When they do not fit in ``max_lines``, each run of material × tip pages is given as one
+    line ('7–33  27 material × tip pages: A · flat … B · cone'); if that is still too long, the
+    list is cut with a line giving the number of pages.
+    """
+    def entries(collapse: bool) -> list[tuple[str, str]]:
+        items: list[tuple[str, str]] = []
+        i = 1
+        while i < len(contents):
+            t = contents[i]
+            j = i
+            if collapse and " · " in t and ":" not in t:
+                while j + 1 < len(contents) and " · " in contents[j + 1] \
+                        and ":" not in contents[j + 1]:
+                    j += 1
+            if j > i:
+                items.append((f"{i + 1}–{j + 1}", f"{j - i + 1} material × tip pages: {t} … "
+                                                  f"{contents[j]}"))
+            else:
+                items.append((str(i + 1), t))
+            i = j + 1
+        out: list[tuple[str, str]] = []
+        for num, t in items:
+            for k, ln in enumerate(textwrap.wrap(t, 50, break_on_hyphens=False) or [""]):
+                out.append(("t", f"{num:>5}   {ln}" if k == 0 else f"{'':>5}   {ln}"))
+        return out
+
+    lines = entries(False)
+    if len(lines) > max_lines:
+        lines = entries(True)
+    if len(lines) > max_lines:
+        lines = [*lines[:max_lines - 1], ("t", f"{'':>5}   … {len(contents)} pages in all")]
+    return lines
+
+
 def _shown(path: str | os.PathLike | None) -> str:
-    """A path as shown in the report: relative to the working folder when inside it."""
+    """A path as shown in the report: relative to the working folder when it is inside it or
+    beside it (at most one '..'), else absolute."""
     if not path:
         return "(none)"
     p = Path(path).resolve()
     try:
-        return str(p.relative_to(Path.cwd().resolve()))
-    except ValueError:
+        rel = Path(os.path.relpath(p, Path.cwd().resolve()))
+    except ValueError:  # another drive (Windows)
         return str(p)
+    if rel.parts[:2] == ("..", ".."):
+        return str(p)
+    return str(rel)
 
 
 def _has_gt(res: ResultsFolder) -> bool:
@@ -559,49 +549,134 @@ def _has_gt(res: ResultsFolder) -> bool:
     return bool(c is not None and "gt_E_pa" in c and c["gt_E_pa"].notna().any())
 
 
-def _page_summary(res: ResultsFolder) -> _Page:
+def _coverage_line(res: ResultsFolder) -> str:
+    cov = coverage_counts(res)
+    if not cov:
+        return ""
+    parts = [f"{'Bayes' if m == 'bayes' else 'LS'}: {k}/{n}" for m, (k, n) in cov.items()]
+    return ("New-specimen 90 % interval covers the ground truth in " + ", ".join(parts)
+            + " material × tip groups.")
+
+
+def _paper_gt_text(materials: Sequence[str]) -> str:
+    """The paper's own Instron ground truth of the given materials, e.g. 'White 111 kPa'."""
+    from .paper import PAPER_MATERIALS
+
+    known = [f"{m} {PAPER_MATERIALS[m].E_pa * _KPA:g} kPa" for m in materials
+             if m in PAPER_MATERIALS]
+    return ", ".join(known)
+
+
+def _pages_summary(res: ResultsFolder) -> list[_Page]:
     table = summary_table(res)
+    title = "Summary: ground truth vs least squares vs Bayes"
 
     def hl(_r: int, col: str, txt: str) -> str | None:
-        if col.endswith("covers"):
+        if "covers" in col:
             return "#fde0dc" if txt == "NO" else ("#e3f4e1" if txt == "yes" else None)
         return None
 
-    def build(fig: Figure) -> None:
-        ax = fig.add_axes((0.03, 0.16, 0.94, 0.74))
-        _draw_table(ax, table, fontsize=8.0 if table.shape[1] > 10 else 9.0, highlight=hl,
-                    row_height=min(0.065, 1.0 / (len(table) + 1)))
-        if res.comparison is not None:
-            note = (
-                "E in kPa. GT: compression ground truth, mean ± sd over the specimens of a "
-                "material. LS: the paper's least squares, mean ± sd over the traces. Bayes: "
-                "hierarchical pooling of the per-trace posteriors with the uncertainty budget "
-                "applied once per group, median ± sd of the material's modulus. 'new 90 %': "
-                "interval for a new specimen (LS: t prediction interval; Bayes: posterior "
-                "predictive), the quantity comparable with the spread of the ground truth; "
-                "'covers': GT inside that interval. err % = (GT − E)/GT as in the paper. Paper: "
-                "the published robot estimates, err recomputed from the printed E. (!) marks a "
-                "group with a non-converged or flagged fit.")
-        else:
-            note = ("No comparison.csv in this folder (run 'palpbayes compare'): per-group means "
-                    "± sd of the per-trace estimates, kPa.")
-        _text_lines(fig, [("t", ln) for ln in _wrap(note, 175)], top=0.13, left=0.03,
-                    size=8)
-    return _Page("Summary: ground truth vs least squares vs Bayes", build)
+    if res.comparison is not None:
+        paper_gt = _paper_gt_text(list(dict.fromkeys(table["Material"])))
+        note = (
+            "GT: compression ground truth, mean ± sd over the specimens of a material. LS: the "
+            "paper's least squares, mean ± sd over the traces. Bayes material E: hierarchical "
+            "pooling of the per-trace posteriors with the uncertainty budget applied once per "
+            "group, median ± sd of the material's modulus. 'new specimen 90 %': interval for a "
+            "new specimen (LS: t prediction interval; Bayes: posterior predictive), the "
+            "quantity comparable with the spread of the ground truth; 'covers GT': GT inside "
+            "that interval. err = (GT − E)/GT with the GT column. Paper: the published robot "
+            "estimates; 'Paper err' is relative to the PAPER's own Instron ground truth"
+            + (f" ({paper_gt})" if paper_gt else "") + ", not to the GT column, recomputed "
+            "from the printed E. (!) marks a group with a non-converged or flagged fit.")
+        if HERTZ_COL in table.columns:
+            note += (" Hertz LS: the paper's choice for a sphere — least squares with the "
+                     "paraboloid (Hertz) law at the sphere's radius on the same traces, mean "
+                     "over the traces, and its difference from the LS column (exact Sneddon "
+                     "law).")
+    else:
+        note = ("No comparison.csv in this folder (run 'palpbayes compare'): per-group means "
+                "± sd of the per-trace estimates.")
+    cover = _coverage_line(res)
+    chunks = _chunks(len(table))
+    per = max(c.stop - c.start for c in chunks)
+    h = min(0.065, 1.0 / (per + 2.5))
+    pages = []
+    for k, sl in enumerate(chunks):
+        part = table.iloc[sl]
+
+        def build(fig: Figure, part: pd.DataFrame = part) -> None:
+            top = 0.9
+            if cover:
+                fig.text(0.03, 0.905, cover, fontsize=10, fontweight="bold", va="bottom")
+            ax = fig.add_axes((0.03, 0.2, 0.94, top - 0.2))
+            _draw_table(ax, part, fontsize=7.5 if part.shape[1] > 10 else 9.0, highlight=hl,
+                        row_height=h, wrap_header=12)
+            _text_lines(fig, [("t", ln) for ln in _wrap(note, 185)], top=0.175, left=0.03,
+                        size=8)
+        pages.append(_Page(_continued(title, k, len(chunks)), build, rows=len(part)))
+    return pages
 
 
-def _page_comparison(res: ResultsFolder) -> _Page:
-    def build(fig: Figure) -> None:
-        ax = fig.add_axes((0.07, 0.14, 0.9, 0.72))
-        plots.plot_comparison(res.comparison, ax=ax)
-        cap = ("Thick bars: each method's 90 % interval of the material's modulus (least "
-               "squares: t interval of the mean over traces; Bayes: pooled posterior with the "
-               "budget). Thin bars: 90 % interval for a new specimen (least squares: t "
-               "prediction interval; Bayes: posterior predictive). Grey bands: ground truth "
-               "mean ± sd. Open diamonds: the paper's robot estimate ± sd.")
-        _text_lines(fig, [("t", ln) for ln in _wrap(cap, 170)], top=0.085, left=0.07,
-                    size=8)
-    return _Page("Comparison per material and tip", build)
+def _material_pages(groups: Sequence[tuple[str, str]], per_page: int
+                    ) -> list[list[tuple[str, str]]]:
+    """(material, tip) groups split into pages of at most ``per_page`` groups, keeping a
+    material's tips together (a material with more tips than ``per_page`` is split), with as
+    few pages as that allows and the groups spread evenly over them."""
+    by_mat: dict[str, list[tuple[str, str]]] = {}
+    for g in groups:
+        by_mat.setdefault(g[0], []).append(g)
+
+    def pack(limit: int) -> list[list[tuple[str, str]]]:
+        pages: list[list[tuple[str, str]]] = []
+        cur: list[tuple[str, str]] = []
+        for gs in by_mat.values():
+            if cur and len(cur) + len(gs) > limit:
+                pages.append(cur)
+                cur = []
+            while len(gs) > limit:
+                pages.append(gs[:limit])
+                gs = gs[limit:]
+            cur += gs
+        if cur:
+            pages.append(cur)
+        return pages
+
+    best = pack(per_page)
+    for limit in range(math.ceil(len(groups) / max(len(best), 1)), per_page):
+        even = pack(limit)
+        if len(even) == len(best):
+            return even
+    return best
+
+
+def _pages_comparison(res: ResultsFolder) -> list[_Page]:
+    comp = res.comparison
+    groups = _comparison_groups(comp)
+    split = _material_pages(groups, CHART_GROUPS_PER_PAGE)
+    cap = ("Thick bars: each method's 90 % interval of the material's modulus (least "
+           "squares: t interval of the mean over traces; Bayes: pooled posterior with the "
+           "budget). Thin bars: 90 % interval for a new specimen (least squares: t "
+           "prediction interval; Bayes: posterior predictive). Grey bands: ground truth "
+           "mean ± sd. Open diamonds: the paper's robot estimate ± sd (relative to the paper's "
+           "own ground truth).")
+    if any(t == "sphere" for _, t in groups) and "E_hertz_pa" in res.summary:
+        cap += (" Sphere: least squares and Bayes use the exact Sneddon law; the paper's Hertz "
+                "fit of the same traces is in the summary table.")
+    pages = []
+    for k, part in enumerate(split):
+        keys = set(part)
+        sub = comp[[(str(m), str(t)) in keys
+                    for m, t in zip(comp["material"], comp["tip"], strict=True)]]
+
+        def build(fig: Figure, sub: pd.DataFrame = sub) -> None:
+            ax = fig.add_axes((0.07, 0.17, 0.9, 0.69))
+            plots.plot_comparison(sub, ax=ax)
+            _text_lines(fig, [("t", ln) for ln in _wrap(cap, 175)], top=0.11, left=0.07,
+                        size=8)
+        pages.append(_Page(_continued("Comparison per material and tip", k, len(split)),
+                           build, rows=len(part)))
+    return pages
 
 
 def _representative(res: ResultsFolder, mat: str, tip: str) -> str | None:
@@ -654,7 +729,7 @@ def _page_group(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page:
         sub = s[(s["material"].fillna("").astype(str) == mat) & (s["tip"].astype(str) == tip)]
         gt = _gt_of(res, mat)
         pooled = _pooled_of(res, mat, tip)
-        gs = fig.add_gridspec(2, 3, left=0.06, right=0.98, top=0.86, bottom=0.1, wspace=0.32,
+        gs = fig.add_gridspec(2, 3, left=0.06, right=0.98, top=0.84, bottom=0.1, wspace=0.32,
                               hspace=0.42)
         ax_fd = fig.add_subplot(gs[0, 0:2])
         ax_forest = fig.add_subplot(gs[0, 2])
@@ -685,13 +760,39 @@ def _page_group(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page:
         if gt is not None:
             txt.append(f"Ground truth: {_fmt(gt[0] * _KPA)} ± {_fmt(gt[1] * _KPA)} kPa")
         fig.text(0.06, 0.905, "    ".join(txt), fontsize=8.5, color="0.2")
+        hz = _hertz_line(res, mat, tip)
+        if hz:
+            fig.text(0.06, 0.882, hz, fontsize=8.5, color="#8a3b00")
     return _Page(f"{mat} · {tip}" if mat else tip, build)
+
+
+def _hertz_line(res: ResultsFolder, mat: str, tip: str) -> str:
+    """Sphere pages: the paper's Hertz fit of the same traces against the exact Sneddon law."""
+    h = _hertz_of_group(res, mat, tip)
+    if h is None:
+        return ""
+    s = res.summary
+    ls = s[(s["material"].fillna("").astype(str) == mat) & (s["tip"].astype(str) == tip)
+           & (s["method"] == "lsq")]
+    e = pd.to_numeric(ls["E_pa"], errors="coerce").dropna()
+    sd = f" ± {_fmt(h[1] * _KPA)}" if math.isfinite(h[1]) else ""
+    ref = (f"least squares with the exact Sneddon law ({_fmt(e.mean() * _KPA)} kPa)"
+           if len(e) else "the exact Sneddon law")
+    return (f"Paper's Hertz fit of the same {h[3]} trace(s) (least squares, paraboloid law at "
+            f"the sphere's radius): E = {_fmt(h[0] * _KPA)}{sd} kPa, Δ = {100 * h[2]:+.1f} % "
+            f"vs {ref}.")
 
 
 def _truthy(v: Any) -> bool:
     if isinstance(v, str):
         return v.strip().lower() == "true"
     return bool(v) if v is not None and not (isinstance(v, float) and math.isnan(v)) else False
+
+
+def _range(lo: Any, hi: Any, digits: int = 0) -> str:
+    """'lo–hi', or a single number when both are equal ('1500', not '1500–1500')."""
+    a, b = _fmt(lo, digits), _fmt(hi, digits)
+    return a if a == b else f"{a}–{b}"
 
 
 def _flagged(res: ResultsFolder) -> pd.DataFrame:
@@ -750,7 +851,7 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
             "converged": str(int(g["converged"].map(_truthy).sum())),
             "max R-hat": _fmt(g["rhat_max"].max(), 4), "min ESS": _fmt(g["ess_min"].min(), 0),
             "max tau [steps]": _fmt(g["tau_max"].max(), 1),
-            "steps": f"{_fmt(g['n_steps'].min(), 0)}–{_fmt(g['n_steps'].max(), 0)}",
+            "steps": _range(g["n_steps"].min(), g["n_steps"].max()),
             "acceptance": _fmt(g["acceptance"].mean(), 2),
             "pooled R-hat": "–" if pooled is None else _fmt(pooled.get("rhat_max"), 4),
             "pooled ESS": "–" if pooled is None else _fmt(pooled.get("ess_min"), 0),
@@ -763,32 +864,42 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
         "steps": _fmt(r["n_steps"], 0),
         "flags": textwrap.shorten(str(r["flags"]) if pd.notna(r["flags"]) else "", 95),
     } for _, r in flagged.iterrows()])
-    per_page = 18
-    chunks = [ftab.iloc[i:i + per_page] for i in range(0, len(ftab), per_page)] or [None]
+    # pages: the group table in chunks, then the flagged fits in chunks; the first flagged
+    # chunk shares the last group page when both fit in TABLE_ROWS_PER_PAGE rows
+    layout: list[tuple[pd.DataFrame | None, pd.DataFrame | None]] = \
+        [(gtab.iloc[sl], None) for sl in _chunks(len(gtab))] if len(gtab) else [(None, None)]
+    fchunks = [ftab.iloc[sl] for sl in _chunks(len(ftab))] if len(ftab) else []
+    if fchunks:
+        last_g = layout[-1][0]
+        if last_g is None or len(last_g) + len(fchunks[0]) <= TABLE_ROWS_PER_PAGE:
+            layout[-1] = (last_g, fchunks.pop(0))
+        layout += [(None, f) for f in fchunks]
+    row_h = 0.042
     pages = []
-    for k, chunk in enumerate(chunks):
-        def build(fig: Figure, chunk=chunk, first=(k == 0)) -> None:
+    for k, (gpart, fpart) in enumerate(layout):
+        def build(fig: Figure, gpart=gpart, fpart=fpart, first=(k == 0)) -> None:
             lines = [("t", ln) for ln in _wrap(head, 150)]
             lines += [("t", crit)] if first else []
             _text_lines(fig, lines, top=0.9, left=0.04, size=10)
             top = 0.8
-            if first and not gtab.empty:
-                hgt = min(0.45, 0.042 * (len(gtab) + 1))
+            if gpart is not None and len(gpart):
+                hgt = row_h * (len(gpart) + 1)
                 ax = fig.add_axes((0.04, top - hgt, 0.92, hgt))
-                _draw_table(ax, gtab, fontsize=8, row_height=1.0 / (len(gtab) + 1),
-                            highlight=_diag_highlight(gtab))
+                _draw_table(ax, gpart, fontsize=8, row_height=1.0 / (len(gpart) + 1),
+                            highlight=_diag_highlight(gpart))
                 top -= hgt + 0.05
-            if chunk is not None and len(chunk):
+            if fpart is not None and len(fpart):
                 fig.text(0.04, top, "Non-converged or flagged fits", fontsize=11,
                          fontweight="bold")
                 top -= 0.02
-                hgt = min(top - 0.06, 0.04 * (len(chunk) + 1))
+                hgt = min(top - 0.06, row_h * (len(fpart) + 1))
                 ax = fig.add_axes((0.04, top - hgt, 0.92, hgt))
-                _draw_table(ax, chunk, fontsize=7.5, row_height=1.0 / (len(chunk) + 1),
+                _draw_table(ax, fpart, fontsize=7.5, row_height=1.0 / (len(fpart) + 1),
                             highlight=lambda _r, c, t: "#fde0dc" if c == "converged" and
                             t == "NO" else None)
-        title = "Convergence diagnostics" + (f" (continued {k + 1})" if k else "")
-        pages.append(_Page(title, build))
+        rows = max(0 if gpart is None else len(gpart), 0 if fpart is None else len(fpart))
+        pages.append(_Page(_continued("Convergence diagnostics", k, len(layout)), build,
+                           rows=rows))
     worst = None
     if len(b) and b["rhat_max"].notna().any():
         cand = b[b["trace_id"].map(lambda t: (res.path / "posterior" / f"{t}.nc").is_file())]
@@ -804,14 +915,14 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
     return pages
 
 
-def _page_budget(res: ResultsFolder) -> _Page | None:
+def _pages_budget(res: ResultsFolder) -> list[_Page]:
     bud = res.budget
     if bud is None or bud.empty:
-        return None
+        return []
     inputs = list(dict.fromkeys(bud["input"].astype(str)))
     dist = bud.drop_duplicates("input").set_index("input")["distribution"].astype(str)
     keys = [c for c in ("material", "tip") if c in bud.columns]
-    rows = []
+    rows, members = [], []
     for key, g in bud.groupby(keys, sort=False) if keys else [((), bud)]:
         key = key if isinstance(key, tuple) else (key,)
         r = {k.capitalize(): str(v) for k, v in zip(keys, key, strict=True)}
@@ -823,24 +934,36 @@ def _page_budget(res: ResultsFolder) -> _Page | None:
             else:
                 r[name] = "–"
         rows.append(r)
+        members.append(g.index)
     tab = pd.DataFrame(rows)
     dtab = pd.DataFrame({"Input": inputs, "Distribution": [dist.get(i, "") for i in inputs]})
+    chunks = _chunks(len(tab), BUDGET_GROUPS_PER_PAGE)  # table and chart share the page
+    per = max(c.stop - c.start for c in chunks)
+    row_h = 0.036
+    hgt = row_h * (per + 1)  # the same table height on every page: charts line up
+    pages = []
+    for k, sl in enumerate(chunks):
+        part = tab.iloc[sl]
+        idx = [i for m in members[sl] for i in m]
+        bpart = bud.loc[idx]
 
-    def build(fig: Figure) -> None:
-        hgt = min(0.5, 0.036 * (len(tab) + 1))
-        ax = fig.add_axes((0.03, 0.88 - hgt, 0.58, hgt))
-        _draw_table(ax, tab, fontsize=7.5, row_height=1.0 / (len(tab) + 1))
-        ax2 = fig.add_axes((0.64, 0.88 - 0.036 * (len(dtab) + 1), 0.34,
-                            0.036 * (len(dtab) + 1)))
-        _draw_table(ax2, dtab, fontsize=7.5, row_height=1.0 / (len(dtab) + 1),
-                    col_weights=[1.0, 1.6])
-        fig.text(0.03, 0.885 - hgt - 0.035, "Cells: share of the variance of ln E "
-                 "(relative sd of E from that input, %). Systematic inputs are shared by the "
-                 "traces of a group and applied once to the pooled estimate.", fontsize=8,
-                 color="0.25")
-        ax3 = fig.add_axes((0.15, 0.1, 0.62, 0.88 - hgt - 0.22))
-        plots.plot_budget(bud, ax=ax3)
-    return _Page("Uncertainty budget", build)
+        def build(fig: Figure, part: pd.DataFrame = part, bpart: pd.DataFrame = bpart) -> None:
+            h = row_h * (len(part) + 1)
+            ax = fig.add_axes((0.03, 0.88 - h, 0.58, h))
+            _draw_table(ax, part, fontsize=7.5, row_height=1.0 / (len(part) + 1))
+            ax2 = fig.add_axes((0.64, 0.88 - row_h * (len(dtab) + 1), 0.34,
+                                row_h * (len(dtab) + 1)))
+            _draw_table(ax2, dtab, fontsize=7.5, row_height=1.0 / (len(dtab) + 1),
+                        col_weights=[1.0, 1.6])
+            fig.text(0.03, 0.885 - hgt - 0.035, "Cells: share of the variance of ln E "
+                     "(relative sd of E from that input, %). Systematic inputs are shared by "
+                     "the traces of a group and applied once to the pooled estimate.",
+                     fontsize=8, color="0.25")
+            ax3 = fig.add_axes((0.15, 0.1, 0.62, 0.88 - hgt - 0.22))
+            plots.plot_budget(bpart, ax=ax3)
+        pages.append(_Page(_continued("Uncertainty budget", k, len(chunks)), build,
+                           rows=len(part)))
+    return pages
 
 
 def _stiffening_groups(res: ResultsFolder) -> list[tuple[str, str]]:
@@ -896,53 +1019,152 @@ def _page_stiffening(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page
     return _Page(title, build)
 
 
-def _page_stiffening_table(res: ResultsFolder) -> _Page | None:
+def _pages_stiffening_table(res: ResultsFolder) -> list[_Page]:
     st = res.stiffening
     if st is None or st.empty:
-        return None
+        return []
     cols = [c for c in st.columns if not c.startswith("_")]
+    show = st[cols].copy()
+    for c in show.columns:
+        if pd.api.types.is_float_dtype(show[c]):
+            show[c] = show[c].map(lambda v: f"{v:.4g}")
+    chunks = _chunks(len(show))
+    per = max(c.stop - c.start for c in chunks)
+    pages = []
+    for k, sl in enumerate(chunks):
+        part = show.iloc[sl]
 
-    def build(fig: Figure) -> None:
-        show = st[cols].copy()
-        for c in show.columns:
-            if pd.api.types.is_float_dtype(show[c]):
-                show[c] = show[c].map(lambda v: f"{v:.4g}")
-        ax = fig.add_axes((0.03, 0.2, 0.94, 0.68))
-        _draw_table(ax, show, fontsize=7, row_height=min(0.06, 1.0 / (len(show) + 1)))
-    return _Page("Stiffening (stiffening.csv)", build)
+        def build(fig: Figure, part: pd.DataFrame = part) -> None:
+            ax = fig.add_axes((0.03, 0.2, 0.94, 0.68))
+            _draw_table(ax, part, fontsize=7, row_height=min(0.06, 1.0 / (per + 1)))
+        pages.append(_Page(_continued("Stiffening (stiffening.csv)", k, len(chunks)), build,
+                           rows=len(part)))
+    return pages
+
+
+#: What each ``SamplerSettings.moves`` value means (emcee moves).
+MOVES_TEXT = {
+    "de": "emcee's differential-evolution move (DEMove) only",
+    "de-snooker": "80 % DEMove + 20 % DESnookerMove",
+    "stretch": "emcee's affine-invariant stretch move",
+}
+
+
+def _sampler_settings(recorded: dict | None) -> tuple[dict, bool]:
+    """Sampler settings as a dict: the recorded ones (``settings.json``) completed by the
+    package defaults; the flag says whether anything came from the defaults."""
+    from dataclasses import asdict
+
+    from .bayes.sampler import SamplerSettings
+
+    default = asdict(SamplerSettings())
+    rec = dict(recorded or {})
+    missing = any(k not in rec for k in ("n_walkers", "max_steps", "min_steps", "check_every",
+                                         "tau_factor", "tau_rtol", "moves"))
+    return {**default, **{k: v for k, v in rec.items() if v is not None}}, missing
+
+
+def _stopping_rule(smp: dict) -> str:
+    """The sampler's stopping rule in words, with the numbers of ``smp``."""
+    from .bayes.diagnostics import ESS_MIN, RHAT_MAX
+
+    moves = str(smp.get("moves"))
+    return (
+        f"emcee, {int(smp['n_walkers'])} walkers, moves: {MOVES_TEXT.get(moves, repr(moves))}. "
+        f"Stopping rule: every {int(smp['check_every'])} steps after {int(smp['min_steps'])}, "
+        f"stop when the chain is longer than {float(smp['tau_factor']):g} × the integrated "
+        "autocorrelation time (tau) of every parameter, tau changed by less than "
+        f"{100 * float(smp['tau_rtol']):g} % since the last check, and the post-burn-in "
+        f"chain passes max R-hat ≤ {RHAT_MAX:g} over every parameter and the log posterior, "
+        f"and bulk and tail ESS ≥ {ESS_MIN:.0f} for every parameter — or at "
+        f"{int(smp['max_steps'])} steps (then flagged). Burn-in 2·max tau, thinning "
+        "floor(min tau / 2)."
+    )
+
+
+def _sphere_vs_hertz(d_over_r: float = 0.3) -> float:
+    """Relative force of the exact Sneddon sphere vs Hertz at depth d/R (negative: less)."""
+    from .contact import Tip, shape
+
+    sph = float(shape(np.array([d_over_r]), Tip("sphere", radius=1.0))[0])
+    par = float(shape(np.array([d_over_r]), Tip("paraboloid", radius=1.0))[0])
+    return sph / par - 1.0
+
+
+def _pooling_text(res: ResultsFolder) -> str:
+    """Pooling paragraph: sampler from :data:`palpbayes.pooling.POOLING_SETTINGS`, the tau
+    prior scale from ``pooled.csv`` (else :data:`palpbayes.pooling.TAU_PRIOR_SD`)."""
+    from dataclasses import asdict
+
+    from .pooling import POOLING_SETTINGS, TAU_PRIOR_SD
+
+    scales: list[float] = []
+    if res.pooled is not None and "tau_prior_sd" in res.pooled:
+        scales = sorted(set(pd.to_numeric(res.pooled["tau_prior_sd"], errors="coerce")
+                            .dropna().astype(float)))
+    prior = ", ".join(f"{v:g}" for v in scales) if scales else f"{TAU_PRIOR_SD:g}"
+    smp = asdict(POOLING_SETTINGS)
+    return (
+        "Per material × tip: log E_i ~ Normal(mu, tau²), fitted in two stages (Lunn et al. "
+        "2013): each trace's statistical posterior of log E summarised as Normal(m_i, s_i²), "
+        f"then (mu, log tau) sampled with {_stopping_rule(smp)} Flat prior on mu, "
+        f"tau ~ HalfNormal({prior}) on the log-E scale. The systematic budget inputs are "
+        "shared by the traces of a group and applied once to the pooled draws. 'New "
+        "specimen' is the posterior predictive exp(mu + tau·z)·f, the quantity to compare "
+        "with the Instron mean ± sd.")
 
 
 def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     from .bayes import priors as _priors
+    from .contact import Tip
+    from .fitdata import default_fit_fraction
+    from .lsq import GRID_POINTS
 
     o = res.options
     W = 150
+    smp, from_defaults = _sampler_settings(o.get("settings"))
+    frac = o.get("fit_fraction")
+    if frac is None:
+        flat = default_fit_fraction(Tip("flat", radius=1.0))
+        window = (f"Fit window: the paper's default, the first {100 * flat:g} % of a flat "
+                  "punch's penetration is not fitted (non-linear start of contact), every "
+                  "sample in contact for the other tips.")
+    else:
+        window = (f"Fit window: the first {100 * float(frac):g} % of the penetration is not "
+                  "fitted, for every tip (fit_fraction option of this run).")
+    if o.get("max_depth") is not None:
+        window += f" Only samples shallower than {1e3 * float(o['max_depth']):g} mm are fitted."
     lines: list[tuple[str, str]] = [("h", "Contact models (DESIGN §1)")]
     lines += [("t", ln) for ln in _wrap(
         "Rigid axisymmetric tip on an elastic half-space, F = E*·s(d) with E* = E/(1 − nu²) and "
         "depth d = z_surf − z_tip (F = 0 for d ≤ 0). Flat punch of radius a: F = 2·a·E*·d. "
         "Paraboloid (Hertz) of radius R: F = (4/3)·E*·sqrt(R)·d^(3/2). Sphere: the exact "
-        "Sneddon solution (about 3 % less force than Hertz at d/R = 0.3; the paper fitted its "
-        "sphere with Hertz). Cone and power-law tips by the method of dimensionality "
-        "reduction. Finite-thickness correction (Dimitriadis et al. 2002 / Hayes et al. 1972) "
+        f"Sneddon solution ({abs(100 * _sphere_vs_hertz(0.3)):.1f} % "
+        f"{'less' if _sphere_vs_hertz(0.3) < 0 else 'more'} force than Hertz at d/R = 0.3; "
+        "the paper fitted its sphere with Hertz: its least-squares Hertz fit of every sphere "
+        "trace is reported beside the Sneddon fits as E_hertz). Cone and power-law tips by the "
+        "method of dimensionality reduction. Finite-thickness correction (Dimitriadis et al. "
+        "2002 / Hayes et al. 1972) "
         + ("ON for this run." if o.get("thickness_correction") else
            "OFF for this run (half-space, as the paper)."), W)]
     lines += [("h", "Least-squares baseline (the paper's eqs. 12–13)")]
     lines += [("t", ln) for ln in _wrap(
         "Minimise L = Σ (F_j − k·d_j^m)² over k and z_surf subject to |F(z_surf)| ≤ F_unc "
         f"(F_unc = {_fmt(1e3 * float(o.get('f_unc', 0.048)), 0)} mN): for fixed z_surf E* has "
-        "a closed form; z_surf by a 64-point grid and bounded Brent search over the admissible "
-        "range. Interval: Gauss-Newton covariance of (E*, z_surf) from the residuals, "
-        "E ± t(0.95, n − 2)·sd — the textbook interval, assuming iid residuals and ignoring the "
-        "constraint. Flat punch: the first 20 % of the penetration is not fitted (paper).", W)]
+        f"a closed form; z_surf by a {GRID_POINTS}-point grid and bounded Brent search over the "
+        "admissible range. Interval: Gauss-Newton covariance of (E*, z_surf) from the "
+        "residuals, E ± t(0.95, n − 2)·sd — the textbook interval, assuming iid residuals and "
+        f"ignoring the constraint. {window}", W)]
     lines += [("h", "Bayesian model per trace")]
     lines += [("t", ln) for ln in _wrap(
         f"F_j = E*·s(z_surf − z_j) + F0 + e_j, noise model '{o.get('noise', 'gaussian')}' "
         "(gaussian: iid Normal(0, sigma); ar1: stationary AR(1) with marginal sd sigma; "
-        "student: Student-t). Sampled with emcee (80 % DEMove + 20 % DESnookerMove) until the "
-        "chain is longer than 100 autocorrelation times and tau is stable; burn-in 2·tau "
-        "discarded. Convergence: rank-normalised split R-hat ≤ 1.01 and bulk/tail ESS ≥ 400 "
-        "(arviz, walkers as chains). Priors (palpbayes.bayes.priors):", W)]
+        f"student: Student-t). Sampled with {_stopping_rule(smp)}"
+        + (" (Sampler settings not recorded in settings.json: package defaults shown.)"
+           if from_defaults else "")
+        + " Convergence is checked with arviz (rank-normalised split R-hat, bulk and tail "
+        "ESS, walkers as chains); a fit that fails is flagged in every table. Priors "
+        "(palpbayes.bayes.priors):", W)]
     lines += [("m", ln) for ln in _priors_table(_priors.__doc__ or "")]
     lines += [("h", "Uncertainty budget (GUM Supplement 1)")]
     lines += [("t", ln) for ln in _wrap(
@@ -951,13 +1173,7 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         "tolerance f_R, the force-sensor gain g_F and a series compliance f_C (distributions on "
         "the budget page). Shares are each input's part of the variance of ln E.", W)]
     lines += [("h", "Pooling of repeated indentations")]
-    lines += [("t", ln) for ln in _wrap(
-        "Per material × tip: log E_i ~ Normal(mu, tau²), fitted in two stages (Lunn et al. "
-        "2013): each trace's statistical posterior of log E summarised as Normal(m_i, s_i²), "
-        "then (mu, log tau) sampled with emcee; flat prior on mu, tau ~ HalfNormal(0.5). The "
-        "systematic budget inputs are shared by the traces of a group and applied once to the "
-        "pooled draws. 'New specimen' is the posterior predictive exp(mu + tau·z)·f, the "
-        "quantity to compare with the Instron mean ± sd.", W)]
+    lines += [("t", ln) for ln in _wrap(_pooling_text(res), W)]
     gt = res.groundtruth_summary
     if gt is not None and "window_lo" in gt:
         win = (f"{100 * float(gt['window_lo'].iloc[0]):g}–"
@@ -998,7 +1214,7 @@ def _pages_methods(res: ResultsFolder) -> list[_Page]:
     for k, chunk in enumerate(chunks):
         def build(fig: Figure, chunk=chunk) -> None:
             _text_lines(fig, chunk, top=0.9, left=0.04, size=9.0)
-        pages.append(_Page("Methods" + (f" (continued {k + 1})" if k else ""), build))
+        pages.append(_Page(_continued("Methods", k, len(chunks)), build))
     return pages
 
 
@@ -1021,6 +1237,11 @@ class ReportInfo:
         Bayesian fits not converged or flagged.
     n_pooled_flagged
         Pooled (hierarchical) groups whose chain did not converge.
+    table_rows
+        Per page, the most rows of a table (or material × tip groups of a chart) on it; 0 for
+        pages without one.  Tables are split at :data:`TABLE_ROWS_PER_PAGE` rows.
+    results_shown
+        The results folder as printed on the title page and in the footer.
     """
 
     path: Path
@@ -1028,6 +1249,8 @@ class ReportInfo:
     n_traces: int
     n_flagged: int
     n_pooled_flagged: int = 0
+    table_rows: list[int] = field(default_factory=list)
+    results_shown: str = ""
 
     @property
     def n_pages(self) -> int:
@@ -1063,20 +1286,17 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
         raise InputError(f"{out}: the report is a PDF; give a file name ending in .pdf")
     created = created or _dt.date.today().isoformat()
     contents: list[str] = []
-    pages: list[_Page] = [_page_title(res, created, contents), _page_summary(res)]
+    pages: list[_Page] = [_page_title(res, created, contents), *_pages_summary(res)]
     if res.comparison is not None and not res.comparison.empty:
-        pages.append(_page_comparison(res))
+        pages += _pages_comparison(res)
     pages += [_page_group(res, m, t, seed) for m, t in res.groups()]
     pages += _page_diagnostics(res)
-    budget = _page_budget(res)
-    if budget is not None:
-        pages.append(budget)
+    pages += _pages_budget(res)
     pages += [_page_stiffening(res, m, t, seed) for m, t in _stiffening_groups(res)]
-    table = _page_stiffening_table(res)
-    if table is not None:
-        pages.append(table)
+    pages += _pages_stiffening_table(res)
     pages += _pages_methods(res)
-    footer = f"palpbayes {__version__} · campaign {res.name} · {created} · {_shown(res.path)}"
+    footer = (f"palpbayes {__version__} · campaign {res.name} · {created} · results "
+              f"{_shown(res.path)}")
     titles = [p.title or "palpbayes report" for p in pages]
     contents.extend(titles)
 
@@ -1101,86 +1321,5 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
         n_pool = int((~res.pooled["converged"].map(_truthy)).sum())
     return ReportInfo(path=out, titles=titles, n_traces=int(res.summary["trace_id"].nunique()),
                       n_flagged=int(len(_flagged(res))) if len(b) else 0,
-                      n_pooled_flagged=n_pool)
-
-
-# ----------------------------------------------------------------------------- pipeline
-
-
-def example_campaign_dir() -> Path:
-    """The shipped example campaign (``data/example-campaign`` beside the package).
-
-    Raises
-    ------
-    InputError
-        The folder is not there (e.g. a non-editable install, which ships the package only).
-    """
-    import palpbayes
-
-    p = Path(palpbayes.__file__).resolve().parents[1] / "data" / "example-campaign"
-    if not (p / "manifest.csv").is_file():
-        raise InputError(
-            f"the shipped example campaign is not at {p} (it comes with a source checkout, "
-            "not with an installed wheel); give a campaign folder, manifest or results folder, "
-            "or make one with 'palpbayes simulate DIR'")
-    return p
-
-
-def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
-                 options: FitOptions | None = None, *,
-                 workers: int | None = None, force: bool = False,
-                 progress: bool | None = None) -> Path:
-    """Fit a campaign (both methods), analyse its ground truth and compare; return out_dir.
-
-    Steps: :func:`palpbayes.campaign.fit_campaign` (``palpbayes fit``); when the campaign folder
-    has ``groundtruth/``, :func:`palpbayes.groundtruth.analyse` written to ``groundtruth.csv``
-    and ``groundtruth_summary.csv`` (``palpbayes groundtruth``); then
-    :func:`palpbayes.compare.compare_campaign` (``palpbayes compare OUT``).  A results folder
-    fitted before from the same source with the same options is reused (the campaign's
-    resume); different options need ``force``.
-
-    Parameters
-    ----------
-    manifest
-        Campaign manifest CSV.
-    out_dir
-        Results folder.
-    options
-        :class:`~palpbayes.fitjob.FitOptions` (default: both methods, package defaults).
-    workers, force, progress
-        As for :func:`~palpbayes.campaign.fit_campaign`.
-    """
-    from .campaign import fit_campaign, read_settings
-    from .fitjob import FitOptions
-
-    manifest = Path(manifest).resolve()
-    out = Path(out_dir)
-    options = options or FitOptions(method="both")
-    resume = False
-    if not force and out.is_dir() and any(out.iterdir()):
-        old = read_settings(out)
-        if not old:
-            from .errors import OutputExistsError
-
-            raise OutputExistsError(f"output folder {out} is not empty and holds no palpbayes "
-                                    "results; choose another --out or use --force")
-        if old.get("source") and Path(old["source"]).resolve() != manifest:
-            raise InputError(f"{out} holds results of another campaign ({old['source']}); "
-                             "choose another --out or use --force to replace them")
-        resume = True
-    fit_campaign(manifest, out, options, workers=workers, resume=resume, force=force,
-                 progress=progress)
-    gt_dir = manifest.parent / "groundtruth"
-    if gt_dir.is_dir():  # for the report (compare analyses the same folder at full precision)
-        from .cli.groundtruth import PER_FILE_NAME, SUMMARY_NAME
-        from .groundtruth import analyse
-        from .io.atomic import write_csv_atomic
-
-        per_file, per_group = analyse(gt_dir)
-        write_csv_atomic(per_file, out / PER_FILE_NAME, float_format="%.10g")
-        write_csv_atomic(per_group, out / SUMMARY_NAME, float_format="%.10g")
-    from .compare import compare_campaign
-
-    # exactly `palpbayes compare OUT`: the campaign's groundtruth/ is found via settings.json
-    compare_campaign(out)
-    return out
+                      n_pooled_flagged=n_pool, table_rows=[p.rows for p in pages],
+                      results_shown=_shown(res.path))

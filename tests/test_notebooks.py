@@ -44,6 +44,15 @@ def test_notebook_committed_clean_and_current(name):
     assert [c.source for c in nb.cells] == [c.source for c in cells]
 
 
+def test_notebook_01_names_its_ground_truth_and_the_two_bayes_quantities():
+    """The text table gets the analysed ground truth (not 'none found'), and the pooled
+    material modulus and the new-specimen prediction carry different labels."""
+    src = "\n".join(c.source for c in _generator().NB01)
+    assert "format_comparison(res.comparison, groundtruth_source=" in src
+    assert "Bayes material E ± sd [kPa]" in src and "Bayes new specimen E ± sd [kPa]" in src
+    assert "from palpbayes.pipeline import" in src and "from palpbayes.results import" in src
+
+
 def _execute(name: str, cwd: Path, timeout: int = 900):
     nbclient = pytest.importorskip("nbclient")
     nb = nbformat.read(NB_DIR / name, as_version=4)

@@ -23,12 +23,19 @@ from matplotlib.patches import Rectangle
 from palpbayes import plots
 from palpbayes.cli import main
 from palpbayes.report import (
+    BUDGET_GROUPS_PER_PAGE,
+    CHART_GROUPS_PER_PAGE,
     REPORT_NAME,
+    TABLE_ROWS_PER_PAGE,
+    _methods_lines,
+    _range,
+    _shown,
     build_report,
     load_fit,
     load_results,
     summary_table,
 )
+from palpbayes.results import ResultsFolder
 from palpbayes.simulate import PAPER_MATERIALS, PAPER_TIPS
 from palpbayes.simulate_campaign import simulate_campaign
 
@@ -86,6 +93,10 @@ def test_campaign_report_pipeline_writes_every_table(fitted):
     assert len(list((out / "posterior").glob("*.nc"))) == 4
     comp = pd.read_csv(out / "comparison.csv")
     assert set(comp["method"]) == {"lsq", "bayes"}
+    # sphere traces: the paper's Hertz fit beside every row, a few per cent below E
+    summ = pd.read_csv(out / "summary.csv")
+    assert summ["E_hertz_pa"].notna().all()
+    assert ((summ["E_hertz_rel_diff"] < 0) & (summ["E_hertz_rel_diff"] > -0.06)).all()
     assert comp["gt_E_pa"].notna().all()
     assert pdf.is_file()
     assert f"wrote {pdf}" in stdout
@@ -127,6 +138,12 @@ def test_report_from_results_folder_cli(fitted, tmp_path, capsys):
     info = build_report(out)
     assert info.path == out / REPORT_NAME and info.path.is_file()
     assert info.titles[1].startswith("Summary") and info.n_traces == 4
+    # continued pages are numbered 2/n, 3/n (not 'continued 2' on the second page)
+    methods = [t for t in info.titles if t.startswith("Methods")]
+    assert methods[0] == "Methods" and len(methods) >= 2
+    assert methods[1:] == [f"Methods (continued, {k}/{len(methods)})"
+                           for k in range(2, len(methods) + 1)]
+    assert info.results_shown == _shown(out)
 
 
 def test_rerun_on_the_same_campaign_reuses_the_fits(fitted, campaign, tmp_path):
@@ -139,6 +156,25 @@ def test_rerun_on_the_same_campaign_reuses_the_fits(fitted, campaign, tmp_path):
     # other options on the same folder: refused without --force (exit 2, one line)
     assert main(["report", str(campaign), "--out", str(out), "-o", str(tmp_path / "s.pdf"),
                  "--workers", "1", "--seed", "4"]) == 2
+
+
+def test_rerun_refuses_fits_of_another_palpbayes_version(fitted, campaign, tmp_path, capsys):
+    import json
+    import shutil
+
+    out, _, _ = fitted
+    old = tmp_path / "old-results"
+    shutil.copytree(out, old)
+    settings = json.loads((old / "settings.json").read_text(encoding="utf-8"))
+    settings["palpbayes_version"] = "0.0.1"
+    (old / "settings.json").write_text(json.dumps(settings), encoding="utf-8")
+    before = {p.name: p.stat().st_mtime_ns for p in (old / "posterior").glob("*.nc")}
+    assert main(["report", str(campaign), "--out", str(old), "-o", str(tmp_path / "r.pdf"),
+                 "--workers", "1", "--seed", "3"]) == 2
+    err = capsys.readouterr().err
+    assert "fitted by palpbayes 0.0.1" in err and "--force" in err
+    assert {p.name: p.stat().st_mtime_ns for p in (old / "posterior").glob("*.nc")} == before
+    assert not (tmp_path / "r.pdf").exists()
 
 
 def test_report_input_errors(tmp_path, capsys, monkeypatch, fitted):
@@ -165,11 +201,145 @@ def test_summary_table_without_comparison(fitted, tmp_path):
     res.comparison = None
     tab = summary_table(res)
     assert list(tab["Material"]) == ["White", "Pink"]
-    assert "Bayes mean E ± sd (traces)" in tab.columns
+    assert "Bayes mean E ± sd over traces [kPa]" in tab.columns
     full = summary_table(load_results(out))
-    assert {"GT E ± sd", "LS E ± sd", "Bayes E ± sd", "Bayes new 90 %", "Bayes covers",
-            "Paper E ± sd"} <= set(full.columns)
-    assert set(full["Bayes covers"]) <= {"yes", "NO"}
+    # units in the headers; the two Bayes quantities labelled apart
+    assert {"GT E ± sd [kPa]", "LS E ± sd [kPa]", "Bayes material E ± sd [kPa]",
+            "Bayes new specimen 90 % [kPa]", "Bayes covers GT", "Paper E ± sd [kPa]",
+            "Paper err [%] (vs paper's GT)", "Hertz LS E [kPa] (Δ vs LS)"} <= set(full.columns)
+    assert set(full["Bayes covers GT"]) <= {"yes", "NO"}
+    # sphere groups: the paper's Hertz fit, a few per cent below the Sneddon LS E
+    for cell in full["Hertz LS E [kPa] (Δ vs LS)"]:
+        delta = float(re.search(r"\(([-+]\d+\.\d) %\)", cell).group(1))
+        assert -6.0 < delta < 0.0
+
+
+def test_compare_cli_says_what_its_bayes_cells_are(fitted, tmp_path, capsys):
+    import shutil
+
+    out, _, _ = fitted
+    copy = tmp_path / "res"
+    shutil.copytree(out, copy)
+    assert main(["compare", str(copy)]) == 0
+    text = capsys.readouterr().out
+    assert "NEW SPECIMEN" in text and "'Bayes material E ± sd'" in text
+    assert "none found" not in text  # the campaign's ground truth was found and analysed
+
+
+def test_summary_page_states_coverage_and_paper_error_basis(fitted):
+    _, pdf, stdout = fitted
+    pages = _pdf_pages(pdf)
+    if not any(pages):
+        pytest.skip("pypdf not installed")
+    comp = pd.read_csv(fitted[0] / "comparison.csv")
+    k = int(comp[comp["method"] == "bayes"]["gt_in_interval"].sum())
+    summary = " ".join(pages[1].split())
+    assert f"Bayes: {k}/2" in summary and "LS: " in summary
+    assert "relative to the PAPER's own Instron ground truth" in summary
+    assert "not to the GT column" in summary
+    assert "covers the ground truth: Bayes" in stdout
+    # sphere pages name the paper's Hertz fit of the same traces
+    groups = [p for p in pages if "Representative trace" in p]
+    assert groups and all("Paper's Hertz fit of the same" in " ".join(p.split())
+                          for p in groups)
+
+
+def test_methods_text_is_built_from_the_settings(fitted):
+    import copy
+
+    out, _, _ = fitted
+    res = load_results(out)
+
+    def text(r) -> str:
+        return " ".join(t for _, t in _methods_lines(r))
+
+    base = text(res)
+    smp = res.settings["options_fields"]["settings"]
+    assert f"longer than {smp['tau_factor']:g} × the integrated autocorrelation time" in base
+    assert "100 autocorrelation" not in base and "first 20 % of a flat punch" in base
+    assert "HalfNormal(0.5)" in base  # tau prior scale read from pooled.csv
+    changed = copy.deepcopy(res.settings)
+    changed["options_fields"]["settings"].update(
+        tau_factor=37, check_every=123, min_steps=456, max_steps=7890, tau_rtol=0.02,
+        n_walkers=24, moves="de-snooker")
+    changed["options_fields"]["fit_fraction"] = 0.1
+    res.settings = changed
+    res.pooled = res.pooled.assign(tau_prior_sd=0.25)
+    new = text(res)
+    for frag in ("emcee, 24 walkers", "80 % DEMove + 20 % DESnookerMove",
+                 "every 123 steps after 456", "longer than 37 × the integrated",
+                 "less than 2 % since the last check",
+                 "max R-hat ≤ 1.01 over every parameter and the log posterior",
+                 "bulk and tail ESS ≥ 400 for every parameter", "or at 7890 steps (then flagged)",
+                 "Burn-in 2·max tau, thinning floor(min tau / 2)", "the first 10 % of the",
+                 "HalfNormal(0.25)"):
+        assert frag in new, frag
+    assert "50 ×" not in new.split("Pooling")[0] and "HalfNormal(0.5)" not in new
+    changed["options_fields"]["settings"]["moves"] = "de"
+    assert "DEMove) only" in text(res)
+
+
+def _replicated(res: ResultsFolder, path: Path, materials: list[str], tips: list[str]
+                ) -> ResultsFolder:
+    """The tables of one fitted group copied to materials × tips groups (no posteriors: the
+    group pages say so, nothing is fitted)."""
+    mat0, tip0 = res.groups()[0]
+
+    def rep(df: pd.DataFrame | None) -> pd.DataFrame | None:
+        if df is None:
+            return None
+        src = df[(df["material"].astype(str) == mat0) & (df["tip"].astype(str) == tip0)]
+        parts = []
+        for m in materials:
+            for t in tips:
+                part = src.copy()
+                part["material"], part["tip"] = m, t
+                if "trace_id" in part:
+                    part["trace_id"] = part["trace_id"].str.replace(f"{mat0}_{tip0}", f"{m}_{t}")
+                parts.append(part)
+        return pd.concat(parts, ignore_index=True)
+
+    return ResultsFolder(path=path, summary=rep(res.summary), settings=res.settings,
+                         comparison=rep(res.comparison), pooled=rep(res.pooled),
+                         budget=rep(res.budget))
+
+
+def test_many_groups_paginate_tables_and_split_charts(fitted, tmp_path):
+    out, _, _ = fitted
+    res = load_results(out)
+    (tmp_path / "many").mkdir()
+    materials = [f"Foam{i}" for i in range(1, 10)]
+    tips = ["flat", "sphere", "paraboloid"]
+    many = build_report(_replicated(res, tmp_path / "many", materials, tips),
+                        tmp_path / "many.pdf")
+    few = build_report(_replicated(res, tmp_path / "many", materials[:1], tips),
+                       tmp_path / "few.pdf")
+    assert len(_pdf_pages(many.path)) == many.n_pages
+    assert max(many.table_rows) <= TABLE_ROWS_PER_PAGE
+
+    def rows_of(info, prefix):
+        return [r for t, r in zip(info.titles, info.table_rows, strict=True)
+                if t.startswith(prefix)]
+
+    assert rows_of(many, "Summary") == [14, 13]
+    assert rows_of(many, "Comparison") == [9, 9, 9]  # whole materials, spread evenly
+    assert max(rows_of(many, "Comparison")) <= CHART_GROUPS_PER_PAGE
+    assert rows_of(many, "Uncertainty budget") == [9, 9, 9]
+    assert max(rows_of(many, "Uncertainty budget")) <= BUDGET_GROUPS_PER_PAGE
+    assert rows_of(many, "Convergence diagnostics") == [14, 13]
+    assert "Summary: ground truth vs least squares vs Bayes (continued, 2/2)" in many.titles
+    # 24 more group pages, one more summary and diagnostics page, two more of each chart
+    assert many.n_pages - few.n_pages == 24 + 1 + 1 + 2 + 2
+    assert rows_of(few, "Summary") == [3]
+
+
+def test_small_formatting_helpers(tmp_path, monkeypatch):
+    assert _range(1500, 1500) == "1500" and _range(1250, 2000) == "1250–2000"
+    (tmp_path / "work").mkdir()
+    monkeypatch.chdir(tmp_path / "work")
+    assert _shown(tmp_path / "work" / "res") == "res"
+    assert _shown(tmp_path / "rep") == str(Path("..") / "rep")
+    assert _shown("/") == "/"
 
 
 def test_plotting_modules_do_not_use_pyplot():
@@ -219,6 +389,26 @@ def test_force_depth_plot_units_and_band(fit):
     assert len(ax.child_axes) == 1  # the zoom on the contact onset
     inset = ax.child_axes[0]
     assert inset.get_xlim()[0] < 0 < inset.get_xlim()[1]
+    # neither the inset nor the legend covers the data or the fitted curves
+    assert _points_inside(ax, inset, data) == 0
+    assert _points_inside(ax, ax.get_legend(), data) == 0
+    median = [ln for ln in ax.lines if ln.get_label() == "Bayes posterior median"][0]
+    assert _points_inside(ax, inset, median) == 0
+    assert _points_inside(ax, ax.get_legend(), median) == 0
+
+
+def _points_inside(ax, artist, line) -> int:
+    """How many points of ``line`` (on ``ax``) fall inside ``artist``'s drawn box."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig = ax.figure
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    box = artist.get_window_extent(canvas.get_renderer())
+    xy = ax.transData.transform(np.column_stack([line.get_xdata(), line.get_ydata()]))
+    inside = ((xy[:, 0] >= box.x0) & (xy[:, 0] <= box.x1)
+              & (xy[:, 1] >= box.y0) & (xy[:, 1] <= box.y1))
+    return int(inside.sum())
 
 
 def test_plots_draw_on_a_given_axes(fit):
@@ -226,6 +416,9 @@ def test_plots_draw_on_a_given_axes(fit):
     ax = fig.add_subplot()
     assert plots.plot_residuals(fit, ax=ax) is fig
     assert ax.get_ylabel().endswith("[mN]") and "[mm]" in ax.get_xlabel()
+    # the legend sits in the band kept free below the residuals
+    points = [ln for ln in ax.lines if ln.get_label() == "Bayes residuals"][0]
+    assert _points_inside(ax, ax.get_legend(), points) == 0
 
 
 def test_posterior_plots(fit):
@@ -256,7 +449,7 @@ def test_walkers_plot(fit):
     n_walkers = fit.idata.posterior.sizes["chain"]
     assert all(len(a.lines) == n_walkers for a in axes)
     assert "Sampler step" in axes[-1].get_xlabel()
-    assert "R-hat" in axes[0].get_title(loc="left")
+    assert re.search(r"R-hat \d\.\d{4},", axes[0].get_title(loc="left"))  # as the tables
 
 
 def test_budget_plots(fitted):

@@ -16,12 +16,10 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..groundtruth import DEFAULT_STRAIN_WINDOW, analyse, scan_inputs
-from ..io.atomic import write_csv_atomic
+from ..pipeline import write_groundtruth
+from ..results import PER_FILE_NAME, SUMMARY_NAME
 
 __all__ = ["register", "run", "PER_FILE_NAME", "SUMMARY_NAME"]
-
-PER_FILE_NAME = "groundtruth.csv"
-SUMMARY_NAME = "groundtruth_summary.csv"
 
 
 def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -86,8 +84,7 @@ def run(args: argparse.Namespace) -> int:
                                 toe_compensation=args.toe_compensation,
                                 skip_toe=args.skip_toe, area_m2=area, height_m=height)
     out.mkdir(parents=True, exist_ok=True)
-    write_csv_atomic(per_file, out / PER_FILE_NAME, float_format="%.10g")
-    write_csv_atomic(summary, out / SUMMARY_NAME, float_format="%.10g")
+    write_groundtruth(per_file, summary, out)
 
     origin = "the toe offset" if args.toe_compensation else "zero measured strain"
     extra = "; points below twice the toe offset skipped" if args.skip_toe else ""

@@ -6,11 +6,12 @@ INPUT is one of
 * a campaign folder (it has ``manifest.csv``) or a campaign manifest: the campaign is fitted
   with both methods, its ground truth analysed (if it has ``groundtruth/``) and compared, into
   ``--out`` (default ``palpbayes-results/`` in the current folder; a folder fitted before from
-  the same campaign with the same options is reused), then the report is built;
+  the same campaign with the same options by the same palpbayes version is reused), then the
+  report is built;
 * nothing: the shipped example campaign ``data/example-campaign`` of a source checkout.
 
 The PDF goes to ``-o FILE.pdf`` (default ``report.pdf`` in the results folder).  See
-:mod:`palpbayes.report` for the pages.
+:mod:`palpbayes.report` for the pages and :mod:`palpbayes.pipeline` for the fitting.
 """
 
 from __future__ import annotations
@@ -65,7 +66,7 @@ def resolve_input(value: str | None) -> tuple[str, Path]:
         manifest; no INPUT and no shipped example.
     """
     from ..io.manifest import is_manifest
-    from ..report import example_campaign_dir
+    from ..pipeline import example_campaign_dir
 
     if value is None:
         return "campaign", example_campaign_dir() / "manifest.csv"
@@ -87,7 +88,18 @@ def resolve_input(value: str | None) -> tuple[str, Path]:
 
 def run(args: argparse.Namespace) -> int:
     """Fit if needed, build the report, print a short summary and the PDF's path."""
-    from ..report import build_report, load_results, run_pipeline, summary_table
+    from ..pipeline import run_pipeline
+    from ..report import (
+        BAYES_E_COL,
+        BAYES_NEW_COL,
+        GT_COL,
+        HERTZ_COL,
+        LS_E_COL,
+        build_report,
+        coverage_counts,
+        summary_table,
+    )
+    from ..results import load_results
 
     kind, path = resolve_input(args.input)
     if args.output is not None and not str(args.output).lower().endswith(".pdf"):
@@ -108,16 +120,20 @@ def run(args: argparse.Namespace) -> int:
     res = load_results(results)
     info = build_report(res, args.output, seed=args.seed)
     table = summary_table(res)
-    keep = [c for c in ("Material", "Tip", "GT E ± sd", "LS E ± sd", "Bayes E ± sd",
-                        "Bayes new 90 %", "Bayes covers", "LS mean E ± sd (traces)",
-                        "Bayes mean E ± sd (traces)") if c in table.columns]
+    keep = [c for c in ("Material", "Tip", GT_COL, LS_E_COL, BAYES_E_COL, BAYES_NEW_COL,
+                        "Bayes covers GT", HERTZ_COL, "LS mean E ± sd over traces [kPa]",
+                        "Bayes mean E ± sd over traces [kPa]") if c in table.columns]
     if len(table):
-        print("E [kPa]:")
         print(table[keep].to_string(index=False))
+    cover = coverage_counts(res)
+    if cover:
+        print("new-specimen 90 % interval covers the ground truth: "
+              + ", ".join(f"{'Bayes' if m == 'bayes' else 'LS'} {k}/{n}"
+                          for m, (k, n) in cover.items()))
     flagged = f"{info.n_flagged} flagged" if info.n_flagged else "all converged"
     line = f"report: {info.n_pages} pages, {info.n_traces} traces, Bayesian fits {flagged}"
     if info.n_pooled_flagged:
         line += f"; {info.n_pooled_flagged} pooled group(s) not converged (marked (!))"
     print(line)
-    print(f"wrote {info.path}")
+    print(f"wrote {info.path} (from the results folder {info.results_shown})")
     return 0

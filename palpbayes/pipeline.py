@@ -1,0 +1,146 @@
+"""The fitting pipeline behind ``palpbayes report CAMPAIGN``: fit, ground truth, compare.
+
+:func:`run_pipeline` fits a campaign folder with both methods
+(:func:`palpbayes.campaign.fit_campaign`), analyses its compression tests when the campaign has
+``groundtruth/`` (:func:`palpbayes.groundtruth.analyse`, written by :func:`write_groundtruth`)
+and pools and compares (:func:`palpbayes.compare.compare_campaign`), into one results folder.
+A results folder fitted before from the same campaign with the same options *and the same
+palpbayes version* is reused; anything else needs ``force``.  :func:`example_campaign_dir`
+locates the campaign shipped with a source checkout.
+
+This module and the command line are the only writers of a results folder's ground-truth
+tables; reading a results folder is :mod:`palpbayes.results`, the PDF :mod:`palpbayes.report`.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from . import __version__
+from .errors import InputError, OutputExistsError
+from .results import PER_FILE_NAME, SUMMARY_NAME
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from .fitjob import FitOptions
+
+__all__ = ["example_campaign_dir", "run_pipeline", "write_groundtruth", "check_reusable"]
+
+
+def write_groundtruth(per_file: pd.DataFrame, per_group: pd.DataFrame,
+                      out_dir: str | os.PathLike) -> tuple[Path, Path]:
+    """Write the ground-truth tables of :func:`palpbayes.groundtruth.analyse` into ``out_dir``.
+
+    ``groundtruth.csv`` (one row per test) and ``groundtruth_summary.csv`` (one row per
+    material), atomically, floats to 10 significant digits.  Returns the two paths.
+    """
+    from .io.atomic import write_csv_atomic
+
+    out = Path(out_dir)
+    a, b = out / PER_FILE_NAME, out / SUMMARY_NAME
+    write_csv_atomic(per_file, a, float_format="%.10g")
+    write_csv_atomic(per_group, b, float_format="%.10g")
+    return a, b
+
+
+def example_campaign_dir() -> Path:
+    """The shipped example campaign (``data/example-campaign`` beside the package).
+
+    Raises
+    ------
+    InputError
+        The folder is not there (e.g. a non-editable install, which ships the package only).
+    """
+    import palpbayes
+
+    p = Path(palpbayes.__file__).resolve().parents[1] / "data" / "example-campaign"
+    if not (p / "manifest.csv").is_file():
+        raise InputError(
+            f"the shipped example campaign is not at {p} (it comes with a source checkout, "
+            "not with an installed wheel); give a campaign folder, manifest or results folder, "
+            "or make one with 'palpbayes simulate DIR'")
+    return p
+
+
+def check_reusable(out_dir: str | os.PathLike, manifest: str | os.PathLike) -> None:
+    """Refuse to reuse a non-empty ``out_dir`` that is not this campaign's, by this version.
+
+    Reuse (the campaign's resume) keeps every finished fit, so it is only safe when the folder
+    holds palpbayes results (``settings.json``) of the same campaign manifest written by the
+    same palpbayes version (``settings.json`` ``palpbayes_version``): another version may fit
+    differently.  Different fit options are refused later by
+    :func:`palpbayes.campaign.fit_campaign`.
+
+    Raises
+    ------
+    OutputExistsError
+        The folder holds no palpbayes results.
+    InputError
+        Another campaign, or another (or unrecorded) palpbayes version.
+    """
+    from .campaign import read_settings
+
+    out = Path(out_dir)
+    old = read_settings(out)
+    if not old:
+        raise OutputExistsError(f"output folder {out} is not empty and holds no palpbayes "
+                                "results; choose another --out or use --force")
+    if old.get("source") and Path(old["source"]).resolve() != Path(manifest).resolve():
+        raise InputError(f"{out} holds results of another campaign ({old['source']}); "
+                         "choose another --out or use --force to replace them")
+    version = old.get("palpbayes_version")
+    if version != __version__:
+        raise InputError(f"{out} was fitted by palpbayes {version or '(unrecorded version)'}, "
+                         f"this is {__version__}: its fits are not reused; use --force to refit "
+                         "them, or choose another --out")
+
+
+def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
+                 options: FitOptions | None = None, *,
+                 workers: int | None = None, force: bool = False,
+                 progress: bool | None = None) -> Path:
+    """Fit a campaign (both methods), analyse its ground truth and compare; return out_dir.
+
+    Steps: :func:`palpbayes.campaign.fit_campaign` (``palpbayes fit``); when the campaign folder
+    has ``groundtruth/``, :func:`palpbayes.groundtruth.analyse` written to ``groundtruth.csv``
+    and ``groundtruth_summary.csv`` (``palpbayes groundtruth``); then
+    :func:`palpbayes.compare.compare_campaign` (``palpbayes compare OUT``).  A results folder
+    fitted before from the same source with the same options by the same palpbayes version is
+    reused (the campaign's resume); anything else needs ``force`` (:func:`check_reusable`).
+
+    Parameters
+    ----------
+    manifest
+        Campaign manifest CSV.
+    out_dir
+        Results folder.
+    options
+        :class:`~palpbayes.fitjob.FitOptions` (default: both methods, package defaults).
+    workers, force, progress
+        As for :func:`~palpbayes.campaign.fit_campaign`.
+    """
+    from .campaign import fit_campaign
+    from .fitjob import FitOptions
+
+    manifest = Path(manifest).resolve()
+    out = Path(out_dir)
+    options = options or FitOptions(method="both")
+    resume = False
+    if not force and out.is_dir() and any(out.iterdir()):
+        check_reusable(out, manifest)
+        resume = True
+    fit_campaign(manifest, out, options, workers=workers, resume=resume, force=force,
+                 progress=progress)
+    gt_dir = manifest.parent / "groundtruth"
+    if gt_dir.is_dir():  # for the report (compare analyses the same folder at full precision)
+        from .groundtruth import analyse
+
+        write_groundtruth(*analyse(gt_dir), out)
+    from .compare import compare_campaign
+
+    # exactly `palpbayes compare OUT`: the campaign's groundtruth/ is found via settings.json
+    compare_campaign(out)
+    return out
