@@ -306,7 +306,8 @@ def test_real_process_exit_status(tmp_path, good):
 
 @pytest.mark.slow
 def test_million_row_trace(tmp_path, capsys):
-    """A 10^6-row trace (3 mm at ~208 kHz) fits; measured 22 s and 360 MB RSS on 2 cores."""
+    """A 10^6-row trace (3 mm at ~208 kHz) fits end to end with both methods.  Time and memory
+    are measured by benchmarks/bench_long_trace.py (10 s, 357 MB peak RSS on 2 cores)."""
     tr = simulate_trace(111e3, Tip("paraboloid", radius=0.0117), thickness=0.03,
                         rate=208_333.0, rng=1)
     assert tr.n_points > 999_000
