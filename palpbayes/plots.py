@@ -874,7 +874,7 @@ def plot_forest(
         g, s = gt[0] * _KPA, (gt[1] if np.isfinite(gt[1]) else 0.0) * _KPA
         ax.axvspan(g - s, g + s, color="0.88", lw=0, zorder=0)
         ax.axvline(g, color=METHOD_COLORS["gt"], lw=1.2, zorder=1,
-                   label=f"{METHOD_LABELS['gt']} (mean ± sd)")
+                   label="Instron GT, mean ± sd")
     for _, r in summary.iterrows():
         m = r["method"]
         if m not in off:
@@ -891,13 +891,13 @@ def plot_forest(
         c = METHOD_COLORS["bayes"]
         ax.hlines(0.9, p["E_lo_pa"] * _KPA, p["E_hi_pa"] * _KPA, color=c, lw=3.0)
         ax.plot([p["E_pa"] * _KPA], [0.9], "D", ms=6, color=c, mec="white",
-                label="pooled: material mean")
+                label="pooled: material")
         labels[0.9] = "pooled mean"
         if "E_new_lo_pa" in p and np.isfinite(p["E_new_lo_pa"]):
             cn = METHOD_COLORS["pooled"]
             ax.hlines(0.2, p["E_new_lo_pa"] * _KPA, p["E_new_hi_pa"] * _KPA, color=cn, lw=3.0)
             ax.plot([p.get("E_new_pa", p["E_pa"]) * _KPA], [0.2], "D", ms=6, color=cn,
-                    mec="white", label="pooled: new specimen")
+                    mec="white", label="pooled: new spec.")
             labels[0.2] = "new specimen"
         ax.axhline(1.5, color="0.7", lw=0.6)
     ys = sorted(labels)

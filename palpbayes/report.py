@@ -733,6 +733,9 @@ def _page_group(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page:
                               hspace=0.42)
         ax_fd = fig.add_subplot(gs[0, 0:2])
         ax_forest = fig.add_subplot(gs[0, 2])
+        # room for the forest plot's trace-id tick labels (they would run into the force panel)
+        x0, y0, w, h = ax_forest.get_position().bounds
+        ax_forest.set_position([x0 + 0.045, y0, w - 0.045, h])
         ax_res = fig.add_subplot(gs[1, 0])
         ax_e = fig.add_subplot(gs[1, 1])
         ax_pair = fig.add_subplot(gs[1, 2])
