@@ -427,7 +427,7 @@ def simulate_trace(
         "simulated": True,
         "E_true": E,
         "Estar_true": float(effective_modulus(E, nu)),
-        "nu": nu,
+        "nu_true": nu,
         "z_surf_true": z_surf + b,
         "z_surf_commanded": z_surf,
         "z_offset_true": b,

@@ -128,7 +128,7 @@ def _truth_row(trace: IndentationTrace, tip_name: str) -> dict:
         "specimen": trace.specimen,
         "repetition": trace.repetition,
         "E_true_pa": m["E_true"],
-        "nu": m["nu"],
+        "nu": m["nu_true"],
         "Estar_true_pa": m["Estar_true"],
         "z_surf_true_m": m["z_surf_true"],
         "z_offset_true_m": m["z_offset_true"],

@@ -480,3 +480,17 @@ def test_pooled_interval_covers_the_true_material_modulus(tmp_path):
     assert sum(covered) >= 7, bayes[["material", "tip", "E_lo_pa", "E_pa", "E_hi_pa"]]
     assert bayes["gt_in_interval"].astype(bool).sum() >= 7
     assert bayes["paper_E_pa"].notna().all()
+
+
+def test_fit_options_nu_applies_to_simulated_traces():
+    """The simulator records its true nu as ``nu_true``; only a manifest's per-row ``nu``
+    overrides the run's option, so FitOptions(nu=...) is used for in-memory traces."""
+    from palpbayes.fitjob import fit_trace
+    from palpbayes.simulate import simulate_trace
+
+    tr = simulate_trace(136e3, Tip("paraboloid", radius=0.0117), nu=0.3, thickness=0.02, rng=1)
+    assert tr.metadata["nu_true"] == 0.3 and "nu" not in tr.metadata
+    rows = {nu: fit_trace(tr, FitOptions(method="lsq", nu=nu)).rows[0] for nu in (0.3, 0.45)}
+    assert rows[0.45]["nu"] == 0.45
+    # same E*, E scaled by (1 - nu^2)
+    assert rows[0.45]["E_pa"] / rows[0.3]["E_pa"] == pytest.approx((1 - 0.45**2) / (1 - 0.3**2))

@@ -68,7 +68,7 @@ class Diagnostics:
         out = []
         if not (self.rhat_max <= RHAT_MAX):
             worst = max(self.rhat, key=self.rhat.get)
-            out.append(f"R-hat {self.rhat_max:.3f} > {RHAT_MAX} ({worst})")
+            out.append(f"R-hat {self.rhat_max:.4f} > {RHAT_MAX} ({worst})")
         if not (self.ess_min >= ESS_MIN):
             out.append(f"ESS {self.ess_min:.0f} < {ESS_MIN:.0f}")
         if self.hit_cap:
