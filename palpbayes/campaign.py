@@ -39,6 +39,7 @@ summary is identical whatever the number of workers or the order of completion.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import hashlib
 import json
 import math
 import os
@@ -240,6 +241,17 @@ def _methods(options: FitOptions) -> list[str]:
     return ["bayes", "lsq"] if options.method == "both" else [options.method]
 
 
+def trace_fingerprint(trace: IndentationTrace) -> str:
+    """SHA-256 of what a fit of ``trace`` depends on: the time, z and force arrays, the tip,
+    the thickness and a manifest's per-row nu.  ``--resume`` refits a trace whose fingerprint
+    changed (an edited file) instead of reusing its recorded rows."""
+    h = hashlib.sha256()
+    for a in (trace.time, trace.z, trace.force):
+        h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    h.update(repr((trace.tip, trace.thickness, trace.metadata.get("nu"))).encode("utf-8"))
+    return h.hexdigest()
+
+
 def _fit_one(trace: IndentationTrace, options: FitOptions, out: str) -> dict:
     """Fit one trace, write its posterior and partial JSON; never raises PalpbayesErrors.
 
@@ -267,7 +279,7 @@ def _fit_one(trace: IndentationTrace, options: FitOptions, out: str) -> dict:
         return {"error": (type(exc).__name__, msg)}
     rows = [{k: _jsonable(v) for k, v in r.items()} for r in rows]
     record = {"trace_id": trace.trace_id, "options": options_record(options)["repr"],
-              "rows": rows}
+              "data_sha256": trace_fingerprint(trace), "rows": rows}
     write_text_atomic(json.dumps(record, indent=1),
                       Path(out) / PARTIAL_DIR / f"{trace.trace_id}.json")
     return {"rows": rows}
@@ -294,6 +306,8 @@ def _read_partial(out: Path, trace: IndentationTrace, options: FitOptions) -> li
         return None
     rows = rec.get("rows", [])
     if rec.get("options") != options_record(options)["repr"]:
+        return None
+    if rec.get("data_sha256") != trace_fingerprint(trace):
         return None
     if sorted(r.get("method") for r in rows) != sorted(_methods(options)):
         return None

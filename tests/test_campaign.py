@@ -169,6 +169,15 @@ def test_resume_fits_only_unfinished_traces(traces, tmp_path, monkeypatch):
     campaign.fit_campaign(subset, out, OPTS, workers=1, resume=True)
     assert counter4.ids == [subset[0].trace_id]
 
+    # a trace whose data changed (an edited file) is refitted; going back refits it again
+    edited = list(subset)
+    edited[1] = subset[1].replace(force=subset[1].force * 1.05)
+    for source in (edited, subset):
+        counter5 = _Counter(counter.real)
+        monkeypatch.setattr(campaign, "fit_trace", counter5)
+        campaign.fit_campaign(source, out, OPTS, workers=1, resume=True)
+        assert counter5.ids == [subset[1].trace_id]
+
     # the result matches an uninterrupted run
     monkeypatch.setattr(campaign, "fit_trace", counter.real)
     campaign.fit_campaign(subset, tmp_path / "straight", OPTS, workers=1)
