@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
+from .contact import check_tip_plausible
 from .contact.geometry import Tip
 from .errors import ConvergenceWarning, FitError, GeometryError
 from .fitdata import DEFAULT_F_UNC, FitData, ModelSpec, prepare
@@ -130,8 +131,6 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     NoContactError, InputError
         As :func:`palpbayes.fitdata.prepare`.
     """
-    from .contact import check_tip_plausible
-
     src = trace.source or trace.trace_id
     tip = trace.tip
     if tip is None:
@@ -150,7 +149,7 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     data = prepare(trace, model, f_unc=options.f_unc, fit_fraction=options.fit_fraction,
                    max_depth=options.max_depth)
 
-    depth = data.z_contact - float(data.loading.z.min())
+    depth = data.z_contact - data.z_min
     if trace.thickness is not None and depth > trace.thickness:
         raise GeometryError(
             f"{src}: the indentation depth {depth * 1e3:.4g} mm (contact onset to deepest "
