@@ -536,7 +536,7 @@ def _variants(test: CompressionTest, fit: GroundTruthFit, window: tuple[float, f
         try:
             plain = fit_modulus(test, window, toe_compensation=False)
             out["E_plain_pa"], out["E_plain_sd_pa"] = plain.E_pa, plain.E_sd_pa
-        except DataFileError:
+        except (InputError, FitError):  # auxiliary columns never abort the analysis
             pass
     else:
         out["E_plain_pa"], out["E_plain_sd_pa"] = fit.E_pa, fit.E_sd_pa
@@ -547,7 +547,7 @@ def _variants(test: CompressionTest, fit: GroundTruthFit, window: tuple[float, f
             continue
         try:
             values.append(fit_modulus(test, w, toe_compensation, skip_toe=skip_toe).E_pa)
-        except DataFileError:
+        except (InputError, FitError):  # auxiliary columns never abort the analysis
             return out  # a window the test cannot fill: no spread
     out["E_window_spread_pa"] = float(max(values) - min(values))
     return out

@@ -947,7 +947,7 @@ def plot_stiffening(
     fit
         A :class:`palpbayes.stiffening.StiffeningResult`: its preferred law's median and
         ``level`` band (``fit.predict``) on 300 rest times from 0 to 1.05·max(t), unless
-        ``curve_*`` are given.
+        ``curve_*`` are given, labelled with ``fit.law``.
     ax
         Axes to draw on.
     level
@@ -969,8 +969,7 @@ def plot_stiffening(
         pred = fit.predict(curve_t, level=level)
         curve_median = pred["median_pa"].to_numpy()
         curve_lo, curve_hi = pred["lo_pa"].to_numpy(), pred["hi_pa"].to_numpy()
-        law = ("fitted c1·exp(c2·t) + c3·exp(c4·t)" if fit.preferred == "double"
-               else "fitted c0 + c1·exp(c2·t)")
+        law = f"fitted {fit.law}"
     if rested is not None:
         ax.axhspan(rested[1] * _KPA, rested[2] * _KPA, color="0.88", lw=0)
         ax.axhline(rested[0] * _KPA, color=METHOD_COLORS["gt"], lw=1.0,

@@ -228,11 +228,8 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
             if any(h is not None for h in hertz.values()):
                 h = hertz[(mat, tip)]
                 row[HERTZ_COL] = "–"
-                if h is not None:
-                    ls_e = float(lsq["E_pa"]) if lsq is not None and _isnum(lsq["E_pa"]) \
-                        else float("nan")
-                    d = (h[0] - ls_e) / ls_e if math.isfinite(ls_e) and ls_e else h[2]
-                    row[HERTZ_COL] = f"{_fmt(h[0] * _KPA)} ({100 * d:+.1f} %)"
+                if h is not None:  # Δ: mean per-trace (E_hertz − E)/E, as on the group page
+                    row[HERTZ_COL] = f"{_fmt(h[0] * _KPA)} ({100 * h[2]:+.1f} %)"
             if bay is not None and not _truthy(bay.get("converged_all")):
                 row[BAYES_E_COL] += " (!)"
             rows.append(row)
@@ -1002,7 +999,7 @@ def _page_stiffening(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page
         plots.plot_stiffening(rows["rest_time_s"].astype(float), rows["E_stat_pa"],
                               E_lo=rows["E_stat_lo_pa"], E_hi=rows["E_stat_hi_pa"], fit=fit,
                               rested=rested, ax=ax)
-        tab = (fit.double if fit.preferred == "double" else fit.single).copy()
+        tab = fit.table_of().copy()
         show = pd.DataFrame({"parameter": tab["parameter"], "unit": tab["unit"],
                              "median": tab["median"].map(lambda v: f"{v:.4g}"),
                              "90 % interval": [f"[{a:.4g}, {b:.4g}]"
@@ -1010,9 +1007,7 @@ def _page_stiffening(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page
                                                                strict=True)]})
         ax2 = fig.add_axes((0.62, 0.62, 0.35, 0.24))
         _draw_table(ax2, show, fontsize=8, row_height=1.0 / (len(show) + 1))
-        law = ("E(t) = c1·exp(c2·t) + c3·exp(c4·t)" if fit.preferred == "double"
-               else "E(t) = c0 + c1·exp(c2·t)")
-        lines = [("t", f"Preferred law: {law}"), ("", "")]
+        lines = [("t", f"Preferred law: {fit.law}"), ("", "")]
         lines += [("t", ln) for ln in _wrap(fit.message, 62)]
         lines += [("", ""), ("t", "Statistical E of each palpation (the budget's systematic "),
                   ("t", "inputs scale the whole curve, not its shape).")]

@@ -72,7 +72,7 @@ from .bayes.sampler import SamplerSettings, run_emcee
 from .errors import InputError
 
 __all__ = ["StiffeningResult", "fit_stiffening", "fit_stiffening_summary",
-           "STIFFENING_SETTINGS", "MIN_RATIO", "double_exponential"]
+           "STIFFENING_SETTINGS", "MIN_RATIO", "double_exponential", "LAW_TEXT"]
 
 #: Minimum ratio T4/T2 (5 % quantile) for the two time scales to count as distinct.
 MIN_RATIO = 1.5
@@ -226,6 +226,14 @@ def _q(x, level):
     return float(np.median(x)), float(np.std(x, ddof=1)), float(lo), float(hi)
 
 
+#: Equation of each law, by the names used in :attr:`StiffeningResult.preferred`.
+LAW_TEXT = {
+    "double": "E(t) = c1·exp(c2·t) + c3·exp(c4·t)",
+    "single": "E(t) = c0 + c1·exp(c2·t)",
+    "constant": "E(t) = c0 (no stiffening detected)",
+}
+
+
 @dataclass
 class StiffeningResult:
     """Result of :func:`fit_stiffening`.
@@ -288,12 +296,19 @@ class StiffeningResult:
         """False when the outcome is a constant modulus (no stiffening law passed its checks)."""
         return self.preferred != "constant"
 
-    def _table_of(self, model: str) -> pd.DataFrame:
+    def table_of(self, model: str | None = None) -> pd.DataFrame:
+        """Parameter table of ``model`` ("double", "single", "constant"; default: preferred)."""
+        model = model or self.preferred
         return {"double": self.double, "single": self.single, "constant": self.constant}[model]
+
+    @property
+    def law(self) -> str:
+        """The preferred law as an equation, e.g. ``E(t) = c0 + c1·exp(c2·t)``."""
+        return LAW_TEXT[self.preferred]
 
     def row(self) -> dict:
         """One row of ``stiffening.csv``: verdict, BICs and the preferred law's medians."""
-        tab = self._table_of(self.preferred).set_index("parameter")["median"]
+        tab = self.table_of().set_index("parameter")["median"]
         out = {"n_points": self.n_points, "n_distinct": self.n_distinct,
                "identifiable": self.identifiable, "preferred": self.preferred}
         for k in ("c0", "c1", "c2", "c3", "c4", "sigma_x"):

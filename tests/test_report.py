@@ -223,6 +223,7 @@ def test_compare_cli_says_what_its_bayes_cells_are(fitted, tmp_path, capsys):
     assert main(["compare", str(copy)]) == 0
     text = capsys.readouterr().out
     assert "NEW SPECIMEN" in text and "'Bayes material E ± sd'" in text
+    assert "E_new_lo_pa, E_new_hi_pa" in text and "E_new_sd_pa" not in text  # as printed
     assert "none found" not in text  # the campaign's ground truth was found and analysed
 
 
@@ -495,6 +496,7 @@ def test_comparison_and_forest_plots(fitted):
 def test_stiffening_plot_with_a_fit_object():
     class Fake:
         preferred = "single"
+        law = "E(t) = c0 + c1·exp(c2·t)"
 
         def predict(self, t, level=0.9):
             m = 100e3 + 30e3 * np.exp(-np.asarray(t) / 30)

@@ -89,6 +89,15 @@ def test_constant_data_give_no_stiffening():
     assert row["preferred"] == "constant" and not row["stiffening_detected"]
     assert row["c0"] == pytest.approx(E.mean(), rel=0.03) and np.isnan(row["c1"])
     assert row["bic_constant"] - row["bic_single"] <= 2  # BIC: no evidence for a decay
+    # the preferred law is named (and drawn) as a constant, not as the rejected exponential
+    assert r.law == "E(t) = c0 (no stiffening detected)"
+    assert list(r.table_of()["parameter"]) == list(r.constant["parameter"])
+    from palpbayes import plots
+
+    fig = plots.plot_stiffening(rest, E, fit=r)
+    labels = fig.axes[0].get_legend_handles_labels()[1]
+    assert "fitted E(t) = c0 (no stiffening detected)" in labels
+    assert not any("exp" in lab for lab in labels), labels
 
 
 def test_equal_rates_are_detected():

@@ -43,9 +43,10 @@ def run(args: argparse.Namespace) -> int:
     """Run ``palpbayes compare``; return 0.  Bad input raises InputError (exit status 2)."""
     result = compare_campaign(args.results_dir, groundtruth=args.groundtruth, seed=args.seed)
     print(result.format())
-    print("\nnote: the Bayes cells above are the prediction for a NEW SPECIMEN (comparison.csv "
-          "E_new_pa ± E_new_sd_pa); the pooled MATERIAL modulus (E_pa ± E_sd_pa) is the "
-          "report's 'Bayes material E ± sd' column")
+    if "bayes" in set(result.comparison["method"].astype(str)):
+        print("\nnote: the Bayes cells above are the prediction for a NEW SPECIMEN, median [90 % "
+              "interval] (comparison.csv E_new_pa [E_new_lo_pa, E_new_hi_pa]); the pooled "
+              "MATERIAL modulus (E_pa ± E_sd_pa) is the report's 'Bayes material E ± sd' column")
     res = result.results_dir
     print(f"\nwrote {res / 'comparison.csv'}, {res / 'pooled.csv'} and {res / 'budget.csv'}")
     return 0
