@@ -57,6 +57,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from . import __version__, plots
+from .bayes.sampler import MOVES
 from .errors import InputError
 from .pipeline import example_campaign_dir, run_pipeline
 from .results import (
@@ -1041,11 +1042,7 @@ def _pages_stiffening_table(res: ResultsFolder) -> list[_Page]:
 
 
 #: What each ``SamplerSettings.moves`` value means (emcee moves).
-MOVES_TEXT = {
-    "de": "emcee's differential-evolution move (DEMove) only",
-    "de-snooker": "80 % DEMove + 20 % DESnookerMove",
-    "stretch": "emcee's affine-invariant stretch move",
-}
+MOVES_TEXT = MOVES  # description of each move schedule, defined beside the sampler
 
 
 def _sampler_settings(recorded: dict | None) -> tuple[dict, bool]:

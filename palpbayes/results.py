@@ -183,12 +183,10 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
     """
     from .bayes.diagnostics import compute_diagnostics
     from .bayes.result import BayesResult
-    from .compare import read_posterior
-    from .fitdata import FitData, ModelSpec, prepare
+    from .fitdata import ModelSpec, prepare
     from .io.manifest import load_trace, tip_from_row
     from .lsq import fit_lsq_data
-    from .pooling import posterior_attrs
-    from .trace import IndentationTrace
+    from .pooling_inputs import fitdata_from_posterior, posterior_attrs, read_posterior
 
     res = results if isinstance(results, ResultsFolder) else load_results(results)
     path = res.path / "posterior" / f"{trace_id}.nc"
@@ -227,13 +225,8 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
                 data = cand
         except InputError:
             data = None
-    if data is None:
-        zc, zt = (float(v) for v in np.asarray(attrs["z_admissible_m"]).ravel()[:2])
-        loading = IndentationTrace(np.arange(z_fit.size, dtype=float), z_fit, f_fit,
-                                   trace_id=trace_id)
-        data = FitData(z=z_fit, force=f_fit, z_contact=zc, z_top=zt, z_min=float(z_fit.min()),
-                       f_unc=f_unc, fit_fraction=float(fraction or 0.0), loading=loading,
-                       model=model)
+    if data is None:  # the trace file is gone or changed: the fitted points stored in the netCDF
+        data = fitdata_from_posterior(idata, model)
     names = [n for n in ("E_star", "z_surf", "sigma", "F0", "phi", "nu_t")
              if n in idata.posterior]
     srow = res.summary[(res.summary["trace_id"].astype(str) == trace_id)

@@ -33,8 +33,12 @@ from ..errors import InputError
 __all__ = ["SamplerSettings", "ChainResult", "run_emcee", "MOVES"]
 
 
-#: Names of the move schedules (see :class:`SamplerSettings`).
-MOVES = ("de", "de-snooker", "stretch")
+#: The move schedules (see :class:`SamplerSettings`), name -> description (used in reports).
+MOVES = {
+    "de": "emcee's differential-evolution move (DEMove) only",
+    "de-snooker": "80 % DEMove + 20 % DESnookerMove",
+    "stretch": "emcee's affine-invariant stretch move",
+}
 
 
 @dataclass(frozen=True)
