@@ -5,11 +5,20 @@ Shared by the least-squares baseline and the Bayesian model so both fit the same
 Rules (DESIGN §2):
 
 * only the loading segment is used (approach + indentation, no hold/retract);
-* the *contact onset* z_c is where the measured force last lies within ±F_unc before it stays
-  above it (linear interpolation between the two samples), read along the samples where the
-  tip reaches a new deepest point (:func:`first_passage`; all samples when z is monotone).
-  The paper's constraint −F_unc <= F(z_surf) <= F_unc then admits z_surf in [z_c, z_top],
-  z_top the start of the approach;
+* the force is read against the pre-contact *baseline* (:mod:`palpbayes.baseline`): a sensor
+  that was not tared, or whose baseline drifts, is normal input.  F_unc, when not given, is
+  the baseline's noise read as a peak-to-peak spec (6·sd, :mod:`palpbayes.noise`);
+* the *contact onset* z_c is where the measured force last lies within ±F_unc of its
+  reference before it stays above it (linear interpolation between the two samples), read
+  along the samples where the tip reaches a new deepest point (:func:`first_passage`; all
+  samples when z is monotone).  The reference is zero — the paper's constraint
+  −F_unc <= F(z_surf) <= F_unc, exactly — when the sensor is tared to within F_unc, and the
+  baseline level b otherwise (untared: |F(z_surf) − b| <= F_unc, the only form that has a
+  solution).  It admits z_surf in [z_c, z_top], z_top the start of the approach: the
+  least-squares baseline's search range.  The Bayesian model does not use it (DESIGN §3.6): its surface
+  prior spans the whole loading range [z_min, z_top];
+* ``tare=True`` subtracts the baseline level from the force (zeroing the sensor), so that the
+  paper's model, which has no offset term, can be fitted to an untared recording;
 * for a tip with ``fit_fraction`` f > 0 (the paper uses f = 0.2 for the flat punch) only samples
   with z <= z_c − f·(z_c − z_min) are fitted, a window fixed once from z_c so the objective is a
   smooth function of z_surf;  with f = 0 every loading sample (approach included) is fitted.
@@ -22,12 +31,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .baseline import MIN_BASELINE_POINTS, Baseline, estimate_baseline
 from .contact import Tip, check_nu, exponent, shape
 from .errors import InputError, NoContactError
 from .trace import IndentationTrace
+from .units import format_force
 
 __all__ = ["ModelSpec", "FitData", "prepare", "first_passage", "DEFAULT_F_UNC",
-           "default_fit_fraction"]
+           "default_fit_fraction", "noise_from_baseline", "onset_reference"]
 
 #: The paper's sensor uncertainty F_unc [N]: 48 mN peak-to-peak.
 DEFAULT_F_UNC = 48e-3
@@ -112,6 +123,10 @@ class FitData:
         The whole loading segment (for the constraint and plots).
     model
         The contact model.
+    baseline
+        Pre-contact baseline of the loading segment (before any tare).
+    tare
+        [N] Force subtracted from the measured force (the baseline level when tared, else 0).
     """
 
     z: np.ndarray
@@ -123,6 +138,13 @@ class FitData:
     fit_fraction: float
     loading: IndentationTrace
     model: ModelSpec
+    baseline: Baseline | None = None
+    tare: float = 0.0
+
+    @property
+    def z_prior(self) -> tuple[float, float]:
+        """[m] Support of the Bayesian surface prior: the whole loading range [z_min, z_top]."""
+        return self.z_min, self.z_top
 
     @property
     def n_points(self) -> int:
@@ -150,7 +172,7 @@ class FitData:
         samples sorted by height.  For monotone z this is plain interpolation of F(z).
         """
         z, f = first_passage(self.loading.z, self.loading.force)
-        return np.interp(z_surf, z[::-1], f[::-1])
+        return np.interp(z_surf, z[::-1], f[::-1]) - self.tare
 
 
 def first_passage(z: np.ndarray, force: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -164,39 +186,68 @@ def first_passage(z: np.ndarray, force: np.ndarray) -> tuple[np.ndarray, np.ndar
     return z[keep], force[keep]
 
 
-def _contact_onset(z: np.ndarray, f: np.ndarray, f_unc: float, source: str) -> float:
-    inside = np.abs(f) <= f_unc
-    if inside.all():
+def _contact_onset(z: np.ndarray, f: np.ndarray, f_unc: float, base: Baseline,
+                   source: str) -> float:
+    """Height [m] where F − baseline last lies within ±f_unc before staying above it."""
+    reference = onset_reference(base, f_unc)
+    excess = f - reference
+    inside = np.abs(excess) <= f_unc
+    if inside.all() or excess.max() <= f_unc:
         raise NoContactError(
-            f"{source}: the force never leaves ±{f_unc * 1e3:g} mN, so the tip never reaches the "
-            f"surface (max force {f.max() * 1e3:.3g} mN); check the recording or lower --f-unc"
+            f"{source}: no contact: the force never leaves ±{format_force(f_unc)} around its "
+            f"pre-contact level ({format_force(reference)}; largest rise "
+            f"{format_force(excess.max())}), so the tip never reaches the surface; check the "
+            "recording, or lower --f-unc/--noise-pp"
         )
     if not inside.any():
         raise InputError(
-            f"{source}: the force is outside ±{f_unc * 1e3:g} mN from the first sample "
-            f"({f[0] * 1e3:.3g} mN), so no surface height satisfies the paper's constraint; "
-            "tare the force sensor before the approach or raise --f-unc"
+            f"{source}: the force is never within ±{format_force(f_unc)} of its pre-contact "
+            f"level ({format_force(reference)}); give the sensor noise with --noise-pp"
         )
     last = int(np.flatnonzero(inside)[-1])
     if last == f.size - 1:
         raise NoContactError(
-            f"{source}: the force is back within ±{f_unc * 1e3:g} mN at the deepest point; the "
-            "tip does not stay in contact (is the force sign flipped? try --force-sign -1)"
+            f"{source}: the force is back within ±{format_force(f_unc)} of its pre-contact "
+            "level at the deepest point; the tip does not stay in contact (is the force sign flipped? "
+            "try --force-sign -1)"
         )
-    # interpolate where |F| crosses f_unc between samples `last` and `last + 1`
-    f0, f1 = f[last], f[last + 1]
+    # interpolate where |F − baseline| crosses f_unc between samples `last` and `last + 1`
+    f0, f1 = excess[last], excess[last + 1]
     target = np.sign(f1) * f_unc
     w = 0.0 if f1 == f0 else float(np.clip((target - f0) / (f1 - f0), 0.0, 1.0))
     return float(z[last] + w * (z[last + 1] - z[last]))
+
+
+def onset_reference(base: Baseline, f_unc: float) -> float:
+    """[N] Force level the contact onset is read against: 0 on a sensor tared to within
+    ``f_unc`` (the paper's constraint as written), the baseline level otherwise."""
+    return float(base.level) if abs(base.level) > f_unc else 0.0
+
+
+def noise_from_baseline(base: Baseline, source: str) -> float:
+    """[N] The peak-to-peak noise spec read off the baseline (6·sd), or a clear error."""
+    if base.n >= MIN_BASELINE_POINTS and base.sd == 0:
+        raise InputError(
+            f"{source}: the force before contact has no noise (a noise-free simulation?), so "
+            "no noise spec can be read from it; give --noise-pp (or --f-unc) in N"
+        )
+    if not base.reliable:
+        raise InputError(
+            f"{source}: too few samples before contact ({base.n}) to estimate the sensor noise; "
+            "give it with --noise-pp (the sensor's peak-to-peak noise in N), or record a "
+            "longer approach"
+        )
+    return base.noise_pp
 
 
 def prepare(
     trace: IndentationTrace,
     model: ModelSpec,
     *,
-    f_unc: float = DEFAULT_F_UNC,
+    f_unc: float | None = None,
     fit_fraction: float | None = None,
     max_depth: float | None = None,
+    tare: bool = False,
 ) -> FitData:
     """Select the loading segment, the contact onset and the fit window of ``trace``.
 
@@ -207,12 +258,15 @@ def prepare(
     model
         Contact model.
     f_unc
-        [N] Sensor uncertainty of the constraint |F(z_surf)| <= F_unc (paper: 48 mN).
+        [N] Sensor uncertainty of the constraint |F(z_surf)| <= F_unc (paper: 48 mN); None:
+        the baseline's noise as a peak-to-peak spec (:func:`noise_from_baseline`).
     fit_fraction
         Fraction of the penetration (from the contact onset) left out; None for the paper's
         default (:func:`default_fit_fraction`).
     max_depth
         [m] Drop samples deeper than this below the contact onset (None: keep all).
+    tare
+        Subtract the baseline level from the force (zero the sensor) before fitting.
 
     Raises
     ------
@@ -221,7 +275,7 @@ def prepare(
     InputError
         If no surface height satisfies the constraint, or an option is out of range.
     """
-    if not (np.isfinite(f_unc) and f_unc > 0):
+    if f_unc is not None and not (np.isfinite(f_unc) and f_unc > 0):
         raise InputError(f"F_unc must be a positive force in newtons, got {f_unc!r}")
     if fit_fraction is None:
         fit_fraction = default_fit_fraction(model.tip)
@@ -230,7 +284,11 @@ def prepare(
     source = trace.source or trace.trace_id
     loading = trace.loading_segment()
     z, f = loading.z, loading.force
-    z_c = _contact_onset(*first_passage(z, f), f_unc, source)
+    base = estimate_baseline(z, f)
+    if f_unc is None:
+        f_unc = noise_from_baseline(base, source)
+    z_c = _contact_onset(*first_passage(z, f - (base.level if tare else 0.0)), f_unc,
+                         base.shifted(-base.level) if tare else base, source)
     z_min = float(z.min())
     keep = np.ones(z.size, dtype=bool)
     if fit_fraction > 0:
@@ -243,9 +301,10 @@ def prepare(
             f"{source}: only {n_contact} sample(s) in contact inside the fit window; the "
             "indentation is too shallow or the window too narrow"
         )
+    offset = base.level if tare else 0.0
     return FitData(
         z=np.ascontiguousarray(z[keep]),
-        force=np.ascontiguousarray(f[keep]),
+        force=np.ascontiguousarray(f[keep] - offset),
         z_contact=z_c,
         z_top=float(z.max()),
         z_min=z_min,
@@ -253,4 +312,6 @@ def prepare(
         fit_fraction=float(fit_fraction),
         loading=loading,
         model=model,
+        baseline=base,
+        tare=float(offset),
     )

@@ -17,7 +17,7 @@ from .bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_baye
 from .contact import check_tip_plausible
 from .contact.geometry import Tip
 from .errors import ConvergenceWarning, FitError, GeometryError
-from .fitdata import DEFAULT_F_UNC, FitData, ModelSpec, prepare
+from .fitdata import FitData, ModelSpec, prepare
 from .lsq import LSQResult, fit_lsq_data
 from .trace import IndentationTrace
 
@@ -32,6 +32,8 @@ SUMMARY_COLUMNS = [
     "material", "specimen", "repetition", "rest_time_s", "nu", "noise_model",
     "E_stat_pa", "E_stat_sd_pa", "E_stat_lo_pa", "E_stat_hi_pa", "k", "m", "rss_n2",
     "constraint_active", "tau_max", "acceptance", "n_steps", "flags",
+    # the pre-contact baseline and the noise spec used (F_unc), read from the data unless given
+    "baseline_n", "f_unc_n", "baseline_model", "F0_n",
     # tip "sphere" only (else NaN): the paper's choice for a sphere, least squares with the
     # paraboloid (Hertz) law at the sphere's radius on the same points, and (E_hertz − E)/E
     "E_hertz_pa", "E_hertz_rel_diff",
@@ -53,13 +55,20 @@ class FitOptions:
     bonded
         Specimen bonded to the base (thickness correction only).
     f_unc
-        [N] Sensor uncertainty (surface constraint and F0 prior).
+        [N] Sensor uncertainty (surface constraint, contact onset and F0 prior scale); None:
+        the pre-contact baseline's noise as a peak-to-peak spec.
     fit_fraction
         Fraction of the penetration skipped (None: 0.2 for flat, 0 otherwise).
     max_depth
         [m] Only fit samples shallower than this below the contact onset.
     noise
         Noise model of the Bayesian fit.
+    baseline
+        Baseline of the Bayesian model: ``"constant"`` (F0) or ``"linear"`` (F0 + F1·(z −
+        z_ref), drift or a tilted baseline).
+    tare
+        Subtract the pre-contact baseline level from the force before both fits (the paper's
+        least squares has no offset term).
     priors, budget, settings
         Bayesian settings.
     seed
@@ -72,10 +81,12 @@ class FitOptions:
     nu: float = 0.3
     thickness_correction: bool = False
     bonded: bool = True
-    f_unc: float = DEFAULT_F_UNC
+    f_unc: float | None = None
     fit_fraction: float | None = None
     max_depth: float | None = None
     noise: str = "gaussian"
+    baseline: str = "constant"
+    tare: bool = False
     priors: PriorSpec = field(default_factory=PriorSpec)
     budget: BudgetSpec = field(default_factory=BudgetSpec)
     settings: SamplerSettings = field(default_factory=SamplerSettings)
@@ -147,7 +158,7 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     nu = trace.metadata.get("nu", options.nu)
     model = ModelSpec(tip, nu=nu, thickness=thickness, bonded=options.bonded)
     data = prepare(trace, model, f_unc=options.f_unc, fit_fraction=options.fit_fraction,
-                   max_depth=options.max_depth)
+                   max_depth=options.max_depth, tare=options.tare)
 
     depth = data.z_contact - data.z_min
     if trace.thickness is not None and depth > trace.thickness:
@@ -225,7 +236,9 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
                 "E_hertz_rel_diff": (e_hertz - e) / e if ok else float("nan")}
 
     meta = {"material": trace.material, "specimen": trace.specimen,
-            "repetition": trace.repetition, "rest_time_s": trace.rest_time}
+            "repetition": trace.repetition, "rest_time_s": trace.rest_time,
+            "baseline_n": data.baseline.level if data.baseline is not None else float("nan"),
+            "f_unc_n": data.f_unc}
     rows = []
     if options.method in ("lsq", "both"):
         rows.append(with_hertz({**lsq.summary_row(), **meta}))
@@ -236,7 +249,8 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
             if not options.strict:
                 warnings.simplefilter("ignore", ConvergenceWarning)  # flagged in the row
             bayes = fit_bayes_data(
-                data, noise=options.noise, priors=options.priors, budget=options.budget,
+                data, noise=options.noise, baseline=options.baseline, priors=options.priors,
+                budget=options.budget,
                 settings=options.settings, seed=trace_seed(options.seed, trace.trace_id),
                 strict=options.strict, trace_id=trace.trace_id, lsq=lsq,
             )

@@ -16,6 +16,12 @@ cov = s²·(JᵀJ)⁻¹ with s² = L/(n − 2) and J the Jacobian [s(d), E*·s'(
 its central 90 % interval is E ± t(0.95, n − 2)·sd(E).  This is the textbook nonlinear
 least-squares interval: it assumes iid Gaussian residuals and ignores the constraint; it is
 the baseline's own interval, not a recommendation.
+
+Untared sensors: the paper's model has no force-offset term.  The contact onset (and so the
+constraint's range) is read against the pre-contact baseline (:mod:`palpbayes.fitdata`), but
+the fit itself is the paper's: when the baseline level exceeds F_unc the row carries a note
+(``notes``, the ``flags`` column) that E and z_surf are biased, and ``tare=True``
+(``--tare``) subtracts the baseline level first.
 """
 
 from __future__ import annotations
@@ -26,8 +32,9 @@ import numpy as np
 from scipy import optimize, stats
 
 from .errors import FitError
-from .fitdata import DEFAULT_F_UNC, FitData, ModelSpec, prepare
+from .fitdata import FitData, ModelSpec, prepare
 from .trace import IndentationTrace
+from .units import format_force
 
 __all__ = ["LSQResult", "fit_lsq", "fit_lsq_data", "profile_rss", "GRID_POINTS"]
 
@@ -63,6 +70,8 @@ class LSQResult:
         True when the unconstrained optimum would violate |F(z_s)| <= F_unc.
     force_at_surface
         [N] Measured force where the tip passed z_surf.
+    notes
+        Caveats of this fit (e.g. an untared sensor), shown in the ``flags`` column.
     """
 
     E: float
@@ -85,6 +94,7 @@ class LSQResult:
     model: ModelSpec
     trace_id: str = ""
     cov: np.ndarray = field(default_factory=lambda: np.full((2, 2), np.nan), repr=False)
+    notes: tuple[str, ...] = ()
 
     def summary_row(self) -> dict:
         """One row of ``summary.csv`` (DESIGN §7); Bayesian-only columns are empty."""
@@ -109,6 +119,7 @@ class LSQResult:
             "m": np.nan if self.m is None else self.m,
             "rss_n2": self.rss,
             "constraint_active": self.constraint_active,
+            "flags": "; ".join(self.notes),
         }
 
 
@@ -187,6 +198,14 @@ def fit_lsq_data(data: FitData, *, level: float = 0.9, trace_id: str = "") -> LS
     t = stats.t.ppf(0.5 + level / 2, max(n - 2, 1))
     m = model.exponent
     g = None if m is None else float(model.shape(np.array([1.0]))[0])  # s(1 m) = g
+    notes = []
+    base = data.baseline
+    if base is not None and data.tare == 0.0 and abs(base.level) > data.f_unc:
+        notes.append(
+            f"untared sensor: the pre-contact force is {format_force(base.level)} (beyond "
+            f"F_unc = {format_force(data.f_unc)}); the paper's model has no offset term, so E "
+            "and z_surf are biased: refit with --tare (or read the Bayesian row, which fits "
+            "the offset)")
     return LSQResult(
         E=E, E_sd=E_sd, E_lo=E - t * E_sd, E_hi=E + t * E_sd,
         Estar=estar, Estar_sd=estar_sd,
@@ -195,7 +214,7 @@ def fit_lsq_data(data: FitData, *, level: float = 0.9, trace_id: str = "") -> LS
         rss=rss, rms=float(np.sqrt(rss / n)), n_points=n,
         z_admissible=(lo, hi), constraint_active=bool(active),
         force_at_surface=float(data.measured_force_at(z_best)),
-        level=level, model=model, trace_id=trace_id, cov=cov,
+        level=level, model=model, trace_id=trace_id, cov=cov, notes=tuple(notes),
     )
 
 
@@ -203,10 +222,11 @@ def fit_lsq(
     trace: IndentationTrace,
     model: ModelSpec | None = None,
     *,
-    f_unc: float = DEFAULT_F_UNC,
+    f_unc: float | None = None,
     fit_fraction: float | None = None,
     max_depth: float | None = None,
     level: float = 0.9,
+    tare: bool = False,
 ) -> LSQResult:
     """Fit E and z_surf to one trace by the paper's constrained least squares.
 
@@ -217,13 +237,16 @@ def fit_lsq(
     model
         Contact model (tip, nu, thickness correction); default: ``ModelSpec(trace.tip)``.
     f_unc
-        [N] Sensor uncertainty of the surface constraint (48 mN in the paper).
+        [N] Sensor uncertainty of the surface constraint (48 mN in the paper); None: the
+        pre-contact baseline's noise read as a peak-to-peak spec.
     fit_fraction
         Fraction of the penetration skipped (default 0.2 for the flat tip, 0 otherwise).
     max_depth
         [m] Ignore samples deeper than this below the contact onset.
     level
         Probability content of the reported interval.
+    tare
+        Subtract the pre-contact baseline level from the force first (zero the sensor).
 
     Returns
     -------
@@ -233,5 +256,6 @@ def fit_lsq(
         if trace.tip is None:
             raise FitError(f"{trace.trace_id}: no tip geometry given; pass a ModelSpec")
         model = ModelSpec(trace.tip)
-    data = prepare(trace, model, f_unc=f_unc, fit_fraction=fit_fraction, max_depth=max_depth)
+    data = prepare(trace, model, f_unc=f_unc, fit_fraction=fit_fraction, max_depth=max_depth,
+                   tare=tare)
     return fit_lsq_data(data, level=level, trace_id=trace.trace_id)

@@ -66,6 +66,7 @@ def _grid_oracle(data, priors):
     """Brute-force posterior on a (log E*, z_s, F0) grid, sigma integrated on a 1-D grid.
 
     Written independently of the package's likelihood: residuals are summed directly.
+    ``priors`` is the trace's prior (centres and scales read from its data).
     """
     lsq = fit_lsq_data(data)
     n_g = 31
@@ -82,10 +83,10 @@ def _grid_oracle(data, priors):
         rss = np.einsum("abn,abn->ab", r, r)
         # log p(rss | sigma) + log prior(sigma), summed over the sigma grid (log-sum-exp)
         ll = (-data.n_points * ls[None, None, :] - rss[..., None] / (2 * sig**2)
-              - 0.5 * ((ls - np.log(priors.sigma_center)) / priors.log_sigma_sd) ** 2)
+              - 0.5 * ((ls - np.log(priors.sigma_center)) / priors.spec.log_sigma_sd) ** 2)
         mx = ll.max(axis=-1, keepdims=True)
         logp[:, j, :] = (mx[..., 0] + np.log(np.exp(ll - mx).sum(axis=-1))
-                         - 0.5 * (f0[None, :] / priors.f0_sd) ** 2)
+                         - 0.5 * ((f0[None, :] - priors.f0_center) / priors.f0_sd) ** 2)
     w = np.exp(logp - logp.max())
     w /= w.sum()
     E_grid = np.exp(le)[:, None, None]
@@ -102,7 +103,7 @@ def test_posterior_matches_grid_oracle():
     res = fit_bayes(tr, seed=3, budget=BudgetSpec.none())
     from palpbayes.bayes import PriorSpec
 
-    oracle = _grid_oracle(res.data, PriorSpec())
+    oracle = _grid_oracle(res.data, PriorSpec().for_trace(res.data, "gaussian"))
     for name in ("E_star", "z_surf"):
         x = res.draws(name)
         ess = res.diagnostics.ess_bulk[name]

@@ -1,7 +1,7 @@
 """Posterior flags reach ``summary.csv``: a flagged fit is reported as not converged.
 
 The Bayesian fit flags failure modes that R-hat and ESS cannot see (``bayes.fit._flags``): a
-bimodal surface posterior and a prior-dominated surface.  These tests check that each flag is
+bimodal surface posterior, a prior-dominated surface and a posterior at a prior bound.  These tests check that each flag is
 raised on inputs that show it and that it ends up in the ``flags`` column of ``summary.csv``
 with ``converged = False``, although the chains themselves pass their diagnostics.
 """
@@ -24,6 +24,7 @@ from palpbayes.simulate import simulate_trace
 TIP = Tip("sphere", radius=0.01)
 BIMODAL = "bimodal z_surf"
 PRIOR_DOMINATED = "prior-dominated z_surf"
+AT_UPPER = "z_surf posterior at its upper prior bound"
 
 
 @pytest.fixture(scope="module")
@@ -31,15 +32,20 @@ def clean():
     return simulate_trace(136e3, TIP, thickness=0.02, rng=1, trace_id="clean")
 
 
+def _theta(post):
+    return {"log_Estar": np.log(post["E_star"]), "z_surf": post["z_surf"]}
+
+
 def test_bimodal_detector_on_a_synthetic_posterior(clean):
     data = check_fittable(clean, FitOptions())
+    prior = PriorSpec().for_trace(data, "gaussian")
     rng = np.random.default_rng(0)
     z0, sd = clean.metadata["z_surf_true"], 1e-6
     one = {"z_surf": z0 + sd * rng.standard_normal(4000),
            "E_star": 1.5e5 * np.exp(0.01 * rng.standard_normal(4000))}
-    assert bayes_fit._flags(one, data, PriorSpec()) == []
+    assert bayes_fit._flags(one, _theta(one), prior) == []
     two = dict(one, z_surf=np.concatenate([one["z_surf"][:2000], one["z_surf"][2000:] + 20 * sd]))
-    flags = bayes_fit._flags(two, data, PriorSpec())
+    flags = bayes_fit._flags(two, _theta(two), prior)
     assert any(f.startswith(BIMODAL) for f in flags), flags
 
 
@@ -51,11 +57,11 @@ def test_bimodal_flag_reaches_summary_csv(clean, tmp_path, monkeypatch):
 
     real = bayes_fit._flags
 
-    def split_surface(post, data, priors):
+    def split_surface(post, post_theta, prior):
         z = np.array(post["z_surf"], dtype=float)
         flat = z.reshape(-1)
         flat[: flat.size // 2] += 20 * np.std(flat)  # two separated surface heights
-        return real(dict(post, z_surf=z), data, priors)
+        return real(dict(post, z_surf=z), dict(post_theta, z_surf=z), prior)
 
     monkeypatch.setattr(bayes_fit, "_flags", split_surface)
     out = tmp_path / "res"
@@ -66,15 +72,19 @@ def test_bimodal_flag_reaches_summary_csv(clean, tmp_path, monkeypatch):
     assert row["rhat_max"] < 1.05  # the chains pass: only the flag makes it "not converged"
 
 
-def test_prior_dominated_flag_end_to_end_through_the_cli(tmp_path, capsys):
-    """13 contact samples at 5 Hz with 0.6 N peak-to-peak noise barely locate the surface."""
+def test_bound_flag_end_to_end_through_the_cli(tmp_path, capsys):
+    """13 samples at 5 Hz with 0.6 N peak-to-peak noise; the first sample is taken 0.12 mm
+    *below* the true surface (50 µm approach, 0.17 mm per sample), so the surface lies above
+    the recorded loading range: its posterior piles up at the prior's upper bound, and that
+    must be said (it used to be reported as merely prior-dominated)."""
     tr = simulate_trace(136e3, TIP, thickness=0.02, rng=1, rate=5, noise_pp=0.6,
                         approach=5e-5, trace_id="sparse")
     outcome = fit_trace(tr, FitOptions(method="bayes", seed=1, f_unc=0.6,
                                        priors=PriorSpec(noise_pp=0.6)))
     assert outcome.bayes.diagnostics.converged  # R-hat and ESS pass ...
     assert not outcome.bayes.converged  # ... the flag alone fails the fit
-    assert any(w.startswith(PRIOR_DOMINATED) for w in outcome.bayes.warnings)
+    assert tr.z.max() < tr.metadata["z_surf_true"]
+    assert any(w.startswith(AT_UPPER) for w in outcome.bayes.warnings), outcome.bayes.warnings
 
     path = write_trace(tr, tmp_path / "sparse.csv", float_format="%.17g")
     out = tmp_path / "res"
@@ -83,6 +93,20 @@ def test_prior_dominated_flag_end_to_end_through_the_cli(tmp_path, capsys):
     stdout = capsys.readouterr().out
     assert rc == 0
     row = pd.read_csv(out / "summary.csv").iloc[0]
-    assert PRIOR_DOMINATED in row["flags"], row["flags"]
+    assert AT_UPPER in row["flags"] and "start in contact" in row["flags"], row["flags"]
     assert not bool(row["converged"])
     assert "1 Bayesian fit(s) not converged or flagged" in stdout
+
+
+def test_prior_dominated_detector():
+    """A surface posterior as wide as the prior is prior-dominated; a narrow one is not."""
+    tr = simulate_trace(136e3, TIP, thickness=0.02, rng=1, trace_id="clean")
+    data = check_fittable(tr, FitOptions())
+    prior = PriorSpec().for_trace(data, "gaussian")
+    rng = np.random.default_rng(1)
+    lo, hi = prior.z_bounds
+    wide = {"z_surf": rng.uniform(lo + 0.3 * (hi - lo), hi, 4000),
+            "E_star": 1.5e5 * np.exp(0.01 * rng.standard_normal(4000))}
+    assert any(f.startswith(PRIOR_DOMINATED) for f in bayes_fit._flags(wide, _theta(wide), prior))
+    narrow = dict(wide, z_surf=0.5 * (lo + hi) + 1e-7 * rng.standard_normal(4000))
+    assert bayes_fit._flags(narrow, _theta(narrow), prior) == []

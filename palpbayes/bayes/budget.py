@@ -63,9 +63,9 @@ class BudgetSpec:
     def nu_bounds(self, nu: float) -> tuple[float, float]:
         lo, hi = self.nu_range if self.nu_range is not None else (
             nu - self.nu_half_width, nu + self.nu_half_width)
-        lo, hi = max(lo, 0.0), min(hi, 0.4999)
-        if not 0.0 <= lo <= hi < 0.5:
-            raise InputError(f"Poisson-ratio range ({lo}, {hi}) must lie within [0, 0.5)")
+        lo, hi = max(lo, 0.0), min(hi, 0.5)  # truncated at the incompressible limit
+        if not 0.0 <= lo <= hi <= 0.5:
+            raise InputError(f"Poisson-ratio range ({lo}, {hi}) must lie within [0, 0.5]")
         return lo, hi
 
     @staticmethod

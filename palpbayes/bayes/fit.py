@@ -1,57 +1,30 @@
-"""Fit one trace: least squares start, emcee posterior, arviz diagnostics, budget."""
+"""Fit one trace: profile-scan start, emcee posterior, arviz diagnostics, flags, budget."""
 
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 
 from .. import __version__
 from ..errors import ConvergenceError, ConvergenceWarning, FitError
-from ..fitdata import DEFAULT_F_UNC, FitData, ModelSpec, prepare
+from ..fitdata import FitData, ModelSpec, prepare
 from ..lsq import LSQResult, fit_lsq_data
 from ..trace import IndentationTrace
+from ..units import format_length
 from .budget import BudgetSpec, propagate
 from .diagnostics import chain_passes, compute_diagnostics, import_arviz
 from .likelihood import TraceLikelihood
-from .priors import PriorSpec, param_names
+from .priors import PriorSpec, TracePrior
 from .result import BayesResult
 from .sampler import SamplerSettings, run_emcee
+from .start import find_modes, initial_ensemble
 
-__all__ = ["fit_bayes", "fit_bayes_data", "initial_ensemble", "is_bimodal"]
+__all__ = ["fit_bayes", "fit_bayes_data", "is_bimodal", "bound_flags"]
 
-
-def initial_ensemble(lsq: LSQResult, data: FitData, noise: str, n_walkers: int,
-                     z_bounds: tuple[float, float], rng: np.random.Generator,
-                     estar_bounds: tuple[float, float] = (0.0, np.inf)) -> np.ndarray:
-    """Walkers in a small Gaussian ball around the least-squares solution.
-
-    Scales: the least-squares standard errors of log E* and z_surf (floored), 1/sqrt(2n) for
-    log sigma, sigma/sqrt(n) for F0; z_surf is reflected into the prior support and log E*
-    moved inside the prior bounds when the least-squares value lies outside them.
-    """
-    n = data.n_points
-    sigma = max(lsq.rms, 1e-9)
-    rel_e = lsq.Estar_sd / lsq.Estar if np.isfinite(lsq.Estar_sd) else 1e-3
-    z_sd = lsq.z_surf_sd if np.isfinite(lsq.z_surf_sd) else 1e-7
-    scale = [max(rel_e, 1e-6), max(z_sd, 1e-10), 1.0 / np.sqrt(2 * n), sigma / np.sqrt(n)]
-    e_lo = np.log(estar_bounds[0]) + 5 * scale[0] if estar_bounds[0] > 0 else -np.inf
-    e_hi = np.log(estar_bounds[1]) - 5 * scale[0]
-    log_e = float(np.clip(np.log(lsq.Estar), e_lo, e_hi)) if e_lo < e_hi else np.log(lsq.Estar)
-    center = [log_e, lsq.z_surf, np.log(sigma), 0.0]
-    if noise == "ar1":
-        center.append(0.0)
-        scale.append(0.05)
-    elif noise == "student":
-        center.append(np.log(20.0))
-        scale.append(0.2)
-    p0 = np.asarray(center) + np.asarray(scale) * rng.standard_normal((n_walkers, len(center)))
-    lo, hi = z_bounds
-    z = p0[:, 1]
-    z = np.where(z < lo, 2 * lo - z, z)
-    z = np.where(z > hi, 2 * hi - z, z)
-    p0[:, 1] = np.clip(z, lo, hi)
-    return p0
+#: A posterior whose median lies within this many posterior sd of a hard prior bound is flagged.
+BOUND_SDS = 3.0
 
 
 def _posterior_dict(samples: np.ndarray, names: list[str], nu: float) -> dict[str, np.ndarray]:
@@ -89,27 +62,56 @@ def is_bimodal(x: np.ndarray, gap: float = 6.0, min_mass: float = 0.05) -> bool:
     return bool(scale > 0 and x[i + 1] - x[i] > gap * scale)
 
 
-def _flags(post: dict, data: FitData, priors: PriorSpec) -> list[str]:
+def bound_flags(post_theta: dict[str, np.ndarray], prior: TracePrior) -> list[str]:
+    """A flag for every sampled parameter whose posterior reaches a hard prior bound.
+
+    "Reaches": the median lies within :data:`BOUND_SDS` posterior sd of the bound (or the sd is
+    zero at the bound).  The prior, not the data, then shapes that side of the posterior.
+    """
+    out = []
+    causes = {
+        ("z_surf", "upper"): "the surface sits at the top of the recorded approach: the trace "
+                             "may start in contact, or the baseline is not flat (try --baseline "
+                             "linear); record a longer approach",
+        ("z_surf", "lower"): "the surface sits at the deepest point: no contact is resolved",
+        ("log_Estar", "lower"): "E* at the lower end of its prior range (check units)",
+        ("log_Estar", "upper"): "E* at the upper end of its prior range (check units)",
+        ("phi", "upper"): "noise correlation phi at its bound: the residuals wander like drift "
+                          "(try --baseline linear) or the model misfits",
+        ("phi", "lower"): "noise correlation phi at its lower bound",
+        ("log_nu_t", "lower"): "Student-t degrees of freedom at 2: heavy outliers",
+        ("log_nu_t", "upper"): "Student-t degrees of freedom at 200: the noise is Gaussian",
+    }
+    for name, (lo, hi) in prior.bounds.items():
+        x = post_theta[name]
+        med, sd = float(np.median(x)), float(np.std(x))
+        for side, bound in (("lower", lo), ("upper", hi)):
+            dist = abs(med - bound)
+            if dist < BOUND_SDS * sd or (sd == 0 and dist == 0):
+                what = {"log_Estar": "E*", "log_nu_t": "nu_t"}.get(name, name)
+                value = format_length(bound) if name == "z_surf" else f"{bound:.4g}"
+                out.append(f"{what} posterior at its {side} prior bound ({value}): "
+                           f"{causes[(name, side)]}")
+    return out
+
+
+def _flags(post: dict, post_theta: dict, prior: TracePrior) -> list[str]:
     """Failure modes a converged chain can still show (bimodal, prior-dominated, at a bound)."""
     out = []
     if is_bimodal(post["z_surf"]):
         out.append("bimodal z_surf: two separated surface heights fit the data")
-    lo, hi = data.z_contact, data.z_top
+    lo, hi = prior.z_bounds
     z = post["z_surf"]
     if np.std(z) > 0.2 * (hi - lo) / np.sqrt(12):
         out.append("prior-dominated z_surf: the data barely constrain the surface")
-    # a bound within 3 posterior sd of the median of log E*: the prior truncates the posterior
-    log_e = np.log(post["E_star"])
-    med, sd = np.median(log_e), np.std(log_e)
-    if min(med - np.log(priors.Estar_bounds[0]), np.log(priors.Estar_bounds[1]) - med) < 3 * sd:
-        out.append("E* posterior reaches the prior bound")
-    return out
+    return out + bound_flags(post_theta, prior)
 
 
 def fit_bayes_data(
     data: FitData,
     *,
     noise: str = "gaussian",
+    baseline: str = "constant",
     priors: PriorSpec | None = None,
     budget: BudgetSpec | None = None,
     settings: SamplerSettings | None = None,
@@ -123,32 +125,38 @@ def fit_bayes_data(
     priors = priors or PriorSpec()
     budget = budget or BudgetSpec()
     settings = settings or SamplerSettings()
-    names = param_names(noise)
+    prior = priors.for_trace(data, noise, baseline)
+    names = list(prior.names)
     if lsq is None:
         lsq = fit_lsq_data(data, trace_id=trace_id)
-    like = TraceLikelihood(data, noise, tabulate=tabulate, z_center=lsq.z_surf,
-                           z_scale=lsq.z_surf_sd)
-    zb = like.z_bounds
+    modes = find_modes(data, prior)
+    centers = tuple((m.z_surf, float(np.sqrt(m.cov[1, 1]))) for m in modes
+                    if np.isfinite(m.cov[1, 1]))
+    like = TraceLikelihood(data, noise, tabulate=tabulate, baseline=baseline,
+                           z_ref=prior.z_ref, centers=centers)
     ss = np.random.SeedSequence(seed)
     init_ss, sampler_ss, budget_ss = ss.spawn(3)
 
     def log_prob(theta: np.ndarray) -> np.ndarray:
-        lp = priors.log_prior(theta, zb, noise)
+        lp = prior.log_prior(theta)
         ok = np.isfinite(lp)
         if ok.any():
             lp[ok] += like(theta[ok])
         return lp
 
     n_walkers = max(settings.n_walkers, 2 * len(names) + 2)
-    p0 = initial_ensemble(lsq, data, noise, n_walkers, zb, np.random.default_rng(init_ss),
-                          priors.Estar_bounds)
+    p0, used = initial_ensemble(modes, names, n_walkers, np.random.default_rng(init_ss),
+                                prior.z_bounds, prior.bounds["log_Estar"], data.n_points)
     bad = ~np.isfinite(log_prob(p0))
     if bad.any():
         raise FitError(f"{trace_id}: {int(bad.sum())} initial walker(s) have zero posterior "
-                       "density; the least-squares start lies outside the prior")
+                       "density; the profile-scan start lies outside the prior")
+    if len(used) > 1 and settings.moves == "de":
+        settings = replace(settings, moves="de-snooker")  # emcee's advice for several modes
     chains = run_emcee(log_prob, p0, settings, int(sampler_ss.generate_state(1)[0]),
                        accept=chain_passes)
     post = _posterior_dict(chains.samples, names, data.model.nu)
+    post_theta = {n: chains.samples[..., i] for i, n in enumerate(names)}
     bud = propagate(post["E_star"], data, float(np.median(post["z_surf"])), budget,
                     np.random.default_rng(budget_ss))
     post["E_total"] = bud.E
@@ -157,11 +165,14 @@ def fit_bayes_data(
         # heavy thinning of a short chain can leave fewer draws than walkers: fine for us
         warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
         idata = _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed,
-                          lsq, noise)
-    return _finish(idata, post, chains, data, trace_id, priors, bud, lsq, noise, strict)
+                          lsq, noise, prior, modes)
+    flags = _flags(post, post_theta, prior)
+    return _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
+                   like)
 
 
-def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, lsq, noise):
+def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, lsq, noise,
+              prior, modes):
     """arviz InferenceData of the draws, with the fit's settings as attributes."""
     return az.from_dict(
         posterior=post,
@@ -182,6 +193,14 @@ def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, 
             "f_unc_n": data.f_unc,
             "fit_fraction": data.fit_fraction,
             "z_admissible_m": [data.z_contact, data.z_top],
+            "z_prior_m": list(prior.z_bounds),
+            "baseline_model": prior.baseline,
+            "z_ref_m": prior.z_ref,
+            "F0_prior_n": [prior.f0_center, prior.f0_sd],
+            "sigma_prior_center_n": prior.sigma_center,
+            "tare_n": data.tare,
+            "modes_z_surf_m": [m.z_surf for m in modes],
+            "modes_weight": [m.weight for m in modes],
             "lsq_E_pa": lsq.E,
             "lsq_z_surf_m": lsq.z_surf,
             "n_steps": chains.n_steps,
@@ -191,13 +210,15 @@ def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, 
     )
 
 
-def _finish(idata, post, chains, data, trace_id, priors, bud, lsq, noise, strict):
+def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags, like):
     """Diagnostics, flags and the warning (or error in strict mode)."""
-    diag_names = [n for n in ("E_star", "z_surf", "sigma", "F0", "phi", "nu_t") if n in post]
+    diag_names = [n for n in ("E_star", "z_surf", "sigma", "F0", "F1", "phi", "nu_t")
+                  if n in post]
     diag = compute_diagnostics(idata, diag_names, chains.tau, chains.acceptance,
                                chains.n_steps, chains.hit_cap)
     result = BayesResult(idata=idata, diagnostics=diag, budget=bud, data=data, noise=noise,
-                         trace_id=trace_id, lsq=lsq, warnings=_flags(post, data, priors))
+                         trace_id=trace_id, lsq=lsq, warnings=flags,
+                         baseline=like.baseline, z_ref=like.z_ref)
     if not result.converged:
         problems = "; ".join(result.warnings + diag.problems())
         msg = f"{trace_id}: Bayesian fit flagged as not converged: {problems}"
@@ -211,9 +232,10 @@ def fit_bayes(
     trace: IndentationTrace,
     model: ModelSpec | None = None,
     *,
-    f_unc: float = DEFAULT_F_UNC,
+    f_unc: float | None = None,
     fit_fraction: float | None = None,
     max_depth: float | None = None,
+    tare: bool = False,
     **kwargs,
 ) -> BayesResult:
     """Bayesian fit of E*, z_surf, sigma and F0 (and phi or nu_t) to one trace.
@@ -225,11 +247,14 @@ def fit_bayes(
     model
         Contact model (tip, nu, optional finite-thickness correction).
     f_unc
-        [N] Sensor uncertainty defining the admissible surface range (prior support).
-    fit_fraction, max_depth
-        Fit window, shared with the least-squares baseline (:func:`palpbayes.fitdata.prepare`).
+        [N] Sensor uncertainty: contact onset, fit window and the F0 prior's scale (None: the
+        pre-contact baseline's noise as a peak-to-peak spec).
+    fit_fraction, max_depth, tare
+        Fit window and tare, shared with the least-squares baseline
+        (:func:`palpbayes.fitdata.prepare`).
     **kwargs
-        ``noise`` ("gaussian" | "ar1" | "student"), ``priors`` (:class:`PriorSpec`),
+        ``noise`` ("gaussian" | "ar1" | "student"), ``baseline`` ("constant" | "linear"),
+        ``priors`` (:class:`PriorSpec`),
         ``budget`` (:class:`BudgetSpec`), ``settings`` (:class:`SamplerSettings`), ``seed``,
         ``tabulate``, ``strict`` (raise :class:`ConvergenceError` instead of warning).
 
@@ -241,5 +266,6 @@ def fit_bayes(
         if trace.tip is None:
             raise FitError(f"{trace.trace_id}: no tip geometry given; pass a ModelSpec")
         model = ModelSpec(trace.tip)
-    data = prepare(trace, model, f_unc=f_unc, fit_fraction=fit_fraction, max_depth=max_depth)
+    data = prepare(trace, model, f_unc=f_unc, fit_fraction=fit_fraction, max_depth=max_depth,
+                   tare=tare)
     return fit_bayes_data(data, trace_id=trace.trace_id, **kwargs)

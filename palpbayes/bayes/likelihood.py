@@ -37,47 +37,54 @@ FINE_HALF_WIDTH = 40.0
 _LOG2PI = np.log(2.0 * np.pi)
 
 
-def _quad_forms(s: np.ndarray, F: np.ndarray, ar1: bool) -> np.ndarray:
-    """Statistics (…, K) of shape rows ``s`` (…, N): [sMs, sMF, sM1] for each M.
-
-    M runs over identity, and for AR(1) also the symmetric lag-one matrix L (r'Lr = Σ r_t r_{t-1})
-    and the interior diagonal D (r'Dr = Σ_{t=2}^{N-1} r_t²).
-    """
-    out = [np.einsum("...j,...j->...", s, s), s @ F, s.sum(axis=-1)]
+def _pair(a: np.ndarray, b: np.ndarray, ar1: bool) -> np.ndarray:
+    """a'M_k b for each matrix M_k, shape (…, K): identity, and for AR(1) also the symmetric
+    lag-one matrix L (r'Lr = Σ r_t r_{t-1}) and the interior diagonal D (Σ_{t=2}^{N-1} r_t²).
+    ``a`` may be (…, N) and ``b`` (N,) or (…, N)."""
+    out = [np.einsum("...j,...j->...", a, b)]
     if ar1:
-        a, b = s[..., 1:], s[..., :-1]
-        out += [
-            np.einsum("...j,...j->...", a, b),
-            0.5 * (a @ F[:-1] + b @ F[1:]),
-            0.5 * (a.sum(axis=-1) + b.sum(axis=-1)),
-        ]
-        mid = s[..., 1:-1]
-        out += [np.einsum("...j,...j->...", mid, mid), mid @ F[1:-1], mid.sum(axis=-1)]
-    return np.stack(out, axis=-1)
+        out.append(0.5 * (np.einsum("...j,...j->...", a[..., 1:], b[..., :-1])
+                          + np.einsum("...j,...j->...", a[..., :-1], b[..., 1:])))
+        out.append(np.einsum("...j,...j->...", a[..., 1:-1], b[..., 1:-1]))
+    return np.stack(np.broadcast_arrays(*out), axis=-1)
 
 
-def _const_forms(F: np.ndarray, ar1: bool) -> np.ndarray:
-    """[FMF, 1MF, 1M1] for each matrix M (see :func:`_quad_forms`)."""
-    n = F.size
-    out = [F @ F, F.sum(), float(n)]
-    if ar1:
-        out += [F[1:] @ F[:-1], 0.5 * (F[1:].sum() + F[:-1].sum()), float(n - 1)]
-        out += [F[1:-1] @ F[1:-1], F[1:-1].sum(), float(n - 2)]
-    return np.array(out)
+def _quad_forms(s: np.ndarray, F: np.ndarray, u: np.ndarray | None, ar1: bool) -> np.ndarray:
+    """Statistics (…, P·K) of shape rows ``s`` (…, N): [sMs, sMF, sM1(, sMu)] for each M."""
+    one = np.ones(F.size)
+    parts = [_pair(s, s, ar1), _pair(s, F, ar1), _pair(s, one, ar1)]
+    if u is not None:
+        parts.append(_pair(s, u, ar1))
+    return np.concatenate(parts, axis=-1)
 
 
-def _form_value(stats: np.ndarray, const: np.ndarray, estar: np.ndarray, f0: np.ndarray,
-                k: int) -> np.ndarray:
-    """r'M_k r for r = F − E*·s − F0 from the statistics of matrix k."""
-    sMs, sMF, sM1 = stats[..., 3 * k], stats[..., 3 * k + 1], stats[..., 3 * k + 2]
-    FMF, oMF, oMo = const[3 * k], const[3 * k + 1], const[3 * k + 2]
-    return (FMF - 2.0 * estar * sMF - 2.0 * f0 * oMF + estar**2 * sMs
-            + 2.0 * estar * f0 * sM1 + f0**2 * oMo)
+def _const_forms(F: np.ndarray, u: np.ndarray | None, ar1: bool) -> dict[str, np.ndarray]:
+    """Data-only forms for each matrix M: FMF, 1MF, 1M1 (and uMF, 1Mu, uMu), each (K,)."""
+    one = np.ones(F.size)
+    out = {"FF": _pair(F, F, ar1), "1F": _pair(one, F, ar1), "11": _pair(one, one, ar1)}
+    if u is not None:
+        out.update({"uF": _pair(u, F, ar1), "1u": _pair(one, u, ar1), "uu": _pair(u, u, ar1)})
+    return out
+
+
+def _form_value(stats: np.ndarray, const: dict, estar: np.ndarray, f0: np.ndarray,
+                f1: np.ndarray | None, k: int, n_m: int) -> np.ndarray:
+    """r'M_k r for r = F − E*·s − F0 − F1·u from the statistics of matrix k."""
+    sMs, sMF, sM1 = stats[..., k], stats[..., n_m + k], stats[..., 2 * n_m + k]
+    q = (const["FF"][k] - 2.0 * estar * sMF - 2.0 * f0 * const["1F"][k] + estar**2 * sMs
+         + 2.0 * estar * f0 * sM1 + f0**2 * const["11"][k])
+    if f1 is not None:
+        sMu = stats[..., 3 * n_m + k]
+        q = q + (f1**2 * const["uu"][k] - 2.0 * f1 * const["uF"][k] + 2.0 * estar * f1 * sMu
+                 + 2.0 * f0 * f1 * const["1u"][k])
+    return q
 
 
 @dataclass
 class TraceLikelihood:
-    """Log-likelihood of θ = (log E*, z_s, log sigma, F0[, phi | log nu_t]) for one trace.
+    """Log-likelihood of θ = (log E*, z_s, log sigma, F0[, F1][, phi | log nu_t]) for one trace.
+
+    The mean force is E*·s(z_s − z) + F0 (+ F1·(z − z_ref) with a linear baseline).
 
     Parameters
     ----------
@@ -88,7 +95,14 @@ class TraceLikelihood:
     tabulate
         Use the tabulated sufficient statistics (Gaussian/AR(1) only).
     z_center, z_scale
-        [m] Centre and scale (least-squares z_surf and its standard error) of the fine grid.
+        [m] Centre and scale (a surface estimate and its standard error) of a fine grid.
+    baseline
+        ``"constant"`` (F0) or ``"linear"`` (F0 + F1·(z − z_ref)).
+    z_ref
+        [m] Reference height of the linear baseline (default: the top of the loading range).
+    centers
+        More (centre, scale) pairs [m], one fine grid each: every local optimum of the
+        surface profile (:mod:`palpbayes.bayes.start`).
     """
 
     data: FitData
@@ -96,86 +110,112 @@ class TraceLikelihood:
     tabulate: bool = True
     z_center: float | None = None
     z_scale: float | None = None
+    baseline: str = "constant"
+    z_ref: float | None = None
+    centers: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
         self._F = self.data.force
         self._z = self.data.z
         self._ar1 = self.noise == "ar1"
-        self._const = _const_forms(self._F, self._ar1)
+        self._n_m = 3 if self._ar1 else 1
+        self._linear = self.baseline == "linear"
+        if self.z_ref is None:
+            self.z_ref = float(self.data.z_top)
+        self._u = (self._z - self.z_ref) if self._linear else None
+        self._const = _const_forms(self._F, self._u, self._ar1)
+        self._n_stats = self._n_m * (4 if self._linear else 3)
         self._spline = None
         if self.tabulate and self.noise in ("gaussian", "ar1"):
             self._spline = self._build_table()
 
     @property
     def z_bounds(self) -> tuple[float, float]:
-        """[m] Support of the z_surf prior: the admissible range of the constraint."""
-        return self.data.z_contact, self.data.z_top
+        """[m] Support of the z_surf prior: the whole loading range (DESIGN §3.6)."""
+        return self.data.z_prior
 
     def grid(self) -> np.ndarray:
         """The z_s grid of the tabulation [m]."""
         lo, hi = self.z_bounds
         parts = [np.linspace(lo, hi, COARSE_POINTS)]
-        if self.z_center is not None and self.z_scale and np.isfinite(self.z_scale):
-            half = FINE_HALF_WIDTH * max(self.z_scale, 1e-9)
-            a, b = max(lo, self.z_center - half), min(hi, self.z_center + half)
+        centers = list(self.centers)
+        if self.z_center is not None:
+            centers.append((self.z_center, self.z_scale))
+        for c, scale in centers:
+            if not (scale and np.isfinite(scale) and np.isfinite(c)):
+                continue
+            half = FINE_HALF_WIDTH * max(scale, 1e-9 * (hi - lo), 1e-15)
+            a, b = max(lo, c - half), min(hi, c + half)
             if b > a:
                 parts.append(np.linspace(a, b, FINE_POINTS))
         return np.unique(np.concatenate(parts))
 
+    def _direct_stats(self, z_surf: np.ndarray) -> np.ndarray:
+        out = np.empty((z_surf.size, self._n_stats))
+        for rows in self.data.blocks(z_surf.size):  # bounded memory for long traces
+            s = self.data.shape(z_surf[rows, None] - self._z[None, :])
+            out[rows] = _quad_forms(s, self._F, self._u, self._ar1)
+        return out
+
     def _build_table(self) -> CubicSpline:
         grid = self.grid()
-        stats = np.empty((grid.size, 9 if self._ar1 else 3))
-        for rows in self.data.blocks(grid.size):  # bounded memory for long traces
-            s = self.data.shape(grid[rows, None] - self._z[None, :])
-            stats[rows] = _quad_forms(s, self._F, self._ar1)
-        return CubicSpline(grid, stats, axis=0)
+        return CubicSpline(grid, self._direct_stats(grid), axis=0)
 
     def statistics(self, z_surf: np.ndarray, direct: bool = False) -> np.ndarray:
         """Quadratic-form statistics at each z_s, shape (W, K)."""
-        z_surf = np.atleast_1d(z_surf)
+        z_surf = np.atleast_1d(np.asarray(z_surf, dtype=float))
         if self._spline is not None and not direct:
             return self._spline(z_surf)
-        out = np.empty((z_surf.size, 9 if self._ar1 else 3))
-        for rows in self.data.blocks(z_surf.size):
-            s = self.data.shape(z_surf[rows, None] - self._z[None, :])
-            out[rows] = _quad_forms(s, self._F, self._ar1)
-        return out
+        return self._direct_stats(z_surf)
+
+    def _split(self, theta: np.ndarray):
+        estar = np.exp(theta[:, 0])
+        f1 = theta[:, 4] if self._linear else None
+        extra = theta[:, 5 if self._linear else 4] if self.noise != "gaussian" else None
+        return estar, theta[:, 1], np.exp(theta[:, 2]), theta[:, 3], f1, extra
 
     def __call__(self, theta: np.ndarray, direct: bool = False) -> np.ndarray:
         """Log-likelihood for θ of shape (W, ndim) (or (ndim,)); returns shape (W,)."""
         theta = np.atleast_2d(theta)
-        estar = np.exp(theta[:, 0])
-        zs = theta[:, 1]
-        sigma = np.exp(theta[:, 2])
-        f0 = theta[:, 3]
+        estar, zs, sigma, f0, f1, extra = self._split(theta)
         n = self._F.size
         if self.noise == "student":
-            return self._student(estar, zs, sigma, f0, np.exp(theta[:, 4]))
+            return self._student(estar, zs, sigma, f0, f1, np.exp(extra))
         stats = self.statistics(zs, direct=direct)
-        q0 = _form_value(stats, self._const, estar, f0, 0)
+        q0 = _form_value(stats, self._const, estar, f0, f1, 0, self._n_m)
         if not self._ar1:
             return -n * np.log(sigma) - 0.5 * n * _LOG2PI - 0.5 * q0 / sigma**2
-        phi = theta[:, 4]
-        q1 = _form_value(stats, self._const, estar, f0, 1)
-        q2 = _form_value(stats, self._const, estar, f0, 2)
+        phi = extra
+        q1 = _form_value(stats, self._const, estar, f0, f1, 1, self._n_m)
+        q2 = _form_value(stats, self._const, estar, f0, f1, 2, self._n_m)
         one_m = 1.0 - phi**2
         quad = (q0 - 2.0 * phi * q1 + phi**2 * q2) / one_m
         return (-n * np.log(sigma) - 0.5 * (n - 1) * np.log(one_m) - 0.5 * n * _LOG2PI
                 - 0.5 * quad / sigma**2)
 
-    def _student(self, estar, zs, sigma, f0, nu_t) -> np.ndarray:
+    def _student(self, estar, zs, sigma, f0, f1, nu_t) -> np.ndarray:
         n = self._F.size
         nu = nu_t
         tail = np.empty(zs.size)
         for rows in self.data.blocks(zs.size):
             s = self.data.shape(zs[rows, None] - self._z[None, :])
-            r = (self._F[None, :] - estar[rows, None] * s - f0[rows, None]) / sigma[rows, None]
+            mean = estar[rows, None] * s + f0[rows, None]
+            if f1 is not None:
+                mean = mean + f1[rows, None] * self._u[None, :]
+            r = (self._F[None, :] - mean) / sigma[rows, None]
             tail[rows] = np.log1p(r * r / nu[rows, None]).sum(axis=1)
         return (n * (gammaln((nu + 1) / 2) - gammaln(nu / 2) - 0.5 * np.log(nu * np.pi))
                 - n * np.log(sigma) - 0.5 * (nu + 1) * tail)
 
+    def mean_force(self, theta: np.ndarray, z: np.ndarray | None = None) -> np.ndarray:
+        """Model force [N] at heights ``z`` (default: the fitted samples) for one θ."""
+        theta = np.asarray(theta, dtype=float)
+        z = self._z if z is None else np.asarray(z, dtype=float)
+        out = np.exp(theta[0]) * self.data.shape(theta[1] - z) + theta[3]
+        if self._linear:
+            out = out + theta[4] * (z - self.z_ref)
+        return out
+
     def residuals(self, theta: np.ndarray) -> np.ndarray:
         """Residuals F − model [N] for one parameter vector."""
-        theta = np.asarray(theta, dtype=float)
-        s = self.data.shape(theta[1] - self._z)
-        return self._F - np.exp(theta[0]) * s - theta[3]
+        return self._F - self.mean_force(theta)

@@ -1,19 +1,32 @@
-"""Priors of the per-trace model (DESIGN §3).
+"""Priors of the per-trace model (DESIGN §3, §3.6).
 
-Parameters, in the order of the sampler's vector θ:
+Parameters, in the order of the sampler's vector θ (:func:`param_names`):
 
 ================  ==============================================================
 ``log_Estar``     ln(E*/Pa).  Uniform on [ln 1 Pa, ln 1e12 Pa] by default: the scale-free
                   (Jeffreys) prior 1/E* truncated to twelve decades, so kPa foams and kPa cells
                   measured in µm/nN units (converted to SI) are both inside.
-``z_surf``        [m] Uniform over the admissible range [z_c, z_top] of the trace: the paper's
-                  constraint |F(z_surf)| <= F_unc (see :mod:`palpbayes.fitdata`).
-``log_sigma``     ln(sigma/N).  Normal(ln(pp/6), 1): centred on the sensor's peak-to-peak
-                  spec read as ±3 sigma (:mod:`palpbayes.noise`); a factor e either way is 1 sd.
-``F0``            [N] Force offset, Normal(0, F_unc): the sensor is tared to within its spec.
+``z_surf``        [m] Uniform over the whole loading range [z_min, z_top] of the trace
+                  (``surface="loading"``, the default): the likelihood, with the free offset,
+                  places the surface.  The paper's constraint |F(z_surf)| <= F_unc belongs to
+                  the least-squares baseline; ``surface="soft"`` adds it as a soft penalty,
+                  −½·(max(0, |F_meas(z_s) − F0 − F1·u| − F_unc)/F_unc)², on the same support.
+``log_sigma``     ln(sigma/N).  Normal(ln(pp/6), 1): centred on the noise spec read as ±3 sigma
+                  (:mod:`palpbayes.noise`) — the user's ``noise_pp``, or when none is given the
+                  pre-contact baseline's own noise (:mod:`palpbayes.baseline`); a factor e
+                  either way is 1 sd.
+``F0``            [N] Force offset, Normal(b, s): centred on the pre-contact baseline b (an
+                  untared sensor is normal input) with s = F_unc (the sensor's peak-to-peak
+                  spec: the baseline's own scale).  ``F0_center``/``F0_sd`` override both.
+``F1``            (linear baseline only) [N/m] slope of the baseline F0 + F1·(z − z_ref),
+                  Normal(0, s1) with s1 = (F_max − b)/(z_top − z_min): a drift that alone would
+                  produce the whole contact force over the recorded span is 1 sd.
 ``phi``           (AR(1) only) lag-one correlation, Uniform(−0.99, 0.99).
 ``log_nu_t``      (Student-t only) ln of the degrees of freedom, Uniform(ln 2, ln 200).
 ================  ==============================================================
+
+:class:`PriorSpec` holds the user's settings; :class:`TracePrior` the numbers for one trace
+(support, centres and scales read from its data).
 """
 
 from __future__ import annotations
@@ -24,16 +37,24 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..fitdata import FitData
 from ..noise import sigma_from_pp
 
-__all__ = ["NOISE_MODELS", "PriorSpec", "param_names"]
+__all__ = ["NOISE_MODELS", "BASELINES", "SURFACE_PRIORS", "PriorSpec", "TracePrior",
+           "param_names"]
 
 NOISE_MODELS = ("gaussian", "ar1", "student")
+BASELINES = ("constant", "linear")
+SURFACE_PRIORS = ("loading", "soft")
 
 
-def param_names(noise: str) -> list[str]:
-    """Names of the sampled parameters for a noise model."""
+def param_names(noise: str, baseline: str = "constant") -> list[str]:
+    """Names of the sampled parameters for a noise model and a baseline model."""
     names = ["log_Estar", "z_surf", "log_sigma", "F0"]
+    if baseline == "linear":
+        names.append("F1")
+    elif baseline != "constant":
+        raise InputError(f"unknown baseline {baseline!r}; use one of {', '.join(BASELINES)}")
     if noise == "ar1":
         names.append("phi")
     elif noise == "student":
@@ -52,68 +73,146 @@ class PriorSpec:
     Estar_bounds
         [Pa] Bounds of the log-uniform prior of E*.
     noise_pp
-        [N] Sensor peak-to-peak noise spec (paper: 48 mN).
+        [N] Sensor peak-to-peak noise spec (paper: 48 mN); None: read from the trace's
+        pre-contact baseline.
     log_sigma_sd
         Sd of the log-normal prior of sigma.
     F0_sd
-        [N] Sd of the force-offset prior (default: equal to ``noise_pp``, the paper's F_unc).
+        [N] Sd of the force-offset prior (None: the trace's F_unc).
+    F0_center
+        [N] Centre of the force-offset prior (None: the trace's pre-contact baseline level).
     phi_bounds
         Bounds of the AR(1) coefficient.
     nu_t_bounds
         Bounds of the Student-t degrees of freedom (log-uniform).
+    surface
+        ``"loading"`` (uniform over the loading range) or ``"soft"`` (plus the paper's
+        constraint as a soft penalty).
     """
 
     Estar_bounds: tuple[float, float] = (1.0, 1e12)
-    noise_pp: float = 48e-3
+    noise_pp: float | None = None
     log_sigma_sd: float = 1.0
     F0_sd: float | None = None
+    F0_center: float | None = None
     phi_bounds: tuple[float, float] = (-0.99, 0.99)
     nu_t_bounds: tuple[float, float] = (2.0, 200.0)
+    surface: str = "loading"
 
     def __post_init__(self) -> None:
         lo, hi = self.Estar_bounds
         if not (0 < lo < hi and math.isfinite(hi)):
             raise InputError(f"E* prior bounds {self.Estar_bounds} must satisfy 0 < lo < hi")
-        if not (self.noise_pp > 0 and math.isfinite(self.noise_pp)):
+        if self.noise_pp is not None and not (self.noise_pp > 0
+                                              and math.isfinite(self.noise_pp)):
             raise InputError(f"noise peak-to-peak {self.noise_pp!r} N must be positive")
+        if self.surface not in SURFACE_PRIORS:
+            raise InputError(f"unknown surface prior {self.surface!r}; use one of "
+                             f"{', '.join(SURFACE_PRIORS)}")
+
+    def for_trace(self, data: FitData, noise: str, baseline: str = "constant") -> TracePrior:
+        """The prior of one trace: support, centres and scales read from ``data``."""
+        base = data.baseline
+        pp = self.noise_pp
+        if pp is None:
+            pp = base.noise_pp if base is not None and base.reliable else data.f_unc
+        if base is not None:
+            center = float(base.level) - data.tare
+            z_ref = float(base.z_ref)
+        else:
+            center, z_ref = 0.0, float(data.z_top)
+        if self.F0_center is not None:
+            center = float(self.F0_center)
+        f0_sd = data.f_unc if self.F0_sd is None else float(self.F0_sd)
+        span = max(data.z_top - data.z_min, 1e-300)
+        rise = max(float(np.max(data.force)) - center, data.f_unc)
+        return TracePrior(
+            spec=self, names=tuple(param_names(noise, baseline)), noise=noise,
+            baseline=baseline, z_bounds=data.z_prior, sigma_center=sigma_from_pp(pp),
+            f0_center=center, f0_sd=f0_sd, f1_sd=rise / span, z_ref=z_ref,
+            f_unc=data.f_unc, data=data,
+        )
+
+
+@dataclass(frozen=True)
+class TracePrior:
+    """The prior of one trace (see the module docstring).
+
+    Attributes
+    ----------
+    names
+        Sampled parameter names, in θ order.
+    z_bounds
+        [m] Support of the surface prior.
+    sigma_center
+        [N] Median of the sigma prior.
+    f0_center, f0_sd
+        [N] Centre and sd of the offset prior.
+    f1_sd
+        [N/m] Sd of the baseline-slope prior (linear baseline).
+    z_ref
+        [m] Height where the baseline equals F0 (the linear baseline's reference).
+    """
+
+    spec: PriorSpec
+    names: tuple[str, ...]
+    noise: str
+    baseline: str
+    z_bounds: tuple[float, float]
+    sigma_center: float
+    f0_center: float
+    f0_sd: float
+    f1_sd: float
+    z_ref: float
+    f_unc: float
+    data: FitData
+
+    def index(self, name: str) -> int:
+        return self.names.index(name)
 
     @property
-    def sigma_center(self) -> float:
-        """[N] Median of the sigma prior, pp/6."""
-        return sigma_from_pp(self.noise_pp)
+    def bounds(self) -> dict[str, tuple[float, float]]:
+        """Hard bounds of the bounded parameters, in θ coordinates."""
+        s = self.spec
+        out = {"log_Estar": (math.log(s.Estar_bounds[0]), math.log(s.Estar_bounds[1])),
+               "z_surf": self.z_bounds}
+        if "phi" in self.names:
+            out["phi"] = s.phi_bounds
+        if "log_nu_t" in self.names:
+            out["log_nu_t"] = (math.log(s.nu_t_bounds[0]), math.log(s.nu_t_bounds[1]))
+        return out
 
-    @property
-    def f0_sd(self) -> float:
-        return self.noise_pp if self.F0_sd is None else self.F0_sd
-
-    def log_prior(self, theta: np.ndarray, z_bounds: tuple[float, float], noise: str
-                  ) -> np.ndarray:
+    def log_prior(self, theta: np.ndarray) -> np.ndarray:
         """Log prior density (up to a constant) for θ of shape (W, ndim); -inf outside."""
         theta = np.atleast_2d(theta)
-        lo, hi = np.log(self.Estar_bounds[0]), np.log(self.Estar_bounds[1])
-        ok = (theta[:, 0] > lo) & (theta[:, 0] < hi)
-        ok &= (theta[:, 1] >= z_bounds[0]) & (theta[:, 1] <= z_bounds[1])
+        ok = np.ones(theta.shape[0], dtype=bool)
+        for name, (lo, hi) in self.bounds.items():
+            x = theta[:, self.index(name)]
+            ok &= (x >= lo) & (x <= hi) if name == "z_surf" else (x > lo) & (x < hi)
         ls = theta[:, 2]
-        lp = -0.5 * ((ls - np.log(self.sigma_center)) / self.log_sigma_sd) ** 2
-        lp += -0.5 * (theta[:, 3] / self.f0_sd) ** 2
-        if noise == "ar1":
-            ok &= (theta[:, 4] > self.phi_bounds[0]) & (theta[:, 4] < self.phi_bounds[1])
-        elif noise == "student":
-            a, b = np.log(self.nu_t_bounds[0]), np.log(self.nu_t_bounds[1])
-            ok &= (theta[:, 4] > a) & (theta[:, 4] < b)
+        lp = -0.5 * ((ls - math.log(self.sigma_center)) / self.spec.log_sigma_sd) ** 2
+        f0 = theta[:, 3]
+        lp += -0.5 * ((f0 - self.f0_center) / self.f0_sd) ** 2
+        if self.baseline == "linear":
+            lp += -0.5 * (theta[:, 4] / self.f1_sd) ** 2
+        if self.spec.surface == "soft":
+            zs = theta[:, 1]
+            base = f0 + (theta[:, 4] * (zs - self.z_ref) if self.baseline == "linear" else 0.0)
+            excess = np.abs(self.data.measured_force_at(zs) - base) - self.f_unc
+            lp += -0.5 * (np.maximum(excess, 0.0) / self.f_unc) ** 2
         return np.where(ok, lp, -np.inf)
 
-    def sample(self, rng: np.random.Generator, n: int, z_bounds: tuple[float, float],
-               noise: str = "gaussian") -> np.ndarray:
-        """Draw n parameter vectors from the prior, shape (n, ndim)."""
-        cols = [
-            rng.uniform(np.log(self.Estar_bounds[0]), np.log(self.Estar_bounds[1]), n),
-            rng.uniform(z_bounds[0], z_bounds[1], n),
-            rng.normal(np.log(self.sigma_center), self.log_sigma_sd, n),
-            rng.normal(0.0, self.f0_sd, n),
-        ]
-        if noise == "ar1":
-            cols.append(rng.uniform(*self.phi_bounds, n))
-        elif noise == "student":
-            cols.append(rng.uniform(*np.log(self.nu_t_bounds), n))
-        return np.column_stack(cols)
+    def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """Draw n parameter vectors from the prior (without the soft penalty), shape (n, ndim)."""
+        s = self.spec
+        cols = {
+            "log_Estar": rng.uniform(math.log(s.Estar_bounds[0]), math.log(s.Estar_bounds[1]),
+                                     n),
+            "z_surf": rng.uniform(*self.z_bounds, n),
+            "log_sigma": rng.normal(math.log(self.sigma_center), s.log_sigma_sd, n),
+            "F0": rng.normal(self.f0_center, self.f0_sd, n),
+            "F1": rng.normal(0.0, self.f1_sd, n),
+            "phi": rng.uniform(*s.phi_bounds, n),
+            "log_nu_t": rng.uniform(*np.log(s.nu_t_bounds), n),
+        }
+        return np.column_stack([cols[name] for name in self.names])

@@ -46,9 +46,16 @@ class BayesResult:
     trace_id
         Identifier.
     lsq
-        The least-squares result the walkers started from.
+        The paper's least-squares result on the same data.
     warnings
-        Flags raised during the fit (non-convergence, prior-dominated, bimodal surface).
+        Flags raised during the fit (prior-dominated, bimodal surface, a prior bound, a failed
+        model check).
+    baseline
+        ``"constant"`` or ``"linear"`` baseline model.
+    z_ref
+        [m] Reference height of the linear baseline F0 + F1·(z − z_ref).
+    checks
+        Model-adequacy checks (:mod:`palpbayes.checks`), empty if not run.
     """
 
     idata: object
@@ -59,6 +66,9 @@ class BayesResult:
     trace_id: str
     lsq: object = None
     warnings: list[str] = field(default_factory=list)
+    baseline: str = "constant"
+    z_ref: float = 0.0
+    checks: list = field(default_factory=list)
 
     # ----------------------------------------------------------------- access
     def draws(self, name: str) -> np.ndarray:
@@ -72,7 +82,8 @@ class BayesResult:
     def summary(self) -> pd.DataFrame:
         """Per-parameter table: mean, sd, median, central 90 % interval, 90 % HDI, R-hat, ESS."""
         az = import_arviz()
-        names = [n for n in ("E_total", "E", "E_star", "z_surf", "sigma", "F0", "phi", "nu_t")
+        names = [n for n in ("E_total", "E", "E_star", "z_surf", "sigma", "F0", "F1", "phi",
+                             "nu_t")
                  if n in self.idata.posterior]
         rows = []
         for n in names:
@@ -123,6 +134,8 @@ class BayesResult:
             "tau_max": float(max(d.tau.values())),
             "acceptance": d.acceptance,
             "n_steps": d.n_steps,
+            "baseline_model": self.baseline,
+            "F0_n": float(np.median(self.draws("F0"))),
             "flags": "; ".join(self.warnings + d.problems()),
         }
 
@@ -138,13 +151,8 @@ class BayesResult:
         z = self.data.z if z is None else np.asarray(z, dtype=float)
         rng = np.random.default_rng(seed)
         post = self.idata.posterior
-        flat = {n: np.asarray(post[n]).ravel() for n in ("E_star", "z_surf", "F0", "sigma")}
-        idx = rng.choice(flat["E_star"].size, size=min(n_draws, flat["E_star"].size),
-                         replace=False)
-        curves = np.array([
-            flat["E_star"][i] * self.data.shape(flat["z_surf"][i] - z) + flat["F0"][i]
-            for i in idx
-        ])
+        idx, curves = self.mean_curves(z, n_draws, rng)
+        flat = {n: np.asarray(post[n]).ravel() for n in ("z_surf", "sigma")}
         if noise:
             curves = curves + rng.normal(0, 1, curves.shape) * flat["sigma"][idx][:, None]
         a = (1 - level) / 2
@@ -152,6 +160,31 @@ class BayesResult:
         zs = float(np.median(flat["z_surf"]))
         return pd.DataFrame({"z_m": z, "depth_m": zs - z, "median_n": med, "lo_n": lo,
                              "hi_n": hi})
+
+    def mean_curves(self, z: np.ndarray | None = None, n_draws: int = 200,
+                    rng: np.random.Generator | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Mean force curves [N] at ``z`` [m] for ``n_draws`` random posterior draws.
+
+        Returns the flat draw indices (n_draws,) and the curves (n_draws, len(z)).
+        """
+        z = self.data.z if z is None else np.asarray(z, dtype=float)
+        rng = rng or np.random.default_rng(0)
+        post = self.idata.posterior
+        names = [n for n in ("E_star", "z_surf", "F0", "F1") if n in post]
+        flat = {n: np.asarray(post[n]).ravel() for n in names}
+        size = flat["E_star"].size
+        idx = np.sort(rng.choice(size, size=min(n_draws, size), replace=False))
+        curves = (flat["E_star"][idx, None] * self.data.shape(flat["z_surf"][idx, None] - z)
+                  + flat["F0"][idx, None])
+        if "F1" in flat:
+            curves = curves + flat["F1"][idx, None] * (z - self.z_ref)
+        return idx, curves
+
+    def median_theta(self) -> dict[str, float]:
+        """Posterior medians of the mean-curve parameters (E_star, z_surf, F0, F1, sigma[, phi])."""
+        post = self.idata.posterior
+        return {n: float(np.median(np.asarray(post[n]))) for n in
+                ("E_star", "z_surf", "F0", "F1", "sigma", "phi") if n in post}
 
     # ----------------------------------------------------------------- persistence
     def to_netcdf(self, path: str | os.PathLike) -> Path:
@@ -163,5 +196,5 @@ class BayesResult:
 
 
 _UNITS = {"E_total": "Pa", "E": "Pa", "E_star": "Pa", "z_surf": "m", "sigma": "N", "F0": "N",
-          "phi": "-", "nu_t": "-"}
+          "F1": "N/m", "phi": "-", "nu_t": "-"}
 _SAMPLED = {"E_total": "E_star", "E": "E_star"}

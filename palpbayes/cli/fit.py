@@ -7,11 +7,12 @@ import math
 from pathlib import Path
 
 from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
-from ..bayes.priors import NOISE_MODELS
+from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
 from ..contact import TIP_KINDS, Tip, check_nu, half_angle_from_degrees
 from ..errors import DataFileError, InputError
 from ..fitjob import METHODS, FitOptions
 from ..io.manifest import is_manifest
+from ..units import format_pressure
 
 __all__ = ["register", "run", "add_model_options", "options_from_args", "trace_from_args",
            "read_options_from_args"]
@@ -31,10 +32,21 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                     help="uniform Poisson-ratio range for the budget (fit at its midpoint)")
     g.add_argument("--noise", choices=NOISE_MODELS, default="gaussian",
                    help="noise model of the Bayesian fit (default gaussian)")
-    g.add_argument("--noise-pp", type=float, default=48e-3, metavar="N",
-                   help="sensor peak-to-peak noise [N] (default 0.048; sigma prior = pp/6)")
+    g.add_argument("--noise-pp", type=float, default=None, metavar="N",
+                   help="sensor peak-to-peak noise [N] (the paper's sensor: 0.048; default: "
+                        "read from the pre-contact baseline as 6 sd; sigma prior = pp/6)")
     g.add_argument("--f-unc", type=float, default=None, metavar="N",
-                   help="surface constraint |F(z_surf)| <= F_unc [N] (default: --noise-pp)")
+                   help="contact threshold and least-squares surface constraint "
+                        "|F(z_surf) - baseline| <= F_unc [N] (default: --noise-pp)")
+    g.add_argument("--baseline", choices=BASELINES, default="constant",
+                   help="baseline of the Bayesian model: constant offset F0, or linear "
+                        "F0 + F1*(z - z_ref) for drift or a tilted baseline (default constant)")
+    g.add_argument("--tare", action="store_true",
+                   help="subtract the pre-contact baseline from the force before fitting "
+                        "(zero an untared sensor; the paper's least squares has no offset)")
+    g.add_argument("--surface-prior", choices=SURFACE_PRIORS, default="loading",
+                   help="Bayesian surface prior: uniform over the loading range, or 'soft' "
+                        "(plus the paper's |F(z_surf)| <= F_unc as a soft penalty)")
     g.add_argument("--fit-fraction", type=float, default=None,
                    help="fraction of the penetration skipped (default 0.2 flat, 0 others)")
     g.add_argument("--max-depth", type=float, default=None, metavar="M",
@@ -98,12 +110,15 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
         nu, budget_nu = 0.5 * (lo + hi), (lo, hi)
     else:
         nu, budget_nu = check_nu(0.3 if args.nu is None else args.nu), None
-    for name in ("noise_pp", "radius_tolerance", "gain_sd", "compliance_max"):
+    for name in ("radius_tolerance", "gain_sd", "compliance_max"):
         v = getattr(args, name)
         if not (math.isfinite(v) and v >= 0):
             raise InputError(f"--{name.replace('_', '-')} {v!r} must be a non-negative number")
-    if not args.noise_pp > 0:
-        raise InputError("--noise-pp must be positive (the sensor's peak-to-peak noise in N)")
+    for name in ("noise_pp", "f_unc"):
+        v = getattr(args, name)
+        if v is not None and not (math.isfinite(v) and v > 0):
+            raise InputError(f"--{name.replace('_', '-')} {v!r} must be a positive force in "
+                             "newtons (the sensor's peak-to-peak noise)")
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers {args.workers} must be at least 1")
     budget = BudgetSpec(nu_range=budget_nu, radius_tolerance=args.radius_tolerance,
@@ -113,7 +128,9 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
         method=args.method, nu=nu, thickness_correction=args.finite_thickness,
         bonded=not args.non_bonded, f_unc=args.f_unc if args.f_unc is not None else args.noise_pp,
         fit_fraction=args.fit_fraction, max_depth=args.max_depth, noise=args.noise,
-        priors=PriorSpec(noise_pp=args.noise_pp), budget=budget, settings=settings,
+        baseline=args.baseline, tare=args.tare,
+        priors=PriorSpec(noise_pp=args.noise_pp, surface=args.surface_prior), budget=budget,
+        settings=settings,
         seed=args.seed, strict=args.strict,
     )
 
@@ -181,8 +198,8 @@ def run(args: argparse.Namespace) -> int:
     cols = ["trace_id", "method", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa", "converged"]
     show = summary[cols].copy()
     for c in ("E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa"):
-        show[c.replace("_pa", "_kPa")] = show.pop(c) / 1e3
-    print(show.to_string(index=False, float_format=lambda v: f"{v:.2f}"))
+        show[c.removesuffix("_pa")] = show.pop(c).map(format_pressure)
+    print(show.to_string(index=False))
     flagged = summary[(summary["method"] == "bayes") & (summary["converged"] == False)]  # noqa: E712
     if len(flagged):
         print(f"warning: {len(flagged)} Bayesian fit(s) not converged or flagged; see the "

@@ -117,14 +117,16 @@ def get_law(tip: Tip) -> ContactLaw:
 
 
 def check_nu(nu: float) -> float:
-    """Validate a Poisson ratio: finite and 0 <= nu < 0.5; return it as float."""
+    """Validate a Poisson ratio: finite and 0 <= nu <= 0.5 (0.5: incompressible, the usual
+    choice for silicone, gels and tissue); return it as float.  Corrections undefined at 0.5
+    refuse it themselves."""
     try:
         v = float(nu)
     except (TypeError, ValueError):
         raise GeometryError(f"Poisson ratio {nu!r} is not a number") from None
-    if not (math.isfinite(v) and 0.0 <= v < 0.5):
+    if not (math.isfinite(v) and 0.0 <= v <= 0.5):
         raise GeometryError(
-            f"Poisson ratio nu = {nu!r} is outside [0, 0.5); "
+            f"Poisson ratio nu = {nu!r} is outside [0, 0.5]; "
             "give a value such as 0.3 for foam or 0.49 for silicone"
         )
     return v

@@ -46,10 +46,12 @@ from typing import Literal
 import numpy as np
 import pandas as pd
 
+from ..baseline import sign_flipped
 from ..contact import Tip
 from ..errors import DataFileError, InputError
 from ..kinematics import UR3E, DHParameters, _as_offset, tip_z
 from ..trace import IndentationTrace
+from ..units import format_force
 from .units import FORCE_UNITS, TIME_UNITS, force_factor, time_factor
 
 __all__ = [
@@ -180,15 +182,16 @@ def _require(df: pd.DataFrame, columns: list[str], source: str, fix: str) -> Non
 
 
 def _check_force_sign(source: str, trace: IndentationTrace, fix: str) -> None:
-    """Reject a trace whose force is clearly negative at the deepest indentation."""
-    f = trace.loading_segment().force
-    top = f[int(0.9 * f.size):]
-    noise = np.std(f[: max(3, f.size // 10)])
-    if np.median(top) < 0 and abs(np.median(top)) > 3 * noise:
+    """Reject a trace whose force falls below its pre-contact baseline at the deepest
+    indentation (:func:`palpbayes.baseline.sign_flipped`)."""
+    load = trace.loading_segment()
+    flipped, rise, base = sign_flipped(load.z, load.force)
+    if flipped:
         raise DataFileError(
             source,
-            f"force is negative ({np.median(top):.3g} N) at the deepest indentation; the "
-            "compressive force must be positive",
+            f"force falls {format_force(-rise)} below its pre-contact baseline "
+            f"({format_force(base.level)}) at the deepest indentation; the compressive force "
+            "must rise",
             fix,
         )
 

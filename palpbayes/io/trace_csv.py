@@ -22,9 +22,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..baseline import sign_flipped
 from ..contact import Tip
 from ..errors import DataFileError, InputError
 from ..trace import IndentationTrace
+from ..units import format_force
 from .atomic import write_csv_atomic
 from .units import FORCE_UNITS, LENGTH_UNITS, TIME_UNITS, force_factor, length_factor, time_factor
 
@@ -136,8 +138,8 @@ def check_plausible(trace: IndentationTrace) -> None:
     """Reject traces whose units or signs cannot be right for a palpation.
 
     Raises :class:`DataFileError` when z spans more than :data:`MAX_Z_SPAN_M`, when |force|
-    exceeds :data:`MAX_FORCE_N`, or when the force during loading is mostly negative (sign
-    flipped).
+    exceeds :data:`MAX_FORCE_N`, or when the force at the deepest indentation falls below its
+    pre-contact baseline (sign flipped, :func:`palpbayes.baseline.sign_flipped`).
     """
     src = trace.source or trace.trace_id
     span = float(np.ptp(trace.z))
@@ -153,12 +155,12 @@ def check_plausible(trace: IndentationTrace) -> None:
             "is force in mN? give the force unit, e.g. --force-unit mN",
         )
     load = trace.loading_segment()
-    f = load.force
-    top = f[int(0.9 * f.size):]  # the deepest 10 % of the loading
-    if np.median(top) < 0 and abs(np.median(top)) > 3 * np.std(f[: max(3, f.size // 10)]):
+    flipped, rise, base = sign_flipped(load.z, load.force)
+    if flipped:
         raise DataFileError(
-            src, f"force is negative ({np.median(top):.3g} N) at the deepest indentation; "
-            "the compressive force must be positive",
+            src, f"force falls {format_force(-rise)} below its pre-contact baseline "
+            f"({format_force(base.level)}) at the deepest indentation; the compressive force "
+            "must rise",
             "flip the force sign with --force-sign -1",
         )
 
