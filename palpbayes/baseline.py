@@ -142,10 +142,11 @@ def estimate_baseline(z: np.ndarray, force: np.ndarray) -> Baseline:
 def sign_flipped(z: np.ndarray, force: np.ndarray) -> tuple[bool, float, Baseline]:
     """Whether the force falls below its pre-contact baseline at the deepest indentation.
 
-    Compares the median force over the deepest 10 % of the loading samples (in time order)
-    with the baseline there — not with zero, so an untared sensor with a negative offset is
-    not mistaken for a flipped sign.  Flipped: the force lies more than 6·sd (the baseline's
-    own peak-to-peak noise) below the baseline.
+    Compares the median force of the deepest 1 % of the loading samples (at least 5) with the
+    baseline level — not with zero, so an untared sensor with a negative offset is not mistaken
+    for a flipped sign, and not over a fixed share of the samples, so a short contact after a
+    long approach is seen.  Flipped: the force lies more than 6·sd (the baseline's own
+    peak-to-peak noise) below the baseline.
 
     Returns
     -------
@@ -155,6 +156,7 @@ def sign_flipped(z: np.ndarray, force: np.ndarray) -> tuple[bool, float, Baselin
     z = np.asarray(z, dtype=float)
     f = np.asarray(force, dtype=float)
     base = estimate_baseline(z, f)
-    top = slice(int(0.9 * f.size), None)
-    rise = float(np.median(f[top]) - base.level)
+    k = min(f.size, max(5, f.size // 100))
+    deepest = np.argsort(z, kind="stable")[:k]
+    rise = float(np.median(f[deepest]) - base.level)
     return bool(rise < -pp_from_sigma(base.sd) and base.sd > 0), rise, base

@@ -219,7 +219,17 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     depths (about −3 % at d/R ≈ 0.3).  Other tips: NaN.
     """
     data = check_fittable(trace, options)
-    lsq = fit_lsq_data(data, trace_id=trace.trace_id)
+    try:
+        lsq = fit_lsq_data(data, trace_id=trace.trace_id)
+        lsq_row = lsq.summary_row()
+    except FitError as exc:
+        if options.method == "lsq":
+            raise
+        # the paper's model (no offset) can fail where the Bayesian one fits: say so in its row
+        lsq = None
+        lsq_row = {"trace_id": trace.trace_id, "method": "lsq", "tip": data.model.tip.kind,
+                   "n_points": data.n_points, "E_pa": float("nan"), "nu": data.model.nu,
+                   "flags": f"least squares failed: {exc}"}
     e_hertz = float("nan")
     if data.model.tip.kind == "sphere":
         hertz = replace(data, model=replace(data.model, tip=Tip("paraboloid",
@@ -241,7 +251,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
             "f_unc_n": data.f_unc}
     rows = []
     if options.method in ("lsq", "both"):
-        rows.append(with_hertz({**lsq.summary_row(), **meta}))
+        rows.append(with_hertz({**lsq_row, **meta}))
     bayes = None
     path = None
     if options.method in ("bayes", "both"):

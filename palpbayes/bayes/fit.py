@@ -128,7 +128,10 @@ def fit_bayes_data(
     prior = priors.for_trace(data, noise, baseline)
     names = list(prior.names)
     if lsq is None:
-        lsq = fit_lsq_data(data, trace_id=trace_id)
+        try:  # the paper's fit, recorded beside the posterior; the posterior does not need it
+            lsq = fit_lsq_data(data, trace_id=trace_id)
+        except FitError:
+            lsq = None
     modes = find_modes(data, prior)
     centers = tuple((m.z_surf, float(np.sqrt(m.cov[1, 1]))) for m in modes
                     if np.isfinite(m.cov[1, 1]))
@@ -201,8 +204,8 @@ def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, 
             "tare_n": data.tare,
             "modes_z_surf_m": [m.z_surf for m in modes],
             "modes_weight": [m.weight for m in modes],
-            "lsq_E_pa": lsq.E,
-            "lsq_z_surf_m": lsq.z_surf,
+            "lsq_E_pa": np.nan if lsq is None else lsq.E,
+            "lsq_z_surf_m": np.nan if lsq is None else lsq.z_surf,
             "n_steps": chains.n_steps,
             "burn": chains.burn,
             "thin": chains.thin,
