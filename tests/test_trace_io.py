@@ -52,6 +52,69 @@ def test_mm_mN_flipped_sign_equals_canonical(tmp_path):
     np.testing.assert_allclose(read_trace(tmp_path / "suffix.csv").z, canonical.z, rtol=1e-14)
 
 
+
+def make_afm_trace(n=2000, seed=1):  # AFM scale: 1 µm approach + 400 nm deep, ~nN forces
+    rng = np.random.default_rng(seed)
+    tip = Tip("paraboloid", radius=20e-9)
+    t = np.arange(n) / 2000.0
+    z = 1e-6 - 1.4e-6 * t / t[-1]
+    f = force(np.maximum(-z, 0.0), 5e3, 0.49, tip) + 2e-11 * rng.standard_normal(n)
+    return IndentationTrace(t, z, f, tip=tip, trace_id="afm")
+
+
+def test_afm_nn_nm_columns_read_as_si(tmp_path):
+    """A canonical trace written in nN/nm columns reads back as the SI trace."""
+    tr = make_afm_trace()
+    assert 1e-10 < tr.force.max() < 1e-7  # nN scale, so the columns really are in nN
+    canonical = read_trace(write_trace(tr, tmp_path / "c.csv", float_format="%.17g"))
+    pd.DataFrame({"time_s": tr.time, "z_nm": tr.z / 1e-9, "force_nn": tr.force / 1e-9}).to_csv(
+        tmp_path / "afm.csv", index=False, float_format="%.17g")
+    afm = read_trace(tmp_path / "afm.csv")
+    for name in ("time", "z", "force"):
+        np.testing.assert_allclose(getattr(afm, name), getattr(canonical, name),
+                                   rtol=1e-14, atol=0)
+
+
+@pytest.mark.parametrize("z_col, z_factor", [
+    ("z_um", 1e-6), ("Z_UM", 1e-6), ("z_µm", 1e-6), ("z_μm", 1e-6), ("z_nm", 1e-9),
+    ("z_pm", 1e-12), ("z_mm", 1e-3), ("z_cm", 1e-2), ("z_m", 1.0),
+])
+@pytest.mark.parametrize("f_col, f_factor", [
+    ("force_nn", 1e-9), ("force_nN", 1e-9), ("force_pn", 1e-12), ("Force_pN", 1e-12),
+    ("force_un", 1e-6), ("force_uN", 1e-6), ("force_µN", 1e-6), ("force_μn", 1e-6),
+    ("force_mn", 1e-3), ("force_MN", 1e-3), ("force_kn", 1e3), ("force_n", 1.0),
+])
+def test_unit_suffixed_columns_are_recognised(tmp_path, z_col, z_factor, f_col, f_factor):
+    """``<quantity>_<unit>`` names in any case, incl. the AFM units, without options."""
+    tr = make_afm_trace(n=300)
+    pd.DataFrame({"time_s": tr.time, z_col: tr.z / z_factor, f_col: tr.force / f_factor}).to_csv(
+        tmp_path / "x.csv", index=False, float_format="%.17g", encoding="utf-8")
+    back = read_trace(tmp_path / "x.csv")
+    np.testing.assert_allclose(back.z, tr.z, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(back.force, tr.force, rtol=1e-14, atol=0)
+
+
+@pytest.mark.parametrize("unit, factor", [("pN", 1e-12), ("nN", 1e-9), ("uN", 1e-6),
+                                          ("µN", 1e-6), ("μN", 1e-6)])
+def test_afm_force_units_as_options(tmp_path, unit, factor):
+    tr = make_afm_trace(n=300)
+    pd.DataFrame({"t": tr.time, "h": tr.z / 1e-6, "F": tr.force / factor}).to_csv(
+        tmp_path / "x.csv", index=False, float_format="%.17g", encoding="utf-8")
+    back = read_trace(tmp_path / "x.csv", columns={"time": "t", "z": "h", "force": "F"},
+                      units={"z": "um", "force": unit})
+    np.testing.assert_allclose(back.z, tr.z, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(back.force, tr.force, rtol=1e-14, atol=0)
+
+
+def test_force_unit_options_stay_case_sensitive():
+    from palpbayes.io.units import force_factor, length_factor
+
+    assert force_factor("pN") == 1e-12 and length_factor("pm") == 1e-12
+    assert length_factor("PM") == 1e-12 and length_factor("NM") == 1e-9  # lengths: any case
+    for wrong in ("PN", "MN", "nn", "pn"):  # petanewton/meganewton are not pN/mN
+        with pytest.raises(InputError, match=f"unknown force unit '{wrong}'.*pN"):
+            force_factor(wrong)
+
 def _write(tmp_path, name, text):
     p = tmp_path / name
     p.write_text(text)

@@ -7,10 +7,12 @@ forward kinematics.  Other files are read through a column mapping, unit and sig
     read_trace("run.csv", columns={"time": "t", "z": "Z", "force": "Fz"},
                units={"z": "mm", "force": "mN"}, force_sign=-1)
 
-Columns named ``<quantity>_<unit>`` (``z_mm``, ``force_mn``, ``time_ms``) are recognised
-without options.  The separator (comma, semicolon or tab) is detected from the header line;
-decimal commas are not read but reported as such.  Every problem is raised as
-:class:`~palpbayes.errors.DataFileError` naming the file, the column or value, and the fix.
+Columns named ``<quantity>_<unit>`` (``z_mm``, ``force_mn``, ``time_ms``; AFM ``z_um``, ``z_nm``,
+``force_nn``, ``force_pn``) are recognised without options, case-insensitively (``force_mn``
+is millinewtons: no one records in meganewtons).  The separator (comma, semicolon or tab) is
+detected from the header line; decimal commas are not read but reported as such.  Every
+problem is raised as :class:`~palpbayes.errors.DataFileError` naming the file, the column or
+value, and the fix.
 """
 
 from __future__ import annotations
@@ -237,7 +239,8 @@ def read_trace(
     columns
         Mapping from quantity (``time``, ``z``, ``force``) to the file's column name.
     units
-        Mapping from quantity to unit: time s/ms/min, z m/mm/um/nm, force N/mN/uN/nN/kN.
+        Mapping from quantity to unit: time s/ms/min, z m/cm/mm/um (µm)/nm/pm, force
+        N/kN/mN/uN (µN)/nN/pN.
     force_sign, z_sign
         +1 or -1: multiply force (to make pressing positive) or z (to make up positive).
     tip
