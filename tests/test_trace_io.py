@@ -53,7 +53,7 @@ def test_mm_mN_flipped_sign_equals_canonical(tmp_path):
 
 
 
-def make_afm_trace(n=2000, seed=1):  # AFM scale: 1 µm approach + 400 nm deep, ~nN forces
+def make_afm_trace(n=2000, seed=1):  # AFM scale: 1 µm approach + 400 nm deep, 340 pN
     rng = np.random.default_rng(seed)
     tip = Tip("paraboloid", radius=20e-9)
     t = np.arange(n) / 2000.0
@@ -167,6 +167,24 @@ def test_implausible_units_and_flipped_sign(tmp_path):
         read_trace(tmp_path / "s.csv")
     assert read_trace(tmp_path / "s.csv", force_sign=-1).force.max() > 1.0
 
+
+
+def test_messages_print_forces_and_lengths_with_a_fitting_prefix():
+    from dataclasses import replace
+
+    from palpbayes.io.trace_csv import check_plausible
+
+    afm = make_afm_trace()
+    with pytest.raises(DataFileError, match=r"^afm: force is negative \(-2\d\d pN\) at the "):
+        check_plausible(replace(afm, force=-afm.force))
+    tr = make_trace()
+    with pytest.raises(DataFileError, match=r"\|force\| reaches 1\.11 kN, implausible"):
+        check_plausible(replace(tr, force=tr.force * 1e3))
+    with pytest.raises(DataFileError, match=r"z spans 25 m, more than a palpation can \(500 mm\)"):
+        check_plausible(replace(tr, z=tr.z * 1e4))
+    assert repr(tr) == ("IndentationTrace('t1', 2400 points, paraboloid R=11.7 mm, "
+                        "z 98.501 mm..101 mm, F -31.2 mN..1.11 N)")
+    assert "paraboloid R=20 nm, z -400 nm..1 µm, F -71 pN..340 pN)" in repr(afm)
 
 def test_loading_segment_drops_retract():
     t = np.arange(10.0)
@@ -291,10 +309,13 @@ def test_trace_metadata_types_raise_package_errors(kwargs, match):
 def test_narrow_depth_window_names_the_window_not_the_file():
     tr = make_trace().replace(source="run.csv")
     with pytest.raises(InputError, match=r"only \d of 2400 samples have a depth in "
-                       r"\[0, 0\.001\] mm.*widen the window") as info:
+                       r"\[0 m, 1 µm\] below z_surf = 100 mm;.*widen the window") as info:
         tr.depth_window(0.1, 0.0, 1e-6)
     assert "whole recording" not in str(info.value)
-    with pytest.raises(InputError, match="have z >= "):
+    with pytest.raises(InputError, match=r"only 0 of 2400 samples have a depth of at least "
+                       r"50 mm below z_surf = 100 mm;"):
+        tr.depth_window(0.1, 0.05)
+    with pytest.raises(InputError, match="have z >= 1 m;"):
         tr.above(1.0)
     assert tr.depth_window(0.1, 0.0, 5e-4).n_points > 3
 

@@ -50,6 +50,7 @@ from ..contact import Tip
 from ..errors import DataFileError, InputError
 from ..kinematics import UR3E, DHParameters, _as_offset, tip_z
 from ..trace import IndentationTrace
+from ..units import format_force
 from .units import FORCE_UNITS, TIME_UNITS, force_factor, time_factor
 
 __all__ = [
@@ -187,7 +188,7 @@ def _check_force_sign(source: str, trace: IndentationTrace, fix: str) -> None:
     if np.median(top) < 0 and abs(np.median(top)) > 3 * noise:
         raise DataFileError(
             source,
-            f"force is negative ({np.median(top):.3g} N) at the deepest indentation; the "
+            f"force is negative ({format_force(np.median(top))}) at the deepest indentation; the "
             "compressive force must be positive",
             fix,
         )

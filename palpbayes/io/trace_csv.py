@@ -27,6 +27,7 @@ import pandas as pd
 from ..contact import Tip
 from ..errors import DataFileError, InputError
 from ..trace import IndentationTrace
+from ..units import format_force, format_length
 from .atomic import write_csv_atomic
 from .units import FORCE_UNITS, LENGTH_UNITS, TIME_UNITS, force_factor, length_factor, time_factor
 
@@ -145,13 +146,14 @@ def check_plausible(trace: IndentationTrace) -> None:
     span = float(np.ptp(trace.z))
     if span > MAX_Z_SPAN_M:
         raise DataFileError(
-            src, f"z spans {span:g} m, more than a palpation can ({MAX_Z_SPAN_M} m)",
+            src, f"z spans {format_length(span)}, more than a palpation can "
+            f"({format_length(MAX_Z_SPAN_M)})",
             "is z in mm? give the z unit, e.g. --z-unit mm",
         )
     fmax = float(np.max(np.abs(trace.force)))
     if fmax > MAX_FORCE_N:
         raise DataFileError(
-            src, f"|force| reaches {fmax:g} N, implausible for soft-material palpation",
+            src, f"|force| reaches {format_force(fmax)}, implausible for soft-material palpation",
             "is force in mN? give the force unit, e.g. --force-unit mN",
         )
     load = trace.loading_segment()
@@ -159,7 +161,7 @@ def check_plausible(trace: IndentationTrace) -> None:
     top = f[int(0.9 * f.size):]  # the deepest 10 % of the loading
     if np.median(top) < 0 and abs(np.median(top)) > 3 * np.std(f[: max(3, f.size // 10)]):
         raise DataFileError(
-            src, f"force is negative ({np.median(top):.3g} N) at the deepest indentation; "
+            src, f"force is negative ({format_force(np.median(top))}) at the deepest indentation; "
             "the compressive force must be positive",
             "flip the force sign with --force-sign -1",
         )
