@@ -15,7 +15,7 @@ Rules (DESIGN §2):
   −F_unc <= F(z_surf) <= F_unc, exactly — when the sensor is tared to within F_unc, and the
   baseline level b otherwise (untared: |F(z_surf) − b| <= F_unc, the only form that has a
   solution).  It admits z_surf in [z_c, z_top], z_top the start of the approach: the
-  least-squares baseline's search range.  The Bayesian model does not use it (DESIGN §3.6): its surface
+  least-squares baseline's search range.  The Bayesian model does not use it: its surface
   prior spans the whole loading range [z_min, z_top];
 * ``tare=True`` subtracts the baseline level from the force (zeroing the sensor), so that the
   paper's model, which has no offset term, can be fitted to an untared recording;
@@ -208,8 +208,8 @@ def _contact_onset(z: np.ndarray, f: np.ndarray, f_unc: float, base: Baseline,
     if last == f.size - 1:
         raise NoContactError(
             f"{source}: the force is back within ±{format_force(f_unc)} of its pre-contact "
-            "level at the deepest point; the tip does not stay in contact (is the force sign flipped? "
-            "try --force-sign -1)"
+            "level at the deepest point; the tip does not stay in contact (is the force sign "
+            "flipped? try --force-sign -1)"
         )
     # interpolate where |F − baseline| crosses f_unc between samples `last` and `last + 1`
     f0, f1 = excess[last], excess[last + 1]

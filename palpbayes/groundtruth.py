@@ -139,6 +139,7 @@ from .io.groundtruth_inputs import (
     scan_inputs,
 )
 from .io.instron import CompressionTest
+from .units import format_pressure
 
 __all__ = [
     "DEFAULT_STRAIN_WINDOW",
@@ -392,7 +393,7 @@ def fit_modulus(
         if not (math.isfinite(slope) and slope > 0):
             raise DataFileError(
                 where, f"the load does not rise with compression between {_pct(shift + start)} "
-                f"and {_pct(shift + hi)} strain (slope {slope:.4g} Pa)",
+                f"and {_pct(shift + hi)} strain (slope {format_pressure(slope, 4)})",
                 "check that the file is a compression test and the load column is the load",
             )
         eps0 = -intercept / slope

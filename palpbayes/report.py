@@ -68,6 +68,7 @@ from .results import (
     load_results,
     ordered,
 )
+from .units import format_force, format_length
 
 __all__ = [
     "PAGE_SIZE",
@@ -432,7 +433,7 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     else:
         frac = f"{frac:g}"
     depth = o.get("max_depth")
-    depth = "none" if depth is None else f"{1e3 * float(depth):g} mm"
+    depth = "none" if depth is None else format_length(float(depth), 6)
     nu_b = bud.get("nu_range") or f"nu ± {bud.get('nu_half_width')}"
     n_tr = s.get("n_traces", res.summary["trace_id"].nunique())
     return [
@@ -440,10 +441,10 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
               f"traces: {n_tr}"),
         ("t", f"Contact model: Poisson ratio nu = {o.get('nu')}; finite-thickness correction "
               f"{thick}"),
-        ("t", f"Fit window: F_unc = {_fmt(1e3 * float(o.get('f_unc', 0.048)), 0)} mN; fit "
+        ("t", f"Fit window: F_unc = {format_force(float(o.get('f_unc', 0.048)))}; fit "
               f"fraction {frac}; max depth {depth}"),
         ("t", f"Noise model: {o.get('noise', 'gaussian')}; sensor noise "
-              f"{_fmt(1e3 * float(pri.get('noise_pp', 0.048)), 0)} mN peak-to-peak (sigma "
+              f"{format_force(float(pri.get('noise_pp', 0.048)))} peak-to-peak (sigma "
               "prior centred on pp/6)"),
         ("t", f"Budget: Poisson ratio {nu_b}; tip radius "
               f"±{_fmt(100 * float(bud.get('radius_tolerance', 0)), 1)} %; force gain sd "
@@ -1128,7 +1129,8 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         window = (f"Fit window: the first {100 * float(frac):g} % of the penetration is not "
                   "fitted, for every tip (fit_fraction option of this run).")
     if o.get("max_depth") is not None:
-        window += f" Only samples shallower than {1e3 * float(o['max_depth']):g} mm are fitted."
+        window += (f" Only samples shallower than {format_length(float(o['max_depth']), 6)} "
+                   "are fitted.")
     lines: list[tuple[str, str]] = [("h", "Contact models (DESIGN §1)")]
     lines += [("t", ln) for ln in _wrap(
         "Rigid axisymmetric tip on an elastic half-space, F = E*·s(d) with E* = E/(1 − nu²) and "
@@ -1145,7 +1147,7 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     lines += [("h", "Least-squares baseline (the paper's eqs. 12–13)")]
     lines += [("t", ln) for ln in _wrap(
         "Minimise L = Σ (F_j − k·d_j^m)² over k and z_surf subject to |F(z_surf)| ≤ F_unc "
-        f"(F_unc = {_fmt(1e3 * float(o.get('f_unc', 0.048)), 0)} mN): for fixed z_surf E* has "
+        f"(F_unc = {format_force(float(o.get('f_unc', 0.048)))}): for fixed z_surf E* has "
         f"a closed form; z_surf by a {GRID_POINTS}-point grid and bounded Brent search over the "
         "admissible range. Interval: Gauss-Newton covariance of (E*, z_surf) from the "
         "residuals, E ± t(0.95, n − 2)·sd — the textbook interval, assuming iid residuals and "

@@ -42,6 +42,7 @@ from .simulate import (
     write_compression_export,
 )
 from .trace import IndentationTrace
+from .units import format_pressure
 
 __all__ = ["simulate_campaign", "simulate_palpation_series", "rest_modulus", "child_seed"]
 
@@ -152,8 +153,9 @@ def _truth_row(trace: IndentationTrace, tip_name: str) -> dict:
 def _draw_modulus(gen: np.random.Generator, mat: Material) -> float:
     E = mat.E_pa + mat.E_sd_pa * gen.standard_normal()
     if E <= 0:
-        raise InputError(f"material {mat.name}: drew a non-positive modulus {E:g} Pa; the sd "
-                         f"{mat.E_sd_pa:g} Pa is too large for the mean {mat.E_pa:g} Pa")
+        raise InputError(f"material {mat.name}: drew a non-positive modulus "
+                         f"{format_pressure(E, 6)}; the sd {format_pressure(mat.E_sd_pa, 6)} is "
+                         f"too large for the mean {format_pressure(mat.E_pa, 6)}")
     return float(E)
 
 
@@ -392,7 +394,8 @@ def simulate_palpation_series(
             raise InputError(f"rest time {t!r} s must be non-negative (None for a fresh specimen)")
         E = E0 if fresh else float(rest_modulus(float(t), c))
         if E <= 0:
-            raise InputError(f"the stiffening law gives E = {E:g} Pa at rest time {t} s; "
+            raise InputError(f"the stiffening law gives E = {format_pressure(E, 6)} at rest "
+                             f"time {t} s; "
                              "check the coefficients c")
         trace = simulate_trace(E, tip, rng=gen, trace_id=f"{trace_prefix}_p{i:02d}",
                                specimen=specimen, material=material, repetition=i,

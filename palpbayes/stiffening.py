@@ -70,6 +70,7 @@ from .bayes.diagnostics import chain_passes, compute_diagnostics, import_arviz
 from .bayes.result import LEVEL
 from .bayes.sampler import SamplerSettings, run_emcee
 from .errors import InputError
+from .units import format_pressure
 
 __all__ = ["StiffeningResult", "fit_stiffening", "fit_stiffening_summary",
            "STIFFENING_SETTINGS", "MIN_RATIO", "double_exponential", "LAW_TEXT"]
@@ -476,7 +477,8 @@ def fit_stiffening(rest_time, E, E_sd=None, *, seed: int | None = 0,
         med = {k: float(np.median(v)) for k, v in draws.items()}
         message = (f"two exponentials resolved from {n} estimates: time scales "
                    f"{-1 / med['c2']:.3g} s and {-1 / med['c4']:.3g} s, amplitudes "
-                   f"{med['c1']:.4g} and {med['c3']:.4g} Pa (BIC favours them by "
+                   f"{format_pressure(med['c1'], 4)} and {format_pressure(med['c3'], 4)} (BIC "
+                   "favours them by "
                    f"{float(bic_s - bic_d):.1f})")
     else:
         message = ("E(t) = c1·e^(c2·t) + c3·e^(c4·t) is not identifiable from these data: "
@@ -486,16 +488,18 @@ def fit_stiffening(rest_time, E, E_sd=None, *, seed: int | None = 0,
             T = -1.0 / single["c2"]
             T_lo, T_hi = np.quantile(T, [(1 - level) / 2, (1 + level) / 2])
             message += (f" Use the single exponential E = c0 + c1·e^(c2·t): c0 = "
-                        f"{q['c0'][0]:.4g} Pa, c1 = {q['c1'][0]:.4g} Pa ({pct} interval "
-                        f"{q['c1'][2]:.4g} to {q['c1'][3]:.4g}), time scale "
+                        f"{format_pressure(q['c0'][0], 4)}, c1 = {format_pressure(q['c1'][0], 4)} "
+                        f"({pct} interval {format_pressure(q['c1'][2], 4)} to "
+                        f"{format_pressure(q['c1'][3], 4)}), time scale "
                         f"{float(np.median(T)):.3g} s ({pct} interval {T_lo:.3g}-{T_hi:.3g} s); "
                         f"BIC favours it over a constant by {float(bic_c - bic_s):.1f}.")
         else:
             _, _, c_lo, c_hi = _q(constant["c0"], level)
             message += (" A single exponential E = c0 + c1·e^(c2·t) is not supported either: "
                         + "; ".join(single_reasons) + f". No stiffening detected: E = "
-                        f"{mean / 1e3:.4g} ± {sd / 1e3:.3g} kPa (mean ± sd of {n} estimates; "
-                        f"{pct} interval of the constant {c_lo / 1e3:.4g}-{c_hi / 1e3:.4g} kPa).")
+                        f"{format_pressure(mean, 4)} ± {format_pressure(sd)} (mean ± sd of {n} "
+                        f"estimates; {pct} interval of the constant {format_pressure(c_lo, 4)} to "
+                        f"{format_pressure(c_hi, 4)}).")
     converged_laws = {"double": bool(diag_d.converged), "single": bool(diag_s.converged),
                       "constant": bool(diag_c.converged)}
     return StiffeningResult(

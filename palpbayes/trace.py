@@ -13,6 +13,7 @@ import numpy as np
 
 from .contact import Tip
 from .errors import DataFileError, InputError, NoContactError
+from .units import format_force, format_length
 
 __all__ = ["IndentationTrace"]
 
@@ -176,8 +177,10 @@ class IndentationTrace:
         """
         d = z_surf - self.z
         keep = (d >= depth_min) & (d <= depth_max)
-        self._check_window(keep, f"have a depth in [{depth_min * 1e3:.4g}, "
-                           f"{depth_max * 1e3:.4g}] mm below z_surf = {z_surf * 1e3:.6g} mm")
+        window = (f"of at least {format_length(depth_min, 4)}" if np.isposinf(depth_max) else
+                  f"in [{format_length(depth_min, 4)}, {format_length(depth_max, 4)}]")
+        self._check_window(keep, f"have a depth {window} below z_surf = "
+                           f"{format_length(z_surf, 6)}")
         return self._slice(keep)
 
     def above(self, z_min: float) -> IndentationTrace:
@@ -189,7 +192,7 @@ class IndentationTrace:
             If fewer than 3 samples lie above ``z_min``.
         """
         keep = self.z >= z_min
-        self._check_window(keep, f"have z >= {z_min * 1e3:.6g} mm")
+        self._check_window(keep, f"have z >= {format_length(z_min, 6)}")
         return self._slice(keep)
 
     def _check_window(self, keep: np.ndarray, what: str) -> None:
@@ -213,8 +216,8 @@ class IndentationTrace:
         tip = self.tip.describe() if self.tip else "no tip"
         return (
             f"IndentationTrace({self.trace_id!r}, {self.n_points} points, {tip}, "
-            f"z {self.z.min() * 1e3:.3f}..{self.z.max() * 1e3:.3f} mm, "
-            f"F {self.force.min():.3g}..{self.force.max():.3g} N)"
+            f"z {format_length(self.z.min(), 6)}..{format_length(self.z.max(), 6)}, "
+            f"F {format_force(self.force.min())}..{format_force(self.force.max())})"
         )
 
 

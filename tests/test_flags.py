@@ -1,9 +1,10 @@
 """Posterior flags reach ``summary.csv``: a flagged fit is reported as not converged.
 
 The Bayesian fit flags failure modes that R-hat and ESS cannot see (``bayes.fit._flags``): a
-bimodal surface posterior, a prior-dominated surface and a posterior at a prior bound.  These tests check that each flag is
-raised on inputs that show it and that it ends up in the ``flags`` column of ``summary.csv``
-with ``converged = False``, although the chains themselves pass their diagnostics.
+bimodal surface posterior, a prior-dominated surface and a posterior at a prior bound. These
+tests check that each flag is raised on inputs that show it and that it ends up in the
+``flags`` column of ``summary.csv`` with ``converged = False``, although the chains themselves
+pass their diagnostics.
 """
 
 from __future__ import annotations

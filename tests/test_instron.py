@@ -146,6 +146,19 @@ def test_units_synonyms_and_position(tmp_path):
     np.testing.assert_allclose(t2.compression_m, 5e-6 * np.arange(10))
 
 
+
+@pytest.mark.parametrize("load_col, factor", [("load_nn", 1e-9), ("load_pn", 1e-12),
+                                              ("load_un", 1e-6), ("load_µn", 1e-6),
+                                              ("Load (nN)", 1e-9), ("Load (pN)", 1e-12),
+                                              ("Load (µN)", 1e-6)])
+def test_small_force_units(tmp_path, load_col, factor):
+    rows = [f"{k / 10},{k * 0.5},{k * 2}" for k in range(10)]
+    p = write(tmp_path / "small.csv", ["Area: 1mm^2;", "Height: 1mm;",
+                                       f"time_s,displacement_nm,{load_col}"] + rows)
+    t = read_compression_test(p)
+    np.testing.assert_allclose(t.compression_m, 0.5e-9 * np.arange(10))
+    np.testing.assert_allclose(t.load_n, 2 * factor * np.arange(10))
+
 def test_keyword_geometry_takes_precedence(tmp_path):
     p = sim_file(tmp_path)
     t = read_compression_test(p, area_m2=1e-3, height_m=0.04, material="Foam", specimen="s1")

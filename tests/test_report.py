@@ -29,6 +29,7 @@ from palpbayes.report import (
     TABLE_ROWS_PER_PAGE,
     _methods_lines,
     _range,
+    _settings_lines,
     _shown,
     build_report,
     load_fit,
@@ -279,6 +280,32 @@ def test_methods_text_is_built_from_the_settings(fitted):
     changed["options_fields"]["settings"]["moves"] = "de"
     assert "DEMove) only" in text(res)
 
+
+
+def test_settings_and_methods_print_forces_and_depths_with_a_prefix(fitted):
+    """AFM-scale settings read as pN and µm, not as '0 mN' (issue 12)."""
+    import copy
+
+    out, _, _ = fitted
+    res = load_results(out)
+
+    def text(lines) -> str:
+        return " ".join(t for _, t in lines)
+
+    assert "(F_unc = 48 mN)" in text(_methods_lines(res))
+    base = text(_settings_lines(res))
+    assert "F_unc = 48 mN;" in base and "sensor noise 48 mN peak-to-peak" in base
+    changed = copy.deepcopy(res.settings)
+    opts = changed["options_fields"]
+    opts.update(f_unc=3e-10, max_depth=2e-6)
+    opts["priors"] = {**(opts.get("priors") or {}), "noise_pp": 2.5e-10}
+    res.settings = changed
+    methods, settings = text(_methods_lines(res)), text(_settings_lines(res))
+    assert "(F_unc = 300 pN)" in methods
+    assert "Only samples shallower than 2 µm are fitted." in methods
+    assert "F_unc = 300 pN; fit fraction" in settings and "max depth 2 µm" in settings
+    assert "sensor noise 250 pN peak-to-peak" in settings
+    assert " mN" not in methods.split("Bayesian model")[0] and " mN" not in settings
 
 def _replicated(res: ResultsFolder, path: Path, materials: list[str], tips: list[str]
                 ) -> ResultsFolder:

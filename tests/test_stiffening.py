@@ -79,8 +79,8 @@ def test_constant_data_give_no_stiffening():
                for x in r.single_reasons), r.single_reasons
     assert any("time scale is not resolved" in x for x in r.single_reasons), r.single_reasons
     assert "Use the single exponential" not in r.message
-    assert f"No stiffening detected: E = {E.mean() / 1e3:.4g} ± {E.std(ddof=1) / 1e3:.3g} kPa" \
-        in r.message
+    assert (f"No stiffening detected: E = {E.mean() / 1e3:.4g} kPa ± {E.std(ddof=1) / 1e3:.3g} "
+            "kPa") in r.message
     assert r.E_mean_pa == pytest.approx(E.mean()) and r.E_sd_pa == pytest.approx(E.std(ddof=1))
     assert _covers(r.constant, "c0", E.mean()) and _covers(r.constant, "c0", 100e3)
     pred = r.predict([0.0, 100.0, 600.0])

@@ -52,6 +52,69 @@ def test_mm_mN_flipped_sign_equals_canonical(tmp_path):
     np.testing.assert_allclose(read_trace(tmp_path / "suffix.csv").z, canonical.z, rtol=1e-14)
 
 
+
+def make_afm_trace(n=2000, seed=1):  # AFM scale: 1 µm approach + 400 nm deep, 340 pN
+    rng = np.random.default_rng(seed)
+    tip = Tip("paraboloid", radius=20e-9)
+    t = np.arange(n) / 2000.0
+    z = 1e-6 - 1.4e-6 * t / t[-1]
+    f = force(np.maximum(-z, 0.0), 5e3, 0.49, tip) + 2e-11 * rng.standard_normal(n)
+    return IndentationTrace(t, z, f, tip=tip, trace_id="afm")
+
+
+def test_afm_nn_nm_columns_read_as_si(tmp_path):
+    """A canonical trace written in nN/nm columns reads back as the SI trace."""
+    tr = make_afm_trace()
+    assert 1e-10 < tr.force.max() < 1e-7  # nN scale, so the columns really are in nN
+    canonical = read_trace(write_trace(tr, tmp_path / "c.csv", float_format="%.17g"))
+    pd.DataFrame({"time_s": tr.time, "z_nm": tr.z / 1e-9, "force_nn": tr.force / 1e-9}).to_csv(
+        tmp_path / "afm.csv", index=False, float_format="%.17g")
+    afm = read_trace(tmp_path / "afm.csv")
+    for name in ("time", "z", "force"):
+        np.testing.assert_allclose(getattr(afm, name), getattr(canonical, name),
+                                   rtol=1e-14, atol=0)
+
+
+@pytest.mark.parametrize("z_col, z_factor", [
+    ("z_um", 1e-6), ("Z_UM", 1e-6), ("z_µm", 1e-6), ("z_μm", 1e-6), ("z_nm", 1e-9),
+    ("z_pm", 1e-12), ("z_mm", 1e-3), ("z_cm", 1e-2), ("z_m", 1.0),
+])
+@pytest.mark.parametrize("f_col, f_factor", [
+    ("force_nn", 1e-9), ("force_nN", 1e-9), ("force_pn", 1e-12), ("Force_pN", 1e-12),
+    ("force_un", 1e-6), ("force_uN", 1e-6), ("force_µN", 1e-6), ("force_μn", 1e-6),
+    ("force_mn", 1e-3), ("force_MN", 1e-3), ("force_kn", 1e3), ("force_n", 1.0),
+])
+def test_unit_suffixed_columns_are_recognised(tmp_path, z_col, z_factor, f_col, f_factor):
+    """``<quantity>_<unit>`` names in any case, incl. the AFM units, without options."""
+    tr = make_afm_trace(n=300)
+    pd.DataFrame({"time_s": tr.time, z_col: tr.z / z_factor, f_col: tr.force / f_factor}).to_csv(
+        tmp_path / "x.csv", index=False, float_format="%.17g", encoding="utf-8")
+    back = read_trace(tmp_path / "x.csv")
+    np.testing.assert_allclose(back.z, tr.z, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(back.force, tr.force, rtol=1e-14, atol=0)
+
+
+@pytest.mark.parametrize("unit, factor", [("pN", 1e-12), ("nN", 1e-9), ("uN", 1e-6),
+                                          ("µN", 1e-6), ("μN", 1e-6)])
+def test_afm_force_units_as_options(tmp_path, unit, factor):
+    tr = make_afm_trace(n=300)
+    pd.DataFrame({"t": tr.time, "h": tr.z / 1e-6, "F": tr.force / factor}).to_csv(
+        tmp_path / "x.csv", index=False, float_format="%.17g", encoding="utf-8")
+    back = read_trace(tmp_path / "x.csv", columns={"time": "t", "z": "h", "force": "F"},
+                      units={"z": "um", "force": unit})
+    np.testing.assert_allclose(back.z, tr.z, rtol=1e-14, atol=0)
+    np.testing.assert_allclose(back.force, tr.force, rtol=1e-14, atol=0)
+
+
+def test_force_unit_options_stay_case_sensitive():
+    from palpbayes.io.units import force_factor, length_factor
+
+    assert force_factor("pN") == 1e-12 and length_factor("pm") == 1e-12
+    assert length_factor("PM") == 1e-12 and length_factor("NM") == 1e-9  # lengths: any case
+    for wrong in ("PN", "MN", "nn", "pn"):  # petanewton/meganewton are not pN/mN
+        with pytest.raises(InputError, match=f"unknown force unit '{wrong}'.*pN"):
+            force_factor(wrong)
+
 def _write(tmp_path, name, text):
     p = tmp_path / name
     p.write_text(text)
@@ -104,6 +167,24 @@ def test_implausible_units_and_flipped_sign(tmp_path):
         read_trace(tmp_path / "s.csv")
     assert read_trace(tmp_path / "s.csv", force_sign=-1).force.max() > 1.0
 
+
+
+def test_messages_print_forces_and_lengths_with_a_fitting_prefix():
+    from dataclasses import replace
+
+    from palpbayes.io.trace_csv import check_plausible
+
+    afm = make_afm_trace()
+    with pytest.raises(DataFileError, match=r"^afm: force is negative \(-2\d\d pN\) at the "):
+        check_plausible(replace(afm, force=-afm.force))
+    tr = make_trace()
+    with pytest.raises(DataFileError, match=r"\|force\| reaches 1\.11 kN, implausible"):
+        check_plausible(replace(tr, force=tr.force * 1e3))
+    with pytest.raises(DataFileError, match=r"z spans 25 m, more than a palpation can \(500 mm\)"):
+        check_plausible(replace(tr, z=tr.z * 1e4))
+    assert repr(tr) == ("IndentationTrace('t1', 2400 points, paraboloid R=11.7 mm, "
+                        "z 98.501 mm..101 mm, F -31.2 mN..1.11 N)")
+    assert "paraboloid R=20 nm, z -400 nm..1 µm, F -71 pN..340 pN)" in repr(afm)
 
 def test_loading_segment_drops_retract():
     t = np.arange(10.0)
@@ -228,10 +309,13 @@ def test_trace_metadata_types_raise_package_errors(kwargs, match):
 def test_narrow_depth_window_names_the_window_not_the_file():
     tr = make_trace().replace(source="run.csv")
     with pytest.raises(InputError, match=r"only \d of 2400 samples have a depth in "
-                       r"\[0, 0\.001\] mm.*widen the window") as info:
+                       r"\[0 m, 1 µm\] below z_surf = 100 mm;.*widen the window") as info:
         tr.depth_window(0.1, 0.0, 1e-6)
     assert "whole recording" not in str(info.value)
-    with pytest.raises(InputError, match="have z >= "):
+    with pytest.raises(InputError, match=r"only 0 of 2400 samples have a depth of at least "
+                       r"50 mm below z_surf = 100 mm;"):
+        tr.depth_window(0.1, 0.05)
+    with pytest.raises(InputError, match="have z >= 1 m;"):
         tr.above(1.0)
     assert tr.depth_window(0.1, 0.0, 5e-4).n_points > 3
 

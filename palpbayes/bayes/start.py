@@ -2,16 +2,17 @@
 
 For a trial surface z_s the mean force E*·s(z_s − z) + F0 (+ F1·(z − z_ref)) is linear in
 β = (E*, F0[, F1]), so the least-squares β(z_s) and the residual sum of squares RSS(z_s) have a
-closed form (normal equations, with E* >= 0).  The Gaussian priors of F0 (and F1) enter as
+closed form (normal equations, with E* >= 0). The Gaussian priors of F0 (and F1) enter as
 pseudo-observations weighted by (sigma0/sd)², sigma0 the prior's noise scale — without them a
-flat punch whose window lies wholly in contact has no optimum along its z_surf–F0 ridge.  The
+flat punch whose window lies wholly in contact has no optimum along its z_surf–F0 ridge. The
 profile log-likelihood of iid Gaussian noise, ℓ(z_s) = −(n/2)·ln RSS(z_s), is scanned on
-:data:`SCAN_POINTS` heights over the whole loading range (the surface prior's support), every local maximum is refined with bounded Brent
-(:func:`scipy.optimize.minimize_scalar`), and each becomes a :class:`Mode` with its Gauss–Newton
-covariance.  The modes are weighted by their Laplace evidence, exp(ℓ)·sqrt(det cov), and the
-walkers are shared among those holding at least :data:`MIN_WEIGHT` of it, so a second surface
-that fits almost as well is sampled instead of missed — and then flagged as bimodal.  The
-others are kept in the fit's record (``other_modes``).
+:data:`SCAN_POINTS` heights over the whole loading range (the surface prior's support), every
+local maximum is refined with bounded Brent (:func:`scipy.optimize.minimize_scalar`), and each
+becomes a :class:`Mode` with its Gauss–Newton covariance. The modes are weighted by their
+Laplace evidence, exp(ℓ)·sqrt(det cov), and the walkers are shared among those holding at least
+:data:`MIN_WEIGHT` of it, so a second surface that fits almost as well is sampled instead of
+missed — and then flagged as bimodal. The others are kept in the fit's record
+(``other_modes``).
 
 Walkers start in a small Gaussian ball shaped by each mode's covariance (0.1 of its sd), so
 they lie along a long thin ridge rather than across it; emcee's moves then spread them.

@@ -12,6 +12,7 @@ import argparse
 
 from ..simulate import PAPER_MATERIALS, PAPER_TIPS
 from ..simulate_campaign import simulate_campaign
+from ..units import format_force
 
 __all__ = ["register", "run"]
 
@@ -56,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
         gt_specimens=args.gt_specimens,
     )
     n_mat, n_tip = len(PAPER_MATERIALS), len(PAPER_TIPS)
-    noise = f"{args.noise_pp * 1e3:g} mN p-p"
+    noise = f"{format_force(args.noise_pp, 6)} p-p"
     noise += f", AR(1) phi = {args.ar1:g}" if args.ar1 else ", white"
     print(f"wrote a synthetic campaign to {out} (seed {args.seed}, noise {noise}):")
     print(f"  {n_mat * n_tip * args.repetitions} traces ({n_mat} materials x {n_tip} tips x "

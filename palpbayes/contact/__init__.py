@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import GeometryError
+from ..units import format_length
 from . import cone, flat, mdr, paraboloid, sphere, thickness
 from .geometry import TIP_KINDS, Tip
 
@@ -156,8 +157,9 @@ def check_tip_plausible(tip: Tip) -> None:
     """
     if tip.radius is not None and tip.radius > MAX_TIP_RADIUS_M:
         raise GeometryError(
-            f"tip radius {tip.radius:g} m is implausibly large for palpation (more than "
-            f"{MAX_TIP_RADIUS_M:g} m); --radius is in metres (so is the manifest's radius_m): "
+            f"tip radius {format_length(tip.radius, 6)} is implausibly large for palpation (more "
+            f"than {format_length(MAX_TIP_RADIUS_M)}); --radius is in metres (so is the "
+            "manifest's radius_m): "
             f"did you mean {_mm_as_metres(tip.radius)}?"
         )
 

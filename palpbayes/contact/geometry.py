@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 from ..errors import GeometryError
+from ..units import format_length
 
 __all__ = ["Tip", "TIP_KINDS"]
 
@@ -62,10 +63,10 @@ class Tip:
             _positive(self.n, "power-law profile exponent n", "profile is f(r) = c*r^n")
 
     def describe(self) -> str:
-        """Short human-readable description, e.g. ``'sphere R=10 mm'``."""
+        """Short human-readable description, e.g. ``'sphere R=10 mm'`` or ``'sphere R=20 nm'``."""
         if self.kind in ("flat", "paraboloid", "sphere"):
             label = "a" if self.kind == "flat" else "R"
-            return f"{self.kind} {label}={self.radius * 1e3:g} mm"
+            return f"{self.kind} {label}={format_length(self.radius, 6)}"
         if self.kind == "cone":
             return f"cone alpha={math.degrees(self.half_angle):g} deg"
         return f"power c={self.c:g} n={self.n:g}"

@@ -30,6 +30,7 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 
 from ..errors import GeometryError
+from ..units import format_length
 
 __all__ = [
     "dimitriadis_coefficients",
@@ -102,8 +103,9 @@ def dimitriadis_factor(
         i = int(np.nanargmax(chi))
         raise GeometryError(
             f"finite-thickness correction out of range: chi = sqrt(R*d)/h = "
-            f"{chi.flat[i]:.3g} at depth d = {d.flat[i] * 1e3:.3g} mm (R = {radius * 1e3:g} mm, "
-            f"h = {thickness * 1e3:g} mm) exceeds {DIMITRIADIS_CHI_MAX:g}, the validity of "
+            f"{chi.flat[i]:.3g} at depth d = {format_length(d.flat[i])} (R = "
+            f"{format_length(radius, 6)}, h = {format_length(thickness, 6)}) exceeds "
+            f"{DIMITRIADIS_CHI_MAX:g}, the validity of "
             "Dimitriadis' series; check the thickness (--thickness, thickness_m), fit a "
             "shallower window (--max-depth) or switch the correction off (drop "
             "--finite-thickness; thickness_correction=False in the API)"
@@ -145,8 +147,8 @@ def hayes_kappa(radius: float, thickness: float, nu: float) -> float:
     ratio = radius / thickness
     if not 0.0 <= ratio <= 1.0:
         raise GeometryError(
-            f"flat-punch radius/thickness a/h = {ratio:.3g} (a = {radius * 1e3:g} mm, h = "
-            f"{thickness * 1e3:g} mm) is outside Hayes' table (0..1); check the thickness "
+            f"flat-punch radius/thickness a/h = {ratio:.3g} (a = {format_length(radius, 6)}, h = "
+            f"{format_length(thickness, 6)}) is outside Hayes' table (0..1); check the thickness "
             "(--thickness, thickness_m) or switch the correction off (drop --finite-thickness; "
             "thickness_correction=False in the API)"
         )

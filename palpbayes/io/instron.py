@@ -19,7 +19,8 @@ Column row
 Columns
     Time (``Time``), displacement (``Compression``, ``Extension``, ``Displacement``,
     ``Deflection``, ``Position``) and load (``Load``, ``Force``), the unit in brackets
-    (``Load (kN)``, ``Time [ms]``) or as a suffix (``load_kn``): s/ms/min, m/mm/µm/um, N/kN/mN.
+    (``Load (kN)``, ``Time [ms]``) or as a suffix (``load_kn``): s/ms/min, m/mm/µm/um,
+    N/kN/mN/µN/uN/nN/pN (lower-case suffixes ``_un``, ``_nn``, ``_pn`` too).
     ``Position`` is an absolute coordinate, so its first value is subtracted.
 Signs
     Compression and load are returned positive in compression.  A displacement that mostly
@@ -69,7 +70,8 @@ LOAD_NAMES = ("load", "force")
 _QUANTITIES = {"time": TIME_NAMES, "displacement": DISPLACEMENT_NAMES, "load": LOAD_NAMES}
 _FACTOR = {"time": time_factor, "displacement": length_factor, "load": force_factor}
 _UNIT_ALIASES = {"sec": "s", "secs": "s", "seconds": "s", "mins": "min", "minutes": "min",
-                 "msec": "ms", "micron": "µm", "microns": "µm", "n": "N", "kn": "kN"}
+                 "msec": "ms", "micron": "µm", "microns": "µm", "n": "N", "kn": "kN",
+                 "un": "uN", "µn": "µN", "μn": "μN", "nn": "nN", "pn": "pN"}
 _AREA_UNITS = {"m2": 1.0, "m²": 1.0, "m^2": 1.0, "cm2": 1e-4, "cm²": 1e-4, "cm^2": 1e-4,
                "mm2": 1e-6, "mm²": 1e-6, "mm^2": 1e-6}
 _DELIMITERS = (",", "\t", ";")

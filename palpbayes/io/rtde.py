@@ -413,7 +413,7 @@ def trace_from_joint_frame(
         frame.
     units
         Unit overrides by quantity: ``time`` (s, ms, us, min), ``q`` (rad, deg), ``force``
-        (N, mN, uN, nN, kN).
+        (N, mN, uN/µN, nN, pN, kN).
     force_sign
         +1 or -1, multiplies the force column (+1: the file already has compression positive).
     check

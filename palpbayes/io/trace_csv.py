@@ -7,10 +7,12 @@ forward kinematics.  Other files are read through a column mapping, unit and sig
     read_trace("run.csv", columns={"time": "t", "z": "Z", "force": "Fz"},
                units={"z": "mm", "force": "mN"}, force_sign=-1)
 
-Columns named ``<quantity>_<unit>`` (``z_mm``, ``force_mn``, ``time_ms``) are recognised
-without options.  The separator (comma, semicolon or tab) is detected from the header line;
-decimal commas are not read but reported as such.  Every problem is raised as
-:class:`~palpbayes.errors.DataFileError` naming the file, the column or value, and the fix.
+Columns named ``<quantity>_<unit>`` (``z_mm``, ``force_mn``, ``time_ms``; AFM ``z_um``, ``z_nm``,
+``force_nn``, ``force_pn``) are recognised without options, case-insensitively (``force_mn``
+is millinewtons: no one records in meganewtons).  The separator (comma, semicolon or tab) is
+detected from the header line; decimal commas are not read but reported as such.  Every
+problem is raised as :class:`~palpbayes.errors.DataFileError` naming the file, the column or
+value, and the fix.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from ..baseline import sign_flipped
 from ..contact import Tip
 from ..errors import DataFileError, InputError
 from ..trace import IndentationTrace
-from ..units import format_force
+from ..units import format_force, format_length
 from .atomic import write_csv_atomic
 from .units import FORCE_UNITS, LENGTH_UNITS, TIME_UNITS, force_factor, length_factor, time_factor
 
@@ -145,13 +147,14 @@ def check_plausible(trace: IndentationTrace) -> None:
     span = float(np.ptp(trace.z))
     if span > MAX_Z_SPAN_M:
         raise DataFileError(
-            src, f"z spans {span:g} m, more than a palpation can ({MAX_Z_SPAN_M} m)",
+            src, f"z spans {format_length(span)}, more than a palpation can "
+            f"({format_length(MAX_Z_SPAN_M)})",
             "is z in mm? give the z unit, e.g. --z-unit mm",
         )
     fmax = float(np.max(np.abs(trace.force)))
     if fmax > MAX_FORCE_N:
         raise DataFileError(
-            src, f"|force| reaches {fmax:g} N, implausible for soft-material palpation",
+            src, f"|force| reaches {format_force(fmax)}, implausible for soft-material palpation",
             "is force in mN? give the force unit, e.g. --force-unit mN",
         )
     load = trace.loading_segment()
@@ -239,7 +242,8 @@ def read_trace(
     columns
         Mapping from quantity (``time``, ``z``, ``force``) to the file's column name.
     units
-        Mapping from quantity to unit: time s/ms/min, z m/mm/um/nm, force N/mN/uN/nN/kN.
+        Mapping from quantity to unit: time s/ms/min, z m/cm/mm/um (µm)/nm/pm, force
+        N/kN/mN/uN (µN)/nN/pN.
     force_sign, z_sign
         +1 or -1: multiply force (to make pressing positive) or z (to make up positive).
     tip

@@ -1,4 +1,10 @@
-"""Unit factors to SI for lengths, forces and times found in data files."""
+"""Unit factors to SI for lengths, forces and times found in data files.
+
+Units are matched case-sensitively first; lengths and times then also case-insensitively
+(``MM`` is mm), forces never (``MN`` is not ``mN``, ``PN`` is not ``pN``).  Micro is accepted as
+``u``, the MICRO SIGN ``µ`` (U+00B5, what palpbayes prints, see :mod:`palpbayes.units`) and the
+Greek ``μ`` (U+03BC).  AFM units are included: pm and nm, pN and nN.
+"""
 
 from __future__ import annotations
 
@@ -8,9 +14,9 @@ __all__ = ["length_factor", "force_factor", "time_factor", "LENGTH_UNITS", "FORC
            "TIME_UNITS"]
 
 LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6,
-                "nm": 1e-9}
+                "nm": 1e-9, "pm": 1e-12}
 FORCE_UNITS = {"N": 1.0, "kN": 1e3, "mN": 1e-3, "uN": 1e-6, "µN": 1e-6, "μN": 1e-6,
-               "nN": 1e-9}
+               "nN": 1e-9, "pN": 1e-12}
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "min": 60.0, "h": 3600.0}
 
 
