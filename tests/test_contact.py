@@ -268,7 +268,13 @@ def test_tip_validation(kwargs, match):
         Tip(**kwargs)
 
 
-@pytest.mark.parametrize("nu", [-0.1, 0.5, 0.7, float("nan"), "x"])
+@pytest.mark.parametrize("nu", [-0.1, 0.5001, 0.7, float("nan"), "x"])
 def test_poisson_ratio_range(nu):
     with pytest.raises(GeometryError, match="Poisson ratio"):
         check_nu(nu)
+
+
+def test_poisson_ratio_one_half_is_allowed():
+    """nu = 0.5 (incompressible: silicone, gels, tissue) is valid for the half-space laws."""
+    assert check_nu(0.5) == 0.5
+    assert check_nu(0.0) == 0.0

@@ -324,7 +324,7 @@ def test_joint_frame_errors(data):
     bad.loc[7, "q1_rad"] = "x"
     with pytest.raises(DataFileError, match="q1_rad.*data row 8"):
         trace_from_joint_frame(bad, "frame.csv")
-    with pytest.raises(DataFileError, match="force is negative"):
+    with pytest.raises(DataFileError, match="force falls .* below its pre-contact baseline"):
         trace_from_joint_frame(df.assign(force_n=-force), "frame.csv", tool_offset=OFFSET)
     neg = trace_from_joint_frame(df.assign(force_n=-force), "f", force_sign=-1)
     np.testing.assert_allclose(neg.force, force, atol=1e-12)

@@ -222,7 +222,7 @@ def test_input_validation():
     with pytest.raises(GeometryError, match="thickness"):
         simulate_trace(E_WHITE, SPHERE, depth=1e-3, stiffening=2.0)
     with pytest.raises(GeometryError):
-        simulate_trace(E_WHITE, SPHERE, depth=1e-3, nu=0.5)
+        simulate_trace(E_WHITE, SPHERE, depth=1e-3, nu=0.51)
 
 
 # ----------------------------------------------------------------------------- files
