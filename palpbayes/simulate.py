@@ -7,15 +7,18 @@ compressive normal force, positive when pressing.
 
 Force model of one trace (every term optional except the contact law)::
 
-    F_rec(t) = F_true(t) + F0 + drift·t + e(t)
+    F_rec(t) = F_true(t) + F_on(delta) + F0 + drift·t + e(t)
     F_true   = E*·s(delta)·xi(delta),          E* = E/(1 - nu²)
+    F_on     = gradual onset (:func:`onset_force_profile`, off by default)
     delta    = z_surf - z_cmd(t) - C·F_true     (series compliance C, solved implicitly)
     z_rec(t) = z_cmd(t) + b + eta(t)            (registration offset b, encoder noise eta)
     e(t)     = phi·e(t-1) + sqrt(1 - phi²)·sigma·w(t),  w ~ N(0, 1),  e(0) = sigma·w(0)
 
 with s(d) the tip's shape function (:func:`palpbayes.contact.shape`, optionally with the bonded
 finite-thickness factor), xi the strain-stiffening factor (:func:`stiffening_factor`) and
-sigma = noise_pp / :data:`PP_TO_SIGMA`.
+sigma = noise_pp / :data:`PP_TO_SIGMA`.  The drift is **per second** (``drift`` [N/s], t the
+sample time from the start of the trace, t_k = k/rate), so on the loading segment it is also a
+linear function of z with slope -drift/speed [N/m].
 
 **Peak-to-peak to sigma.**  A sensor's "peak-to-peak noise" is read as ±3 sigma, the band that
 holds 99.7 % of Gaussian samples, so sigma = pp/6: the paper's 48 mN gives sigma = 8 mN (the
@@ -66,6 +69,7 @@ __all__ = [
     "STIFFENING_STRAIN0",
     "stiffening_factor",
     "true_force",
+    "onset_force_profile",
     "solve_series_compliance",
     "ar1_noise",
     "simulate_trace",
@@ -187,6 +191,49 @@ def true_force(
     return f
 
 
+def onset_force_profile(depth, onset_force: float, onset_length: float) -> np.ndarray:
+    """Gradual-onset force F_on(d) [N]: a smooth force that starts before the true surface.
+
+    Real curves rarely switch on sharply at the surface: a soft skin or coating, surface
+    roughness, long-range repulsion (electrostatic double layer, steric brushes in AFM) or,
+    with a negative ``onset_force``, attraction/adhesion, make the force change over a length
+    L = ``onset_length`` *before* the contact law starts.  The simulator models it as::
+
+        F_on(d) = F_a·exp(d/L)              for d <  0   (pre-contact, decays to 0 far above)
+        F_on(d) = F_a·(2 - exp(-d/L))       for d >= 0   (in contact, saturates at 2·F_a)
+
+    with F_a = ``onset_force``.  The in-contact branch is the point reflection of the
+    pre-contact one about (0, F_a), so F_on is continuous with a continuous slope F_a/L at the
+    surface (C¹), monotone, and bounded by 2·F_a: a layer of thickness ~L that is squeezed flat
+    within a few L and then carries a constant extra load (it does not change the contact
+    law's stiffness at depth).  Far above the surface it vanishes, so a fit's constant
+    baseline sees the untouched sensor; a fit that ignores the onset puts its surface into
+    the exponential tail and leaves a structured residual near contact (what
+    :func:`palpbayes.checks.residual_structure_check` detects).
+
+    Parameters
+    ----------
+    depth
+        [m] Depth d = z_surf - z (negative above the surface).
+    onset_force
+        F_a [N], the onset force at the surface (> 0 repulsive/soft skin, < 0 attractive).
+    onset_length
+        L [m] > 0, the decay length of the pre-contact force.
+
+    Returns
+    -------
+    numpy.ndarray
+        [N] F_on(d), same shape as ``depth``.
+    """
+    d = np.asarray(depth, dtype=float)
+    if onset_length <= 0:
+        raise InputError(f"onset length {onset_length!r} m must be positive")
+    x = d / onset_length
+    # exp of a non-positive argument only: no overflow deep in contact or far above
+    e = np.exp(-np.abs(x))
+    return onset_force * np.where(x < 0, e, 2.0 - e)
+
+
 def solve_series_compliance(d_cmd, force_of_depth, compliance: float,
                             iterations: int = 64) -> tuple[np.ndarray, np.ndarray]:
     """Solve F = g(d_cmd - C·F) for the actual depth and force with series compliance C.
@@ -288,6 +335,8 @@ def simulate_trace(
     noise_ar1: float = 0.0,
     force_offset: float = 0.0,
     drift: float = 0.0,
+    onset_force: float = 0.0,
+    onset_length: float = 0.0,
     position_noise: float = 0.0,
     repeatability: float = 0.0,
     compliance: float = 0.0,
@@ -341,7 +390,17 @@ def simulate_trace(
     force_offset
         [N] Constant force offset F0 (sensor tare error).
     drift
-        [N/s] Linear force drift, F += drift·t.
+        [N/s] Linear force drift **per second**, F += drift·t with t the sample time
+        (t_k = k/rate, so the first sample already carries drift/rate).  On the loading
+        segment this equals a linear baseline in z of slope -drift/speed [N/m].
+    onset_force, onset_length
+        [N], [m] Gradual onset (:func:`onset_force_profile`): F += F_on(delta) with
+        F_on = onset_force·exp(delta/onset_length) above the surface (delta < 0) and its C¹
+        saturating continuation onset_force·(2 - exp(-delta/onset_length)) in contact.  Off
+        when ``onset_force`` is 0 (the default; then the output is bit-for-bit what it was
+        without the knob); ``onset_length`` must be positive when it is on.  The onset force
+        is evaluated at the actual depth and does not feed the compliance solve (its own
+        deflection C·F_on is neglected).
     position_noise
         [m] White noise sd on the recorded z (encoder/kinematic jitter).
     repeatability
@@ -369,6 +428,7 @@ def simulate_trace(
         ``E_true``, ``Estar_true``, ``nu``, ``z_surf_true`` (surface in the *recorded* frame,
         z_surf + b, what a perfect fit recovers), ``z_surf_commanded``, ``z_offset_true`` (b),
         ``sigma_true``, ``noise_pp``, ``phi_true``, ``force_offset_true``, ``drift_true``,
+        ``onset_force_true``, ``onset_length_true``,
         ``position_noise_true``, ``repeatability``, ``compliance_true``, ``finite_thickness``,
         ``bonded``, ``stiffening``, ``depth_true``, ``max_force_true``, motion settings, and
         ``seed`` when ``rng`` was an int.
@@ -377,7 +437,8 @@ def simulate_trace(
     ------
     InputError, GeometryError
         Non-positive E, speed or rate, missing depth and thickness, |phi| >= 1, negative noise,
-        an invalid nu, or a finite-thickness request for a tip without a correction.
+        an invalid nu, a finite-thickness request for a tip without a correction, or a
+        non-zero ``onset_force`` without a positive ``onset_length``.
     """
     if not isinstance(tip, Tip):
         raise InputError(f"tip must be a palpbayes.contact.Tip, got {type(tip).__name__}")
@@ -400,6 +461,10 @@ def simulate_trace(
     phi = _phi(noise_ar1)
     force_offset = _finite(force_offset, "force offset [N]")
     drift = _finite(drift, "force drift [N/s]")
+    onset_force = _finite(onset_force, "onset force [N]")
+    onset_length = _nonneg(onset_length, "onset length [m]")
+    if onset_force != 0 and onset_length == 0:
+        raise InputError("a gradual onset (onset_force != 0) needs a positive onset_length [m]")
     position_noise = _nonneg(position_noise, "position noise [m]")
     repeatability = _nonneg(repeatability, "repeatability [m]")
     compliance = _nonneg(compliance, "compliance [m/N]")
@@ -421,7 +486,11 @@ def simulate_trace(
         d_cmd, lambda d: true_force(d, E, **law), compliance)
     b = repeatability * u + 0.0  # + 0.0: no negative zero in the truth tables
     z_rec = z_cmd + b + position_noise * w_z
-    f_rec = f_true + force_offset + drift * t + ar1_noise(n, sigma, phi, w_force)
+    if onset_force != 0:  # skipped when off, so default outputs stay bit-for-bit identical
+        f_true_rec = f_true + onset_force_profile(delta, onset_force, onset_length)
+    else:
+        f_true_rec = f_true
+    f_rec = f_true_rec + force_offset + drift * t + ar1_noise(n, sigma, phi, w_force)
 
     metadata = {
         "simulated": True,
@@ -436,6 +505,8 @@ def simulate_trace(
         "phi_true": phi,
         "force_offset_true": force_offset,
         "drift_true": drift,
+        "onset_force_true": onset_force,
+        "onset_length_true": onset_length,
         "position_noise_true": position_noise,
         "repeatability": repeatability,
         "compliance_true": compliance,

@@ -22,6 +22,7 @@ from palpbayes.simulate import (
     PAPER_ROBOT_ESTIMATES,
     PAPER_TIPS,
     PP_TO_SIGMA,
+    onset_force_profile,
     paper_robot_estimates_frame,
     sigma_from_pp,
     simulate_campaign,
@@ -207,6 +208,64 @@ def test_offsets_drift_and_position_errors():
     assert tr.metadata["z_surf_true"] == pytest.approx(0.1 + b, abs=1e-16)
     jitter = tr.z - base.z - b
     assert jitter.std() == pytest.approx(1e-6, rel=4 / math.sqrt(2 * jitter.size))
+
+
+def test_drift_is_per_second():
+    """drift [N/s] multiplies the sample time; on loading it is a z-slope of -drift/speed."""
+    kw = dict(thickness=0.03, rng=5, noise_pp=0.0)
+    base = simulate_trace(E_WHITE, SPHERE, **kw)
+    tr = simulate_trace(E_WHITE, SPHERE, drift=2e-3, **kw)
+    diff = tr.force - base.force
+    np.testing.assert_allclose(diff, 2e-3 * tr.time, rtol=1e-12, atol=1e-15)
+    slope = np.polyfit(tr.z, diff, 1)[0]
+    assert slope == pytest.approx(-2e-3 / tr.metadata["speed"], rel=1e-9)
+
+
+def test_onset_profile_shape():
+    fa, ell = 0.05, 0.2e-3
+    d = np.linspace(-3e-3, 3e-3, 60001)
+    f = onset_force_profile(d, fa, ell)
+    above = d < 0
+    np.testing.assert_allclose(f[above], fa * np.exp(d[above] / ell), rtol=1e-14)
+    np.testing.assert_allclose(f[~above], fa * (2.0 - np.exp(-d[~above] / ell)), rtol=1e-14)
+    assert float(onset_force_profile(0.0, fa, ell)) == pytest.approx(fa, rel=1e-15)
+    # C¹ at the surface: one-sided slopes both fa/ell
+    h = 1e-12
+    left = (fa - float(onset_force_profile(-h, fa, ell))) / h
+    right = (float(onset_force_profile(h, fa, ell)) - fa) / h
+    assert left == pytest.approx(fa / ell, rel=1e-3)
+    assert right == pytest.approx(fa / ell, rel=1e-3)
+    assert np.all(np.diff(f) >= 0) and f.max() < 2 * fa and f.min() > 0
+    assert float(onset_force_profile(-1.0, fa, ell)) == 0.0  # far above: nothing, no overflow
+    assert float(onset_force_profile(1.0, fa, ell)) == 2 * fa  # deep: saturated
+    # attraction (negative onset force) mirrors it
+    np.testing.assert_array_equal(onset_force_profile(d, -fa, ell), -f)
+    with pytest.raises(InputError, match="positive"):
+        onset_force_profile(d, fa, 0.0)
+
+
+def test_gradual_onset_knob():
+    kw = dict(thickness=0.03, rng=9)
+    base = simulate_trace(E_WHITE, SPHERE, **kw)
+    # off by default: a length alone changes nothing, bit for bit
+    same = simulate_trace(E_WHITE, SPHERE, onset_length=0.3e-3, **kw)
+    np.testing.assert_array_equal(same.force, base.force)
+    np.testing.assert_array_equal(same.z, base.z)
+    tr = simulate_trace(E_WHITE, SPHERE, onset_force=0.04, onset_length=0.3e-3, **kw)
+    np.testing.assert_array_equal(tr.z, base.z)
+    d = tr.metadata["z_surf_true"] - tr.z
+    np.testing.assert_allclose(tr.force - base.force, onset_force_profile(d, 0.04, 0.3e-3),
+                               rtol=1e-9, atol=1e-15)
+    assert tr.metadata["onset_force_true"] == 0.04
+    assert tr.metadata["onset_length_true"] == 0.3e-3
+    assert base.metadata["onset_force_true"] == 0.0
+    # the pre-contact force rises smoothly towards the surface: 1 mm above it it is e^-3.33
+    pre = (d < 0) & (d > -0.1e-3)
+    assert np.all(tr.force[pre] - base.force[pre] > 0.04 * math.exp(-1 / 3) - 1e-12)
+    with pytest.raises(InputError, match="onset_length"):
+        simulate_trace(E_WHITE, SPHERE, onset_force=0.04, **kw)
+    with pytest.raises(InputError, match="onset length"):
+        simulate_trace(E_WHITE, SPHERE, onset_force=0.04, onset_length=-1e-4, **kw)
 
 
 def test_input_validation():
