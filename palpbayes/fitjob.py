@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
+from .checks import CheckResult, run_checks
 from .contact import check_tip_plausible
 from .contact.geometry import Tip
 from .errors import ConvergenceWarning, FitError, GeometryError
@@ -34,6 +35,9 @@ SUMMARY_COLUMNS = [
     "constraint_active", "tau_max", "acceptance", "n_steps", "flags",
     # the pre-contact baseline and the noise spec used (F_unc), read from the data unless given
     "baseline_n", "f_unc_n", "baseline_model", "F0_n",
+    # model-adequacy checks (palpbayes.checks): all passed, and the free exponent m of
+    # F = k·d^m + baseline (compare with the tip law's); failed checks are named in flags
+    "model_ok", "m_free",
     # tip "sphere" only (else NaN): the paper's choice for a sphere, least squares with the
     # paraboloid (Hertz) law at the sphere's radius on the same points, and (E_hertz − E)/E
     "E_hertz_pa", "E_hertz_rel_diff",
@@ -204,6 +208,29 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     return data
 
 
+def model_checks(data: FitData, *, z_surf: float, estar: float, f0: float, f1: float = 0.0,
+                 sigma: float, baseline: str = "constant", z_ref: float | None = None,
+                 draws: dict | None = None, seed: int = 0) -> list[CheckResult]:
+    """Model-adequacy checks of one fit (:func:`palpbayes.checks.run_checks`) on its points.
+
+    The noise's own lag-one correlation is read from the pre-contact baseline when it is
+    reliable, so correlated sensor noise is not mistaken for misfit.
+    """
+    base = data.baseline
+    lag1 = base.lag1 if base is not None and base.reliable else None
+    return run_checks(data.z, data.force, data.model, z_surf=z_surf, estar=estar, f0=f0,
+                      f1=f1, sigma=sigma, draws=draws, baseline_lag1=lag1, baseline=baseline,
+                      z_ref=z_ref, rng=seed)
+
+
+def check_columns(checks: list[CheckResult], flags: str) -> dict:
+    """``model_ok``, ``m_free`` and the failed checks' flags appended to ``flags``."""
+    failed = [c.flag for c in checks if not c.passed]
+    m = next((c.statistic for c in checks if c.name == "exponent"), float("nan"))
+    return {"model_ok": not failed, "m_free": m,
+            "flags": "; ".join([f for f in [flags] if f] + failed)}
+
+
 def fit_trace(trace: IndentationTrace, options: FitOptions,
               posterior_dir: str | Path | None = None) -> FitOutcome:
     """Fit one trace with the requested method(s).
@@ -250,7 +277,12 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
             "baseline_n": data.baseline.level if data.baseline is not None else float("nan"),
             "f_unc_n": data.f_unc}
     rows = []
+    seed = trace_seed(options.seed, trace.trace_id)
     if options.method in ("lsq", "both"):
+        if lsq is not None:  # the paper's model: no offset term
+            lsq_row.update(check_columns(model_checks(
+                data, z_surf=lsq.z_surf, estar=lsq.Estar, f0=0.0, sigma=lsq.rms, seed=seed),
+                lsq_row.get("flags", "")))
         rows.append(with_hertz({**lsq_row, **meta}))
     bayes = None
     path = None
@@ -261,9 +293,17 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
             bayes = fit_bayes_data(
                 data, noise=options.noise, baseline=options.baseline, priors=options.priors,
                 budget=options.budget,
-                settings=options.settings, seed=trace_seed(options.seed, trace.trace_id),
+                settings=options.settings, seed=seed,
                 strict=options.strict, trace_id=trace.trace_id, lsq=lsq,
             )
+        med = bayes.median_theta()
+        post = bayes.idata.posterior
+        draws = {n: np.asarray(post[n]).ravel() for n in
+                 ("E_star", "z_surf", "F0", "F1", "sigma", "phi") if n in post}
+        bayes.checks = model_checks(
+            data, z_surf=med["z_surf"], estar=med["E_star"], f0=med["F0"],
+            f1=med.get("F1", 0.0), sigma=med["sigma"], baseline=bayes.baseline,
+            z_ref=bayes.z_ref, draws=draws, seed=seed)
         rows.append(with_hertz({**bayes.summary_row(), **meta}))
         if posterior_dir is not None:
             path = bayes.to_netcdf(Path(posterior_dir) / f"{trace.trace_id}.nc")

@@ -150,3 +150,31 @@ def test_profile_scan_finds_the_surface_over_the_whole_loading_range():
     assert modes[0].weight > 0.98
     assert abs(modes[0].z_surf - tr.metadata["z_surf_true"]) < 5e-6
     assert modes[0].beta[1] == pytest.approx(-0.1, abs=0.003)
+
+
+def test_paraboloid_in_a_30_mm_layer_is_flagged_with_its_cause():
+    """3 mm into a 30 mm bonded layer, fitted as a half-space: E comes out ~24 % high with
+    tight intervals; both rows must say the model does not fit and name finite thickness."""
+    tr = simulate_trace(111e3, PARA, thickness=0.03, depth=3e-3, finite_thickness=True, rng=3)
+    out = fit_trace(tr, FitOptions(method="both", seed=1))
+    for row in out.rows:
+        assert row["E_pa"] > 1.2 * 111e3
+        assert row["model_ok"] is False or row["model_ok"] == False  # noqa: E712
+        assert "finite thickness" in row["flags"] and "--thickness" in row["flags"], row
+        assert row["m_free"] > 1.55
+    clean = fit_trace(simulate_trace(111e3, PARA, thickness=0.03, rng=3),
+                      FitOptions(method="both", seed=1))
+    for row in clean.rows:
+        assert row["model_ok"] and not row["flags"], row
+
+
+def test_real_curves_carry_named_misfit_flags(afm, tmp_path):
+    """The references are the optimum of a misspecified model (residuals 1-5x the noise,
+    autocorrelated): the fit agrees with them *and* says the model does not fit, naming a
+    gradual onset."""
+    out = tmp_path / "res"
+    assert main(["fit", str(afm / "force-save-example.csv"), "--tip", "paraboloid",
+                 "--radius", "10e-6", "--nu", "0.5", "--out", str(out)]) == 0
+    row = pd.read_csv(out / "summary.csv").iloc[0]
+    assert not row["model_ok"]
+    assert "onset" in row["flags"], row["flags"]

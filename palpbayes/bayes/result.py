@@ -136,7 +136,11 @@ class BayesResult:
             "n_steps": d.n_steps,
             "baseline_model": self.baseline,
             "F0_n": float(np.median(self.draws("F0"))),
-            "flags": "; ".join(self.warnings + d.problems()),
+            "flags": "; ".join(self.warnings + d.problems()
+                               + [c.flag for c in self.checks if not c.passed]),
+            "model_ok": all(c.passed for c in self.checks) if self.checks else np.nan,
+            "m_free": next((c.statistic for c in self.checks if c.name == "exponent"),
+                           np.nan),
         }
 
     # ----------------------------------------------------------------- predictive
