@@ -39,7 +39,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from .results import MATERIAL_ORDER, TIP_ORDER, ordered
+from ..results import MATERIAL_ORDER, TIP_ORDER, ordered
 
 __all__ = [
     "METHOD_COLORS",

@@ -56,11 +56,11 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from . import __version__, plots
-from .bayes.sampler import MOVES
-from .errors import InputError
-from .pipeline import example_campaign_dir, run_pipeline
-from .results import (
+from .. import __version__, plots
+from ..bayes.sampler import MOVES
+from ..errors import InputError
+from ..pipeline import example_campaign_dir, run_pipeline
+from ..results import (
     MATERIAL_ORDER,
     TIP_ORDER,
     ResultsFolder,
@@ -424,8 +424,8 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         thick = "off (half-space, as the paper)"
     frac = o.get("fit_fraction")
     if frac is None:
-        from .contact import Tip
-        from .fitdata import default_fit_fraction
+        from ..contact import Tip
+        from ..fitdata import default_fit_fraction
 
         flat = default_fit_fraction(Tip("flat", radius=1.0))
         frac = f"paper default ({flat:g} flat, 0 others)"
@@ -558,7 +558,7 @@ def _coverage_line(res: ResultsFolder) -> str:
 
 def _paper_gt_text(materials: Sequence[str]) -> str:
     """The paper's own Instron ground truth of the given materials, e.g. 'White 111 kPa'."""
-    from .paper import PAPER_MATERIALS
+    from ..paper import PAPER_MATERIALS
 
     known = [f"{m} {PAPER_MATERIALS[m].E_pa * _KPA:g} kPa" for m in materials
              if m in PAPER_MATERIALS]
@@ -815,7 +815,7 @@ def _diag_highlight(gtab: pd.DataFrame) -> Callable[[int, str, str], str | None]
 
 
 def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
-    from .bayes.diagnostics import ESS_MIN, RHAT_MAX
+    from ..bayes.diagnostics import ESS_MIN, RHAT_MAX
 
     b = res.bayes_rows()
     flagged = _flagged(res)
@@ -984,7 +984,7 @@ def _stiffening_groups(res: ResultsFolder) -> list[tuple[str, str]]:
 
 def _page_stiffening(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page:
     def build(fig: Figure) -> None:
-        from .stiffening import fit_stiffening_summary
+        from ..stiffening import fit_stiffening_summary
 
         b = res.bayes_rows()
         g = b[(b["material"].astype(str) == mat) & (b["tip"].astype(str) == tip)]
@@ -1050,7 +1050,7 @@ def _sampler_settings(recorded: dict | None) -> tuple[dict, bool]:
     package defaults; the flag says whether anything came from the defaults."""
     from dataclasses import asdict
 
-    from .bayes.sampler import SamplerSettings
+    from ..bayes.sampler import SamplerSettings
 
     default = asdict(SamplerSettings())
     rec = dict(recorded or {})
@@ -1061,7 +1061,7 @@ def _sampler_settings(recorded: dict | None) -> tuple[dict, bool]:
 
 def _stopping_rule(smp: dict) -> str:
     """The sampler's stopping rule in words, with the numbers of ``smp``."""
-    from .bayes.diagnostics import ESS_MIN, RHAT_MAX
+    from ..bayes.diagnostics import ESS_MIN, RHAT_MAX
 
     moves = str(smp.get("moves"))
     return (
@@ -1079,7 +1079,7 @@ def _stopping_rule(smp: dict) -> str:
 
 def _sphere_vs_hertz(d_over_r: float = 0.3) -> float:
     """Relative force of the exact Sneddon sphere vs Hertz at depth d/R (negative: less)."""
-    from .contact import Tip, shape
+    from ..contact import Tip, shape
 
     sph = float(shape(np.array([d_over_r]), Tip("sphere", radius=1.0))[0])
     par = float(shape(np.array([d_over_r]), Tip("paraboloid", radius=1.0))[0])
@@ -1091,7 +1091,7 @@ def _pooling_text(res: ResultsFolder) -> str:
     prior scale from ``pooled.csv`` (else :data:`palpbayes.pooling.TAU_PRIOR_SD`)."""
     from dataclasses import asdict
 
-    from .pooling import POOLING_SETTINGS, TAU_PRIOR_SD
+    from ..pooling import POOLING_SETTINGS, TAU_PRIOR_SD
 
     scales: list[float] = []
     if res.pooled is not None and "tau_prior_sd" in res.pooled:
@@ -1110,10 +1110,10 @@ def _pooling_text(res: ResultsFolder) -> str:
 
 
 def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
-    from .bayes import priors as _priors
-    from .contact import Tip
-    from .fitdata import default_fit_fraction
-    from .lsq import GRID_POINTS
+    from ..bayes import priors as _priors
+    from ..contact import Tip
+    from ..fitdata import default_fit_fraction
+    from ..lsq import GRID_POINTS
 
     o = res.options
     W = 150
@@ -1174,7 +1174,7 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         win = (f"{100 * float(gt['window_lo'].iloc[0]):g}–"
                f"{100 * float(gt['window_hi'].iloc[0]):g} %")
     else:
-        from .groundtruth import DEFAULT_STRAIN_WINDOW
+        from ..groundtruth import DEFAULT_STRAIN_WINDOW
 
         win = (f"{100 * DEFAULT_STRAIN_WINDOW[0]:g}–{100 * DEFAULT_STRAIN_WINDOW[1]:g} % "
                "(default)")
@@ -1273,7 +1273,7 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     """
     from matplotlib.backends.backend_pdf import PdfPages
 
-    from .io.atomic import write_with
+    from ..io.atomic import write_with
 
     res = results if isinstance(results, ResultsFolder) else load_results(results)
     out = Path(pdf) if pdf is not None else res.path / REPORT_NAME
