@@ -15,10 +15,27 @@ from ..bayes.sampler import MOVES
 from ..results import ResultsFolder
 from .format import _fmt, _wrap
 
-__all__ = ["MOVES_TEXT"]
+__all__ = ["MOVES_TEXT", "PRIORS_TABLE"]
 
 #: What each ``SamplerSettings.moves`` value means (emcee moves).
 MOVES_TEXT = MOVES  # description of each move schedule, defined beside the sampler
+
+#: The priors of the per-trace model (:mod:`palpbayes.bayes.priors`, defaults of
+#: :class:`~palpbayes.bayes.priors.PriorSpec`) as the monospaced lines of the methods page:
+#: parameter, then its prior.  Keep in step with the priors module when they change.
+PRIORS_TABLE: tuple[str, ...] = (
+    "log_Estar     ln(E*/Pa).  Uniform on [ln 1 Pa, ln 1e12 Pa] by default: the scale-free",
+    "                  (Jeffreys) prior 1/E* truncated to twelve decades, so kPa foams and kPa "
+    "cells",
+    "                  measured in µm/nN units (converted to SI) are both inside.",
+    "z_surf        [m] Uniform over the admissible range [z_c, z_top] of the trace: the paper's",
+    "                  constraint |F(z_surf)| <= F_unc (see palpbayes.fitdata).",
+    "log_sigma     ln(sigma/N).  Normal(ln(pp/6), 1): centred on the sensor's peak-to-peak",
+    "                  spec read as ±3 sigma (palpbayes.noise); a factor e either way is 1 sd.",
+    "F0            [N] Force offset, Normal(0, F_unc): the sensor is tared to within its spec.",
+    "phi           (AR(1) only) lag-one correlation, Uniform(−0.99, 0.99).",
+    "log_nu_t      (Student-t only) ln of the degrees of freedom, Uniform(ln 2, ln 200).",
+)
 
 
 def _sampler_settings(recorded: dict | None) -> tuple[dict, bool]:
@@ -86,7 +103,6 @@ def _pooling_text(res: ResultsFolder) -> str:
 
 
 def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
-    from ..bayes import priors as _priors
     from ..contact import Tip
     from ..fitdata import default_fit_fraction
     from ..lsq import GRID_POINTS
@@ -136,7 +152,7 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         + " Convergence is checked with arviz (rank-normalised split R-hat, bulk and tail "
         "ESS, walkers as chains); a fit that fails is flagged in every table. Priors "
         "(palpbayes.bayes.priors):", W)]
-    lines += [("m", ln) for ln in _priors_table(_priors.__doc__ or "")]
+    lines += [("m", ln) for ln in PRIORS_TABLE]
     lines += [("h", "Uncertainty budget (GUM Supplement 1)")]
     lines += [("t", ln) for ln in _wrap(
         "Inputs a trace cannot identify are propagated by Monte Carlo, one input draw per "
@@ -160,18 +176,3 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         f"sigma = E·(eps − eps0) fitted over the toe-compensated strain window {win}; the "
         "material's ground truth is the mean ± sd (ddof 1) over its specimens.", W)]
     return lines
-
-
-def _priors_table(doc: str) -> list[str]:
-    """The parameter table of the priors docstring as plain monospaced lines."""
-    import re
-
-    out = []
-    for ln in doc.strip().splitlines():
-        if not ln.strip() or set(ln.strip()) <= {"=", " "}:
-            continue
-        if ln.startswith(("Priors of", "Parameters, in")):
-            continue
-        ln = re.sub(r":\w+:`([^`]+)`", r"\1", ln).replace("``", "")
-        out.append(ln.rstrip())
-    return out
