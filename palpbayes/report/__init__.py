@@ -31,7 +31,7 @@ comparison charts beyond :data:`CHART_GROUPS_PER_PAGE` material × tip groups (w
 per page) and budget pages beyond :data:`BUDGET_GROUPS_PER_PAGE` groups, so a campaign of any
 size stays readable.
 
-This module only draws: reading a results folder is :mod:`palpbayes.results`, fitting a campaign
+This package only draws: reading a results folder is :mod:`palpbayes.results`, fitting a campaign
 first (``palpbayes report CAMPAIGN``) is :func:`palpbayes.pipeline.run_pipeline`.  Both modules'
 public names used by notebooks (``load_results``, ``load_fit``, ``ResultsFolder``,
 ``run_pipeline``, ``example_campaign_dir``) are re-exported here for compatibility.

@@ -68,7 +68,7 @@ class ReportInfo:
 
 def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathLike | None = None,
                  *, seed: int = 0, created: str | None = None) -> ReportInfo:
-    """Write the PDF report of a results folder (pages listed in the module docstring).
+    """Write the PDF report of a results folder (pages listed in :mod:`palpbayes.report`).
 
     Parameters
     ----------
