@@ -307,6 +307,26 @@ def test_settings_and_methods_print_forces_and_depths_with_a_prefix(fitted):
     assert "sensor noise 250 pN peak-to-peak" in settings
     assert " mN" not in methods.split("Bayesian model")[0] and " mN" not in settings
 
+
+def test_methods_priors_table_matches_the_priors_module():
+    """The priors on the methods page are written out in palpbayes.report.methods; they must
+    name every sampled parameter and state PriorSpec's default numbers."""
+    import math
+
+    from palpbayes.bayes.priors import NOISE_MODELS, PriorSpec, param_names
+    from palpbayes.report.methods import PRIORS_TABLE
+
+    rows = {ln.split()[0] for ln in PRIORS_TABLE if ln.strip() and not ln.startswith(" ")}
+    for noise in NOISE_MODELS:
+        assert set(param_names(noise, "linear")) <= rows, noise
+    text = " ".join(PRIORS_TABLE)
+    spec = PriorSpec()
+    lo, hi = spec.Estar_bounds
+    assert f"[ln {lo:g} Pa, ln 1e{round(math.log10(hi))} Pa]" in text
+    assert f"Normal(ln(pp/6), {spec.log_sigma_sd:g})" in text
+    assert f"Uniform(−{-spec.phi_bounds[0]:g}, {spec.phi_bounds[1]:g})" in text
+    assert f"Uniform(ln {spec.nu_t_bounds[0]:g}, ln {spec.nu_t_bounds[1]:g})" in text
+
 def _replicated(res: ResultsFolder, path: Path, materials: list[str], tips: list[str]
                 ) -> ResultsFolder:
     """The tables of one fitted group copied to materials × tips groups (no posteriors: the

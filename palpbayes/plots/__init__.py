@@ -1,0 +1,58 @@
+"""Figures for papers and reports (matplotlib only here; DESIGN §4).
+
+Every function draws with matplotlib's object API on an optional ``ax`` (or ``fig``) and returns
+the :class:`~matplotlib.figure.Figure`.  Without ``ax`` a new figure is made with
+:class:`matplotlib.figure.Figure` directly, not through ``pyplot``: no global state, nothing to
+close, any backend.  Nothing here calls ``matplotlib.use``; the caller chooses the backend (in
+Jupyter, ``%matplotlib inline`` and ``display(fig)`` or a figure as the cell's last value).
+
+Units on the axes: depth in mm, force in N, moduli in kPa, surface height relative to its
+posterior median in µm (the posterior spread of z_surf is a few µm; mm would show only zeros).
+Colours per method are fixed (Okabe-Ito, colour-blind safe): :data:`METHOD_COLORS`.  Dense data
+points are rasterized so a PDF page stays small.
+
+Functions
+---------
+:func:`plot_force_depth`     data, posterior-predictive band and least-squares curve
+:func:`plot_residuals`       residuals vs depth, both methods, binned means and ±2 sigma
+:func:`plot_posterior_E`     marginal posterior of E (statistical and with the budget)
+:func:`plot_posterior_zsurf` marginal posterior of the surface height
+:func:`plot_pair`            joint posterior of E and z_surf with the least-squares ellipse
+:func:`plot_posterior`       the three above side by side
+:func:`plot_walkers`         trace plots of the sampled parameters, one line per walker
+:func:`plot_budget`          share of the variance of ln E per input of the budget
+:func:`plot_comparison`      ground truth vs least squares vs Bayes per material × tip
+:func:`plot_forest`          per-trace intervals of one material × tip with the pooled result
+:func:`plot_stiffening`      modulus vs rest time with the fitted stiffening law and its band
+
+Modules, by subject: :mod:`~palpbayes.plots.style` (colours, units, shared helpers),
+:mod:`~palpbayes.plots.trace` (force-depth, residuals), :mod:`~palpbayes.plots.posterior`,
+:mod:`~palpbayes.plots.walkers`, :mod:`~palpbayes.plots.budget`,
+:mod:`~palpbayes.plots.campaign` (comparison, forest) and
+:mod:`~palpbayes.plots.stiffening`; the functions are imported from here.
+"""
+
+from .budget import plot_budget
+from .campaign import plot_comparison, plot_forest
+from .posterior import plot_pair, plot_posterior, plot_posterior_E, plot_posterior_zsurf
+from .stiffening import plot_stiffening
+from .style import INPUT_COLORS, METHOD_COLORS, METHOD_LABELS
+from .trace import plot_force_depth, plot_residuals
+from .walkers import plot_walkers
+
+__all__ = [
+    "METHOD_COLORS",
+    "METHOD_LABELS",
+    "INPUT_COLORS",
+    "plot_force_depth",
+    "plot_residuals",
+    "plot_posterior_E",
+    "plot_posterior_zsurf",
+    "plot_pair",
+    "plot_posterior",
+    "plot_walkers",
+    "plot_budget",
+    "plot_comparison",
+    "plot_forest",
+    "plot_stiffening",
+]

@@ -1,0 +1,271 @@
+"""Posteriors of one trace: E, the surface height, and their joint distribution."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from .style import (
+    _KPA,
+    _MM,
+    _UM,
+    METHOD_COLORS,
+    METHOD_LABELS,
+    _central,
+    _draws,
+    _fig_ax,
+    _level_label,
+)
+
+__all__ = ["plot_posterior_E", "plot_posterior_zsurf", "plot_pair", "plot_posterior"]
+
+
+def _hist(ax: Axes, x: np.ndarray, color: str, label: str, filled: bool, bins: int,
+          peak: bool = False) -> None:
+    """Histogram as a density, or scaled to a peak of 1 when ``peak`` (very unequal widths)."""
+    dens, edges = np.histogram(x, bins=bins, density=True)
+    if peak and dens.max() > 0:
+        dens = dens / dens.max()
+    if filled:
+        ax.stairs(dens, edges, fill=True, color=color, alpha=0.35, label=label)
+    else:
+        ax.stairs(dens, edges, color=color, lw=1.2, label=label)
+
+
+def plot_posterior_E(
+    result: Any,
+    lsq: Any = None,
+    *,
+    ax: Axes | None = None,
+    level: float = 0.9,
+    bins: int = 60,
+    truth: float | None = None,
+) -> Figure:
+    """Marginal posterior of Young's modulus E [kPa].
+
+    Two histograms, each scaled to a peak of 1 (their widths can differ a hundredfold):
+    ``E`` at the model's Poisson ratio (statistical uncertainty of the trace only) and
+    ``E_total`` with the uncertainty budget (Poisson ratio, tip radius, force gain,
+    compliance).  Medians and central ``level`` intervals are marked; the
+    least-squares estimate with its own interval is drawn as an error bar above.
+
+    Parameters
+    ----------
+    result
+        A :class:`~palpbayes.bayes.BayesResult` or an arviz ``InferenceData``.
+    lsq
+        Least-squares result (default ``result.lsq``; ``False`` to leave it out).
+    ax
+        Axes to draw on.
+    level
+        Probability content of the marked intervals.
+    bins
+        Histogram bins.
+    truth
+        [Pa] A known true value to mark (simulations).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = _fig_ax(ax, (5.0, 3.6))
+    if lsq is None:
+        lsq = getattr(result, "lsq", None)
+    c = METHOD_COLORS["bayes"]
+    e_tot = _draws(result, "E_total") * _KPA
+    e_stat = _draws(result, "E") * _KPA
+    _hist(ax, e_tot, c, "E with budget", True, bins, peak=True)
+    # the trace-only posterior is often 100x narrower: its own bins, scaled to the same peak
+    _hist(ax, e_stat, c, "E, trace only (fixed nu)", False, bins, peak=True)
+    lo, hi = _central(e_tot, level)
+    med = float(np.median(e_tot))
+    ax.axvline(med, color=c, lw=1.2)
+    ax.axvspan(lo, hi, color=c, alpha=0.08, lw=0)
+    if lsq is not None and lsq is not False:
+        ax.errorbar([lsq.E * _KPA], [1.1],
+                    xerr=[[(lsq.E - lsq.E_lo) * _KPA], [(lsq.E_hi - lsq.E) * _KPA]],
+                    fmt="s", ms=4, color=METHOD_COLORS["lsq"], capsize=3,
+                    label=f"least squares ± {_level_label(getattr(lsq, 'level', level))}")
+    if truth is not None:
+        ax.axvline(truth * _KPA, color=METHOD_COLORS["truth"], ls="--", lw=1.2,
+                   label=METHOD_LABELS["truth"])
+    ax.set_ylim(0, 1.45)
+    ax.set_xlabel("Young's modulus, E [kPa]")
+    ax.set_ylabel("Posterior density (peak = 1)")
+    ax.set_title(f"E = {med:.1f} kPa, {_level_label(level)} interval [{lo:.1f}, {hi:.1f}]",
+                 fontsize="medium")
+    ax.legend(loc="upper left", fontsize="x-small", frameon=False)
+    return fig
+
+
+def plot_posterior_zsurf(
+    result: Any,
+    lsq: Any = None,
+    *,
+    ax: Axes | None = None,
+    level: float = 0.9,
+    bins: int = 60,
+    truth: float | None = None,
+) -> Figure:
+    """Marginal posterior of the surface height, relative to its median [µm].
+
+    Parameters
+    ----------
+    result
+        A :class:`~palpbayes.bayes.BayesResult` or an arviz ``InferenceData``.
+    lsq
+        Least-squares result (default ``result.lsq``); its z_surf ± interval is marked.
+    ax
+        Axes to draw on.
+    level
+        Probability content of the marked interval.
+    bins
+        Histogram bins.
+    truth
+        [m] A known true surface height to mark.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = _fig_ax(ax, (5.0, 3.6))
+    if lsq is None:
+        lsq = getattr(result, "lsq", None)
+    z = _draws(result, "z_surf")
+    zm = float(np.median(z))
+    rel = (z - zm) * _UM
+    c = METHOD_COLORS["bayes"]
+    _hist(ax, rel, c, "Bayes posterior", True, bins)
+    lo, hi = _central(rel, level)
+    ax.axvline(0.0, color=c, lw=1.2)
+    ax.axvspan(lo, hi, color=c, alpha=0.08, lw=0)
+    top = ax.get_ylim()[1]
+    if lsq is not None and lsq is not False:
+        from scipy import stats
+
+        n = getattr(lsq, "n_points", 1000)
+        t = stats.t.ppf(0.5 + level / 2, max(n - 2, 1))
+        ax.errorbar([(lsq.z_surf - zm) * _UM], [1.12 * top],
+                    xerr=[[t * lsq.z_surf_sd * _UM], [t * lsq.z_surf_sd * _UM]], fmt="s", ms=4,
+                    color=METHOD_COLORS["lsq"], capsize=3,
+                    label=f"least squares ± {_level_label(level)}")
+    if truth is not None:
+        ax.axvline((truth - zm) * _UM, color=METHOD_COLORS["truth"], ls="--", lw=1.2,
+                   label=METHOD_LABELS["truth"])
+    ax.set_ylim(0, top * 1.4)
+    ax.set_xlabel(f"z_surf − {zm * _MM:.3f} mm (posterior median) [µm]")
+    ax.set_ylabel("Posterior density [1/µm]")
+    ax.set_title(f"z_surf: {_level_label(level)} interval [{lo:+.1f}, {hi:+.1f}] µm",
+                 fontsize="medium")
+    ax.legend(loc="upper left", fontsize="x-small", frameon=False)
+    return fig
+
+
+def plot_pair(
+    result: Any,
+    lsq: Any = None,
+    *,
+    ax: Axes | None = None,
+    level: float = 0.9,
+    max_points: int = 3000,
+    seed: int = 0,
+) -> Figure:
+    """Joint posterior of E (trace only, fixed nu) [kPa] and z_surf − median [µm].
+
+    The surface height and the modulus are strongly correlated (a higher surface means deeper
+    indentation, hence a softer material), which is why the surface uncertainty dominates the
+    statistical part of the budget (DESIGN §8).  Draws are a random subset, rasterized; the
+    least-squares estimate is drawn with its Gauss-Newton ``level`` confidence ellipse.
+
+    Parameters
+    ----------
+    result
+        A :class:`~palpbayes.bayes.BayesResult` or an arviz ``InferenceData``.
+    lsq
+        Least-squares result (default ``result.lsq``; ``False`` to leave it out).
+    ax
+        Axes to draw on.
+    level
+        Probability content of the ellipse.
+    max_points
+        Draws plotted at most.
+    seed
+        Seed of the subset.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = _fig_ax(ax, (5.0, 3.6))
+    if lsq is None:
+        lsq = getattr(result, "lsq", None)
+    e = _draws(result, "E") * _KPA
+    z = _draws(result, "z_surf")
+    zm = float(np.median(z))
+    rel = (z - zm) * _UM
+    rng = np.random.default_rng(seed)
+    idx = rng.choice(e.size, size=min(max_points, e.size), replace=False)
+    c = METHOD_COLORS["bayes"]
+    ax.plot(rel[idx], e[idx], ".", ms=2, alpha=0.35, color=c, rasterized=True,
+            label="Bayes posterior draws")
+    r = np.corrcoef(rel, e)[0, 1] if e.std() > 0 and rel.std() > 0 else np.nan
+    if lsq is not None and lsq is not False and np.all(np.isfinite(lsq.cov)):
+        from scipy import stats
+
+        scale = 1.0 - lsq.model.nu ** 2
+        # cov of (E* [Pa], z_s [m]) -> (E [kPa], z [µm])
+        J = np.diag([scale * _KPA, _UM])
+        cov = J @ np.asarray(lsq.cov) @ J
+        k = np.sqrt(stats.chi2.ppf(level, 2))
+        # ellipse in (x = z, y = E): mean + k·L·(cos, sin) with L the Cholesky factor
+        covxy = cov[::-1, ::-1]
+        w, v = np.linalg.eigh(covxy)
+        L = v @ np.diag(np.sqrt(np.clip(w, 0.0, None)))
+        th = np.linspace(0.0, 2.0 * np.pi, 181)
+        pts = k * L @ np.vstack([np.cos(th), np.sin(th)])
+        ax.plot((lsq.z_surf - zm) * _UM + pts[0], lsq.E * _KPA + pts[1],
+                color=METHOD_COLORS["lsq"], lw=1.2)
+        ax.plot([(lsq.z_surf - zm) * _UM], [lsq.E * _KPA], "s", ms=4,
+                color=METHOD_COLORS["lsq"],
+                label=f"least squares, {_level_label(level)} ellipse")
+    ax.set_xlabel(f"z_surf − {zm * _MM:.3f} mm (posterior median) [µm]")
+    ax.set_ylabel("E, trace only (fixed nu) [kPa]")
+    ax.ticklabel_format(axis="y", useOffset=False)
+    ax.set_title(f"Joint posterior (correlation {r:+.2f})", fontsize="medium")
+    ax.legend(loc="best", fontsize="x-small", frameon=False)
+    return fig
+
+
+def plot_posterior(result: Any, lsq: Any = None, *, fig: Figure | None = None,
+                   level: float = 0.9, truth: Mapping[str, float] | None = None) -> Figure:
+    """Marginal posteriors of E and z_surf and their joint posterior, side by side.
+
+    Parameters
+    ----------
+    result
+        A :class:`~palpbayes.bayes.BayesResult`.
+    lsq
+        Least-squares result (default ``result.lsq``).
+    fig
+        Figure to draw in (default: a new 12 × 3.6 in figure).
+    level
+        Probability content of intervals.
+    truth
+        Optional known values ``{"E": Pa, "z_surf": m}`` (simulations).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if fig is None:
+        fig = Figure(figsize=(12.0, 3.6), layout="constrained")
+    axes = fig.subplots(1, 3)
+    truth = dict(truth or {})
+    plot_posterior_E(result, lsq, ax=axes[0], level=level, truth=truth.get("E"))
+    plot_posterior_zsurf(result, lsq, ax=axes[1], level=level, truth=truth.get("z_surf"))
+    plot_pair(result, lsq, ax=axes[2], level=level)
+    return fig

@@ -1,0 +1,71 @@
+"""Colours, units and small helpers shared by every figure of :mod:`palpbayes.plots`."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+__all__ = ["METHOD_COLORS", "METHOD_LABELS", "INPUT_COLORS"]
+
+#: One colour per method, used by every figure (Okabe-Ito palette).
+METHOD_COLORS: dict[str, str] = {
+    "data": "#7f7f7f",
+    "gt": "#222222",
+    "lsq": "#D55E00",      # vermillion
+    "bayes": "#0072B2",    # blue
+    "pooled": "#56B4E9",   # sky blue
+    "paper": "#009E73",    # bluish green
+    "truth": "#CC79A7",    # reddish purple
+}
+#: Legend labels of the methods.
+METHOD_LABELS: dict[str, str] = {
+    "data": "data",
+    "gt": "Instron ground truth",
+    "lsq": "least squares",
+    "bayes": "Bayes",
+    "pooled": "Bayes, pooled",
+    "paper": "paper (robot)",
+    "truth": "true value",
+}
+#: Colours of the inputs of the uncertainty budget.
+INPUT_COLORS: dict[str, str] = {
+    "E* (posterior)": "#0072B2",
+    "mu (pooled posterior)": "#0072B2",
+    "Poisson ratio": "#E69F00",
+    "tip radius": "#009E73",
+    "force gain": "#CC79A7",
+    "compliance": "#56B4E9",
+}
+_EXTRA_COLORS = ["#F0E442", "#D55E00", "#999999", "#000000"]
+
+_KPA = 1e-3
+_MM = 1e3
+_UM = 1e6
+_MN = 1e3
+
+
+def _fig_ax(ax: Axes | None, figsize: tuple[float, float] = (6.0, 4.0)) -> tuple[Figure, Axes]:
+    """The figure of ``ax``, or a new constrained-layout figure with one axes."""
+    if ax is not None:
+        return ax.figure, ax
+    fig = Figure(figsize=figsize, layout="constrained")
+    return fig, fig.add_subplot()
+
+
+def _level_label(level: float) -> str:
+    return f"{100 * level:g} %"
+
+
+def _central(x: np.ndarray, level: float) -> tuple[float, float]:
+    a = (1 - level) / 2
+    lo, hi = np.quantile(x, [a, 1 - a])
+    return float(lo), float(hi)
+
+
+def _draws(result: Any, name: str) -> np.ndarray:
+    """Flattened posterior draws of ``name`` from a BayesResult or an InferenceData."""
+    idata = getattr(result, "idata", result)
+    return np.asarray(idata.posterior[name]).ravel()

@@ -1,0 +1,94 @@
+"""The PDF report of a results folder: what a researcher attaches to a lab notebook.
+
+:func:`build_report` reads a results folder (:mod:`palpbayes.results`: ``summary.csv``,
+``posterior/*.nc``, ``settings.json``, ``traces.csv`` and, when present, ``comparison.csv``,
+``pooled.csv``, ``budget.csv``, ``stiffening.csv``, ``groundtruth.csv`` /
+``groundtruth_summary.csv``) and writes a multi-page PDF (A4 landscape, written atomically):
+
+1. title page: campaign, date, palpbayes version, the results folder it was built from,
+   settings, contents;
+2. summary table in the layout of the paper's Table III (units in the headers): ground truth,
+   least squares and Bayes E ± sd per material × tip, errors, whether each new-specimen
+   interval covers the ground truth (with the overall count), the paper's robot numbers and,
+   for spheres, the paper's Hertz fit of the same traces;
+3. the same comparison as a figure;
+4. one page per material × tip: force-depth data of a representative trace with the
+   posterior-predictive band and the least-squares curve, residuals, posterior of E and of
+   (E, z_surf), per-trace intervals with the pooled result; sphere pages also state the
+   paper's Hertz fit (``summary.csv`` ``E_hertz_pa``) against the exact Sneddon law;
+5. convergence diagnostics (every non-converged or flagged fit, or the statement that all
+   converged with the largest R-hat and smallest ESS) and the walkers of the worst fit;
+6. the uncertainty budget (table and chart);
+7. the stiffening law E(t) vs rest time (:mod:`palpbayes.stiffening`) for every material × tip
+   whose palpations have at least :data:`STIFFENING_MIN_REST_TIMES` distinct rest times, and
+   ``stiffening.csv`` when present;
+8. methods: models, priors, noise model, least squares, the sampler's stopping rule (numbers
+   from ``settings.json``), pooling (:data:`palpbayes.pooling.POOLING_SETTINGS`, tau prior from
+   ``pooled.csv``), ground-truth window.
+
+Tables continue on further pages beyond :data:`TABLE_ROWS_PER_PAGE` rows ('… (continued, 2/3)'),
+comparison charts beyond :data:`CHART_GROUPS_PER_PAGE` material × tip groups (whole materials
+per page) and budget pages beyond :data:`BUDGET_GROUPS_PER_PAGE` groups, so a campaign of any
+size stays readable.
+
+This package only draws: reading a results folder is :mod:`palpbayes.results`, fitting a campaign
+first (``palpbayes report CAMPAIGN``) is :func:`palpbayes.pipeline.run_pipeline`.  Both modules'
+public names used by notebooks (``load_results``, ``load_fit``, ``ResultsFolder``,
+``run_pipeline``, ``example_campaign_dir``) are re-exported here for compatibility.
+
+Matplotlib is used through its object API only (figures are rendered by the PDF backend;
+:mod:`matplotlib.pyplot` is never imported), so the report works under any backend.
+
+Modules: :mod:`~palpbayes.report.build` (:func:`build_report`, page order),
+:mod:`~palpbayes.report.format` (numbers and cells), :mod:`~palpbayes.report.tables` (the
+summary table, drawn tables, pagination), :mod:`~palpbayes.report.layout` (page geometry),
+:mod:`~palpbayes.report.methods` (the methods text) and one ``pages_*`` module per page kind
+(title, summary, group, diagnostics, budget, stiffening, methods).
+"""
+
+from __future__ import annotations
+
+from ..pipeline import example_campaign_dir, run_pipeline
+from ..results import ResultsFolder, load_fit, load_results
+from .build import RASTER_DPI, REPORT_NAME, ReportInfo, build_report
+from .format import _range as _range
+from .format import _shown as _shown
+from .layout import BUDGET_GROUPS_PER_PAGE, CHART_GROUPS_PER_PAGE, PAGE_SIZE, TABLE_ROWS_PER_PAGE
+from .methods import MOVES_TEXT
+from .methods import _methods_lines as _methods_lines
+from .pages_stiffening import STIFFENING_MIN_REST_TIMES
+from .tables import (
+    BAYES_E_COL,
+    BAYES_NEW_COL,
+    GT_COL,
+    HERTZ_COL,
+    LS_E_COL,
+    coverage_counts,
+    summary_table,
+)
+
+__all__ = [
+    "PAGE_SIZE",
+    "REPORT_NAME",
+    "RASTER_DPI",
+    "STIFFENING_MIN_REST_TIMES",
+    "TABLE_ROWS_PER_PAGE",
+    "CHART_GROUPS_PER_PAGE",
+    "BUDGET_GROUPS_PER_PAGE",
+    "MOVES_TEXT",
+    "ReportInfo",
+    "summary_table",
+    "coverage_counts",
+    "GT_COL",
+    "LS_E_COL",
+    "BAYES_E_COL",
+    "BAYES_NEW_COL",
+    "HERTZ_COL",
+    "build_report",
+    # re-exported from palpbayes.results and palpbayes.pipeline (notebooks import them here)
+    "ResultsFolder",
+    "load_results",
+    "load_fit",
+    "example_campaign_dir",
+    "run_pipeline",
+]

@@ -1,0 +1,134 @@
+"""Assembling the report: every page in order, numbered and footed, into one PDF."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .. import __version__
+from ..errors import InputError
+from ..results import ResultsFolder, load_results
+from .format import _shown, _truthy
+from .layout import _decorate, _new_page, _Page
+from .pages_budget import _pages_budget
+from .pages_diagnostics import _page_diagnostics
+from .pages_group import _page_group
+from .pages_methods import _pages_methods
+from .pages_stiffening import _page_stiffening, _pages_stiffening_table, _stiffening_groups
+from .pages_summary import _pages_comparison, _pages_summary
+from .pages_title import _page_title
+from .tables import _flagged
+
+__all__ = ["REPORT_NAME", "RASTER_DPI", "ReportInfo", "build_report"]
+
+#: Default file name of the report inside a results folder.
+REPORT_NAME = "report.pdf"
+#: Resolution [dpi] of the rasterized parts (dense scatter, walker traces); text, axes,
+#: curves and bands stay vector graphics.
+RASTER_DPI = 110
+
+
+@dataclass
+class ReportInfo:
+    """What :func:`build_report` wrote.
+
+    Attributes
+    ----------
+    path
+        The PDF.
+    titles
+        Page titles in order.
+    n_traces
+        Traces in the results folder.
+    n_flagged
+        Bayesian fits not converged or flagged.
+    n_pooled_flagged
+        Pooled (hierarchical) groups whose chain did not converge.
+    table_rows
+        Per page, the most rows of a table (or material × tip groups of a chart) on it; 0 for
+        pages without one.  Tables are split at :data:`TABLE_ROWS_PER_PAGE` rows.
+    results_shown
+        The results folder as printed on the title page and in the footer.
+    """
+
+    path: Path
+    titles: list[str]
+    n_traces: int
+    n_flagged: int
+    n_pooled_flagged: int = 0
+    table_rows: list[int] = field(default_factory=list)
+    results_shown: str = ""
+
+    @property
+    def n_pages(self) -> int:
+        return len(self.titles)
+
+
+def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathLike | None = None,
+                 *, seed: int = 0, created: str | None = None) -> ReportInfo:
+    """Write the PDF report of a results folder (pages listed in :mod:`palpbayes.report`).
+
+    Parameters
+    ----------
+    results
+        Results folder (or one loaded with :func:`load_results`).
+    pdf
+        Output file (default ``<results>/report.pdf``); written atomically.
+    seed
+        Seed of the posterior-predictive draws in the plots.
+    created
+        Date printed on the title page (default: today, ISO format).
+
+    Returns
+    -------
+    ReportInfo
+    """
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    from ..io.atomic import write_with
+
+    res = results if isinstance(results, ResultsFolder) else load_results(results)
+    out = Path(pdf) if pdf is not None else res.path / REPORT_NAME
+    if out.suffix.lower() != ".pdf":
+        raise InputError(f"{out}: the report is a PDF; give a file name ending in .pdf")
+    created = created or _dt.date.today().isoformat()
+    contents: list[str] = []
+    pages: list[_Page] = [_page_title(res, created, contents), *_pages_summary(res)]
+    if res.comparison is not None and not res.comparison.empty:
+        pages += _pages_comparison(res)
+    pages += [_page_group(res, m, t, seed) for m, t in res.groups()]
+    pages += _page_diagnostics(res)
+    pages += _pages_budget(res)
+    pages += [_page_stiffening(res, m, t, seed) for m, t in _stiffening_groups(res)]
+    pages += _pages_stiffening_table(res)
+    pages += _pages_methods(res)
+    footer = (f"palpbayes {__version__} · campaign {res.name} · {created} · results "
+              f"{_shown(res.path)}")
+    titles = [p.title or "palpbayes report" for p in pages]
+    contents.extend(titles)
+
+    def write(tmp: Path) -> None:
+        meta = {"Title": f"palpbayes report: {res.name}", "Creator": f"palpbayes {__version__}",
+                "Subject": "Elastic modulus from robotic palpation"}
+        with PdfPages(tmp, metadata=meta) as pdfp:
+            for i, page in enumerate(pages, start=1):
+                fig = _new_page()
+                page.build(fig)
+                if page.title:
+                    _decorate(fig, page.title, footer, i, len(pages))
+                else:
+                    fig.text(0.96, 0.02, f"page {i} / {len(pages)}", fontsize=7, color="0.4",
+                             ha="right")
+                pdfp.savefig(fig, dpi=RASTER_DPI)
+
+    write_with(write, out, suffix=".pdf")
+    b = res.bayes_rows()
+    n_pool = 0
+    if res.pooled is not None and "converged" in res.pooled:
+        n_pool = int((~res.pooled["converged"].map(_truthy)).sum())
+    return ReportInfo(path=out, titles=titles, n_traces=int(res.summary["trace_id"].nunique()),
+                      n_flagged=int(len(_flagged(res))) if len(b) else 0,
+                      n_pooled_flagged=n_pool, table_rows=[p.rows for p in pages],
+                      results_shown=_shown(res.path))

@@ -1,0 +1,93 @@
+"""Formatting of numbers, cells, paths and paragraphs for the report's pages (no drawing)."""
+
+from __future__ import annotations
+
+import math
+import os
+import textwrap
+from pathlib import Path
+from typing import Any
+
+#: Pa -> kPa.
+_KPA = 1e-3
+
+
+def _fmt(v: Any, digits: int = 1) -> str:
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return "–"
+    return "–" if not math.isfinite(x) else f"{x:.{digits}f}"
+
+
+def _pm(e: Any, sd: Any, digits: int = 1) -> str:
+    a, b = _fmt(float(e) * _KPA if _isnum(e) else e, digits), \
+        _fmt(float(sd) * _KPA if _isnum(sd) else sd, digits)
+    if a == "–":
+        return "–"
+    return a if b == "–" else f"{a} ± {b}"
+
+
+def _isnum(v: Any) -> bool:
+    try:
+        return math.isfinite(float(v))
+    except (TypeError, ValueError):
+        return False
+
+
+def _yesno(v: Any) -> str:
+    if isinstance(v, str):
+        v = {"true": True, "false": False}.get(v.strip().lower(), v)
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "–"
+    return "yes" if bool(v) else "NO"
+
+
+def _interval(lo: Any, hi: Any, digits: int = 0) -> str:
+    if not (_isnum(lo) and _isnum(hi)):
+        return "–"
+    return f"[{float(lo) * _KPA:.{digits}f}, {float(hi) * _KPA:.{digits}f}]"
+
+
+def _truthy(v: Any) -> bool:
+    if isinstance(v, str):
+        return v.strip().lower() == "true"
+    return bool(v) if v is not None and not (isinstance(v, float) and math.isnan(v)) else False
+
+
+def _range(lo: Any, hi: Any, digits: int = 0) -> str:
+    """'lo–hi', or a single number when both are equal ('1500', not '1500–1500')."""
+    a, b = _fmt(lo, digits), _fmt(hi, digits)
+    return a if a == b else f"{a}–{b}"
+
+
+def _shown(path: str | os.PathLike | None) -> str:
+    """A path as shown in the report: relative to the working folder when it is inside it or
+    beside it (at most one '..'), else absolute."""
+    if not path:
+        return "(none)"
+    p = Path(path).resolve()
+    try:
+        rel = Path(os.path.relpath(p, Path.cwd().resolve()))
+    except ValueError:  # another drive (Windows)
+        return str(p)
+    if rel.parts[:2] == ("..", ".."):
+        return str(p)
+    return str(rel)
+
+
+def _force_setting(v: Any) -> str:
+    """A force option of the run [N] with an SI prefix, or what None means (read per trace)."""
+    from ..units import format_force
+
+    if v is None:
+        return "read from each trace's pre-contact baseline (6 sd)"
+    return format_force(float(v))
+
+
+def _wrap(text: str, width: int) -> list[str]:
+    out: list[str] = []
+    for para in text.split("\n"):
+        # no breaks inside 'R-hat', 'post-burn-in', 'de-snooker'
+        out.extend(textwrap.wrap(para, width, break_on_hyphens=False) or [""])
+    return out

@@ -1,0 +1,128 @@
+"""Convergence diagnostics pages and the walkers of the least converged fit."""
+
+from __future__ import annotations
+
+import textwrap
+from collections.abc import Callable
+
+import pandas as pd
+from matplotlib.figure import Figure
+
+from .. import plots
+from ..results import ResultsFolder, load_fit
+from .format import _fmt, _range, _truthy, _wrap, _yesno
+from .layout import TABLE_ROWS_PER_PAGE, _Page, _text_lines
+from .tables import _chunks, _continued, _draw_table, _flagged, _pooled_of
+
+
+def _diag_highlight(gtab: pd.DataFrame) -> Callable[[int, str, str], str | None]:
+    """Red cells: a group with fewer converged fits than fits, or a non-converged pool."""
+    def hl(r: int, col: str, txt: str) -> str | None:
+        if col == "pooled conv." and txt == "NO":
+            return "#fde0dc"
+        if col == "converged" and txt != gtab["fits"].iloc[r]:
+            return "#fde0dc"
+        return None
+    return hl
+
+
+def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
+    from ..bayes.diagnostics import ESS_MIN, RHAT_MAX
+
+    b = res.bayes_rows()
+    flagged = _flagged(res)
+    rmax = float(b["rhat_max"].max()) if len(b) else float("nan")
+    emin = float(b["ess_min"].min()) if len(b) else float("nan")
+    crit = (f"criteria: R-hat ≤ {RHAT_MAX}, bulk and tail ESS ≥ {ESS_MIN:.0f}, autocorrelation "
+            "time stable before the step cap, no prior-dominated surface or bound-hitting E*")
+    pooled_bad: list[str] = []
+    if res.pooled is not None and "converged" in res.pooled:
+        pooled_bad = [f"{r['material']} {r['tip']}" for _, r in res.pooled.iterrows()
+                      if not _truthy(r["converged"])]
+    if len(b) == 0:
+        head = "No Bayesian fits in this folder."
+    elif flagged.empty:
+        head = (f"All {len(b)} Bayesian fits converged: largest R-hat {rmax:.4f}, smallest ESS "
+                f"{emin:.0f}.")
+    else:
+        head = (f"{len(flagged)} of {len(b)} Bayesian fits are NOT converged or are flagged "
+                f"(largest R-hat {rmax:.4f}, smallest ESS {emin:.0f}); their numbers are "
+                "marked in every table.")
+    if pooled_bad:
+        head += (f" Pooled (hierarchical) chain not converged for: {', '.join(pooled_bad)} "
+                 "(marked (!) in the summary table).")
+    elif res.pooled is not None and len(res.pooled):
+        head += f" All {len(res.pooled)} pooled (hierarchical) chains converged."
+    groups = []
+    for mat, tip in res.groups():
+        g = b[(b["material"].fillna("").astype(str) == mat) & (b["tip"].astype(str) == tip)]
+        if g.empty:
+            continue
+        pooled = _pooled_of(res, mat, tip)
+        groups.append({
+            "Material": mat, "Tip": tip, "fits": str(len(g)),
+            "converged": str(int(g["converged"].map(_truthy).sum())),
+            "max R-hat": _fmt(g["rhat_max"].max(), 4), "min ESS": _fmt(g["ess_min"].min(), 0),
+            "max tau [steps]": _fmt(g["tau_max"].max(), 1),
+            "steps": _range(g["n_steps"].min(), g["n_steps"].max()),
+            "acceptance": _fmt(g["acceptance"].mean(), 2),
+            "pooled R-hat": "–" if pooled is None else _fmt(pooled.get("rhat_max"), 4),
+            "pooled ESS": "–" if pooled is None else _fmt(pooled.get("ess_min"), 0),
+            "pooled conv.": "–" if pooled is None else _yesno(pooled.get("converged")),
+        })
+    gtab = pd.DataFrame(groups)
+    ftab = pd.DataFrame([{
+        "Trace": r["trace_id"], "converged": _yesno(r["converged"]),
+        "R-hat": _fmt(r["rhat_max"], 4), "ESS": _fmt(r["ess_min"], 0),
+        "steps": _fmt(r["n_steps"], 0),
+        "flags": textwrap.shorten(str(r["flags"]) if pd.notna(r["flags"]) else "", 95),
+    } for _, r in flagged.iterrows()])
+    # pages: the group table in chunks, then the flagged fits in chunks; the first flagged
+    # chunk shares the last group page when both fit in TABLE_ROWS_PER_PAGE rows
+    layout: list[tuple[pd.DataFrame | None, pd.DataFrame | None]] = \
+        [(gtab.iloc[sl], None) for sl in _chunks(len(gtab))] if len(gtab) else [(None, None)]
+    fchunks = [ftab.iloc[sl] for sl in _chunks(len(ftab))] if len(ftab) else []
+    if fchunks:
+        last_g = layout[-1][0]
+        if last_g is None or len(last_g) + len(fchunks[0]) <= TABLE_ROWS_PER_PAGE:
+            layout[-1] = (last_g, fchunks.pop(0))
+        layout += [(None, f) for f in fchunks]
+    row_h = 0.042
+    pages = []
+    for k, (gpart, fpart) in enumerate(layout):
+        def build(fig: Figure, gpart=gpart, fpart=fpart, first=(k == 0)) -> None:
+            lines = [("t", ln) for ln in _wrap(head, 150)]
+            lines += [("t", crit)] if first else []
+            _text_lines(fig, lines, top=0.9, left=0.04, size=10)
+            top = 0.8
+            if gpart is not None and len(gpart):
+                hgt = row_h * (len(gpart) + 1)
+                ax = fig.add_axes((0.04, top - hgt, 0.92, hgt))
+                _draw_table(ax, gpart, fontsize=8, row_height=1.0 / (len(gpart) + 1),
+                            highlight=_diag_highlight(gpart))
+                top -= hgt + 0.05
+            if fpart is not None and len(fpart):
+                fig.text(0.04, top, "Non-converged or flagged fits", fontsize=11,
+                         fontweight="bold")
+                top -= 0.02
+                hgt = min(top - 0.06, row_h * (len(fpart) + 1))
+                ax = fig.add_axes((0.04, top - hgt, 0.92, hgt))
+                _draw_table(ax, fpart, fontsize=7.5, row_height=1.0 / (len(fpart) + 1),
+                            highlight=lambda _r, c, t: "#fde0dc" if c == "converged" and
+                            t == "NO" else None)
+        rows = max(0 if gpart is None else len(gpart), 0 if fpart is None else len(fpart))
+        pages.append(_Page(_continued("Convergence diagnostics", k, len(layout)), build,
+                           rows=rows))
+    worst = None
+    if len(b) and b["rhat_max"].notna().any():
+        cand = b[b["trace_id"].map(lambda t: (res.path / "posterior" / f"{t}.nc").is_file())]
+        if len(cand):
+            worst = str(cand.loc[cand["rhat_max"].astype(float).idxmax(), "trace_id"])
+    if worst is not None:
+        def build_w(fig: Figure, tid: str = worst) -> None:
+            fit = load_fit(res, tid)
+            sub = fig.add_subfigure(fig.add_gridspec(1, 1, left=0.05, right=0.97, top=0.92,
+                                                     bottom=0.05)[0, 0])
+            plots.plot_walkers(fit, fig=sub, title=False)
+        pages.append(_Page(f"Walkers of the least converged fit ({worst})", build_w))
+    return pages

@@ -1,0 +1,115 @@
+"""One page per material × tip: a representative trace's fit and posteriors, and the
+per-trace intervals with the pooled result."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from .. import plots
+from ..results import ResultsFolder, load_fit
+from .format import _KPA, _fmt, _interval
+from .layout import _Page
+from .tables import _hertz_of_group, _pooled_of
+
+
+def _representative(res: ResultsFolder, mat: str, tip: str) -> str | None:
+    """The trace shown for a group: the pooling's representative (posterior median of log E
+    closest to the group median) if recorded, else the Bayes estimate closest to the median."""
+    pooled = _pooled_of(res, mat, tip)
+    if pooled is not None and isinstance(pooled.get("representative_trace"), str):
+        tid = pooled["representative_trace"]
+        if (res.path / "posterior" / f"{tid}.nc").is_file():
+            return tid
+    b = res.bayes_rows()
+    b = b[(b["material"].fillna("").astype(str) == mat) & (b["tip"].astype(str) == tip)]
+    b = b[b["E_pa"].notna()]
+    if b.empty:
+        return None
+    ok = b[b["converged"].astype(str).str.lower() == "true"]
+    pick = ok if len(ok) else b
+    med = float(np.median(pick["E_pa"]))
+    i = int(np.argmin(np.abs(pick["E_pa"].to_numpy(dtype=float) - med)))
+    tid = str(pick["trace_id"].iloc[i])
+    return tid if (res.path / "posterior" / f"{tid}.nc").is_file() else None
+
+
+def _gt_of(res: ResultsFolder, mat: str) -> tuple[float, float] | None:
+    c = res.comparison
+    if c is not None and "gt_E_pa" in c:
+        sub = c[c["material"].astype(str) == mat]["gt_E_pa"].dropna()
+        if len(sub):
+            sd = c[c["material"].astype(str) == mat]["gt_sd_pa"].dropna()
+            return float(sub.iloc[0]), float(sd.iloc[0]) if len(sd) else float("nan")
+    g = res.groundtruth_summary
+    if g is not None and mat in set(g["material"].astype(str)):
+        r = g[g["material"].astype(str) == mat].iloc[0]
+        return float(r["E_mean_pa"]), float(r["E_sd_pa"])
+    return None
+
+
+def _page_group(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page:
+    def build(fig: Figure) -> None:
+        tid = _representative(res, mat, tip)
+        s = res.summary
+        sub = s[(s["material"].fillna("").astype(str) == mat) & (s["tip"].astype(str) == tip)]
+        gt = _gt_of(res, mat)
+        pooled = _pooled_of(res, mat, tip)
+        gs = fig.add_gridspec(2, 3, left=0.06, right=0.98, top=0.84, bottom=0.1, wspace=0.32,
+                              hspace=0.42)
+        ax_fd = fig.add_subplot(gs[0, 0:2])
+        ax_forest = fig.add_subplot(gs[0, 2])
+        # room for the forest plot's trace-id tick labels (they would run into the force panel)
+        x0, y0, w, h = ax_forest.get_position().bounds
+        ax_forest.set_position([x0 + 0.045, y0, w - 0.045, h])
+        ax_res = fig.add_subplot(gs[1, 0])
+        ax_e = fig.add_subplot(gs[1, 1])
+        ax_pair = fig.add_subplot(gs[1, 2])
+        plots.plot_forest(sub[sub["E_pa"].notna()], pooled, gt=gt, ax=ax_forest,
+                          title="Per trace and pooled (90 % intervals)")
+        if tid is None:
+            for a in (ax_fd, ax_res, ax_e, ax_pair):
+                a.set_axis_off()
+            ax_fd.text(0.5, 0.5, "no Bayesian posterior for this group", ha="center")
+        else:
+            fit = load_fit(res, tid)
+            plots.plot_force_depth(fit, ax=ax_fd, seed=seed)
+            ax_fd.set_title(f"Representative trace {tid} ({fit.data.model.describe()})",
+                            fontsize="medium")
+            plots.plot_residuals(fit, ax=ax_res)
+            plots.plot_posterior_E(fit, ax=ax_e)
+            plots.plot_pair(fit, ax=ax_pair, seed=seed)
+        txt = []
+        if pooled is not None:
+            txt.append(f"Pooled ({int(pooled['n_traces'])} traces): E = "
+                       f"{_fmt(pooled['E_pa'] * _KPA)} kPa, 90 % "
+                       f"{_interval(pooled['E_lo_pa'], pooled['E_hi_pa'], 1)}; new specimen "
+                       f"{_interval(pooled['E_new_lo_pa'], pooled['E_new_hi_pa'], 1)} kPa; "
+                       f"between-trace sd of log E tau = {_fmt(pooled.get('tau'), 3)}")
+        if gt is not None:
+            txt.append(f"Ground truth: {_fmt(gt[0] * _KPA)} ± {_fmt(gt[1] * _KPA)} kPa")
+        fig.text(0.06, 0.905, "    ".join(txt), fontsize=8.5, color="0.2")
+        hz = _hertz_line(res, mat, tip)
+        if hz:
+            fig.text(0.06, 0.882, hz, fontsize=8.5, color="#8a3b00")
+    return _Page(f"{mat} · {tip}" if mat else tip, build)
+
+
+def _hertz_line(res: ResultsFolder, mat: str, tip: str) -> str:
+    """Sphere pages: the paper's Hertz fit of the same traces against the exact Sneddon law."""
+    h = _hertz_of_group(res, mat, tip)
+    if h is None:
+        return ""
+    s = res.summary
+    ls = s[(s["material"].fillna("").astype(str) == mat) & (s["tip"].astype(str) == tip)
+           & (s["method"] == "lsq")]
+    e = pd.to_numeric(ls["E_pa"], errors="coerce").dropna()
+    sd = f" ± {_fmt(h[1] * _KPA)}" if math.isfinite(h[1]) else ""
+    ref = (f"least squares with the exact Sneddon law ({_fmt(e.mean() * _KPA)} kPa)"
+           if len(e) else "the exact Sneddon law")
+    return (f"Paper's Hertz fit of the same {h[3]} trace(s) (least squares, paraboloid law at "
+            f"the sphere's radius): E = {_fmt(h[0] * _KPA)}{sd} kPa, Δ = {100 * h[2]:+.1f} % "
+            f"vs {ref}.")

@@ -1,0 +1,93 @@
+"""Stiffening pages: E(t) vs rest time per material × tip (:mod:`palpbayes.stiffening`) and
+``stiffening.csv``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from .. import plots
+from ..results import ResultsFolder
+from .format import _wrap
+from .layout import _Page, _text_lines
+from .tables import _chunks, _continued, _draw_table
+
+__all__ = ["STIFFENING_MIN_REST_TIMES"]
+
+#: A material × tip group gets a stiffening page when it has this many distinct rest times.
+STIFFENING_MIN_REST_TIMES = 3
+
+
+def _stiffening_groups(res: ResultsFolder) -> list[tuple[str, str]]:
+    """Groups whose Bayesian fits span enough distinct positive rest times for the law."""
+    b = res.bayes_rows()
+    if "rest_time_s" not in b:
+        return []
+    out = []
+    for mat, tip in res.groups():
+        g = b[(b["material"].astype(str) == mat) & (b["tip"].astype(str) == tip)]
+        t = pd.to_numeric(g["rest_time_s"], errors="coerce")
+        t = t[np.isfinite(t) & (t > 0) & g["E_stat_pa"].notna()]
+        if t.nunique() >= STIFFENING_MIN_REST_TIMES:
+            out.append((mat, tip))
+    return out
+
+
+def _page_stiffening(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page:
+    def build(fig: Figure) -> None:
+        from ..stiffening import fit_stiffening_summary
+
+        b = res.bayes_rows()
+        g = b[(b["material"].astype(str) == mat) & (b["tip"].astype(str) == tip)]
+        fit = fit_stiffening_summary(g, method="bayes", seed=seed)
+        t = pd.to_numeric(g["rest_time_s"], errors="coerce")
+        rows = g[np.isfinite(t)]
+        fresh = g[~np.isfinite(t)]
+        rested = None
+        if len(fresh):
+            r = fresh.iloc[0]
+            rested = (r["E_stat_pa"], r["E_stat_lo_pa"], r["E_stat_hi_pa"])
+        ax = fig.add_axes((0.07, 0.12, 0.5, 0.74))
+        plots.plot_stiffening(rows["rest_time_s"].astype(float), rows["E_stat_pa"],
+                              E_lo=rows["E_stat_lo_pa"], E_hi=rows["E_stat_hi_pa"], fit=fit,
+                              rested=rested, ax=ax)
+        tab = fit.table_of().copy()
+        show = pd.DataFrame({"parameter": tab["parameter"], "unit": tab["unit"],
+                             "median": tab["median"].map(lambda v: f"{v:.4g}"),
+                             "90 % interval": [f"[{a:.4g}, {b:.4g}]"
+                                               for a, b in zip(tab["lo"], tab["hi"],
+                                                               strict=True)]})
+        ax2 = fig.add_axes((0.62, 0.62, 0.35, 0.24))
+        _draw_table(ax2, show, fontsize=8, row_height=1.0 / (len(show) + 1))
+        lines = [("t", f"Preferred law: {fit.law}"), ("", "")]
+        lines += [("t", ln) for ln in _wrap(fit.message, 62)]
+        lines += [("", ""), ("t", "Statistical E of each palpation (the budget's systematic "),
+                  ("t", "inputs scale the whole curve, not its shape).")]
+        _text_lines(fig, lines, top=0.56, left=0.62, size=8.5)
+    title = f"Stiffening after repeated palpation: {mat} · {tip}" if mat else \
+        f"Stiffening after repeated palpation: {tip}"
+    return _Page(title, build)
+
+
+def _pages_stiffening_table(res: ResultsFolder) -> list[_Page]:
+    st = res.stiffening
+    if st is None or st.empty:
+        return []
+    cols = [c for c in st.columns if not c.startswith("_")]
+    show = st[cols].copy()
+    for c in show.columns:
+        if pd.api.types.is_float_dtype(show[c]):
+            show[c] = show[c].map(lambda v: f"{v:.4g}")
+    chunks = _chunks(len(show))
+    per = max(c.stop - c.start for c in chunks)
+    pages = []
+    for k, sl in enumerate(chunks):
+        part = show.iloc[sl]
+
+        def build(fig: Figure, part: pd.DataFrame = part) -> None:
+            ax = fig.add_axes((0.03, 0.2, 0.94, 0.68))
+            _draw_table(ax, part, fontsize=7, row_height=min(0.06, 1.0 / (per + 1)))
+        pages.append(_Page(_continued("Stiffening (stiffening.csv)", k, len(chunks)), build,
+                           rows=len(part)))
+    return pages
