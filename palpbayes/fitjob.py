@@ -7,6 +7,7 @@ the per-trace netCDF when ``posterior_dir`` is given (written atomically).
 
 from __future__ import annotations
 
+import json
 import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -17,7 +18,7 @@ from .bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_baye
 from .checks import CheckResult, run_checks
 from .contact import check_tip_plausible
 from .contact.geometry import Tip
-from .errors import ConvergenceWarning, FitError, GeometryError
+from .errors import ConvergenceWarning, FitError, GeometryError, InputError
 from .fitdata import FitData, ModelSpec, prepare
 from .lsq import LSQResult, fit_lsq_data
 from .trace import IndentationTrace
@@ -214,20 +215,24 @@ def model_checks(data: FitData, *, z_surf: float, estar: float, f0: float, f1: f
     """Model-adequacy checks of one fit (:func:`palpbayes.checks.run_checks`) on its points.
 
     The noise's own lag-one correlation is read from the pre-contact baseline when it is
-    reliable, so correlated sensor noise is not mistaken for misfit.
+    reliable, so correlated sensor noise is not mistaken for misfit.  A trace too short for
+    the checks gets none (``model_ok`` is then empty), not an error.
     """
     base = data.baseline
     lag1 = base.lag1 if base is not None and base.reliable else None
-    return run_checks(data.z, data.force, data.model, z_surf=z_surf, estar=estar, f0=f0,
-                      f1=f1, sigma=sigma, draws=draws, baseline_lag1=lag1, baseline=baseline,
-                      z_ref=z_ref, rng=seed)
+    try:
+        return run_checks(data.z, data.force, data.model, z_surf=z_surf, estar=estar, f0=f0,
+                          f1=f1, sigma=sigma, draws=draws, baseline_lag1=lag1,
+                          baseline=baseline, z_ref=z_ref, rng=seed)
+    except InputError:
+        return []
 
 
 def check_columns(checks: list[CheckResult], flags: str) -> dict:
     """``model_ok``, ``m_free`` and the failed checks' flags appended to ``flags``."""
     failed = [c.flag for c in checks if not c.passed]
     m = next((c.statistic for c in checks if c.name == "exponent"), float("nan"))
-    return {"model_ok": not failed, "m_free": m,
+    return {"model_ok": not failed if checks else float("nan"), "m_free": m,
             "flags": "; ".join([f for f in [flags] if f] + failed)}
 
 
@@ -304,6 +309,9 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
             data, z_surf=med["z_surf"], estar=med["E_star"], f0=med["F0"],
             f1=med.get("F1", 0.0), sigma=med["sigma"], baseline=bayes.baseline,
             z_ref=bayes.z_ref, draws=draws, seed=seed)
+        bayes.idata.posterior.attrs["model_checks"] = json.dumps(
+            [{"name": c.name, "statistic": float(c.statistic), "passed": bool(c.passed),
+              "flag": c.flag} for c in bayes.checks])
         rows.append(with_hertz({**bayes.summary_row(), **meta}))
         if posterior_dir is not None:
             path = bayes.to_netcdf(Path(posterior_dir) / f"{trace.trace_id}.nc")

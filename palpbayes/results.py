@@ -175,7 +175,9 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
     file is gone or its points differ from the stored ones, the stored fitted points
     (``constant_data.z``, ``observed_data.force``) are used alone.  The least-squares fit is
     recomputed on the same points (deterministic, milliseconds).  ``budget`` is None: the
-    per-trace budget table is not stored (``budget.csv`` holds the group budgets).
+    per-trace budget table is not stored (``budget.csv`` holds the group budgets).  The
+    posterior flags and the model checks come back from the netCDF's posterior attributes, so a
+    flagged fit is reloaded as flagged.
 
     Returns
     -------
@@ -183,6 +185,8 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
     """
     from .bayes.diagnostics import compute_diagnostics
     from .bayes.result import BayesResult
+    from .checks import CheckResult
+    from .errors import FitError
     from .fitdata import ModelSpec, prepare
     from .io.manifest import load_trace, tip_from_row
     from .lsq import fit_lsq_data
@@ -219,7 +223,7 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
             trace = load_trace(row)
             cand = prepare(trace, model, f_unc=f_unc,
                            fit_fraction=None if fraction is None else float(fraction),
-                           max_depth=opts.get("max_depth"))
+                           max_depth=opts.get("max_depth"), tare=bool(opts.get("tare")))
             if cand.z.shape == z_fit.shape and np.allclose(cand.z, z_fit, rtol=0, atol=1e-12) \
                     and np.allclose(cand.force, f_fit, rtol=0, atol=1e-12):
                 data = cand
@@ -227,7 +231,7 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
             data = None
     if data is None:  # the trace file is gone or changed: the fitted points stored in the netCDF
         data = fitdata_from_posterior(idata, model)
-    names = [n for n in ("E_star", "z_surf", "sigma", "F0", "phi", "nu_t")
+    names = [n for n in ("E_star", "z_surf", "sigma", "F0", "F1", "phi", "nu_t")
              if n in idata.posterior]
     srow = res.summary[(res.summary["trace_id"].astype(str) == trace_id)
                        & (res.summary["method"] == "bayes")]
@@ -235,7 +239,17 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
     steps = int(srow["n_steps"].iloc[0]) if len(srow) and pd.notna(srow["n_steps"].iloc[0]) \
         else int(attrs.get("n_steps", 0))
     diag = compute_diagnostics(idata, names, np.full(len(names), np.nan), acc, steps, False)
-    lsq = fit_lsq_data(data, trace_id=trace_id)
+    try:
+        lsq = fit_lsq_data(data, trace_id=trace_id)
+    except FitError:
+        lsq = None
+    pattrs = dict(idata.posterior.attrs)
+    flags = pattrs.get("flags", [])
+    flags = [str(flags)] if isinstance(flags, str) else [str(f) for f in np.ravel(flags)]
+    checks = [CheckResult(c["name"], c["statistic"], c["passed"], c["flag"], {})
+              for c in json.loads(str(pattrs.get("model_checks", "[]")))]
     return BayesResult(idata=idata, diagnostics=diag, budget=None, data=data,
                        noise=str(attrs.get("noise_model", "gaussian")), trace_id=trace_id,
-                       lsq=lsq, warnings=[])
+                       lsq=lsq, warnings=[f for f in flags if f], checks=checks,
+                       baseline=str(attrs.get("baseline_model", "constant")),
+                       z_ref=float(attrs.get("z_ref_m", 0.0)))

@@ -111,3 +111,32 @@ def test_prior_dominated_detector():
     assert any(f.startswith(PRIOR_DOMINATED) for f in bayes_fit._flags(wide, _theta(wide), prior))
     narrow = dict(wide, z_surf=0.5 * (lo + hi) + 1e-7 * rng.standard_normal(4000))
     assert bayes_fit._flags(narrow, _theta(narrow), prior) == []
+
+
+def test_a_reloaded_fit_keeps_its_flags_and_model_checks(tmp_path):
+    """load_fit used to drop the flags, so a flagged fit came back as converged."""
+    from palpbayes.results import load_fit
+
+    tr = simulate_trace(136e3, TIP, thickness=0.02, rng=1, rate=5, noise_pp=0.6,
+                        approach=5e-5, trace_id="sparse")
+    opts = FitOptions(method="bayes", seed=1, f_unc=0.6, priors=PriorSpec(noise_pp=0.6))
+    summary = campaign.fit_campaign([tr], tmp_path / "res", opts, workers=1)
+    assert not bool(summary["converged"].iloc[0])
+    back = load_fit(tmp_path / "res", "sparse")
+    assert not back.converged
+    assert any(w.startswith(AT_UPPER) for w in back.warnings), back.warnings
+    assert back.checks == []  # 13 samples: too few for the model checks, which are skipped
+    assert np.isnan(summary["model_ok"].iloc[0])
+
+
+def test_a_reloaded_fit_keeps_its_model_checks(tmp_path):
+    from palpbayes.results import load_fit
+
+    tr = simulate_trace(136e3, Tip("paraboloid", radius=0.0117), thickness=0.03, depth=3e-3,
+                        finite_thickness=True, rng=3, trace_id="layer")
+    summary = campaign.fit_campaign([tr], tmp_path / "res", FitOptions(seed=1), workers=1)
+    back = load_fit(tmp_path / "res", "layer")
+    assert [c.name for c in back.checks] == ["exponent", "residual_structure",
+                                             "depth_consistency", "ppc"]
+    assert back.summary_row()["model_ok"] == summary["model_ok"].iloc[0] == False  # noqa: E712
+    assert back.summary_row()["flags"] == summary["flags"].iloc[0]

@@ -29,13 +29,13 @@ from palpbayes.report import (
     TABLE_ROWS_PER_PAGE,
     _methods_lines,
     _range,
-    _settings_lines,
     _shown,
     build_report,
     load_fit,
     load_results,
     summary_table,
 )
+from palpbayes.report.pages_title import _settings_lines
 from palpbayes.results import ResultsFolder
 from palpbayes.simulate import PAPER_MATERIALS, PAPER_TIPS
 from palpbayes.simulate_campaign import simulate_campaign

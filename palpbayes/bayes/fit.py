@@ -170,6 +170,8 @@ def fit_bayes_data(
         idata = _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed,
                           lsq, noise, prior, modes)
     flags = _flags(post, post_theta, prior)
+    for group in ("posterior", "sample_stats"):  # reloaded fits keep their flags
+        getattr(idata, group).attrs["flags"] = list(flags)
     return _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
                    like)
 
