@@ -26,8 +26,11 @@ pytestmark = pytest.mark.slow
 
 TIP = Tip("paraboloid", radius=0.0117)
 NU = 0.3
-#: proper prior used both to draw the truths and to fit (E* log-uniform 50-500 kPa, ...)
-PRIOR = PriorSpec(Estar_bounds=(5e4, 5e5), noise_pp=48e-3, log_sigma_sd=0.3, F0_sd=0.02)
+#: proper prior used both to draw the truths and to fit (E* log-uniform 50-500 kPa, ...); the
+#: F0 prior is centred on 0 explicitly (the default centre, the trace's pre-contact baseline, is
+#: read from the data, which a simulation-based calibration must not do)
+PRIOR = PriorSpec(Estar_bounds=(5e4, 5e5), noise_pp=48e-3, log_sigma_sd=0.3, F0_sd=0.02,
+                  F0_center=0.0)
 N_SBC = 240
 N_RANK = 99  # posterior draws per rank -> ranks 0..99
 OUT = os.environ.get("PALPBAYES_CALIBRATION_OUT")
