@@ -56,7 +56,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from . import __version__, plots
+from . import __version__, layout, plots
 from .bayes.sampler import MOVES
 from .errors import InputError
 from .pipeline import example_campaign_dir, run_pipeline
@@ -98,7 +98,7 @@ __all__ = [
 #: Page size [in]: A4 landscape.
 PAGE_SIZE = (11.69, 8.27)
 #: Default file name of the report inside a results folder.
-REPORT_NAME = "report.pdf"
+REPORT_NAME = layout.REPORT
 #: Resolution [dpi] of the rasterized parts (dense scatter, walker traces); text, axes,
 #: curves and bands stay vector graphics.
 RASTER_DPI = 110
@@ -683,7 +683,7 @@ def _representative(res: ResultsFolder, mat: str, tip: str) -> str | None:
     pooled = _pooled_of(res, mat, tip)
     if pooled is not None and isinstance(pooled.get("representative_trace"), str):
         tid = pooled["representative_trace"]
-        if (res.path / "posterior" / f"{tid}.nc").is_file():
+        if layout.posterior_path(res.path, tid).is_file():
             return tid
     b = res.bayes_rows()
     b = b[(b["material"].fillna("").astype(str) == mat) & (b["tip"].astype(str) == tip)]
@@ -695,7 +695,7 @@ def _representative(res: ResultsFolder, mat: str, tip: str) -> str | None:
     med = float(np.median(pick["E_pa"]))
     i = int(np.argmin(np.abs(pick["E_pa"].to_numpy(dtype=float) - med)))
     tid = str(pick["trace_id"].iloc[i])
-    return tid if (res.path / "posterior" / f"{tid}.nc").is_file() else None
+    return tid if layout.posterior_path(res.path, tid).is_file() else None
 
 
 def _gt_of(res: ResultsFolder, mat: str) -> tuple[float, float] | None:
@@ -903,7 +903,7 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
                            rows=rows))
     worst = None
     if len(b) and b["rhat_max"].notna().any():
-        cand = b[b["trace_id"].map(lambda t: (res.path / "posterior" / f"{t}.nc").is_file())]
+        cand = b[b["trace_id"].map(lambda t: layout.posterior_path(res.path, t).is_file())]
         if len(cand):
             worst = str(cand.loc[cand["rhat_max"].astype(float).idxmax(), "trace_id"])
     if worst is not None:
