@@ -56,9 +56,10 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from . import __version__, layout, plots
+from . import __version__, plots
 from .bayes.sampler import MOVES
 from .errors import InputError
+from .layout import REPORT, posterior_path
 from .pipeline import example_campaign_dir, run_pipeline
 from .results import (
     MATERIAL_ORDER,
@@ -98,7 +99,7 @@ __all__ = [
 #: Page size [in]: A4 landscape.
 PAGE_SIZE = (11.69, 8.27)
 #: Default file name of the report inside a results folder.
-REPORT_NAME = layout.REPORT
+REPORT_NAME = REPORT
 #: Resolution [dpi] of the rasterized parts (dense scatter, walker traces); text, axes,
 #: curves and bands stay vector graphics.
 RASTER_DPI = 110
@@ -683,7 +684,7 @@ def _representative(res: ResultsFolder, mat: str, tip: str) -> str | None:
     pooled = _pooled_of(res, mat, tip)
     if pooled is not None and isinstance(pooled.get("representative_trace"), str):
         tid = pooled["representative_trace"]
-        if layout.posterior_path(res.path, tid).is_file():
+        if posterior_path(res.path, tid).is_file():
             return tid
     b = res.bayes_rows()
     b = b[(b["material"].fillna("").astype(str) == mat) & (b["tip"].astype(str) == tip)]
@@ -695,7 +696,7 @@ def _representative(res: ResultsFolder, mat: str, tip: str) -> str | None:
     med = float(np.median(pick["E_pa"]))
     i = int(np.argmin(np.abs(pick["E_pa"].to_numpy(dtype=float) - med)))
     tid = str(pick["trace_id"].iloc[i])
-    return tid if layout.posterior_path(res.path, tid).is_file() else None
+    return tid if posterior_path(res.path, tid).is_file() else None
 
 
 def _gt_of(res: ResultsFolder, mat: str) -> tuple[float, float] | None:
@@ -903,7 +904,7 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
                            rows=rows))
     worst = None
     if len(b) and b["rhat_max"].notna().any():
-        cand = b[b["trace_id"].map(lambda t: layout.posterior_path(res.path, t).is_file())]
+        cand = b[b["trace_id"].map(lambda t: posterior_path(res.path, t).is_file())]
         if len(cand):
             worst = str(cand.loc[cand["rhat_max"].astype(float).idxmax(), "trace_id"])
     if worst is not None:
