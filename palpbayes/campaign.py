@@ -51,7 +51,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import __version__
+from . import __version__, layout
 from . import errors as _errors
 from .errors import FitError, InputError, OutputExistsError
 from .fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable, fit_trace
@@ -69,11 +69,11 @@ __all__ = [
     "OUTPUT_FILES",
 ]
 
-PARTIAL_DIR = ".partial"
-POSTERIOR_DIR = "posterior"
-#: Files a results folder may hold (removed by ``force=True`` before a new run).
-OUTPUT_FILES = ("summary.csv", "settings.json", "traces.csv", "comparison.csv", "pooled.csv",
-                "budget.csv")
+PARTIAL_DIR = layout.PARTIAL_DIR
+POSTERIOR_DIR = layout.POSTERIOR_DIR
+#: Files a results folder may hold that depend on the fit (removed by ``force=True`` before a
+#: new run; :data:`palpbayes.layout.FIT_OUTPUTS`).
+OUTPUT_FILES = layout.FIT_OUTPUTS
 
 
 # ----------------------------------------------------------------------------- source
@@ -160,7 +160,7 @@ def options_record(options: FitOptions) -> dict:
 
 def read_settings(out_dir: str | os.PathLike) -> dict:
     """``settings.json`` of a results folder as a dict ({} when absent)."""
-    path = Path(out_dir) / "settings.json"
+    path = Path(out_dir) / layout.SETTINGS
     if not path.is_file():
         return {}
     try:
@@ -281,7 +281,7 @@ def _fit_one(trace: IndentationTrace, options: FitOptions, out: str) -> dict:
     record = {"trace_id": trace.trace_id, "options": options_record(options)["repr"],
               "data_sha256": trace_fingerprint(trace), "rows": rows}
     write_text_atomic(json.dumps(record, indent=1),
-                      Path(out) / PARTIAL_DIR / f"{trace.trace_id}.json")
+                      layout.partial_path(out, trace.trace_id))
     return {"rows": rows}
 
 
@@ -297,7 +297,7 @@ def _raise_input(error: tuple[str, str]) -> None:
 
 def _read_partial(out: Path, trace: IndentationTrace, options: FitOptions) -> list[dict] | None:
     """The recorded rows of a finished trace, or None when it must be (re)fitted."""
-    path = out / PARTIAL_DIR / f"{trace.trace_id}.json"
+    path = layout.partial_path(out, trace.trace_id)
     if not path.is_file():
         return None
     try:
@@ -315,7 +315,7 @@ def _read_partial(out: Path, trace: IndentationTrace, options: FitOptions) -> li
         ok = r.get("E_pa") is not None and not (isinstance(r["E_pa"], float)
                                                 and math.isnan(r["E_pa"]))
         if r["method"] == "bayes" and ok and \
-                not (out / POSTERIOR_DIR / f"{trace.trace_id}.nc").is_file():
+                not layout.posterior_path(out, trace.trace_id).is_file():
             return None
     return rows
 
@@ -457,9 +457,9 @@ def fit_campaign(
                          "another --out") from None
     if force:
         _clear_outputs(out)
-    write_text_atomic(json.dumps(settings, indent=2) + "\n", out / "settings.json")
+    write_text_atomic(json.dumps(settings, indent=2) + "\n", out / layout.SETTINGS)
     write_csv_atomic(pd.DataFrame([_geometry_row(t) for t in traces],
-                                  columns=MANIFEST_COLUMNS), out / "traces.csv",
+                                  columns=MANIFEST_COLUMNS), out / layout.TRACES,
                      float_format="%.10g")
 
     done = {t.trace_id for t in traces if resume and _read_partial(out, t, options) is not None}
@@ -475,11 +475,11 @@ def fit_campaign(
         rows += recorded
     summary = pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
     summary = summary.sort_values(["trace_id", "method"], kind="stable").reset_index(drop=True)
-    write_csv_atomic(summary, out / "summary.csv")
+    write_csv_atomic(summary, out / layout.SUMMARY)
     if options.strict:
         failed = sorted({r["trace_id"] for r in rows
                          if str(r.get("flags") or "").startswith("fit failed")})
         if failed:
             raise FitError(f"{len(failed)} trace(s) failed in strict mode: {', '.join(failed)} "
-                           f"(see {out / 'summary.csv'})")
+                           f"(see {out / layout.SUMMARY})")
     return summary

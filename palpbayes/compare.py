@@ -63,9 +63,10 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from . import layout
 from .bayes.budget import BudgetSpec
 from .bayes.result import LEVEL
-from .campaign import POSTERIOR_DIR, read_settings
+from .campaign import read_settings
 from .compare_text import format_comparison
 from .errors import DataFileError, FitError
 from .fitdata import ModelSpec
@@ -82,8 +83,9 @@ from .reference import (
     paper_estimates,
 )
 
-__all__ = ["COMPARISON_COLUMNS", "STIFFENING_MIN_REST_TIMES", "Comparison", "compare_campaign",
-           "load_groundtruth", "paper_estimates", "format_comparison", "read_posterior"]
+__all__ = ["COMPARISON_COLUMNS", "POOLED_COLUMNS", "STIFFENING_MIN_REST_TIMES", "Comparison",
+           "compare_campaign", "load_groundtruth", "paper_estimates", "format_comparison",
+           "read_posterior"]
 
 COMPARISON_COLUMNS = [
     "material", "tip", "method", "n_traces", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa",
@@ -96,6 +98,17 @@ COMPARISON_COLUMNS = [
 #: A material × tip gets a stiffening fit when its Bayesian rows span this many rest times.
 STIFFENING_MIN_REST_TIMES = 3
 BUDGET_COLUMNS = ["material", "tip", "input", "distribution", "rel_sd_pct", "share_pct"]
+#: Columns of ``pooled.csv`` (:meth:`palpbayes.pooling.PooledResult.row` plus the group's
+#: representative trace); written as a header-only table when no group has Bayes rows.
+POOLED_COLUMNS = (
+    ["material", "tip", "n_traces"]
+    + [f"{stem}{q}{unit}" for stem, unit in (("mu", ""), ("tau", ""), ("E_stat", "_pa"),
+                                             ("E", "_pa"), ("E_mean", "_pa"), ("E_new", "_pa"),
+                                             ("factor", ""))
+       for q in ("", "_sd", "_lo", "_hi")]
+    + ["m_spread", "s_max", "tau_prior_sd", "rhat_max", "ess_min", "tau_max", "n_steps",
+       "n_draws", "converged", "flags", "representative_trace", "budget_applied"]
+)
 
 
 @dataclass
@@ -127,9 +140,9 @@ def _campaign_dir(res: Path, settings: dict) -> Path | None:
 
 
 def _read_summary(res: Path) -> pd.DataFrame:
-    path = res / "summary.csv"
+    path = res / layout.SUMMARY
     if not path.is_file():
-        raise DataFileError(res, "no summary.csv in this folder",
+        raise DataFileError(res, f"no {layout.SUMMARY} in this folder",
                             "give the --out folder of 'palpbayes fit' on a campaign manifest")
     df = pd.read_csv(path, dtype={"trace_id": str, "material": str, "tip": str,
                                   "method": str, "flags": str})
@@ -187,7 +200,7 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None, fiel
     material, tip = g["material"].iloc[0], g["tip"].iloc[0]
     ids, ms, ss, meds = [], [], [], []
     for tid, E in zip(g["trace_id"], g["E_pa"], strict=True):
-        path = res / POSTERIOR_DIR / f"{tid}.nc"
+        path = layout.posterior_path(res, tid)
         if not (np.isfinite(E) and path.is_file()):
             continue
         idata = read_posterior(path)
@@ -208,7 +221,7 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None, fiel
     i_rep = int(np.argmin(np.abs(np.asarray(ms) - np.median(ms))))
     if geometry is not None and ids[i_rep] in geometry.index:
         grow = geometry.loc[ids[i_rep]]
-        idata = read_posterior(res / POSTERIOR_DIR / f"{ids[i_rep]}.nc")
+        idata = read_posterior(layout.posterior_path(res, ids[i_rep]))
         attrs = posterior_attrs(idata)
         thick = grow.get("thickness_m") if fields.get("thickness_correction") else None
         model = ModelSpec(tip_from_row(grow), nu=float(attrs.get("nu", fields.get("nu", 0.3))),
@@ -291,8 +304,8 @@ def compare_campaign(
     budget = _budget_spec(fields)
     seed = int(settings.get("seed", 0) if seed is None else seed)
     geometry = None
-    if (res / "traces.csv").is_file():
-        geometry = pd.read_csv(res / "traces.csv", dtype={"trace_id": str, "material": str,
+    if (res / layout.TRACES).is_file():
+        geometry = pd.read_csv(res / layout.TRACES, dtype={"trace_id": str, "material": str,
                                                           "tip": str, "specimen": str})
         geometry = geometry.set_index("trace_id", drop=False)
     camp = _campaign_dir(res, settings)
@@ -333,18 +346,22 @@ def compare_campaign(
                     row["z_surf_err_mean_m"] = float(err.mean()) if err.size else np.nan
                 rows.append(row)
     if not rows:
-        raise FitError(f"{res / 'summary.csv'} has no lsq or bayes rows to compare")
+        raise FitError(f"{res / layout.SUMMARY} has no lsq or bayes rows to compare")
     comparison = pd.DataFrame(rows, columns=COMPARISON_COLUMNS)
-    pooled = pd.DataFrame(pooled_rows)
+    # header-only when no group has Bayes rows (an lsq-only fit): a file without columns is
+    # not a CSV table, and readers reject it
+    pooled = pd.DataFrame(pooled_rows) if pooled_rows else pd.DataFrame(columns=POOLED_COLUMNS)
     budget_tab = pd.concat(budgets, ignore_index=True) if budgets else pd.DataFrame(
         columns=BUDGET_COLUMNS)
     stiff = _stiffening(summary, materials, tips, seed)
     if write:
-        write_csv_atomic(comparison, res / "comparison.csv")
-        write_csv_atomic(pooled, res / "pooled.csv")
-        write_csv_atomic(budget_tab, res / "budget.csv")
+        write_csv_atomic(comparison, res / layout.COMPARISON)
+        write_csv_atomic(pooled, res / layout.POOLED)
+        write_csv_atomic(budget_tab, res / layout.BUDGET)
         if stiff is not None:
-            write_csv_atomic(stiff, res / "stiffening.csv")
+            write_csv_atomic(stiff, res / layout.STIFFENING)
+        else:  # no series with rest times now: a previous run's table would be stale
+            (res / layout.STIFFENING).unlink(missing_ok=True)
     return Comparison(comparison=comparison, pooled=pooled, budget=budget_tab, groundtruth=gt,
                       groundtruth_source=gt_source, results_dir=res, stiffening=stiff)
 

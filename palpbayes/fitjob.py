@@ -20,6 +20,7 @@ from .contact import check_tip_plausible
 from .contact.geometry import Tip
 from .errors import ConvergenceWarning, FitError, GeometryError, InputError
 from .fitdata import FitData, ModelSpec, prepare
+from .layout import posterior_file
 from .lsq import LSQResult, fit_lsq_data
 from .trace import IndentationTrace
 
@@ -314,5 +315,5 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
               "flag": c.flag} for c in bayes.checks])
         rows.append(with_hertz({**bayes.summary_row(), **meta}))
         if posterior_dir is not None:
-            path = bayes.to_netcdf(Path(posterior_dir) / f"{trace.trace_id}.nc")
+            path = bayes.to_netcdf(posterior_file(posterior_dir, trace.trace_id))
     return FitOutcome(rows=rows, lsq=lsq, bayes=bayes, posterior_path=path)

@@ -18,9 +18,8 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from . import __version__
+from . import __version__, layout
 from .errors import InputError, OutputExistsError
-from .results import PER_FILE_NAME, SUMMARY_NAME
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -40,7 +39,7 @@ def write_groundtruth(per_file: pd.DataFrame, per_group: pd.DataFrame,
     from .io.atomic import write_csv_atomic
 
     out = Path(out_dir)
-    a, b = out / PER_FILE_NAME, out / SUMMARY_NAME
+    a, b = out / layout.GROUNDTRUTH, out / layout.GROUNDTRUTH_SUMMARY
     write_csv_atomic(per_file, a, float_format="%.10g")
     write_csv_atomic(per_group, b, float_format="%.10g")
     return a, b

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from . import layout
 from .bayes.result import LEVEL
 from .errors import DataFileError
 
@@ -72,9 +73,9 @@ def load_groundtruth(spec: str | os.PathLike | None, campaign_dir: Path | None
     if spec is not None:
         p = Path(spec)
         if p.is_dir():
-            if (p / "groundtruth_summary.csv").is_file():
-                return _gt_from_file(p / "groundtruth_summary.csv"), str(
-                    p / "groundtruth_summary.csv")
+            if (p / layout.GROUNDTRUTH_SUMMARY).is_file():
+                return _gt_from_file(p / layout.GROUNDTRUTH_SUMMARY), str(
+                    p / layout.GROUNDTRUTH_SUMMARY)
             return analyse([p])[1], f"{p} (analysed)"
         if not p.is_file():
             raise DataFileError(p, "ground truth not found", "give a groundtruth_summary.csv, "

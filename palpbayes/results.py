@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from . import layout
 from .errors import DataFileError, InputError
 
 if TYPE_CHECKING:
@@ -44,9 +45,9 @@ __all__ = [
 ]
 
 #: Per-test ground-truth table of a results folder (``palpbayes groundtruth``).
-PER_FILE_NAME = "groundtruth.csv"
+PER_FILE_NAME = layout.GROUNDTRUTH
 #: Per-material ground-truth table of a results folder.
-SUMMARY_NAME = "groundtruth_summary.csv"
+SUMMARY_NAME = layout.GROUNDTRUTH_SUMMARY
 
 #: Order of tips in tables and figures (the paper's first; others after, as found).
 TIP_ORDER = ("flat", "sphere", "paraboloid", "cone", "power")
@@ -145,23 +146,23 @@ def load_results(path: str | os.PathLike) -> ResultsFolder:
         ``path`` has no ``summary.csv``.
     """
     p = Path(path)
-    summary = _read_csv(p / "summary.csv")
+    summary = _read_csv(p / layout.SUMMARY)
     if summary is None:
-        raise InputError(f"{p}: no summary.csv; run 'palpbayes fit' first, or give a campaign "
+        raise InputError(f"{p}: no {layout.SUMMARY}; run 'palpbayes fit' first, or give a campaign "
                          "folder or manifest to fit it")
     if summary.empty:
-        raise DataFileError(p / "summary.csv", "has no rows")
+        raise DataFileError(p / layout.SUMMARY, "has no rows")
     settings: dict = {}
-    if (p / "settings.json").is_file():
+    if (p / layout.SETTINGS).is_file():
         try:
-            settings = json.loads((p / "settings.json").read_text(encoding="utf-8"))
+            settings = json.loads((p / layout.SETTINGS).read_text(encoding="utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise DataFileError(p / "settings.json", f"not valid JSON ({exc})") from None
+            raise DataFileError(p / layout.SETTINGS, f"not valid JSON ({exc})") from None
     return ResultsFolder(
         path=p, summary=summary, settings=settings,
-        traces=_read_csv(p / "traces.csv"), comparison=_read_csv(p / "comparison.csv"),
-        pooled=_read_csv(p / "pooled.csv"), budget=_read_csv(p / "budget.csv"),
-        stiffening=_read_csv(p / "stiffening.csv"),
+        traces=_read_csv(p / layout.TRACES), comparison=_read_csv(p / layout.COMPARISON),
+        pooled=_read_csv(p / layout.POOLED), budget=_read_csv(p / layout.BUDGET),
+        stiffening=_read_csv(p / layout.STIFFENING),
         groundtruth=_read_csv(p / PER_FILE_NAME),
         groundtruth_summary=_read_csv(p / SUMMARY_NAME),
     )
@@ -193,7 +194,7 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
     from .pooling_inputs import fitdata_from_posterior, posterior_attrs, read_posterior
 
     res = results if isinstance(results, ResultsFolder) else load_results(results)
-    path = res.path / "posterior" / f"{trace_id}.nc"
+    path = layout.posterior_path(res.path, trace_id)
     if not path.is_file():
         raise InputError(f"{path}: no posterior for trace {trace_id!r}")
     idata = read_posterior(path)

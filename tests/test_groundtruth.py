@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 from pathlib import Path
 
 import numpy as np
@@ -28,21 +27,13 @@ from palpbayes.groundtruth import (
 from palpbayes.io.atomic import write_csv_atomic
 from palpbayes.io.instron import CompressionTest, read_compression_test
 
-#: The shared folder: $PALPBAYES_SHARED, else ../shared beside the repository (as on CI).
-SHARED = Path(os.environ.get("PALPBAYES_SHARED") or Path(__file__).resolve().parents[2]
-              / "shared")
-PHANTOMS = SHARED / "data" / "phantom-compression"
 #: published_moduli.csv label -> folder / material label of the exports
 FOLDER = {"EF50_12.5T": "EF50_12_5T", "EF30_0T": "EF30_0T", "EF10_50T": "EF10_50T"}
 
 
-def need_phantoms() -> Path:
-    if not (PHANTOMS / "published_moduli.csv").is_file():
-        where = ("$PALPBAYES_SHARED" if os.environ.get("PALPBAYES_SHARED")
-                 else "../shared beside the repository; set PALPBAYES_SHARED to override")
-        pytest.skip(f"real phantom data not found: looked for {PHANTOMS / 'published_moduli.csv'}"
-                    f" (from {where})")
-    return PHANTOMS
+def need_phantoms(shared_data) -> Path:
+    """The real phantoms in ../shared/data (skip when absent, fail on CI; tests/conftest.py)."""
+    return shared_data("phantom-compression", files=["published_moduli.csv"])
 
 
 # ----------------------------------------------------------------------------- synthetic
@@ -225,8 +216,8 @@ def test_unloading_branch_is_ignored():
 
 
 @pytest.fixture(scope="module")
-def phantom_tables():
-    root = need_phantoms()
+def phantom_tables(shared_data):
+    root = need_phantoms(shared_data)
     return analyse(root), pd.read_csv(root / "published_moduli.csv")
 
 
@@ -268,10 +259,10 @@ def test_real_phantoms_match_published_moduli(phantom_tables):
     assert (per_file.loc[per_file["material"] != "EF10_50T", "resid_acf1"] > 0.75).all()
 
 
-def test_real_phantoms_authors_convention(phantom_tables):
+def test_real_phantoms_authors_convention(phantom_tables, shared_data):
     """README: a plain linear fit over 0-5 % of measured strain lands within a few percent;
     the default analysis reports exactly that fit as E_plain."""
-    root = need_phantoms()
+    root = need_phantoms(shared_data)
     (per_file, summary), published = phantom_tables
     for _, pub in published.iterrows():
         folder = root / FOLDER[pub["sample_label"]]

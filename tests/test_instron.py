@@ -17,7 +17,6 @@ from palpbayes.io.instron import (
     read_compression_test,
 )
 
-PHANTOMS = Path(__file__).parents[2] / "shared" / "data" / "phantom-compression"
 AREA_50MM = math.pi * 0.05**2 / 4
 
 SIM_HEADER = ["White_S1", "Compression test;", "Block Width: 40mm;", "Block Length: 60mm;",
@@ -25,11 +24,9 @@ SIM_HEADER = ["White_S1", "Compression test;", "Block Width: 40mm;", "Block Leng
               "Machine: INSTRON 4502 (simulated);", "Load cell: 1kN;"]
 
 
-def need_phantoms() -> Path:
-    if not (PHANTOMS / "EF10_50T" / "EF10_50T_A1.csv").is_file():
-        pytest.skip(f"real phantom data not found at {PHANTOMS} (shared/data is not checked out "
-                    "next to the repository)")
-    return PHANTOMS
+def need_phantoms(shared_data) -> Path:
+    """The real phantoms in ../shared/data (skip when absent, fail on CI; tests/conftest.py)."""
+    return shared_data("phantom-compression", files=["EF10_50T/EF10_50T_A1.csv"])
 
 
 def write(path: Path, lines: list[str]) -> Path:
@@ -56,8 +53,8 @@ def sim_file(tmp_path: Path, name: str = "White_S1.csv", header=None, columns=No
 # ----------------------------------------------------------------------------- real files
 
 
-def test_real_instron_export_in_si():
-    path = need_phantoms() / "EF10_50T" / "EF10_50T_A1.csv"
+def test_real_instron_export_in_si(shared_data):
+    path = need_phantoms(shared_data) / "EF10_50T" / "EF10_50T_A1.csv"
     t = read_compression_test(path)
     assert isinstance(t, CompressionTest)
     assert t.specimen == "EF10_50T_A1" and t.material == "EF10_50T"
@@ -78,8 +75,8 @@ def test_real_instron_export_in_si():
                                atol=1e-2)
 
 
-def test_every_real_export_reads():
-    root = need_phantoms()
+def test_every_real_export_reads(shared_data):
+    root = need_phantoms(shared_data)
     files = sorted(root.glob("*/*.csv"))
     assert len(files) == 30
     for f in files:
@@ -90,8 +87,8 @@ def test_every_real_export_reads():
         assert t.load_n.max() > 100 and t.load_n[np.argmax(t.compression_m)] > 0
 
 
-def test_non_test_files_are_recognised():
-    root = need_phantoms()
+def test_non_test_files_are_recognised(shared_data):
+    root = need_phantoms(shared_data)
     assert looks_like_compression_test(root / "EF30_0T" / "EF30_0T_B2.csv")
     assert not looks_like_compression_test(root / "published_moduli.csv")
     assert not looks_like_compression_test(root / "README.md")

@@ -8,9 +8,7 @@ sensor, a short contact after a long approach and a drifting baseline must fit.
 
 from __future__ import annotations
 
-import os
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -31,14 +29,9 @@ PARA = Tip("paraboloid", radius=0.0117)
 
 
 @pytest.fixture(scope="module")
-def afm():
-    path = Path(__file__).resolve().parents[2] / "shared" / "data" / "afm-curves"
-    if not path.is_dir():
-        msg = f"real AFM curves not found at {path} (../shared/data beside the project)"
-        if os.environ.get("CI") == "true":
-            pytest.fail(msg)
-        pytest.skip(msg)
-    return path
+def afm(shared_data):
+    return shared_data("afm-curves", files=["references.csv", "force-save-example.csv",
+                                            "map1d-curve7.csv", "no-contact.csv"])
 
 
 @pytest.mark.parametrize("name", ["force-save-example", "map1d-curve7"])

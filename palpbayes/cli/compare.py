@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 
+from .. import layout
 from ..compare import compare_campaign
 
 __all__ = ["register", "run"]
@@ -48,5 +49,5 @@ def run(args: argparse.Namespace) -> int:
               "interval] (comparison.csv E_new_pa [E_new_lo_pa, E_new_hi_pa]); the pooled "
               "MATERIAL modulus (E_pa ± E_sd_pa) is the report's 'Bayes material E ± sd' column")
     res = result.results_dir
-    print(f"\nwrote {res / 'comparison.csv'}, {res / 'pooled.csv'} and {res / 'budget.csv'}")
+    print(f"\nwrote {res / layout.COMPARISON}, {res / layout.POOLED} and {res / layout.BUDGET}")
     return 0

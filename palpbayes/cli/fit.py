@@ -6,6 +6,7 @@ import argparse
 import math
 from pathlib import Path
 
+from .. import layout
 from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
 from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
 from ..contact import TIP_KINDS, Tip, check_nu, half_angle_from_degrees
@@ -204,7 +205,7 @@ def run(args: argparse.Namespace) -> int:
     if len(flagged):
         print(f"warning: {len(flagged)} Bayesian fit(s) not converged or flagged; see the "
               "'flags' column of summary.csv")
-    print(f"wrote {Path(args.out) / 'summary.csv'}")
+    print(f"wrote {Path(args.out) / layout.SUMMARY}")
     return 0
 
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .. import layout
 from ..errors import InputError
 from .fit import add_model_options, options_from_args
 
@@ -74,11 +75,11 @@ def resolve_input(value: str | None) -> tuple[str, Path]:
     if not p.exists():
         raise InputError(f"{p}: no such file or folder")
     if p.is_dir():
-        if (p / "summary.csv").is_file():
+        if (p / layout.SUMMARY).is_file():
             return "results", p
         if (p / "manifest.csv").is_file():
             return "campaign", p / "manifest.csv"
-        raise InputError(f"{p}: neither a results folder (summary.csv) nor a campaign folder "
+        raise InputError(f"{p}: neither a results folder ({layout.SUMMARY}) nor a campaign folder "
                          "(manifest.csv)")
     if is_manifest(p):
         return "campaign", p

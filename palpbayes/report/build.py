@@ -9,6 +9,7 @@ from pathlib import Path
 
 from .. import __version__
 from ..errors import InputError
+from ..layout import REPORT
 from ..results import ResultsFolder, load_results
 from .format import _shown, _truthy
 from .layout import _decorate, _new_page, _Page
@@ -24,7 +25,7 @@ from .tables import _flagged
 __all__ = ["REPORT_NAME", "RASTER_DPI", "ReportInfo", "build_report"]
 
 #: Default file name of the report inside a results folder.
-REPORT_NAME = "report.pdf"
+REPORT_NAME = REPORT
 #: Resolution [dpi] of the rasterized parts (dense scatter, walker traces); text, axes,
 #: curves and bands stay vector graphics.
 RASTER_DPI = 110

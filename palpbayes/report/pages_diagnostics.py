@@ -9,6 +9,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
+from ..layout import posterior_path
 from ..results import ResultsFolder, load_fit
 from .format import _fmt, _range, _truthy, _wrap, _yesno
 from .layout import TABLE_ROWS_PER_PAGE, _Page, _text_lines
@@ -115,7 +116,7 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
                            rows=rows))
     worst = None
     if len(b) and b["rhat_max"].notna().any():
-        cand = b[b["trace_id"].map(lambda t: (res.path / "posterior" / f"{t}.nc").is_file())]
+        cand = b[b["trace_id"].map(lambda t: posterior_path(res.path, t).is_file())]
         if len(cand):
             worst = str(cand.loc[cand["rhat_max"].astype(float).idxmax(), "trace_id"])
     if worst is not None:

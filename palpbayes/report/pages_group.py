@@ -10,6 +10,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
+from ..layout import posterior_path
 from ..results import ResultsFolder, load_fit
 from .format import _KPA, _fmt, _interval
 from .layout import _Page
@@ -22,7 +23,7 @@ def _representative(res: ResultsFolder, mat: str, tip: str) -> str | None:
     pooled = _pooled_of(res, mat, tip)
     if pooled is not None and isinstance(pooled.get("representative_trace"), str):
         tid = pooled["representative_trace"]
-        if (res.path / "posterior" / f"{tid}.nc").is_file():
+        if posterior_path(res.path, tid).is_file():
             return tid
     b = res.bayes_rows()
     b = b[(b["material"].fillna("").astype(str) == mat) & (b["tip"].astype(str) == tip)]
@@ -34,7 +35,7 @@ def _representative(res: ResultsFolder, mat: str, tip: str) -> str | None:
     med = float(np.median(pick["E_pa"]))
     i = int(np.argmin(np.abs(pick["E_pa"].to_numpy(dtype=float) - med)))
     tid = str(pick["trace_id"].iloc[i])
-    return tid if (res.path / "posterior" / f"{tid}.nc").is_file() else None
+    return tid if posterior_path(res.path, tid).is_file() else None
 
 
 def _gt_of(res: ResultsFolder, mat: str) -> tuple[float, float] | None:

@@ -1,0 +1,78 @@
+"""Shared test fixtures.
+
+Data too large (or not ours) to keep in the repository lives in ``../shared/data`` beside the
+repository checkout (``$PALPBAYES_SHARED/data`` when that variable is set).  Tests reach it only
+through the :func:`shared_data` fixture, so that a missing folder skips the test on a
+developer's machine but FAILS it on CI (``CI=true``), where a silent skip would hide that the
+real-data tests never ran.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+import pytest
+
+#: The shared folder: $PALPBAYES_SHARED, else ../shared beside the repository (as on CI).
+SHARED = Path(os.environ.get("PALPBAYES_SHARED")
+              or Path(__file__).resolve().parents[2] / "shared")
+#: Data sets in the shared folder (phantom-compression/, afm-curves/, ...).
+SHARED_DATA = SHARED / "data"
+
+
+def on_ci() -> bool:
+    """True when the environment variable ``CI`` is ``true`` (or ``1``/``yes``), as CI sets it."""
+    return os.environ.get("CI", "").strip().lower() in ("true", "1", "yes")
+
+
+def find_shared_data(path: str | os.PathLike, *, files: Iterable[str] = ()) -> Path:
+    """``SHARED_DATA / path``, checked; skips (locally) or fails (on CI) when it is absent.
+
+    The function behind the :func:`shared_data` fixture, for module-level helpers; see there.
+    """
+    target = SHARED_DATA / path
+    missing = [p for p in (target, *(target / f for f in files)) if not p.exists()]
+    if missing:
+        where = ("$PALPBAYES_SHARED/data" if os.environ.get("PALPBAYES_SHARED")
+                 else "../shared/data beside the repository; set PALPBAYES_SHARED to override")
+        msg = (f"shared test data not found: {missing[0]} (looked in {where})")
+        if on_ci():
+            pytest.fail(f"{msg}; CI=true, so a missing data set is an error, not a skip: "
+                        "check out the shared folder next to the repository", pytrace=False)
+        pytest.skip(msg)
+    return target
+
+
+@pytest.fixture(scope="session")
+def shared_data() -> Callable[..., Path]:
+    """Path to a data set under ``../shared/data``: skip when absent, FAIL when absent on CI.
+
+    The fixture returns a function ``shared_data(path, *, files=())``:
+
+    path
+        Relative to the shared data folder, e.g. ``"phantom-compression"`` or
+        ``"afm-curves/some_curve.txt"``.  Returns the absolute :class:`~pathlib.Path`.
+    files
+        Names that must exist inside ``path`` too (e.g. ``["published_moduli.csv"]``), so an
+        empty or partial checkout is treated as absent.
+
+    When ``path`` (or one of ``files``) does not exist the test is *skipped* with a reason
+    naming the missing path, or — when the environment variable ``CI`` is ``true`` — it
+    *fails* with a message saying so, because on CI the data must be there.
+
+    The shared folder is ``$PALPBAYES_SHARED/data`` when that variable is set, else
+    ``../shared/data`` beside the repository checkout (``SHARED_DATA`` in this module).
+
+    Usage (the fixture is session-scoped, so module- and session-scoped fixtures can use it)::
+
+        def test_curves(shared_data):
+            root = shared_data("afm-curves")
+            ...
+
+        @pytest.fixture(scope="module")
+        def phantoms(shared_data):
+            return shared_data("phantom-compression", files=["published_moduli.csv"])
+    """
+    return find_shared_data
