@@ -1,0 +1,76 @@
+"""Model-adequacy checks of a contact fit (DESIGN §3 point 7).
+
+A 3,840-point trace pins E* to a fraction of a percent, so a fit can be statistically tight and
+physically wrong.  Each check here compares the data with what the fitted contact law
+F = E*·s(d) + F0 (+ F1·(z - z_ref)), d = z_surf - z, implies, and returns a
+:class:`CheckResult` whose ``flag`` names the likely cause and the fix when it fails:
+
+``exponent``
+    Free power law F = k·d_+^m + F0 (+ F1·(z - z_ref)) fitted with z_surf and m free
+    (:func:`free_exponent_fit`) against the law's own exponent on the same depths (1 flat,
+    1.5 paraboloid, 2 cone; the local log-slope for the exact sphere or a thickness-corrected
+    law).  Stiffening with depth (m too high) points at finite thickness, strain-stiffening
+    or a sharper tip; softening at a blunter tip, series compliance or a soft start.
+``residual_structure``
+    Mean residual in depth bins (pre-contact and contact), chi² against the AR(1)-aware
+    variance of a bin mean; the pattern names drift/tilt, a gradual onset/adhesion, or a
+    wrong law shape.  Durbin-Watson and lag-1 autocorrelation of the residuals in depth order
+    are reported.
+``ppc``
+    Posterior-predictive check (Gelman, Meng & Stern 1996): the same binned chi² as the
+    discrepancy T(y, theta), replicated data drawn from the fitted noise model (iid or AR(1))
+    at each posterior draw; p = P(T(y_rep) >= T(y)).
+``depth_consistency``
+    E* refitted on the shallower half of the depth (z_surf, E*, F0 free) against E* over
+    all points; the standard error of the difference is the Hausman form
+    sqrt(se_shallow² - se_all²) for nested efficient estimators (Hausman 1978).
+
+**Thresholds.**  Standard errors of a long trace are tiny, so every check fails only when a
+statistical test *and* a physical effect size agree (:data:`THRESHOLDS`): exponent
+|m - m_law| > 3 se and > 3 % of m_law; binned residual chi² p < 0.01 and the largest bin mean
+> 0.2 sigma; posterior-predictive p < 0.01; depth consistency |E*_shallow/E*_all - 1| > 3 se
+and > 5 %.  They were calibrated on simulated traces (``tests/test_model_checks.py``).
+
+**Correlated noise.**  800 Hz force noise is autocorrelated.  The variance of the mean of n
+consecutive AR(1) samples with lag-1 coefficient phi and marginal sd sigma is
+(sigma²/n)·[(1+phi)/(1-phi) - 2·phi·(1-phi^n)/(n·(1-phi)²)] (e.g. Box & Jenkins); standard
+errors of fitted parameters are inflated by the long-run factor sqrt((1+phi)/(1-phi)).  phi is
+the noise's own lag-1 autocorrelation, best taken from the pre-contact baseline
+(:func:`noise_lag1`); without it, it is estimated from the residuals' first differences,
+phi = 1 + 2·corr(Δr_t, Δr_(t-1)) (exact for AR(1), and blind to smooth misfit).
+
+**Baseline reference.**  A linear baseline is F0 + F1·(z - z_ref) with z_ref = the highest z of
+the fitted samples (the start of the approach) unless ``z_ref`` is given: F0 is then the force
+where the approach starts.
+
+Pure numpy/scipy, no plotting.  Inputs are the fitted samples in time order (loading segment).
+
+Modules: :mod:`.core` (result type, thresholds, AR(1) factors, least-squares helpers),
+:mod:`.exponent`, :mod:`.residuals`, :mod:`.ppc`, :mod:`.depth` (one check each) and
+:mod:`.run` (:func:`run_checks`).
+"""
+
+from __future__ import annotations
+
+from .core import THRESHOLDS, TIP_EXPONENTS, CheckResult, ar1_mean_variance_factor, noise_lag1
+from .depth import depth_consistency_check
+from .exponent import exponent_check, free_exponent_fit, law_exponent
+from .ppc import posterior_predictive_check
+from .residuals import binned_residuals, residual_structure_check
+from .run import run_checks
+
+__all__ = [
+    "CheckResult",
+    "THRESHOLDS",
+    "TIP_EXPONENTS",
+    "ar1_mean_variance_factor",
+    "noise_lag1",
+    "law_exponent",
+    "free_exponent_fit",
+    "exponent_check",
+    "binned_residuals",
+    "residual_structure_check",
+    "posterior_predictive_check",
+    "depth_consistency_check",
+    "run_checks",
+]

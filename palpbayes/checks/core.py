@@ -1,0 +1,211 @@
+"""Shared pieces of the model-adequacy checks (:mod:`palpbayes.checks`).
+
+:class:`CheckResult`, :data:`THRESHOLDS`, the AR(1) noise factors
+(:func:`ar1_mean_variance_factor`, :func:`noise_lag1`), input validation, the linear
+least-squares and covariance helpers of the fits, and a tabulated shape function.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError
+from ..fitdata import ModelSpec
+
+#: Pass/fail thresholds (statistical and physical) of the checks; see :mod:`palpbayes.checks`.
+THRESHOLDS: dict[str, float] = {
+    "exponent_n_se": 3.0,        # |m - m_law| > 3 standard errors ...
+    "exponent_rel": 0.03,        # ... and > 3 % of m_law
+    "residual_alpha": 0.01,      # binned chi² p-value below 1 % ...
+    "residual_amp": 0.2,         # ... and the largest |bin mean| above 0.2 sigma
+    "ppc_alpha": 0.01,           # posterior-predictive p below 1 %
+    "depth_n_se": 3.0,           # |E*_shallow/E*_all - 1| > 3 standard errors ...
+    "depth_rel": 0.05,           # ... and > 5 %
+}
+
+#: Exponent m of each power-law tip family (for naming a wrong tip).
+TIP_EXPONENTS: dict[str, float] = {"flat": 1.0, "paraboloid": 1.5, "cone": 2.0}
+
+_MIN_BIN = 8  # fewest samples in a bin
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """Outcome of one adequacy check.
+
+    Attributes
+    ----------
+    name
+        ``"exponent"``, ``"residual_structure"``, ``"ppc"`` or ``"depth_consistency"``.
+    statistic
+        The check's number: fitted m, binned chi², posterior-predictive p-value, or
+        E*_shallow/E*_all.
+    passed
+        False when the check flags the model.
+    flag
+        ``""`` when passed, else one line naming the likely cause and the fix.
+    details
+        Numbers for tables (all SI).
+    """
+
+    name: str
+    statistic: float
+    passed: bool
+    flag: str
+    details: dict = field(default_factory=dict)
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+def _arrays(z, force) -> tuple[np.ndarray, np.ndarray]:
+    z = np.asarray(z, dtype=float).ravel()
+    f = np.asarray(force, dtype=float).ravel()
+    if z.shape != f.shape:
+        raise InputError(f"z ({z.size}) and force ({f.size}) differ in length")
+    if z.size < 20:
+        raise InputError(f"a model check needs at least 20 samples, got {z.size}")
+    if not (np.all(np.isfinite(z)) and np.all(np.isfinite(f))):
+        raise InputError("z and force must be finite")
+    return z, f
+
+
+def _acf1(x: np.ndarray) -> float:
+    x = np.asarray(x, dtype=float) - np.mean(x)
+    den = float(np.dot(x, x))
+    return float(np.dot(x[1:], x[:-1]) / den) if den > 0 else 0.0
+
+
+def _clip_phi(phi: float) -> float:
+    return float(np.clip(phi, -0.99, 0.999))
+
+
+def ar1_mean_variance_factor(n, phi: float) -> np.ndarray:
+    """Variance of the mean of n consecutive AR(1) samples, in units of sigma²/n [-].
+
+    g(n, phi) = (1+phi)/(1-phi) - 2·phi·(1-phi^n)/(n·(1-phi)²): 1 for white noise, tending to
+    the long-run factor (1+phi)/(1-phi) for n >> 1/(1-phi) (Box & Jenkins, AR(1) sample mean).
+
+    Parameters
+    ----------
+    n
+        Number of samples per mean (array or scalar, >= 1).
+    phi
+        Lag-1 autocorrelation, |phi| < 1.
+    """
+    n = np.asarray(n, dtype=float)
+    phi = _clip_phi(phi)
+    if phi == 0:
+        return np.ones_like(n)
+    return (1 + phi) / (1 - phi) - 2 * phi * (1 - phi**n) / (n * (1 - phi) ** 2)
+
+
+def _phi_from_differences(r: np.ndarray) -> float:
+    """AR(1) coefficient from the lag-1 correlation of first differences: phi = 1 + 2·rho_Δ."""
+    dr = np.diff(r)
+    if dr.size < 3:
+        return 0.0
+    return _clip_phi(1.0 + 2.0 * _acf1(dr))
+
+
+def noise_lag1(z, force, z_surf: float, *, margin: float = 0.05) -> float | None:
+    """Lag-1 autocorrelation [-] of the force noise from the pre-contact baseline.
+
+    Uses the samples above z_surf + margin·(z_surf - min z) (clear of a gradual onset), in time
+    order, after removing a straight line in time (drift); None with fewer than 32 of them.
+
+    Parameters
+    ----------
+    z, force
+        [m], [N] samples in time order.
+    z_surf
+        [m] Fitted surface height.
+    margin
+        Fraction of the contact depth kept clear above the surface.
+    """
+    z, f = _arrays(z, force)
+    dmax = max(z_surf - float(z.min()), 0.0)
+    sel = z > z_surf + margin * dmax
+    if sel.sum() < 32:
+        return None
+    y = f[sel]
+    t = np.arange(y.size, dtype=float)
+    y = y - np.polyval(np.polyfit(t, y, 1), t)
+    return _clip_phi(_acf1(y))
+
+
+def _design(z, dp_term, baseline: str, z_ref: float) -> np.ndarray:
+    cols = [dp_term, np.ones_like(z)]
+    if baseline == "linear":
+        cols.append(z - z_ref)
+    elif baseline != "constant":
+        raise InputError(f"baseline must be 'constant' or 'linear', got {baseline!r}")
+    return np.column_stack(cols)
+
+
+# Tall-skinny products go through einsum, not BLAS: a threaded BLAS on a loaded machine makes
+# a (16000 x 5)ᵀ(16000 x 5) product 100x slower than the arithmetic needs.
+def _gram(J: np.ndarray) -> np.ndarray:
+    return np.einsum("ij,ik->jk", J, J)
+
+
+def _tdot(J: np.ndarray, r: np.ndarray) -> np.ndarray:
+    return np.einsum("ij,i->j", J, r)
+
+
+def _lstsq(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Linear least squares (scaled normal equations; few columns); (coefficients, residuals)."""
+    scale = np.sqrt(np.einsum("ij,ij->j", X, X))
+    scale[scale == 0] = 1.0
+    Xs = X / scale
+    beta = np.linalg.lstsq(_gram(Xs), _tdot(Xs, y), rcond=None)[0] / scale
+    return beta, y - np.einsum("ij,j->i", X, beta)
+
+
+def _cov(J: np.ndarray, s2: float, infl: float) -> np.ndarray:
+    scale = np.sqrt(np.einsum("ij,ij->j", J, J))
+    scale[scale == 0] = 1.0
+    Js = J / scale
+    cov = np.linalg.pinv(_gram(Js)) / np.outer(scale, scale)
+    return cov * s2 * infl
+
+
+class _ShapeTable:
+    """s(d) and ds/dd of a model tabulated on d_i = d_top·(i/N)², linearly interpolated.
+
+    The exact shape function (e.g. Sneddon's sphere, solved by Halley iterations) is too slow
+    to call for every posterior draw and every step of a search; the table is exact at its
+    4097 nodes (denser near d = 0 where s is least smooth) and its interpolation error is below
+    1e-6·s(d_top) for the laws of :mod:`palpbayes.contact`.  Depths beyond d_top fall back to
+    the exact law.
+    """
+
+    def __init__(self, model: ModelSpec, d_top: float, n: int = 4096):
+        self.model = model
+        self.d_top = float(d_top)
+        self.grid = self.d_top * (np.arange(n + 1) / n) ** 2
+        self.s = model.shape(self.grid)
+        self.ds = model.shape_derivative(self.grid)
+
+    def shape(self, d) -> np.ndarray:
+        d = np.asarray(d, dtype=float)
+        out = np.interp(d, self.grid, self.s, left=0.0)
+        far = d > self.d_top
+        if np.any(far):
+            out[far] = self.model.shape(d[far])
+        return out
+
+    def shape_derivative(self, d) -> np.ndarray:
+        d = np.asarray(d, dtype=float)
+        out = np.interp(d, self.grid, self.ds, left=0.0)
+        far = d > self.d_top
+        if np.any(far):
+            out[far] = self.model.shape_derivative(d[far])
+        return out
+
+
+def _long_run(phi: float | None) -> float:
+    phi = 0.0 if phi is None else _clip_phi(phi)
+    return (1 + phi) / (1 - phi)

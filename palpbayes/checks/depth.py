@@ -1,0 +1,121 @@
+"""Depth-consistency check: E* over the shallower half of the depth against E* over all of
+it (Hausman 1978); see :mod:`palpbayes.checks`."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import optimize
+
+from ..errors import FitError
+from ..fitdata import ModelSpec
+from .core import THRESHOLDS, CheckResult, _arrays, _cov, _design, _long_run, _lstsq, _ShapeTable
+
+
+def _profile_law_fit(z, f, model, z_surf0: float, half_width: float,
+                     baseline: str, z_ref: float, phi: float | None) -> dict:
+    """F = E*·s(z_surf - z) + F0 (+F1·(z - z_ref)): Brent over z_surf, E*/F0/F1 linear."""
+    def fit_at(zs):
+        s = model.shape(zs - z)
+        X = _design(z, s, baseline, z_ref)
+        beta, r = _lstsq(X, f)
+        return beta, r, X
+
+    def rss(zs):
+        r = fit_at(zs)[1]
+        return float(np.dot(r, r))
+
+    res = optimize.minimize_scalar(rss, bounds=(z_surf0 - half_width, z_surf0 + half_width),
+                                   method="bounded", options={"xatol": 1e-6 * half_width})
+    zs = float(res.x)
+    beta, r, X = fit_at(zs)
+    dsdz = model.shape_derivative(zs - z)
+    J = np.column_stack([beta[0] * dsdz, X])
+    n, p = f.size, J.shape[1]
+    rs = float(np.dot(r, r))
+    cov = _cov(J, rs / max(n - p, 1), _long_run(phi))
+    return {"z_surf": zs, "estar": float(beta[0]), "estar_se": math.sqrt(max(cov[1, 1], 0.0)),
+            "F0": float(beta[1]), "rss": rs, "n": int(n)}
+
+
+def depth_consistency_check(z, force, model: ModelSpec, z_surf: float, *,
+                            baseline: str = "constant", z_ref: float | None = None,
+                            noise_lag1: float | None = None,
+                            n_se: float = THRESHOLDS["depth_n_se"],
+                            rel_tol: float = THRESHOLDS["depth_rel"]) -> CheckResult:
+    """E* over the shallower half of the depth against E* over all the depth.
+
+    Both fits are F = E*·s(z_surf - z) + F0 (+ F1·(z - z_ref)) with z_surf free (bounded
+    Brent search around the given one), E*, F0, F1 profiled linearly.  The shallow fit keeps
+    every sample above z_surf - d_max/2 (pre-contact included).  A law that describes the
+    material and geometry gives the same E* at all depths; finite thickness (substrate
+    effect), strain stiffening, a sharper tip or a gradual onset make the shallow E* lower
+    (simulated: 0.94 for the 30 mm layer, 0.76 for a cone fitted as a paraboloid, 0.96-0.98 for
+    a 20-50 mN onset), a blunter tip, series compliance or yielding make it higher.  se of
+    the difference (Hausman 1978, nested efficient estimators): sqrt(se_shallow² - se_all²)
+    (floored at se_shallow/2), AR(1)-inflated with ``noise_lag1``.  Fails when |ratio - 1| >
+    ``n_se``·se **and** > ``rel_tol``.  A flat punch on a finite layer keeps F ∝ d (the Hayes
+    factor does not depend on depth), so neither this check nor the exponent can see it.
+
+    Parameters
+    ----------
+    z, force
+        [m], [N] fitted samples.
+    model
+        The fitted contact model.
+    z_surf
+        [m] Fitted surface height.
+    baseline, z_ref
+        Baseline of the fit and its reference height [m] (default highest z).
+    noise_lag1
+        Noise lag-1 autocorrelation.
+    n_se, rel_tol
+        Statistical and physical thresholds.
+
+    Returns
+    -------
+    CheckResult
+        ``statistic`` = E*_shallow/E*_all; ``details``: ``estar_all``, ``estar_shallow``
+        [Pa], their se, ``ratio``, ``ratio_se``, ``z_surf_all``, ``z_surf_shallow`` [m],
+        ``d_half`` [m].
+    """
+    z, f = _arrays(z, force)
+    z_ref = float(z.max()) if z_ref is None else float(z_ref)
+    dmax = z_surf - float(z.min())
+    if not dmax > 0:
+        raise FitError("the surface lies below every sample: no contact to check")
+    hw = 0.25 * dmax
+    table = _ShapeTable(model, 1.5 * dmax)
+    full = _profile_law_fit(z, f, table, z_surf, hw, baseline, z_ref, noise_lag1)
+    d_half = 0.5 * (full["z_surf"] - float(z.min()))
+    sel = z >= full["z_surf"] - d_half
+    if np.count_nonzero(sel & (z < full["z_surf"])) < 10:
+        raise FitError("too few samples in the shallow half of the contact")
+    shallow = _profile_law_fit(z[sel], f[sel], table, full["z_surf"], 0.5 * d_half, baseline,
+                               z_ref, noise_lag1)
+    ratio = shallow["estar"] / full["estar"]
+    se_diff = math.sqrt(max(shallow["estar_se"] ** 2 - full["estar_se"] ** 2,
+                            0.25 * shallow["estar_se"] ** 2))
+    ratio_se = se_diff / full["estar"]
+    dev = ratio - 1.0
+    failed = abs(dev) > n_se * ratio_se and abs(dev) > rel_tol
+    details = {"estar_all": full["estar"], "estar_all_se": full["estar_se"],
+               "estar_shallow": shallow["estar"], "estar_shallow_se": shallow["estar_se"],
+               "ratio": ratio, "ratio_se": ratio_se, "z_surf_all": full["z_surf"],
+               "z_surf_shallow": shallow["z_surf"], "d_half": d_half, "rel_tol": rel_tol,
+               "n_se": n_se}
+    flag = ""
+    if failed:
+        head = (f"E* over the shallow half = {ratio:.3f} ± {ratio_se:.3f} × E* over all "
+                "depths")
+        if dev < 0:
+            cause = ("finite thickness -> --thickness/--finite-thickness" if model.thickness
+                     is None else "thickness under-corrected (check --thickness, bonded)")
+            flag = (f"{head}: apparent modulus rises with depth ({cause}, strain-stiffening "
+                    "material, a gradual onset before the surface, or wrong tip sharper than "
+                    "the law)")
+        else:
+            flag = (f"{head}: apparent modulus falls with depth (wrong tip blunter than the "
+                    "law, series compliance of robot/sensor, or yielding)")
+    return CheckResult("depth_consistency", float(ratio), not failed, flag, details)

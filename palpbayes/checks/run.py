@@ -1,0 +1,81 @@
+"""All adequacy checks of one fit (:func:`run_checks`); see :mod:`palpbayes.checks`."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..fitdata import ModelSpec
+from .core import CheckResult, _arrays, _ShapeTable, noise_lag1
+from .depth import depth_consistency_check
+from .exponent import exponent_check
+from .ppc import posterior_predictive_check
+from .residuals import residual_structure_check
+
+
+def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: float,
+               f1: float = 0.0, sigma: float, draws: dict | None = None,
+               baseline_lag1: float | None = None, baseline: str | None = None,
+               z_ref: float | None = None,
+               rng: np.random.Generator | int | None = None) -> list[CheckResult]:
+    """Run every adequacy check on one fit.
+
+    Model force: mu(z) = E*·s(z_surf - z) + F0 + F1·(z - z_ref), z_ref = highest z unless
+    given.  Runs the exponent, residual-structure and depth-consistency checks, and the
+    posterior-predictive check when ``draws`` are given.
+
+    Parameters
+    ----------
+    z, force
+        [m], [N] fitted samples in time order.
+    model
+        The fitted contact model.
+    z_surf, estar, f0, f1, sigma
+        Point estimates (posterior medians): [m], [Pa], [N], [N/m], [N].
+    draws
+        Optional posterior draws: dict of equal-length arrays ``E_star`` [Pa], ``z_surf``
+        [m], ``F0`` [N], ``sigma`` [N], optional ``F1`` [N/m] and ``phi``.
+    baseline_lag1
+        Lag-1 autocorrelation of the noise; default the fit's median ``phi`` if drawn, else
+        :func:`noise_lag1` of the pre-contact samples, else estimated from the residuals.
+    baseline
+        ``"constant"`` or ``"linear"``; default linear when f1 != 0 or ``F1`` is drawn.
+    z_ref
+        [m] Linear-baseline reference height.
+    rng
+        Generator or seed for the posterior-predictive replicates.
+
+    Returns
+    -------
+    list of CheckResult
+        In the order exponent, residual_structure, depth_consistency[, ppc].
+    """
+    z, f = _arrays(z, force)
+    z_ref = float(z.max()) if z_ref is None else float(z_ref)
+    if baseline is None:
+        baseline = "linear" if (f1 != 0 or (draws is not None and "F1" in draws)) else "constant"
+    phi = baseline_lag1
+    if phi is None and draws is not None and "phi" in draws:
+        phi = float(np.median(draws["phi"]))
+    if phi is None:
+        phi = noise_lag1(z, f, z_surf)
+    mu = estar * model.shape(z_surf - z) + f0 + f1 * (z - z_ref)
+    out = [
+        exponent_check(z, f, model, z_surf, baseline=baseline, z_ref=z_ref, noise_lag1=phi),
+        residual_structure_check(z, f - mu, z_surf, sigma, baseline_lag1=phi),
+        depth_consistency_check(z, f, model, z_surf, baseline=baseline, z_ref=z_ref,
+                                noise_lag1=phi),
+    ]
+    if draws is not None:
+        es = np.asarray(draws["E_star"], dtype=float)
+        zs = np.asarray(draws["z_surf"], dtype=float)
+        f0s = np.asarray(draws["F0"], dtype=float)
+        f1s = np.asarray(draws.get("F1", np.zeros_like(es)), dtype=float)
+        keep = np.linspace(0, es.size - 1, min(es.size, 200)).round().astype(int)
+        table = _ShapeTable(model, 1.5 * (float(np.max(zs[keep])) - float(z.min())))
+        curves = (es[keep, None] * table.shape(zs[keep, None] - z[None, :])
+                  + f0s[keep, None] + f1s[keep, None] * (z - z_ref)[None, :])
+        sig = np.asarray(draws["sigma"], dtype=float)[keep]
+        ph = np.asarray(draws["phi"], dtype=float)[keep] if "phi" in draws else None
+        out.append(posterior_predictive_check(z, f, curves, sig, phi=ph, rng=rng,
+                                              z_surf=z_surf))
+    return out
