@@ -287,8 +287,8 @@ def prepare(
     base = estimate_baseline(z, f)
     if f_unc is None:
         if np.ptp(f) == 0:
-            raise NoContactError(f"{source}: no contact: the force is constant "
-                                 f"({format_force(f[0])}) over the whole loading")
+            raise NoContactError(f"{source}: no contact: the force never leaves its constant "
+                                 f"value ({format_force(f[0])}) over the whole loading")
         f_unc = noise_from_baseline(base, source)
     z_c = _contact_onset(*first_passage(z, f - (base.level if tare else 0.0)), f_unc,
                          base.shifted(-base.level) if tare else base, source)

@@ -14,7 +14,6 @@ independent set of seeds gave 1/40 per cell (residual_structure, with ppc under 
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -237,7 +236,8 @@ def test_ppc_fails_for_wrong_law_passes_for_right_one():
     assert "posterior-predictive" in bad["ppc"].flag
 
 
-def test_run_checks_fast_on_16000_points():
+def test_run_checks_on_16000_points():
+    """A long trace passes every check (timing: benchmarks/bench_real.py)."""
     tr = simulate_trace(E_WHITE, TIPS["sphere"], nu=0.3, thickness=0.03, rng=1, rate=3333.3)
     lo = tr.loading_segment()
     z, f = lo.z, lo.force
@@ -246,13 +246,7 @@ def test_run_checks_fast_on_16000_points():
     p = _fit(z, f, model)
     draws = _laplace_draws(z, model, p, 0.0, np.random.default_rng(0))
     kw = dict(z_surf=p["z_surf"], estar=p["estar"], f0=p["f0"], sigma=p["sigma"])
-    C.run_checks(z, f, model, **kw)  # warm up
-    best = math.inf
-    for _ in range(3):  # CPU time of this process: robust to other jobs on the machine
-        t0 = time.process_time()
-        res = C.run_checks(z, f, model, draws=draws, rng=0, **kw)
-        best = min(best, time.process_time() - t0)
+    res = C.run_checks(z, f, model, draws=draws, rng=0, **kw)
     assert [r.name for r in res] == ["exponent", "residual_structure", "depth_consistency",
                                      "ppc"]
     assert all(r.passed for r in res), [r.flag for r in res]
-    assert best < 0.5

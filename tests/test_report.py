@@ -292,16 +292,18 @@ def test_settings_and_methods_print_forces_and_depths_with_a_prefix(fitted):
     def text(lines) -> str:
         return " ".join(t for _, t in lines)
 
-    assert "(F_unc = 48 mN)" in text(_methods_lines(res))
+    # the fixture gives no noise spec: it is read from each trace's baseline, and said so
+    auto = "read from each trace's pre-contact baseline (6 sd)"
+    assert f"(F_unc = {auto};" in text(_methods_lines(res))
     base = text(_settings_lines(res))
-    assert "F_unc = 48 mN;" in base and "sensor noise 48 mN peak-to-peak" in base
+    assert f"F_unc = {auto};" in base and f"sensor noise {auto} peak-to-peak" in base
     changed = copy.deepcopy(res.settings)
     opts = changed["options_fields"]
     opts.update(f_unc=3e-10, max_depth=2e-6)
     opts["priors"] = {**(opts.get("priors") or {}), "noise_pp": 2.5e-10}
     res.settings = changed
     methods, settings = text(_methods_lines(res)), text(_settings_lines(res))
-    assert "(F_unc = 300 pN)" in methods
+    assert "(F_unc = 300 pN;" in methods
     assert "Only samples shallower than 2 µm are fitted." in methods
     assert "F_unc = 300 pN; fit fraction" in settings and "max depth 2 µm" in settings
     assert "sensor noise 250 pN peak-to-peak" in settings

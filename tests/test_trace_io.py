@@ -175,7 +175,9 @@ def test_messages_print_forces_and_lengths_with_a_fitting_prefix():
     from palpbayes.io.trace_csv import check_plausible
 
     afm = make_afm_trace()
-    with pytest.raises(DataFileError, match=r"^afm: force is negative \(-2\d\d pN\) at the "):
+    with pytest.raises(DataFileError,
+                       match=r"^afm: force falls \d\d\d pN below its pre-contact baseline \("
+                             r"-?\d+(\.\d+)? pN\) at the deepest"):
         check_plausible(replace(afm, force=-afm.force))
     tr = make_trace()
     with pytest.raises(DataFileError, match=r"\|force\| reaches 1\.11 kN, implausible"):
