@@ -7,7 +7,6 @@ the per-trace netCDF when ``posterior_dir`` is given (written atomically).
 
 from __future__ import annotations
 
-import json
 import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -15,10 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from .bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
-from .checks import CheckResult, run_checks
+from .checks import CheckResult, check_fit
 from .contact import check_tip_plausible
 from .contact.geometry import Tip
-from .errors import ConvergenceWarning, FitError, GeometryError, InputError
+from .errors import ConvergenceWarning, FitError, GeometryError
 from .fitdata import FitData, ModelSpec, prepare
 from .layout import posterior_file
 from .lsq import LSQResult, fit_lsq_data
@@ -210,25 +209,6 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     return data
 
 
-def model_checks(data: FitData, *, z_surf: float, estar: float, f0: float, f1: float = 0.0,
-                 sigma: float, baseline: str = "constant", z_ref: float | None = None,
-                 draws: dict | None = None, seed: int = 0) -> list[CheckResult]:
-    """Model-adequacy checks of one fit (:func:`palpbayes.checks.run_checks`) on its points.
-
-    The noise's own lag-one correlation is read from the pre-contact baseline when it is
-    reliable, so correlated sensor noise is not mistaken for misfit.  A trace too short for
-    the checks gets none (``model_ok`` is then empty), not an error.
-    """
-    base = data.baseline
-    lag1 = base.lag1 if base is not None and base.reliable else None
-    try:
-        return run_checks(data.z, data.force, data.model, z_surf=z_surf, estar=estar, f0=f0,
-                          f1=f1, sigma=sigma, draws=draws, baseline_lag1=lag1,
-                          baseline=baseline, z_ref=z_ref, rng=seed)
-    except InputError:
-        return []
-
-
 def check_columns(checks: list[CheckResult], flags: str) -> dict:
     """``model_ok``, ``m_free`` and the failed checks' flags appended to ``flags``."""
     failed = [c.flag for c in checks if not c.passed]
@@ -241,8 +221,10 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
               posterior_dir: str | Path | None = None) -> FitOutcome:
     """Fit one trace with the requested method(s).
 
-    The least-squares fit always runs (the Bayesian walkers start from it); its row is
-    returned for ``method`` "lsq" or "both".
+    The least-squares fit always runs (its E is recorded beside the posterior); its row is
+    returned for ``method`` "lsq" or "both", with the model checks (:mod:`palpbayes.checks`)
+    of its own fit.  A least-squares failure (the paper's model has no offset) does not stop
+    the Bayesian fit: the row says why.
 
     For tip ``sphere`` (the exact Sneddon law, DESIGN §1) the paper's choice is also fitted:
     least squares with the paraboloid (Hertz) law at the sphere's radius on the same points
@@ -286,7 +268,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     seed = trace_seed(options.seed, trace.trace_id)
     if options.method in ("lsq", "both"):
         if lsq is not None:  # the paper's model: no offset term
-            lsq_row.update(check_columns(model_checks(
+            lsq_row.update(check_columns(check_fit(
                 data, z_surf=lsq.z_surf, estar=lsq.Estar, f0=0.0, sigma=lsq.rms, seed=seed),
                 lsq_row.get("flags", "")))
         rows.append(with_hertz({**lsq_row, **meta}))
@@ -302,17 +284,6 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
                 settings=options.settings, seed=seed,
                 strict=options.strict, trace_id=trace.trace_id, lsq=lsq,
             )
-        med = bayes.median_theta()
-        post = bayes.idata.posterior
-        draws = {n: np.asarray(post[n]).ravel() for n in
-                 ("E_star", "z_surf", "F0", "F1", "sigma", "phi") if n in post}
-        bayes.checks = model_checks(
-            data, z_surf=med["z_surf"], estar=med["E_star"], f0=med["F0"],
-            f1=med.get("F1", 0.0), sigma=med["sigma"], baseline=bayes.baseline,
-            z_ref=bayes.z_ref, draws=draws, seed=seed)
-        bayes.idata.posterior.attrs["model_checks"] = json.dumps(
-            [{"name": c.name, "statistic": float(c.statistic), "passed": bool(c.passed),
-              "flag": c.flag} for c in bayes.checks])
         rows.append(with_hertz({**bayes.summary_row(), **meta}))
         if posterior_dir is not None:
             path = bayes.to_netcdf(posterior_file(posterior_dir, trace.trace_id))

@@ -171,3 +171,13 @@ def test_real_curves_carry_named_misfit_flags(afm, tmp_path):
     row = pd.read_csv(out / "summary.csv").iloc[0]
     assert not row["model_ok"]
     assert "onset" in row["flags"], row["flags"]
+
+
+def test_fit_bayes_itself_carries_the_model_checks():
+    """API users get the checks too, not only the command line."""
+    tr = simulate_trace(111e3, PARA, thickness=0.03, depth=3e-3, finite_thickness=True, rng=3)
+    res = fit_bayes(tr, seed=1, budget=BudgetSpec.none())
+    assert [c.name for c in res.checks] == ["exponent", "residual_structure",
+                                            "depth_consistency", "ppc"]
+    assert res.summary_row()["model_ok"] is False
+    assert res.converged  # sampling is fine: the misfit is a separate verdict

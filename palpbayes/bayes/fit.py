@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import json
 import warnings
 from dataclasses import replace
 
 import numpy as np
 
 from .. import __version__
+from ..checks import check_fit
 from ..errors import ConvergenceError, ConvergenceWarning, FitError
 from ..fitdata import FitData, ModelSpec, prepare
 from ..lsq import LSQResult, fit_lsq_data
@@ -138,7 +140,7 @@ def fit_bayes_data(
     like = TraceLikelihood(data, noise, tabulate=tabulate, baseline=baseline,
                            z_ref=prior.z_ref, centers=centers)
     ss = np.random.SeedSequence(seed)
-    init_ss, sampler_ss, budget_ss = ss.spawn(3)
+    init_ss, sampler_ss, budget_ss, check_ss = ss.spawn(4)  # first three as before
 
     def log_prob(theta: np.ndarray) -> np.ndarray:
         lp = prior.log_prior(theta)
@@ -170,10 +172,25 @@ def fit_bayes_data(
         idata = _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed,
                           lsq, noise, prior, modes)
     flags = _flags(post, post_theta, prior)
-    for group in ("posterior", "sample_stats"):  # reloaded fits keep their flags
-        getattr(idata, group).attrs["flags"] = list(flags)
+    checks = _model_checks(post, data, like, int(check_ss.generate_state(1)[0]))
+    # reloaded fits keep their flags and checks (palpbayes.results.load_fit)
+    idata.posterior.attrs["flags"] = list(flags)
+    idata.posterior.attrs["model_checks"] = json.dumps(
+        [{"name": c.name, "statistic": float(c.statistic), "passed": bool(c.passed),
+          "flag": c.flag} for c in checks])
     return _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
-                   like)
+                   like, checks)
+
+
+def _model_checks(post: dict, data: FitData, like: TraceLikelihood, seed: int) -> list:
+    """Model-adequacy checks (:func:`palpbayes.checks.check_fit`) at the posterior medians,
+    with the posterior-predictive check on the draws."""
+    draws = {n: np.ravel(post[n]) for n in ("E_star", "z_surf", "F0", "F1", "sigma", "phi")
+             if n in post}
+    med = {n: float(np.median(x)) for n, x in draws.items()}
+    return check_fit(data, z_surf=med["z_surf"], estar=med["E_star"], f0=med["F0"],
+                     f1=med.get("F1", 0.0), sigma=med["sigma"], baseline=like.baseline,
+                     z_ref=like.z_ref, draws=draws, seed=seed)
 
 
 def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, lsq, noise,
@@ -215,7 +232,8 @@ def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, 
     )
 
 
-def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags, like):
+def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags, like,
+            checks):
     """Diagnostics, flags and the warning (or error in strict mode)."""
     diag_names = [n for n in ("E_star", "z_surf", "sigma", "F0", "F1", "phi", "nu_t")
                   if n in post]
@@ -223,7 +241,7 @@ def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
                                chains.n_steps, chains.hit_cap)
     result = BayesResult(idata=idata, diagnostics=diag, budget=bud, data=data, noise=noise,
                          trace_id=trace_id, lsq=lsq, warnings=flags,
-                         baseline=like.baseline, z_ref=like.z_ref)
+                         baseline=like.baseline, z_ref=like.z_ref, checks=checks)
     if not result.converged:
         problems = "; ".join(result.warnings + diag.problems())
         msg = f"{trace_id}: Bayesian fit flagged as not converged: {problems}"

@@ -57,7 +57,7 @@ from .depth import depth_consistency_check
 from .exponent import exponent_check, free_exponent_fit, law_exponent
 from .ppc import posterior_predictive_check
 from .residuals import binned_residuals, residual_structure_check
-from .run import run_checks
+from .run import check_fit, run_checks
 
 __all__ = [
     "CheckResult",
@@ -73,4 +73,5 @@ __all__ = [
     "posterior_predictive_check",
     "depth_consistency_check",
     "run_checks",
+    "check_fit",
 ]

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..fitdata import ModelSpec
+from ..errors import InputError
+from ..fitdata import FitData, ModelSpec
 from .core import CheckResult, _arrays, _ShapeTable, noise_lag1
 from .depth import depth_consistency_check
 from .exponent import exponent_check
@@ -79,3 +80,36 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
         out.append(posterior_predictive_check(z, f, curves, sig, phi=ph, rng=rng,
                                               z_surf=z_surf))
     return out
+
+
+def check_fit(data: FitData, *, z_surf: float, estar: float, f0: float, f1: float = 0.0,
+              sigma: float, baseline: str = "constant", z_ref: float | None = None,
+              draws: dict | None = None, seed: int = 0) -> list[CheckResult]:
+    """:func:`run_checks` on the points of a prepared fit.
+
+    The noise's own lag-one correlation is read from the pre-contact baseline
+    (:mod:`palpbayes.baseline`) when it is reliable, so correlated sensor noise is not taken
+    for misfit.  A trace too short for the checks gets none (an empty list), not an error.
+
+    Parameters
+    ----------
+    data
+        The fitted points and their contact model.
+    z_surf, estar, f0, f1, sigma
+        [m], [Pa], [N], [N/m], [N] the fit's surface, modulus, baseline and noise.
+    baseline, z_ref
+        Baseline model and the linear baseline's reference height [m].
+    draws
+        Posterior draws (``E_star``, ``z_surf``, ``F0``, ``sigma`` [, ``F1``, ``phi``]) for
+        the posterior-predictive check; None skips it.
+    seed
+        Seed of the replicated data.
+    """
+    base = data.baseline
+    lag1 = base.lag1 if base is not None and base.reliable else None
+    try:
+        return run_checks(data.z, data.force, data.model, z_surf=z_surf, estar=estar, f0=f0,
+                          f1=f1, sigma=sigma, draws=draws, baseline_lag1=lag1,
+                          baseline=baseline, z_ref=z_ref, rng=seed)
+    except InputError:
+        return []
