@@ -20,6 +20,7 @@ from scipy import stats
 from palpbayes.bayes import BudgetSpec, PriorSpec, fit_bayes
 from palpbayes.contact import Tip
 from palpbayes.errors import ConvergenceWarning
+from palpbayes.noise import sigma_from_pp
 from palpbayes.simulate import simulate_trace
 
 pytestmark = pytest.mark.slow
@@ -39,8 +40,8 @@ OUT = os.environ.get("PALPBAYES_CALIBRATION_OUT")
 def _sbc_one(i: int) -> dict:
     rng = np.random.default_rng([2018, i])
     log_e = rng.uniform(np.log(5e4), np.log(5e5))
-    sigma = np.exp(rng.normal(np.log(PRIOR.sigma_center), PRIOR.log_sigma_sd))
-    f0 = rng.normal(0.0, PRIOR.f0_sd)
+    sigma = np.exp(rng.normal(np.log(sigma_from_pp(PRIOR.noise_pp)), PRIOR.log_sigma_sd))
+    f0 = rng.normal(PRIOR.F0_center, PRIOR.F0_sd)
     z_s = rng.uniform(0.0995, 0.1005)
     estar = np.exp(log_e)
     tr = simulate_trace(estar * (1 - NU**2), TIP, nu=NU, z_surf=z_s, depth=1.2e-3,
