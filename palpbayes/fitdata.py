@@ -34,14 +34,16 @@ import numpy as np
 from .baseline import MIN_BASELINE_POINTS, Baseline, estimate_baseline
 from .contact import Tip, check_nu, exponent, shape
 from .errors import InputError, NoContactError
+from .noise import PAPER_NOISE_PP
 from .trace import IndentationTrace
 from .units import format_force
 
 __all__ = ["ModelSpec", "FitData", "prepare", "first_passage", "DEFAULT_F_UNC",
            "default_fit_fraction", "noise_from_baseline", "onset_reference"]
 
-#: The paper's sensor uncertainty F_unc [N]: 48 mN peak-to-peak.
-DEFAULT_F_UNC = 48e-3
+#: The paper's sensor uncertainty F_unc [N]: 48 mN peak-to-peak
+#: (:data:`palpbayes.noise.PAPER_NOISE_PP`).
+DEFAULT_F_UNC = PAPER_NOISE_PP
 
 
 def default_fit_fraction(tip: Tip) -> float:

@@ -7,6 +7,7 @@ so they do not import each other for these).  Every problem is raised as
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from pathlib import Path
@@ -20,7 +21,7 @@ from ..trace import IndentationTrace
 from ..units import format_force, format_length
 
 __all__ = ["SEPARATORS", "WHITESPACE", "sniff_delimiter", "is_decimal_comma", "numeric_column",
-           "check_force_sign", "check_plausible", "MAX_Z_SPAN_M", "MAX_FORCE_N"]
+           "check_force_sign", "check_plausible", "parse_bool", "MAX_Z_SPAN_M", "MAX_FORCE_N"]
 
 #: Plausibility limits: a palpation moves the tip by less than this [m] ...
 MAX_Z_SPAN_M = 0.5
@@ -73,6 +74,17 @@ def sniff_delimiter(path: str | os.PathLike) -> str:
 def is_decimal_comma(value) -> bool:
     """True for a string cell like ``'0,5'`` (a number written with a decimal comma)."""
     return isinstance(value, str) and bool(_DECIMAL_COMMA.match(value))
+
+
+def parse_bool(value) -> bool:
+    """A boolean cell of a CSV (or a value read from one): ``True``, ``"true"``/``"True"``,
+    ``"1"``, ``"1.0"``, a non-zero number are true; ``False``, ``"false"``, ``"0"``, an empty
+    cell, None and NaN are false."""
+    if isinstance(value, str):
+        return value.strip().lower() in ("true", "1", "1.0")
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return False
+    return bool(value)
 
 
 def numeric_column(df: pd.DataFrame, col: str, source: str) -> np.ndarray:
