@@ -32,7 +32,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from .errors import FitError
-from .fitdata import FitData, ModelSpec, prepare
+from .fitdata import FitData, ModelSpec, prepare_trace
 from .intervals import LEVEL
 from .trace import IndentationTrace
 from .units import format_force
@@ -253,10 +253,6 @@ def fit_lsq(
     -------
     LSQResult
     """
-    if model is None:
-        if trace.tip is None:
-            raise FitError(f"{trace.trace_id}: no tip geometry given; pass a ModelSpec")
-        model = ModelSpec(trace.tip)
-    data = prepare(trace, model, f_unc=f_unc, fit_fraction=fit_fraction, max_depth=max_depth,
-                   tare=tare)
+    data = prepare_trace(trace, model, f_unc=f_unc, fit_fraction=fit_fraction,
+                         max_depth=max_depth, tare=tare)
     return fit_lsq_data(data, level=level, trace_id=trace.trace_id)
