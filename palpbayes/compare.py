@@ -65,15 +65,16 @@ from scipy import stats
 
 from . import layout
 from .bayes.budget import BudgetSpec
-from .bayes.result import LEVEL
 from .campaign import read_settings
 from .compare_text import format_comparison
 from .errors import DataFileError, FitError
 from .fitdata import ModelSpec
 from .fitjob import trace_seed
+from .intervals import LEVEL, central
 from .io.atomic import write_csv_atomic
 from .io.manifest import tip_from_row
-from .pooling import TAU_PRIOR_SD, central, log_normal_summary, pool_group
+from .io.tabular import parse_bool
+from .pooling import TAU_PRIOR_SD, log_normal_summary, pool_group
 from .pooling_inputs import fitdata_from_posterior, posterior_attrs, read_posterior
 from .reference import (
     gt_columns,
@@ -169,10 +170,6 @@ def _order(values: pd.Series, preferred: list[str]) -> list[str]:
     return [v for v in preferred if v in seen] + [v for v in seen if v not in preferred]
 
 
-def _as_bool(v) -> bool:
-    return str(v).strip().lower() in ("true", "1", "1.0")
-
-
 # ----------------------------------------------------------------------------- groups
 
 
@@ -211,7 +208,7 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None, fiel
         meds.append((float(np.median(np.asarray(idata.posterior["z_surf"]))),
                      float(np.median(np.asarray(idata.posterior["E_star"])))))
     flags = []
-    conv = g["converged"].map(_as_bool) if "converged" in g else pd.Series(False, index=g.index)
+    conv = g["converged"].map(parse_bool) if "converged" in g else pd.Series(False, index=g.index)
     row = {"n_traces": len(ids), "n_failed": len(g) - len(ids)}
     if not ids:
         row.update({"converged_all": False, "flags": "no Bayesian posterior to pool"})

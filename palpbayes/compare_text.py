@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from .io.tabular import parse_bool
+
 __all__ = ["format_comparison"]
 
 
@@ -104,7 +106,7 @@ def format_comparison(df: pd.DataFrame, groundtruth_source: str | None = None,
     out += ["", f"ground truth: {src}"]
     if df["paper_E_pa"].notna().any():
         out += ["", "paper's robot estimates (least squares) [kPa]", block("paper", False)]
-    bad = df[~df["converged_all"].fillna(False).astype(bool)]
+    bad = df[~df["converged_all"].map(parse_bool)]
     for _, r in bad.iterrows():
         out.append(f"warning: {r['material']} {r['tip']} {r['method']}: not every fit converged"
                    + (f" ({r['flags']})" if isinstance(r["flags"], str) and r["flags"] else ""))

@@ -33,15 +33,17 @@ import numpy as np
 
 from .baseline import MIN_BASELINE_POINTS, Baseline, estimate_baseline
 from .contact import Tip, check_nu, exponent, shape
-from .errors import InputError, NoContactError
+from .errors import FitError, InputError, NoContactError
+from .noise import PAPER_NOISE_PP
 from .trace import IndentationTrace
 from .units import format_force
 
-__all__ = ["ModelSpec", "FitData", "prepare", "first_passage", "DEFAULT_F_UNC",
+__all__ = ["ModelSpec", "FitData", "prepare", "prepare_trace", "first_passage", "DEFAULT_F_UNC",
            "default_fit_fraction", "noise_from_baseline", "onset_reference"]
 
-#: The paper's sensor uncertainty F_unc [N]: 48 mN peak-to-peak.
-DEFAULT_F_UNC = 48e-3
+#: The paper's sensor uncertainty F_unc [N]: 48 mN peak-to-peak
+#: (:data:`palpbayes.noise.PAPER_NOISE_PP`).
+DEFAULT_F_UNC = PAPER_NOISE_PP
 
 
 def default_fit_fraction(tip: Tip) -> float:
@@ -238,6 +240,29 @@ def noise_from_baseline(base: Baseline, source: str) -> float:
             "longer approach"
         )
     return base.noise_pp
+
+
+def prepare_trace(
+    trace: IndentationTrace,
+    model: ModelSpec | None = None,
+    *,
+    f_unc: float | None = None,
+    fit_fraction: float | None = None,
+    max_depth: float | None = None,
+    tare: bool = False,
+) -> FitData:
+    """The fit data of ``trace`` under ``model`` (default ``ModelSpec(trace.tip)``): the common
+    first step of :func:`~palpbayes.lsq.fit_lsq` and :func:`~palpbayes.bayes.fit_bayes`.
+
+    Raises :class:`~palpbayes.errors.FitError` when ``model`` is None and the trace has no tip;
+    the other arguments are those of :func:`prepare`.
+    """
+    if model is None:
+        if trace.tip is None:
+            raise FitError(f"{trace.trace_id}: no tip geometry given; pass a ModelSpec")
+        model = ModelSpec(trace.tip)
+    return prepare(trace, model, f_unc=f_unc, fit_fraction=fit_fraction, max_depth=max_depth,
+                   tare=tare)
 
 
 def prepare(

@@ -32,7 +32,8 @@ import numpy as np
 from scipy import optimize, stats
 
 from .errors import FitError
-from .fitdata import FitData, ModelSpec, prepare
+from .fitdata import FitData, ModelSpec, prepare_trace
+from .intervals import LEVEL
 from .trace import IndentationTrace
 from .units import format_force
 
@@ -168,7 +169,7 @@ def _minimise(data: FitData, lo: float, hi: float) -> float:
     return best
 
 
-def fit_lsq_data(data: FitData, *, level: float = 0.9, trace_id: str = "") -> LSQResult:
+def fit_lsq_data(data: FitData, *, level: float = LEVEL, trace_id: str = "") -> LSQResult:
     """Least-squares fit on prepared data (see :func:`fit_lsq`)."""
     lo, hi = data.z_contact, data.z_top
     z_best = _minimise(data, lo, hi)
@@ -225,7 +226,7 @@ def fit_lsq(
     f_unc: float | None = None,
     fit_fraction: float | None = None,
     max_depth: float | None = None,
-    level: float = 0.9,
+    level: float = LEVEL,
     tare: bool = False,
 ) -> LSQResult:
     """Fit E and z_surf to one trace by the paper's constrained least squares.
@@ -252,10 +253,6 @@ def fit_lsq(
     -------
     LSQResult
     """
-    if model is None:
-        if trace.tip is None:
-            raise FitError(f"{trace.trace_id}: no tip geometry given; pass a ModelSpec")
-        model = ModelSpec(trace.tip)
-    data = prepare(trace, model, f_unc=f_unc, fit_fraction=fit_fraction, max_depth=max_depth,
-                   tare=tare)
+    data = prepare_trace(trace, model, f_unc=f_unc, fit_fraction=fit_fraction,
+                         max_depth=max_depth, tare=tare)
     return fit_lsq_data(data, level=level, trace_id=trace.trace_id)

@@ -9,15 +9,38 @@ convention is a specification, not the observed range of a long record.)
 
 from __future__ import annotations
 
-__all__ = ["PP_TO_SIGMA", "sigma_from_pp", "pp_from_sigma"]
+import math
+
+from .errors import InputError
+
+__all__ = ["PP_TO_SIGMA", "PAPER_NOISE_PP", "sigma_from_pp", "pp_from_sigma"]
 
 #: Peak-to-peak = PP_TO_SIGMA · sigma (±3 sigma).
 PP_TO_SIGMA = 6.0
+#: [N] The paper's force-sensor noise, peak-to-peak (sigma = 8 mN); the default noise spec.
+PAPER_NOISE_PP = 48e-3
 
 
 def sigma_from_pp(pp: float) -> float:
-    """Gaussian standard deviation [N] for a peak-to-peak noise spec ``pp`` [N]: pp/6."""
-    return float(pp) / PP_TO_SIGMA
+    """Gaussian standard deviation [N] for a peak-to-peak noise spec ``pp`` [N]: pp/6 (±3 sigma).
+
+    >>> round(sigma_from_pp(PAPER_NOISE_PP), 12)  # the paper's sensor: 48 mN p-p -> 8 mN
+    0.008
+
+    Raises
+    ------
+    InputError
+        ``pp`` is not a finite, non-negative number.
+    """
+    try:
+        v = float(pp)
+    except (TypeError, ValueError):
+        raise InputError(f"peak-to-peak noise [N] {pp!r} is not a number") from None
+    if not math.isfinite(v):
+        raise InputError(f"peak-to-peak noise [N] must be finite, got {pp!r}")
+    if v < 0:
+        raise InputError(f"peak-to-peak noise {pp!r} N must be non-negative")
+    return v / PP_TO_SIGMA
 
 
 def pp_from_sigma(sigma: float) -> float:

@@ -83,10 +83,10 @@ import pandas as pd
 
 from .bayes.budget import BudgetSpec
 from .bayes.diagnostics import Diagnostics, chain_passes, compute_diagnostics, import_arviz
-from .bayes.result import LEVEL
 from .bayes.sampler import SamplerSettings, run_emcee
 from .errors import FitError, InputError
 from .fitdata import FitData
+from .intervals import LEVEL, central
 from .pooling_inputs import fitdata_from_posterior, posterior_attrs, systematic_factor
 
 __all__ = [
@@ -112,13 +112,6 @@ POOLING_SETTINGS = SamplerSettings(n_walkers=32, max_steps=20000, min_steps=1000
                                    check_every=250, moves="de", progress=False)
 
 _LOG_TAU_BOUNDS = (np.log(1e-6), np.log(10.0))
-
-
-def central(x: np.ndarray, level: float = LEVEL) -> tuple[float, float]:
-    """Central ``level`` interval (quantiles (1 − level)/2 and (1 + level)/2) of draws ``x``."""
-    a = (1.0 - level) / 2.0
-    lo, hi = np.quantile(np.asarray(x, dtype=float), [a, 1.0 - a])
-    return float(lo), float(hi)
 
 
 def log_normal_summary(draws: np.ndarray) -> tuple[float, float]:

@@ -20,8 +20,8 @@ import pandas as pd
 from scipy import stats
 
 from . import layout
-from .bayes.result import LEVEL
 from .errors import DataFileError
+from .intervals import LEVEL
 
 __all__ = ["load_groundtruth", "paper_estimates", "gt_columns", "paper_columns",
            "new_specimen_sd"]

@@ -29,6 +29,7 @@ import pandas as pd
 
 from . import layout
 from .errors import DataFileError, InputError
+from .noise import PAPER_NOISE_PP
 
 if TYPE_CHECKING:
     from .bayes.result import BayesResult
@@ -216,7 +217,7 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
     model = ModelSpec(tip_from_row(row), nu=nu, thickness=thickness,
                       bonded=bool(opts.get("bonded", True)))
     data = None
-    f_unc = float(attrs.get("f_unc_n", opts.get("f_unc", 0.048)))
+    f_unc = float(attrs.get("f_unc_n", opts.get("f_unc", PAPER_NOISE_PP)))
     fraction = attrs.get("fit_fraction", opts.get("fit_fraction"))
     file = str(row.get("file", "") or "")
     if file and Path(file).is_file():

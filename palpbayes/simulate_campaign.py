@@ -32,7 +32,8 @@ from .errors import InputError, OutputExistsError
 from .io.atomic import write_csv_atomic
 from .io.manifest import write_manifest
 from .io.trace_csv import write_trace
-from .simulate import (
+from .noise import PAPER_NOISE_PP
+from .simulate_core import (
     PAPER_MATERIALS,
     PAPER_TIPS,
     Material,
@@ -168,7 +169,7 @@ def simulate_campaign(
     tips: Mapping[str, Tip] = PAPER_TIPS,
     nu: float = 0.3,
     gt_specimens: int = 5,
-    noise_pp: float = 48e-3,
+    noise_pp: float = PAPER_NOISE_PP,
     noise_ar1: float = 0.0,
     force_offset_sd: float = 5e-3,
     z_surf: float = 0.1,

@@ -76,9 +76,9 @@ import pandas as pd
 from scipy import optimize
 
 from .bayes.diagnostics import chain_passes, compute_diagnostics, import_arviz
-from .bayes.result import LEVEL
 from .bayes.sampler import SamplerSettings, run_emcee
 from .errors import InputError
+from .intervals import LEVEL, central, central_band
 from .units import format_pressure
 
 __all__ = ["StiffeningResult", "fit_stiffening", "fit_stiffening_summary",
@@ -364,8 +364,7 @@ def _sample(model, theta0, t, y, s, bounds, settings, seed):
 
 
 def _q(x, level):
-    a = (1 - level) / 2
-    lo, hi = np.quantile(x, [a, 1 - a])
+    lo, hi = central(x, level)
     return float(np.median(x)), float(np.std(x, ddof=1)), float(lo), float(hi)
 
 
@@ -477,8 +476,7 @@ class StiffeningResult:
         else:
             d = self.single_draws
             curves = d["c0"][:, None] + d["c1"][:, None] * np.exp(d["c2"][:, None] * t)
-        a = (1 - level) / 2
-        lo, med, hi = np.quantile(curves, [a, 0.5, 1 - a], axis=0)
+        lo, med, hi = central_band(curves, level)
         return pd.DataFrame({"t_s": t, "median_pa": med, "lo_pa": lo, "hi_pa": hi})
 
 
@@ -530,8 +528,7 @@ def _single_reasons(draws, bic_s, bic_c, n_distinct, t_min, t_max, diag, level) 
     _, _, lo, hi = _q(draws["c1"], level)
     if lo <= 0 <= hi:
         reasons.append(f"the {int(level * 100)} % interval of amplitude c1 includes 0")
-    a = (1 - level) / 2
-    T_lo, T_hi = (float(v) for v in np.quantile(-1.0 / draws["c2"], [a, 1 - a]))
+    T_lo, T_hi = central(-1.0 / draws["c2"], level)
     if T_lo < t_min or T_hi > t_max:
         reasons.append(f"its time scale is not resolved within the rest times {t_min:g}-{t_max:g}"
                        f" s (its {int(level * 100)} % interval is {T_lo:.3g}-{T_hi:.3g} s)")
@@ -628,7 +625,7 @@ def fit_stiffening(rest_time, E, E_sd=None, *, seed: int | None = 0,
         if single_ok:
             q = {k: _q(v, level) for k, v in single.items()}
             T = -1.0 / single["c2"]
-            T_lo, T_hi = np.quantile(T, [(1 - level) / 2, (1 + level) / 2])
+            T_lo, T_hi = central(T, level)
             message += (f" Use the single exponential E = c0 + c1·e^(c2·t): c0 = "
                         f"{format_pressure(q['c0'][0], 4)}, c1 = {format_pressure(q['c1'][0], 4)} "
                         f"({pct} interval {format_pressure(q['c1'][2], 4)} to "

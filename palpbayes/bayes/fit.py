@@ -11,7 +11,7 @@ import numpy as np
 from .. import __version__
 from ..checks import check_fit
 from ..errors import ConvergenceError, ConvergenceWarning, FitError
-from ..fitdata import FitData, ModelSpec, prepare
+from ..fitdata import FitData, ModelSpec, prepare_trace
 from ..lsq import LSQResult, fit_lsq_data
 from ..trace import IndentationTrace
 from ..units import format_length
@@ -259,7 +259,14 @@ def fit_bayes(
     fit_fraction: float | None = None,
     max_depth: float | None = None,
     tare: bool = False,
-    **kwargs,
+    noise: str = "gaussian",
+    baseline: str = "constant",
+    priors: PriorSpec | None = None,
+    budget: BudgetSpec | None = None,
+    settings: SamplerSettings | None = None,
+    seed: int | None = 0,
+    tabulate: bool = True,
+    strict: bool = False,
 ) -> BayesResult:
     """Bayesian fit of E*, z_surf, sigma and F0 (and phi or nu_t) to one trace.
 
@@ -275,20 +282,32 @@ def fit_bayes(
     fit_fraction, max_depth, tare
         Fit window and tare, shared with the least-squares baseline
         (:func:`palpbayes.fitdata.prepare`).
-    **kwargs
-        ``noise`` ("gaussian" | "ar1" | "student"), ``baseline`` ("constant" | "linear"),
-        ``priors`` (:class:`PriorSpec`),
-        ``budget`` (:class:`BudgetSpec`), ``settings`` (:class:`SamplerSettings`), ``seed``,
-        ``tabulate``, ``strict`` (raise :class:`ConvergenceError` instead of warning).
+    noise
+        Noise model: ``"gaussian"`` (default), ``"ar1"`` (autocorrelated) or ``"student"``.
+    baseline
+        Pre-contact force model: ``"constant"`` (default) or ``"linear"`` (drift).
+    priors
+        :class:`PriorSpec` (default ``PriorSpec()``).
+    budget
+        :class:`BudgetSpec` of the systematic errors propagated into E (default
+        ``BudgetSpec()``).
+    settings
+        :class:`SamplerSettings` of the emcee run (default ``SamplerSettings()``).
+    seed
+        Seed of the start, the sampler and the budget draws (None: fresh entropy).
+    tabulate
+        Evaluate the Gaussian/AR(1) likelihood from tabulated sufficient statistics
+        (default True; False: the direct sum, see :class:`TraceLikelihood`).
+    strict
+        Raise :class:`~palpbayes.errors.ConvergenceError` instead of warning when the fit is
+        not converged.
 
     Returns
     -------
     BayesResult
     """
-    if model is None:
-        if trace.tip is None:
-            raise FitError(f"{trace.trace_id}: no tip geometry given; pass a ModelSpec")
-        model = ModelSpec(trace.tip)
-    data = prepare(trace, model, f_unc=f_unc, fit_fraction=fit_fraction, max_depth=max_depth,
-                   tare=tare)
-    return fit_bayes_data(data, trace_id=trace.trace_id, **kwargs)
+    data = prepare_trace(trace, model, f_unc=f_unc, fit_fraction=fit_fraction,
+                         max_depth=max_depth, tare=tare)
+    return fit_bayes_data(data, noise=noise, baseline=baseline, priors=priors, budget=budget,
+                          settings=settings, seed=seed, tabulate=tabulate, strict=strict,
+                          trace_id=trace.trace_id)

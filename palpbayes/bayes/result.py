@@ -10,20 +10,13 @@ import numpy as np
 import pandas as pd
 
 from ..fitdata import FitData
+from ..intervals import LEVEL, central, central_band
 from ..io.atomic import write_with
 from .budget import Budget
 from .diagnostics import Diagnostics, import_arviz
 
 __all__ = ["BayesResult", "LEVEL"]
 
-#: Probability content of the reported central intervals.
-LEVEL = 0.9
-
-
-def _central(x: np.ndarray, level: float = LEVEL) -> tuple[float, float]:
-    a = (1 - level) / 2
-    lo, hi = np.quantile(x, [a, 1 - a])
-    return float(lo), float(hi)
 
 
 @dataclass
@@ -88,7 +81,7 @@ class BayesResult:
         rows = []
         for n in names:
             x = self.draws(n)
-            lo, hi = _central(x)
+            lo, hi = central(x)
             hdi = np.asarray(az.hdi(x, hdi_prob=LEVEL))
             rows.append({
                 "parameter": n, "unit": _UNITS[n], "mean": float(x.mean()),
@@ -106,8 +99,8 @@ class BayesResult:
         E = self.draws("E_total")
         Es = self.draws("E")
         z = self.draws("z_surf")
-        lo, hi = _central(E)
-        slo, shi = _central(Es)
+        lo, hi = central(E)
+        slo, shi = central(Es)
         d = self.diagnostics
         return {
             "trace_id": self.trace_id,
@@ -159,8 +152,7 @@ class BayesResult:
         flat = {n: np.asarray(post[n]).ravel() for n in ("z_surf", "sigma")}
         if noise:
             curves = curves + rng.normal(0, 1, curves.shape) * flat["sigma"][idx][:, None]
-        a = (1 - level) / 2
-        lo, med, hi = np.quantile(curves, [a, 0.5, 1 - a], axis=0)
+        lo, med, hi = central_band(curves, level)
         zs = float(np.median(flat["z_surf"]))
         return pd.DataFrame({"z_m": z, "depth_m": zs - z, "median_n": med, "lo_n": lo,
                              "hi_n": hi})

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..noise import PAPER_NOISE_PP
 from ..simulate import PAPER_MATERIALS, PAPER_TIPS
 from ..simulate_campaign import simulate_campaign
 from ..units import format_force
@@ -35,8 +36,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="palpations per material and tip (default 3)")
     p.add_argument("--force", action="store_true",
                    help="write into a non-empty OUT_DIR (a previous campaign is replaced)")
-    p.add_argument("--noise-pp", type=float, default=48e-3, metavar="N",
-                   help="peak-to-peak force noise in newtons, sigma = pp/6 (default 0.048)")
+    p.add_argument("--noise-pp", type=float, default=PAPER_NOISE_PP, metavar="N",
+                   help="peak-to-peak force noise in newtons, sigma = pp/6 (default %(default)g)")
     p.add_argument("--ar1", type=float, default=0.0, metavar="PHI",
                    help="AR(1) coefficient of the force noise, |PHI| < 1 (default 0: white)")
     p.add_argument("--gt-specimens", type=int, default=5, metavar="N",

@@ -40,7 +40,8 @@ from ..contact import Tip, half_angle_from_degrees
 from ..errors import DataFileError, GeometryError, InputError
 from ..trace import IndentationTrace
 from .atomic import write_csv_atomic
-from .trace_csv import read_trace, sniff_delimiter
+from .tabular import sniff_delimiter
+from .trace_csv import read_trace
 
 __all__ = [
     "MANIFEST_COLUMNS",

@@ -46,12 +46,11 @@ from typing import Literal
 import numpy as np
 import pandas as pd
 
-from ..baseline import sign_flipped
 from ..contact import Tip
 from ..errors import DataFileError, InputError
 from ..kinematics import UR3E, DHParameters, _as_offset, tip_z
 from ..trace import IndentationTrace
-from ..units import format_force
+from .tabular import check_force_sign, check_plausible, numeric_column, sniff_delimiter
 from .units import FORCE_UNITS, TIME_UNITS, force_factor, time_factor
 
 __all__ = [
@@ -105,20 +104,6 @@ def rotvec_to_matrix(rotvec: np.ndarray) -> np.ndarray:
     return np.eye(3) + s * K + c * (K @ K)
 
 
-def _sniff_separator(path: Path) -> str:
-    """Column separator from the header line: comma, semicolon, else whitespace."""
-    with open(path, encoding="utf-8") as fh:
-        for line in fh:
-            text = line.strip()
-            if text and not text.startswith("#"):
-                if "," in text:
-                    return ","
-                if ";" in text:
-                    return ";"
-                return r"\s+"
-    return ","
-
-
 def _read_table(path: str | os.PathLike, delimiter: str | None) -> tuple[pd.DataFrame, str]:
     """Read a delimited text file into a DataFrame; sniff the separator when None."""
     path = Path(path)
@@ -128,7 +113,7 @@ def _read_table(path: str | os.PathLike, delimiter: str | None) -> tuple[pd.Data
     if path.stat().st_size == 0:
         raise DataFileError(source, "file is empty", "check that the recording was saved")
     try:
-        sep = delimiter if delimiter is not None else _sniff_separator(path)
+        sep = delimiter if delimiter is not None else sniff_delimiter(path)
         df = pd.read_csv(path, sep=sep, comment="#", skipinitialspace=True,
                          engine="c", encoding="utf-8")
     except UnicodeDecodeError:
@@ -147,28 +132,6 @@ def _read_table(path: str | os.PathLike, delimiter: str | None) -> tuple[pd.Data
     return df, source
 
 
-def _values(df: pd.DataFrame, col: str, source: str) -> np.ndarray:
-    """Float values of one column; non-numeric or NaN/inf cells raise naming the data row."""
-    raw = df[col]
-    values = pd.to_numeric(raw, errors="coerce")
-    bad = values.isna() & raw.notna()
-    if bad.any():
-        i = int(np.argmax(bad.to_numpy()))
-        raise DataFileError(
-            source,
-            f"column {col!r} has a non-numeric value {raw.iloc[i]!r} at data row {i + 1}",
-            "remove or repair that row",
-        )
-    arr = values.to_numpy(dtype=float)
-    nonfinite = ~np.isfinite(arr)
-    if nonfinite.any():
-        i = int(np.argmax(nonfinite))
-        what = "empty (NaN)" if np.isnan(arr[i]) else f"infinite ({arr[i]})"
-        raise DataFileError(source, f"column {col!r} is {what} at data row {i + 1}",
-                            "remove or repair that row")
-    return arr
-
-
 def _require(df: pd.DataFrame, columns: list[str], source: str, fix: str) -> None:
     missing = [c for c in columns if c not in df.columns]
     if missing:
@@ -177,21 +140,6 @@ def _require(df: pd.DataFrame, columns: list[str], source: str, fix: str) -> Non
         raise DataFileError(
             source,
             f"missing column{'s' if len(missing) > 1 else ''} {shown}; the file has {have}",
-            fix,
-        )
-
-
-def _check_force_sign(source: str, trace: IndentationTrace, fix: str) -> None:
-    """Reject a trace whose force falls below its pre-contact baseline at the deepest
-    indentation (:func:`palpbayes.baseline.sign_flipped`)."""
-    load = trace.loading_segment()
-    flipped, rise, base = sign_flipped(load.z, load.force)
-    if flipped:
-        raise DataFileError(
-            source,
-            f"force falls {format_force(-rise)} below its pre-contact baseline "
-            f"({format_force(base.level)}) at the deepest indentation; the compressive force "
-            "must rise",
             fix,
         )
 
@@ -276,7 +224,7 @@ def read_rtde(
         Identifier; default the file name without extension.
     check
         Reject implausible traces (force negative at the deepest point, z span or |force| out
-        of range; see :func:`palpbayes.io.trace_csv.check_plausible`).
+        of range; see :func:`palpbayes.io.tabular.check_plausible`).
     delimiter
         Column separator; None (default) sniffs it from the header line.
     **metadata
@@ -328,15 +276,16 @@ def read_rtde(
         raise DataFileError(source, f"only {df.shape[0]} data row(s); a trace needs at least 3",
                             "check that the file holds the whole recording")
 
-    t = _values(df, RTDE_TIME_COLUMN, source)
-    raw_force = _values(df, force_col, source)
+    t = numeric_column(df, RTDE_TIME_COLUMN, source)
+    raw_force = numeric_column(df, force_col, source)
     if z_source == "q":
-        q = np.column_stack([_values(df, c, source) for c in RTDE_Q_COLUMNS])
+        q = np.column_stack([numeric_column(df, c, source) for c in RTDE_Q_COLUMNS])
         z = tip_z(q, dh, offset)
     else:
-        z = _values(df, RTDE_TCP_POSE_COLUMNS[2], source)
+        z = numeric_column(df, RTDE_TCP_POSE_COLUMNS[2], source)
         if np.any(offset != 0.0):
-            rv = np.column_stack([_values(df, c, source) for c in RTDE_TCP_POSE_COLUMNS[3:]])
+            rv = np.column_stack([numeric_column(df, c, source)
+                                  for c in RTDE_TCP_POSE_COLUMNS[3:]])
             z = z + rotvec_to_matrix(rv)[:, 2, :] @ offset
     if sign == "auto":
         sign = _auto_sign(z, raw_force)
@@ -361,10 +310,8 @@ def read_rtde(
         **kwargs,
     )
     if check:
-        _check_force_sign(source, trace,
+        check_force_sign(source, trace,
                           f"flip the sign: pass force_sign={-sign:+g} (or force_sign='auto')")
-        from .trace_csv import check_plausible
-
         check_plausible(trace)
     return trace
 
@@ -417,7 +364,7 @@ def trace_from_joint_frame(
     force_sign
         +1 or -1, multiplies the force column (+1: the file already has compression positive).
     check
-        Reject implausible traces (see :func:`palpbayes.io.trace_csv.check_plausible`).
+        Reject implausible traces (see :func:`palpbayes.io.tabular.check_plausible`).
     **metadata
         Trace fields (``tip``, ``trace_id``, ``specimen``, ``material``, ``thickness``,
         ``repetition``, ``rest_time``); anything else goes into ``trace.metadata``.
@@ -461,10 +408,10 @@ def trace_from_joint_frame(
             q_factors.append(_ANGLE_UNITS[u.lower()])
     except InputError as exc:
         raise DataFileError(source, str(exc)) from None
-    q = np.column_stack([_values(df, col, source) * fac
+    q = np.column_stack([numeric_column(df, col, source) * fac
                          for (col, _), fac in zip(q_cols, q_factors, strict=True)])
-    t = _values(df, time_col, source) * t_factor
-    force = sign * f_factor * _values(df, force_col, source)
+    t = numeric_column(df, time_col, source) * t_factor
+    force = sign * f_factor * numeric_column(df, force_col, source)
     z = tip_z(q, dh, offset)
 
     kwargs, free = _split_metadata(metadata, {
@@ -475,8 +422,6 @@ def trace_from_joint_frame(
     })
     trace = IndentationTrace(time=t, z=z, force=force, source=source, metadata=free, **kwargs)
     if check:
-        from .trace_csv import check_plausible
-
         check_plausible(trace)
     return trace
 
@@ -504,7 +449,8 @@ def read_joint_trace(
     tip
         The indenter, stored in the trace.
     delimiter
-        Column separator (default comma); None sniffs comma, semicolon or whitespace.
+        Column separator (default comma); None sniffs it
+        (:func:`~palpbayes.io.tabular.sniff_delimiter`).
     **metadata
         Stored on the trace; ``trace_id`` defaults to the file name without extension.
 

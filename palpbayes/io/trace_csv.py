@@ -9,27 +9,25 @@ forward kinematics.  Other files are read through a column mapping, unit and sig
 
 Columns named ``<quantity>_<unit>`` (``z_mm``, ``force_mn``, ``time_ms``; AFM ``z_um``, ``z_nm``,
 ``force_nn``, ``force_pn``) are recognised without options, case-insensitively (``force_mn``
-is millinewtons: no one records in meganewtons).  The separator (comma, semicolon or tab) is
-detected from the header line; decimal commas are not read but reported as such.  Every
-problem is raised as :class:`~palpbayes.errors.DataFileError` naming the file, the column or
+is millinewtons: no one records in meganewtons).  The separator (comma, semicolon, tab or
+blanks) is detected from the header line; decimal commas are not read but reported as such.
+Every problem is raised as :class:`~palpbayes.errors.DataFileError` naming the file, the column or
 value, and the fix.
 """
 
 from __future__ import annotations
 
 import os
-import re
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
-from ..baseline import sign_flipped
 from ..contact import Tip
 from ..errors import DataFileError, InputError
 from ..trace import IndentationTrace
-from ..units import format_force, format_length
 from .atomic import write_csv_atomic
+from .rtde import trace_from_joint_frame
+from .tabular import MAX_FORCE_N, MAX_Z_SPAN_M, check_plausible, numeric_column, sniff_delimiter
 from .units import FORCE_UNITS, LENGTH_UNITS, TIME_UNITS, force_factor, length_factor, time_factor
 
 __all__ = ["read_trace", "write_trace", "trace_from_frame", "check_plausible",
@@ -37,46 +35,6 @@ __all__ = ["read_trace", "write_trace", "trace_from_frame", "check_plausible",
 
 _QUANTITIES = {"time": TIME_UNITS, "z": LENGTH_UNITS, "force": FORCE_UNITS}
 _FACTORS = {"time": time_factor, "z": length_factor, "force": force_factor}
-
-#: Plausibility limits: a palpation moves the tip by less than this [m] ...
-MAX_Z_SPAN_M = 0.5
-#: ... and presses with less than this [N] (soft materials; pass ``check=False`` to skip).
-MAX_FORCE_N = 500.0
-
-
-_SEPARATORS = {",": "comma", ";": "semicolon", "\t": "tab"}
-_DECIMAL_COMMA = re.compile(r"^\s*[-+]?\d*,\d+(?:[eE][-+]?\d+)?\s*$")
-
-
-def _header_line(path: Path) -> str:
-    """First line that is neither empty nor a ``#`` comment ('' if none)."""
-    with open(path, encoding="utf-8", errors="replace", newline="") as fh:
-        for i, line in enumerate(fh):
-            if line.strip() and not line.lstrip().startswith("#"):
-                return line.rstrip("\r\n")
-            if i > 10_000:
-                break
-    return ""
-
-
-def sniff_delimiter(path: str | os.PathLike) -> str:
-    """The column separator of a CSV file from its header line: ``','``, ``';'`` or tab.
-
-    The most frequent of the three in the header wins (comma on a tie or when none occurs,
-    e.g. a one-column file).  Unreadable files give ``','`` (the reader then reports them).
-    """
-    try:
-        header = _header_line(Path(path))
-    except OSError:
-        return ","
-    counts = {sep: header.count(sep) for sep in _SEPARATORS}
-    best = max(counts, key=lambda sep: (counts[sep], sep == ","))
-    return best if counts[best] > 0 else ","
-
-
-def _is_decimal_comma(value) -> bool:
-    return isinstance(value, str) and bool(_DECIMAL_COMMA.match(value))
-
 
 def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: str | None,
                  source: str) -> tuple[str, str]:
@@ -106,68 +64,6 @@ def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: st
     )
 
 
-def _numeric(df: pd.DataFrame, col: str, source: str) -> np.ndarray:
-    values = pd.to_numeric(df[col], errors="coerce")
-    bad = values.isna() & df[col].notna()
-    if bad.any():
-        i = int(np.argmax(bad.to_numpy()))
-        value = df[col].iloc[i]
-        if _is_decimal_comma(value):
-            raise DataFileError(
-                source,
-                f"column {col!r} has a non-numeric value {value!r} at data row {i + 1}: the "
-                "file uses decimal commas",
-                "write decimal points, e.g. save it from a spreadsheet set to an English locale",
-            )
-        raise DataFileError(
-            source,
-            f"column {col!r} has a non-numeric value {value!r} at data row {i + 1}",
-            "remove or repair that row",
-        )
-    arr = values.to_numpy(dtype=float)
-    if np.isnan(arr).any():
-        i = int(np.argmax(np.isnan(arr)))
-        raise DataFileError(source, f"column {col!r} is empty (NaN) at data row {i + 1}",
-                            "remove or repair that row")
-    if np.isinf(arr).any():
-        i = int(np.argmax(np.isinf(arr)))
-        raise DataFileError(source, f"column {col!r} is infinite at data row {i + 1}",
-                            "remove or repair that row")
-    return arr
-
-
-def check_plausible(trace: IndentationTrace) -> None:
-    """Reject traces whose units or signs cannot be right for a palpation.
-
-    Raises :class:`DataFileError` when z spans more than :data:`MAX_Z_SPAN_M`, when |force|
-    exceeds :data:`MAX_FORCE_N`, or when the force at the deepest indentation falls below its
-    pre-contact baseline (sign flipped, :func:`palpbayes.baseline.sign_flipped`).
-    """
-    src = trace.source or trace.trace_id
-    span = float(np.ptp(trace.z))
-    if span > MAX_Z_SPAN_M:
-        raise DataFileError(
-            src, f"z spans {format_length(span)}, more than a palpation can "
-            f"({format_length(MAX_Z_SPAN_M)})",
-            "is z in mm? give the z unit, e.g. --z-unit mm",
-        )
-    fmax = float(np.max(np.abs(trace.force)))
-    if fmax > MAX_FORCE_N:
-        raise DataFileError(
-            src, f"|force| reaches {format_force(fmax)}, implausible for soft-material palpation",
-            "is force in mN? give the force unit, e.g. --force-unit mN",
-        )
-    load = trace.loading_segment()
-    flipped, rise, base = sign_flipped(load.z, load.force)
-    if flipped:
-        raise DataFileError(
-            src, f"force falls {format_force(-rise)} below its pre-contact baseline "
-            f"({format_force(base.level)}) at the deepest indentation; the compressive force "
-            "must rise",
-            "flip the force sign with --force-sign -1",
-        )
-
-
 def trace_from_frame(
     df: pd.DataFrame,
     source: str,
@@ -195,8 +91,6 @@ def trace_from_frame(
     lower = {str(c).strip().lower() for c in df.columns}
     has_q = any(c.startswith("q0_") for c in lower)
     if "z" not in columns and not any(c.startswith("z") for c in lower) and has_q:
-        from .rtde import trace_from_joint_frame
-
         joint_units = {k: v for k, v in units.items() if k in ("time", "force")}
         return trace_from_joint_frame(df, source, tool_offset=tool_offset,
                                       units=joint_units or None, force_sign=force_sign,
@@ -208,7 +102,7 @@ def trace_from_frame(
             factor = _FACTORS[q](unit)
         except InputError as exc:
             raise DataFileError(source, f"column {col!r}: {exc}") from None
-        arrays[q] = _numeric(df, col, source) * factor
+        arrays[q] = numeric_column(df, col, source) * factor
     trace = IndentationTrace(
         time=arrays["time"],
         z=z_sign * arrays["z"],
@@ -251,8 +145,9 @@ def read_trace(
     check
         Apply :func:`check_plausible` (units and sign sanity).
     delimiter
-        Column separator; ``"auto"`` (default) detects comma, semicolon or tab from the header
-        line (:func:`sniff_delimiter`); None lets pandas sniff it (slower).
+        Column separator; ``"auto"`` (default) detects comma, semicolon, tab or blanks from the
+        header line (:func:`~palpbayes.io.tabular.sniff_delimiter`); None lets pandas sniff it
+        (slower).
     **metadata
         Stored on the trace (``trace_id``, ``specimen``, ``material``, ``thickness`` ...).
 
@@ -274,9 +169,9 @@ def read_trace(
         raise DataFileError(source, "file not found", "check the path")
     if path.stat().st_size == 0:
         raise DataFileError(source, "file is empty", "check that the recording was saved")
-    if delimiter == "auto":
-        delimiter = sniff_delimiter(path)
     try:
+        if delimiter == "auto":
+            delimiter = sniff_delimiter(path)
         df = pd.read_csv(path, comment="#", sep=delimiter,
                          engine="c" if delimiter else "python", skipinitialspace=True)
     except pd.errors.EmptyDataError:

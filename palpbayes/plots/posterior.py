@@ -9,13 +9,13 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..intervals import LEVEL, central
 from .style import (
     _KPA,
     _MM,
     _UM,
     METHOD_COLORS,
     METHOD_LABELS,
-    _central,
     _draws,
     _fig_ax,
     _level_label,
@@ -41,7 +41,7 @@ def plot_posterior_E(
     lsq: Any = None,
     *,
     ax: Axes | None = None,
-    level: float = 0.9,
+    level: float = LEVEL,
     bins: int = 60,
     truth: float | None = None,
 ) -> Figure:
@@ -81,7 +81,7 @@ def plot_posterior_E(
     _hist(ax, e_tot, c, "E with budget", True, bins, peak=True)
     # the trace-only posterior is often 100x narrower: its own bins, scaled to the same peak
     _hist(ax, e_stat, c, "E, trace only (fixed nu)", False, bins, peak=True)
-    lo, hi = _central(e_tot, level)
+    lo, hi = central(e_tot, level)
     med = float(np.median(e_tot))
     ax.axvline(med, color=c, lw=1.2)
     ax.axvspan(lo, hi, color=c, alpha=0.08, lw=0)
@@ -107,7 +107,7 @@ def plot_posterior_zsurf(
     lsq: Any = None,
     *,
     ax: Axes | None = None,
-    level: float = 0.9,
+    level: float = LEVEL,
     bins: int = 60,
     truth: float | None = None,
 ) -> Figure:
@@ -140,7 +140,7 @@ def plot_posterior_zsurf(
     rel = (z - zm) * _UM
     c = METHOD_COLORS["bayes"]
     _hist(ax, rel, c, "Bayes posterior", True, bins)
-    lo, hi = _central(rel, level)
+    lo, hi = central(rel, level)
     ax.axvline(0.0, color=c, lw=1.2)
     ax.axvspan(lo, hi, color=c, alpha=0.08, lw=0)
     top = ax.get_ylim()[1]
@@ -170,7 +170,7 @@ def plot_pair(
     lsq: Any = None,
     *,
     ax: Axes | None = None,
-    level: float = 0.9,
+    level: float = LEVEL,
     max_points: int = 3000,
     seed: int = 0,
 ) -> Figure:
@@ -241,7 +241,7 @@ def plot_pair(
 
 
 def plot_posterior(result: Any, lsq: Any = None, *, fig: Figure | None = None,
-                   level: float = 0.9, truth: Mapping[str, float] | None = None) -> Figure:
+                   level: float = LEVEL, truth: Mapping[str, float] | None = None) -> Figure:
     """Marginal posteriors of E and z_surf and their joint posterior, side by side.
 
     Parameters

@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..intervals import LEVEL
 from .style import _KPA, METHOD_COLORS, METHOD_LABELS, _fig_ax, _level_label
 
 __all__ = ["plot_stiffening"]
@@ -27,7 +28,7 @@ def plot_stiffening(
     rested: tuple[float, float, float] | None = None,
     fit: Any = None,
     ax: Axes | None = None,
-    level: float = 0.9,
+    level: float = LEVEL,
     label: str = "Bayes per palpation",
 ) -> Figure:
     """Modulus vs rest time since the previous excitation, with the fitted stiffening law.

@@ -59,12 +59,6 @@ def _level_label(level: float) -> str:
     return f"{100 * level:g} %"
 
 
-def _central(x: np.ndarray, level: float) -> tuple[float, float]:
-    a = (1 - level) / 2
-    lo, hi = np.quantile(x, [a, 1 - a])
-    return float(lo), float(hi)
-
-
 def _draws(result: Any, name: str) -> np.ndarray:
     """Flattened posterior draws of ``name`` from a BayesResult or an InferenceData."""
     idata = getattr(result, "idata", result)

@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..intervals import LEVEL
 from .style import _MM, _MN, METHOD_COLORS, _draws, _fig_ax, _level_label
 
 __all__ = ["plot_force_depth", "plot_residuals"]
@@ -50,7 +51,7 @@ def plot_force_depth(
     lsq: Any = None,
     *,
     ax: Axes | None = None,
-    level: float = 0.9,
+    level: float = LEVEL,
     n_draws: int = 200,
     n_grid: int = 300,
     seed: int = 0,

@@ -9,9 +9,10 @@ from pathlib import Path
 
 from .. import __version__
 from ..errors import InputError
+from ..io.tabular import parse_bool
 from ..layout import REPORT
 from ..results import ResultsFolder, load_results
-from .format import _shown, _truthy
+from .format import _shown
 from .layout import _decorate, _new_page, _Page
 from .pages_budget import _pages_budget
 from .pages_diagnostics import _page_diagnostics
@@ -128,7 +129,7 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     b = res.bayes_rows()
     n_pool = 0
     if res.pooled is not None and "converged" in res.pooled:
-        n_pool = int((~res.pooled["converged"].map(_truthy)).sum())
+        n_pool = int((~res.pooled["converged"].map(parse_bool)).sum())
     return ReportInfo(path=out, titles=titles, n_traces=int(res.summary["trace_id"].nunique()),
                       n_flagged=int(len(_flagged(res))) if len(b) else 0,
                       n_pooled_flagged=n_pool, table_rows=[p.rows for p in pages],

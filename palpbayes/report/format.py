@@ -49,12 +49,6 @@ def _interval(lo: Any, hi: Any, digits: int = 0) -> str:
     return f"[{float(lo) * _KPA:.{digits}f}, {float(hi) * _KPA:.{digits}f}]"
 
 
-def _truthy(v: Any) -> bool:
-    if isinstance(v, str):
-        return v.strip().lower() == "true"
-    return bool(v) if v is not None and not (isinstance(v, float) and math.isnan(v)) else False
-
-
 def _range(lo: Any, hi: Any, digits: int = 0) -> str:
     """'lo–hi', or a single number when both are equal ('1500', not '1500–1500')."""
     a, b = _fmt(lo, digits), _fmt(hi, digits)

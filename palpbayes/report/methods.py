@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ..bayes.sampler import MOVES
+from ..noise import PAPER_NOISE_PP
 from ..results import ResultsFolder
 from ..units import format_length
 from .format import _force_setting, _wrap
@@ -142,7 +143,7 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     lines += [("h", "Least-squares baseline (the paper's eqs. 12–13)")]
     lines += [("t", ln) for ln in _wrap(
         "Minimise L = Σ (F_j − k·d_j^m)² over k and z_surf subject to |F(z_surf)| ≤ F_unc "
-        f"(F_unc = {_force_setting(o.get('f_unc', 0.048))}; measured from the pre-contact "
+        f"(F_unc = {_force_setting(o.get('f_unc', PAPER_NOISE_PP))}; measured from the pre-contact "
         "level when the sensor was not tared, with a note in the row): for fixed z_surf E* has "
         f"a closed form; z_surf by a {GRID_POINTS}-point grid and bounded Brent search over the "
         "admissible range. Interval: Gauss-Newton covariance of (E*, z_surf) from the "

@@ -9,9 +9,10 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
+from ..io.tabular import parse_bool
 from ..layout import posterior_path
 from ..results import ResultsFolder, load_fit
-from .format import _fmt, _range, _truthy, _wrap, _yesno
+from .format import _fmt, _range, _wrap, _yesno
 from .layout import TABLE_ROWS_PER_PAGE, _Page, _text_lines
 from .tables import _chunks, _continued, _draw_table, _flagged, _pooled_of
 
@@ -39,7 +40,7 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
     pooled_bad: list[str] = []
     if res.pooled is not None and "converged" in res.pooled:
         pooled_bad = [f"{r['material']} {r['tip']}" for _, r in res.pooled.iterrows()
-                      if not _truthy(r["converged"])]
+                      if not parse_bool(r["converged"])]
     if len(b) == 0:
         head = "No Bayesian fits in this folder."
     elif flagged.empty:
@@ -62,7 +63,7 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
         pooled = _pooled_of(res, mat, tip)
         groups.append({
             "Material": mat, "Tip": tip, "fits": str(len(g)),
-            "converged": str(int(g["converged"].map(_truthy).sum())),
+            "converged": str(int(g["converged"].map(parse_bool).sum())),
             "max R-hat": _fmt(g["rhat_max"].max(), 4), "min ESS": _fmt(g["ess_min"].min(), 0),
             "max tau [steps]": _fmt(g["tau_max"].max(), 1),
             "steps": _range(g["n_steps"].min(), g["n_steps"].max()),

@@ -8,6 +8,7 @@ from collections.abc import Sequence
 from matplotlib.figure import Figure
 
 from .. import __version__
+from ..noise import PAPER_NOISE_PP
 from ..results import ResultsFolder
 from ..units import format_length
 from .format import _fmt, _force_setting, _range, _shown, _wrap
@@ -44,11 +45,11 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
               f"traces: {n_tr}"),
         ("t", f"Contact model: Poisson ratio nu = {o.get('nu')}; finite-thickness correction "
               f"{thick}"),
-        ("t", f"Fit window: F_unc = {_force_setting(o.get('f_unc', 0.048))}; fit "
+        ("t", f"Fit window: F_unc = {_force_setting(o.get('f_unc', PAPER_NOISE_PP))}; fit "
               f"fraction {frac}; max depth {depth}"),
         ("t", f"Noise model: {o.get('noise', 'gaussian')}; baseline "
               f"{o.get('baseline', 'constant')}{'; tared' if o.get('tare') else ''}; sensor "
-              f"noise {_force_setting(pri.get('noise_pp', 0.048))} peak-to-peak (sigma "
+              f"noise {_force_setting(pri.get('noise_pp', PAPER_NOISE_PP))} peak-to-peak (sigma "
               "prior centred on pp/6)"),
         ("t", f"Budget: Poisson ratio {nu_b}; tip radius "
               f"±{_fmt(100 * float(bud.get('radius_tolerance', 0)), 1)} %; force gain sd "

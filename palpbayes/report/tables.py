@@ -12,8 +12,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 
+from ..io.tabular import parse_bool
 from ..results import MATERIAL_ORDER, TIP_ORDER, ResultsFolder, ordered
-from .format import _KPA, _fmt, _interval, _isnum, _pm, _truthy, _yesno
+from .format import _KPA, _fmt, _interval, _isnum, _pm, _yesno
 from .layout import PAGE_SIZE, TABLE_ROWS_PER_PAGE
 
 __all__ = ["summary_table", "coverage_counts", "GT_COL", "LS_E_COL", "BAYES_E_COL",
@@ -93,7 +94,7 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
                 row[HERTZ_COL] = "–"
                 if h is not None:  # Δ: mean per-trace (E_hertz − E)/E, as on the group page
                     row[HERTZ_COL] = f"{_fmt(h[0] * _KPA)} ({100 * h[2]:+.1f} %)"
-            if bay is not None and not _truthy(bay.get("converged_all")):
+            if bay is not None and not parse_bool(bay.get("converged_all")):
                 row[BAYES_E_COL] += " (!)"
             rows.append(row)
         return pd.DataFrame(rows)
@@ -121,7 +122,7 @@ def coverage_counts(results: ResultsFolder) -> dict[str, tuple[int, int]]:
         if "gt_E_pa" in sub:
             sub = sub[pd.to_numeric(sub["gt_E_pa"], errors="coerce").notna()]
         if len(sub):
-            out[method] = (int(sub["gt_in_interval"].map(_truthy).sum()), int(len(sub)))
+            out[method] = (int(sub["gt_in_interval"].map(parse_bool).sum()), int(len(sub)))
     return out
 
 
@@ -143,7 +144,7 @@ def _pooled_of(res: ResultsFolder, mat: str, tip: str) -> pd.Series | None:
 def _flagged(res: ResultsFolder) -> pd.DataFrame:
     b = res.bayes_rows().copy()
     flags = b["flags"].astype(str) if "flags" in b else pd.Series("", index=b.index)
-    bad = ~b["converged"].map(_truthy) | (flags.str.len() > 0)
+    bad = ~b["converged"].map(parse_bool) | (flags.str.len() > 0)
     return b[bad]
 
 

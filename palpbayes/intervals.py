@@ -1,0 +1,31 @@
+"""Central credible intervals: the one probability level and the one quantile helper.
+
+Every reported interval of palpbayes (per-trace posteriors, pooled summaries, stiffening fits,
+least-squares intervals, plots) is the central :data:`LEVEL` interval, cut at the quantiles
+(1 - level)/2 and (1 + level)/2 of the draws.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["LEVEL", "central", "central_band"]
+
+#: Probability content of the reported central intervals.
+LEVEL = 0.9
+
+
+def central(x, level: float = LEVEL) -> tuple[float, float]:
+    """Central ``level`` interval (quantiles (1 − level)/2 and (1 + level)/2) of draws ``x``."""
+    a = (1.0 - level) / 2.0
+    lo, hi = np.quantile(np.asarray(x, dtype=float), [a, 1.0 - a])
+    return float(lo), float(hi)
+
+
+def central_band(x, level: float = LEVEL, axis: int = 0
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lower bound, median and upper bound of the central ``level`` band of draws ``x`` along
+    ``axis`` (e.g. posterior curves, one draw per row)."""
+    a = (1.0 - level) / 2.0
+    lo, med, hi = np.quantile(np.asarray(x, dtype=float), [a, 0.5, 1.0 - a], axis=axis)
+    return lo, med, hi

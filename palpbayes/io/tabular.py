@@ -1,0 +1,159 @@
+"""What every text-table reader shares: the separator sniffer, numeric columns, sanity checks.
+
+Lower than :mod:`palpbayes.io.trace_csv` and :mod:`palpbayes.io.rtde` (both import from here,
+so they do not import each other for these).  Every problem is raised as
+:class:`~palpbayes.errors.DataFileError` naming the file, the column or value, and the fix.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..baseline import sign_flipped
+from ..errors import DataFileError
+from ..trace import IndentationTrace
+from ..units import format_force, format_length
+
+__all__ = ["SEPARATORS", "WHITESPACE", "sniff_delimiter", "is_decimal_comma", "numeric_column",
+           "check_force_sign", "check_plausible", "parse_bool", "MAX_Z_SPAN_M", "MAX_FORCE_N"]
+
+#: Plausibility limits: a palpation moves the tip by less than this [m] ...
+MAX_Z_SPAN_M = 0.5
+#: ... and presses with less than this [N] (soft materials; pass ``check=False`` to skip).
+MAX_FORCE_N = 500.0
+
+#: Single-character column separators a header line is searched for, with their names.
+SEPARATORS = {",": "comma", ";": "semicolon", "\t": "tab"}
+#: pandas separator for runs of blanks (the RTDE client library's ``record.py`` output).
+WHITESPACE = r"\s+"
+
+_DECIMAL_COMMA = re.compile(r"^\s*[-+]?\d*,\d+(?:[eE][-+]?\d+)?\s*$")
+
+
+def _header_line(path: Path) -> str:
+    """First line that is neither empty nor a ``#`` comment ('' if none)."""
+    with open(path, encoding="utf-8", newline="") as fh:
+        for i, line in enumerate(fh):
+            if line.strip() and not line.lstrip().startswith("#"):
+                return line.rstrip("\r\n")
+            if i > 10_000:
+                break
+    return ""
+
+
+def sniff_delimiter(path: str | os.PathLike) -> str:
+    """The column separator of a CSV file from its header line: ``','``, ``';'``, tab or blanks.
+
+    The most frequent of comma, semicolon and tab in the header wins (comma on a tie).  A header
+    with none of them but blanks between names gives :data:`WHITESPACE` (``r"\\s+"``, e.g. the
+    RTDE ``record.py`` output); a one-column header gives ``','``.  Unreadable files give
+    ``','`` (the reader then reports them).
+
+    Raises
+    ------
+    UnicodeDecodeError
+        The file does not start as UTF-8 text (a binary file); readers report it.
+    """
+    try:
+        header = _header_line(Path(path))
+    except OSError:
+        return ","
+    counts = {sep: header.count(sep) for sep in SEPARATORS}
+    best = max(counts, key=lambda sep: (counts[sep], sep == ","))
+    if counts[best] > 0:
+        return best
+    return WHITESPACE if len(header.split()) > 1 else ","
+
+
+def is_decimal_comma(value) -> bool:
+    """True for a string cell like ``'0,5'`` (a number written with a decimal comma)."""
+    return isinstance(value, str) and bool(_DECIMAL_COMMA.match(value))
+
+
+def parse_bool(value) -> bool:
+    """A boolean cell of a CSV (or a value read from one): ``True``, ``"true"``/``"True"``,
+    ``"1"``, ``"1.0"``, a non-zero number are true; ``False``, ``"false"``, ``"0"``, an empty
+    cell, None and NaN are false."""
+    if isinstance(value, str):
+        return value.strip().lower() in ("true", "1", "1.0")
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return False
+    return bool(value)
+
+
+def numeric_column(df: pd.DataFrame, col: str, source: str) -> np.ndarray:
+    """Float values of one column; a non-numeric (decimal comma named as such), NaN or infinite
+    cell raises :class:`DataFileError` naming the column and the data row."""
+    raw = df[col]
+    values = pd.to_numeric(raw, errors="coerce")
+    bad = values.isna() & raw.notna()
+    if bad.any():
+        i = int(np.argmax(bad.to_numpy()))
+        value = raw.iloc[i]
+        if is_decimal_comma(value):
+            raise DataFileError(
+                source,
+                f"column {col!r} has a non-numeric value {value!r} at data row {i + 1}: the "
+                "file uses decimal commas",
+                "write decimal points, e.g. save it from a spreadsheet set to an English locale",
+            )
+        raise DataFileError(
+            source,
+            f"column {col!r} has a non-numeric value {value!r} at data row {i + 1}",
+            "remove or repair that row",
+        )
+    arr = values.to_numpy(dtype=float)
+    if np.isnan(arr).any():
+        i = int(np.argmax(np.isnan(arr)))
+        raise DataFileError(source, f"column {col!r} is empty (NaN) at data row {i + 1}",
+                            "remove or repair that row")
+    if np.isinf(arr).any():
+        i = int(np.argmax(np.isinf(arr)))
+        raise DataFileError(source, f"column {col!r} is infinite at data row {i + 1}",
+                            "remove or repair that row")
+    return arr
+
+
+def check_force_sign(source: str, trace: IndentationTrace, fix: str) -> None:
+    """Reject a trace whose force falls below its pre-contact baseline at the deepest
+    indentation (:func:`palpbayes.baseline.sign_flipped`); ``fix`` says how to flip it."""
+    load = trace.loading_segment()
+    flipped, rise, base = sign_flipped(load.z, load.force)
+    if flipped:
+        raise DataFileError(
+            source,
+            f"force falls {format_force(-rise)} below its pre-contact baseline "
+            f"({format_force(base.level)}) at the deepest indentation; the compressive force "
+            "must rise",
+            fix,
+        )
+
+
+def check_plausible(trace: IndentationTrace) -> None:
+    """Reject traces whose units or signs cannot be right for a palpation.
+
+    Raises :class:`DataFileError` when z spans more than :data:`MAX_Z_SPAN_M`, when |force|
+    exceeds :data:`MAX_FORCE_N`, or when the force at the deepest indentation falls below its
+    pre-contact baseline (sign flipped, :func:`palpbayes.baseline.sign_flipped`).
+    """
+    src = trace.source or trace.trace_id
+    span = float(np.ptp(trace.z))
+    if span > MAX_Z_SPAN_M:
+        raise DataFileError(
+            src, f"z spans {format_length(span)}, more than a palpation can "
+            f"({format_length(MAX_Z_SPAN_M)})",
+            "is z in mm? give the z unit, e.g. --z-unit mm",
+        )
+    fmax = float(np.max(np.abs(trace.force)))
+    if fmax > MAX_FORCE_N:
+        raise DataFileError(
+            src, f"|force| reaches {format_force(fmax)}, implausible for soft-material palpation",
+            "is force in mN? give the force unit, e.g. --force-unit mN",
+        )
+    check_force_sign(src, trace, "flip the force sign with --force-sign -1")

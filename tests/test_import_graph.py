@@ -1,0 +1,44 @@
+"""palpbayes has no import cycle, counting function-level imports (tools/import_graph.py)."""
+
+import importlib.util
+from pathlib import Path
+
+TOOL = Path(__file__).resolve().parents[1] / "tools" / "import_graph.py"
+
+
+def _tool():
+    spec = importlib.util.spec_from_file_location("import_graph", TOOL)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_no_import_cycles():
+    tool = _tool()
+    assert tool.cycles(tool.graph()) == []
+
+
+def test_cycle_check_finds_cycles_and_function_level_imports(tmp_path, capsys):
+    tool = _tool()
+    pkg = tmp_path / "palpbayes"
+    (pkg / "io").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "io" / "__init__.py").write_text("")
+    (pkg / "io" / "a.py").write_text("from .b import f\n")
+    (pkg / "io" / "b.py").write_text("def f():\n    from . import a\n    return a\n")
+    (pkg / "c.py").write_text("from .io import a\nimport palpbayes.io.b\n")
+    edges = tool.graph(pkg)
+    assert edges["palpbayes.io.a"] == {"palpbayes.io.b"}
+    assert edges["palpbayes.io.b"] == {"palpbayes.io.a"}
+    assert edges["palpbayes.c"] == {"palpbayes.io.a", "palpbayes.io.b"}
+    assert tool.cycles(edges) == [["palpbayes.io.a", "palpbayes.io.b"]]
+    text = tool.dot(edges, pkg)
+    assert text.startswith("digraph") and '"palpbayes.c" -> "palpbayes.io.a";' in text
+    assert 'label="palpbayes.io";' in text
+
+
+def test_cli_exit_status(capsys):
+    assert _tool().main([]) == 0
+    assert "no import cycles" in capsys.readouterr().out
+    assert _tool().main(["--dot"]) == 0
+    assert capsys.readouterr().out.startswith("digraph palpbayes {")

@@ -1,0 +1,179 @@
+#!/usr/bin/env python
+"""Import graph of the palpbayes package: find cycles, or print it as Graphviz DOT.
+
+Every ``import`` / ``from ... import`` statement in ``palpbayes/`` counts, including those inside
+functions (a function-level import hides a cycle from Python's import machinery, not from this
+check).  Edges go module -> module within palpbayes; ``from . import x`` resolves to the
+submodule ``x`` when one exists, else to the package (its ``__init__``).
+
+Usage::
+
+    python tools/import_graph.py          # print cycles; exit 1 if there are any, else 0
+    python tools/import_graph.py --dot    # Graphviz DOT of module -> module edges, one
+                                          # cluster per subpackage
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import sys
+from collections.abc import Iterable
+from pathlib import Path
+
+PACKAGE = "palpbayes"
+ROOT = Path(__file__).resolve().parents[1] / PACKAGE
+
+
+def modules(root: Path = ROOT) -> dict[str, Path]:
+    """Dotted module name -> file, for every .py file under ``root`` (packages by __init__)."""
+    out = {}
+    for path in sorted(root.rglob("*.py")):
+        parts = list(path.relative_to(root.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = path
+    return out
+
+
+def _resolve(name: str, mods: dict[str, Path]) -> str | None:
+    """The longest prefix of ``name`` that is a palpbayes module (None outside the package)."""
+    parts = name.split(".")
+    while parts:
+        candidate = ".".join(parts)
+        if candidate in mods:
+            return candidate
+        parts.pop()
+    return None
+
+
+def imports_of(module: str, mods: dict[str, Path]) -> set[str]:
+    """Palpbayes modules imported anywhere in ``module`` (module level or inside functions)."""
+    tree = ast.parse(mods[module].read_text(encoding="utf-8"), filename=str(mods[module]))
+    is_package = mods[module].name == "__init__.py"
+    package = module if is_package else module.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                if node.level > 1:
+                    base = base[: len(base) - (node.level - 1)]
+                stem = ".".join(base + ([node.module] if node.module else []))
+            else:
+                stem = node.module or ""
+            # ``from pkg import sub`` imports the submodule pkg.sub when there is one
+            targets = [f"{stem}.{alias.name}" if f"{stem}.{alias.name}" in mods else stem
+                       for alias in node.names]
+        else:
+            continue
+        for target in targets:
+            resolved = _resolve(target, mods)
+            if resolved is not None and resolved != module:
+                found.add(resolved)
+    return found
+
+
+def graph(root: Path = ROOT) -> dict[str, set[str]]:
+    """Module -> set of palpbayes modules it imports."""
+    mods = modules(root)
+    return {module: imports_of(module, mods) for module in mods}
+
+
+def cycles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (or a self-loop), each
+    sorted, by Tarjan's algorithm (iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    out: list[list[str]] = []
+    counter = 0
+    for start in sorted(edges):
+        if start in index:
+            continue
+        work = [(start, iter(sorted(edges[start])))]
+        index[start] = low[start] = counter
+        counter += 1
+        stack.append(start)
+        on_stack.add(start)
+        while work:
+            node, children = work[-1]
+            advanced = False
+            for child in children:
+                if child not in index:
+                    index[child] = low[child] = counter
+                    counter += 1
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(edges.get(child, ())))))
+                    advanced = True
+                    break
+                if child in on_stack:
+                    low[node] = min(low[node], index[child])
+            if advanced:
+                continue
+            work.pop()
+            if work:
+                parent = work[-1][0]
+                low[parent] = min(low[parent], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1 or node in edges.get(node, ()):
+                    out.append(sorted(component))
+    return sorted(out)
+
+
+def dot(edges: dict[str, set[str]], root: Path = ROOT) -> str:
+    """Graphviz DOT text: one node per module, clustered by (sub)package; a package's node
+    (its ``__init__``) sits in its own cluster."""
+    mods = modules(root)
+    groups: dict[str, list[str]] = {}
+    for module in edges:
+        is_package = module in mods and mods[module].name == "__init__.py"
+        group = module if is_package else module.rpartition(".")[0]
+        groups.setdefault(group, []).append(module)
+    lines = [f"digraph {PACKAGE} {{", "  rankdir=LR;", "  node [shape=box, fontsize=10];"]
+    for i, (group, members) in enumerate(sorted(groups.items())):
+        lines.append(f'  subgraph cluster_{i} {{')
+        lines.append(f'    label="{group}";')
+        lines.extend(f'    "{m}";' for m in sorted(members))
+        lines.append("  }")
+    for module in sorted(edges):
+        lines.extend(f'  "{module}" -> "{target}";' for target in sorted(edges[module]))
+    lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: Iterable[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--dot", action="store_true",
+                        help="print a Graphviz DOT of module -> module edges instead")
+    args = parser.parse_args(list(argv) if argv is not None else None)
+    edges = graph()
+    if args.dot:
+        sys.stdout.write(dot(edges))
+        return 0
+    found = cycles(edges)
+    n_edges = sum(len(t) for t in edges.values())
+    if not found:
+        print(f"no import cycles ({len(edges)} modules, {n_edges} edges)")
+        return 0
+    for component in found:
+        print("import cycle: " + " <-> ".join(component))
+        for module in component:
+            inside = sorted(edges[module] & set(component))
+            print(f"  {module} -> {', '.join(inside)}")
+    return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
