@@ -181,3 +181,14 @@ def test_fit_bayes_itself_carries_the_model_checks():
                                             "depth_consistency", "ppc"]
     assert res.summary_row()["model_ok"] is False
     assert res.converged  # sampling is fine: the misfit is a separate verdict
+
+
+def test_a_small_offset_is_named_in_the_least_squares_row():
+    """8 mN offset (within the sensor's ±48 mN spec, so no 'untared' note): the paper's model
+    has no offset term, its residuals sit at a constant level before contact, and the check
+    says so; the Bayesian row, which fits F0, passes."""
+    tr = simulate_trace(111e3, PARA, thickness=0.03, rng=2, force_offset=0.008)
+    rows = {r["method"]: r for r in fit_trace(tr, FitOptions(method="both", seed=1)).rows}
+    assert not rows["lsq"]["model_ok"] and "constant offset" in rows["lsq"]["flags"]
+    assert "untared sensor: the pre-contact force" not in rows["lsq"]["flags"]
+    assert rows["bayes"]["model_ok"] and not rows["bayes"]["flags"], rows["bayes"]["flags"]

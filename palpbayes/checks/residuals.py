@@ -113,7 +113,8 @@ def binned_residuals(z, residuals, z_surf: float | None, sigma, *, phi: float = 
 
 
 def _pattern(b: dict) -> tuple[str, str, dict]:
-    """Name the residual pattern of failed bins: ('drift' | 'onset' | 'shape', text, scores).
+    """Name the residual pattern of failed bins: ('drift' | 'offset' | 'onset' | 'shape', text,
+    scores).
 
     Scores (chi² shares of the standardized bin means z_b):
     ``pre_line``, the part of the pre-contact bins' spread about their mean that a straight
@@ -122,8 +123,11 @@ def _pattern(b: dict) -> tuple[str, str, dict]:
     first two contact bins; ``deep``, the remaining contact bins; ``near_excess``, the
     standardized step of the bin just above the surface over the mean of the farther
     pre-contact bins.  Drift: ``pre_line`` > half of chi² and > ``deep``.  Onset: |near_excess|
-    > 3 with the sign of the first contact bin and ``deep`` < 0.9·``near``.  Else a shape misfit
-    of the contact law.
+    > 3 with the sign of the first contact bin and ``deep`` < 0.9·``near``.  ``pre_level``, the
+    chi² of the pre-contact bins' common (weighted mean) level: offset, when it is over 30 % of
+    chi² and above ``pre_line`` — a force offset the model lacks (an untared sensor fitted by
+    the paper's least squares, which has no offset term).  Else a shape misfit of the contact
+    law.
     """
     zb = b["means"] / b["sd"]
     kinds = b["contact"]
@@ -131,7 +135,7 @@ def _pattern(b: dict) -> tuple[str, str, dict]:
     con = np.flatnonzero(kinds)
     total = float(np.sum(zb**2))
     scores = {"pre_line": 0.0, "near": 0.0, "deep": float(np.sum(zb[con[2:]] ** 2)),
-              "near_excess": 0.0}
+              "near_excess": 0.0, "pre_level": 0.0}
     if pre.size >= 3:
         w = 1.0 / b["sd"][pre] ** 2
         x = b["depth"][pre]
@@ -140,6 +144,9 @@ def _pattern(b: dict) -> tuple[str, str, dict]:
         ym = np.sum(w * y) / np.sum(w)
         sxx = np.sum(w * (x - xm) ** 2)
         scores["pre_line"] = float(np.sum(w * (x - xm) * (y - ym)) ** 2 / sxx) if sxx > 0 else 0.0
+    if pre.size >= 2:
+        w = 1.0 / b["sd"][pre] ** 2
+        scores["pre_level"] = float(np.sum(w * b["means"][pre]) ** 2 / np.sum(w))
     if pre.size >= 2:
         near, far = pre[-1], pre[:-1]
         w = 1.0 / b["sd"][far] ** 2
@@ -153,6 +160,10 @@ def _pattern(b: dict) -> tuple[str, str, dict]:
     if scores["pre_line"] > 0.5 * total and scores["pre_line"] > scores["deep"]:
         return "drift", ("pre-contact residuals ramp linearly with height: baseline drift or "
                          "tilt -> linear baseline (F1) or re-tare"), scores
+    if scores["pre_level"] > 0.3 * total and scores["pre_level"] > scores["pre_line"]:
+        return "offset", ("pre-contact residuals sit at a constant offset: a force offset the "
+                          "model lacks (an untared sensor; the paper's least squares has no "
+                          "offset term) -> --tare, or the Bayesian fit's F0"), scores
     ex = scores["near_excess"]
     if (abs(ex) > 3 and con.size and np.sign(ex) == np.sign(zb[con[0]])
             and scores["deep"] < 0.9 * scores["near"]):
