@@ -560,3 +560,20 @@ def test_stiffening_plot_with_a_fit_object():
     line = [ln for ln in ax.lines if "fitted" in ln.get_label()][0]
     assert np.max(line.get_ydata()) == pytest.approx(130.0, rel=1e-3)
     _band_contains(ax, "credible band", line.get_label())
+
+
+def test_diagnostics_page_counts_failed_model_checks(fitted):
+    """Failed model checks reach the report (issue 12), per method."""
+    from palpbayes.report.pages_diagnostics import _model_check_line
+
+    out, _, _ = fitted
+    res = load_results(out)
+    line = _model_check_line(res)
+    s = res.summary
+    for method, label in (("bayes", "Bayesian"), ("lsq", "least-squares")):
+        ran = s[(s["method"] == method) & s["model_ok"].notna()]
+        if len(ran):
+            bad = int((ran["model_ok"].astype(str).str.lower() == "false").sum())
+            assert f"{bad} of {len(ran)} {label} fits" in line, line
+    res.summary = s.drop(columns=["model_ok"])
+    assert "not run" in _model_check_line(res)

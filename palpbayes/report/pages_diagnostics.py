@@ -28,6 +28,25 @@ def _diag_highlight(gtab: pd.DataFrame) -> Callable[[int, str, str], str | None]
     return hl
 
 
+def _model_check_line(res: ResultsFolder) -> str:
+    """How many fits of each method fail a model-adequacy check, and the causes named most."""
+    s = res.summary
+    if "model_ok" not in s:
+        return "Model checks: not run (results of an older palpbayes)."
+    parts = []
+    for method, label in (("bayes", "Bayesian"), ("lsq", "least-squares")):
+        m = s[s["method"] == method]
+        ran = m[m["model_ok"].notna()]
+        if len(ran):
+            bad = int((~ran["model_ok"].map(parse_bool)).sum())
+            parts.append(f"{bad} of {len(ran)} {label} fits")
+    if not parts:
+        return "Model checks: none ran."
+    return ("Model checks (free exponent, residual structure, depth consistency, posterior "
+            f"predictive) fail for {' and '.join(parts)}; each failure names its likely cause "
+            "in the flags column of summary.csv.")
+
+
 def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
     from ..bayes.diagnostics import ESS_MIN, RHAT_MAX
 
@@ -36,7 +55,8 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
     rmax = float(b["rhat_max"].max()) if len(b) else float("nan")
     emin = float(b["ess_min"].min()) if len(b) else float("nan")
     crit = (f"criteria: R-hat ≤ {RHAT_MAX}, bulk and tail ESS ≥ {ESS_MIN:.0f}, autocorrelation "
-            "time stable before the step cap, no prior-dominated surface or bound-hitting E*")
+            "time stable before the step cap, no bimodal or prior-dominated surface, no "
+            "posterior at a prior bound")
     pooled_bad: list[str] = []
     if res.pooled is not None and "converged" in res.pooled:
         pooled_bad = [f"{r['material']} {r['tip']}" for _, r in res.pooled.iterrows()
@@ -55,6 +75,7 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
                  "(marked (!) in the summary table).")
     elif res.pooled is not None and len(res.pooled):
         head += f" All {len(res.pooled)} pooled (hierarchical) chains converged."
+    head += " " + _model_check_line(res)
     groups = []
     for mat, tip in res.groups():
         g = b[(b["material"].fillna("").astype(str) == mat) & (b["tip"].astype(str) == tip)]
