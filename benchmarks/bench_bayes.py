@@ -5,7 +5,8 @@
 
 The Cramér-Rao bound is computed at the true parameters from the Fisher information of the
 mean parameters (E*, z_surf, F0) under iid Gaussian noise, I = JᵀJ/sigma² with
-J = [s(d), E*·s'(d), 1] (sigma decouples, DESIGN §8).  Run: ``python benchmarks/bench_bayes.py``.
+J = [s(d), E*·s'(d), 1] (sigma decouples, docs/design.md §8).
+Run: ``python benchmarks/bench_bayes.py``.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Batch fitting of a campaign: every trace of a manifest, in parallel, resumable.
 
 :func:`fit_campaign` runs :func:`palpbayes.fitjob.fit_trace` on every trace over a process pool
-and writes a results folder (DESIGN §5, §7)::
+and writes a results folder (docs/design.md §5, §7)::
 
     OUT_DIR/
       summary.csv               one row per trace × method, columns fitjob.SUMMARY_COLUMNS

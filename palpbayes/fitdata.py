@@ -2,7 +2,7 @@
 
 Shared by the least-squares baseline and the Bayesian model so both fit the same points.
 
-Rules (DESIGN §2):
+Rules (docs/design.md §2):
 
 * only the loading segment is used (approach + indentation, no hold/retract);
 * the force is read against the pre-contact *baseline* (:mod:`palpbayes.baseline`): a sensor

@@ -27,7 +27,7 @@ __all__ = ["FitOptions", "FitOutcome", "fit_trace", "check_fittable", "SUMMARY_C
 
 METHODS = ("bayes", "lsq", "both")
 
-#: Columns of ``summary.csv`` in order (DESIGN §7 first, then extras).
+#: Columns of ``summary.csv`` in order (docs/design.md §7 first, then extras).
 SUMMARY_COLUMNS = [
     "trace_id", "method", "tip", "n_points", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa",
     "Estar_pa", "z_surf_m", "z_surf_sd_m", "sigma_n", "converged", "rhat_max", "ess_min",
@@ -226,7 +226,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     of its own fit.  A least-squares failure (the paper's model has no offset) does not stop
     the Bayesian fit: the row says why.
 
-    For tip ``sphere`` (the exact Sneddon law, DESIGN §1) the paper's choice is also fitted:
+    For tip ``sphere`` (the exact Sneddon law, docs/design.md §1) the paper's choice is also fitted:
     least squares with the paraboloid (Hertz) law at the sphere's radius on the same points
     (same window, constraint, Poisson ratio and thickness model).  Every row of the trace gets
     ``E_hertz_pa`` and ``E_hertz_rel_diff`` = (E_hertz − E)/E with the row's own E; Hertz

@@ -1,4 +1,4 @@
-"""Denavit–Hartenberg forward kinematics of Universal Robots arms (DESIGN §2).
+"""Denavit–Hartenberg forward kinematics of Universal Robots arms (docs/design.md §2).
 
 The tip height used by the contact models comes from the joint encoders, not from the robot's
 own TCP estimate: each joint transform is built with the *standard* (distal) DH convention as

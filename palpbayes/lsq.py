@@ -1,4 +1,4 @@
-"""The paper's least-squares baseline (DESIGN §2, paper eqs. 12-13).
+"""The paper's least-squares baseline (docs/design.md §2, paper eqs. 12-13).
 
 For a trial surface height z_s the force law F = E*·s(z_s − z) is linear in E* (k = E*·g for
 power laws), so E* has the closed form
@@ -98,7 +98,7 @@ class LSQResult:
     notes: tuple[str, ...] = ()
 
     def summary_row(self) -> dict:
-        """One row of ``summary.csv`` (DESIGN §7); Bayesian-only columns are empty."""
+        """One row of ``summary.csv`` (docs/design.md §7); Bayesian-only columns are empty."""
         return {
             "trace_id": self.trace_id,
             "method": "lsq",

@@ -2,7 +2,7 @@
 
 **Peak-to-peak to sigma.**  A force sensor's noise is specified as a peak-to-peak (p-p) value;
 palpbayes reads it as ±3 sigma, i.e. sigma = p-p / 6, the range holding 99.7 % of Gaussian
-samples.  With the paper's 48 mN this gives sigma = 8 mN, the value used in DESIGN §3.  (The
+samples.  With the paper's 48 mN this gives sigma = 8 mN, the value used in docs/design.md §3.  (The
 range of n iid Gaussian samples grows with n — about 7.2 sigma for 3,840 samples — so the
 convention is a specification, not the observed range of a long record.)
 """

@@ -1,4 +1,4 @@
-"""The paper's published numbers (DESIGN §2): specimens, tips, robot estimates.
+"""The paper's published numbers (docs/design.md §2): specimens, tips, robot estimates.
 
 UR3e robotic palpation of polyethylene foam with an Instron 4502 compression test as ground
 truth.  Used by the simulator (to reproduce the campaign) and by the comparison tables (the
@@ -51,7 +51,7 @@ class Material:
 
 
 class RobotEstimate(NamedTuple):
-    """One published robot estimate (DESIGN §2); err_pct = (GT - E)/GT·100."""
+    """One published robot estimate (docs/design.md §2); err_pct = (GT - E)/GT·100."""
 
     material: str
     tip: str
@@ -60,24 +60,26 @@ class RobotEstimate(NamedTuple):
     err_pct: float
 
 
-#: The paper's foam specimens (DESIGN §2): Instron 4502 E ± sd (50 mm/min, 25 Hz, up to 5 mm),
-#: polyethylene foam blocks 50 × 50 mm, White 30 mm, Pink and Grey 20 mm thick.
+#: The paper's foam specimens (docs/design.md §2): Instron 4502 E ± sd (50 mm/min, 25 Hz, up
+#: to 5 mm), polyethylene foam blocks 50 × 50 mm, White 30 mm, Pink and Grey 20 mm thick.
 PAPER_MATERIALS: MappingProxyType[str, Material] = MappingProxyType({
     "White": Material("White", 111e3, 13e3, 0.030),
     "Pink": Material("Pink", 136e3, 14e3, 0.020),
     "Grey": Material("Grey", 194e3, 17e3, 0.020),
 })
 
-#: The paper's tips (DESIGN §2): flat punch radius 10 mm, sphere radius 10 mm (simulated with
-#: the exact Sneddon law; the paper fitted it with Hertz), paraboloid radius 11.7 mm.
+#: The paper's tips (docs/design.md §2): flat punch radius 10 mm, sphere radius 10 mm
+#: (simulated with the exact Sneddon law; the paper fitted it with Hertz), paraboloid radius
+#: 11.7 mm.
 PAPER_TIPS: MappingProxyType[str, Tip] = MappingProxyType({
     "flat": Tip("flat", radius=0.010),
     "sphere": Tip("sphere", radius=0.010),
     "paraboloid": Tip("paraboloid", radius=0.0117),
 })
 
-#: The paper's published robot estimates E ± sd [kPa] and error vs ground truth [%] (DESIGN §2),
-#: as printed (err = (GT - E)/GT).  ``pandas.DataFrame(PAPER_ROBOT_ESTIMATES)`` gives the table.
+#: The paper's published robot estimates E ± sd [kPa] and error vs ground truth [%]
+#: (docs/design.md §2), as printed (err = (GT - E)/GT).
+#: ``pandas.DataFrame(PAPER_ROBOT_ESTIMATES)`` gives the table.
 #: Caution: the printed sphere errors do not follow from the printed E and GT: recomputed they
 #: are -11.5 / -5.9 / -4.2 % against the printed -10.8 / -4.1 / -5.9 % (Pink and Grey look
 #: swapped); flat and paraboloid agree to 0.1 %.  Tables should recompute err from E_kPa.
@@ -93,7 +95,7 @@ PAPER_ROBOT_ESTIMATES: tuple[RobotEstimate, ...] = (
     RobotEstimate("Grey", "paraboloid", 174.0, 19.6, 10.3),
 )
 
-#: The paper's mean surface-position error [m] by tip (DESIGN §2).
+#: The paper's mean surface-position error [m] by tip (docs/design.md §2).
 PAPER_SURFACE_ERROR_M: MappingProxyType[str, float] = MappingProxyType(
     {"sphere": 0.38e-3, "paraboloid": 0.39e-3}
 )

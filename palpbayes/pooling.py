@@ -1,4 +1,4 @@
-"""Hierarchical pooling of repeated indentations of one material × tip (DESIGN §3, item 3).
+"""Hierarchical pooling of repeated indentations of one material × tip (docs/design.md §3, item 3).
 
 Model
 -----

@@ -12,7 +12,7 @@ ground-truth step (``palpbayes groundtruth``) and the compare step (``palpbayes 
 
 :func:`load_results` reads the tables into a :class:`ResultsFolder`; :func:`load_fit` rebuilds
 one trace's :class:`~palpbayes.bayes.BayesResult` for plotting.  Reading only: nothing here
-writes (DESIGN §4).
+writes (docs/design.md §4).
 """
 
 from __future__ import annotations

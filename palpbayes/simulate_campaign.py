@@ -1,6 +1,6 @@
 """Synthetic campaigns: a folder of palpation traces, Instron exports and the truth behind them.
 
-:func:`simulate_campaign` writes the layout of DESIGN §5::
+:func:`simulate_campaign` writes the layout of docs/design.md §5::
 
     OUT_DIR/
       manifest.csv                 one row per trace (palpbayes.io.manifest columns)
@@ -12,7 +12,7 @@
       truth_materials.csv          material, E_pa, E_sd_pa, thickness_m, nu, width_m, length_m
 
 :func:`simulate_palpation_series` simulates repeated palpation of one specimen with the
-rest-time stiffening law of DESIGN §2.  Both are re-exported by :mod:`palpbayes.simulate`.
+rest-time stiffening law of docs/design.md §2.  Both are re-exported by :mod:`palpbayes.simulate`.
 """
 
 from __future__ import annotations
@@ -327,7 +327,7 @@ def _write_groundtruth(out: Path, tests: list[tuple[str, pd.DataFrame, float]]) 
 def rest_modulus(rest_time, c: Sequence[float]) -> np.ndarray:
     """E(t) = c1·exp(c2·t) + c3·exp(c4·t) [Pa], t the rest time since the last excitation [s].
 
-    The repeated-palpation stiffening law of DESIGN §2 (c1, c3 in Pa; c2, c4 in 1/s).
+    The repeated-palpation stiffening law of docs/design.md §2 (c1, c3 in Pa; c2, c4 in 1/s).
     """
     c1, c2, c3, c4 = (float(v) for v in c)
     t = np.asarray(rest_time, dtype=float)

@@ -4,9 +4,9 @@ The public face is :mod:`palpbayes.simulate`, which re-exports this module and
 :mod:`palpbayes.simulate_campaign` (this lower module imports neither).
 
 The simulator draws data from a *known* truth so that every estimator in palpbayes can be checked
-against it (bias, interval coverage, simulation-based calibration).  Conventions (DESIGN §1, §5):
-SI units; z is up, the tip moves down into the specimen, depth d = z_surf - z; the force is the
-compressive normal force, positive when pressing.
+against it (bias, interval coverage, simulation-based calibration).  Conventions
+(docs/design.md §1, §5): SI units; z is up, the tip moves down into the specimen, depth
+d = z_surf - z; the force is the compressive normal force, positive when pressing.
 
 Force model of one trace (every term optional except the contact law)::
 
@@ -25,12 +25,12 @@ linear function of z with slope -drift/speed [N/m].
 
 **Peak-to-peak to sigma.**  A sensor's "peak-to-peak noise" is read as ±3 sigma, the band that
 holds 99.7 % of Gaussian samples, so sigma = pp/6: the paper's 48 mN gives sigma = 8 mN (the
-value DESIGN §3 uses).  Note that the *observed* range of N samples grows with N (about 6.4
+value docs/design.md §3 uses).  Note that the *observed* range of N samples grows with N (about 6.4
 sigma for N = 800 and 7.2 sigma for N = 3840), so a range measured over a long record overstates
 the ±3 sigma convention; ``tests/test_simulate.py`` checks both facts.
 
 Paper numbers (:data:`PAPER_MATERIALS`, :data:`PAPER_TIPS`, :data:`PAPER_ROBOT_ESTIMATES`) are
-those of DESIGN §2 (UR3e robotic palpation of polyethylene foam, Instron 4502 ground truth).
+those of docs/design.md §2 (UR3e robotic palpation of polyethylene foam, Instron 4502 ground truth).
 Campaign folders are written by :func:`~palpbayes.simulate_campaign.simulate_campaign`.
 """
 

@@ -1,4 +1,6 @@
-"""Multi-palpation stiffening: E(t) = c1·e^(c2·t) + c3·e^(c4·t) versus rest time t (DESIGN §2).
+"""Multi-palpation stiffening: E(t) = c1·e^(c2·t) + c3·e^(c4·t) versus rest time t.
+
+The law and its numbers: docs/design.md §2.
 
 Repeated palpation of foam without rest stiffens it; the paper describes the modulus measured
 after a rest t [s] since the previous excitation by a sum of two exponentials.  This module fits

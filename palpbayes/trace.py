@@ -1,7 +1,7 @@
 """The indentation trace: time, tip height and force in SI units, plus metadata.
 
-Conventions (DESIGN §5): z is *up* in the robot base frame, so pressing moves the tip down and
-depth is d = z_surf - z; force is the compressive normal force, positive when pressing.
+Conventions (docs/design.md §5): z is *up* in the robot base frame, so pressing moves the tip
+down and depth is d = z_surf - z; force is the compressive normal force, positive when pressing.
 """
 
 from __future__ import annotations

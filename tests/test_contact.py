@@ -125,7 +125,7 @@ def test_sneddon_tends_to_hertz_and_is_three_percent_below_at_0p3():
     assert abs(ratios[0] - 1) < 1e-8
     assert abs(ratios[1] - 1) < 2e-6
     assert all(np.diff(ratios) < 0)  # the deficit grows with depth
-    assert 0.02 < 1 - ratios[-1] < 0.031  # 3.0 % at d/R = 0.3 (DESIGN §1)
+    assert 0.02 < 1 - ratios[-1] < 0.031  # 3.0 % at d/R = 0.3 (docs/design.md §1)
 
 
 def test_force_zero_for_non_positive_depth_and_vectorised():

@@ -1,6 +1,6 @@
 """The paper's Hertz fit of sphere traces (summary.csv ``E_hertz_pa``, ``E_hertz_rel_diff``).
 
-Tip ``sphere`` is the exact Sneddon law; the paper fitted its sphere with Hertz (DESIGN §1).
+Tip ``sphere`` is the exact Sneddon law; the paper fitted its sphere with Hertz (docs/design.md §1).
 On traces simulated with Sneddon's law, least squares with the paraboloid law at the sphere's
 radius must give an E a few per cent *below* the Sneddon E, more so the deeper the indentation.
 """

@@ -153,12 +153,56 @@ def dot(edges: dict[str, set[str]], root: Path = ROOT) -> str:
     return "\n".join(lines) + "\n"
 
 
+def layers(edges: dict[str, set[str]]) -> dict[str, set[str]]:
+    """The graph collapsed to subpackages and top-level modules (``palpbayes.bayes.fit`` ->
+    ``bayes``; the package's own ``__init__`` -> ``palpbayes``), self-edges dropped."""
+    def group(module: str) -> str:
+        parts = module.split(".")
+        return parts[1] if len(parts) > 1 else PACKAGE
+
+    out: dict[str, set[str]] = {}
+    for module, targets in edges.items():
+        a = group(module)
+        out.setdefault(a, set())
+        out[a] |= {group(t) for t in targets} - {a}
+    return out
+
+
+#: Leaf modules that nearly every module imports; left out of the drawing to keep it legible.
+LEAVES = ("errors", "units")
+
+
+def layers_dot(edges: dict[str, set[str]], hide: Iterable[str] = LEAVES) -> str:
+    """Graphviz DOT of :func:`layers`, drawn top-down: every arrow points to a lower layer.
+    Arrows into the ``hide`` leaves (imported nearly everywhere, importing nothing) are left
+    out and the leaves named in a note."""
+    hide = set(hide)
+    lay = {a: t - hide for a, t in layers(edges).items() if a not in hide}
+    lines = [f"digraph {PACKAGE}_layers {{", "  rankdir=TB; ranksep=0.35; nodesep=0.15;",
+             '  node [shape=box, style="rounded,filled", fillcolor="#eef3fa", fontsize=11, '
+             'fontname="Helvetica"];', '  edge [color="#7a8aa0", arrowsize=0.6];']
+    lines.extend(f'  "{n}";' for n in sorted(lay))
+    if hide:
+        lines.append(f'  note [shape=note, fillcolor="#ffffff", label="not drawn: '
+                     f'{", ".join(sorted(hide))}\\n(leaves imported nearly everywhere)"];')
+    for a in sorted(lay):
+        lines.extend(f'  "{a}" -> "{t}";' for t in sorted(lay[a]))
+    lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: Iterable[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--dot", action="store_true",
                         help="print a Graphviz DOT of module -> module edges instead")
+    parser.add_argument("--layers", action="store_true",
+                        help="print a Graphviz DOT of the subpackage-level graph instead "
+                             "(docs/import-graph.svg: dot -Tsvg)")
     args = parser.parse_args(list(argv) if argv is not None else None)
     edges = graph()
+    if args.layers:
+        sys.stdout.write(layers_dot(edges))
+        return 0
     if args.dot:
         sys.stdout.write(dot(edges))
         return 0

@@ -1,4 +1,4 @@
-"""Bayesian model of one indentation trace, sampled with emcee (DESIGN §3).
+"""Bayesian model of one indentation trace, sampled with emcee (docs/design.md §3).
 
 >>> from palpbayes.bayes import fit_bayes                       # doctest: +SKIP
 >>> result = fit_bayes(trace, noise="gaussian", seed=1)         # doctest: +SKIP

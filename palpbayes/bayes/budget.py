@@ -9,8 +9,8 @@ Carlo, one independent input draw per posterior draw:
 =================  =====================================  ===================================
 input              default distribution                   effect
 =================  =====================================  ===================================
-Poisson ratio nu   Uniform(nu − 0.05, nu + 0.05) in        factor 1 − nu² (DESIGN §8: PE foam
-                   [0, 0.4999] (half_width=0 fixes it)     estimates 0.27-0.33)
+Poisson ratio nu   Uniform(nu − 0.05, nu + 0.05) in        factor 1 − nu² (design.md §8: PE foam
+                   [0, 0.5] (half_width=0 fixes it)        estimates 0.27-0.33)
 tip radius         Uniform ±1 % (machining tolerance)     E* ∝ 1/g(R): refit of the model curve
 force gain         Normal(1, 1 %) (calibration)           E* ∝ 1/gain
 compliance C       Uniform(0, 2e-6 m/N) robot + sensor    depth d − C·F: refit of the curve

@@ -131,7 +131,7 @@ class TraceLikelihood:
 
     @property
     def z_bounds(self) -> tuple[float, float]:
-        """[m] Support of the z_surf prior: the whole loading range (DESIGN §3.6)."""
+        """[m] Support of the z_surf prior: the whole loading range (docs/design.md §3.6)."""
         return self.data.z_prior
 
     def grid(self) -> np.ndarray:

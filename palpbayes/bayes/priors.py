@@ -1,4 +1,4 @@
-"""Priors of the per-trace model (DESIGN §3, §3.6).
+"""Priors of the per-trace model (docs/design.md §3, §3.6).
 
 Parameters, in the order of the sampler's vector θ (:func:`param_names`):
 

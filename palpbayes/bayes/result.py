@@ -95,7 +95,7 @@ class BayesResult:
         return pd.DataFrame(rows).set_index("parameter")
 
     def summary_row(self) -> dict:
-        """One row of ``summary.csv`` (DESIGN §7): E with the full budget."""
+        """One row of ``summary.csv`` (docs/design.md §7): E with the full budget."""
         E = self.draws("E_total")
         Es = self.draws("E")
         z = self.draws("z_surf")

@@ -10,13 +10,13 @@ floor, not the whole rule.
 
 Stopping rule (emcee's autocorrelation tutorial): every ``check_every`` steps the integrated
 autocorrelation time tau of each parameter is estimated; sampling stops once the chain is longer
-than ``tau_factor``·tau (default 50, the DESIGN's N > 50·tau) for every parameter and tau changed
-by less than ``tau_rtol`` since the last check — and, when an ``accept`` test is given (the
+than ``tau_factor``·tau (default 50: N > 50·tau, docs/design.md §3) for every parameter and tau
+changed by less than ``tau_rtol`` since the last check — and, when an ``accept`` test is given (the
 fit passes R-hat <= 1.01 and ESS >= 400), that test passes — or at ``max_steps``.  Burn-in
 ``ceil(2·max tau)`` is discarded and the chain thinned by ``max(1, floor(min tau / 2))``.
 
 Seeding: emcee has no ``seed`` argument and copies NumPy's global state when built, so the
-sampler's own ``RandomState`` is replaced by one seeded from ``seed`` (DESIGN §8).
+sampler's own ``RandomState`` is replaced by one seeded from ``seed`` (docs/design.md §8).
 """
 
 from __future__ import annotations

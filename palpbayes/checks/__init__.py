@@ -1,4 +1,4 @@
-"""Model-adequacy checks of a contact fit (DESIGN §3 point 7).
+"""Model-adequacy checks of a contact fit (docs/design.md §3 point 7).
 
 A 3,840-point trace pins E* to a fraction of a percent, so a fit can be statistically tight and
 physically wrong.  Each check here compares the data with what the fitted contact law

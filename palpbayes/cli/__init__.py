@@ -1,4 +1,4 @@
-"""The ``palpbayes`` command (DESIGN §7).
+"""The ``palpbayes`` command (docs/design.md §7).
 
 Each subcommand lives in its own module with ``register(subparsers)`` and ``run(args) -> int``.
 Exit status: 0 on success, 2 on bad input (one clear line on stderr), 1 otherwise.

@@ -1,4 +1,4 @@
-"""``palpbayes compare RESULTS_DIR [--groundtruth FILE] [--seed N]`` (DESIGN §7).
+"""``palpbayes compare RESULTS_DIR [--groundtruth FILE] [--seed N]`` (docs/design.md §7).
 
 Reads ``RESULTS_DIR/summary.csv`` and the posteriors written by ``palpbayes fit`` on a campaign,
 pools the Bayesian fits per material × tip (:mod:`palpbayes.pooling`), compares least squares,

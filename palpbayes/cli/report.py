@@ -1,4 +1,4 @@
-"""``palpbayes report [INPUT] [-o FILE.pdf]``: the PDF report of a campaign (DESIGN §7).
+"""``palpbayes report [INPUT] [-o FILE.pdf]``: the PDF report of a campaign (docs/design.md §7).
 
 INPUT is one of
 

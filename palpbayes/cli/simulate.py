@@ -1,4 +1,4 @@
-"""``palpbayes simulate OUT_DIR``: write a synthetic palpation campaign (DESIGN §7).
+"""``palpbayes simulate OUT_DIR``: write a synthetic palpation campaign (docs/design.md §7).
 
 The folder holds a manifest, one CSV per trace, Instron-like ground-truth exports and the true
 values (see :mod:`palpbayes.simulate_campaign`).  The shipped example was made with::

@@ -1,4 +1,4 @@
-"""Contact laws for rigid axisymmetric tips on an elastic half-space (DESIGN §1).
+"""Contact laws for rigid axisymmetric tips on an elastic half-space (docs/design.md §1).
 
 Every law is written as F = E*·s(d), with E* = E/(1-nu²) the effective modulus and s(d) the
 *shape function* [m²] of the tip (0 for d <= 0).  Power laws have s(d) = g·d^m, so

@@ -114,7 +114,7 @@ def dimitriadis_factor(
     return c[0] + chi * (c[1] + chi * (c[2] + chi * (c[3] + chi * c[4])))
 
 
-#: a/h grid of Hayes et al. (1972) as solved in DESIGN §1.
+#: a/h grid of Hayes et al. (1972) as solved in docs/design.md §1.
 HAYES_A_OVER_H = np.array([0.0, 0.2, 0.4, 0.6, 1.0])
 #: kappa(a/h) for nu = 0.3 and nu = 0.5 (rows), bonded flat punch.
 HAYES_KAPPA = np.array(

@@ -1,4 +1,4 @@
-"""Campaign manifests: one CSV row per trace (DESIGN §5).
+"""Campaign manifests: one CSV row per trace (docs/design.md §5).
 
 Columns (SI units; file paths relative to the manifest's folder):
 

@@ -1,4 +1,4 @@
-"""Read Universal Robots RTDE recordings and joint-angle traces (DESIGN §2, §5).
+"""Read Universal Robots RTDE recordings and joint-angle traces (docs/design.md §2, §5).
 
 Two inputs end up here:
 

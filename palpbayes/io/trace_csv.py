@@ -1,4 +1,4 @@
-"""Read and write indentation traces as CSV (DESIGN §5).
+"""Read and write indentation traces as CSV (docs/design.md §5).
 
 The canonical file has the columns ``time_s, z_m, force_n`` (SI, z up, force positive when
 pressing) or, instead of ``z_m``, the joint angles ``q0_rad … q5_rad`` from which z follows by

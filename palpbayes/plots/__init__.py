@@ -1,4 +1,4 @@
-"""Figures for papers and reports (matplotlib only here; DESIGN §4).
+"""Figures for papers and reports (matplotlib only here; docs/design.md §4).
 
 Every function draws with matplotlib's object API on an optional ``ax`` (or ``fig``) and returns
 the :class:`~matplotlib.figure.Figure`.  Without ``ax`` a new figure is made with

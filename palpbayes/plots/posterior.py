@@ -178,7 +178,7 @@ def plot_pair(
 
     The surface height and the modulus are strongly correlated (a higher surface means deeper
     indentation, hence a softer material), which is why the surface uncertainty dominates the
-    statistical part of the budget (DESIGN §8).  Draws are a random subset, rasterized; the
+    statistical part of the budget (docs/design.md §8).  Draws are a random subset, rasterized; the
     least-squares estimate is drawn with its Gauss-Newton ``level`` confidence ellipse.
 
     Parameters

@@ -127,7 +127,7 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     if o.get("max_depth") is not None:
         window += (f" Only samples shallower than {format_length(float(o['max_depth']), 6)} "
                    "are fitted.")
-    lines: list[tuple[str, str]] = [("h", "Contact models (DESIGN §1)")]
+    lines: list[tuple[str, str]] = [("h", "Contact models (docs/design.md §1)")]
     lines += [("t", ln) for ln in _wrap(
         "Rigid axisymmetric tip on an elastic half-space, F = E*·s(d) with E* = E/(1 − nu²) and "
         "depth d = z_surf − z_tip (F = 0 for d ≤ 0). Flat punch of radius a: F = 2·a·E*·d. "
