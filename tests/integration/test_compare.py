@@ -8,17 +8,16 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
+from presets import FAST
 
 import palpbayes.compare as compare
 from palpbayes import pooling
-from palpbayes.bayes import BudgetSpec, SamplerSettings
+from palpbayes.bayes import BudgetSpec
 from palpbayes.bayes.diagnostics import import_arviz
 from palpbayes.compare import COMPARISON_COLUMNS, _lsq_row, compare_campaign
 from palpbayes.compare_text import format_comparison
 from palpbayes.reference import gt_columns, new_specimen_sd
 
-FAST = SamplerSettings(n_walkers=32, max_steps=1000, min_steps=500, check_every=250,
-                       progress=False)
 Z90 = 1.6448536269514722  # Phi^-1(0.95)
 GT = pd.DataFrame({"material": ["White", "Grey"], "n": [5, 5],
                    "E_mean_pa": [100e3, 194e3], "E_sd_pa": [10e3, np.nan]})

@@ -3,7 +3,7 @@
 import importlib.util
 from pathlib import Path
 
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "import_graph.py"
+TOOL = Path(__file__).resolve().parents[2] / "tools" / "import_graph.py"
 
 
 def _tool():

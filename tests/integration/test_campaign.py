@@ -8,6 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 import pytest
+from presets import POOL_FAST, TINY
 
 import palpbayes.campaign as campaign
 import palpbayes.pooling as pooling
@@ -36,11 +37,6 @@ from palpbayes.simulate import (
     simulate_trace,
 )
 
-#: Plumbing only: short chains (flagged as not converged, which the tables must show).
-TINY = SamplerSettings(n_walkers=16, max_steps=300, min_steps=200, check_every=100,
-                       progress=False)
-POOL_FAST = SamplerSettings(n_walkers=32, max_steps=600, min_steps=400, check_every=200,
-                            progress=False)
 OPTS = FitOptions(method="both", settings=TINY, seed=5)
 
 

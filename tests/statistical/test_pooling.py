@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from presets import FAST
 from scipy import integrate, stats
 
 from palpbayes.bayes import BudgetSpec, SamplerSettings
@@ -17,10 +18,6 @@ from palpbayes.pooling import (
     systematic_factor,
 )
 from palpbayes.simulate import PAPER_TIPS, simulate_trace
-
-FAST = SamplerSettings(n_walkers=32, max_steps=1000, min_steps=500, check_every=250,
-                       progress=False)
-
 
 MU0 = float(np.log(1.2e5))
 

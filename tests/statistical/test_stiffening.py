@@ -5,15 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from presets import SHORT
 
-from palpbayes.bayes import SamplerSettings
 from palpbayes.errors import InputError
 from palpbayes.lsq import fit_lsq
 from palpbayes.simulate import PAPER_TIPS, simulate_palpation_series
 from palpbayes.stiffening import double_exponential, fit_stiffening, fit_stiffening_summary
 
-SHORT = SamplerSettings(n_walkers=40, max_steps=3000, min_steps=1500, check_every=500,
-                        progress=False)
 REST = np.geomspace(1.0, 600.0, 25)
 
 
