@@ -2,7 +2,7 @@
 
 Run from anywhere: ``python notebooks/make_notebooks.py``.  The committed ``.ipynb`` files are
 this script's output; edit the cells here, not in Jupyter, and regenerate.
-``tests/test_notebooks.py`` executes them.
+``tests/integration/test_notebooks.py`` executes them.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ palpbayes fit data/example-campaign/manifest.csv --out DIR --method both --seed 
 palpbayes compare DIR
 ```
 
-(`tests/test_notebooks.py` executes this notebook and checks that its `comparison.csv` equals
+(`tests/integration/test_notebooks.py` executes this notebook and checks that its `comparison.csv` equals
 the CLI's.)
 
 **Runtime.** Fitting the 27 traces takes about 1.5 min on two cores (about 3 s per trace and
@@ -263,7 +263,7 @@ budget adds a few per cent on top (notebook 01).
 
 **Runtime** about 2 min on one core: the AR(1) study uses only **4 replicate traces** (small on
 purpose, enough to show the effect, not to estimate a coverage probability; the calibration
-tests in `tests/test_calibration.py` do that properly).
+tests in `tests/statistical/test_calibration.py` do that properly).
 """),
     code("""
 %matplotlib inline

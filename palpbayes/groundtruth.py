@@ -103,7 +103,7 @@ EF10), so the ordinary-least-squares standard error ``sqrt(s² / sum((eps - mean
 ``s² = RSS/(n - 2)``, which assumes independent residuals, is too small.  It is kept as
 ``E_ols_sd_pa``; on the shipped phantoms ``E_sd_pa / E_ols_sd_pa`` has median 4.3 (1.1-10.0;
 EF50 4.3-6.5, EF30 1.9-10.0, EF10 1.1-7.2) and ``E_sd_pa`` is 0.1-4.0 % of E.  Calibration
-(tests/test_groundtruth.py): on straight lines with AR(1) residuals, the 90 % interval
+(tests/unit/test_groundtruth.py): on straight lines with AR(1) residuals, the 90 % interval
 ``E ± 1.645·E_sd_pa`` covers the true slope in 87 % of 200-point lines at phi = 0.6 (the OLS
 interval: 59 %); with 90 points (the phantoms' 0-5 % windows) it covers 85 % at phi = 0.5,
 79 % at phi = 0.8 and 72 % at phi = 0.9 (2000 replicates each): with few effectively

@@ -27,7 +27,7 @@ linear function of z with slope -drift/speed [N/m].
 holds 99.7 % of Gaussian samples, so sigma = pp/6: the paper's 48 mN gives sigma = 8 mN (the
 value docs/design.md §3 uses).  Note that the *observed* range of N samples grows with N (about 6.4
 sigma for N = 800 and 7.2 sigma for N = 3840), so a range measured over a long record overstates
-the ±3 sigma convention; ``tests/test_simulate.py`` checks both facts.
+the ±3 sigma convention; ``tests/unit/test_simulate.py`` checks both facts.
 
 Paper numbers (:data:`PAPER_MATERIALS`, :data:`PAPER_TIPS`, :data:`PAPER_ROBOT_ESTIMATES`) are
 those of docs/design.md §2 (UR3e robotic palpation of polyethylene foam, Instron 4502 ground truth).

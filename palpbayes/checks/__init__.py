@@ -29,7 +29,7 @@ F = E*·s(d) + F0 (+ F1·(z - z_ref)), d = z_surf - z, implies, and returns a
 statistical test *and* a physical effect size agree (:data:`THRESHOLDS`): exponent
 |m - m_law| > 3 se and > 3 % of m_law; binned residual chi² p < 0.01 and the largest bin mean
 > 0.2 sigma; posterior-predictive p < 0.01; depth consistency |E*_shallow/E*_all - 1| > 3 se
-and > 5 %.  They were calibrated on simulated traces (``tests/test_model_checks.py``).
+and > 5 %.  They were calibrated on simulated traces (``tests/unit/test_model_checks.py``).
 
 **Correlated noise.**  800 Hz force noise is autocorrelated.  The variance of the mean of n
 consecutive AR(1) samples with lag-1 coefficient phi and marginal sd sigma is

@@ -22,7 +22,7 @@ from .core import (
 )
 
 #: scipy.optimize.least_squares settings of the free-exponent fit: tight enough to recover a
-#: noise-free power law to 1e-6 in m (tests/test_model_checks.py).
+#: noise-free power law to 1e-6 in m (tests/unit/test_model_checks.py).
 _LSQ_OPTIONS = {"ftol": 1e-12, "xtol": 1e-12, "gtol": 1e-12, "x_scale": "jac", "max_nfev": 200}
 
 
