@@ -228,7 +228,8 @@ class ExactPosterior:
         lp = np.where(np.isfinite(lp), lp, -np.inf)
         a, b = lp[:-1], lp[1:]                      # (G-1, H) interval ends
         dz = np.diff(self.z)[:, None]
-        delta = b - a
+        with np.errstate(invalid="ignore"):
+            delta = b - a
         ok = np.isfinite(a) & np.isfinite(b)
         ad = np.abs(np.where(ok, delta, 0.0))
         # log ∫ exp(a + delta·t) dz over the interval = max(a, b) + log(dz·(1 − e^−|δ|)/|δ|)
