@@ -27,13 +27,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .contact import Tip, check_nu
-from .errors import InputError, OutputExistsError
-from .io.atomic import write_csv_atomic
-from .io.manifest import write_manifest
-from .io.trace_csv import write_trace
-from .noise import PAPER_NOISE_PP
-from .simulate_core import (
+from ..contact import Tip, check_nu
+from ..errors import InputError, OutputExistsError
+from ..io.atomic import write_csv_atomic
+from ..io.manifest import write_manifest
+from ..io.trace_csv import write_trace
+from ..noise import PAPER_NOISE_PP
+from ..trace import IndentationTrace
+from ..units import format_pressure
+from .trace import (
     PAPER_MATERIALS,
     PAPER_TIPS,
     Material,
@@ -42,8 +44,6 @@ from .simulate_core import (
     simulate_trace,
     write_compression_export,
 )
-from .trace import IndentationTrace
-from .units import format_pressure
 
 __all__ = ["simulate_campaign", "simulate_palpation_series", "rest_modulus", "child_seed"]
 

@@ -42,11 +42,11 @@ import numpy as np
 import pandas as pd
 from scipy.signal import lfilter
 
-from .contact import Tip, check_nu, effective_modulus, shape
-from .errors import GeometryError, InputError
-from .io.atomic import write_text_atomic
-from .noise import PAPER_NOISE_PP, PP_TO_SIGMA, sigma_from_pp
-from .paper import (  # re-exported: the simulator reproduces the paper's campaign
+from ..contact import Tip, check_nu, effective_modulus, shape
+from ..errors import GeometryError, InputError
+from ..io.atomic import write_text_atomic
+from ..noise import PAPER_NOISE_PP, PP_TO_SIGMA, sigma_from_pp
+from ..paper import (  # re-exported: the simulator reproduces the paper's campaign
     PAPER_MATERIALS,
     PAPER_ROBOT_ESTIMATES,
     PAPER_SURFACE_ERROR_M,
@@ -55,7 +55,7 @@ from .paper import (  # re-exported: the simulator reproduces the paper's campai
     RobotEstimate,
     paper_robot_estimates_frame,
 )
-from .trace import IndentationTrace
+from ..trace import IndentationTrace
 
 __all__ = [
     "PP_TO_SIGMA",

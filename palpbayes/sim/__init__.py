@@ -8,12 +8,12 @@ noise and misspecification knobs, the paper's numbers) and :mod:`palpbayes.simul
 
 from __future__ import annotations
 
-from .simulate_campaign import (
+from .campaign import (
     rest_modulus,
     simulate_campaign,
     simulate_palpation_series,
 )
-from .simulate_core import (
+from .trace import (
     PAPER_MATERIALS,
     PAPER_ROBOT_ESTIMATES,
     PAPER_SURFACE_ERROR_M,
