@@ -1,61 +1,38 @@
-"""Synthetic palpation traces, Instron compression curves and whole campaigns (one import).
+"""The simulator: synthetic palpation traces, compression tests and campaigns from a known truth.
 
-Re-exports :mod:`palpbayes.simulate_core` (one trace, one compression test: the force model,
-noise and misspecification knobs, the paper's numbers) and :mod:`palpbayes.simulate_campaign`
-(campaign folders, repeated palpation with rest-time stiffening).  Imports flow one way:
-``simulate`` -> ``simulate_campaign`` -> ``simulate_core``.
+One module per job, imports flowing one way (``campaign`` -> ``series``/``compression`` ->
+``trace`` -> ``force``):
+
+* :mod:`~palpbayes.sim.force` -- the noise-free contact force and its physics knobs (strain
+  stiffening, gradual onset, finite thickness, series compliance);
+* :mod:`~palpbayes.sim.trace` -- one palpation trace: motion, AR(1) force noise, offset, drift,
+  registration and encoder errors, with the truth in its metadata;
+* :mod:`~palpbayes.sim.compression` -- an Instron compression test and its export file;
+* :mod:`~palpbayes.sim.series` -- repeated palpation with rest-time stiffening;
+* :mod:`~palpbayes.sim.campaign` -- a whole campaign folder with its truth tables.
+
+The paper's numbers the simulator reproduces live in :mod:`palpbayes.paper`, the peak-to-peak
+noise convention in :mod:`palpbayes.noise` (both are shared with the fitting side).
+
+>>> from palpbayes.paper import PAPER_TIPS
+>>> from palpbayes.sim import simulate_trace
+>>> simulate_trace(111e3, PAPER_TIPS["sphere"], thickness=0.03, rng=1).n_points
+3840
 """
 
 from __future__ import annotations
 
-from .campaign import (
-    rest_modulus,
-    simulate_campaign,
-    simulate_palpation_series,
-)
-from .trace import (
-    PAPER_MATERIALS,
-    PAPER_ROBOT_ESTIMATES,
-    PAPER_SURFACE_ERROR_M,
-    PAPER_TIPS,
-    PP_TO_SIGMA,
-    STIFFENING_STRAIN0,
-    Material,
-    RobotEstimate,
-    ar1_noise,
-    onset_force_profile,
-    paper_robot_estimates_frame,
-    sigma_from_pp,
-    simulate_compression_test,
-    simulate_trace,
-    solve_series_compliance,
-    stiffening_factor,
-    toe_compression,
-    true_force,
-    write_compression_export,
-)
+from . import campaign, compression, force, series, trace
+from .campaign import *  # noqa: F403
+from .compression import *  # noqa: F403
+from .force import *  # noqa: F403
+from .series import *  # noqa: F403
+from .trace import *  # noqa: F403
 
-__all__ = [
-    "PP_TO_SIGMA",
-    "sigma_from_pp",
-    "Material",
-    "RobotEstimate",
-    "PAPER_MATERIALS",
-    "PAPER_TIPS",
-    "PAPER_ROBOT_ESTIMATES",
-    "PAPER_SURFACE_ERROR_M",
-    "paper_robot_estimates_frame",
-    "STIFFENING_STRAIN0",
-    "stiffening_factor",
-    "true_force",
-    "onset_force_profile",
-    "solve_series_compliance",
-    "ar1_noise",
-    "simulate_trace",
-    "toe_compression",
-    "simulate_compression_test",
-    "write_compression_export",
-    "simulate_campaign",
-    "simulate_palpation_series",
-    "rest_modulus",
-]
+# built from the submodules' own lists (the form static checkers follow), never re-typed
+__all__: list[str] = []
+__all__ += force.__all__
+__all__ += trace.__all__
+__all__ += compression.__all__
+__all__ += series.__all__
+__all__ += campaign.__all__
