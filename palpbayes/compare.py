@@ -45,7 +45,7 @@ Against the ground truth (Instron mean GT ± sd over specimens):
   when GT is outside the interval.
 
 ``paper_*`` are the paper's published robot (least-squares) estimates for White/Pink/Grey ×
-flat/sphere/paraboloid (:data:`palpbayes.simulate.PAPER_ROBOT_ESTIMATES`); ``paper_err_pct`` is
+flat/sphere/paraboloid (:data:`palpbayes.paper.PAPER_ROBOT_ESTIMATES`); ``paper_err_pct`` is
 recomputed from the printed E and the paper's Instron means, because the printed sphere errors
 do not follow from the printed values (see that constant's note).
 
