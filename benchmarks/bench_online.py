@@ -27,7 +27,7 @@ from palpbayes.bayes.exact import exact_posterior
 from palpbayes.fitdata import ModelSpec, prepare_trace
 from palpbayes.lsq import fit_lsq
 from palpbayes.online import OnlineEstimator, StoppingRule
-from palpbayes.simulate import simulate_trace
+from palpbayes.sim import simulate_trace
 
 
 def engine_vs_lsq() -> None:

@@ -9,7 +9,8 @@ from palpbayes.bayes.exact import exact_posterior
 from palpbayes.contact import Tip
 from palpbayes.errors import ConvergenceWarning, InputError
 from palpbayes.fitdata import ModelSpec, prepare_trace
-from palpbayes.simulate import PAPER_TIPS, simulate_trace
+from palpbayes.paper import PAPER_TIPS
+from palpbayes.sim import simulate_trace
 
 CASES = {
     "flat": dict(tip="flat"),

@@ -1,4 +1,4 @@
-"""Online estimation: agreement with the whole-trace engine, stopping rules, coverage at the stop."""
+"""Online estimation: agreement with the whole-trace engine, stopping rules, stop coverage."""
 
 import numpy as np
 import pytest
@@ -8,7 +8,8 @@ from palpbayes.bayes.exact import exact_posterior
 from palpbayes.errors import InputError
 from palpbayes.fitdata import ModelSpec, prepare_trace
 from palpbayes.online import OnlineEstimator, StoppingRule, replay
-from palpbayes.simulate import PAPER_TIPS, simulate_trace
+from palpbayes.paper import PAPER_TIPS
+from palpbayes.sim import simulate_trace
 
 
 def _feed(est, tr, chunk):
