@@ -30,7 +30,7 @@ import pandas as pd
 from .contact import Tip, check_nu
 from .errors import InputError, OutputExistsError
 from .io.atomic import write_csv_atomic
-from .io.manifest import write_manifest
+from .io.manifest import tip_columns, write_manifest
 from .io.trace_csv import write_trace
 from .noise import PAPER_NOISE_PP
 from .simulate_core import (
@@ -110,10 +110,7 @@ def _manifest_row(trace_id: str, file: str, specimen: str, material: str, tip: T
         "specimen": specimen,
         "material": material,
         "tip": tip.kind,
-        "radius_m": tip.radius if tip.radius is not None else np.nan,
-        "half_angle_deg": math.degrees(tip.half_angle) if tip.half_angle is not None else np.nan,
-        "profile_c": tip.c if tip.c is not None else np.nan,
-        "profile_n": tip.n if tip.n is not None else np.nan,
+        **tip_columns(tip),
         "thickness_m": thickness,
         "repetition": repetition,
         "rest_time_s": np.nan if rest_time is None else rest_time,
