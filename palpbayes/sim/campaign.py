@@ -17,7 +17,6 @@ has its own random stream (:func:`child_seed`).
 
 from __future__ import annotations
 
-import math
 import os
 import re
 import zlib
@@ -30,7 +29,7 @@ import pandas as pd
 from ..contact import Tip, check_nu
 from ..errors import InputError, OutputExistsError
 from ..io.atomic import write_csv_atomic
-from ..io.manifest import write_manifest
+from ..io.manifest import tip_columns, write_manifest
 from ..io.trace_csv import write_trace
 from ..noise import PAPER_NOISE_PP
 from ..paper import PAPER_MATERIALS, PAPER_TIPS, Material
@@ -104,10 +103,7 @@ def _manifest_row(trace_id: str, file: str, specimen: str, material: str, tip: T
         "specimen": specimen,
         "material": material,
         "tip": tip.kind,
-        "radius_m": tip.radius if tip.radius is not None else np.nan,
-        "half_angle_deg": math.degrees(tip.half_angle) if tip.half_angle is not None else np.nan,
-        "profile_c": tip.c if tip.c is not None else np.nan,
-        "profile_n": tip.n if tip.n is not None else np.nan,
+        **tip_columns(tip),
         "thickness_m": thickness,
         "repetition": repetition,
         "rest_time_s": np.nan if rest_time is None else rest_time,

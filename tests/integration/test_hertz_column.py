@@ -11,7 +11,7 @@ import math
 
 import pytest
 
-from palpbayes.contact.geometry import Tip
+from palpbayes.contact import Tip
 from palpbayes.fitjob import SUMMARY_COLUMNS, FitOptions, fit_trace
 from palpbayes.sim import simulate_trace
 
