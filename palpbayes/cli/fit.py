@@ -21,8 +21,8 @@ from ..fitjob import METHODS, FitOptions
 from ..io.manifest import is_manifest
 from ..units import format_pressure
 
-__all__ = ["register", "run", "add_model_options", "options_from_args", "trace_from_args",
-           "read_options_from_args"]
+__all__ = ["register", "run", "add_model_options", "add_trace_options", "options_from_args",
+           "trace_from_args", "read_options_from_args"]
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:
@@ -90,7 +90,12 @@ def register(subparsers) -> None:
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted run, keeping finished traces")
     add_model_options(p)
-    t = p.add_argument_group("single trace (ignored for a manifest)")
+    add_trace_options(p, "single trace (ignored for a manifest)")
+
+
+def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -> None:
+    """Tip, specimen, columns, units and signs of a trace file (``fit``, ``replay``)."""
+    t = p.add_argument_group(title)
     t.add_argument("--tip", choices=registered_kinds(), help="tip kind")
     for par in TIP_PARAMETERS.values():  # the tip's size, in the option's unit
         t.add_argument(par.option, type=float, metavar=par.metavar, dest=_dest(par.option),

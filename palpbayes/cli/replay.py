@@ -1,0 +1,108 @@
+"""``palpbayes replay TRACE --target 2%``: where would online estimation have stopped?"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import pandas as pd
+
+from ..campaign import layout
+from ..contact import check_nu
+from ..errors import InputError
+from ..fitdata import ModelSpec
+from ..io.atomic import write_csv_atomic, write_with
+from ..online import StoppingRule, replay
+from ..units import format_force, format_length, format_pressure
+from .fit import add_trace_options, trace_from_args
+
+__all__ = ["register", "run", "parse_fraction"]
+
+
+def parse_fraction(text: str) -> float:
+    """'2%' -> 0.02, '0.02' -> 0.02 (a relative half-width)."""
+    t = str(text).strip()
+    try:
+        v = float(t[:-1]) / 100 if t.endswith("%") else float(t)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a fraction: give e.g. 2% or 0.02") from None
+    if not 0 < v < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must lie between 0 and 100 %")
+    return v
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "replay", help="replay a recorded trace as if live: where would it have stopped?",
+        description="Feed a recorded trace to the online estimator in chunks, as a robot "
+        "would stream it, and show where the stopping rule fires: time, depth and peak force, "
+        "E then against E from the whole trace, and the interval narrowing with depth.",
+    )
+    p.add_argument("input", metavar="TRACE", help="trace CSV")
+    p.add_argument("--target", type=parse_fraction, default=None, metavar="FRACTION",
+                   help="stop when the 90 %% interval of E is within ± this (e.g. 2%%)")
+    p.add_argument("--max-force", type=float, default=None, metavar="N",
+                   help="stop at this force above the baseline [N]")
+    p.add_argument("--max-depth", type=float, default=None, metavar="M",
+                   help="stop at this depth below the estimated surface [m]")
+    p.add_argument("--chunk", type=int, default=100, metavar="SAMPLES",
+                   help="samples per update (default 100: 0.2 s at a UR robot's 500 Hz)")
+    p.add_argument("--noise", choices=("gaussian", "ar1"), default="gaussian",
+                   help="noise model (default gaussian)")
+    p.add_argument("--noise-pp", type=float, default=None, metavar="N",
+                   help="sensor peak-to-peak noise [N] (default: 6 sd of the baseline)")
+    p.add_argument("--nu", type=float, default=0.3, help="Poisson ratio (default 0.3)")
+    p.add_argument("--truth", type=float, default=None, metavar="PA",
+                   help="true modulus [Pa] of a simulated trace, drawn on the figure")
+    p.add_argument("--out", metavar="DIR", default=None,
+                   help=f"write {layout.REPLAY_HISTORY}, {layout.REPLAY_SUMMARY} and "
+                        f"{layout.REPLAY_FIGURE} here")
+    add_trace_options(p)
+
+
+def _show(label: str, s) -> str:
+    return (f"{label:<14} t = {s.t:7.3f} s  depth {format_length(s.depth):>9}  peak force "
+            f"{format_force(s.peak_force):>9}  E = {format_pressure(s.E.median)} "
+            f"[{format_pressure(s.E.lo)}, {format_pressure(s.E.hi)}]  "
+            f"(±{100 * s.E.rel_half_width:.2g} %)")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.target is None and args.max_force is None and args.max_depth is None:
+        raise InputError("give a stopping rule: --target 2% (precision), --max-force N or "
+                         "--max-depth M")
+    rule = StoppingRule(target=args.target, max_force=args.max_force,
+                        max_depth=args.max_depth)
+    trace = trace_from_args(args)
+    model = ModelSpec(trace.tip, nu=check_nu(args.nu))
+    res = replay(trace, model, rule=rule, chunk=args.chunk, noise=args.noise,
+                 noise_pp=args.noise_pp)
+    s, f = res.at_stop, res.final
+    if s is None:
+        print("the stopping rule never fired: the whole trace was needed")
+    else:
+        print(_show(f"stop ({s.stop})", s))
+        print(f"{'':<14} with the budget: [{format_pressure(res.budget_at_stop.lo)}, "
+              f"{format_pressure(res.budget_at_stop.hi)}]")
+    print(_show("whole trace", f))
+    summary = res.summary()
+    if s is not None:
+        print(f"saved against the recorded protocol: {summary['depth_saved_pct']:.0f} % of the "
+              f"depth, {summary['force_saved_pct']:.0f} % of the peak force")
+    for flag in f.flags:
+        print(f"warning: {flag}")
+    if args.out:
+        from ..plots.online import plot_replay
+
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        write_csv_atomic(res.history, out / layout.REPLAY_HISTORY)
+        write_csv_atomic(pd.DataFrame([summary]), out / layout.REPLAY_SUMMARY)
+        fig = plot_replay(res.history, stop_n=None if s is None else s.n, target=args.target,
+                          truth=args.truth, title=trace.trace_id)
+        write_with(lambda tmp: fig.savefig(tmp, dpi=150, format="png"),
+                   out / layout.REPLAY_FIGURE, suffix=".png")
+        print(f"wrote {out / layout.REPLAY_HISTORY}, {out / layout.REPLAY_SUMMARY} and "
+              f"{out / layout.REPLAY_FIGURE}")
+    return 0
