@@ -173,7 +173,7 @@ def fit_bayes_data(
                           lsq, noise, prior, modes)
     flags = _flags(post, post_theta, prior)
     checks = _model_checks(post, data, like, int(check_ss.generate_state(1)[0]))
-    # reloaded fits keep their flags and checks (palpbayes.results.load_fit)
+    # reloaded fits keep their flags and checks (palpbayes.campaign.results.load_fit)
     idata.posterior.attrs["flags"] = list(flags)
     idata.posterior.attrs["model_checks"] = json.dumps(
         [{"name": c.name, "statistic": float(c.statistic), "passed": bool(c.passed),

@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 
 from ..bayes.sampler import MOVES
+from ..campaign.results import ResultsFolder
 from ..noise import PAPER_NOISE_PP
-from ..results import ResultsFolder
 from ..units import format_length
 from .format import _force_setting, _wrap
 

@@ -8,7 +8,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
-from ..results import ResultsFolder
+from ..campaign.results import ResultsFolder
 from .format import _KPA, _wrap
 from .layout import CHART_GROUPS_PER_PAGE, _Page, _text_lines
 from .tables import (

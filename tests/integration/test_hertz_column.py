@@ -11,8 +11,8 @@ import math
 
 import pytest
 
+from palpbayes.campaign.fitjob import SUMMARY_COLUMNS, FitOptions, fit_trace
 from palpbayes.contact.geometry import Tip
-from palpbayes.fitjob import SUMMARY_COLUMNS, FitOptions, fit_trace
 from palpbayes.simulate import simulate_trace
 
 E_TRUE = 111e3

@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from palpbayes import plots
+from palpbayes.campaign.results import ResultsFolder
 from palpbayes.cli import main
 from palpbayes.report import (
     BUDGET_GROUPS_PER_PAGE,
@@ -36,7 +37,6 @@ from palpbayes.report import (
     summary_table,
 )
 from palpbayes.report.pages_title import _settings_lines
-from palpbayes.results import ResultsFolder
 from palpbayes.simulate import PAPER_MATERIALS, PAPER_TIPS
 from palpbayes.simulate_campaign import simulate_campaign
 

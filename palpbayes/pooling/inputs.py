@@ -1,8 +1,8 @@
 """Stage-1 inputs of the pooling: per-trace posteriors and the shared systematic factor.
 
-Reads the per-trace posterior netCDFs written by :func:`palpbayes.fitjob.fit_trace`, rebuilds a
-trace's fitted points from them, and draws the systematic factor of the uncertainty budget
-(:mod:`palpbayes.bayes.budget`) once per pooled draw (see :mod:`palpbayes.pooling`).
+Reads the per-trace posterior netCDFs written by :func:`palpbayes.campaign.fitjob.fit_trace`,
+rebuilds a trace's fitted points from them, and draws the systematic factor of the uncertainty
+budget (:mod:`palpbayes.bayes.budget`) once per pooled draw (see :mod:`palpbayes.pooling`).
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ import os
 import numpy as np
 import pandas as pd
 
-from .bayes.budget import BudgetSpec, propagate
-from .bayes.diagnostics import import_arviz
-from .errors import InputError
-from .fitdata import FitData, ModelSpec
-from .trace import IndentationTrace
+from ..bayes.budget import BudgetSpec, propagate
+from ..bayes.diagnostics import import_arviz
+from ..errors import InputError
+from ..fitdata import FitData, ModelSpec
+from ..trace import IndentationTrace
 
 __all__ = ["read_posterior", "posterior_attrs", "fitdata_from_posterior", "systematic_factor"]
 

@@ -3,7 +3,7 @@
 A results folder is written by :func:`palpbayes.campaign.fit_campaign` (``palpbayes fit``), the
 ground-truth step (``palpbayes groundtruth``) and the compare step (``palpbayes compare``):
 
-    summary.csv               one row per trace × method (:data:`palpbayes.fitjob.SUMMARY_COLUMNS`)
+    summary.csv               one row per trace × method (:data:`~.fitjob.SUMMARY_COLUMNS`)
     settings.json             palpbayes version, fit options, source, seed
     traces.csv                geometry and file of every trace
     posterior/<trace_id>.nc   the Bayesian posterior of each trace (arviz netCDF)
@@ -27,16 +27,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from ..errors import DataFileError, InputError
+from ..noise import PAPER_NOISE_PP
 from . import layout
-from .errors import DataFileError, InputError
-from .noise import PAPER_NOISE_PP
 
 if TYPE_CHECKING:
-    from .bayes.result import BayesResult
+    from ..bayes.result import BayesResult
 
 __all__ = [
-    "PER_FILE_NAME",
-    "SUMMARY_NAME",
     "TIP_ORDER",
     "MATERIAL_ORDER",
     "ordered",
@@ -44,11 +42,6 @@ __all__ = [
     "load_results",
     "load_fit",
 ]
-
-#: Per-test ground-truth table of a results folder (``palpbayes groundtruth``).
-PER_FILE_NAME = layout.GROUNDTRUTH
-#: Per-material ground-truth table of a results folder.
-SUMMARY_NAME = layout.GROUNDTRUTH_SUMMARY
 
 #: Order of tips in tables and figures (the paper's first; others after, as found).
 TIP_ORDER = ("flat", "sphere", "paraboloid", "cone", "power")
@@ -92,7 +85,8 @@ class ResultsFolder:
     path
         The folder.
     summary
-        ``summary.csv``: one row per trace × method (:data:`palpbayes.fitjob.SUMMARY_COLUMNS`).
+        ``summary.csv``: one row per trace × method
+        (:data:`palpbayes.campaign.fitjob.SUMMARY_COLUMNS`).
     settings
         ``settings.json`` as a dict ({} if absent).
     traces
@@ -164,8 +158,8 @@ def load_results(path: str | os.PathLike) -> ResultsFolder:
         traces=_read_csv(p / layout.TRACES), comparison=_read_csv(p / layout.COMPARISON),
         pooled=_read_csv(p / layout.POOLED), budget=_read_csv(p / layout.BUDGET),
         stiffening=_read_csv(p / layout.STIFFENING),
-        groundtruth=_read_csv(p / PER_FILE_NAME),
-        groundtruth_summary=_read_csv(p / SUMMARY_NAME),
+        groundtruth=_read_csv(p / layout.GROUNDTRUTH),
+        groundtruth_summary=_read_csv(p / layout.GROUNDTRUTH_SUMMARY),
     )
 
 
@@ -185,14 +179,14 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
     -------
     palpbayes.bayes.BayesResult
     """
-    from .bayes.diagnostics import compute_diagnostics
-    from .bayes.result import BayesResult
-    from .checks import CheckResult
-    from .errors import FitError
-    from .fitdata import ModelSpec, prepare
-    from .io.manifest import load_trace, tip_from_row
-    from .lsq import fit_lsq_data
-    from .pooling_inputs import fitdata_from_posterior, posterior_attrs, read_posterior
+    from ..bayes.diagnostics import compute_diagnostics
+    from ..bayes.result import BayesResult
+    from ..checks import CheckResult
+    from ..errors import FitError
+    from ..fitdata import ModelSpec, prepare
+    from ..io.manifest import load_trace, tip_from_row
+    from ..lsq import fit_lsq_data
+    from ..pooling.inputs import fitdata_from_posterior, posterior_attrs, read_posterior
 
     res = results if isinstance(results, ResultsFolder) else load_results(results)
     path = layout.posterior_path(res.path, trace_id)

@@ -1,7 +1,7 @@
 """Batch fitting of a campaign: every trace of a manifest, in parallel, resumable.
 
-:func:`fit_campaign` runs :func:`palpbayes.fitjob.fit_trace` on every trace over a process pool
-and writes a results folder (docs/design.md §5, §7)::
+:func:`fit_campaign` runs :func:`palpbayes.campaign.fitjob.fit_trace` on every trace over a
+process pool and writes a results folder (docs/design.md §5, §7)::
 
     OUT_DIR/
       summary.csv               one row per trace × method, columns fitjob.SUMMARY_COLUMNS
@@ -11,11 +11,11 @@ and writes a results folder (docs/design.md §5, §7)::
       .partial/<trace_id>.json  per-trace rows, written as each trace finishes (for --resume)
 
 Comparison tables (ground truth vs least squares vs Bayes) are made from this folder by
-:func:`palpbayes.compare.compare_campaign` (``palpbayes compare``).
+:func:`palpbayes.campaign.compare.compare_campaign` (``palpbayes compare``).
 
 Failure policy
 --------------
-* Every trace is read and passes :func:`palpbayes.fitjob.check_fittable` (geometry, units,
+* Every trace is read and passes :func:`palpbayes.campaign.fitjob.check_fittable` (geometry, units,
   contact, fit window, the contact model at every depth a fit evaluates) and the output folder
   must be creatable before anything is written; only then does ``force=True`` remove the
   previous results.  Bad input found there leaves the results folder as it was.
@@ -31,9 +31,9 @@ Failure policy
   error) the run raises :class:`~palpbayes.errors.FitError` *after* writing ``summary.csv``,
   listing the failed traces.
 
-Reproducibility: each trace's seed is :func:`palpbayes.fitjob.trace_seed` (base seed, trace id),
-results are read back from the per-trace JSON files and sorted by (trace_id, method), so the
-summary is identical whatever the number of workers or the order of completion.
+Reproducibility: each trace's seed is :func:`palpbayes.campaign.fitjob.trace_seed` (base seed,
+trace id), results are read back from the per-trace JSON files and sorted by (trace_id,
+method), so the summary is identical whatever the number of workers or the order of completion.
 """
 
 from __future__ import annotations
@@ -51,13 +51,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import __version__, layout
-from . import errors as _errors
-from .errors import FitError, InputError, OutputExistsError
+from .. import __version__
+from .. import errors as _errors
+from ..errors import FitError, InputError, OutputExistsError
+from ..io.atomic import write_csv_atomic, write_text_atomic
+from ..io.manifest import MANIFEST_COLUMNS, read_manifest
+from ..trace import IndentationTrace
+from . import layout
 from .fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable, fit_trace
-from .io.atomic import write_csv_atomic, write_text_atomic
-from .io.manifest import MANIFEST_COLUMNS, read_manifest
-from .trace import IndentationTrace
 
 __all__ = [
     "fit_campaign",
@@ -72,7 +73,7 @@ __all__ = [
 PARTIAL_DIR = layout.PARTIAL_DIR
 POSTERIOR_DIR = layout.POSTERIOR_DIR
 #: Files a results folder may hold that depend on the fit (removed by ``force=True`` before a
-#: new run; :data:`palpbayes.layout.FIT_OUTPUTS`).
+#: new run; :data:`palpbayes.campaign.layout.FIT_OUTPUTS`).
 OUTPUT_FILES = layout.FIT_OUTPUTS
 
 
@@ -104,7 +105,7 @@ def load_source(source: str | os.PathLike | Sequence[IndentationTrace],
     if isinstance(source, str | os.PathLike):
         path = Path(source).resolve()
         df = read_manifest(path)
-        from .io.manifest import load_trace
+        from ..io.manifest import load_trace
 
         traces = [load_trace(row, **read_options) for _, row in df.iterrows()]
     else:
@@ -378,7 +379,7 @@ def fit_campaign(
     """Fit every trace of a campaign and write the results folder (module docstring).
 
     Nothing is written, and with ``force`` nothing is removed, until every trace has been read
-    and has passed :func:`palpbayes.fitjob.check_fittable` (geometry, units, contact, fit
+    and has passed :func:`palpbayes.campaign.fitjob.check_fittable` (geometry, units, contact, fit
     window, the contact model over every depth a fit evaluates) and the output folder can be
     created.
 
@@ -389,7 +390,7 @@ def fit_campaign(
     out_dir
         Results folder; created if needed.
     options
-        Fit options shared by every trace (default :class:`~palpbayes.fitjob.FitOptions`).
+        Fit options shared by every trace (default :class:`~palpbayes.campaign.fitjob.FitOptions`).
     workers
         Worker processes (default ``os.cpu_count()``); 1 fits in this process.
     resume
