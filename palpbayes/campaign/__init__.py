@@ -10,9 +10,15 @@ Modules, one job each
 :mod:`~palpbayes.campaign.fitjob`
     One trace's fit (least squares and/or Bayes) and its ``summary.csv`` rows;
     :class:`FitOptions`.
+:mod:`~palpbayes.campaign.source`
+    Reading a campaign's traces (manifest or list) and ``traces.csv``.
+:mod:`~palpbayes.campaign.settings`
+    ``settings.json``: how a results folder was fitted.
+:mod:`~palpbayes.campaign.partial`
+    One trace inside a run (a worker's job) and its ``.partial/`` record for ``--resume``
+    (internal to :mod:`~palpbayes.campaign.run`).
 :mod:`~palpbayes.campaign.run`
-    :func:`fit_campaign`: every trace over a process pool, resumable, into a results folder;
-    ``settings.json`` and the ``.partial/`` records of ``--resume``.
+    :func:`fit_campaign`: every trace over a process pool, resumable, into a results folder.
 :mod:`~palpbayes.campaign.results`
     Reading a results folder back (:func:`load_results`) and one trace's fit
     (:func:`load_fit`, equal to the fit that was saved).
@@ -34,7 +40,8 @@ import importlib.util
 from typing import TYPE_CHECKING, Any
 
 #: Submodules whose ``__all__`` make up the package's public names.
-API_MODULES = ("fitjob", "run", "results", "compare", "compare_text", "pipeline")
+API_MODULES = ("fitjob", "source", "settings", "run", "results", "compare", "compare_text",
+               "pipeline")
 
 if TYPE_CHECKING:  # the same names, for static tools
     from .compare import *  # noqa: F403
@@ -43,6 +50,8 @@ if TYPE_CHECKING:  # the same names, for static tools
     from .pipeline import *  # noqa: F403
     from .results import *  # noqa: F403
     from .run import *  # noqa: F403
+    from .settings import *  # noqa: F403
+    from .source import *  # noqa: F403
 
 
 def _public_names() -> dict[str, str]:

@@ -82,7 +82,7 @@ from ..reference import (
 from . import layout
 from .compare_text import format_comparison
 from .fitjob import trace_seed
-from .run import read_settings
+from .settings import read_settings
 
 __all__ = ["COMPARISON_COLUMNS", "POOLED_COLUMNS", "STIFFENING_MIN_REST_TIMES", "Comparison",
            "compare_campaign", "load_groundtruth", "paper_estimates"]

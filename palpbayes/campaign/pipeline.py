@@ -83,7 +83,7 @@ def check_reusable(out_dir: str | os.PathLike, manifest: str | os.PathLike) -> N
     InputError
         Another campaign, or another (or unrecorded) palpbayes version.
     """
-    from .run import read_settings
+    from .settings import read_settings
 
     out = Path(out_dir)
     old = read_settings(out)
