@@ -15,8 +15,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from palpbayes.campaign import fit_campaign
-from palpbayes.fitjob import FitOptions
+from palpbayes.campaign.fitjob import FitOptions
+from palpbayes.campaign.run import fit_campaign
 from palpbayes.sim import simulate_campaign
 
 
@@ -45,7 +45,7 @@ def main() -> None:
         print(f"converged: {int(bayes['converged'].astype(bool).sum())}/{len(bayes)}, median "
               f"steps {bayes['n_steps'].median():.0f}")
         if args.compare:
-            from palpbayes.compare import compare_campaign
+            from palpbayes.campaign.compare import compare_campaign
 
             cmp = compare_campaign(res)
             t3 = time.perf_counter()

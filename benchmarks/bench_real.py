@@ -23,9 +23,10 @@ import numpy as np
 import pandas as pd
 from common import E_TRUE, TIPS
 
+from palpbayes.campaign.fitjob import FitOptions, fit_trace
+from palpbayes.checks import check_fit as model_checks
 from palpbayes.contact import Tip
 from palpbayes.errors import ConvergenceWarning
-from palpbayes.fitjob import FitOptions, fit_trace, model_checks
 from palpbayes.io.trace_csv import read_trace
 from palpbayes.sim import simulate_trace
 

@@ -77,10 +77,14 @@ import palpbayes
 from palpbayes import plots
 from palpbayes.cli import build_parser
 from palpbayes.cli.fit import options_from_args
-from palpbayes.compare import format_comparison, paper_estimates
-from palpbayes.pipeline import example_campaign_dir, run_pipeline
+from palpbayes.campaign import (
+    example_campaign_dir,
+    format_comparison,
+    load_results,
+    paper_estimates,
+    run_pipeline,
+)
 from palpbayes.report import summary_table
-from palpbayes.results import load_results
 
 from tqdm import TqdmWarning
 
@@ -451,8 +455,7 @@ import pandas as pd
 from IPython.display import display
 
 from palpbayes import plots
-from palpbayes.campaign import fit_campaign
-from palpbayes.fitjob import FitOptions
+from palpbayes.campaign import FitOptions, fit_campaign
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.sim import rest_modulus, simulate_palpation_series
 from palpbayes.stiffening import fit_stiffening_summary

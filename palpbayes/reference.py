@@ -7,7 +7,7 @@
   (:data:`palpbayes.paper.PAPER_ROBOT_ESTIMATES`) with the error recomputed from the printed
   E and the paper's Instron means;
 * :func:`gt_columns` / :func:`paper_columns` fill the reference columns of one comparison row
-  (definitions in :mod:`palpbayes.compare`).
+  (definitions in :mod:`palpbayes.campaign.compare`).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from . import layout
+from .campaign import layout
 from .errors import DataFileError
 from .intervals import LEVEL
 
@@ -99,7 +99,8 @@ def new_specimen_sd(lo: float, hi: float, level: float = LEVEL) -> float:
 
 def gt_columns(row: dict, gt: pd.DataFrame | None, material: str, level: float = LEVEL
                ) -> dict:
-    """The ground-truth columns of one comparison row (definitions in :mod:`palpbayes.compare`).
+    """The ground-truth columns of one comparison row (definitions in
+    :mod:`palpbayes.campaign.compare`).
 
     ``row`` needs ``method``, ``E_pa`` and the method's central ``level`` interval for a new
     specimen, ``E_new_lo_pa`` / ``E_new_hi_pa``.  Both methods are treated alike:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import warnings
 from dataclasses import replace
 
@@ -167,11 +166,6 @@ def fit_bayes_data(
     idata.posterior.attrs["engine"] = engine
     flags = _flags(post, post_theta, prior)
     checks = _model_checks(post, data, like, int(check_ss.generate_state(1)[0]))
-    # reloaded fits keep their flags and checks (palpbayes.results.load_fit)
-    idata.posterior.attrs["flags"] = list(flags)
-    idata.posterior.attrs["model_checks"] = json.dumps(
-        [{"name": c.name, "statistic": float(c.statistic), "passed": bool(c.passed),
-          "flag": c.flag} for c in checks])
     return _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
                    like, checks)
 

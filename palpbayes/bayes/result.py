@@ -1,7 +1,17 @@
-"""The result of a Bayesian fit: draws, diagnostics, budget, tables and netCDF persistence."""
+"""The result of a Bayesian fit: draws, diagnostics, budget, tables and netCDF persistence.
+
+:meth:`BayesResult.to_netcdf` writes the draws and, in the posterior attribute
+:data:`STATE_ATTR`, everything else of the result as JSON (warnings, model checks with their
+details, diagnostics, the budget table, the model with its exact tip);
+:meth:`BayesResult.from_idata` rebuilds the result from them, equal in every field but the
+fitted data and the least-squares fit, which the caller supplies
+(:func:`palpbayes.campaign.results.load_fit`).
+"""
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -9,14 +19,19 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..fitdata import FitData
+from ..checks import CheckResult
+from ..contact import Tip
+from ..errors import InputError
+from ..fitdata import FitData, ModelSpec
 from ..intervals import LEVEL, central, central_band
 from ..io.atomic import write_with
 from .budget import Budget
 from .diagnostics import Diagnostics, import_arviz
 
-__all__ = ["BayesResult", "LEVEL"]
+__all__ = ["BayesResult", "LEVEL", "STATE_ATTR", "saved_state", "saved_model"]
 
+#: Posterior attribute of a saved fit holding, as JSON, what its draws do not.
+STATE_ATTR = "palpbayes_result"
 
 
 @dataclass
@@ -184,11 +199,87 @@ class BayesResult:
 
     # ----------------------------------------------------------------- persistence
     def to_netcdf(self, path: str | os.PathLike) -> Path:
-        """Write the InferenceData (h5netcdf engine) atomically; arviz can open it."""
+        """Write the InferenceData (h5netcdf engine) atomically; arviz can open it.
+
+        The rest of the result goes into the posterior attribute :data:`STATE_ATTR` (also set
+        on ``self.idata``), so that :meth:`from_idata` can rebuild it.
+        """
+        self.idata.posterior.attrs[STATE_ATTR] = json.dumps(self._state(), default=_to_json,
+                                                            allow_nan=True)
+
         def _write(tmp: Path) -> None:
             self.idata.to_netcdf(str(tmp), engine="h5netcdf")
 
         return write_with(_write, path, suffix=".nc")
+
+    def _state(self) -> dict:
+        """Everything but the draws, the fitted points and the least-squares fit."""
+        model = self.data.model
+        return {
+            "trace_id": self.trace_id, "noise": self.noise, "baseline": self.baseline,
+            "z_ref": self.z_ref, "warnings": list(self.warnings),
+            "checks": [dataclasses.asdict(c) for c in self.checks],
+            "diagnostics": dataclasses.asdict(self.diagnostics),
+            "budget_table": None if self.budget is None else self.budget.table.to_dict("list"),
+            "model": {"tip": dataclasses.asdict(model.tip), "nu": model.nu,
+                      "thickness": model.thickness, "bonded": model.bonded},
+        }
+
+    @classmethod
+    def from_idata(cls, idata, data: FitData, lsq: object = None) -> BayesResult:
+        """The result that :meth:`to_netcdf` saved, from its InferenceData (read back with its
+        attributes) and the fitted data and least-squares fit of the trace.
+
+        Raises
+        ------
+        InputError
+            The posterior has no :data:`STATE_ATTR` (not written by :meth:`to_netcdf`).
+        """
+        state = saved_state(idata)
+        table = state["budget_table"]
+        budget = None if table is None else Budget(
+            E=np.asarray(idata.posterior["E_total"]), table=pd.DataFrame(table))
+        return cls(idata=idata, diagnostics=Diagnostics(**state["diagnostics"]), budget=budget,
+                   data=data, noise=state["noise"], trace_id=state["trace_id"], lsq=lsq,
+                   warnings=list(state["warnings"]), baseline=state["baseline"],
+                   z_ref=state["z_ref"], checks=[CheckResult(**c) for c in state["checks"]])
+
+
+def saved_state(idata) -> dict:
+    """The JSON state that :meth:`BayesResult.to_netcdf` stored in a posterior, decoded.
+
+    Raises
+    ------
+    InputError
+        The posterior has no such state (written otherwise, or by an older palpbayes).
+    """
+    raw = dict(idata.posterior.attrs).get(STATE_ATTR)
+    if raw is None:
+        raise InputError("the posterior does not hold the fit's flags, checks, diagnostics and "
+                         "budget (written by an older palpbayes?); refit the trace "
+                         "('palpbayes fit --force')")
+    return json.loads(str(raw), object_hook=_from_json)
+
+
+def saved_model(idata) -> ModelSpec:
+    """The contact model of a saved fit, exactly as fitted (tip, nu, thickness, bonded)."""
+    m = saved_state(idata)["model"]
+    return ModelSpec(Tip(**m["tip"]), nu=m["nu"], thickness=m["thickness"], bonded=m["bonded"])
+
+
+def _to_json(obj):
+    """numpy values for :func:`json.dumps`; arrays keep their dtype and shape."""
+    if isinstance(obj, np.ndarray):
+        return {"__ndarray__": obj.tolist(), "dtype": obj.dtype.str, "shape": list(obj.shape)}
+    if isinstance(obj, np.generic):
+        return obj.item()
+    raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
+
+
+def _from_json(obj: dict):
+    if "__ndarray__" in obj:
+        return np.array(obj["__ndarray__"], dtype=obj["dtype"]).reshape(obj["shape"])
+    return obj
 
 
 _UNITS = {"E_total": "Pa", "E": "Pa", "E_star": "Pa", "z_surf": "m", "sigma": "N", "F0": "N",

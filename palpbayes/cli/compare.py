@@ -2,17 +2,17 @@
 
 Reads ``RESULTS_DIR/summary.csv`` and the posteriors written by ``palpbayes fit`` on a campaign,
 pools the Bayesian fits per material × tip (:mod:`palpbayes.pooling`), compares least squares,
-Bayes, the ground truth and the paper's published numbers (:mod:`palpbayes.compare`), writes
-``comparison.csv``, ``pooled.csv`` and ``budget.csv`` into RESULTS_DIR (atomically) and prints the
-comparison in the paper's layout.
+Bayes, the ground truth and the paper's published numbers (:mod:`palpbayes.campaign.compare`),
+writes ``comparison.csv``, ``pooled.csv`` and ``budget.csv`` into RESULTS_DIR (atomically) and
+prints the comparison in the paper's layout.
 """
 
 from __future__ import annotations
 
 import argparse
 
-from .. import layout
-from ..compare import compare_campaign
+from ..campaign import layout
+from ..campaign.compare import compare_campaign
 
 __all__ = ["register", "run"]
 

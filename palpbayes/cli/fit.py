@@ -6,9 +6,10 @@ import argparse
 import math
 from pathlib import Path
 
-from .. import layout
 from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
 from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
+from ..campaign import layout
+from ..campaign.fitjob import METHODS, FitOptions
 from ..contact import (
     TIP_PARAMETERS,
     Tip,
@@ -17,7 +18,6 @@ from ..contact import (
     registered_kinds,
 )
 from ..errors import DataFileError, InputError
-from ..fitjob import METHODS, FitOptions
 from ..io.manifest import is_manifest
 from ..units import format_pressure
 
@@ -202,7 +202,7 @@ def _check_input_path(path: Path) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..campaign import fit_campaign
+    from ..campaign.run import fit_campaign
 
     options = options_from_args(args)
     path = Path(args.input)

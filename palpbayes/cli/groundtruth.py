@@ -14,10 +14,11 @@ import argparse
 import math
 from pathlib import Path
 
+from ..campaign.layout import GROUNDTRUTH as PER_FILE_NAME
+from ..campaign.layout import GROUNDTRUTH_SUMMARY as SUMMARY_NAME
+from ..campaign.pipeline import write_groundtruth
 from ..errors import InputError
 from ..groundtruth import DEFAULT_STRAIN_WINDOW, analyse, scan_inputs
-from ..pipeline import write_groundtruth
-from ..results import PER_FILE_NAME, SUMMARY_NAME
 
 __all__ = ["register", "run", "PER_FILE_NAME", "SUMMARY_NAME"]
 

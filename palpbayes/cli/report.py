@@ -11,7 +11,7 @@ INPUT is one of
 * nothing: the shipped example campaign ``data/example-campaign`` of a source checkout.
 
 The PDF goes to ``-o FILE.pdf`` (default ``report.pdf`` in the results folder).  See
-:mod:`palpbayes.report` for the pages and :mod:`palpbayes.pipeline` for the fitting.
+:mod:`palpbayes.report` for the pages and :mod:`palpbayes.campaign.pipeline` for the fitting.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .. import layout
+from ..campaign import layout
 from ..errors import InputError
 from .fit import add_model_options, options_from_args
 
@@ -66,8 +66,8 @@ def resolve_input(value: str | None) -> tuple[str, Path]:
         INPUT does not exist or is neither a results folder, a campaign folder nor a
         manifest; no INPUT and no shipped example.
     """
+    from ..campaign.pipeline import example_campaign_dir
     from ..io.manifest import is_manifest
-    from ..pipeline import example_campaign_dir
 
     if value is None:
         return "campaign", example_campaign_dir() / "manifest.csv"
@@ -89,7 +89,8 @@ def resolve_input(value: str | None) -> tuple[str, Path]:
 
 def run(args: argparse.Namespace) -> int:
     """Fit if needed, build the report, print a short summary and the PDF's path."""
-    from ..pipeline import run_pipeline
+    from ..campaign.pipeline import run_pipeline
+    from ..campaign.results import load_results
     from ..report import (
         BAYES_E_COL,
         BAYES_NEW_COL,
@@ -100,7 +101,6 @@ def run(args: argparse.Namespace) -> int:
         coverage_counts,
         summary_table,
     )
-    from ..results import load_results
 
     kind, path = resolve_input(args.input)
     if args.output is not None and not str(args.output).lower().endswith(".pdf"):

@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from ..results import MATERIAL_ORDER, TIP_ORDER, ordered
+from ..campaign.results import MATERIAL_ORDER, TIP_ORDER, ordered
 from .style import _KPA, METHOD_COLORS, METHOD_LABELS, _fig_ax
 
 __all__ = ["plot_comparison", "plot_forest"]

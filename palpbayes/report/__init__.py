@@ -1,6 +1,6 @@
 """The PDF report of a results folder: what a researcher attaches to a lab notebook.
 
-:func:`build_report` reads a results folder (:mod:`palpbayes.results`: ``summary.csv``,
+:func:`build_report` reads a results folder (:mod:`palpbayes.campaign.results`: ``summary.csv``,
 ``posterior/*.nc``, ``settings.json``, ``traces.csv`` and, when present, ``comparison.csv``,
 ``pooled.csv``, ``budget.csv``, ``stiffening.csv``, ``groundtruth.csv`` /
 ``groundtruth_summary.csv``) and writes a multi-page PDF (A4 landscape, written atomically):
@@ -31,11 +31,10 @@ comparison charts beyond :data:`CHART_GROUPS_PER_PAGE` material × tip groups (w
 per page) and budget pages beyond :data:`BUDGET_GROUPS_PER_PAGE` groups, so a campaign of any
 size stays readable.
 
-This package only draws: reading a results folder is :mod:`palpbayes.results`, fitting a campaign
-first (``palpbayes report CAMPAIGN``) is :func:`palpbayes.pipeline.run_pipeline`.  Both modules'
-public names used by notebooks (``load_results``, ``load_fit``, ``ResultsFolder``,
+This package only draws: reading a results folder is :mod:`palpbayes.campaign.results`, fitting a
+campaign first (``palpbayes report CAMPAIGN``) is :func:`palpbayes.campaign.pipeline.run_pipeline`.
+Both modules' public names used by notebooks (``load_results``, ``load_fit``, ``ResultsFolder``,
 ``run_pipeline``, ``example_campaign_dir``) are re-exported here for compatibility.
-
 Matplotlib is used through its object API only (figures are rendered by the PDF backend;
 :mod:`matplotlib.pyplot` is never imported), so the report works under any backend.
 
@@ -48,8 +47,8 @@ summary table, drawn tables, pagination), :mod:`~palpbayes.report.layout` (page 
 
 from __future__ import annotations
 
-from ..pipeline import example_campaign_dir, run_pipeline
-from ..results import ResultsFolder, load_fit, load_results
+from ..campaign.pipeline import example_campaign_dir, run_pipeline
+from ..campaign.results import ResultsFolder, load_fit, load_results
 from .build import RASTER_DPI, REPORT_NAME, ReportInfo, build_report
 from .format import _range as _range
 from .format import _shown as _shown
@@ -85,7 +84,7 @@ __all__ = [
     "BAYES_NEW_COL",
     "HERTZ_COL",
     "build_report",
-    # re-exported from palpbayes.results and palpbayes.pipeline (notebooks import them here)
+    # re-exported from palpbayes.campaign.results and .pipeline (notebooks import them here)
     "ResultsFolder",
     "load_results",
     "load_fit",

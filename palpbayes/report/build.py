@@ -8,10 +8,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .. import __version__
+from ..campaign.layout import REPORT
+from ..campaign.results import ResultsFolder, load_results
 from ..errors import InputError
 from ..io.tabular import parse_bool
-from ..layout import REPORT
-from ..results import ResultsFolder, load_results
 from .format import _shown
 from .layout import _decorate, _new_page, _Page
 from .pages_budget import _pages_budget

@@ -11,8 +11,8 @@ from __future__ import annotations
 import pandas as pd
 
 from ..bayes.sampler import MOVES
+from ..campaign.results import ResultsFolder
 from ..noise import PAPER_NOISE_PP
-from ..results import ResultsFolder
 from ..units import format_length
 from .format import _force_setting, _wrap
 

@@ -6,7 +6,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
-from ..results import ResultsFolder
+from ..campaign.results import ResultsFolder
 from .layout import BUDGET_GROUPS_PER_PAGE, _Page
 from .tables import _chunks, _continued, _draw_table
 

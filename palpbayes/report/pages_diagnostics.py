@@ -9,9 +9,9 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
+from ..campaign.layout import posterior_path
+from ..campaign.results import ResultsFolder, load_fit
 from ..io.tabular import parse_bool
-from ..layout import posterior_path
-from ..results import ResultsFolder, load_fit
 from .format import _fmt, _range, _wrap, _yesno
 from .layout import TABLE_ROWS_PER_PAGE, _Page, _text_lines
 from .tables import _chunks, _continued, _draw_table, _flagged, _pooled_of

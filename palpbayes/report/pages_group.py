@@ -10,8 +10,8 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
-from ..layout import posterior_path
-from ..results import ResultsFolder, load_fit
+from ..campaign.layout import posterior_path
+from ..campaign.results import ResultsFolder, load_fit
 from .format import _KPA, _fmt, _interval
 from .layout import _Page
 from .tables import _hertz_of_group, _pooled_of

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from matplotlib.figure import Figure
 
-from ..results import ResultsFolder
+from ..campaign.results import ResultsFolder
 from .layout import PAGE_SIZE, _Page, _paginate, _text_lines
 from .methods import _methods_lines
 from .tables import _continued

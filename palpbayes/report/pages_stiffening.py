@@ -8,7 +8,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
-from ..results import ResultsFolder
+from ..campaign.results import ResultsFolder
 from .format import _wrap
 from .layout import _Page, _text_lines
 from .tables import _chunks, _continued, _draw_table

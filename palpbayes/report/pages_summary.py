@@ -8,8 +8,8 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
+from ..campaign.results import ResultsFolder
 from ..contact import registered_laws
-from ..results import ResultsFolder
 from .format import _KPA, _wrap
 from .layout import CHART_GROUPS_PER_PAGE, _Page, _text_lines
 from .tables import (

@@ -8,8 +8,8 @@ from collections.abc import Sequence
 from matplotlib.figure import Figure
 
 from .. import __version__
+from ..campaign.results import ResultsFolder
 from ..noise import PAPER_NOISE_PP
-from ..results import ResultsFolder
 from ..units import format_length
 from .format import _fmt, _force_setting, _range, _shown, _wrap
 from .layout import PAGE_SIZE, _Page, _text_lines

@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 
+from ..campaign.results import MATERIAL_ORDER, TIP_ORDER, ResultsFolder, ordered
 from ..io.tabular import parse_bool
-from ..results import MATERIAL_ORDER, TIP_ORDER, ResultsFolder, ordered
 from .format import _KPA, _fmt, _interval, _isnum, _pm, _yesno
 from .layout import PAGE_SIZE, TABLE_ROWS_PER_PAGE
 

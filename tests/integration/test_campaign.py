@@ -11,10 +11,13 @@ import pytest
 from presets import POOL_FAST, TINY
 
 import palpbayes.campaign as campaign
-import palpbayes.pooling as pooling
+import palpbayes.campaign.partial as partial
+import palpbayes.pooling.model as pooling_model
 from palpbayes.bayes import SamplerSettings
+from palpbayes.campaign.compare import COMPARISON_COLUMNS, compare_campaign
+from palpbayes.campaign.compare_text import format_comparison
+from palpbayes.campaign.fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable
 from palpbayes.cli import main
-from palpbayes.compare import COMPARISON_COLUMNS, compare_campaign, format_comparison
 from palpbayes.contact import Tip
 from palpbayes.errors import (
     DataFileError,
@@ -25,7 +28,6 @@ from palpbayes.errors import (
     OutputExistsError,
 )
 from palpbayes.fitdata import ModelSpec, prepare
-from palpbayes.fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable
 from palpbayes.io.manifest import iter_traces
 from palpbayes.io.trace_csv import write_trace
 from palpbayes.lsq import fit_lsq_data
@@ -132,8 +134,8 @@ class _Counter:
 def test_resume_fits_only_unfinished_traces(traces, tmp_path, monkeypatch):
     subset = traces[:4]
     out = tmp_path / "res"
-    counter = _Counter(campaign.fit_trace, stop_after=2)
-    monkeypatch.setattr(campaign, "fit_trace", counter)
+    counter = _Counter(partial.fit_trace, stop_after=2)
+    monkeypatch.setattr(partial, "fit_trace", counter)
     with pytest.raises(KeyboardInterrupt):  # an interrupted run
         campaign.fit_campaign(subset, out, OPTS, workers=1)
     assert len(list((out / ".partial").glob("*.json"))) == 2
@@ -142,13 +144,13 @@ def test_resume_fits_only_unfinished_traces(traces, tmp_path, monkeypatch):
         campaign.fit_campaign(subset, out, OPTS, workers=1)
 
     counter2 = _Counter(counter.real)
-    monkeypatch.setattr(campaign, "fit_trace", counter2)
+    monkeypatch.setattr(partial, "fit_trace", counter2)
     summary = campaign.fit_campaign(subset, out, OPTS, workers=1, resume=True)
     assert counter2.ids == [t.trace_id for t in subset[2:]]
     assert len(summary) == 2 * len(subset)
 
     counter3 = _Counter(counter.real)
-    monkeypatch.setattr(campaign, "fit_trace", counter3)
+    monkeypatch.setattr(partial, "fit_trace", counter3)
     again = campaign.fit_campaign(subset, out, OPTS, workers=1, resume=True)
     assert counter3.ids == []  # everything recorded: nothing refitted
     pd.testing.assert_frame_equal(again, summary)
@@ -156,7 +158,7 @@ def test_resume_fits_only_unfinished_traces(traces, tmp_path, monkeypatch):
     # a missing posterior makes the trace unfinished
     (out / "posterior" / f"{subset[0].trace_id}.nc").unlink()
     counter4 = _Counter(counter.real)
-    monkeypatch.setattr(campaign, "fit_trace", counter4)
+    monkeypatch.setattr(partial, "fit_trace", counter4)
     campaign.fit_campaign(subset, out, OPTS, workers=1, resume=True)
     assert counter4.ids == [subset[0].trace_id]
 
@@ -165,12 +167,12 @@ def test_resume_fits_only_unfinished_traces(traces, tmp_path, monkeypatch):
     edited[1] = subset[1].replace(force=subset[1].force * 1.05)
     for source in (edited, subset):
         counter5 = _Counter(counter.real)
-        monkeypatch.setattr(campaign, "fit_trace", counter5)
+        monkeypatch.setattr(partial, "fit_trace", counter5)
         campaign.fit_campaign(source, out, OPTS, workers=1, resume=True)
         assert counter5.ids == [subset[1].trace_id]
 
     # the result matches an uninterrupted run
-    monkeypatch.setattr(campaign, "fit_trace", counter.real)
+    monkeypatch.setattr(partial, "fit_trace", counter.real)
     campaign.fit_campaign(subset, tmp_path / "straight", OPTS, workers=1)
     assert (out / "summary.csv").read_bytes() == \
         (tmp_path / "straight" / "summary.csv").read_bytes()
@@ -205,7 +207,7 @@ def test_duplicate_ids_and_bad_sources(traces, tmp_path):
 
 
 def test_fit_error_is_recorded_and_does_not_stop_the_campaign(traces, tmp_path, monkeypatch):
-    real = campaign.fit_trace
+    real = partial.fit_trace
     bad_id = traces[1].trace_id
 
     def flaky(trace, options, posterior_dir=None):
@@ -213,7 +215,7 @@ def test_fit_error_is_recorded_and_does_not_stop_the_campaign(traces, tmp_path, 
             raise FitError(f"{trace.trace_id}: walkers start outside the prior")
         return real(trace, options, posterior_dir)
 
-    monkeypatch.setattr(campaign, "fit_trace", flaky)
+    monkeypatch.setattr(partial, "fit_trace", flaky)
     summary = campaign.fit_campaign(traces[:3], tmp_path / "res", OPTS, workers=1)
     bad = summary[summary["trace_id"] == bad_id].set_index("method")
     assert np.isnan(bad.loc["bayes", "E_pa"]) and not bad.loc["bayes", "converged"]
@@ -411,7 +413,7 @@ def test_pooled_and_budget_tables(compared, fitted):
 
 def test_compare_cli(fitted, tmp_path, capsys, monkeypatch):
     res, _ = fitted
-    monkeypatch.setattr(pooling, "POOLING_SETTINGS", POOL_FAST)
+    monkeypatch.setattr(pooling_model, "POOLING_SETTINGS", POOL_FAST)
     gt = pd.DataFrame({"material": ["White", "Pink", "Grey"], "n": 5,
                        "E_mean_pa": [111e3, 136e3, 194e3], "E_sd_pa": [13e3, 14e3, 17e3]})
     gt_file = tmp_path / "groundtruth_summary.csv"
@@ -485,7 +487,7 @@ def test_pooled_interval_covers_the_true_material_modulus(tmp_path):
 def test_fit_options_nu_applies_to_simulated_traces():
     """The simulator records its true nu as ``nu_true``; only a manifest's per-row ``nu``
     overrides the run's option, so FitOptions(nu=...) is used for in-memory traces."""
-    from palpbayes.fitjob import fit_trace
+    from palpbayes.campaign.fitjob import fit_trace
     from palpbayes.sim import simulate_trace
 
     tr = simulate_trace(136e3, Tip("paraboloid", radius=0.0117), nu=0.3, thickness=0.02, rng=1)

@@ -1,5 +1,5 @@
 """Comparison with the ground truth: z-score and interval columns on hand-computed tables,
-the pooling inputs compare.py reads, and the text table."""
+the pooling inputs campaign/compare.py reads, and the text table."""
 
 from __future__ import annotations
 
@@ -10,12 +10,12 @@ import pandas as pd
 import pytest
 from presets import FAST
 
-import palpbayes.compare as compare
+import palpbayes.campaign.compare as compare
 from palpbayes import pooling
 from palpbayes.bayes import BudgetSpec
 from palpbayes.bayes.diagnostics import import_arviz
-from palpbayes.compare import COMPARISON_COLUMNS, _lsq_row, compare_campaign
-from palpbayes.compare_text import format_comparison
+from palpbayes.campaign.compare import COMPARISON_COLUMNS, _lsq_row, compare_campaign
+from palpbayes.campaign.compare_text import format_comparison
 from palpbayes.reference import gt_columns, new_specimen_sd
 
 Z90 = 1.6448536269514722  # Phi^-1(0.95)

@@ -16,9 +16,9 @@ import pytest
 import palpbayes.bayes.fit as bayes_fit
 from palpbayes import campaign
 from palpbayes.bayes import PriorSpec
+from palpbayes.campaign.fitjob import FitOptions, check_fittable, fit_trace
 from palpbayes.cli import main
 from palpbayes.contact import Tip
-from palpbayes.fitjob import FitOptions, check_fittable, fit_trace
 from palpbayes.io.trace_csv import write_trace
 from palpbayes.sim import simulate_trace
 
@@ -115,7 +115,7 @@ def test_prior_dominated_detector():
 
 def test_a_reloaded_fit_keeps_its_flags_and_model_checks(tmp_path):
     """load_fit used to drop the flags, so a flagged fit came back as converged."""
-    from palpbayes.results import load_fit
+    from palpbayes.campaign.results import load_fit
 
     tr = simulate_trace(136e3, TIP, thickness=0.02, rng=1, rate=5, noise_pp=0.6,
                         approach=5e-5, trace_id="sparse")
@@ -130,7 +130,7 @@ def test_a_reloaded_fit_keeps_its_flags_and_model_checks(tmp_path):
 
 
 def test_a_reloaded_fit_keeps_its_model_checks(tmp_path):
-    from palpbayes.results import load_fit
+    from palpbayes.campaign.results import load_fit
 
     tr = simulate_trace(136e3, Tip("paraboloid", radius=0.0117), thickness=0.03, depth=3e-3,
                         finite_thickness=True, rng=3, trace_id="layer")

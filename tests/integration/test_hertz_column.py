@@ -11,8 +11,8 @@ import math
 
 import pytest
 
+from palpbayes.campaign.fitjob import SUMMARY_COLUMNS, FitOptions, fit_trace
 from palpbayes.contact import Tip
-from palpbayes.fitjob import SUMMARY_COLUMNS, FitOptions, fit_trace
 from palpbayes.sim import simulate_trace
 
 E_TRUE = 111e3

@@ -16,11 +16,11 @@ import pytest
 
 from palpbayes.bayes import BudgetSpec, PriorSpec, fit_bayes
 from palpbayes.bayes.start import find_modes
+from palpbayes.campaign.fitjob import FitOptions, fit_trace
 from palpbayes.cli import main
 from palpbayes.contact import Tip
 from palpbayes.errors import ConvergenceWarning
 from palpbayes.fitdata import ModelSpec, prepare
-from palpbayes.fitjob import FitOptions, fit_trace
 from palpbayes.io.trace_csv import read_trace, write_trace
 from palpbayes.lsq import fit_lsq
 from palpbayes.sim import simulate_trace

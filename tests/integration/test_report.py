@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from palpbayes import plots
+from palpbayes.campaign.results import ResultsFolder
 from palpbayes.cli import main
 from palpbayes.paper import PAPER_MATERIALS, PAPER_TIPS
 from palpbayes.report import (
@@ -37,7 +38,6 @@ from palpbayes.report import (
     summary_table,
 )
 from palpbayes.report.pages_title import _settings_lines
-from palpbayes.results import ResultsFolder
 from palpbayes.sim import simulate_campaign
 
 GROUP_TITLES = ["White · sphere", "Pink · sphere"]

@@ -1,4 +1,5 @@
-"""Results-folder layout (palpbayes.layout): stale files after --force, lsq-only compare/report."""
+"""Results-folder layout (palpbayes.campaign.layout): stale files after --force, lsq-only
+compare/report."""
 
 from __future__ import annotations
 

@@ -3,7 +3,7 @@
 A results folder is written by :func:`palpbayes.campaign.fit_campaign` (``palpbayes fit``), the
 ground-truth step (``palpbayes groundtruth``) and the compare step (``palpbayes compare``):
 
-    summary.csv               one row per trace × method (:data:`palpbayes.fitjob.SUMMARY_COLUMNS`)
+    summary.csv               one row per trace × method (:data:`~.fitjob.SUMMARY_COLUMNS`)
     settings.json             palpbayes version, fit options, source, seed
     traces.csv                geometry and file of every trace
     posterior/<trace_id>.nc   the Bayesian posterior of each trace (arviz netCDF)
@@ -11,8 +11,8 @@ ground-truth step (``palpbayes groundtruth``) and the compare step (``palpbayes 
     groundtruth.csv, groundtruth_summary.csv                  per-test and per-material GT
 
 :func:`load_results` reads the tables into a :class:`ResultsFolder`; :func:`load_fit` rebuilds
-one trace's :class:`~palpbayes.bayes.BayesResult` for plotting.  Reading only: nothing here
-writes (docs/design.md §4).
+one trace's :class:`~palpbayes.bayes.BayesResult`, equal to the one that was saved.  Reading
+only: nothing here writes (docs/design.md §4).
 """
 
 from __future__ import annotations
@@ -27,17 +27,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from ..contact import registered_kinds
+from ..errors import DataFileError, InputError
 from . import layout
-from .contact import registered_kinds
-from .errors import DataFileError, InputError
-from .noise import PAPER_NOISE_PP
 
 if TYPE_CHECKING:
-    from .bayes.result import BayesResult
+    from ..bayes.result import BayesResult
 
 __all__ = [
-    "PER_FILE_NAME",
-    "SUMMARY_NAME",
     "TIP_ORDER",
     "MATERIAL_ORDER",
     "ordered",
@@ -45,11 +42,6 @@ __all__ = [
     "load_results",
     "load_fit",
 ]
-
-#: Per-test ground-truth table of a results folder (``palpbayes groundtruth``).
-PER_FILE_NAME = layout.GROUNDTRUTH
-#: Per-material ground-truth table of a results folder.
-SUMMARY_NAME = layout.GROUNDTRUTH_SUMMARY
 
 #: Order of tips in tables and figures: the contact registry's display order (the paper's
 #: flat, sphere, paraboloid first); kinds not registered after, as found.
@@ -94,7 +86,8 @@ class ResultsFolder:
     path
         The folder.
     summary
-        ``summary.csv``: one row per trace × method (:data:`palpbayes.fitjob.SUMMARY_COLUMNS`).
+        ``summary.csv``: one row per trace × method
+        (:data:`palpbayes.campaign.fitjob.SUMMARY_COLUMNS`).
     settings
         ``settings.json`` as a dict ({} if absent).
     traces
@@ -166,94 +159,68 @@ def load_results(path: str | os.PathLike) -> ResultsFolder:
         traces=_read_csv(p / layout.TRACES), comparison=_read_csv(p / layout.COMPARISON),
         pooled=_read_csv(p / layout.POOLED), budget=_read_csv(p / layout.BUDGET),
         stiffening=_read_csv(p / layout.STIFFENING),
-        groundtruth=_read_csv(p / PER_FILE_NAME),
-        groundtruth_summary=_read_csv(p / SUMMARY_NAME),
+        groundtruth=_read_csv(p / layout.GROUNDTRUTH),
+        groundtruth_summary=_read_csv(p / layout.GROUNDTRUTH_SUMMARY),
     )
 
 
 def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> BayesResult:
-    """Rebuild the Bayesian result of one trace from its netCDF posterior (for plots).
+    """The Bayesian result of one trace, as it was saved (for plots and tables).
 
-    The fitted points come from re-reading the trace file (``traces.csv``) with the options of
-    ``settings.json``, so the plots also show the loading samples outside the fit window; if the
-    file is gone or its points differ from the stored ones, the stored fitted points
-    (``constant_data.z``, ``observed_data.force``) are used alone.  The least-squares fit is
-    recomputed on the same points (deterministic, milliseconds).  ``budget`` is None: the
-    per-trace budget table is not stored (``budget.csv`` holds the group budgets).  The
-    posterior flags and the model checks come back from the netCDF's posterior attributes, so a
-    flagged fit is reloaded as flagged.
+    Equal in every field to the :class:`~palpbayes.bayes.BayesResult` that
+    :func:`~palpbayes.campaign.fitjob.fit_trace` saved: draws, estimates and intervals,
+    diagnostics, ``converged``, warnings, model checks (with their details), the per-trace
+    uncertainty budget and the contact model (:meth:`BayesResult.from_idata
+    <palpbayes.bayes.BayesResult.from_idata>`).  The fitted data come from re-reading the trace
+    file (``traces.csv``) with the reader and fit options of ``settings.json``, so the plots
+    also show the loading samples outside the fit window; if the file is gone, or its points
+    differ from the stored ones, the stored fitted points (``constant_data.z``,
+    ``observed_data.force``) stand in for the loading segment (no pre-contact baseline).  The
+    least-squares fit is recomputed on those data (deterministic, milliseconds).
 
-    Returns
-    -------
-    palpbayes.bayes.BayesResult
+    Raises
+    ------
+    InputError
+        No posterior for ``trace_id``, or one written without the fit's state (an older
+        palpbayes: refit).
     """
-    from .bayes.diagnostics import compute_diagnostics
-    from .bayes.result import BayesResult
-    from .checks import CheckResult
-    from .errors import FitError
-    from .fitdata import ModelSpec, prepare
-    from .io.manifest import load_trace, tip_from_row
-    from .lsq import fit_lsq_data
-    from .pooling_inputs import fitdata_from_posterior, posterior_attrs, read_posterior
+    from ..bayes.result import BayesResult, saved_model
+    from ..errors import FitError
+    from ..fitdata import prepare
+    from ..io.manifest import load_trace
+    from ..lsq import fit_lsq_data
+    from ..pooling.inputs import fitdata_from_posterior, read_posterior
 
     res = results if isinstance(results, ResultsFolder) else load_results(results)
     path = layout.posterior_path(res.path, trace_id)
     if not path.is_file():
         raise InputError(f"{path}: no posterior for trace {trace_id!r}")
     idata = read_posterior(path)
-    attrs = posterior_attrs(idata)
-    opts = res.options
-    z_fit = np.asarray(idata.constant_data["z"], dtype=float).ravel()
-    f_fit = np.asarray(idata.observed_data["force"], dtype=float).ravel()
-    nu = float(attrs.get("nu", opts.get("nu", 0.3)))
+    try:
+        model = saved_model(idata)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+    stored = fitdata_from_posterior(idata, model)
+    data = None
     row = None
     if res.traces is not None:
         sel = res.traces[res.traces["trace_id"].astype(str) == trace_id]
         row = sel.iloc[0] if len(sel) else None
-    if row is None:
-        raise InputError(f"{res.path}: traces.csv has no row for {trace_id!r}; cannot rebuild "
-                         "the contact model")
-    thickness = None
-    if opts.get("thickness_correction"):
-        thickness = float(row["thickness_m"])
-    model = ModelSpec(tip_from_row(row), nu=nu, thickness=thickness,
-                      bonded=bool(opts.get("bonded", True)))
-    data = None
-    f_unc = float(attrs.get("f_unc_n", opts.get("f_unc", PAPER_NOISE_PP)))
-    fraction = attrs.get("fit_fraction", opts.get("fit_fraction"))
-    file = str(row.get("file", "") or "")
+    file = "" if row is None else str(row.get("file", "") or "")
     if file and Path(file).is_file():
+        opts = res.options
         try:
-            trace = load_trace(row)
-            cand = prepare(trace, model, f_unc=f_unc,
-                           fit_fraction=None if fraction is None else float(fraction),
+            trace = load_trace(row, **res.settings.get("read_options", {}))
+            cand = prepare(trace, model, f_unc=stored.f_unc, fit_fraction=stored.fit_fraction,
                            max_depth=opts.get("max_depth"), tare=bool(opts.get("tare")))
-            if cand.z.shape == z_fit.shape and np.allclose(cand.z, z_fit, rtol=0, atol=1e-12) \
-                    and np.allclose(cand.force, f_fit, rtol=0, atol=1e-12):
+            if np.array_equal(cand.z, stored.z) and np.array_equal(cand.force, stored.force):
                 data = cand
         except InputError:
             data = None
     if data is None:  # the trace file is gone or changed: the fitted points stored in the netCDF
-        data = fitdata_from_posterior(idata, model)
-    names = [n for n in ("E_star", "z_surf", "sigma", "F0", "F1", "phi", "nu_t")
-             if n in idata.posterior]
-    srow = res.summary[(res.summary["trace_id"].astype(str) == trace_id)
-                       & (res.summary["method"] == "bayes")]
-    acc = float(srow["acceptance"].iloc[0]) if len(srow) else float("nan")
-    steps = int(srow["n_steps"].iloc[0]) if len(srow) and pd.notna(srow["n_steps"].iloc[0]) \
-        else int(attrs.get("n_steps", 0))
-    diag = compute_diagnostics(idata, names, np.full(len(names), np.nan), acc, steps, False)
+        data = stored
     try:
         lsq = fit_lsq_data(data, trace_id=trace_id)
     except FitError:
         lsq = None
-    pattrs = dict(idata.posterior.attrs)
-    flags = pattrs.get("flags", [])
-    flags = [str(flags)] if isinstance(flags, str) else [str(f) for f in np.ravel(flags)]
-    checks = [CheckResult(c["name"], c["statistic"], c["passed"], c["flag"], {})
-              for c in json.loads(str(pattrs.get("model_checks", "[]")))]
-    return BayesResult(idata=idata, diagnostics=diag, budget=None, data=data,
-                       noise=str(attrs.get("noise_model", "gaussian")), trace_id=trace_id,
-                       lsq=lsq, warnings=[f for f in flags if f], checks=checks,
-                       baseline=str(attrs.get("baseline_model", "constant")),
-                       z_ref=float(attrs.get("z_ref_m", 0.0)))
+    return BayesResult.from_idata(idata, data, lsq)

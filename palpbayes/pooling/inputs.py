@@ -1,8 +1,8 @@
 """Stage-1 inputs of the pooling: per-trace posteriors and the shared systematic factor.
 
-Reads the per-trace posterior netCDFs written by :func:`palpbayes.fitjob.fit_trace`, rebuilds a
-trace's fitted points from them, and draws the systematic factor of the uncertainty budget
-(:mod:`palpbayes.bayes.budget`) once per pooled draw (see :mod:`palpbayes.pooling`).
+Reads the per-trace posterior netCDFs written by :func:`palpbayes.campaign.fitjob.fit_trace`,
+rebuilds a trace's fitted points from them, and draws the systematic factor of the uncertainty
+budget (:mod:`palpbayes.bayes.budget`) once per pooled draw (see :mod:`palpbayes.pooling`).
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ import os
 import numpy as np
 import pandas as pd
 
-from .bayes.budget import BudgetSpec, propagate
-from .bayes.diagnostics import import_arviz
-from .errors import InputError
-from .fitdata import FitData, ModelSpec
-from .trace import IndentationTrace
+from ..bayes.budget import BudgetSpec, propagate
+from ..bayes.diagnostics import import_arviz
+from ..errors import InputError
+from ..fitdata import FitData, ModelSpec
+from ..trace import IndentationTrace
 
 __all__ = ["read_posterior", "posterior_attrs", "fitdata_from_posterior", "systematic_factor"]
 
@@ -48,9 +48,10 @@ def fitdata_from_posterior(idata, model: ModelSpec) -> FitData:
     """Rebuild the fitted points of a trace from its posterior netCDF (for the budget).
 
     Uses ``constant_data.z`` and ``observed_data.force`` and the attributes ``z_admissible_m``,
-    ``f_unc_n`` and ``fit_fraction`` written by :func:`palpbayes.bayes.fit_bayes_data`; the
-    fitted points stand in for the loading segment (only the depths and the model matter to
-    :func:`palpbayes.bayes.budget.propagate`).
+    ``f_unc_n``, ``fit_fraction``, ``z_prior_m`` (its lower end is the deepest loading sample)
+    and ``tare_n`` written by :func:`palpbayes.bayes.fit_bayes_data`; the fitted points stand
+    in for the loading segment (only the depths and the model matter to
+    :func:`palpbayes.bayes.budget.propagate`), and the pre-contact baseline is not stored.
     """
     try:
         z = np.asarray(idata.constant_data["z"], dtype=float).ravel()
@@ -59,13 +60,15 @@ def fitdata_from_posterior(idata, model: ModelSpec) -> FitData:
         z_lo, z_hi = (float(v) for v in np.asarray(attrs["z_admissible_m"]).ravel()[:2])
         f_unc = float(attrs["f_unc_n"])
         fraction = float(attrs["fit_fraction"])
+        z_prior = np.asarray(attrs.get("z_prior_m", [z.min()]), dtype=float).ravel()
+        tare = float(attrs.get("tare_n", 0.0))
     except (KeyError, AttributeError, ValueError) as exc:
         raise InputError(f"posterior file lacks the fitted data needed for the budget ({exc})"
                          ) from None
     loading = IndentationTrace(np.arange(z.size, dtype=float), z, force,
                                trace_id=str(attrs.get("trace_id", "trace")))
-    return FitData(z=z, force=force, z_contact=z_lo, z_top=z_hi, z_min=float(z.min()),
-                   f_unc=f_unc, fit_fraction=fraction, loading=loading, model=model)
+    return FitData(z=z, force=force, z_contact=z_lo, z_top=z_hi, z_min=float(z_prior[0]),
+                   f_unc=f_unc, fit_fraction=fraction, loading=loading, model=model, tare=tare)
 
 
 def systematic_factor(data: FitData, z_surf: float, estar: float, spec: BudgetSpec, n: int,

@@ -1,4 +1,4 @@
-"""Hierarchical pooling of repeated indentations of one material × tip (docs/design.md §3, item 3).
+"""The two-stage hierarchical model that pools one material × tip (docs/design.md §3, item 3).
 
 Model
 -----
@@ -56,13 +56,13 @@ compares with the Instron mean ± sd.
 
 Reporting E_new
 ---------------
-With a handful of traces the posterior of tau keeps a long right tail (the half-normal prior
-allows tau up to ~1 and two or three traces cannot exclude it), and exp(mu + tau·z) turns that
-tail into rare, very large draws: the sd of the E_new draws (``E_new_sd_pa``) then describes
-the tail, not the spread of a typical new specimen.  Quote the central 90 % interval
-(``E_new_lo_pa`` … ``E_new_hi_pa``) and the median instead, as :mod:`palpbayes.compare_text`
-and the ``z_score`` of :mod:`palpbayes.compare` do, and state the prior of tau
-(``tau_prior_sd`` in ``pooled.csv`` and ``comparison.csv``).
+With a handful of traces the posterior of tau keeps a long right tail (the half-normal prior allows
+tau up to ~1 and two or three traces cannot exclude it), and exp(mu + tau·z) turns that tail into
+rare, very large draws: the sd of the E_new draws (``E_new_sd_pa``) then describes the tail, not
+the spread of a typical new specimen.  Quote the central 90 % interval (``E_new_lo_pa`` …
+``E_new_hi_pa``) and the median instead, as :mod:`palpbayes.campaign.compare_text` and the
+``z_score`` of :mod:`palpbayes.campaign.compare` do, and state the prior of tau (``tau_prior_sd``
+in ``pooled.csv`` and ``comparison.csv``).
 
 References
 ----------
@@ -81,13 +81,13 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .bayes.budget import BudgetSpec
-from .bayes.diagnostics import Diagnostics, chain_passes, compute_diagnostics, import_arviz
-from .bayes.sampler import SamplerSettings, run_emcee
-from .errors import FitError, InputError
-from .fitdata import FitData
-from .intervals import LEVEL, central
-from .pooling_inputs import fitdata_from_posterior, posterior_attrs, systematic_factor
+from ..bayes.budget import BudgetSpec
+from ..bayes.diagnostics import Diagnostics, chain_passes, compute_diagnostics, import_arviz
+from ..bayes.sampler import SamplerSettings, run_emcee
+from ..errors import FitError, InputError
+from ..fitdata import FitData
+from ..intervals import LEVEL, central
+from .inputs import systematic_factor
 
 __all__ = [
     "TAU_PRIOR_SD",
@@ -96,12 +96,8 @@ __all__ = [
     "hierarchical_log_posterior",
     "HierarchicalPosterior",
     "sample_hierarchical",
-    "posterior_attrs",
-    "fitdata_from_posterior",
-    "systematic_factor",
     "PooledEstimate",
     "pool_group",
-    "central",
 ]
 
 #: Scale of the half-normal prior of tau (sd of log E between traces).

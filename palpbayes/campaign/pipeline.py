@@ -1,15 +1,17 @@
 """The fitting pipeline behind ``palpbayes report CAMPAIGN``: fit, ground truth, compare.
 
 :func:`run_pipeline` fits a campaign folder with both methods
-(:func:`palpbayes.campaign.fit_campaign`), analyses its compression tests when the campaign has
-``groundtruth/`` (:func:`palpbayes.groundtruth.analyse`, written by :func:`write_groundtruth`)
-and pools and compares (:func:`palpbayes.compare.compare_campaign`), into one results folder.
+(:func:`palpbayes.campaign.run.fit_campaign`), analyses its compression tests when the
+campaign has ``groundtruth/`` (:func:`palpbayes.groundtruth.analyse`, written by
+:func:`write_groundtruth`) and pools and compares
+(:func:`palpbayes.campaign.compare.compare_campaign`), into one results folder.
 A results folder fitted before from the same campaign with the same options *and the same
 palpbayes version* is reused; anything else needs ``force``.  :func:`example_campaign_dir`
 locates the campaign shipped with a source checkout.
 
 This module and the command line are the only writers of a results folder's ground-truth
-tables; reading a results folder is :mod:`palpbayes.results`, the PDF :mod:`palpbayes.report`.
+tables; reading a results folder is :mod:`palpbayes.campaign.results`, the PDF
+:mod:`palpbayes.report`.
 """
 
 from __future__ import annotations
@@ -18,8 +20,9 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from . import __version__, layout
-from .errors import InputError, OutputExistsError
+from .. import __version__
+from ..errors import InputError, OutputExistsError
+from . import layout
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -36,7 +39,7 @@ def write_groundtruth(per_file: pd.DataFrame, per_group: pd.DataFrame,
     ``groundtruth.csv`` (one row per test) and ``groundtruth_summary.csv`` (one row per
     material), atomically, floats to 10 significant digits.  Returns the two paths.
     """
-    from .io.atomic import write_csv_atomic
+    from ..io.atomic import write_csv_atomic
 
     out = Path(out_dir)
     a, b = out / layout.GROUNDTRUTH, out / layout.GROUNDTRUTH_SUMMARY
@@ -80,7 +83,7 @@ def check_reusable(out_dir: str | os.PathLike, manifest: str | os.PathLike) -> N
     InputError
         Another campaign, or another (or unrecorded) palpbayes version.
     """
-    from .campaign import read_settings
+    from .settings import read_settings
 
     out = Path(out_dir)
     old = read_settings(out)
@@ -106,8 +109,8 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
     Steps: :func:`palpbayes.campaign.fit_campaign` (``palpbayes fit``); when the campaign folder
     has ``groundtruth/``, :func:`palpbayes.groundtruth.analyse` written to ``groundtruth.csv``
     and ``groundtruth_summary.csv`` (``palpbayes groundtruth``); then
-    :func:`palpbayes.compare.compare_campaign` (``palpbayes compare OUT``).  A results folder
-    fitted before from the same source with the same options by the same palpbayes version is
+    :func:`palpbayes.campaign.compare.compare_campaign` (``palpbayes compare OUT``).  A results
+    folder fitted before from the same source with the same options by the same palpbayes version is
     reused (the campaign's resume); anything else needs ``force`` (:func:`check_reusable`).
 
     Parameters
@@ -117,12 +120,12 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
     out_dir
         Results folder.
     options
-        :class:`~palpbayes.fitjob.FitOptions` (default: both methods, package defaults).
+        :class:`~palpbayes.campaign.fitjob.FitOptions` (default: both methods, package defaults).
     workers, force, progress
         As for :func:`~palpbayes.campaign.fit_campaign`.
     """
-    from .campaign import fit_campaign
     from .fitjob import FitOptions
+    from .run import fit_campaign
 
     manifest = Path(manifest).resolve()
     out = Path(out_dir)
@@ -135,7 +138,7 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
                  progress=progress)
     gt_dir = manifest.parent / "groundtruth"
     if gt_dir.is_dir():  # for the report (compare analyses the same folder at full precision)
-        from .groundtruth import analyse
+        from ..groundtruth import analyse
 
         write_groundtruth(*analyse(gt_dir), out)
     from .compare import compare_campaign

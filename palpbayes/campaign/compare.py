@@ -50,7 +50,7 @@ recomputed from the printed E and the paper's Instron means, because the printed
 do not follow from the printed values (see that constant's note).
 
 Reference values are read by :mod:`palpbayes.reference`, the per-trace posteriors by
-:mod:`palpbayes.pooling_inputs`; the text layout is :mod:`palpbayes.compare_text`.
+:mod:`palpbayes.pooling.inputs`; the text layout is :mod:`palpbayes.campaign.compare_text`.
 """
 
 from __future__ import annotations
@@ -63,31 +63,30 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from . import layout
-from .bayes.budget import BudgetSpec
-from .campaign import read_settings
-from .compare_text import format_comparison
-from .contact import registered_kinds
-from .errors import DataFileError, FitError
-from .fitdata import ModelSpec
-from .fitjob import trace_seed
-from .intervals import LEVEL, central
-from .io.atomic import write_csv_atomic
-from .io.manifest import tip_from_row
-from .io.tabular import parse_bool
-from .pooling import TAU_PRIOR_SD, log_normal_summary, pool_group
-from .pooling_inputs import fitdata_from_posterior, posterior_attrs, read_posterior
-from .reference import (
+from ..bayes.budget import BudgetSpec
+from ..contact import registered_kinds
+from ..errors import DataFileError, FitError
+from ..fitdata import ModelSpec
+from ..intervals import LEVEL, central
+from ..io.atomic import write_csv_atomic
+from ..io.manifest import tip_from_row
+from ..io.tabular import parse_bool
+from ..pooling.inputs import fitdata_from_posterior, posterior_attrs, read_posterior
+from ..pooling.model import TAU_PRIOR_SD, log_normal_summary, pool_group
+from ..reference import (
     gt_columns,
     load_groundtruth,
     new_specimen_sd,
     paper_columns,
     paper_estimates,
 )
+from . import layout
+from .compare_text import format_comparison
+from .fitjob import trace_seed
+from .settings import read_settings
 
 __all__ = ["COMPARISON_COLUMNS", "POOLED_COLUMNS", "STIFFENING_MIN_REST_TIMES", "Comparison",
-           "compare_campaign", "load_groundtruth", "paper_estimates", "format_comparison",
-           "read_posterior"]
+           "compare_campaign", "load_groundtruth", "paper_estimates"]
 
 COMPARISON_COLUMNS = [
     "material", "tip", "method", "n_traces", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa",
@@ -367,7 +366,7 @@ def compare_campaign(
 def _stiffening(summary: pd.DataFrame, materials: list[str], tips: list[str], seed: int
                 ) -> pd.DataFrame | None:
     """Stiffening law per material × tip with enough distinct rest times (None if none)."""
-    from .stiffening import fit_stiffening_summary
+    from ..stiffening import fit_stiffening_summary
 
     if "rest_time_s" not in summary or "E_stat_pa" not in summary:
         return None

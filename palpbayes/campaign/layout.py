@@ -28,7 +28,8 @@ from pathlib import Path
 __all__ = [
     "SETTINGS", "TRACES", "SUMMARY", "POSTERIOR_DIR", "PARTIAL_DIR", "COMPARISON", "POOLED",
     "BUDGET", "STIFFENING", "GROUNDTRUTH", "GROUNDTRUTH_SUMMARY", "REPORT", "COMPARE_OUTPUTS",
-    "FIT_OUTPUTS", "posterior_path", "posterior_file", "partial_path",
+    "FIT_OUTPUTS", "REPLAY_HISTORY", "REPLAY_SUMMARY", "REPLAY_FIGURE", "posterior_path",
+    "posterior_file", "partial_path",
 ]
 
 #: Fit options, seed and versions (``palpbayes fit``).
@@ -55,6 +56,12 @@ GROUNDTRUTH = "groundtruth.csv"
 GROUNDTRUTH_SUMMARY = "groundtruth_summary.csv"
 #: The PDF report (``palpbayes report``).
 REPORT = "report.pdf"
+#: One row per online update of a replayed trace (``palpbayes replay --out``).
+REPLAY_HISTORY = "replay.csv"
+#: Where the stopping rule fired, against the whole trace (``palpbayes replay --out``).
+REPLAY_SUMMARY = "replay_summary.csv"
+#: The interval of E narrowing with depth (``palpbayes replay --out``).
+REPLAY_FIGURE = "replay.png"
 
 #: Tables written by ``palpbayes compare`` (derived from the fit: stale after a refit).
 COMPARE_OUTPUTS = (COMPARISON, POOLED, BUDGET, STIFFENING)

@@ -13,14 +13,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
-from .checks import CheckResult, check_fit
-from .contact import check_tip_plausible, get_law
-from .errors import ConvergenceWarning, FitError, GeometryError
-from .fitdata import FitData, ModelSpec, prepare
+from ..bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
+from ..checks import CheckResult, check_fit
+from ..contact import check_tip_plausible, get_law
+from ..errors import ConvergenceWarning, FitError, GeometryError
+from ..fitdata import FitData, ModelSpec, prepare
+from ..lsq import LSQResult, fit_lsq_data
+from ..trace import IndentationTrace
 from .layout import posterior_file
-from .lsq import LSQResult, fit_lsq_data
-from .trace import IndentationTrace
 
 __all__ = ["FitOptions", "FitOutcome", "fit_trace", "check_fittable", "SUMMARY_COLUMNS", "METHODS"]
 

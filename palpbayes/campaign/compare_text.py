@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .io.tabular import parse_bool
+from ..io.tabular import parse_bool
 
 __all__ = ["format_comparison"]
 

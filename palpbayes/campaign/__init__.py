@@ -1,0 +1,86 @@
+"""Campaigns: fit every trace of a manifest into a results folder, read it back, compare.
+
+A *results folder* is what ``palpbayes fit`` writes and ``compare``, ``groundtruth`` and
+``report`` add to; every file name in it is owned by :mod:`~palpbayes.campaign.layout`.
+
+Modules, one job each
+---------------------
+:mod:`~palpbayes.campaign.layout`
+    The name of every file of a results folder (no other module spells one).
+:mod:`~palpbayes.campaign.fitjob`
+    One trace's fit (least squares and/or Bayes) and its ``summary.csv`` rows;
+    :class:`FitOptions`.
+:mod:`~palpbayes.campaign.source`
+    Reading a campaign's traces (manifest or list) and ``traces.csv``.
+:mod:`~palpbayes.campaign.settings`
+    ``settings.json``: how a results folder was fitted.
+:mod:`~palpbayes.campaign.partial`
+    One trace inside a run (a worker's job) and its ``.partial/`` record for ``--resume``
+    (internal to :mod:`~palpbayes.campaign.run`).
+:mod:`~palpbayes.campaign.run`
+    :func:`fit_campaign`: every trace over a process pool, resumable, into a results folder.
+:mod:`~palpbayes.campaign.results`
+    Reading a results folder back (:func:`load_results`) and one trace's fit
+    (:func:`load_fit`, equal to the fit that was saved).
+:mod:`~palpbayes.campaign.compare`, :mod:`~palpbayes.campaign.compare_text`
+    Pooling per material × tip (:mod:`palpbayes.pooling`) and the comparison with the ground
+    truth and the paper (``palpbayes compare``), and its text table.
+:mod:`~palpbayes.campaign.pipeline`
+    Fit, ground truth and compare in one call (``palpbayes report CAMPAIGN``).
+
+The package's public names are the ``__all__`` of the modules in :data:`API_MODULES`.  They are
+imported on first use (PEP 562), so that importing :mod:`~palpbayes.campaign.layout` alone (as
+lower layers such as :mod:`palpbayes.reference` do) does not load the fitting code.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+from typing import TYPE_CHECKING, Any
+
+#: Submodules whose ``__all__`` make up the package's public names.
+API_MODULES = ("fitjob", "source", "settings", "run", "results", "compare", "compare_text",
+               "pipeline")
+
+if TYPE_CHECKING:  # the same names, for static tools
+    from .compare import *  # noqa: F403
+    from .compare_text import *  # noqa: F403
+    from .fitjob import *  # noqa: F403
+    from .pipeline import *  # noqa: F403
+    from .results import *  # noqa: F403
+    from .run import *  # noqa: F403
+    from .settings import *  # noqa: F403
+    from .source import *  # noqa: F403
+
+
+def _public_names() -> dict[str, str]:
+    """Public name -> the submodule that defines it (imports every API module)."""
+    owner: dict[str, str] = {}
+    for sub in API_MODULES:
+        for name in importlib.import_module(f"{__name__}.{sub}").__all__:
+            if name in owner:
+                raise ImportError(f"{__name__}: {name!r} is exported by both {owner[name]} and "
+                                  f"{sub}; export it from one module")
+            owner[name] = sub
+    return owner
+
+
+def __getattr__(name: str) -> Any:
+    if name == "__all__":
+        return list(_public_names())
+    if name.startswith("__"):  # e.g. __wrapped__, looked up by tools: never a public name
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    if importlib.util.find_spec(f"{__name__}.{name}") is not None:
+        # a submodule (``from palpbayes.campaign import layout``): import only that one
+        return importlib.import_module(f"{__name__}.{name}")
+    sub = _public_names().get(name)
+    if sub is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{sub}"), name)
+    globals()[name] = value  # later look-ups skip __getattr__
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_public_names()})

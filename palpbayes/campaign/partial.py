@@ -1,0 +1,133 @@
+"""One trace inside a campaign run, and its record in ``.partial/`` that makes a run resumable.
+
+:func:`fit_and_record` is what a worker process runs for one trace: it fits the trace
+(:func:`palpbayes.campaign.fitjob.fit_trace`), writes its posterior and, atomically, the JSON
+record ``.partial/<trace_id>.json`` (options, a fingerprint of the data, the summary rows).
+:func:`read_partial` reads a record back, and only if it still matches the options and the
+data (:func:`trace_fingerprint`): that is how ``--resume`` keeps finished traces.  Used by
+:mod:`palpbayes.campaign.run` only (not part of the package's public API).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from .. import errors as _errors
+from ..errors import FitError, InputError
+from ..io.atomic import write_text_atomic
+from ..trace import IndentationTrace
+from . import layout
+from .fitjob import FitOptions, fit_trace
+from .settings import options_record
+
+__all__ = ["fit_and_record", "read_partial", "raise_input", "trace_fingerprint"]
+
+
+def _jsonable(v):
+    if isinstance(v, np.generic):
+        v = v.item()
+    if v is None or isinstance(v, bool | int | str):
+        return v
+    if isinstance(v, float):
+        return v
+    return str(v)
+
+
+def _failed_rows(trace: IndentationTrace, methods: list[str], exc: Exception) -> list[dict]:
+    return [{
+        "trace_id": trace.trace_id, "method": m, "tip": trace.tip.kind,
+        "converged": False, "flags": f"fit failed: {exc}", "material": trace.material,
+        "specimen": trace.specimen, "repetition": trace.repetition,
+        "rest_time_s": trace.rest_time,
+    } for m in methods]
+
+
+def _methods(options: FitOptions) -> list[str]:
+    return ["bayes", "lsq"] if options.method == "both" else [options.method]
+
+
+def trace_fingerprint(trace: IndentationTrace) -> str:
+    """SHA-256 of what a fit of ``trace`` depends on: the time, z and force arrays, the tip,
+    the thickness and a manifest's per-row nu.  ``--resume`` refits a trace whose fingerprint
+    changed (an edited file) instead of reusing its recorded rows."""
+    h = hashlib.sha256()
+    for a in (trace.time, trace.z, trace.force):
+        h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    h.update(repr((trace.tip, trace.thickness, trace.metadata.get("nu"))).encode("utf-8"))
+    return h.hexdigest()
+
+
+def fit_and_record(trace: IndentationTrace, options: FitOptions, out: str) -> dict:
+    """Fit one trace, write its posterior and partial JSON; never raises PalpbayesErrors.
+
+    Returns ``{"rows": [...]}`` or, for bad input, ``{"error": (class name, message)}`` (custom
+    exception classes do not all survive pickling between processes).
+    """
+    post_dir = Path(out) / layout.POSTERIOR_DIR
+    try:
+        try:
+            rows = fit_trace(trace, options, post_dir).rows
+        except FitError as exc:
+            rows = None
+            if options.method == "both":
+                try:
+                    rows = fit_trace(trace, replace(options, method="lsq")).rows
+                    rows += _failed_rows(trace, ["bayes"], exc)
+                except FitError:
+                    rows = None
+            if rows is None:
+                rows = _failed_rows(trace, _methods(options), exc)
+    except InputError as exc:
+        msg = str(exc)
+        if trace.trace_id not in msg:
+            msg = f"trace {trace.trace_id!r}: {msg}"
+        return {"error": (type(exc).__name__, msg)}
+    rows = [{k: _jsonable(v) for k, v in r.items()} for r in rows]
+    record = {"trace_id": trace.trace_id, "options": options_record(options)["repr"],
+              "data_sha256": trace_fingerprint(trace), "rows": rows}
+    write_text_atomic(json.dumps(record, indent=1),
+                      layout.partial_path(out, trace.trace_id))
+    return {"rows": rows}
+
+
+def raise_input(error: tuple[str, str]) -> None:
+    """Raise the input error a worker reported as (class name, message) (an
+    :class:`~palpbayes.errors.InputError` subclass; InputError for anything else)."""
+    name, msg = error
+    cls = getattr(_errors, name, InputError)
+    if not (isinstance(cls, type) and issubclass(cls, InputError)):
+        cls = InputError
+    if cls is _errors.DataFileError:
+        raise _errors.DataFileError(None, msg)
+    raise cls(msg)
+
+
+def read_partial(out: Path, trace: IndentationTrace, options: FitOptions) -> list[dict] | None:
+    """The recorded rows of a finished trace, or None when it must be (re)fitted."""
+    path = layout.partial_path(out, trace.trace_id)
+    if not path.is_file():
+        return None
+    try:
+        rec = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        return None
+    rows = rec.get("rows", [])
+    if rec.get("options") != options_record(options)["repr"]:
+        return None
+    if rec.get("data_sha256") != trace_fingerprint(trace):
+        return None
+    if sorted(r.get("method") for r in rows) != sorted(_methods(options)):
+        return None
+    for r in rows:
+        ok = r.get("E_pa") is not None and not (isinstance(r["E_pa"], float)
+                                                and math.isnan(r["E_pa"]))
+        if r["method"] == "bayes" and ok and \
+                not layout.posterior_path(out, trace.trace_id).is_file():
+            return None
+    return rows

@@ -1,0 +1,250 @@
+"""Batch fitting of a campaign: every trace of a manifest, in parallel, resumable.
+
+:func:`fit_campaign` runs :func:`palpbayes.campaign.fitjob.fit_trace` on every trace over a
+process pool (each trace in :func:`palpbayes.campaign.partial.fit_and_record`) and writes a
+results folder (docs/design.md §5, §7; file names in :mod:`palpbayes.campaign.layout`)::
+
+    OUT_DIR/
+      summary.csv               one row per trace × method, columns fitjob.SUMMARY_COLUMNS
+      posterior/<trace_id>.nc   Bayesian posterior of each trace (arviz, h5netcdf)
+      traces.csv                geometry and labels of every trace (manifest columns)
+      settings.json             version, options, source, seed, campaign folder
+      .partial/<trace_id>.json  per-trace rows, written as each trace finishes (for --resume)
+
+Comparison tables (ground truth vs least squares vs Bayes) are made from this folder by
+:func:`palpbayes.campaign.compare.compare_campaign` (``palpbayes compare``).
+
+Failure policy
+--------------
+* Every trace is read and passes :func:`palpbayes.campaign.fitjob.check_fittable` (geometry, units,
+  contact, fit window, the contact model at every depth a fit evaluates) and the output folder
+  must be creatable before anything is written; only then does ``force=True`` remove the
+  previous results.  Bad input found there leaves the results folder as it was.
+* A trace whose *input* is bad (:class:`~palpbayes.errors.InputError`: unreadable file, no
+  contact, missing geometry) fails the whole run with an error naming the trace — bad input is
+  exit status 2, and a campaign silently missing traces would bias every table.  Finished traces
+  are kept in ``.partial/``, so fixing the input and running again with ``resume=True`` only
+  fits what is left.
+* A :class:`~palpbayes.errors.FitError` on otherwise valid data (e.g. no finite posterior at the
+  least-squares start) is recorded as a row with empty estimates, ``converged`` False and the
+  error in ``flags``; the campaign goes on.  With ``method="both"`` the least-squares row is
+  salvaged when only the Bayesian fit failed.  With ``options.strict`` (non-convergence is an
+  error) the run raises :class:`~palpbayes.errors.FitError` *after* writing ``summary.csv``,
+  listing the failed traces.
+
+Reproducibility: each trace's seed is :func:`palpbayes.campaign.fitjob.trace_seed` (base seed,
+trace id), results are read back from the per-trace JSON files and sorted by (trace_id,
+method), so the summary is identical whatever the number of workers or the order of completion.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import json
+import os
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from ..errors import FitError, InputError, OutputExistsError
+from ..io.atomic import write_csv_atomic, write_text_atomic
+from ..trace import IndentationTrace
+from . import layout
+from .fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable
+from .partial import fit_and_record, raise_input, read_partial
+from .settings import read_settings, settings_record
+from .source import load_source, traces_table
+
+__all__ = ["fit_campaign"]
+
+
+def _check_out_dir(out: Path, resume: bool, force: bool) -> None:
+    if resume and force:
+        raise InputError("--force and --resume exclude each other: --force refits everything, "
+                         "--resume keeps finished traces")
+    if out.exists() and not out.is_dir():
+        raise OutputExistsError(f"{out} exists and is not a folder; choose another output folder")
+    for parent in out.absolute().parents:  # nearest existing ancestor must be a folder
+        if parent.exists():
+            if not parent.is_dir():
+                raise InputError(f"cannot create output folder {out}: {parent} is a file, not a "
+                                 "folder; choose another --out")
+            break
+    if out.is_dir() and any(out.iterdir()) and not (resume or force):
+        raise OutputExistsError(
+            f"output folder {out} is not empty; use --force to refit and replace its results, "
+            "or --resume to keep finished traces and fit the rest")
+
+
+def _clear_outputs(out: Path) -> None:
+    """Remove a previous run's results (only files palpbayes writes)."""
+    for name in layout.FIT_OUTPUTS:
+        (out / name).unlink(missing_ok=True)
+    for sub, pattern in ((layout.POSTERIOR_DIR, "*.nc"), (layout.PARTIAL_DIR, "*.json")):
+        for f in (out / sub).glob(pattern):
+            f.unlink()
+
+
+# ----------------------------------------------------------------------------- campaign
+
+
+def _progress_bar(total: int, initial: int, progress: bool | None):
+    from tqdm.auto import tqdm
+
+    show = sys.stderr.isatty() if progress is None else bool(progress)
+    return tqdm(total=total, initial=initial, disable=not show, desc="fitting", unit="trace",
+                file=sys.stderr, dynamic_ncols=True)
+
+
+def _mp_context():
+    """Process start method: fork where it is safe and fast (Linux, Python < 3.12: the workers
+    inherit the imported modules), else forkserver/spawn (fork of a multi-threaded process is
+    deprecated from Python 3.12)."""
+    import multiprocessing as mp
+
+    methods = mp.get_all_start_methods()
+    if "fork" in methods and sys.platform.startswith("linux") and sys.version_info < (3, 12):
+        return mp.get_context("fork")
+    return mp.get_context("forkserver" if "forkserver" in methods else "spawn")
+
+
+def _run(todo: list[IndentationTrace], options: FitOptions, out: Path, workers: int,
+         on_done: Callable[[], None]) -> None:
+    if workers <= 1 or len(todo) <= 1:
+        for t in todo:
+            res = fit_and_record(t, options, str(out))
+            if "error" in res:
+                raise_input(res["error"])
+            on_done()
+        return
+    pool = cf.ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=_mp_context())
+    try:
+        futures = [pool.submit(fit_and_record, t, options, str(out)) for t in todo]
+        for fut in cf.as_completed(futures):
+            res = fut.result()
+            if "error" in res:
+                raise_input(res["error"])
+            on_done()
+    finally:  # on an error or Ctrl-C, drop the traces not started yet
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def fit_campaign(
+    source: str | os.PathLike | Sequence[IndentationTrace],
+    out_dir: str | os.PathLike,
+    options: FitOptions | None = None,
+    *,
+    workers: int | None = None,
+    resume: bool = False,
+    force: bool = False,
+    progress: bool | None = None,
+    read_options: dict | None = None,
+) -> pd.DataFrame:
+    """Fit every trace of a campaign and write the results folder (module docstring).
+
+    Nothing is written, and with ``force`` nothing is removed, until every trace has been read
+    and has passed :func:`palpbayes.campaign.fitjob.check_fittable` (geometry, units, contact, fit
+    window, the contact model over every depth a fit evaluates) and the output folder can be
+    created.
+
+    Parameters
+    ----------
+    source
+        Campaign manifest (:mod:`palpbayes.io.manifest`) or a sequence of traces with tips.
+    out_dir
+        Results folder; created if needed.
+    options
+        Fit options shared by every trace (default :class:`~palpbayes.campaign.fitjob.FitOptions`).
+    workers
+        Worker processes (default ``os.cpu_count()``); 1 fits in this process.
+    resume
+        Keep traces already recorded in ``out_dir/.partial`` with the same options and fit the
+        rest (an interrupted run picks up where it stopped).
+    force
+        Replace the results of a previous run in a non-empty ``out_dir``.
+    progress
+        Progress bar over traces on stderr; None: only when stderr is a terminal.
+    read_options
+        Reader options for every trace file of a manifest (``columns``, ``units``,
+        ``force_sign``, ``z_sign``; see :func:`load_source`); recorded in ``settings.json``,
+        and resuming with other read options is refused.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The summary table, as written to ``summary.csv`` (rows sorted by trace_id, method).
+
+    Raises
+    ------
+    OutputExistsError
+        ``out_dir`` is not empty and neither ``force`` nor ``resume`` is set.
+    InputError
+        Bad source or a trace with bad input (the message names the trace); resuming a folder
+        fitted with other options.
+    FitError
+        Only with ``options.strict``: some traces failed (after ``summary.csv`` is written).
+    """
+    options = options or FitOptions()
+    out = Path(out_dir)
+    _check_out_dir(out, resume, force)
+    traces, src = load_source(source, read_options)
+    if workers is None:
+        workers = os.cpu_count() or 1
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InputError(f"workers {workers!r} must be a positive integer")
+    options = options.with_progress(False)  # one bar over traces, none per fit
+
+    settings = settings_record(options, src, out, len(traces), read_options)
+    old = read_settings(out) if resume else {}
+    if resume and old and old.get("options") != settings["options"]:
+        raise InputError(
+            f"cannot resume {out}: it was fitted with other options ({old.get('options')}); "
+            "use --force to refit everything with the new options")
+    if resume and old and old.get("read_options", {}) != settings["read_options"]:
+        raise InputError(
+            f"cannot resume {out}: its traces were read with other column/unit/sign options "
+            f"({old.get('read_options', {})}); use --force to refit everything with the new ones")
+    for t in traces:  # bad input (geometry, nu, no contact) fails before anything is written
+        try:
+            check_fittable(t, options)
+        except InputError as exc:
+            if t.trace_id in str(exc):
+                raise
+            exc.args = (f"trace {t.trace_id!r}: {exc}",)  # keep the class, name the trace
+            raise
+    # every check passed: only now create the folder and (with force) remove the old results
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / layout.PARTIAL_DIR).mkdir(exist_ok=True)
+        (out / layout.POSTERIOR_DIR).mkdir(exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create output folder {out} ({exc.strerror or exc}); choose "
+                         "another --out") from None
+    if force:
+        _clear_outputs(out)
+    write_text_atomic(json.dumps(settings, indent=2) + "\n", out / layout.SETTINGS)
+    write_csv_atomic(traces_table(traces), out / layout.TRACES, float_format="%.10g")
+
+    done = {t.trace_id for t in traces if resume and read_partial(out, t, options) is not None}
+    todo = [t for t in traces if t.trace_id not in done]
+    with _progress_bar(len(traces), len(done), progress) as bar:
+        _run(todo, options, out, workers, lambda: bar.update(1))
+
+    rows = []
+    for t in traces:
+        recorded = read_partial(out, t, options)
+        if recorded is None:  # pragma: no cover - written just above
+            raise FitError(f"trace {t.trace_id!r}: its results were not recorded")
+        rows += recorded
+    summary = pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
+    summary = summary.sort_values(["trace_id", "method"], kind="stable").reset_index(drop=True)
+    write_csv_atomic(summary, out / layout.SUMMARY)
+    if options.strict:
+        failed = sorted({r["trace_id"] for r in rows
+                         if str(r.get("flags") or "").startswith("fit failed")})
+        if failed:
+            raise FitError(f"{len(failed)} trace(s) failed in strict mode: {', '.join(failed)} "
+                           f"(see {out / layout.SUMMARY})")
+    return summary
