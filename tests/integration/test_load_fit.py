@@ -15,7 +15,6 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-from palpbayes.simulate import simulate_trace
 from presets import TINY
 
 import palpbayes.campaign.partial as partial
@@ -24,6 +23,7 @@ from palpbayes.campaign import FitOptions, fit_campaign, load_fit
 from palpbayes.contact import Tip
 from palpbayes.io.manifest import write_manifest
 from palpbayes.io.trace_csv import write_trace
+from palpbayes.sim import simulate_trace
 
 
 def _same(a, b) -> bool:
