@@ -15,7 +15,8 @@ import math
 from pathlib import Path
 
 from ..errors import InputError
-from ..groundtruth import DEFAULT_STRAIN_WINDOW, analyse, scan_inputs
+from ..groundtruth import DEFAULT_STRAIN_WINDOW, analyse
+from ..io.groundtruth_inputs import scan_inputs
 from ..pipeline import write_groundtruth
 from ..results import PER_FILE_NAME, SUMMARY_NAME
 
