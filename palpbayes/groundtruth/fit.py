@@ -63,6 +63,7 @@ PER_FILE_COLUMNS = ["file", "specimen", "material", "E_pa", "E_sd_pa", "strain_l
                     "strain_toe", "r2", "n_points", "E_ols_sd_pa", "resid_acf1", "hac_lags",
                     "E_plain_pa", "E_plain_sd_pa", "E_window_spread_pa"]
 
+
 @dataclass(frozen=True)
 class GroundTruthFit:
     """Modulus of one compression test.
@@ -123,6 +124,7 @@ class GroundTruthFit:
         ``E_plain_pa``, ``E_plain_sd_pa`` and ``E_window_spread_pa``, are NaN here)."""
         d = asdict(self)
         return {k: d.get(k, math.nan) for k in PER_FILE_COLUMNS}
+
 
 def fit_modulus(
     test: CompressionTest,
@@ -213,6 +215,7 @@ def fit_modulus(
         skip_toe=bool(skip_toe), E_ols_sd_pa=float(se), resid_acf1=_acf1(resid),
         hac_lags=int(lags),
     )
+
 
 def _pct(x: float) -> str:
     return f"{100 * x:.3g} %"

@@ -58,19 +58,23 @@ __all__ = ["hac_slope_se"]
 #: Bound on the AR(1) prewhitening coefficient and the bandwidth's autocorrelation.
 _RHO_MAX = 0.97
 
+
 def _clip_rho(r: float) -> float:
     return float(min(max(r, 0.0), _RHO_MAX)) if math.isfinite(r) else 0.0
+
 
 def _lag1(a: np.ndarray) -> float:
     """Lag-1 autoregression coefficient sum a_t a_(t-1) / sum a_(t-1)² (0 if undefined)."""
     den = float(a[:-1] @ a[:-1]) if a.size > 1 else 0.0
     return float(a[1:] @ a[:-1]) / den if den > 0 else 0.0
 
+
 def _acf1(u: np.ndarray) -> float:
     """Lag-1 sample autocorrelation sum u_t u_(t-1) / sum u_t² of a mean-zero series."""
     u = u - u.mean()
     den = float(u @ u)
     return float(u[1:] @ u[:-1]) / den if den > 0 and u.size > 1 else math.nan
+
 
 def hac_slope_se(x: np.ndarray, resid: np.ndarray) -> tuple[float, int]:
     """Prewhitened Newey-West standard error of an OLS slope and its bandwidth (lags).
@@ -112,6 +116,7 @@ def hac_slope_se(x: np.ndarray, resid: np.ndarray) -> tuple[float, int]:
         s_e += 2.0 * (1.0 - j / (lags + 1.0)) * float(e[j:] @ e[:-j])
     s = max(s_e, 0.0) * (n / m) / (1.0 - rho) ** 2
     return math.sqrt(s * n / (n - 2)) / sxx, lags
+
 
 def _linfit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float, np.ndarray]:
     """Slope, intercept, OLS slope standard error, R² and residuals of a least-squares line."""

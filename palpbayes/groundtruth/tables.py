@@ -71,6 +71,7 @@ SUMMARY_COLUMNS = ["material", "n", "E_mean_pa", "E_sd_pa", "E_sem_pa", "strain_
 #: Extra per-file columns :func:`analyse` adds to the :class:`GroundTruthFit` fields.
 _EXTRA_COLUMNS = ("E_plain_pa", "E_plain_sd_pa", "E_window_spread_pa")
 
+
 def _label(test: CompressionTest, mapping: Mapping[str, str] | None) -> str | None:
     if not mapping:
         return None
@@ -79,6 +80,7 @@ def _label(test: CompressionTest, mapping: Mapping[str, str] | None) -> str | No
         if key in mapping:
             return str(mapping[key])
     return None
+
 
 def summarise(per_file: pd.DataFrame,
               strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW, *,
@@ -131,6 +133,7 @@ def summarise(per_file: pd.DataFrame,
     })
     return out[SUMMARY_COLUMNS]
 
+
 def _variants(test: CompressionTest, fit: GroundTruthFit, window: tuple[float, float],
               toe_compensation: bool, skip_toe: bool) -> dict:
     """The plain fit and the window spread of one test (NaN where a fit is impossible)."""
@@ -154,6 +157,7 @@ def _variants(test: CompressionTest, fit: GroundTruthFit, window: tuple[float, f
             return out  # a window the test cannot fill: no spread
     out["E_window_spread_pa"] = float(max(values) - min(values))
     return out
+
 
 def analyse(
     paths_or_tests: str | os.PathLike | CompressionTest

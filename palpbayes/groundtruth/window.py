@@ -18,6 +18,7 @@ __all__ = ["DEFAULT_STRAIN_WINDOW", "sensitivity_windows", "describe_rule"]
 #: Default fit window [-] in toe-compensated engineering strain (0-5 %).
 DEFAULT_STRAIN_WINDOW: tuple[float, float] = (0.0, 0.05)
 
+
 def _check_window(strain_window: Sequence[float]) -> tuple[float, float]:
     try:
         lo, hi = (float(v) for v in strain_window)
@@ -30,6 +31,7 @@ def _check_window(strain_window: Sequence[float]) -> tuple[float, float]:
         raise InputError(f"strain_window is a fraction of the height (0.05 = 5 %), got "
                          f"({lo}, {hi}); did you give percent?")
     return lo, hi
+
 
 def sensitivity_windows(
     strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW,
@@ -44,8 +46,10 @@ def sensitivity_windows(
     return ((lo, round(lo + 0.6 * w, 12)), (lo, hi),
             (round(lo + 0.2 * w, 12), round(hi + 0.2 * w, 12)))
 
+
 def _pct_range(window: Sequence[float]) -> str:
     return f"{100 * window[0]:g}-{100 * window[1]:g} %"
+
 
 def describe_rule(strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW,
                   toe_compensation: bool = True, skip_toe: bool = False) -> str:

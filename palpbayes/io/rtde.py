@@ -74,7 +74,6 @@ RTDE_TCP_POSE_COLUMNS = tuple(f"actual_TCP_pose_{i}" for i in range(6))
 RTDE_TCP_FORCE_COLUMNS = tuple(f"actual_TCP_force_{i}" for i in range(6))
 
 
-
 # ---------------------------------------------------------------------------------- helpers
 def rotvec_to_matrix(rotvec: np.ndarray) -> np.ndarray:
     """Rotation matrices from axis-angle vectors (UR's rx, ry, rz), vectorised.
