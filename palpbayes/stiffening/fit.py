@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 
 from ..bayes.sampler import SamplerSettings
 from ..errors import InputError
@@ -27,9 +28,9 @@ STIFFENING_SETTINGS = SamplerSettings(n_walkers=40, max_steps=20000, min_steps=2
                                       check_every=500, moves="de", progress=False)
 
 
-def fit_stiffening(rest_time, E, E_sd=None, *, seed: int | None = 0,
-                   settings: SamplerSettings | None = None, level: float = LEVEL
-                   ) -> StiffeningResult:
+def fit_stiffening(rest_time: ArrayLike, E: ArrayLike, E_sd: ArrayLike | None = None, *,
+                   seed: int | None = 0, settings: SamplerSettings | None = None,
+                   level: float = LEVEL) -> StiffeningResult:
     """Fit E(t) = c1·e^(c2·t) + c3·e^(c4·t), the single exponential + constant and a constant.
 
     The preferred law is the double law if it is identifiable, else the single law if it
@@ -113,7 +114,7 @@ def fit_stiffening(rest_time, E, E_sd=None, *, seed: int | None = 0,
 
 def fit_stiffening_summary(summary: pd.DataFrame, *, method: str = "bayes",
                            seed: int | None = 0, settings: SamplerSettings | None = None,
-                           **select) -> StiffeningResult:
+                           **select: object) -> StiffeningResult:
     """:func:`fit_stiffening` on the rows of a ``summary.csv`` table with a rest time.
 
     Bayesian rows use the *statistical* estimate (``E_stat_pa`` ± ``E_stat_sd_pa``): the budget's

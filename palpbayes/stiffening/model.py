@@ -22,7 +22,10 @@ Model and priors
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["double_exponential", "LAW_TEXT"]
 
@@ -31,7 +34,7 @@ _SX = 0.1    # half-normal scale of sigma_x in units of median(E)
 _LOG2PI = np.log(2 * np.pi)
 
 
-def double_exponential(t, c) -> np.ndarray:
+def double_exponential(t: ArrayLike, c: Sequence[float]) -> np.ndarray:
     """E(t) = c1·e^(c2·t) + c3·e^(c4·t) [Pa] for rest time t [s], c = (c1, c2, c3, c4)."""
     c1, c2, c3, c4 = c
     t = np.asarray(t, dtype=float)

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 
 from ..intervals import LEVEL, central, central_band
 from .model import LAW_TEXT
@@ -109,7 +110,8 @@ class StiffeningResult:
                     "converged": self.converged, "message": self.message})
         return out
 
-    def predict(self, t, level: float = LEVEL, model: str | None = None) -> pd.DataFrame:
+    def predict(self, t: ArrayLike, level: float = LEVEL, model: str | None = None
+                ) -> pd.DataFrame:
         """Posterior of the mean curve E(t) [Pa] on rest times ``t`` [s] (preferred law)."""
         model = model or self.preferred
         t = np.atleast_1d(np.asarray(t, dtype=float))
