@@ -17,7 +17,7 @@ from pathlib import Path
 
 from palpbayes.campaign import fit_campaign
 from palpbayes.fitjob import FitOptions
-from palpbayes.simulate import simulate_campaign
+from palpbayes.sim import simulate_campaign
 
 
 def main() -> None:

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from palpbayes.contact import Tip
 from palpbayes.io.trace_csv import write_trace
-from palpbayes.simulate import simulate_trace
+from palpbayes.sim import simulate_trace
 
 SPEED = 50 / 60e3  # [m/s] 50 mm/min
 DEPTH = 3e-3  # [m] 10 % of the White foam's 30 mm

@@ -27,7 +27,7 @@ from palpbayes.contact import Tip
 from palpbayes.errors import ConvergenceWarning
 from palpbayes.fitjob import FitOptions, fit_trace, model_checks
 from palpbayes.io.trace_csv import read_trace
-from palpbayes.simulate import simulate_trace
+from palpbayes.sim import simulate_trace
 
 AFM = Path(__file__).resolve().parents[2] / "shared" / "data" / "afm-curves"
 

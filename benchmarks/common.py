@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 from palpbayes.contact import Tip
-from palpbayes.simulate import simulate_trace
+from palpbayes.sim import simulate_trace
 
 TIPS = {
     "flat": Tip("flat", radius=0.010),

@@ -280,7 +280,8 @@ from palpbayes.contact import Tip
 from palpbayes.errors import ConvergenceWarning
 from palpbayes.fitdata import ModelSpec, prepare
 from palpbayes.lsq import fit_lsq_data
-from palpbayes.simulate import PAPER_TIPS, simulate_trace
+from palpbayes.paper import PAPER_TIPS
+from palpbayes.sim import simulate_trace
 
 pd.set_option("display.width", 160)
 NO_BUDGET = BudgetSpec.none()
@@ -452,7 +453,8 @@ from IPython.display import display
 from palpbayes import plots
 from palpbayes.campaign import fit_campaign
 from palpbayes.fitjob import FitOptions
-from palpbayes.simulate import PAPER_TIPS, rest_modulus, simulate_palpation_series
+from palpbayes.paper import PAPER_TIPS
+from palpbayes.sim import rest_modulus, simulate_palpation_series
 from palpbayes.stiffening import fit_stiffening_summary
 from tqdm import TqdmWarning
 

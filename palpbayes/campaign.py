@@ -56,7 +56,7 @@ from . import errors as _errors
 from .errors import FitError, InputError, OutputExistsError
 from .fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable, fit_trace
 from .io.atomic import write_csv_atomic, write_text_atomic
-from .io.manifest import MANIFEST_COLUMNS, read_manifest
+from .io.manifest import MANIFEST_COLUMNS, read_manifest, tip_columns
 from .trace import IndentationTrace
 
 __all__ = [
@@ -139,10 +139,7 @@ def _geometry_row(t: IndentationTrace) -> dict:
     return {
         "trace_id": t.trace_id, "file": t.source or "", "specimen": t.specimen,
         "material": t.material, "tip": tip.kind,
-        "radius_m": np.nan if tip.radius is None else tip.radius,
-        "half_angle_deg": np.nan if tip.half_angle is None else math.degrees(tip.half_angle),
-        "profile_c": np.nan if tip.c is None else tip.c,
-        "profile_n": np.nan if tip.n is None else tip.n,
+        **tip_columns(tip),
         "thickness_m": np.nan if t.thickness is None else t.thickness,
         "repetition": np.nan if t.repetition is None else t.repetition,
         "rest_time_s": np.nan if t.rest_time is None else t.rest_time,

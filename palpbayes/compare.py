@@ -45,7 +45,7 @@ Against the ground truth (Instron mean GT ± sd over specimens):
   when GT is outside the interval.
 
 ``paper_*`` are the paper's published robot (least-squares) estimates for White/Pink/Grey ×
-flat/sphere/paraboloid (:data:`palpbayes.simulate.PAPER_ROBOT_ESTIMATES`); ``paper_err_pct`` is
+flat/sphere/paraboloid (:data:`palpbayes.paper.PAPER_ROBOT_ESTIMATES`); ``paper_err_pct`` is
 recomputed from the printed E and the paper's Instron means, because the printed sphere errors
 do not follow from the printed values (see that constant's note).
 
@@ -67,6 +67,7 @@ from . import layout
 from .bayes.budget import BudgetSpec
 from .campaign import read_settings
 from .compare_text import format_comparison
+from .contact import registered_kinds
 from .errors import DataFileError, FitError
 from .fitdata import ModelSpec
 from .fitjob import trace_seed
@@ -314,7 +315,7 @@ def compare_campaign(
 
     order_src = geometry if geometry is not None else summary
     materials = _order(order_src["material"].fillna(""), ["White", "Pink", "Grey"])
-    tips = _order(order_src["tip"], ["flat", "sphere", "paraboloid"])
+    tips = _order(order_src["tip"], list(registered_kinds()))
     rows, pooled_rows, budgets = [], [], []
     for mat in materials:
         for tip in tips:

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .baseline import MIN_BASELINE_POINTS, Baseline, estimate_baseline
-from .contact import Tip, check_nu, exponent, shape
+from .contact import Tip, check_nu, exponent, get_law, shape
 from .errors import FitError, InputError, NoContactError
 from .noise import PAPER_NOISE_PP
 from .trace import IndentationTrace
@@ -47,8 +47,9 @@ DEFAULT_F_UNC = PAPER_NOISE_PP
 
 
 def default_fit_fraction(tip: Tip) -> float:
-    """Paper's default: 0.2 of the penetration skipped for the flat punch, 0 otherwise."""
-    return 0.2 if tip.kind == "flat" else 0.0
+    """Fraction of the penetration skipped by default: the tip law's
+    (``ContactLaw.default_fit_fraction``; the paper's 0.2 for the flat punch, 0 otherwise)."""
+    return get_law(tip).default_fit_fraction
 
 
 @dataclass(frozen=True)

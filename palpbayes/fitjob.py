@@ -15,8 +15,7 @@ import numpy as np
 
 from .bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
 from .checks import CheckResult, check_fit
-from .contact import check_tip_plausible
-from .contact.geometry import Tip
+from .contact import check_tip_plausible, get_law
 from .errors import ConvergenceWarning, FitError, GeometryError
 from .fitdata import FitData, ModelSpec, prepare
 from .layout import posterior_file
@@ -39,8 +38,9 @@ SUMMARY_COLUMNS = [
     # model-adequacy checks (palpbayes.checks): all passed, and the free exponent m of
     # F = k·d^m + baseline (compare with the tip law's); failed checks are named in flags
     "model_ok", "m_free",
-    # tip "sphere" only (else NaN): the paper's choice for a sphere, least squares with the
-    # paraboloid (Hertz) law at the sphere's radius on the same points, and (E_hertz − E)/E
+    # tip "sphere" only (a law with a hertz_approximation; else NaN): the paper's choice for a
+    # sphere, least squares with the paraboloid (Hertz) law at the sphere's radius on the same
+    # points, and (E_hertz − E)/E
     "E_hertz_pa", "E_hertz_rel_diff",
 ]
 
@@ -174,13 +174,13 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
             "(--thickness, thickness_m, in metres)"
         )
     fitted = data.z_contact - float(data.z.min())
-    if tip.kind in ("paraboloid", "sphere") and fitted > tip.radius:
-        law = "Hertz" if tip.kind == "paraboloid" else "Sneddon sphere"
+    law = get_law(tip)
+    if law.max_depth is not None and fitted > law.max_depth(tip):
         raise GeometryError(
             f"{src}: the indentation depth {fitted * 1e3:.4g} mm (contact onset to deepest "
-            f"fitted point) exceeds the tip radius {tip.radius * 1e3:.4g} mm, outside the "
-            f"{law} law's validity; is z in another unit (give it, e.g. --z-unit mm or "
-            "--z-unit cm)? or fit a shallower window (--max-depth M)"
+            f"fitted point) exceeds the {law.max_depth_name} {law.max_depth(tip) * 1e3:.4g} mm, "
+            f"outside the {law.name} law's validity; is z in another unit (give it, e.g. "
+            "--z-unit mm or --z-unit cm)? or fit a shallower window (--max-depth M)"
         )
 
     # the depths every fit evaluates: up to the deepest fitted point below the contact onset
@@ -192,7 +192,7 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
                 "cropping a long approach from the file lowers this")
     models = [("", model)]
     tol = options.budget.radius_tolerance
-    if options.method in ("bayes", "both") and tol > 0 and tip.kind != "cone":
+    if options.method in ("bayes", "both") and tol > 0 and tip.has_length_scale:
         models.append((f" (with the tip radius scaled by the budget's +{tol * 100:g} % "
                        "tolerance)", replace(model, tip=tip.scaled(1.0 + tol))))
     for note, m in models:
@@ -226,7 +226,8 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     of its own fit.  A least-squares failure (the paper's model has no offset) does not stop
     the Bayesian fit: the row says why.
 
-    For tip ``sphere`` (the exact Sneddon law, docs/design.md §1) the paper's choice is also fitted:
+    For tip ``sphere`` (the exact Sneddon law, docs/design.md §1; any tip whose law has a
+    ``hertz_approximation``) the paper's choice is also fitted:
     least squares with the paraboloid (Hertz) law at the sphere's radius on the same points
     (same window, constraint, Poisson ratio and thickness model).  Every row of the trace gets
     ``E_hertz_pa`` and ``E_hertz_rel_diff`` = (E_hertz − E)/E with the row's own E; Hertz
@@ -246,9 +247,9 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
                    "n_points": data.n_points, "E_pa": float("nan"), "nu": data.model.nu,
                    "flags": f"least squares failed: {exc}"}
     e_hertz = float("nan")
-    if data.model.tip.kind == "sphere":
-        hertz = replace(data, model=replace(data.model, tip=Tip("paraboloid",
-                                                                 radius=data.model.tip.radius)))
+    approximation = get_law(data.model.tip).hertz_approximation
+    if approximation is not None:
+        hertz = replace(data, model=replace(data.model, tip=approximation(data.model.tip)))
         try:
             e_hertz = float(fit_lsq_data(hertz, trace_id=trace.trace_id).E)
         except FitError:

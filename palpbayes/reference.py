@@ -4,7 +4,7 @@
   ``groundtruth_summary.csv`` of ``palpbayes groundtruth``, or compression exports analysed with
   :func:`palpbayes.groundtruth.analyse`);
 * :func:`paper_estimates` gives the paper's published robot estimates
-  (:data:`palpbayes.simulate.PAPER_ROBOT_ESTIMATES`) with the error recomputed from the printed
+  (:data:`palpbayes.paper.PAPER_ROBOT_ESTIMATES`) with the error recomputed from the printed
   E and the paper's Instron means;
 * :func:`gt_columns` / :func:`paper_columns` fill the reference columns of one comparison row
   (definitions in :mod:`palpbayes.compare`).

@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from . import layout
+from .contact import registered_kinds
 from .errors import DataFileError, InputError
 from .noise import PAPER_NOISE_PP
 
@@ -50,8 +51,9 @@ PER_FILE_NAME = layout.GROUNDTRUTH
 #: Per-material ground-truth table of a results folder.
 SUMMARY_NAME = layout.GROUNDTRUTH_SUMMARY
 
-#: Order of tips in tables and figures (the paper's first; others after, as found).
-TIP_ORDER = ("flat", "sphere", "paraboloid", "cone", "power")
+#: Order of tips in tables and figures: the contact registry's display order (the paper's
+#: flat, sphere, paraboloid first); kinds not registered after, as found.
+TIP_ORDER = registered_kinds()
 #: Order of materials in tables and figures (the paper's foams first).
 MATERIAL_ORDER = ("White", "Pink", "Grey")
 

@@ -129,7 +129,7 @@ def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
             ("Poisson ratio", f"Uniform({lo:.3g}, {hi:.3g})" if hi > lo else f"fixed {lo:.3g}")]
 
     tol = spec.radius_tolerance
-    if tol > 0 and model.tip.kind != "cone":
+    if tol > 0 and model.tip.has_length_scale:
         grid = np.linspace(-tol, tol, 9)
         fac = [_refit_factor(model, depth, ModelSpec(model.tip.scaled(1 + e), model.nu,
                                                      model.thickness, model.bonded).shape)

@@ -10,20 +10,28 @@ import numpy as np
 
 from .. import __version__
 from ..checks import check_fit
-from ..errors import ConvergenceError, ConvergenceWarning, FitError
+from ..errors import ConvergenceError, ConvergenceWarning, FitError, InputError
 from ..fitdata import FitData, ModelSpec, prepare_trace
 from ..lsq import LSQResult, fit_lsq_data
 from ..trace import IndentationTrace
 from ..units import format_length
 from .budget import BudgetSpec, propagate
 from .diagnostics import chain_passes, compute_diagnostics, import_arviz
+from .exact import exact_posterior
 from .likelihood import TraceLikelihood
 from .priors import PriorSpec, TracePrior
 from .result import BayesResult
-from .sampler import SamplerSettings, run_emcee
-from .start import find_modes, initial_ensemble
+from .sampler import ChainResult, SamplerSettings, run_emcee
+from .start import Mode, find_modes, initial_ensemble
 
-__all__ = ["fit_bayes", "fit_bayes_data", "is_bimodal", "bound_flags"]
+__all__ = ["fit_bayes", "fit_bayes_data", "is_bimodal", "bound_flags", "ENGINES",
+           "EXACT_DRAWS"]
+
+#: Posterior engines: emcee (every noise model and prior) or the exact quadrature
+#: (:mod:`palpbayes.bayes.exact`: Gaussian or AR(1) noise, the 'loading' surface prior).
+ENGINES = ("emcee", "exact")
+#: Independent draws the exact engine returns (4 chains of 1,000, for arviz's diagnostics).
+EXACT_DRAWS = (4, 1000)
 
 #: A posterior whose median lies within this many posterior sd of a hard prior bound is flagged.
 BOUND_SDS = 3.0
@@ -122,8 +130,11 @@ def fit_bayes_data(
     strict: bool = False,
     trace_id: str = "trace",
     lsq: LSQResult | None = None,
+    engine: str = "emcee",
 ) -> BayesResult:
     """Posterior of one prepared trace; see :func:`fit_bayes`."""
+    if engine not in ENGINES:
+        raise InputError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}")
     priors = priors or PriorSpec()
     budget = budget or BudgetSpec()
     settings = settings or SamplerSettings()
@@ -134,32 +145,14 @@ def fit_bayes_data(
             lsq = fit_lsq_data(data, trace_id=trace_id)
         except FitError:
             lsq = None
-    modes = find_modes(data, prior)
-    centers = tuple((m.z_surf, float(np.sqrt(m.cov[1, 1]))) for m in modes
-                    if np.isfinite(m.cov[1, 1]))
-    like = TraceLikelihood(data, noise, tabulate=tabulate, baseline=baseline,
-                           z_ref=prior.z_ref, centers=centers)
     ss = np.random.SeedSequence(seed)
     init_ss, sampler_ss, budget_ss, check_ss = ss.spawn(4)  # first three as before
-
-    def log_prob(theta: np.ndarray) -> np.ndarray:
-        lp = prior.log_prior(theta)
-        ok = np.isfinite(lp)
-        if ok.any():
-            lp[ok] += like(theta[ok])
-        return lp
-
-    n_walkers = max(settings.n_walkers, 2 * len(names) + 2)
-    p0, used = initial_ensemble(modes, names, n_walkers, np.random.default_rng(init_ss),
-                                prior.z_bounds, prior.bounds["log_Estar"], data.n_points)
-    bad = ~np.isfinite(log_prob(p0))
-    if bad.any():
-        raise FitError(f"{trace_id}: {int(bad.sum())} initial walker(s) have zero posterior "
-                       "density; the profile-scan start lies outside the prior")
-    if len(used) > 1 and settings.moves == "de":
-        settings = replace(settings, moves="de-snooker")  # emcee's advice for several modes
-    chains = run_emcee(log_prob, p0, settings, int(sampler_ss.generate_state(1)[0]),
-                       accept=chain_passes)
+    if engine == "exact":
+        chains, modes, like = _exact_chains(data, prior, np.random.default_rng(sampler_ss))
+        settings = f"exact engine, {chains.n_steps} (surface, phi) nodes"
+    else:
+        chains, modes, like, settings = _emcee_chains(data, prior, settings, tabulate,
+                                                      init_ss, sampler_ss, trace_id)
     post = _posterior_dict(chains.samples, names, data.model.nu)
     post_theta = {n: chains.samples[..., i] for i, n in enumerate(names)}
     bud = propagate(post["E_star"], data, float(np.median(post["z_surf"])), budget,
@@ -171,6 +164,7 @@ def fit_bayes_data(
         warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
         idata = _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed,
                           lsq, noise, prior, modes)
+    idata.posterior.attrs["engine"] = engine
     flags = _flags(post, post_theta, prior)
     checks = _model_checks(post, data, like, int(check_ss.generate_state(1)[0]))
     # reloaded fits keep their flags and checks (palpbayes.results.load_fit)
@@ -180,6 +174,64 @@ def fit_bayes_data(
           "flag": c.flag} for c in checks])
     return _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
                    like, checks)
+
+
+def _log_prob(prior: TracePrior, like: TraceLikelihood):
+    """Log posterior density of θ (W, ndim), −inf outside the prior."""
+    def log_prob(theta: np.ndarray) -> np.ndarray:
+        lp = prior.log_prior(theta)
+        ok = np.isfinite(lp)
+        if ok.any():
+            lp[ok] += like(theta[ok])
+        return lp
+    return log_prob
+
+
+def _emcee_chains(data: FitData, prior: TracePrior, settings: SamplerSettings, tabulate: bool,
+                  init_ss, sampler_ss, trace_id: str):
+    """emcee, its walkers started at every mode of the profile scan."""
+    names = list(prior.names)
+    modes = find_modes(data, prior)
+    centers = tuple((m.z_surf, float(np.sqrt(m.cov[1, 1]))) for m in modes
+                    if np.isfinite(m.cov[1, 1]))
+    like = TraceLikelihood(data, prior.noise, tabulate=tabulate, baseline=prior.baseline,
+                           z_ref=prior.z_ref, centers=centers)
+    log_prob = _log_prob(prior, like)
+    n_walkers = max(settings.n_walkers, 2 * len(names) + 2)
+    p0, used = initial_ensemble(modes, names, n_walkers, np.random.default_rng(init_ss),
+                                prior.z_bounds, prior.bounds["log_Estar"], data.n_points)
+    bad = ~np.isfinite(log_prob(p0))
+    if bad.any():
+        raise FitError(f"{trace_id}: {int(bad.sum())} initial walker(s) have zero posterior "
+                       "density; the profile-scan start lies outside the prior")
+    if len(used) > 1 and settings.moves == "de":
+        settings = replace(settings, moves="de-snooker")  # emcee's advice for several modes
+    chains = run_emcee(log_prob, p0, settings, int(sampler_ss.generate_state(1)[0]),
+                       accept=chain_passes)
+    return chains, modes, like, settings
+
+
+def _exact_chains(data: FitData, prior: TracePrior, rng: np.random.Generator):
+    """Independent draws of the exact engine, shaped as chains for arviz."""
+    post = exact_posterior(data, prior)
+    n_chains, n_draws = EXACT_DRAWS
+    d = post.draws(rng, n_chains * n_draws)
+    theta = {"log_Estar": np.log(d["E_star"]), "z_surf": d["z_surf"],
+             "log_sigma": np.log(d["sigma"]), "F0": d["F0"], "F1": d.get("F1"),
+             "phi": d.get("phi")}
+    ndim = len(prior.names)
+    samples = np.column_stack([theta[n] for n in prior.names]).reshape(n_chains, n_draws, ndim)
+    zs = post.z_summary()
+    like = TraceLikelihood(data, prior.noise, baseline=prior.baseline, z_ref=prior.z_ref,
+                           z_center=zs.mean, z_scale=zs.sd)
+    lp = _log_prob(prior, like)(samples.reshape(-1, ndim))
+    modes = [Mode(z_surf=z, beta=np.full(2, np.nan), rss=np.nan, loglik=np.nan,
+                  cov=np.full((3, 3), np.nan), lag1=np.nan, weight=w)
+             for z, w in post.modes()]
+    chains = ChainResult(samples=samples, log_prob=lp.reshape(n_chains, n_draws),
+                         tau=np.ones(ndim), n_steps=post.n_nodes, burn=0, thin=1,
+                         acceptance=1.0, hit_cap=not post.complete)
+    return chains, modes, like
 
 
 def _model_checks(post: dict, data: FitData, like: TraceLikelihood, seed: int) -> list:
@@ -210,7 +262,7 @@ def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, 
             "noise_model": noise,
             "priors": repr(priors),
             "budget": repr(budget),
-            "sampler": repr(settings),
+            "sampler": settings if isinstance(settings, str) else repr(settings),
             "seed": -1 if seed is None else int(seed),
             "f_unc_n": data.f_unc,
             "fit_fraction": data.fit_fraction,
@@ -267,6 +319,7 @@ def fit_bayes(
     seed: int | None = 0,
     tabulate: bool = True,
     strict: bool = False,
+    engine: str = "emcee",
 ) -> BayesResult:
     """Bayesian fit of E*, z_surf, sigma and F0 (and phi or nu_t) to one trace.
 
@@ -301,6 +354,10 @@ def fit_bayes(
     strict
         Raise :class:`~palpbayes.errors.ConvergenceError` instead of warning when the fit is
         not converged.
+    engine
+        ``"emcee"`` (default: every noise model and prior) or ``"exact"`` (quadrature over
+        the surface height with the linear parameters and the noise scale integrated out,
+        :mod:`palpbayes.bayes.exact`; Gaussian or AR(1) noise; ``settings`` is then unused).
 
     Returns
     -------
@@ -310,4 +367,4 @@ def fit_bayes(
                          max_depth=max_depth, tare=tare)
     return fit_bayes_data(data, noise=noise, baseline=baseline, priors=priors, budget=budget,
                           settings=settings, seed=seed, tabulate=tabulate, strict=strict,
-                          trace_id=trace.trace_id)
+                          trace_id=trace.trace_id, engine=engine)

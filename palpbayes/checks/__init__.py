@@ -52,7 +52,7 @@ Modules: :mod:`.core` (result type, thresholds, AR(1) factors, least-squares hel
 
 from __future__ import annotations
 
-from .core import THRESHOLDS, TIP_EXPONENTS, CheckResult, ar1_mean_variance_factor, noise_lag1
+from .core import THRESHOLDS, CheckResult, ar1_mean_variance_factor, noise_lag1
 from .depth import depth_consistency_check
 from .exponent import exponent_check, free_exponent_fit, law_exponent
 from .ppc import posterior_predictive_check
@@ -62,7 +62,6 @@ from .run import check_fit, run_checks
 __all__ = [
     "CheckResult",
     "THRESHOLDS",
-    "TIP_EXPONENTS",
     "ar1_mean_variance_factor",
     "noise_lag1",
     "law_exponent",

@@ -25,9 +25,6 @@ THRESHOLDS: dict[str, float] = {
     "depth_rel": 0.05,           # ... and > 5 %
 }
 
-#: Exponent m of each power-law tip family (for naming a wrong tip).
-TIP_EXPONENTS: dict[str, float] = {"flat": 1.0, "paraboloid": 1.5, "cone": 2.0}
-
 _MIN_BIN = 8  # fewest samples in a bin
 
 

@@ -8,11 +8,11 @@ import math
 import numpy as np
 from scipy import optimize
 
+from ..contact import fixed_exponents
 from ..errors import FitError
 from ..fitdata import ModelSpec
 from .core import (
     THRESHOLDS,
-    TIP_EXPONENTS,
     CheckResult,
     _arrays,
     _contact_inputs,
@@ -161,7 +161,7 @@ def free_exponent_fit(z, force, z_surf0: float, *, baseline: str = "constant",
 def _wrong_tip_hint(model: ModelSpec, m: float) -> str:
     """'the cone's 2' when the fitted m is closer to another tip family's exponent."""
     kind = model.tip.kind
-    best = min(TIP_EXPONENTS.items(), key=lambda kv: abs(kv[1] - m))
+    best = min(fixed_exponents().items(), key=lambda kv: abs(kv[1] - m))
     if best[0] != kind and abs(best[1] - m) < 0.15:
         return f"m is near the {best[0]} law's {best[1]:g}"
     return ""

@@ -9,7 +9,13 @@ from pathlib import Path
 from .. import layout
 from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
 from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
-from ..contact import TIP_KINDS, Tip, check_nu, half_angle_from_degrees
+from ..contact import (
+    TIP_PARAMETERS,
+    Tip,
+    check_nu,
+    default_fit_fraction_text,
+    registered_kinds,
+)
 from ..errors import DataFileError, InputError
 from ..fitjob import METHODS, FitOptions
 from ..io.manifest import is_manifest
@@ -49,7 +55,8 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                    help="Bayesian surface prior: uniform over the loading range, or 'soft' "
                         "(plus the paper's |F(z_surf)| <= F_unc as a soft penalty)")
     g.add_argument("--fit-fraction", type=float, default=None,
-                   help="fraction of the penetration skipped (default 0.2 flat, 0 others)")
+                   help="fraction of the penetration skipped (default "
+                   f"{default_fit_fraction_text()})")
     g.add_argument("--max-depth", type=float, default=None, metavar="M",
                    help="fit only down to this depth below the contact onset [m]")
     g.add_argument("--finite-thickness", action="store_true",
@@ -84,11 +91,10 @@ def register(subparsers) -> None:
                    help="continue an interrupted run, keeping finished traces")
     add_model_options(p)
     t = p.add_argument_group("single trace (ignored for a manifest)")
-    t.add_argument("--tip", choices=TIP_KINDS, help="tip kind")
-    t.add_argument("--radius", type=float, metavar="M", help="tip radius [m]")
-    t.add_argument("--half-angle", type=float, metavar="DEG", help="cone half-angle [deg]")
-    t.add_argument("--profile-c", type=float, help="power-law profile c of f = c*r^n")
-    t.add_argument("--profile-n", type=float, help="power-law profile n of f = c*r^n")
+    t.add_argument("--tip", choices=registered_kinds(), help="tip kind")
+    for par in TIP_PARAMETERS.values():  # the tip's size, in the option's unit
+        t.add_argument(par.option, type=float, metavar=par.metavar, dest=_dest(par.option),
+                       help=par.help)
     t.add_argument("--thickness", type=float, metavar="M", help="specimen thickness [m]")
     t.add_argument("--material", default="", help="material label")
     c = p.add_argument_group("columns, units and signs (every trace, also of a manifest)")
@@ -155,16 +161,26 @@ def read_options_from_args(args: argparse.Namespace) -> dict:
     return opts
 
 
+def _dest(option: str) -> str:
+    """The argparse attribute of a ``--long-option``."""
+    return option.lstrip("-").replace("-", "_")
+
+
 def trace_from_args(args: argparse.Namespace):
     """Read the single trace named by ``args.input`` with the tip and column options."""
     from ..io.trace_csv import read_trace
 
     if args.tip is None:
-        raise InputError(f"{args.input}: a single trace needs --tip ({', '.join(TIP_KINDS)}) "
-                         "and its size (--radius M, --half-angle DEG or --profile-c/-n)")
-    half_angle = None if args.half_angle is None else half_angle_from_degrees(args.half_angle)
-    tip = Tip(args.tip, radius=args.radius, half_angle=half_angle,
-              c=args.profile_c, n=args.profile_n)
+        sizes = ", ".join(f"{p.option} {p.metavar}" if p.metavar else p.option
+                          for p in TIP_PARAMETERS.values())
+        raise InputError(f"{args.input}: a single trace needs --tip "
+                         f"({', '.join(registered_kinds())}) and its size ({sizes}, as the "
+                         "tip needs)")
+    sizes = {}
+    for p in TIP_PARAMETERS.values():  # in the option's unit (degrees for the half-angle)
+        value = getattr(args, _dest(p.option))
+        sizes[p.name] = None if value is None else p.from_user(value)
+    tip = Tip(args.tip, **sizes)
     return read_trace(args.input, tip=tip, thickness=args.thickness, material=args.material,
                       **read_options_from_args(args))
 

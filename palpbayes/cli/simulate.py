@@ -1,7 +1,7 @@
 """``palpbayes simulate OUT_DIR``: write a synthetic palpation campaign (docs/design.md §7).
 
 The folder holds a manifest, one CSV per trace, Instron-like ground-truth exports and the true
-values (see :mod:`palpbayes.simulate_campaign`).  The shipped example was made with::
+values (see :mod:`palpbayes.sim.campaign`).  The shipped example was made with::
 
     palpbayes simulate data/example-campaign --seed 2026 --repetitions 3
 """
@@ -11,8 +11,8 @@ from __future__ import annotations
 import argparse
 
 from ..noise import PAPER_NOISE_PP
-from ..simulate import PAPER_MATERIALS, PAPER_TIPS
-from ..simulate_campaign import simulate_campaign
+from ..paper import PAPER_MATERIALS, PAPER_TIPS
+from ..sim import simulate_campaign
 from ..units import format_force
 
 __all__ = ["register", "run"]

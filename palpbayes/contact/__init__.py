@@ -5,7 +5,13 @@ Every law is written as F = E*·s(d), with E* = E/(1-nu²) the effective modulus
 F = k·d^m with k = E*·g; the exact sphere has no power form but stays linear in E*.  An optional
 finite-thickness factor (see :mod:`.thickness`) multiplies s(d).
 
-The registry :data:`LAWS` maps each tip kind to its law::
+Each tip kind is one module of this package (``flat``, ``paraboloid``, ``sphere``, ``cone``,
+``power``) holding its formulas and its :class:`~.registry.ContactLaw`, registered by
+``LAW = register(ContactLaw(...))``.  Importing this package imports every module in it, so a
+new tip kind is one new file here: :func:`get_law` and :func:`registered_kinds` find it, and so
+do :class:`Tip`, the fits, the checks, the manifest and the command line.  Helper modules
+(:mod:`.registry`, :mod:`.parameters`, :mod:`.thickness`, :mod:`.mdr`) register
+nothing.
 
     >>> from palpbayes.contact import Tip, force
     >>> round(float(force(1e-3, E=100e3, nu=0.3, tip=Tip("paraboloid", radius=0.01))), 4)
@@ -14,23 +20,43 @@ The registry :data:`LAWS` maps each tip kind to its law::
 
 from __future__ import annotations
 
+import importlib
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
+import pkgutil
 
 import numpy as np
 
 from ..errors import GeometryError
 from ..units import format_length
-from . import cone, flat, mdr, paraboloid, sphere, thickness
-from .geometry import TIP_KINDS, Tip
+from .parameters import TIP_PARAMETERS, TipParameter, half_angle_from_degrees
+from .registry import (
+    ContactLaw,
+    Tip,
+    get_law,
+    register,
+    registered_kinds,
+    registered_laws,
+    unregister,
+)
+
+# every module of the package: the law modules register themselves on import
+for _module in pkgutil.iter_modules(__path__):
+    importlib.import_module(f"{__name__}.{_module.name}")
+del _module
 
 __all__ = [
     "Tip",
     "TIP_KINDS",
+    "TIP_PARAMETERS",
+    "TipParameter",
     "ContactLaw",
-    "LAWS",
+    "register",
+    "unregister",
     "get_law",
+    "registered_kinds",
+    "registered_laws",
+    "fixed_exponents",
+    "default_fit_fraction_text",
     "shape",
     "force",
     "force_star",
@@ -48,73 +74,26 @@ __all__ = [
 ]
 
 
-@dataclass(frozen=True)
-class ContactLaw:
-    """One entry of the registry.
-
-    Attributes
-    ----------
-    kind
-        Tip kind.
-    shape
-        ``shape(depth, tip) -> F/E*`` [m²] on the half-space.
-    exponent
-        ``exponent(tip) -> m`` or None when the law is not a power law.
-    prefactor
-        ``prefactor(tip) -> g`` [m^(2-m)] with s = g·d^m, or None.
-    reference
-        Where the law comes from.
-    """
-
-    kind: str
-    shape: Callable[[np.ndarray, Tip], np.ndarray]
-    exponent: Callable[[Tip], float | None]
-    prefactor: Callable[[Tip], float | None]
-    reference: str
+def __getattr__(name: str):
+    """``TIP_KINDS``: the registered tip kinds now (:func:`registered_kinds`), in display
+    order, so a law registered after import is in it."""
+    if name == "TIP_KINDS":
+        return registered_kinds()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-LAWS: dict[str, ContactLaw] = {
-    "flat": ContactLaw(
-        "flat",
-        lambda d, t: flat.shape(d, t.radius),
-        lambda t: flat.EXPONENT,
-        lambda t: flat.prefactor(t.radius),
-        "Boussinesq 1885; Sneddon 1965",
-    ),
-    "paraboloid": ContactLaw(
-        "paraboloid",
-        lambda d, t: paraboloid.shape(d, t.radius),
-        lambda t: paraboloid.EXPONENT,
-        lambda t: paraboloid.prefactor(t.radius),
-        "Hertz 1882",
-    ),
-    "sphere": ContactLaw(
-        "sphere",
-        lambda d, t: sphere.shape(d, t.radius),
-        lambda t: None,
-        lambda t: None,
-        "Sneddon 1965 (exact sphere)",
-    ),
-    "cone": ContactLaw(
-        "cone",
-        lambda d, t: cone.shape(d, t.half_angle),
-        lambda t: cone.EXPONENT,
-        lambda t: cone.prefactor(t.half_angle),
-        "Sneddon 1965",
-    ),
-    "power": ContactLaw(
-        "power",
-        lambda d, t: mdr.shape(d, t.c, t.n),
-        lambda t: mdr.power_law_exponent(t.n),
-        lambda t: mdr.power_law_prefactor(t.c, t.n),
-        "Popov & Hess 2015 (MDR)",
-    ),
-}
+def fixed_exponents() -> dict[str, float]:
+    """Tip kind -> exponent m of every registered law whose m does not depend on the tip's
+    size (flat 1, paraboloid 1.5, cone 2), for naming the tip a fitted m points to."""
+    return {law.kind: law.fixed_exponent for law in registered_laws()
+            if law.fixed_exponent is not None}
 
 
-def get_law(tip: Tip) -> ContactLaw:
-    """The registry entry for ``tip.kind``."""
-    return LAWS[tip.kind]
+def default_fit_fraction_text() -> str:
+    """The registered laws' default fit fractions in words, e.g. ``'0.2 flat, 0 others'``."""
+    parts = [f"{law.default_fit_fraction:g} {law.kind}" for law in registered_laws()
+             if law.default_fit_fraction > 0]
+    return ", ".join(parts + ["0 others"]) if parts else "0 for every tip"
 
 
 def check_nu(nu: float) -> float:
@@ -147,8 +126,9 @@ def _mm_as_metres(value: float) -> str:
 def check_tip_plausible(tip: Tip) -> None:
     """Reject a tip whose size cannot be meant for palpation (a unit slip).
 
-    A radius (flat, paraboloid, sphere) above :data:`MAX_TIP_RADIUS_M` = 0.1 m is taken for a
-    value in millimetres given as metres (``--radius 10`` for a 10 mm tip).
+    A radius (flat, paraboloid, sphere: any tip with a ``radius``) above
+    :data:`MAX_TIP_RADIUS_M` = 0.1 m is taken for a value in millimetres given as metres
+    (``--radius 10`` for a 10 mm tip).
 
     Raises
     ------
@@ -162,31 +142,6 @@ def check_tip_plausible(tip: Tip) -> None:
             "manifest's radius_m): "
             f"did you mean {_mm_as_metres(tip.radius)}?"
         )
-
-
-def half_angle_from_degrees(degrees) -> float:
-    """A cone half-opening angle given in degrees, validated, as radians [rad].
-
-    The command line (``--half-angle``) and the manifest (``half_angle_deg``) give the angle in
-    degrees while :class:`Tip` takes radians; validating here keeps the error in the user's
-    unit.
-
-    Raises
-    ------
-    GeometryError
-        If the angle is not a number strictly between 0 and 90 degrees.
-    """
-    try:
-        v = float(degrees)
-    except (TypeError, ValueError):
-        raise GeometryError(f"cone half-angle {degrees!r} deg is not a number "
-                            "(give --half-angle / half_angle_deg in degrees, e.g. 70)") from None
-    if not (math.isfinite(v) and 0.0 < v < 90.0):
-        raise GeometryError(
-            f"cone half-angle {degrees!r} deg must lie strictly between 0 and 90 deg (the "
-            "half-opening angle, axis to flank, in degrees: --half-angle / half_angle_deg)"
-        )
-    return math.radians(v)
 
 
 def effective_modulus(E, nu: float):
@@ -204,34 +159,30 @@ def thickness_factor(
 ) -> np.ndarray:
     """Finite-thickness factor on the force for ``tip`` on a layer of thickness h [m].
 
-    Dimitriadis et al. (2002) for paraboloid and sphere, Hayes et al. (1972) for the bonded flat
-    punch; see :mod:`palpbayes.contact.thickness` for sources and validity.
+    The correction of the tip's law (``ContactLaw.thickness_factor``): Dimitriadis et al.
+    (2002) for paraboloid and sphere, Hayes et al. (1972) for the bonded flat punch; see
+    :mod:`palpbayes.contact.thickness` for sources and validity.
 
     Raises
     ------
     GeometryError
-        For cone and power-law tips (no published correction implemented), for a non-bonded
-        flat punch, or outside the correction's range (Dimitriadis: chi = sqrt(R·d)/h <= 1;
-        Hayes: a/h <= 1 and 0.2 <= nu <= 0.5).
+        For a tip whose law has no correction (cone, power law), for a non-bonded flat punch,
+        or outside the correction's range (Dimitriadis: chi = sqrt(R·d)/h <= 1; Hayes:
+        a/h <= 1 and 0.2 <= nu <= 0.5).
     """
     if not (thickness_m is not None and math.isfinite(thickness_m) and thickness_m > 0):
         raise GeometryError(f"specimen thickness {thickness_m!r} m must be positive")
-    depth = np.asarray(depth, dtype=float)
-    if tip.kind in ("paraboloid", "sphere"):
-        return thickness.dimitriadis_factor(depth, tip.radius, thickness_m, nu, bonded)
-    if tip.kind == "flat":
-        if not bonded:
-            raise GeometryError(
-                "no non-bonded finite-thickness correction for the flat punch; drop "
-                "--non-bonded (bonded=True in the API) or switch the correction off (drop "
-                "--finite-thickness)"
-            )
-        return np.full_like(depth, thickness.hayes_kappa(tip.radius, thickness_m, nu))
-    raise GeometryError(
-        f"no finite-thickness correction for tip '{tip.kind}' (only paraboloid, sphere and flat "
-        "have one); switch the correction off: drop --finite-thickness on the command line "
-        "(thickness_correction=False, or thickness_m=None, in the API)"
-    )
+    correction = get_law(tip).thickness_factor
+    if correction is None:
+        have = [law.kind for law in registered_laws() if law.thickness_factor is not None]
+        listed = " and ".join([", ".join(have[:-1]), have[-1]] if len(have) > 1 else have)
+        raise GeometryError(
+            f"no finite-thickness correction for tip '{tip.kind}' (only {listed} "
+            f"{'has' if len(have) == 1 else 'have'} one); switch the correction off: drop "
+            "--finite-thickness on the command line (thickness_correction=False, or "
+            "thickness_m=None, in the API)"
+        )
+    return correction(np.asarray(depth, dtype=float), tip, thickness_m, nu, bonded)
 
 
 def shape(
@@ -290,22 +241,25 @@ def force(
 
 
 def exponent(tip: Tip) -> float | None:
-    """Exponent m of F = k·d^m, or None for the exact sphere."""
-    return get_law(tip).exponent(tip)
+    """Exponent m of F = k·d^m, or None when the tip's law is no power law (exact sphere)."""
+    return get_law(tip).exponent_of(tip)
 
 
 def prefactor(tip: Tip) -> float | None:
-    """Geometry factor g of s(d) = g·d^m [m^(2-m)], or None for the exact sphere."""
-    return get_law(tip).prefactor(tip)
+    """Geometry factor g of s(d) = g·d^m [m^(2-m)], or None when the tip's law is no power
+    law (exact sphere)."""
+    return get_law(tip).prefactor_of(tip)
 
 
 def _power_prefactor(tip: Tip) -> float:
     g = prefactor(tip)
     if g is None:
-        raise GeometryError(
-            f"tip '{tip.kind}' has no power-law form F = k*d^m; use tip 'paraboloid' for the "
-            "Hertz approximation"
-        )
+        law = get_law(tip)
+        hint = ""
+        if law.hertz_approximation is not None:
+            hint = (f"; use tip '{law.hertz_approximation(tip).kind}' for the Hertz "
+                    "approximation")
+        raise GeometryError(f"tip '{tip.kind}' has no power-law form F = k*d^m{hint}")
     return g
 
 

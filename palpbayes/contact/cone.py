@@ -6,9 +6,13 @@ nanite's ``hertz_cone``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["EXPONENT", "prefactor", "shape"]
+from .registry import ContactLaw, register
+
+__all__ = ["EXPONENT", "LAW", "prefactor", "shape"]
 
 EXPONENT = 2.0
 
@@ -30,3 +34,22 @@ def shape(depth: np.ndarray, half_angle: float) -> np.ndarray:
     """
     d = np.clip(np.asarray(depth, dtype=float), 0.0, None)
     return prefactor(half_angle) * d * d
+
+
+#: The cone's entry of the registry (no length scale: ``scaled`` is None).
+LAW = register(ContactLaw(
+    kind="cone",
+    parameters=("half_angle",),
+    shape=lambda depth, tip: shape(depth, tip.half_angle),
+    exponent=EXPONENT,
+    prefactor=lambda tip: prefactor(tip.half_angle),
+    reference=("I. N. Sneddon. The relation between load and penetration in the axisymmetric "
+               "Boussinesq problem for a punch of arbitrary profile. International Journal of "
+               "Engineering Science 3, 47–57 (1965), eq. 6.4; A. E. H. Love. Boussinesq's "
+               "problem for a rigid cone. Quarterly Journal of Mathematics 10, 161–175 (1939)"),
+    name="Sneddon cone",
+    label="cone",
+    summary="Cone of half-opening angle alpha: F = (2/pi)·E*·tan(alpha)·d² (Sneddon).",
+    describe=lambda tip: f"cone alpha={math.degrees(tip.half_angle):g} deg",
+    order=40,
+))

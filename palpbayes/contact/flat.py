@@ -4,7 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["EXPONENT", "prefactor", "shape"]
+from ..units import format_length
+from .registry import ContactLaw, Tip, register
+from .thickness import hayes_tip_factor
+
+__all__ = ["EXPONENT", "LAW", "prefactor", "shape"]
 
 #: Force exponent m in F = k·d^m.
 EXPONENT = 1.0
@@ -27,3 +31,26 @@ def shape(depth: np.ndarray, radius: float) -> np.ndarray:
     """
     d = np.clip(np.asarray(depth, dtype=float), 0.0, None)
     return 2.0 * radius * d
+
+
+#: The flat punch's entry of the registry.
+LAW = register(ContactLaw(
+    kind="flat",
+    parameters=("radius",),
+    shape=lambda depth, tip: shape(depth, tip.radius),
+    exponent=EXPONENT,
+    prefactor=lambda tip: prefactor(tip.radius),
+    reference=("J. Boussinesq. Application des potentiels à l'étude de l'équilibre et du "
+               "mouvement des solides élastiques. Gauthier-Villars, Paris (1885); I. N. Sneddon. "
+               "The relation between load and penetration in the axisymmetric Boussinesq "
+               "problem for a punch of arbitrary profile. International Journal of Engineering "
+               "Science 3, 47–57 (1965), eq. 6.5"),
+    name="flat-punch",
+    label="flat punch",
+    summary="Flat punch of radius a: F = 2·a·E*·d.",
+    describe=lambda tip: f"flat a={format_length(tip.radius, 6)}",
+    order=10,
+    scaled=lambda tip, factor: Tip("flat", radius=tip.radius * factor),
+    thickness_factor=hayes_tip_factor,
+    default_fit_fraction=0.2,  # the paper's: the start of a flat punch's contact is not linear
+))

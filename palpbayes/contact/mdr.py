@@ -8,7 +8,8 @@ from d = g(a) and the normal force is
 
 Reference: V. L. Popov, M. Hess, *Method of Dimensionality Reduction in Contact Mechanics and
 Friction*, Springer 2015, ch. 3.  The flat punch is the limit n -> infinity with c = a0^(-n),
-where 2n/(n+1) -> 2 and a -> a0 (use :mod:`.flat` for it).
+where 2n/(n+1) -> 2 and a -> a0 (use :mod:`.flat` for it).  A helper of :mod:`.power` (the
+``power`` tip kind); it registers no law.
 """
 
 from __future__ import annotations

@@ -7,7 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["EXPONENT", "prefactor", "shape"]
+from ..units import format_length
+from .registry import ContactLaw, Tip, register
+from .thickness import dimitriadis_tip_factor
+
+__all__ = ["EXPONENT", "LAW", "prefactor", "shape"]
 
 EXPONENT = 1.5
 
@@ -29,3 +33,25 @@ def shape(depth: np.ndarray, radius: float) -> np.ndarray:
     """
     d = np.clip(np.asarray(depth, dtype=float), 0.0, None)
     return prefactor(radius) * d * np.sqrt(d)
+
+
+#: The paraboloid's entry of the registry.
+LAW = register(ContactLaw(
+    kind="paraboloid",
+    parameters=("radius",),
+    shape=lambda depth, tip: shape(depth, tip.radius),
+    exponent=EXPONENT,
+    prefactor=lambda tip: prefactor(tip.radius),
+    reference=("H. Hertz. Über die Berührung fester elastischer Körper. Journal für die reine "
+               "und angewandte Mathematik 92, 156–171 (1882); K. L. Johnson. Contact "
+               "Mechanics. Cambridge University Press (1985), eq. 4.22"),
+    name="Hertz",
+    label="paraboloid (Hertz)",
+    summary="Paraboloid (Hertz) of radius R: F = (4/3)·E*·sqrt(R)·d^(3/2).",
+    describe=lambda tip: f"paraboloid R={format_length(tip.radius, 6)}",
+    order=30,
+    scaled=lambda tip, factor: Tip("paraboloid", radius=tip.radius * factor),
+    thickness_factor=dimitriadis_tip_factor,
+    max_depth=lambda tip: tip.radius,
+    max_depth_name="tip radius",
+))

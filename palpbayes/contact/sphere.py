@@ -15,7 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["contact_radius", "shape"]
+from ..units import format_length
+from . import paraboloid
+from .registry import ContactLaw, Tip, register
+from .thickness import dimitriadis_tip_factor
+
+__all__ = ["LAW", "contact_radius", "hertz_difference", "shape"]
 
 _SERIES_LIMIT = 0.1  # below this u the force bracket is summed as a series (no cancellation)
 _SERIES_TERMS = np.arange(1, 10)
@@ -83,3 +88,39 @@ def shape(depth: np.ndarray, radius: float) -> np.ndarray:
     t = _solve_t(d)
     out = radius * radius * _bracket(np.tanh(t), t)
     return out if out.ndim else out[()]
+
+
+def hertz_difference(d_over_r: float) -> float:
+    """Relative force of the exact sphere vs Hertz at depth d/R, s_sphere/s_Hertz - 1 [-]
+    (negative: less force; -0.030 at d/R = 0.3)."""
+    d = np.array([d_over_r])
+    return float(shape(d, 1.0)[0] / paraboloid.shape(d, 1.0)[0] - 1.0)
+
+
+_AT_03 = hertz_difference(0.3)
+
+#: The exact sphere's entry of the registry: no power law; the paper's Hertz fit beside it.
+LAW = register(ContactLaw(
+    kind="sphere",
+    parameters=("radius",),
+    shape=lambda depth, tip: shape(depth, tip.radius),
+    exponent=None,
+    prefactor=None,
+    reference=("I. N. Sneddon. The relation between load and penetration in the axisymmetric "
+               "Boussinesq problem for a punch of arbitrary profile. International Journal of "
+               "Engineering Science 3, 47–57 (1965), eqs. 6.8-6.9"),
+    name="Sneddon sphere",
+    label="sphere (Sneddon)",
+    summary=(f"Sphere: the exact Sneddon solution ({abs(100 * _AT_03):.1f} % "
+             f"{'less' if _AT_03 < 0 else 'more'} force than Hertz at d/R = 0.3; the paper "
+             "fitted its sphere with Hertz: its least-squares Hertz fit of every sphere trace "
+             "is reported beside the Sneddon fits as E_hertz)."),
+    describe=lambda tip: f"sphere R={format_length(tip.radius, 6)}",
+    order=20,
+    scaled=lambda tip, factor: Tip("sphere", radius=tip.radius * factor),
+    # Dimitriadis' series is derived for the paraboloid; applied with chi = sqrt(R·d)/h
+    thickness_factor=dimitriadis_tip_factor,
+    max_depth=lambda tip: tip.radius,
+    max_depth_name="tip radius",
+    hertz_approximation=lambda tip: Tip("paraboloid", radius=tip.radius),
+))

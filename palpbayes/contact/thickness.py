@@ -1,7 +1,9 @@
 """Finite-thickness corrections for a layer of thickness h on a rigid base.
 
 Each function returns a multiplicative factor on the half-space force; the force stays linear
-in E*, so least squares and the posterior keep their structure.
+in E*, so least squares and the posterior keep their structure.  The ``*_tip_factor``
+functions take a :class:`~palpbayes.contact.registry.Tip`: the law modules name them as their
+``ContactLaw.thickness_factor``.
 
 * Paraboloid / sphere: Dimitriadis et al., *Biophys. J.* 82 (2002) 2798-2810, eqs. 11-12 with
   chi = sqrt(R·d)/h, for general nu, bonded or non-bonded to the base.  The series is derived
@@ -26,16 +28,23 @@ in E*, so least squares and the posterior keep their structure.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
 from ..errors import GeometryError
 from ..units import format_length
 
+if TYPE_CHECKING:
+    from .registry import Tip
+
 __all__ = [
     "dimitriadis_coefficients",
     "dimitriadis_factor",
+    "dimitriadis_tip_factor",
     "hayes_kappa",
+    "hayes_tip_factor",
     "HAYES_A_OVER_H",
     "HAYES_KAPPA",
     "DIMITRIADIS_CHI_MAX",
@@ -161,3 +170,28 @@ def hayes_kappa(radius: float, thickness: float, nu: float) -> float:
     k03, k05 = (float(s(ratio)) for s in _HAYES_SPLINES)
     w = (nu - 0.3) / 0.2
     return k03 + w * (k05 - k03)
+
+
+def dimitriadis_tip_factor(depth: np.ndarray, tip: Tip, thickness: float, nu: float,
+                           bonded: bool = True) -> np.ndarray:
+    """:func:`dimitriadis_factor` at the radius of ``tip`` (paraboloid, sphere) [-]."""
+    return dimitriadis_factor(depth, tip.radius, thickness, nu, bonded)
+
+
+def hayes_tip_factor(depth: np.ndarray, tip: Tip, thickness: float, nu: float,
+                     bonded: bool = True) -> np.ndarray:
+    """:func:`hayes_kappa` for the flat punch ``tip``, at every depth [-].
+
+    Raises
+    ------
+    GeometryError
+        For a non-bonded layer (Hayes et al. solved the bonded one), and as
+        :func:`hayes_kappa`.
+    """
+    if not bonded:
+        raise GeometryError(
+            "no non-bonded finite-thickness correction for the flat punch; drop "
+            "--non-bonded (bonded=True in the API) or switch the correction off (drop "
+            "--finite-thickness)"
+        )
+    return np.full_like(np.asarray(depth, dtype=float), hayes_kappa(tip.radius, thickness, nu))

@@ -7,7 +7,7 @@ Columns (SI units; file paths relative to the manifest's folder):
 ``file``           trace CSV (canonical ``time_s, z_m, force_n``)
 ``specimen``       specimen label
 ``material``       material label (pooling group together with ``tip``)
-``tip``            flat | paraboloid | sphere | cone | power
+``tip``            a registered tip kind: flat | sphere | paraboloid | cone | power
 ``radius_m``       tip radius [m] (flat, paraboloid, sphere)
 ``half_angle_deg`` cone half-opening angle [deg] (cone only)
 ``profile_c``      power-law profile coefficient c of f = c·r^n (power only)
@@ -17,8 +17,9 @@ Columns (SI units; file paths relative to the manifest's folder):
 ``rest_time_s``    rest time before this indentation [s] (empty if unknown)
 =================  ==========================================================
 
-Optional: ``nu`` (Poisson ratio for that row).  A manifest is recognised by its ``file`` and
-``tip`` columns.
+The tip-size columns are those of :data:`palpbayes.contact.TIP_PARAMETERS` (a tip kind reads the
+ones its law needs, :func:`palpbayes.contact.get_law`).  Optional: ``nu`` (Poisson ratio for
+that row).  A manifest is recognised by its ``file`` and ``tip`` columns.
 
 :func:`read_manifest` validates every row before any trace is read: ``trace_id``, ``file``,
 ``material`` and ``tip`` must not be empty, the numeric columns (:data:`NUMERIC_COLUMNS`) must
@@ -36,7 +37,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..contact import Tip, half_angle_from_degrees
+from ..contact import TIP_PARAMETERS, Tip
 from ..errors import DataFileError, GeometryError, InputError
 from ..trace import IndentationTrace
 from .atomic import write_csv_atomic
@@ -51,21 +52,20 @@ __all__ = [
     "read_manifest",
     "write_manifest",
     "tip_from_row",
+    "tip_columns",
     "iter_traces",
     "load_trace",
 ]
 
 MANIFEST_COLUMNS = [
-    "trace_id", "file", "specimen", "material", "tip", "radius_m", "half_angle_deg",
-    "profile_c", "profile_n", "thickness_m", "repetition", "rest_time_s",
+    "trace_id", "file", "specimen", "material", "tip",
+    *(p.column for p in TIP_PARAMETERS.values()),
+    "thickness_m", "repetition", "rest_time_s",
 ]
 REQUIRED_COLUMNS = ["trace_id", "file", "material", "tip"]
 #: Numeric columns: (unit named in messages, example value, whole numbers only).
 NUMERIC_COLUMNS = {
-    "radius_m": ("metres", "0.01", False),
-    "half_angle_deg": ("degrees", "70", False),
-    "profile_c": ("m^(1-n)", "50", False),
-    "profile_n": ("-", "2", False),
+    **{p.column: (p.unit, p.example, False) for p in TIP_PARAMETERS.values()},
     "thickness_m": ("metres", "0.02", False),
     "repetition": ("a whole number", "1", True),
     "rest_time_s": ("seconds", "60", False),
@@ -222,15 +222,20 @@ def _opt(row: pd.Series, col: str) -> float | None:
 
 
 def tip_from_row(row: pd.Series) -> Tip:
-    """Build the :class:`~palpbayes.contact.Tip` of one manifest row."""
-    angle = _opt(row, "half_angle_deg")
-    return Tip(
-        str(row["tip"]),
-        radius=_opt(row, "radius_m"),
-        half_angle=None if angle is None else half_angle_from_degrees(angle),
-        c=_opt(row, "profile_c"),
-        n=_opt(row, "profile_n"),
-    )
+    """Build the :class:`~palpbayes.contact.Tip` of one manifest row (its ``tip`` column and
+    the tip-size columns of :data:`~palpbayes.contact.TIP_PARAMETERS`, in their units)."""
+    sizes = {}
+    for p in TIP_PARAMETERS.values():
+        value = _opt(row, p.column)
+        sizes[p.name] = None if value is None else p.from_user(value)
+    return Tip(str(row["tip"]), **sizes)
+
+
+def tip_columns(tip: Tip) -> dict[str, float]:
+    """The tip-size columns of a manifest row for ``tip`` (NaN for the parameters it lacks);
+    the inverse of :func:`tip_from_row` with the ``tip`` column."""
+    return {p.column: np.nan if getattr(tip, p.name) is None
+            else p.to_user(getattr(tip, p.name)) for p in TIP_PARAMETERS.values()}
 
 
 def load_trace(row: pd.Series, **read_options) -> IndentationTrace:

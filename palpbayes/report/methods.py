@@ -8,7 +8,6 @@ that draws it is :mod:`palpbayes.report.pages_methods`.
 
 from __future__ import annotations
 
-import numpy as np
 import pandas as pd
 
 from ..bayes.sampler import MOVES
@@ -75,15 +74,6 @@ def _stopping_rule(smp: dict) -> str:
     )
 
 
-def _sphere_vs_hertz(d_over_r: float = 0.3) -> float:
-    """Relative force of the exact Sneddon sphere vs Hertz at depth d/R (negative: less)."""
-    from ..contact import Tip, shape
-
-    sph = float(shape(np.array([d_over_r]), Tip("sphere", radius=1.0))[0])
-    par = float(shape(np.array([d_over_r]), Tip("paraboloid", radius=1.0))[0])
-    return sph / par - 1.0
-
-
 def _pooling_text(res: ResultsFolder) -> str:
     """Pooling paragraph: sampler from :data:`palpbayes.pooling.POOLING_SETTINGS`, the tau
     prior scale from ``pooled.csv`` (else :data:`palpbayes.pooling.TAU_PRIOR_SD`)."""
@@ -108,19 +98,21 @@ def _pooling_text(res: ResultsFolder) -> str:
 
 
 def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
-    from ..contact import Tip
-    from ..fitdata import default_fit_fraction
+    from ..contact import registered_laws
     from ..lsq import GRID_POINTS
 
     o = res.options
     W = 150
     smp, from_defaults = _sampler_settings(o.get("settings"))
     frac = o.get("fit_fraction")
-    if frac is None:
-        flat = default_fit_fraction(Tip("flat", radius=1.0))
-        window = (f"Fit window: the paper's default, the first {100 * flat:g} % of a flat "
-                  "punch's penetration is not fitted (non-linear start of contact), every "
-                  "sample in contact for the other tips.")
+    skipped = [f"{100 * law.default_fit_fraction:g} % of a {law.label}'s"
+               for law in registered_laws() if law.default_fit_fraction > 0]
+    if frac is None and skipped:
+        window = (f"Fit window: the paper's default, the first {' and '.join(skipped)} "
+                  "penetration is not fitted (non-linear start of contact), every sample in "
+                  "contact for the other tips.")
+    elif frac is None:
+        window = "Fit window: every sample in contact, for every tip."
     else:
         window = (f"Fit window: the first {100 * float(frac):g} % of the penetration is not "
                   "fitted, for every tip (fit_fraction option of this run).")
@@ -130,14 +122,9 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     lines: list[tuple[str, str]] = [("h", "Contact models (docs/design.md §1)")]
     lines += [("t", ln) for ln in _wrap(
         "Rigid axisymmetric tip on an elastic half-space, F = E*·s(d) with E* = E/(1 − nu²) and "
-        "depth d = z_surf − z_tip (F = 0 for d ≤ 0). Flat punch of radius a: F = 2·a·E*·d. "
-        "Paraboloid (Hertz) of radius R: F = (4/3)·E*·sqrt(R)·d^(3/2). Sphere: the exact "
-        f"Sneddon solution ({abs(100 * _sphere_vs_hertz(0.3)):.1f} % "
-        f"{'less' if _sphere_vs_hertz(0.3) < 0 else 'more'} force than Hertz at d/R = 0.3; "
-        "the paper fitted its sphere with Hertz: its least-squares Hertz fit of every sphere "
-        "trace is reported beside the Sneddon fits as E_hertz). Cone and power-law tips by the "
-        "method of dimensionality reduction. Finite-thickness correction (Dimitriadis et al. "
-        "2002 / Hayes et al. 1972) "
+        "depth d = z_surf − z_tip (F = 0 for d ≤ 0). "
+        + " ".join(law.summary for law in registered_laws())
+        + " Finite-thickness correction (Dimitriadis et al. 2002 / Hayes et al. 1972) "
         + ("ON for this run." if o.get("thickness_correction") else
            "OFF for this run (half-space, as the paper)."), W)]
     lines += [("h", "Least-squares baseline (the paper's eqs. 12–13)")]

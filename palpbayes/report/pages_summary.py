@@ -8,6 +8,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
+from ..contact import registered_laws
 from ..results import ResultsFolder
 from .format import _KPA, _wrap
 from .layout import CHART_GROUPS_PER_PAGE, _Page, _text_lines
@@ -102,7 +103,8 @@ def _pages_comparison(res: ResultsFolder) -> list[_Page]:
            "prediction interval; Bayes: posterior predictive). Grey bands: ground truth "
            "mean ± sd. Open diamonds: the paper's robot estimate ± sd (relative to the paper's "
            "own ground truth).")
-    if any(t == "sphere" for _, t in groups) and "E_hertz_pa" in res.summary:
+    with_hertz = {law.kind for law in registered_laws() if law.hertz_approximation is not None}
+    if any(t in with_hertz for _, t in groups) and "E_hertz_pa" in res.summary:
         cap += (" Sphere: least squares and Bayes use the exact Sneddon law; the paper's Hertz "
                 "fit of the same traces is in the summary table.")
     pages = []

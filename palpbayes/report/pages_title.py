@@ -29,11 +29,9 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         thick = "off (half-space, as the paper)"
     frac = o.get("fit_fraction")
     if frac is None:
-        from ..contact import Tip
-        from ..fitdata import default_fit_fraction
+        from ..contact import default_fit_fraction_text
 
-        flat = default_fit_fraction(Tip("flat", radius=1.0))
-        frac = f"paper default ({flat:g} flat, 0 others)"
+        frac = f"paper default ({default_fit_fraction_text()})"
     else:
         frac = f"{frac:g}"
     depth = o.get("max_depth")

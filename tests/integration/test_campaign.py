@@ -29,13 +29,8 @@ from palpbayes.fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable
 from palpbayes.io.manifest import iter_traces
 from palpbayes.io.trace_csv import write_trace
 from palpbayes.lsq import fit_lsq_data
-from palpbayes.simulate import (
-    PAPER_MATERIALS,
-    PAPER_TIPS,
-    simulate_campaign,
-    simulate_palpation_series,
-    simulate_trace,
-)
+from palpbayes.paper import PAPER_MATERIALS, PAPER_TIPS
+from palpbayes.sim import simulate_campaign, simulate_palpation_series, simulate_trace
 
 OPTS = FitOptions(method="both", settings=TINY, seed=5)
 
@@ -491,7 +486,7 @@ def test_fit_options_nu_applies_to_simulated_traces():
     """The simulator records its true nu as ``nu_true``; only a manifest's per-row ``nu``
     overrides the run's option, so FitOptions(nu=...) is used for in-memory traces."""
     from palpbayes.fitjob import fit_trace
-    from palpbayes.simulate import simulate_trace
+    from palpbayes.sim import simulate_trace
 
     tr = simulate_trace(136e3, Tip("paraboloid", radius=0.0117), nu=0.3, thickness=0.02, rng=1)
     assert tr.metadata["nu_true"] == 0.3 and "nu" not in tr.metadata

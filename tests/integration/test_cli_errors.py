@@ -14,7 +14,7 @@ import pytest
 from palpbayes.cli import main
 from palpbayes.contact import Tip
 from palpbayes.io.trace_csv import write_trace
-from palpbayes.simulate import simulate_trace
+from palpbayes.sim import simulate_trace
 
 TIP = ["--tip", "sphere", "--radius", "0.01"]
 

@@ -20,7 +20,7 @@ from palpbayes.cli import main
 from palpbayes.contact import Tip
 from palpbayes.fitjob import FitOptions, check_fittable, fit_trace
 from palpbayes.io.trace_csv import write_trace
-from palpbayes.simulate import simulate_trace
+from palpbayes.sim import simulate_trace
 
 TIP = Tip("sphere", radius=0.01)
 BIMODAL = "bimodal z_surf"

@@ -11,9 +11,9 @@ import math
 
 import pytest
 
-from palpbayes.contact.geometry import Tip
+from palpbayes.contact import Tip
 from palpbayes.fitjob import SUMMARY_COLUMNS, FitOptions, fit_trace
-from palpbayes.simulate import simulate_trace
+from palpbayes.sim import simulate_trace
 
 E_TRUE = 111e3
 R = 0.01

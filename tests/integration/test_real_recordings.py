@@ -23,7 +23,7 @@ from palpbayes.fitdata import ModelSpec, prepare
 from palpbayes.fitjob import FitOptions, fit_trace
 from palpbayes.io.trace_csv import read_trace, write_trace
 from palpbayes.lsq import fit_lsq
-from palpbayes.simulate import simulate_trace
+from palpbayes.sim import simulate_trace
 
 PARA = Tip("paraboloid", radius=0.0117)
 

@@ -22,6 +22,7 @@ from matplotlib.patches import Rectangle
 
 from palpbayes import plots
 from palpbayes.cli import main
+from palpbayes.paper import PAPER_MATERIALS, PAPER_TIPS
 from palpbayes.report import (
     BUDGET_GROUPS_PER_PAGE,
     CHART_GROUPS_PER_PAGE,
@@ -37,8 +38,7 @@ from palpbayes.report import (
 )
 from palpbayes.report.pages_title import _settings_lines
 from palpbayes.results import ResultsFolder
-from palpbayes.simulate import PAPER_MATERIALS, PAPER_TIPS
-from palpbayes.simulate_campaign import simulate_campaign
+from palpbayes.sim import simulate_campaign
 
 GROUP_TITLES = ["White · sphere", "Pink · sphere"]
 FIXED_TITLES = ["Summary: ground truth vs least squares vs Bayes",

@@ -11,7 +11,7 @@ from palpbayes.contact import Tip
 from palpbayes.errors import ConvergenceError, ConvergenceWarning
 from palpbayes.fitdata import ModelSpec, prepare
 from palpbayes.lsq import fit_lsq_data
-from palpbayes.simulate import simulate_trace
+from palpbayes.sim import simulate_trace
 
 E_TRUE = 136e3
 TIPS = {

@@ -10,6 +10,7 @@ from scipy import integrate, stats
 from palpbayes.bayes import BudgetSpec, SamplerSettings
 from palpbayes.errors import FitError, InputError
 from palpbayes.fitdata import ModelSpec, prepare
+from palpbayes.paper import PAPER_TIPS
 from palpbayes.pooling import (
     hierarchical_log_posterior,
     log_normal_summary,
@@ -17,7 +18,7 @@ from palpbayes.pooling import (
     sample_hierarchical,
     systematic_factor,
 )
-from palpbayes.simulate import PAPER_TIPS, simulate_trace
+from palpbayes.sim import simulate_trace
 
 MU0 = float(np.log(1.2e5))
 

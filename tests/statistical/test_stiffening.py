@@ -9,7 +9,8 @@ from presets import SHORT
 
 from palpbayes.errors import InputError
 from palpbayes.lsq import fit_lsq
-from palpbayes.simulate import PAPER_TIPS, simulate_palpation_series
+from palpbayes.paper import PAPER_TIPS
+from palpbayes.sim import simulate_palpation_series
 from palpbayes.stiffening import double_exponential, fit_stiffening, fit_stiffening_summary
 
 REST = np.geomspace(1.0, 600.0, 25)

@@ -113,7 +113,7 @@ def test_simulator_style_negative_kn_block(tmp_path):
 
 
 def test_reads_the_simulators_own_export(tmp_path):
-    sim = pytest.importorskip("palpbayes.simulate")
+    sim = pytest.importorskip("palpbayes.sim")
     df = sim.simulate_compression_test(136e3, height=0.02, rng=3)
     path = sim.write_compression_export(df, tmp_path / "Pink_S2.csv", sample_name="Pink_S2")
     t = read_compression_test(path)

@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 
 from palpbayes.cli import main
-from palpbayes.simulate import simulate_campaign
+from palpbayes.sim import simulate_campaign
 
 
 @pytest.fixture(scope="module")

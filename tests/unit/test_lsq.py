@@ -9,7 +9,7 @@ from palpbayes.contact import Tip
 from palpbayes.errors import NoContactError
 from palpbayes.fitdata import ModelSpec, prepare
 from palpbayes.lsq import fit_lsq, profile_rss
-from palpbayes.simulate import simulate_trace
+from palpbayes.sim import simulate_trace
 
 TIPS = {
     "flat": Tip("flat", radius=0.010),

@@ -23,7 +23,7 @@ from palpbayes import checks as C
 from palpbayes.contact import Tip
 from palpbayes.errors import InputError
 from palpbayes.fitdata import ModelSpec
-from palpbayes.simulate import ar1_noise, simulate_trace
+from palpbayes.sim import ar1_noise, simulate_trace
 
 E_WHITE = 111e3
 TIPS = {

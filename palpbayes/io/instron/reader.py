@@ -6,7 +6,7 @@ Two layouts are read without options, and others like them:
   lines (``Compression test;``, ``Cylinder Diameter: 50mm;``, ``Cylinder Height: 30mm;``,
   ``Speed (mm/min): 10;``, ...), then ``Time (s),Compression (mm),Load (N),...`` with compression
   and load positive in compression;
-* the simulator's exports (:func:`palpbayes.simulate.write_compression_export`): header lines
+* the simulator's exports (:func:`palpbayes.sim.write_compression_export`): header lines
   ``Block Width: 50mm;``, ``Block Length: 50mm;``, ``Block Height: 20mm;`` ..., then
   ``Time (s),Extension (mm),Load (kN)`` with extension and load **negative** in compression.
 

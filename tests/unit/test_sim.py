@@ -17,14 +17,15 @@ from palpbayes.contact import Tip, effective_modulus, force, shape
 from palpbayes.errors import GeometryError, InputError, OutputExistsError
 from palpbayes.io.manifest import iter_traces, read_manifest
 from palpbayes.io.trace_csv import read_trace, write_trace
-from palpbayes.simulate import (
+from palpbayes.noise import PP_TO_SIGMA, sigma_from_pp
+from palpbayes.paper import (
     PAPER_MATERIALS,
     PAPER_ROBOT_ESTIMATES,
     PAPER_TIPS,
-    PP_TO_SIGMA,
-    onset_force_profile,
     paper_robot_estimates_frame,
-    sigma_from_pp,
+)
+from palpbayes.sim import (
+    onset_force_profile,
     simulate_campaign,
     simulate_compression_test,
     simulate_palpation_series,
@@ -345,7 +346,7 @@ def test_campaign_refuses_non_empty_folder(tmp_path):
 
 def test_campaign_modulus_distribution():
     """Specimen moduli are Normal(E_m, sd_m): check the pooled z-scores of many draws."""
-    from palpbayes.simulate_campaign import _draw_modulus, child_seed
+    from palpbayes.sim.campaign import _draw_modulus, child_seed
 
     mat = PAPER_MATERIALS["Pink"]
     draws = np.array([_draw_modulus(np.random.default_rng(child_seed(0, "trace", "Pink", "x", r)),

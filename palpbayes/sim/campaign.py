@@ -11,41 +11,34 @@
       truth_groundtruth.csv        the true modulus of every compression specimen
       truth_materials.csv          material, E_pa, E_sd_pa, thickness_m, nu, width_m, length_m
 
-:func:`simulate_palpation_series` simulates repeated palpation of one specimen with the
-rest-time stiffening law of docs/design.md §2.  Both are re-exported by :mod:`palpbayes.simulate`.
+The defaults reproduce the paper's campaign (:mod:`palpbayes.paper`).  Every trace and block
+has its own random stream (:func:`child_seed`).
 """
 
 from __future__ import annotations
 
-import math
 import os
 import re
 import zlib
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from .contact import Tip, check_nu
-from .errors import InputError, OutputExistsError
-from .io.atomic import write_csv_atomic
-from .io.manifest import write_manifest
-from .io.trace_csv import write_trace
-from .noise import PAPER_NOISE_PP
-from .simulate_core import (
-    PAPER_MATERIALS,
-    PAPER_TIPS,
-    Material,
-    _positive,
-    simulate_compression_test,
-    simulate_trace,
-    write_compression_export,
-)
-from .trace import IndentationTrace
-from .units import format_pressure
+from ..contact import Tip, check_nu
+from ..errors import InputError, OutputExistsError
+from ..io.atomic import write_csv_atomic
+from ..io.manifest import tip_columns, write_manifest
+from ..io.trace_csv import write_trace
+from ..noise import PAPER_NOISE_PP
+from ..paper import PAPER_MATERIALS, PAPER_TIPS, Material
+from ..trace import IndentationTrace
+from ..units import format_pressure
+from .compression import simulate_compression_test, write_compression_export
+from .trace import simulate_trace
 
-__all__ = ["simulate_campaign", "simulate_palpation_series", "rest_modulus", "child_seed"]
+__all__ = ["simulate_campaign", "child_seed"]
 
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*$")
 
@@ -110,10 +103,7 @@ def _manifest_row(trace_id: str, file: str, specimen: str, material: str, tip: T
         "specimen": specimen,
         "material": material,
         "tip": tip.kind,
-        "radius_m": tip.radius if tip.radius is not None else np.nan,
-        "half_angle_deg": math.degrees(tip.half_angle) if tip.half_angle is not None else np.nan,
-        "profile_c": tip.c if tip.c is not None else np.nan,
-        "profile_n": tip.n if tip.n is not None else np.nan,
+        **tip_columns(tip),
         "thickness_m": thickness,
         "repetition": repetition,
         "rest_time_s": np.nan if rest_time is None else rest_time,
@@ -202,7 +192,7 @@ def simulate_campaign(
     repetitions
         Traces per (material, tip), >= 1.
     materials, tips
-        Name -> :class:`~palpbayes.simulate.Material` / :class:`~palpbayes.contact.Tip`.
+        Name -> :class:`~palpbayes.paper.Material` / :class:`~palpbayes.contact.Tip`.
     nu
         True Poisson ratio [-].
     gt_specimens
@@ -221,7 +211,7 @@ def simulate_campaign(
         Number format of the trace CSVs; "%.10g" keeps z to 1e-10 m and force to 10
         significant digits.
     **trace_options
-        Passed to :func:`~palpbayes.simulate.simulate_trace`: approach, speed, rate, hold,
+        Passed to :func:`~palpbayes.sim.trace.simulate_trace`: approach, speed, rate, hold,
         retract, depth, drift, position_noise, repeatability, compliance, finite_thickness,
         bonded, stiffening.
 
@@ -319,88 +309,3 @@ def _write_groundtruth(out: Path, tests: list[tuple[str, pd.DataFrame, float]]) 
     write_csv_atomic(pd.DataFrame(rows), out / "groundtruth" / "manifest.csv",
                      float_format="%.10g")
     write_csv_atomic(pd.DataFrame(truth), out / "truth_groundtruth.csv")
-
-
-# ----------------------------------------------------------------------------- stiffening
-
-
-def rest_modulus(rest_time, c: Sequence[float]) -> np.ndarray:
-    """E(t) = c1·exp(c2·t) + c3·exp(c4·t) [Pa], t the rest time since the last excitation [s].
-
-    The repeated-palpation stiffening law of docs/design.md §2 (c1, c3 in Pa; c2, c4 in 1/s).
-    """
-    c1, c2, c3, c4 = (float(v) for v in c)
-    t = np.asarray(rest_time, dtype=float)
-    return c1 * np.exp(c2 * t) + c3 * np.exp(c4 * t)
-
-
-def simulate_palpation_series(
-    E0: float,
-    tip: Tip,
-    rest_times: Sequence[float | None],
-    c: Sequence[float] | None = None,
-    *,
-    rng: np.random.Generator | int | None = None,
-    trace_prefix: str = "series",
-    specimen: str = "",
-    material: str = "",
-    **trace_options,
-) -> list[IndentationTrace]:
-    """Repeated palpations of one specimen with rest-time dependent stiffening.
-
-    Palpation i has modulus E_i = c1·exp(c2·t_i) + c3·exp(c4·t_i) (:func:`rest_modulus`) with
-    t_i = ``rest_times[i]`` the rest since the previous excitation; a rest time of None or inf
-    marks a fresh (fully rested) specimen with modulus ``E0``.  The default
-    c = (E0, 0, 0.25·E0, -1/30 s⁻¹) is E0 plus 25 % right after an excitation, relaxing with
-    a 30 s time constant; with explicit c, E0 should equal the law's limit for consistency.
-
-    Parameters
-    ----------
-    E0
-        [Pa] Modulus of the rested specimen.
-    tip
-        The indenter.
-    rest_times
-        [s] Rest before each palpation.
-    c
-        (c1 [Pa], c2 [1/s], c3 [Pa], c4 [1/s]).
-    rng
-        Generator or seed; palpation i uses the i-th child stream (``Generator.spawn``).
-    trace_prefix
-        Trace ids are ``<prefix>_p01``, ``_p02`` ...
-    specimen, material
-        Labels.
-    **trace_options
-        Passed to :func:`~palpbayes.simulate.simulate_trace` (thickness or depth required).
-
-    Returns
-    -------
-    list of IndentationTrace
-        ``rest_time`` set; ``metadata`` adds ``stiffening_c`` (c1..c4) and ``E_rest_law``.
-    """
-    E0 = _positive(E0, "rested modulus E0 [Pa]")
-    if c is None:
-        c = (E0, 0.0, 0.25 * E0, -1.0 / 30.0)
-    c = tuple(float(v) for v in c)
-    if len(c) != 4 or not all(math.isfinite(v) for v in c):
-        raise InputError(f"stiffening coefficients c must be four finite numbers, got {c!r}")
-    times = list(rest_times)
-    if not times:
-        raise InputError("give at least one rest time")
-    gens = np.random.default_rng(rng).spawn(len(times))
-    out = []
-    for i, (t, gen) in enumerate(zip(times, gens, strict=True), start=1):
-        fresh = t is None or math.isinf(float(t))
-        if not fresh and (not math.isfinite(float(t)) or float(t) < 0):
-            raise InputError(f"rest time {t!r} s must be non-negative (None for a fresh specimen)")
-        E = E0 if fresh else float(rest_modulus(float(t), c))
-        if E <= 0:
-            raise InputError(f"the stiffening law gives E = {format_pressure(E, 6)} at rest "
-                             f"time {t} s; "
-                             "check the coefficients c")
-        trace = simulate_trace(E, tip, rng=gen, trace_id=f"{trace_prefix}_p{i:02d}",
-                               specimen=specimen, material=material, repetition=i,
-                               rest_time=None if fresh else float(t), **trace_options)
-        trace.metadata.update({"stiffening_c": c, "E_rest_law": E, "E0": E0})
-        out.append(trace)
-    return out

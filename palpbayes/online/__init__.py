@@ -1,0 +1,17 @@
+"""Online estimation: the posterior of E while the tip is pressing, and when to stop.
+
+>>> from palpbayes.online import OnlineEstimator, StoppingRule      # doctest: +SKIP
+>>> est = OnlineEstimator(ModelSpec(tip), rule=StoppingRule(target=0.02))  # doctest: +SKIP
+>>> for t, z, f in chunks:                                          # doctest: +SKIP
+...     if est.update(t, z, f).should_stop:
+...         break
+
+:mod:`.estimator` holds the estimator and the rule, :mod:`.recorded` replays a recorded trace.
+"""
+
+from . import estimator as _estimator
+from . import recorded as _recorded
+from .estimator import *  # noqa: F403
+from .recorded import *  # noqa: F403
+
+__all__ = _estimator.__all__ + _recorded.__all__

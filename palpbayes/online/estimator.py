@@ -1,0 +1,354 @@
+"""Estimate E while the tip is still pressing, and say when to stop.
+
+:class:`OnlineEstimator` takes samples as they arrive (chunks of t, z, F), detects contact,
+and after every chunk gives the posterior of E with its interval (:class:`OnlineState`) and a
+``should_stop`` from a :class:`StoppingRule`.  The posterior is that of the exact engine
+(:mod:`palpbayes.bayes.exact`): the same model and priors as ``palpbayes fit --engine exact``
+(Gaussian or AR(1) noise, constant baseline), with two online choices:
+
+* the baseline (level, noise sd, F0 prior centre, noise spec) is read once, at contact, from
+  the samples before it (:func:`palpbayes.baseline.estimate_baseline`);
+* the surface prior is uniform on [z_c − (z_top − z_c), z_top] (z_c the contact onset, z_top
+  the highest sample): the final deepest point, the offline prior's lower end, is not known
+  yet; a posterior that reaches the lower end is flagged.  Every loading sample is fitted (no
+  fit window), for every tip.
+
+Updates are incremental: each surface node keeps the running cross-product sums of
+:class:`palpbayes.bayes.conjugate.Gram`, so a chunk of k samples costs (nodes × k) shape
+evaluations, plus n per node the refinement adds (the posterior narrows as the tip goes deeper).
+Nodes more than :data:`PRUNE` below the best log density stop being updated.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass, field
+from types import SimpleNamespace
+
+import numpy as np
+
+from ..baseline import MIN_BASELINE_POINTS, estimate_baseline
+from ..bayes.budget import BudgetSpec, propagate
+from ..bayes.conjugate import Gram, fixed_columns, node_posterior
+from ..bayes.exact import (
+    COARSE_NODES,
+    PHI_NODES,
+    ExactPosterior,
+    cell_widths,
+    log_marginal_phi,
+    refine_grid,
+)
+from ..bayes.mixture import MixtureSummary
+from ..bayes.priors import PriorSpec, TracePrior, param_names
+from ..errors import InputError
+from ..fitdata import ModelSpec
+from ..intervals import LEVEL
+from ..noise import sigma_from_pp
+
+__all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE"]
+
+#: Nodes whose log density falls this far below the best are no longer updated.
+PRUNE = 28.0
+
+
+@dataclass(frozen=True)
+class StoppingRule:
+    """When to stop pressing (the first condition met).
+
+    Parameters
+    ----------
+    target
+        Relative half-width of the E interval (statistical, at the estimator's level) to reach,
+        e.g. 0.02 for ±2 %; None: no precision target.
+    max_force
+        [N] Largest force above the baseline.
+    max_depth
+        [m] Largest depth below the estimated surface.
+    min_contact
+        Fewest samples in contact before the precision target may stop the run.
+    """
+
+    target: float | None = None
+    max_force: float | None = None
+    max_depth: float | None = None
+    min_contact: int = 20
+
+    def __post_init__(self) -> None:
+        for name in ("target", "max_force", "max_depth"):
+            v = getattr(self, name)
+            if v is not None and not (math.isfinite(v) and v > 0):
+                raise InputError(f"stopping rule: {name} = {v!r} must be a positive number")
+
+    def reason(self, state: OnlineState) -> str:
+        """Why to stop now ('' to go on)."""
+        if self.max_force is not None and state.peak_force >= self.max_force:
+            return "max force"
+        if self.max_depth is not None and state.depth >= self.max_depth:
+            return "max depth"
+        if (self.target is not None and state.n_contact >= self.min_contact
+                and state.E is not None and state.E.rel_half_width <= self.target):
+            return "target precision"
+        return ""
+
+
+@dataclass(frozen=True)
+class OnlineState:
+    """The estimate after one update.
+
+    Attributes
+    ----------
+    n, t, z
+        Samples so far, time [s] and tip height [m] of the last one.
+    in_contact, n_contact
+        Contact detected; samples since the contact onset.
+    depth
+        [m] Median surface height minus the current tip height (0 before contact).
+    peak_force
+        [N] Largest force above the baseline so far.
+    E, z_surf
+        Posterior summaries of E [Pa] (statistical) and z_surf [m]; None before contact.
+    stop
+        The stopping rule's reason ('' to go on).
+    flags
+        Posterior at a bound of the online surface prior, refinement cut short.
+    """
+
+    n: int
+    t: float
+    z: float
+    in_contact: bool
+    n_contact: int
+    depth: float
+    peak_force: float
+    E: MixtureSummary | None
+    z_surf: MixtureSummary | None
+    stop: str
+    flags: tuple[str, ...] = ()
+
+    @property
+    def should_stop(self) -> bool:
+        return bool(self.stop)
+
+
+def _scaled(s: MixtureSummary, f: float) -> MixtureSummary:
+    return MixtureSummary(s.mean * f, s.sd * f, s.median * f, s.lo * f, s.hi * f, s.level)
+
+
+@dataclass
+class OnlineEstimator:
+    """Posterior of E updated as samples arrive (module docstring).
+
+    Parameters
+    ----------
+    model
+        Contact model (tip, nu, optional finite-thickness correction).
+    noise
+        ``"gaussian"`` or ``"ar1"`` (phi on a fixed grid of :data:`PHI_NODES` nodes).
+    noise_pp
+        [N] Sensor peak-to-peak noise; None: 6 sd of the pre-contact baseline.
+    f_unc
+        [N] Contact threshold above the baseline; None: the noise spec.
+    rule
+        The stopping rule.
+    priors
+        E* bounds and prior scales (:class:`PriorSpec`; ``surface`` must be "loading").
+    level
+        Probability content of the intervals.
+    persist
+        Consecutive samples above the threshold that make a contact.
+    """
+
+    model: ModelSpec
+    noise: str = "gaussian"
+    noise_pp: float | None = None
+    f_unc: float | None = None
+    rule: StoppingRule = field(default_factory=StoppingRule)
+    priors: PriorSpec = field(default_factory=PriorSpec)
+    level: float = LEVEL
+    persist: int = 5
+
+    def __post_init__(self) -> None:
+        if self.noise not in ("gaussian", "ar1"):
+            raise InputError(f"online estimation takes noise 'gaussian' or 'ar1', not "
+                             f"{self.noise!r}")
+        self._t = np.empty(0)
+        self._z = np.empty(0)
+        self._f = np.empty(0)
+        self._n = 0
+        self._contact: int | None = None
+        self._gram: Gram | None = None
+        self._active: np.ndarray | None = None
+        self._logp: np.ndarray | None = None
+        self._phi = (np.linspace(*self.priors.phi_bounds, PHI_NODES + 2)[1:-1]
+                     if self.noise == "ar1" else np.zeros(1))
+        self.state: OnlineState | None = None
+
+    # ------------------------------------------------------------------ data in
+    def _append(self, t, z, f) -> None:
+        t, z, f = (np.atleast_1d(np.asarray(a, dtype=float)) for a in (t, z, f))
+        if not (t.shape == z.shape == f.shape and t.ndim == 1):
+            raise InputError(f"update: t, z and F must be 1-D of one length, got {t.shape}, "
+                             f"{z.shape}, {f.shape}")
+        if not (np.isfinite(t).all() and np.isfinite(z).all() and np.isfinite(f).all()):
+            raise InputError("update: t, z and F must be finite (drop NaN samples first)")
+        need = self._n + t.size
+        if need > self._t.size:
+            cap = max(need, 2 * self._t.size, 1024)
+            for name in ("_t", "_z", "_f"):
+                old = getattr(self, name)
+                new = np.empty(cap)
+                new[: self._n] = old[: self._n]
+                setattr(self, name, new)
+        self._t[self._n:need], self._z[self._n:need], self._f[self._n:need] = t, z, f
+        self._n = need
+
+    def update(self, t, z, force) -> OnlineState:
+        """Add samples (times [s], tip heights [m], forces [N], in time order) and return the
+        new :class:`OnlineState`."""
+        start = self._n
+        self._append(t, z, force)
+        if self._contact is None:
+            self._detect()
+        elif start < self._n:
+            new = slice(start, self._n)
+            self._gram_active().extend(self._z[new], self._columns(new), self.model.shape)
+        if self._contact is not None:
+            self._refresh()
+        self.state = self._make_state()
+        return self.state
+
+    # ------------------------------------------------------------------ contact
+    def _detect(self) -> None:
+        n, k = self._n, self.persist
+        if n < MIN_BASELINE_POINTS + k:
+            return
+        base = estimate_baseline(self._z[:n], self._f[:n])
+        if not base.reliable:
+            return
+        f_unc = self.f_unc if self.f_unc is not None else (
+            self.noise_pp if self.noise_pp is not None else base.noise_pp)
+        above = self._f[:n] - base.level > f_unc
+        if not above[-k:].all():
+            return
+        inside = np.flatnonzero(np.abs(self._f[:n] - base.level) <= f_unc)
+        if inside.size < MIN_BASELINE_POINTS:
+            raise InputError("online estimation needs an approach: fewer than "
+                             f"{MIN_BASELINE_POINTS} samples before contact")
+        self._contact = int(inside[-1]) + 1
+        self._base, self._f_unc = base, float(f_unc)
+        pp = self.noise_pp if self.noise_pp is not None else base.noise_pp
+        self._sigma_c = sigma_from_pp(pp)
+        z_c = float(self._z[self._contact - 1])
+        self._z_top = float(self._z[:n].max())
+        self._z_lo = z_c - (self._z_top - z_c)
+        self._weights = np.array([(self._sigma_c / self._f_unc) ** 2])
+        nodes = np.linspace(self._z_lo, self._z_top, COARSE_NODES)
+        self._skeleton = nodes
+        self._gram = self._new_gram(nodes)
+        self._active = np.arange(nodes.size)
+
+    def _columns(self, rows: slice) -> np.ndarray:
+        return fixed_columns(self._f[rows] - self._base.level, None)
+
+    def _new_gram(self, nodes: np.ndarray) -> Gram:
+        all_rows = slice(0, self._n)
+        return Gram.empty(nodes, 2, self.noise == "ar1").extend(
+            self._z[all_rows], self._columns(all_rows), self.model.shape)
+
+    def _gram_active(self) -> Gram:
+        if self._active.size != self._gram.z.size:
+            self._gram = self._gram.subset(self._active)
+            self._active = np.arange(self._gram.z.size)
+        return self._gram
+
+    # ------------------------------------------------------------------ posterior
+    def _node_posterior(self, g: Gram):
+        return node_posterior(g, self._phi, self._weights, np.zeros(1))
+
+    def _logp_nodes(self, g: Gram) -> np.ndarray:
+        return log_marginal_phi(self._node_posterior(g).logp, self._phi)
+
+    def _refresh(self) -> None:
+        added: list[Gram] = []
+
+        def evaluate(nodes: np.ndarray) -> np.ndarray:
+            g = self._new_gram(nodes)
+            added.append(g)
+            return self._logp_nodes(g)
+
+        g = self._gram_active()
+        post = self._node_posterior(g)
+        lp = log_marginal_phi(post.logp, self._phi)
+        nodes, lp, self._complete = refine_grid(self._z_lo, self._z_top, evaluate,
+                                                start=(g.z, lp))
+        for other in added:
+            g = g.concat(other)
+        self._gram = g
+        if added:
+            post = self._node_posterior(g)
+        self._post = post
+        self._logp = log_marginal_phi(post.logp, self._phi)
+        best = np.max(self._logp)
+        # the first coarse nodes always stay, so refinement can reach any part of the range
+        keep = np.isin(g.z, self._skeleton)
+        if np.isfinite(best):
+            keep |= self._logp > best - PRUNE
+        self._active = np.flatnonzero(keep)
+
+    def posterior(self) -> ExactPosterior:
+        """The current posterior as an :class:`ExactPosterior` (draws, summaries)."""
+        if self._gram is None:
+            raise InputError("no contact yet: no posterior of E")
+        g = self._gram
+        post = copy.copy(self._post)
+        post.beta = post.beta.copy()
+        post.beta[..., 1] += self._base.level
+        log_cell = (post.logp + np.log(cell_widths(g.z))[:, None]
+                    + np.log(cell_widths(self._phi))[None, :])
+        finite = log_cell[np.isfinite(log_cell)]
+        top = finite.max() if finite.size else 0.0
+        log_mass = log_cell - (np.log(np.exp(log_cell - top).sum()) + top)
+        prior = TracePrior(spec=self.priors, names=tuple(param_names(self.noise)),
+                           noise=self.noise, baseline="constant",
+                           z_bounds=(self._z_lo, self._z_top), sigma_center=self._sigma_c,
+                           f0_center=self._base.level, f0_sd=self._f_unc, f1_sd=np.nan,
+                           z_ref=self._z_top, f_unc=self._f_unc, data=None)
+        return ExactPosterior(z=g.z, phi=self._phi, post=post, log_mass=log_mass,
+                              complete=self._complete, prior=prior)
+
+    def _make_state(self) -> OnlineState:
+        n = self._n
+        t, z = float(self._t[n - 1]), float(self._z[n - 1])
+        if self._contact is None:
+            return OnlineState(n, t, z, False, 0, 0.0, 0.0, None, None, "")
+        post = self.posterior()
+        estar = post.estar_summary(self.level)
+        zs = post.z_summary(self.level)
+        E = _scaled(estar, 1.0 - self.model.nu ** 2)
+        flags = []
+        span = self._z_top - self._z_lo
+        if zs.lo - self._z_lo < 0.01 * span:
+            flags.append("z_surf posterior at the lower end of the online surface prior")
+        if not post.complete:
+            flags.append("surface grid refinement cut short")
+        peak = float(np.max(self._f[:n] - self._base.level))
+        partial = OnlineState(n, t, z, True, n - self._contact, max(zs.median - z, 0.0),
+                              peak, E, zs, "", tuple(flags))
+        return OnlineState(**{**partial.__dict__, "stop": self.rule.reason(partial)})
+
+    def budget_interval(self, budget: BudgetSpec | None = None, n_draws: int = 4000,
+                        seed: int = 0) -> MixtureSummary:
+        """E [Pa] with the uncertainty budget (:mod:`palpbayes.bayes.budget`) at this point."""
+        post = self.posterior()
+        rng = np.random.default_rng(seed)
+        d = post.draws(rng, n_draws)
+        n = self._n
+
+        seen = SimpleNamespace(model=self.model, z=self._z[:n])  # what propagate reads
+        bud = propagate(d["E_star"], seen, float(np.median(d["z_surf"])),
+                        budget or BudgetSpec(), rng)
+        E = bud.E
+        lo, med, hi = np.quantile(E, [(1 - self.level) / 2, 0.5, (1 + self.level) / 2])
+        return MixtureSummary(float(E.mean()), float(E.std()), float(med), float(lo),
+                              float(hi), self.level)

@@ -1,0 +1,38 @@
+"""The simulator: synthetic palpation traces, compression tests and campaigns from a known truth.
+
+One module per job, imports flowing one way (``campaign`` -> ``series``/``compression`` ->
+``trace`` -> ``force``):
+
+* :mod:`~palpbayes.sim.force` -- the noise-free contact force and its physics knobs (strain
+  stiffening, gradual onset, finite thickness, series compliance);
+* :mod:`~palpbayes.sim.trace` -- one palpation trace: motion, AR(1) force noise, offset, drift,
+  registration and encoder errors, with the truth in its metadata;
+* :mod:`~palpbayes.sim.compression` -- an Instron compression test and its export file;
+* :mod:`~palpbayes.sim.series` -- repeated palpation with rest-time stiffening;
+* :mod:`~palpbayes.sim.campaign` -- a whole campaign folder with its truth tables.
+
+The paper's numbers the simulator reproduces live in :mod:`palpbayes.paper`, the peak-to-peak
+noise convention in :mod:`palpbayes.noise` (both are shared with the fitting side).
+
+>>> from palpbayes.paper import PAPER_TIPS
+>>> from palpbayes.sim import simulate_trace
+>>> simulate_trace(111e3, PAPER_TIPS["sphere"], thickness=0.03, rng=1).n_points
+3840
+"""
+
+from __future__ import annotations
+
+from . import campaign, compression, force, series, trace
+from .campaign import *  # noqa: F403
+from .compression import *  # noqa: F403
+from .force import *  # noqa: F403
+from .series import *  # noqa: F403
+from .trace import *  # noqa: F403
+
+# built from the submodules' own lists (the form static checkers follow), never re-typed
+__all__: list[str] = []
+__all__ += force.__all__
+__all__ += trace.__all__
+__all__ += compression.__all__
+__all__ += series.__all__
+__all__ += campaign.__all__

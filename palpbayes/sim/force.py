@@ -1,0 +1,176 @@
+"""The simulator's noise-free contact force, with its physics misspecification knobs.
+
+One job: the force the tip really feels at a given depth.  Conventions (docs/design.md §1, §5):
+SI units, depth d = z_surf - z (positive in contact), force positive when pressing::
+
+    F_true = E*·s(delta)·xi(delta),        E* = E/(1 - nu²)
+    delta  = d_cmd - C·F_true              (series compliance C, :func:`solve_series_compliance`)
+    F_on   = gradual onset before the surface (:func:`onset_force_profile`)
+
+with s(d) the tip's shape function (:func:`palpbayes.contact.shape`, optionally with the bonded
+finite-thickness factor) and xi the strain-stiffening factor (:func:`stiffening_factor`).  Every
+knob is off by default, and then :func:`true_force` is exactly :func:`palpbayes.contact.force`.
+Noise, offsets and drift are added by :func:`palpbayes.sim.trace.simulate_trace`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..contact import Tip, effective_modulus, shape
+from ..errors import GeometryError, InputError
+
+__all__ = [
+    "STIFFENING_STRAIN0",
+    "stiffening_factor",
+    "true_force",
+    "onset_force_profile",
+    "solve_series_compliance",
+]
+
+#: Nominal strain d/h below which the stiffening law is inactive.
+STIFFENING_STRAIN0 = 0.05
+
+
+def stiffening_factor(depth: ArrayLike, thickness: float | None, stiffening: float) -> np.ndarray:
+    """Strain-stiffening factor xi(d) = exp(beta·max(0, d/h - 0.05)) [-].
+
+    A phenomenological misspecification knob (secant modulus E_eff = E·xi): linear up to the
+    nominal strain d/h = :data:`STIFFENING_STRAIN0`, exponentially stiffer beyond.  beta = 5 at
+    the paper's depth d/h = 0.1 gives xi = exp(0.25) = 1.28.  It is monotone in d, so the force
+    stays monotone and the compliance solve keeps its bracket.
+
+    Parameters
+    ----------
+    depth
+        [m] Indentation depth d.
+    thickness
+        [m] Specimen thickness h (needed when ``stiffening`` != 0).
+    stiffening
+        beta [-], >= 0; 0 switches the law off (factor exactly 1).
+    """
+    d = np.asarray(depth, dtype=float)
+    if stiffening == 0:
+        return np.ones_like(d)
+    if thickness is None:
+        raise GeometryError("strain stiffening needs the specimen thickness (give thickness=)")
+    return np.exp(stiffening * np.maximum(0.0, d / thickness - STIFFENING_STRAIN0))
+
+
+def true_force(
+    depth: ArrayLike,
+    E: float,
+    nu: float,
+    tip: Tip,
+    *,
+    thickness: float | None = None,
+    finite_thickness: bool = False,
+    bonded: bool = True,
+    stiffening: float = 0.0,
+) -> np.ndarray:
+    """The simulator's noise-free force F = E*·s(d)·xi(d) [N] (0 for d <= 0).
+
+    s is :func:`palpbayes.contact.shape`, with the bonded Dimitriadis/Hayes finite-thickness
+    factor when ``finite_thickness``; xi is :func:`stiffening_factor`.  With both off this is
+    exactly :func:`palpbayes.contact.force`.
+    """
+    d = np.asarray(depth, dtype=float)
+    h = thickness if finite_thickness else None
+    if finite_thickness and thickness is None:
+        raise GeometryError("finite_thickness=True needs the specimen thickness (give thickness=)")
+    s = shape(d, tip, thickness_m=h, nu=nu, bonded=bonded)
+    f = effective_modulus(E, nu) * s
+    if stiffening != 0:
+        f = f * stiffening_factor(d, thickness, stiffening)
+    return f
+
+
+def onset_force_profile(depth: ArrayLike, onset_force: float, onset_length: float) -> np.ndarray:
+    """Gradual-onset force F_on(d) [N]: a smooth force that starts before the true surface.
+
+    Real curves rarely switch on sharply at the surface: a soft skin or coating, surface
+    roughness, long-range repulsion (electrostatic double layer, steric brushes in AFM) or,
+    with a negative ``onset_force``, attraction/adhesion, make the force change over a length
+    L = ``onset_length`` *before* the contact law starts.  The simulator models it as::
+
+        F_on(d) = F_a·exp(d/L)              for d <  0   (pre-contact, decays to 0 far above)
+        F_on(d) = F_a·(2 - exp(-d/L))       for d >= 0   (in contact, saturates at 2·F_a)
+
+    with F_a = ``onset_force``.  The in-contact branch is the point reflection of the
+    pre-contact one about (0, F_a), so F_on is continuous with a continuous slope F_a/L at the
+    surface (C¹), monotone, and bounded by 2·F_a: a layer of thickness ~L that is squeezed flat
+    within a few L and then carries a constant extra load (it does not change the contact
+    law's stiffness at depth).  Far above the surface it vanishes, so a fit's constant
+    baseline sees the untouched sensor; a fit that ignores the onset puts its surface into
+    the exponential tail and leaves a structured residual near contact (what
+    :func:`palpbayes.checks.residual_structure_check` detects).
+
+    Parameters
+    ----------
+    depth
+        [m] Depth d = z_surf - z (negative above the surface).
+    onset_force
+        F_a [N], the onset force at the surface (> 0 repulsive/soft skin, < 0 attractive).
+    onset_length
+        L [m] > 0, the decay length of the pre-contact force.
+
+    Returns
+    -------
+    numpy.ndarray
+        [N] F_on(d), same shape as ``depth``.
+    """
+    d = np.asarray(depth, dtype=float)
+    if onset_length <= 0:
+        raise InputError(f"onset length {onset_length!r} m must be positive")
+    x = d / onset_length
+    # exp of a non-positive argument only: no overflow deep in contact or far above
+    e = np.exp(-np.abs(x))
+    return onset_force * np.where(x < 0, e, 2.0 - e)
+
+
+def solve_series_compliance(
+    d_cmd: ArrayLike,
+    force_of_depth: Callable[[np.ndarray], np.ndarray],
+    compliance: float,
+    iterations: int = 64,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Solve F = g(d_cmd - C·F) for the actual depth and force with series compliance C.
+
+    The tip sits C·F above its commanded position, so the actual depth delta solves
+    r(delta) = delta + C·g(delta) - d_cmd = 0.  r is strictly increasing for any non-decreasing
+    force law g with g(0) = 0, and r(0) = -d_cmd <= 0 <= r(d_cmd) = C·g(d_cmd): the root is
+    bracketed in [0, d_cmd].  Vectorised bisection with ``iterations`` = 64 halvings reaches the
+    floating-point resolution of delta (width d_cmd·2^-64); it cannot fail or overshoot.
+
+    Parameters
+    ----------
+    d_cmd
+        [m] Commanded depth z_surf - z_cmd (array).
+    force_of_depth
+        g(d) [N], vectorised, non-decreasing, 0 for d <= 0.
+    compliance
+        C [m/N] >= 0; 0 returns (d_cmd, g(d_cmd)) without iterating.
+
+    Returns
+    -------
+    delta, force
+        [m], [N] Actual depth and contact force F = g(delta).
+    """
+    d_cmd = np.asarray(d_cmd, dtype=float)
+    if compliance == 0:
+        return d_cmd, force_of_depth(d_cmd)
+    delta = np.minimum(d_cmd, 0.0)  # out of contact: the tip is where it was sent
+    pos = d_cmd > 0
+    dc = d_cmd[pos]
+    lo, hi = np.zeros_like(dc), dc.copy()
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        r = mid + compliance * force_of_depth(mid) - dc
+        above = r > 0
+        hi = np.where(above, mid, hi)
+        lo = np.where(above, lo, mid)
+    delta[pos] = 0.5 * (lo + hi)
+    return delta, force_of_depth(delta)

@@ -1,0 +1,291 @@
+"""One simulated palpation trace from a known truth, with its misspecification knobs.
+
+The simulator draws data from a *known* truth so that every estimator in palpbayes can be checked
+against it (bias, interval coverage, simulation-based calibration).  Conventions
+(docs/design.md §1, §5): SI units; z is up, the tip moves down into the specimen, depth
+d = z_surf - z; the force is the compressive normal force, positive when pressing.
+
+Model of one trace (every term optional except the contact law)::
+
+    F_rec(t) = F_true(t) + F_on(delta) + F0 + drift·t + e(t)
+    z_rec(t) = z_cmd(t) + b + eta(t)            (registration offset b, encoder noise eta)
+    e(t)     = phi·e(t-1) + sqrt(1 - phi²)·sigma·w(t),  w ~ N(0, 1),  e(0) = sigma·w(0)
+
+F_true, F_on and the actual depth delta under series compliance are those of
+:mod:`palpbayes.sim.force`; sigma = noise_pp / :data:`palpbayes.noise.PP_TO_SIGMA`.  The drift
+is **per second** (``drift`` [N/s], t the sample time from the start of the trace, t_k = k/rate),
+so on the loading segment it is also a linear function of z with slope -drift/speed [N/m].
+
+**Peak-to-peak to sigma.**  A sensor's "peak-to-peak noise" is read as ±3 sigma
+(:func:`palpbayes.noise.sigma_from_pp`): the paper's 48 mN gives sigma = 8 mN.  Note that the
+*observed* range of N samples grows with N (about 6.4 sigma for N = 800 and 7.2 sigma for
+N = 3840), so a range measured over a long record overstates the ±3 sigma convention;
+``tests/unit/test_sim.py`` checks both facts.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.signal import lfilter
+
+from ..contact import Tip, check_nu, effective_modulus
+from ..errors import InputError
+from ..noise import PAPER_NOISE_PP, sigma_from_pp
+from ..trace import IndentationTrace
+from ._checks import ar1_phi, finite, nonneg, positive
+from .force import onset_force_profile, solve_series_compliance, true_force
+
+__all__ = ["ar1_noise", "simulate_trace"]
+
+
+def ar1_noise(n: int, sigma: float, phi: float, w: np.ndarray) -> np.ndarray:
+    """Stationary Gaussian AR(1) noise from standard normal draws ``w`` (length n).
+
+    e(0) = sigma·w(0), e(t) = phi·e(t-1) + sqrt(1 - phi²)·sigma·w(t), so every e(t) has sd sigma
+    whatever phi, and corr(e(t), e(t-k)) = phi^k.
+    """
+    w = np.asarray(w, dtype=float)[:n]
+    if phi == 0:
+        return sigma * w
+    e = np.empty(n)
+    e[0] = sigma * w[0]
+    e[1:], _ = lfilter([math.sqrt(1.0 - phi * phi) * sigma], [1.0, -phi], w[1:],
+                       zi=[phi * e[0]])
+    return e
+
+
+def _motion(travel: float, speed: float, rate: float, hold: float,
+            retract: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Sample times t_k = k/rate (k = 1..N) and distance moved down s(t_k) [m].
+
+    Down at ``speed`` for travel/speed, hold, then (optionally) back up at ``speed``.  N =
+    ceil(T·rate) for the programme's duration T, so the last sample falls at or after the end;
+    samples past the end stay at the final position.
+    """
+    t_down = travel / speed
+    t_end = t_down + hold + (t_down if retract else 0.0)
+    n = max(3, math.ceil(t_end * rate - 1e-6))
+    t = np.arange(1, n + 1) / rate
+    s = np.minimum(speed * t, travel)
+    s[np.isclose(s, travel, rtol=1e-12, atol=0.0)] = travel
+    if retract:
+        up = np.clip(speed * (t - t_down - hold), 0.0, travel)
+        up[np.isclose(up, travel, rtol=1e-12, atol=0.0)] = travel
+        s = s - up
+    return t, s
+
+
+def simulate_trace(
+    E: float,
+    tip: Tip,
+    *,
+    nu: float = 0.3,
+    z_surf: float = 0.1,
+    thickness: float | None = None,
+    depth: float | None = None,
+    approach: float = 1e-3,
+    speed: float = 50 / 60e3,
+    rate: float = 800.0,
+    hold: float = 0.0,
+    retract: bool = False,
+    noise_pp: float = PAPER_NOISE_PP,
+    noise_ar1: float = 0.0,
+    force_offset: float = 0.0,
+    drift: float = 0.0,
+    onset_force: float = 0.0,
+    onset_length: float = 0.0,
+    position_noise: float = 0.0,
+    repeatability: float = 0.0,
+    compliance: float = 0.0,
+    finite_thickness: bool = False,
+    bonded: bool = True,
+    stiffening: float = 0.0,
+    rng: np.random.Generator | int | None = None,
+    trace_id: str = "sim",
+    specimen: str = "",
+    material: str = "",
+    repetition: int | None = None,
+    rest_time: float | None = None,
+) -> IndentationTrace:
+    """Simulate one palpation: a tip driven down into an elastic specimen at constant speed.
+
+    The tip starts ``approach`` above the surface, moves down at ``speed`` to the depth
+    ``depth`` below it, optionally holds and retracts at the same speed, and is sampled at
+    ``rate`` at t_k = k/rate, k = 1..N (a sample at the end of each sampling period, so the
+    deepest point is recorded).  With the defaults on a 30 mm specimen (depth 3 mm, approach
+    1 mm, 50 mm/min, 800 Hz) the trace has exactly 4 mm / (0.8333 mm/s) · 800 Hz = **3840
+    samples**, the benchmark trace size.  The model is given in the module docstring.
+
+    Parameters
+    ----------
+    E
+        [Pa] Young's modulus.
+    tip
+        The indenter (tip ``sphere`` is the exact Sneddon law).
+    nu
+        Poisson ratio [-].
+    z_surf
+        [m] Surface height in the robot's commanded frame.
+    thickness
+        [m] Specimen thickness h (for the default depth, ``finite_thickness``, ``stiffening``).
+    depth
+        [m] Commanded maximum depth; default 10 % of ``thickness`` (required without it).
+    approach
+        [m] Height above the surface where the motion starts.
+    speed
+        [m/s] Tip speed (default 50 mm/min).
+    rate
+        [Hz] Sample rate.
+    hold
+        [s] Hold at the deepest point.
+    retract
+        Move back up to the start after the hold.
+    noise_pp
+        [N] Peak-to-peak force noise; sigma = noise_pp/6 (:func:`~palpbayes.noise.sigma_from_pp`).
+    noise_ar1
+        AR(1) coefficient phi of the force noise, |phi| < 1 (marginal sd stays sigma).
+    force_offset
+        [N] Constant force offset F0 (sensor tare error).
+    drift
+        [N/s] Linear force drift **per second**, F += drift·t with t the sample time
+        (t_k = k/rate, so the first sample already carries drift/rate).  On the loading
+        segment this equals a linear baseline in z of slope -drift/speed [N/m].
+    onset_force, onset_length
+        [N], [m] Gradual onset (:func:`~palpbayes.sim.force.onset_force_profile`):
+        F += F_on(delta) with F_on = onset_force·exp(delta/onset_length) above the surface
+        (delta < 0) and its C¹ saturating continuation onset_force·(2 - exp(-delta/onset_length))
+        in contact.  Off when ``onset_force`` is 0 (the default; then the output is bit-for-bit
+        what it was without the knob); ``onset_length`` must be positive when it is on.  The
+        onset force is evaluated at the actual depth and does not feed the compliance solve
+        (its own deflection C·F_on is neglected).
+    position_noise
+        [m] White noise sd on the recorded z (encoder/kinematic jitter).
+    repeatability
+        [m] Half-range of a uniform per-trace offset b of the recorded z (robot repeatability,
+        e.g. 3e-5 for the UR3e); it shifts the surface seen in the recorded frame to z_surf + b.
+    compliance
+        [m/N] Series compliance C of robot and sensor: the tip sits C·F above the recorded
+        position; solved by :func:`~palpbayes.sim.force.solve_series_compliance`.
+    finite_thickness, bonded
+        Apply the finite-thickness correction (Dimitriadis 2002 / Hayes 1972, bonded by
+        default) to the truth; needs ``thickness``.
+    stiffening
+        beta of :func:`~palpbayes.sim.force.stiffening_factor` (0 = linear elastic); needs
+        ``thickness``.
+    rng
+        numpy Generator or seed.  The draws are made in a fixed order whatever the options
+        (one uniform for b, N normals for the force, N normals for z), so the same seed gives
+        the same noise across misspecification settings (common random numbers).
+    trace_id, specimen, material, repetition, rest_time
+        Labels stored in the trace.
+
+    Returns
+    -------
+    IndentationTrace
+        z recorded (up positive), force positive when pressing.  ``metadata`` holds the truth:
+        ``E_true``, ``Estar_true``, ``nu``, ``z_surf_true`` (surface in the *recorded* frame,
+        z_surf + b, what a perfect fit recovers), ``z_surf_commanded``, ``z_offset_true`` (b),
+        ``sigma_true``, ``noise_pp``, ``phi_true``, ``force_offset_true``, ``drift_true``,
+        ``onset_force_true``, ``onset_length_true``,
+        ``position_noise_true``, ``repeatability``, ``compliance_true``, ``finite_thickness``,
+        ``bonded``, ``stiffening``, ``depth_true``, ``max_force_true``, motion settings, and
+        ``seed`` when ``rng`` was an int.
+
+    Raises
+    ------
+    InputError, GeometryError
+        Non-positive E, speed or rate, missing depth and thickness, |phi| >= 1, negative noise,
+        an invalid nu, a finite-thickness request for a tip without a correction, or a
+        non-zero ``onset_force`` without a positive ``onset_length``.
+    """
+    if not isinstance(tip, Tip):
+        raise InputError(f"tip must be a palpbayes.contact.Tip, got {type(tip).__name__}")
+    E = positive(E, "Young's modulus E [Pa]")
+    nu = check_nu(nu)
+    z_surf = finite(z_surf, "surface height z_surf [m]")
+    if thickness is not None:
+        thickness = positive(thickness, "specimen thickness [m]")
+    if depth is None:
+        if thickness is None:
+            raise InputError("give the indentation depth (depth=) or the specimen thickness "
+                             "(thickness=, depth defaults to 10 % of it)")
+        depth = 0.1 * thickness
+    depth = positive(depth, "indentation depth [m]")
+    approach = nonneg(approach, "approach distance [m]")
+    speed = positive(speed, "speed [m/s]")
+    rate = positive(rate, "sample rate [Hz]")
+    hold = nonneg(hold, "hold time [s]")
+    sigma = sigma_from_pp(noise_pp)
+    phi = ar1_phi(noise_ar1)
+    force_offset = finite(force_offset, "force offset [N]")
+    drift = finite(drift, "force drift [N/s]")
+    onset_force = finite(onset_force, "onset force [N]")
+    onset_length = nonneg(onset_length, "onset length [m]")
+    if onset_force != 0 and onset_length == 0:
+        raise InputError("a gradual onset (onset_force != 0) needs a positive onset_length [m]")
+    position_noise = nonneg(position_noise, "position noise [m]")
+    repeatability = nonneg(repeatability, "repeatability [m]")
+    compliance = nonneg(compliance, "compliance [m/N]")
+    stiffening = nonneg(stiffening, "stiffening beta")
+    law = {"nu": nu, "tip": tip, "thickness": thickness, "finite_thickness": finite_thickness,
+           "bonded": bool(bonded), "stiffening": stiffening}
+    true_force(np.array([depth]), E, **law)  # validate geometry before drawing anything
+
+    gen = np.random.default_rng(rng)
+    t, s = _motion(approach + depth, speed, rate, hold, retract)
+    n = t.size
+    u = gen.uniform(-1.0, 1.0)
+    w_force = gen.standard_normal(n)
+    w_z = gen.standard_normal(n)
+
+    z_cmd = (z_surf + approach) - s
+    d_cmd = z_surf - z_cmd
+    delta, f_true = solve_series_compliance(
+        d_cmd, lambda d: true_force(d, E, **law), compliance)
+    b = repeatability * u + 0.0  # + 0.0: no negative zero in the truth tables
+    z_rec = z_cmd + b + position_noise * w_z
+    if onset_force != 0:  # skipped when off, so default outputs stay bit-for-bit identical
+        f_true_rec = f_true + onset_force_profile(delta, onset_force, onset_length)
+    else:
+        f_true_rec = f_true
+    f_rec = f_true_rec + force_offset + drift * t + ar1_noise(n, sigma, phi, w_force)
+
+    metadata = {
+        "simulated": True,
+        "E_true": E,
+        "Estar_true": float(effective_modulus(E, nu)),
+        "nu_true": nu,
+        "z_surf_true": z_surf + b,
+        "z_surf_commanded": z_surf,
+        "z_offset_true": b,
+        "sigma_true": sigma,
+        "noise_pp": float(noise_pp),
+        "phi_true": phi,
+        "force_offset_true": force_offset,
+        "drift_true": drift,
+        "onset_force_true": onset_force,
+        "onset_length_true": onset_length,
+        "position_noise_true": position_noise,
+        "repeatability": repeatability,
+        "compliance_true": compliance,
+        "finite_thickness": bool(finite_thickness),
+        "bonded": bool(bonded),
+        "stiffening": stiffening,
+        "depth_true": depth,
+        "max_depth_actual": float(delta.max()),
+        "max_force_true": float(f_true.max()),
+        "approach": approach,
+        "speed": speed,
+        "rate": rate,
+        "hold": hold,
+        "retract": bool(retract),
+    }
+    if isinstance(rng, int | np.integer):
+        metadata["seed"] = int(rng)
+    return IndentationTrace(
+        time=t, z=z_rec, force=f_rec, tip=tip, trace_id=trace_id, specimen=specimen,
+        material=material, thickness=thickness, repetition=repetition, rest_time=rest_time,
+        source=f"simulated trace {trace_id!r}", metadata=metadata,
+    )
