@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import FitError, InputError
 from ..fitdata import ModelSpec
 
 #: Pass/fail thresholds (statistical and physical) of the checks; see :mod:`palpbayes.checks`.
@@ -161,6 +161,34 @@ def _lstsq(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return beta, y - np.einsum("ij,j->i", X, beta)
 
 
+def _contact_inputs(z, force, z_surf: float, z_ref: float | None, no_contact: str
+                    ) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Samples of a contact fit: validated ``z``, ``force``, the baseline's reference height
+    (default the highest z) and the contact depth d_max = z_surf - min z [m].
+
+    Raises :class:`FitError` with the message ``no_contact`` when d_max is not positive.
+    """
+    z, f = _arrays(z, force)
+    z_ref = float(z.max()) if z_ref is None else float(z_ref)
+    dmax = z_surf - float(z.min())
+    if not dmax > 0:
+        raise FitError(no_contact)
+    return z, f, z_ref, dmax
+
+
+def _residual_cov(J: np.ndarray, r: np.ndarray, phi: float | None
+                  ) -> tuple[np.ndarray, float, float]:
+    """Covariance of least-squares parameters from their Jacobian ``J`` and residuals ``r``.
+
+    s²·(JᵀJ)⁻¹ with s² = RSS/(n - p), times the AR(1) long-run factor of the noise lag-1
+    autocorrelation ``phi`` (None: white noise).  Returns (covariance, RSS, s²).
+    """
+    n, p = r.size, J.shape[1]
+    rss = float(np.dot(r, r))
+    s2 = rss / max(n - p, 1)
+    return _cov(J, s2, _long_run(phi)), rss, s2
+
+
 def _cov(J: np.ndarray, s2: float, infl: float) -> np.ndarray:
     scale = np.sqrt(np.einsum("ij,ij->j", J, J))
     scale[scale == 0] = 1.0
@@ -187,19 +215,18 @@ class _ShapeTable:
         self.ds = model.shape_derivative(self.grid)
 
     def shape(self, d) -> np.ndarray:
-        d = np.asarray(d, dtype=float)
-        out = np.interp(d, self.grid, self.s, left=0.0)
-        far = d > self.d_top
-        if np.any(far):
-            out[far] = self.model.shape(d[far])
-        return out
+        return self._lookup(d, self.s, self.model.shape)
 
     def shape_derivative(self, d) -> np.ndarray:
+        return self._lookup(d, self.ds, self.model.shape_derivative)
+
+    def _lookup(self, d, table: np.ndarray, exact) -> np.ndarray:
+        """``table`` interpolated at depths ``d``; ``exact(d)`` beyond the table's end."""
         d = np.asarray(d, dtype=float)
-        out = np.interp(d, self.grid, self.ds, left=0.0)
+        out = np.interp(d, self.grid, table, left=0.0)
         far = d > self.d_top
         if np.any(far):
-            out[far] = self.model.shape_derivative(d[far])
+            out[far] = exact(d[far])
         return out
 
 

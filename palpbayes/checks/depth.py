@@ -10,7 +10,15 @@ from scipy import optimize
 
 from ..errors import FitError
 from ..fitdata import ModelSpec
-from .core import THRESHOLDS, CheckResult, _arrays, _cov, _design, _long_run, _lstsq, _ShapeTable
+from .core import (
+    THRESHOLDS,
+    CheckResult,
+    _contact_inputs,
+    _design,
+    _lstsq,
+    _residual_cov,
+    _ShapeTable,
+)
 
 
 def _profile_law_fit(z, f, model, z_surf0: float, half_width: float,
@@ -32,11 +40,9 @@ def _profile_law_fit(z, f, model, z_surf0: float, half_width: float,
     beta, r, X = fit_at(zs)
     dsdz = model.shape_derivative(zs - z)
     J = np.column_stack([beta[0] * dsdz, X])
-    n, p = f.size, J.shape[1]
-    rs = float(np.dot(r, r))
-    cov = _cov(J, rs / max(n - p, 1), _long_run(phi))
+    cov, rs, _ = _residual_cov(J, r, phi)
     return {"z_surf": zs, "estar": float(beta[0]), "estar_se": math.sqrt(max(cov[1, 1], 0.0)),
-            "F0": float(beta[1]), "rss": rs, "n": int(n)}
+            "F0": float(beta[1]), "rss": rs, "n": int(f.size)}
 
 
 def depth_consistency_check(z, force, model: ModelSpec, z_surf: float, *,
@@ -80,11 +86,8 @@ def depth_consistency_check(z, force, model: ModelSpec, z_surf: float, *,
         [Pa], their se, ``ratio``, ``ratio_se``, ``z_surf_all``, ``z_surf_shallow`` [m],
         ``d_half`` [m].
     """
-    z, f = _arrays(z, force)
-    z_ref = float(z.max()) if z_ref is None else float(z_ref)
-    dmax = z_surf - float(z.min())
-    if not dmax > 0:
-        raise FitError("the surface lies below every sample: no contact to check")
+    z, f, z_ref, dmax = _contact_inputs(z, force, z_surf, z_ref,
+                                        "the surface lies below every sample: no contact to check")
     hw = 0.25 * dmax
     table = _ShapeTable(model, 1.5 * dmax)
     full = _profile_law_fit(z, f, table, z_surf, hw, baseline, z_ref, noise_lag1)

@@ -15,10 +15,10 @@ from .core import (
     THRESHOLDS,
     CheckResult,
     _arrays,
-    _cov,
+    _contact_inputs,
     _design,
-    _long_run,
     _lstsq,
+    _residual_cov,
 )
 
 #: scipy.optimize.least_squares settings of the free-exponent fit: tight enough to recover a
@@ -96,11 +96,8 @@ def free_exponent_fit(z, force, z_surf0: float, *, baseline: str = "constant",
         [N/m] (0 for a constant baseline), ``rss`` [N²], ``s`` [N] residual sd, ``n``,
         ``residuals`` [N], ``success``.
     """
-    z, f = _arrays(z, force)
-    z_ref = float(z.max()) if z_ref is None else float(z_ref)
-    dmax = z_surf0 - float(z.min())
-    if not dmax > 0:
-        raise FitError("the starting surface lies below every sample: no contact to fit")
+    z, f, z_ref, dmax = _contact_inputs(
+        z, force, z_surf0, z_ref, "the starting surface lies below every sample: no contact to fit")
     linear = baseline == "linear"
     zn = (z - z_ref) / dmax  # scaled baseline regressor
     fscale = float(np.max(np.abs(f))) or 1.0
@@ -148,9 +145,7 @@ def free_exponent_fit(z, force, z_surf0: float, *, baseline: str = "constant",
     p = np.append(x, 0.0) if not linear else x
     r = -resid(p) * fscale
     J = jac_fn(x) * fscale
-    n, npar = f.size, J.shape[1]
-    rss = float(np.dot(r, r))
-    cov = _cov(J, rss / max(n - npar, 1), _long_run(noise_lag1))
+    cov, rss, s2 = _residual_cov(J, r, noise_lag1)
     m = float(p[1])
     return {
         "m": m, "m_se": float(math.sqrt(max(cov[1, 1], 0.0))),
@@ -158,7 +153,7 @@ def free_exponent_fit(z, force, z_surf0: float, *, baseline: str = "constant",
         "z_surf_se": float(math.sqrt(max(cov[0, 0], 0.0)) * dmax),
         "k": float(p[2] * fscale / dmax**m), "F0": float(p[3] * fscale),
         "F1": float(p[4] * fscale / dmax) if linear else 0.0,
-        "rss": rss, "s": math.sqrt(rss / max(n - npar, 1)), "n": int(n), "residuals": r,
+        "rss": rss, "s": math.sqrt(s2), "n": int(f.size), "residuals": r,
         "success": bool(success),
     }
 

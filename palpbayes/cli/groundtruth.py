@@ -14,13 +14,13 @@ import argparse
 import math
 from pathlib import Path
 
-from ..campaign.layout import GROUNDTRUTH as PER_FILE_NAME
-from ..campaign.layout import GROUNDTRUTH_SUMMARY as SUMMARY_NAME
+from ..campaign import layout
 from ..campaign.pipeline import write_groundtruth
 from ..errors import InputError
-from ..groundtruth import DEFAULT_STRAIN_WINDOW, analyse, scan_inputs
+from ..groundtruth import DEFAULT_STRAIN_WINDOW, analyse
+from ..io.groundtruth_inputs import scan_inputs
 
-__all__ = ["register", "run", "PER_FILE_NAME", "SUMMARY_NAME"]
+__all__ = ["register", "run"]
 
 
 def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -39,7 +39,7 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("inputs", nargs="+", metavar="INPUT",
                    help="compression-test CSV files, folders, or a ground-truth manifest")
     p.add_argument("--out", required=True, metavar="DIR", type=Path,
-                   help=f"output folder for {PER_FILE_NAME} and {SUMMARY_NAME}")
+                   help=f"output folder for {layout.GROUNDTRUTH} and {layout.GROUNDTRUTH_SUMMARY}")
     p.add_argument("--strain-window", nargs=2, type=float, metavar=("LO", "HI"),
                    default=[lo, hi],
                    help="fit window in PERCENT engineering strain, measured from the toe offset "
@@ -100,5 +100,5 @@ def run(args: argparse.Namespace) -> int:
     )[["material", "n", "E_mean_kPa", "E_sd_kPa", "E_sem_kPa", "strain_lo_pct",
        "strain_hi_pct"]]
     print(shown.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    print(f"wrote {out / PER_FILE_NAME} and {out / SUMMARY_NAME}")
+    print(f"wrote {out / layout.GROUNDTRUTH} and {out / layout.GROUNDTRUTH_SUMMARY}")
     return 0

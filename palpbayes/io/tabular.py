@@ -1,7 +1,9 @@
-"""What every text-table reader shares: the separator sniffer, numeric columns, sanity checks.
+"""What every text-table reader shares: the separator sniffer, reading a table, numeric
+columns, trace metadata and force-sign options, sanity checks.
 
-Lower than :mod:`palpbayes.io.trace_csv` and :mod:`palpbayes.io.rtde` (both import from here,
-so they do not import each other for these).  Every problem is raised as
+Lower than :mod:`palpbayes.io.trace_csv`, :mod:`palpbayes.io.rtde` and
+:mod:`palpbayes.io.joint_trace` (all import from here, so they do not import each other for
+these).  Every problem is raised as
 :class:`~palpbayes.errors.DataFileError` naming the file, the column or value, and the fix.
 """
 
@@ -10,18 +12,20 @@ from __future__ import annotations
 import math
 import os
 import re
+from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from ..baseline import sign_flipped
-from ..errors import DataFileError
+from ..errors import DataFileError, InputError
 from ..trace import IndentationTrace
 from ..units import format_force, format_length
 
 __all__ = ["SEPARATORS", "WHITESPACE", "sniff_delimiter", "is_decimal_comma", "numeric_column",
-           "check_force_sign", "check_plausible", "parse_bool", "MAX_Z_SPAN_M", "MAX_FORCE_N"]
+           "check_force_sign", "check_plausible", "parse_bool", "MAX_Z_SPAN_M", "MAX_FORCE_N",
+           "check_file", "read_table", "split_trace_metadata", "validate_force_sign"]
 
 #: Plausibility limits: a palpation moves the tip by less than this [m] ...
 MAX_Z_SPAN_M = 0.5
@@ -34,6 +38,7 @@ SEPARATORS = {",": "comma", ";": "semicolon", "\t": "tab"}
 WHITESPACE = r"\s+"
 
 _DECIMAL_COMMA = re.compile(r"^\s*[-+]?\d*,\d+(?:[eE][-+]?\d+)?\s*$")
+_TRACE_FIELDS = {f.name for f in fields(IndentationTrace)} - {"time", "z", "force", "source"}
 
 
 def _header_line(path: Path) -> str:
@@ -157,3 +162,65 @@ def check_plausible(trace: IndentationTrace) -> None:
             "is force in mN? give the force unit, e.g. --force-unit mN",
         )
     check_force_sign(src, trace, "flip the force sign with --force-sign -1")
+
+
+def check_file(path: Path, source: str) -> None:
+    """Raise :class:`DataFileError` (naming ``source``) when ``path`` is no file or is empty."""
+    if not path.is_file():
+        raise DataFileError(source, "file not found", "check the path")
+    if path.stat().st_size == 0:
+        raise DataFileError(source, "file is empty", "check that the recording was saved")
+
+
+def read_table(path: str | os.PathLike, delimiter: str | None) -> tuple[pd.DataFrame, str]:
+    """A robot recording (delimited text, ``#`` comments) as a DataFrame, and its source name.
+
+    ``delimiter`` None sniffs the separator (:func:`sniff_delimiter`); column names are
+    stripped.  A missing, empty, binary or ragged file raises :class:`DataFileError`.
+    """
+    path = Path(path)
+    source = str(path)
+    check_file(path, source)
+    try:
+        sep = delimiter if delimiter is not None else sniff_delimiter(path)
+        df = pd.read_csv(path, sep=sep, comment="#", skipinitialspace=True,
+                         engine="c", encoding="utf-8")
+    except UnicodeDecodeError:
+        raise DataFileError(
+            source, "not a text file (a binary RTDE recording?)",
+            "record without --binary, or convert the file to CSV first",
+        ) from None
+    except pd.errors.EmptyDataError:
+        raise DataFileError(source, "file is empty", "check that the recording was saved") from None
+    except pd.errors.ParserError as exc:
+        raise DataFileError(
+            source, f"not a readable CSV ({exc})".replace("\n", " "),
+            "check that every row has the same number of columns",
+        ) from None
+    df.columns = [str(c).strip() for c in df.columns]
+    return df, source
+
+
+def split_trace_metadata(metadata: dict, extra: dict) -> tuple[dict, dict]:
+    """Split keyword metadata into :class:`~palpbayes.trace.IndentationTrace` fields and the
+    free-form ``metadata`` dict (to which ``extra``, the reader's own record, is added)."""
+    reserved = {"time", "z", "force", "source"} & set(metadata)
+    if reserved:
+        raise InputError(f"metadata may not set {sorted(reserved)}; they come from the file")
+    kwargs = {k: v for k, v in metadata.items() if k in _TRACE_FIELDS and k != "metadata"}
+    free = dict(metadata.get("metadata") or {})
+    free.update({k: v for k, v in metadata.items() if k not in _TRACE_FIELDS})
+    free.update(extra)
+    return kwargs, free
+
+
+def validate_force_sign(force_sign: float | str, allow_auto: bool) -> float | str:
+    """``force_sign`` as +1.0 or -1.0 (or ``"auto"`` when ``allow_auto``); else InputError."""
+    if allow_auto and isinstance(force_sign, str):
+        if force_sign.lower() == "auto":
+            return "auto"
+        raise InputError(f"force_sign must be +1, -1 or 'auto', got {force_sign!r}")
+    if force_sign not in (1, -1):
+        allowed = "+1, -1 or 'auto'" if allow_auto else "+1 or -1"
+        raise InputError(f"force_sign must be {allowed}, got {force_sign!r}")
+    return float(force_sign)

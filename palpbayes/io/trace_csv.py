@@ -26,8 +26,15 @@ from ..contact import Tip
 from ..errors import DataFileError, InputError
 from ..trace import IndentationTrace
 from .atomic import write_csv_atomic
-from .rtde import trace_from_joint_frame
-from .tabular import MAX_FORCE_N, MAX_Z_SPAN_M, check_plausible, numeric_column, sniff_delimiter
+from .joint_trace import trace_from_joint_frame
+from .tabular import (
+    MAX_FORCE_N,
+    MAX_Z_SPAN_M,
+    check_file,
+    check_plausible,
+    numeric_column,
+    sniff_delimiter,
+)
 from .units import FORCE_UNITS, LENGTH_UNITS, TIME_UNITS, force_factor, length_factor, time_factor
 
 __all__ = ["read_trace", "write_trace", "trace_from_frame", "check_plausible",
@@ -165,10 +172,7 @@ def read_trace(
         raise DataFileError(source, "is a folder, not a trace file",
                             f"did you mean {manifest}?" if manifest.is_file()
                             else "give the path of a trace CSV")
-    if not path.is_file():
-        raise DataFileError(source, "file not found", "check the path")
-    if path.stat().st_size == 0:
-        raise DataFileError(source, "file is empty", "check that the recording was saved")
+    check_file(path, source)
     try:
         if delimiter == "auto":
             delimiter = sniff_delimiter(path)

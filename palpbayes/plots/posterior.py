@@ -15,10 +15,14 @@ from .style import (
     _MM,
     _UM,
     METHOD_COLORS,
-    METHOD_LABELS,
+    _decorate,
     _draws,
     _fig_ax,
     _level_label,
+    _lsq_errorbar,
+    _lsq_of,
+    _mark_interval,
+    _truth_line,
 )
 
 __all__ = ["plot_posterior_E", "plot_posterior_zsurf", "plot_pair", "plot_posterior"]
@@ -34,6 +38,18 @@ def _hist(ax: Axes, x: np.ndarray, color: str, label: str, filled: bool, bins: i
         ax.stairs(dens, edges, fill=True, color=color, alpha=0.35, label=label)
     else:
         ax.stairs(dens, edges, color=color, lw=1.2, label=label)
+
+
+def _zsurf_relative(result: Any) -> tuple[float, np.ndarray]:
+    """Posterior median of z_surf [m] and the draws relative to it [µm]."""
+    z = _draws(result, "z_surf")
+    zm = float(np.median(z))
+    return zm, (z - zm) * _UM
+
+
+def _zsurf_label(zm: float) -> str:
+    """Axis label of surface heights relative to their posterior median ``zm`` [m]."""
+    return f"z_surf − {zm * _MM:.3f} mm (posterior median) [µm]"
 
 
 def plot_posterior_E(
@@ -73,8 +89,7 @@ def plot_posterior_E(
     matplotlib.figure.Figure
     """
     fig, ax = _fig_ax(ax, (5.0, 3.6))
-    if lsq is None:
-        lsq = getattr(result, "lsq", None)
+    lsq = _lsq_of(result, lsq)
     c = METHOD_COLORS["bayes"]
     e_tot = _draws(result, "E_total") * _KPA
     e_stat = _draws(result, "E") * _KPA
@@ -83,22 +98,16 @@ def plot_posterior_E(
     _hist(ax, e_stat, c, "E, trace only (fixed nu)", False, bins, peak=True)
     lo, hi = central(e_tot, level)
     med = float(np.median(e_tot))
-    ax.axvline(med, color=c, lw=1.2)
-    ax.axvspan(lo, hi, color=c, alpha=0.08, lw=0)
-    if lsq is not None and lsq is not False:
-        ax.errorbar([lsq.E * _KPA], [1.1],
-                    xerr=[[(lsq.E - lsq.E_lo) * _KPA], [(lsq.E_hi - lsq.E) * _KPA]],
-                    fmt="s", ms=4, color=METHOD_COLORS["lsq"], capsize=3,
-                    label=f"least squares ± {_level_label(getattr(lsq, 'level', level))}")
+    _mark_interval(ax, med, lo, hi, c)
+    if lsq is not None:
+        _lsq_errorbar(ax, lsq.E * _KPA, 1.1, (lsq.E - lsq.E_lo) * _KPA, (lsq.E_hi - lsq.E) * _KPA,
+                      f"least squares ± {_level_label(getattr(lsq, 'level', level))}")
     if truth is not None:
-        ax.axvline(truth * _KPA, color=METHOD_COLORS["truth"], ls="--", lw=1.2,
-                   label=METHOD_LABELS["truth"])
+        _truth_line(ax, truth * _KPA)
     ax.set_ylim(0, 1.45)
-    ax.set_xlabel("Young's modulus, E [kPa]")
-    ax.set_ylabel("Posterior density (peak = 1)")
-    ax.set_title(f"E = {med:.1f} kPa, {_level_label(level)} interval [{lo:.1f}, {hi:.1f}]",
-                 fontsize="medium")
-    ax.legend(loc="upper left", fontsize="x-small", frameon=False)
+    _decorate(ax, "Young's modulus, E [kPa]", "Posterior density (peak = 1)",
+              f"E = {med:.1f} kPa, {_level_label(level)} interval [{lo:.1f}, {hi:.1f}]",
+              "upper left")
     return fig
 
 
@@ -133,35 +142,26 @@ def plot_posterior_zsurf(
     matplotlib.figure.Figure
     """
     fig, ax = _fig_ax(ax, (5.0, 3.6))
-    if lsq is None:
-        lsq = getattr(result, "lsq", None)
-    z = _draws(result, "z_surf")
-    zm = float(np.median(z))
-    rel = (z - zm) * _UM
+    lsq = _lsq_of(result, lsq)
+    zm, rel = _zsurf_relative(result)
     c = METHOD_COLORS["bayes"]
     _hist(ax, rel, c, "Bayes posterior", True, bins)
     lo, hi = central(rel, level)
-    ax.axvline(0.0, color=c, lw=1.2)
-    ax.axvspan(lo, hi, color=c, alpha=0.08, lw=0)
+    _mark_interval(ax, 0.0, lo, hi, c)
     top = ax.get_ylim()[1]
-    if lsq is not None and lsq is not False:
+    if lsq is not None:
         from scipy import stats
 
         n = getattr(lsq, "n_points", 1000)
         t = stats.t.ppf(0.5 + level / 2, max(n - 2, 1))
-        ax.errorbar([(lsq.z_surf - zm) * _UM], [1.12 * top],
-                    xerr=[[t * lsq.z_surf_sd * _UM], [t * lsq.z_surf_sd * _UM]], fmt="s", ms=4,
-                    color=METHOD_COLORS["lsq"], capsize=3,
-                    label=f"least squares ± {_level_label(level)}")
+        half = t * lsq.z_surf_sd * _UM
+        _lsq_errorbar(ax, (lsq.z_surf - zm) * _UM, 1.12 * top, half, half,
+                      f"least squares ± {_level_label(level)}")
     if truth is not None:
-        ax.axvline((truth - zm) * _UM, color=METHOD_COLORS["truth"], ls="--", lw=1.2,
-                   label=METHOD_LABELS["truth"])
+        _truth_line(ax, (truth - zm) * _UM)
     ax.set_ylim(0, top * 1.4)
-    ax.set_xlabel(f"z_surf − {zm * _MM:.3f} mm (posterior median) [µm]")
-    ax.set_ylabel("Posterior density [1/µm]")
-    ax.set_title(f"z_surf: {_level_label(level)} interval [{lo:+.1f}, {hi:+.1f}] µm",
-                 fontsize="medium")
-    ax.legend(loc="upper left", fontsize="x-small", frameon=False)
+    _decorate(ax, _zsurf_label(zm), "Posterior density [1/µm]",
+              f"z_surf: {_level_label(level)} interval [{lo:+.1f}, {hi:+.1f}] µm", "upper left")
     return fig
 
 
@@ -201,19 +201,16 @@ def plot_pair(
     matplotlib.figure.Figure
     """
     fig, ax = _fig_ax(ax, (5.0, 3.6))
-    if lsq is None:
-        lsq = getattr(result, "lsq", None)
+    lsq = _lsq_of(result, lsq)
     e = _draws(result, "E") * _KPA
-    z = _draws(result, "z_surf")
-    zm = float(np.median(z))
-    rel = (z - zm) * _UM
+    zm, rel = _zsurf_relative(result)
     rng = np.random.default_rng(seed)
     idx = rng.choice(e.size, size=min(max_points, e.size), replace=False)
     c = METHOD_COLORS["bayes"]
     ax.plot(rel[idx], e[idx], ".", ms=2, alpha=0.35, color=c, rasterized=True,
             label="Bayes posterior draws")
     r = np.corrcoef(rel, e)[0, 1] if e.std() > 0 and rel.std() > 0 else np.nan
-    if lsq is not None and lsq is not False and np.all(np.isfinite(lsq.cov)):
+    if lsq is not None and np.all(np.isfinite(lsq.cov)):
         from scipy import stats
 
         scale = 1.0 - lsq.model.nu ** 2
@@ -232,11 +229,9 @@ def plot_pair(
         ax.plot([(lsq.z_surf - zm) * _UM], [lsq.E * _KPA], "s", ms=4,
                 color=METHOD_COLORS["lsq"],
                 label=f"least squares, {_level_label(level)} ellipse")
-    ax.set_xlabel(f"z_surf − {zm * _MM:.3f} mm (posterior median) [µm]")
-    ax.set_ylabel("E, trace only (fixed nu) [kPa]")
     ax.ticklabel_format(axis="y", useOffset=False)
-    ax.set_title(f"Joint posterior (correlation {r:+.2f})", fontsize="medium")
-    ax.legend(loc="best", fontsize="x-small", frameon=False)
+    _decorate(ax, _zsurf_label(zm), "E, trace only (fixed nu) [kPa]",
+              f"Joint posterior (correlation {r:+.2f})", "best")
     return fig
 
 

@@ -63,3 +63,41 @@ def _draws(result: Any, name: str) -> np.ndarray:
     """Flattened posterior draws of ``name`` from a BayesResult or an InferenceData."""
     idata = getattr(result, "idata", result)
     return np.asarray(idata.posterior[name]).ravel()
+
+
+def _median(result: Any, name: str) -> float:
+    """Posterior median of ``name`` (see :func:`_draws`)."""
+    return float(np.median(_draws(result, name)))
+
+
+def _lsq_of(result: Any, lsq: Any) -> Any:
+    """The least-squares result to draw: ``lsq``, else ``result.lsq``; None for ``lsq=False``."""
+    if lsq is None:
+        lsq = getattr(result, "lsq", None)
+    return None if lsq is False else lsq
+
+
+def _mark_interval(ax: Axes, centre: float, lo: float, hi: float, color: str) -> None:
+    """A vertical line at ``centre`` over a light band from ``lo`` to ``hi``."""
+    ax.axvline(centre, color=color, lw=1.2)
+    ax.axvspan(lo, hi, color=color, alpha=0.08, lw=0)
+
+
+def _lsq_errorbar(ax: Axes, x: float, y: float, below: float, above: float, label: str) -> None:
+    """The least-squares estimate at (x, y) with a horizontal error bar [x - below, x + above]."""
+    ax.errorbar([x], [y], xerr=[[below], [above]], fmt="s", ms=4, color=METHOD_COLORS["lsq"],
+                capsize=3, label=label)
+
+
+def _truth_line(ax: Axes, x: float) -> None:
+    """A dashed vertical line at a known true value."""
+    ax.axvline(x, color=METHOD_COLORS["truth"], ls="--", lw=1.2, label=METHOD_LABELS["truth"])
+
+
+def _decorate(ax: Axes, xlabel: str, ylabel: str, title: str, legend_loc: str,
+              **legend_kw: Any) -> None:
+    """Axis labels, a medium-size title and the small frameless legend of every figure."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize="medium")
+    ax.legend(loc=legend_loc, fontsize="x-small", frameon=False, **legend_kw)

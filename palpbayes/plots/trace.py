@@ -9,9 +9,11 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..intervals import LEVEL
-from .style import _MM, _MN, METHOD_COLORS, _draws, _fig_ax, _level_label
+from .style import _MM, _MN, METHOD_COLORS, _decorate, _fig_ax, _level_label, _lsq_of, _median
 
 __all__ = ["plot_force_depth", "plot_residuals"]
+
+_DEPTH_LABEL = "Depth below posterior-median surface, d [mm]"
 
 
 def _title(result: Any) -> str:
@@ -23,9 +25,9 @@ def _title(result: Any) -> str:
 
 def _posterior_median_curve(result: Any, z: np.ndarray) -> np.ndarray:
     """Force of the posterior-median parameters at heights ``z`` [N] (E*·s(d) + F0)."""
-    es = float(np.median(_draws(result, "E_star")))
-    zs = float(np.median(_draws(result, "z_surf")))
-    f0 = float(np.median(_draws(result, "F0")))
+    es = _median(result, "E_star")
+    zs = _median(result, "z_surf")
+    f0 = _median(result, "F0")
     return es * result.data.shape(zs - z) + f0
 
 
@@ -96,14 +98,13 @@ def plot_force_depth(
     """
     fig, ax = _fig_ax(ax)
     data = result.data
-    if lsq is None:
-        lsq = getattr(result, "lsq", None)
-    zs = float(np.median(_draws(result, "z_surf")))
+    lsq = _lsq_of(result, lsq)
+    zs = _median(result, "z_surf")
     zsrc = data.loading.z if getattr(data, "loading", None) is not None else data.z
     zg = np.linspace(float(zsrc.min()), float(zsrc.max()), n_grid)
     obs = result.predictive(zg, n_draws=n_draws, noise=True, level=level, seed=seed)
     mean = result.predictive(zg, n_draws=n_draws, noise=False, level=level, seed=seed)
-    lsq_f = None if lsq is None or lsq is False else _lsq_curve(lsq, data.model, zg)
+    lsq_f = None if lsq is None else _lsq_curve(lsq, data.model, zg)
     excluded = None
     if show_excluded and getattr(data, "loading", None) is not None:
         lz, lf = data.loading.z, data.loading.force
@@ -145,10 +146,7 @@ def plot_force_depth(
         ins.tick_params(labelsize="x-small")
         ins.set_title("near the surface", fontsize="x-small")
         ax.indicate_inset_zoom(ins, edgecolor="0.4")
-    ax.set_xlabel("Depth below posterior-median surface, d [mm]")
-    ax.set_ylabel("Force, F [N]")
-    ax.set_title(_title(result), fontsize="medium")
-    ax.legend(loc="lower right", fontsize="x-small", frameon=False)
+    _decorate(ax, _DEPTH_LABEL, "Force, F [N]", _title(result), "lower right")
     return fig
 
 
@@ -183,11 +181,10 @@ def plot_residuals(
     """
     fig, ax = _fig_ax(ax)
     data = result.data
-    if lsq is None:
-        lsq = getattr(result, "lsq", None)
-    zs = float(np.median(_draws(result, "z_surf")))
+    lsq = _lsq_of(result, lsq)
+    zs = _median(result, "z_surf")
     depth = (zs - data.z) * _MM
-    sigma = float(np.median(_draws(result, "sigma")))
+    sigma = _median(result, "sigma")
     rb = (data.force - _posterior_median_curve(result, data.z)) * _MN
     ax.axhspan(-2 * sigma * _MN, 2 * sigma * _MN, color="0.85", lw=0,
                label=f"±2 sigma (sigma = {sigma * _MN:.3g} mN)")
@@ -195,20 +192,17 @@ def plot_residuals(
             label="Bayes residuals")
     x, m = _binned_mean(depth, rb, bins)
     ax.plot(x, m, color=METHOD_COLORS["bayes"], lw=1.4, label="Bayes, binned mean")
-    if lsq is not None and lsq is not False:
+    if lsq is not None:
         rl = (data.force - _lsq_curve(lsq, data.model, data.z)) * _MN
         x, m = _binned_mean(depth, rl, bins)
         ax.plot(x, m, "--", color=METHOD_COLORS["lsq"], lw=1.4,
                 label="least squares, binned mean")
     ax.axhline(0.0, color="0.3", lw=0.6)
-    ax.set_xlabel("Depth below posterior-median surface, d [mm]")
-    ax.set_ylabel("Residual, F − F_fit [mN]")
-    ax.set_title("Residuals", fontsize="medium")
     # room for the legend below the points: it must not hide residuals
     lo = min(float(np.min(rb)), -2 * sigma * _MN)
     hi = max(float(np.max(rb)), 2 * sigma * _MN)
     span = hi - lo if hi > lo else 1.0
     ax.set_ylim(lo - 0.42 * span, hi + 0.05 * span)
-    ax.legend(loc="lower left", fontsize="x-small", frameon=False, ncol=2,
+    _decorate(ax, _DEPTH_LABEL, "Residual, F − F_fit [mN]", "Residuals", "lower left", ncol=2,
               borderaxespad=0.3)
     return fig

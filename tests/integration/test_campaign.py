@@ -435,7 +435,7 @@ def test_format_handles_missing_ground_truth(compared):
 
 
 def test_compare_fits_the_stiffening_law_when_rest_times_vary(tmp_path, monkeypatch):
-    import palpbayes.stiffening as stiffening
+    import palpbayes.stiffening.fit as stiffening
 
     monkeypatch.setattr(stiffening, "STIFFENING_SETTINGS", SamplerSettings(
         n_walkers=40, max_steps=2000, min_steps=1000, check_every=500, progress=False))

@@ -16,15 +16,13 @@ from palpbayes.groundtruth import (
     PER_FILE_COLUMNS,
     SUMMARY_COLUMNS,
     analyse,
-    collect_tests,
     describe_rule,
     fit_modulus,
     hac_slope_se,
-    read_groundtruth_manifest,
-    scan_inputs,
     sensitivity_windows,
 )
 from palpbayes.io.atomic import write_csv_atomic
+from palpbayes.io.groundtruth_inputs import collect_tests, read_groundtruth_manifest, scan_inputs
 from palpbayes.io.instron import CompressionTest, read_compression_test
 
 #: published_moduli.csv label -> folder / material label of the exports
@@ -322,7 +320,7 @@ def test_sensitivity_windows_and_spread(tmp_path):
 def test_auxiliary_window_failures_do_not_abort_the_analysis(monkeypatch):
     """A sensitivity or plain-convention fit that fails (any package error, e.g. a FitError or
     an InputError about a shifted window past 100 % strain) leaves only its column NaN."""
-    import palpbayes.groundtruth as gt
+    import palpbayes.groundtruth.tables as gt
     from palpbayes.errors import FitError
 
     t, x, f, _ = curve(toe=0.0, noise=0.0)

@@ -9,14 +9,13 @@ import pandas as pd
 import pytest
 
 from palpbayes.errors import DataFileError, InputError
+from palpbayes.io.joint_trace import read_joint_trace, trace_from_joint_frame
 from palpbayes.io.rtde import (
     RTDE_Q_COLUMNS,
     RTDE_TCP_FORCE_COLUMNS,
     RTDE_TCP_POSE_COLUMNS,
-    read_joint_trace,
     read_rtde,
     rotvec_to_matrix,
-    trace_from_joint_frame,
 )
 from palpbayes.kinematics import UR5E, tip_z
 
