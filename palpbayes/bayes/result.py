@@ -149,6 +149,7 @@ class BayesResult:
             "model_ok": all(c.passed for c in self.checks) if self.checks else np.nan,
             "m_free": next((c.statistic for c in self.checks if c.name == "exponent"),
                            np.nan),
+            "engine": self.idata.posterior.attrs.get("engine", "emcee"),
         }
 
     # ----------------------------------------------------------------- predictive

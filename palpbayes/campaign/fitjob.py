@@ -42,6 +42,8 @@ SUMMARY_COLUMNS = [
     # sphere, least squares with the paraboloid (Hertz) law at the sphere's radius on the same
     # points, and (E_hertz − E)/E
     "E_hertz_pa", "E_hertz_rel_diff",
+    # the Bayesian engine: emcee, or the exact quadrature (palpbayes.bayes.exact)
+    "engine",
 ]
 
 
@@ -80,6 +82,9 @@ class FitOptions:
         Base seed; each trace's seed is derived from it and the trace id.
     strict
         Make non-convergence an error.
+    engine
+        Posterior engine of the Bayesian fit: ``"emcee"`` or ``"exact"``
+        (:mod:`palpbayes.bayes.exact`: Gaussian or AR(1) noise only).
     """
 
     method: str = "bayes"
@@ -97,6 +102,7 @@ class FitOptions:
     settings: SamplerSettings = field(default_factory=SamplerSettings)
     seed: int = 0
     strict: bool = False
+    engine: str = "emcee"
 
     def with_progress(self, progress: bool | None) -> FitOptions:
         return replace(self, settings=replace(self.settings, progress=progress))
@@ -284,6 +290,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
                 budget=options.budget,
                 settings=options.settings, seed=seed,
                 strict=options.strict, trace_id=trace.trace_id, lsq=lsq,
+                engine=options.engine,
             )
         rows.append(with_hertz({**bayes.summary_row(), **meta}))
         if posterior_dir is not None:

@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
+from ..bayes.fit import ENGINES
 from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
 from ..campaign import layout
 from ..campaign.fitjob import METHODS, FitOptions
@@ -69,6 +70,10 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                    help="relative force-gain sd of the budget (default 0.01)")
     g.add_argument("--compliance-max", type=float, default=2e-6, metavar="M_PER_N",
                    help="upper bound of the series compliance of the budget [m/N]")
+    g.add_argument("--engine", choices=ENGINES, default="emcee",
+                   help="posterior engine: emcee (every noise model and prior) or exact "
+                        "(quadrature over the surface height with the linear parameters and "
+                        "the noise integrated out; gaussian or ar1 noise; 10-100x faster)")
     g.add_argument("--strict", action="store_true",
                    help="make non-converged or flagged Bayesian fits an error")
     g.add_argument("--max-steps", type=int, default=20000, help="emcee step cap")
@@ -131,6 +136,10 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
         if v is not None and not (math.isfinite(v) and v > 0):
             raise InputError(f"--{name.replace('_', '-')} {v!r} must be a positive force in "
                              "newtons (the sensor's peak-to-peak noise)")
+    if args.engine == "exact" and (args.noise == "student" or args.surface_prior == "soft"):
+        what = ("--noise student" if args.noise == "student" else "--surface-prior soft")
+        raise InputError(f"--engine exact takes --noise gaussian or ar1 and --surface-prior "
+                         f"loading, not {what}: use --engine emcee for it")
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers {args.workers} must be at least 1")
     budget = BudgetSpec(nu_range=budget_nu, radius_tolerance=args.radius_tolerance,
@@ -143,7 +152,7 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
         baseline=args.baseline, tare=args.tare,
         priors=PriorSpec(noise_pp=args.noise_pp, surface=args.surface_prior), budget=budget,
         settings=settings,
-        seed=args.seed, strict=args.strict,
+        seed=args.seed, strict=args.strict, engine=args.engine,
     )
 
 

@@ -1,0 +1,77 @@
+"""``palpbayes fit --engine exact`` and ``palpbayes replay`` from the command line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from palpbayes.campaign import layout
+from palpbayes.cli import main
+from palpbayes.io.trace_csv import write_trace
+from palpbayes.paper import PAPER_TIPS
+from palpbayes.sim import simulate_trace
+
+E_TRUE = 1.25e5
+
+
+@pytest.fixture(scope="module")
+def trace_csv(tmp_path_factory):
+    tr = simulate_trace(E_TRUE, PAPER_TIPS["paraboloid"], thickness=0.03, force_offset=0.05,
+                        rng=17)
+    return write_trace(tr, tmp_path_factory.mktemp("trace") / "para.csv"), tr
+
+
+def test_fit_with_the_exact_engine_writes_a_summary_row_saying_so(trace_csv, tmp_path, capsys):
+    path, _ = trace_csv
+    out = tmp_path / "res"
+    rc = main(["fit", str(path), "--tip", "paraboloid", "--radius", "0.0117", "--out", str(out),
+               "--engine", "exact"])
+    assert rc == 0, capsys.readouterr().err
+    row = pd.read_csv(out / layout.SUMMARY).iloc[0]
+    assert row["engine"] == "exact" and bool(row["converged"])
+    assert row["E_stat_lo_pa"] <= E_TRUE <= row["E_stat_hi_pa"]
+    # the posterior file reloads with its engine
+    assert (out / layout.POSTERIOR_DIR / "para.nc").is_file()
+
+
+def test_exact_engine_refuses_student_noise_on_the_command_line(trace_csv, tmp_path, capsys):
+    path, _ = trace_csv
+    rc = main(["fit", str(path), "--tip", "paraboloid", "--radius", "0.0117", "--out",
+               str(tmp_path / "r"), "--engine", "exact", "--noise", "student"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "--engine exact" in err and "--noise student" in err
+
+
+def test_replay_reports_the_stop_and_writes_its_files(trace_csv, tmp_path, capsys):
+    path, _ = trace_csv
+    out = tmp_path / "replay"
+    rc = main(["replay", str(path), "--tip", "paraboloid", "--radius", "0.0117",
+               "--target", "2%", "--out", str(out), "--truth", str(E_TRUE)])
+    text = capsys.readouterr().out
+    assert rc == 0
+    assert "stop (target precision)" in text and "whole trace" in text and "saved" in text
+    hist = pd.read_csv(out / layout.REPLAY_HISTORY)
+    summary = pd.read_csv(out / layout.REPLAY_SUMMARY).iloc[0]
+    assert (out / layout.REPLAY_FIGURE).stat().st_size > 10_000
+    assert summary["rel_half_width_stop"] <= 0.02
+    assert summary["depth_stop_m"] < summary["depth_final_m"]
+    # the interval narrows as the tip goes deeper
+    w = hist["rel_half_width"].to_numpy()
+    assert w[-1] < w[0] and np.all(np.isfinite(w))
+
+
+@pytest.mark.parametrize("args, message", [
+    ([], "give a stopping rule"),
+    (["--target", "150%"], "between 0 and 100"),
+    (["--target", "two"], "not a fraction"),
+])
+def test_replay_bad_rules_are_refused(trace_csv, capsys, args, message):
+    path, _ = trace_csv
+    argv = ["replay", str(path), "--tip", "paraboloid", "--radius", "0.0117", *args]
+    try:
+        rc = main(argv)
+    except SystemExit as exc:  # argparse refuses the value itself
+        rc = exc.code
+    assert rc == 2
+    assert message in capsys.readouterr().err
