@@ -21,7 +21,7 @@ from .likelihood import TraceLikelihood
 from .priors import PriorSpec, TracePrior
 from .result import BayesResult
 from .sampler import ChainResult, SamplerSettings, run_emcee
-from .start import Mode, find_modes, initial_ensemble
+from .start import Mode, find_modes, initial_ensemble, modes_from_exact
 
 __all__ = ["fit_bayes", "fit_bayes_data", "is_bimodal", "bound_flags", "ENGINES",
            "EXACT_DRAWS"]
@@ -183,9 +183,13 @@ def _log_prob(prior: TracePrior, like: TraceLikelihood):
 
 def _emcee_chains(data: FitData, prior: TracePrior, settings: SamplerSettings, tabulate: bool,
                   init_ss, sampler_ss, trace_id: str):
-    """emcee, its walkers started at every mode of the profile scan."""
+    """emcee, its walkers started at every mode (:mod:`palpbayes.bayes.start`)."""
     names = list(prior.names)
-    modes = find_modes(data, prior)
+    if prior.noise in ("gaussian", "ar1") and prior.spec.surface == "loading":
+        modes = modes_from_exact(exact_posterior(data, prior),
+                                 np.random.default_rng(init_ss.spawn(1)[0]))
+    else:
+        modes = find_modes(data, prior)
     centers = tuple((m.z_surf, float(np.sqrt(m.cov[1, 1]))) for m in modes
                     if np.isfinite(m.cov[1, 1]))
     like = TraceLikelihood(data, prior.noise, tabulate=tabulate, baseline=prior.baseline,

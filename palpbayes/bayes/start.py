@@ -1,4 +1,8 @@
-"""Where the walkers start: every local optimum of a surface-profile scan.
+"""Where the walkers start: every mode of the surface posterior.
+
+For Gaussian and AR(1) noise the modes and their masses come from the exact engine
+(:func:`modes_from_exact`, :mod:`palpbayes.bayes.exact`); otherwise (Student-t noise, the soft
+surface prior) from the profile scan below.
 
 For a trial surface z_s the mean force E*·s(z_s − z) + F0 (+ F1·(z − z_ref)) is linear in
 β = (E*, F0[, F1]), so the least-squares β(z_s) and the residual sum of squares RSS(z_s) have a
@@ -28,7 +32,8 @@ from scipy import optimize
 from ..fitdata import FitData
 from .priors import TracePrior
 
-__all__ = ["Mode", "find_modes", "initial_ensemble", "SCAN_POINTS", "MIN_WEIGHT", "BALL"]
+__all__ = ["Mode", "find_modes", "modes_from_exact", "initial_ensemble", "SCAN_POINTS",
+           "MIN_WEIGHT", "BALL"]
 
 #: Heights of the coarse profile scan over the loading range.
 SCAN_POINTS = 256
@@ -236,6 +241,37 @@ def find_modes(data: FitData, prior: TracePrior, max_drop: float = 20.0) -> list
     modes = [Mode(m.z_surf, m.beta, m.rss, m.loglik, m.cov, m.lag1, float(wi))
              for m, wi in zip(modes, w, strict=True)]
     return sorted(modes, key=lambda m: -m.weight)
+
+
+def modes_from_exact(post, rng: np.random.Generator, n_draws: int = 4000) -> list[Mode]:
+    """Modes of the exact posterior (:class:`palpbayes.bayes.exact.ExactPosterior`), with
+    their exact masses and the mean and covariance of the draws in each one's basin.
+
+    Used instead of :func:`find_modes` for Gaussian and AR(1) noise: the walkers then start
+    at every mode in proportion to its posterior mass, not to a Laplace approximation of it.
+    """
+    found = post.modes()
+    d = post.draws(rng, n_draws)
+    z = d["z_surf"]
+    centres = np.array([m[0] for m in found])
+    owner = np.argmin(np.abs(z[:, None] - centres[None, :]), axis=1)
+    cols = ["E_star", "z_surf", "F0"] + (["F1"] if "F1" in d else [])
+    out = []
+    for k, (_, mass) in enumerate(found):
+        sel = owner == k
+        if sel.sum() < 10:
+            continue
+        X = np.column_stack([d[c][sel] for c in cols])
+        mean = X.mean(axis=0)
+        sigma = float(np.median(d["sigma"][sel]))
+        n = post.post.nu
+        out.append(Mode(z_surf=float(mean[1]), beta=np.r_[mean[0], mean[2:]],
+                        rss=n * sigma**2, loglik=np.nan, cov=np.cov(X, rowvar=False),
+                        lag1=float(np.median(d["phi"][sel])) if "phi" in d else 0.0,
+                        weight=float(mass)))
+    total = sum(m.weight for m in out)
+    return sorted([Mode(m.z_surf, m.beta, m.rss, m.loglik, m.cov, m.lag1, m.weight / total)
+                   for m in out], key=lambda m: -m.weight)
 
 
 def _logdet(cov: np.ndarray) -> float:

@@ -38,12 +38,12 @@ SUMMARY_COLUMNS = [
     # model-adequacy checks (palpbayes.checks): all passed, and the free exponent m of
     # F = k·d^m + baseline (compare with the tip law's); failed checks are named in flags
     "model_ok", "m_free",
+    # the Bayesian engine: emcee, or the exact quadrature (palpbayes.bayes.exact)
+    "engine",
     # tip "sphere" only (a law with a hertz_approximation; else NaN): the paper's choice for a
     # sphere, least squares with the paraboloid (Hertz) law at the sphere's radius on the same
     # points, and (E_hertz − E)/E
     "E_hertz_pa", "E_hertz_rel_diff",
-    # the Bayesian engine: emcee, or the exact quadrature (palpbayes.bayes.exact)
-    "engine",
 ]
 
 
