@@ -8,7 +8,8 @@ submodule ``x`` when one exists, else to the package (its ``__init__``).
 
 Usage::
 
-    python tools/import_graph.py          # print cycles; exit 1 if there are any, else 0
+    python tools/import_graph.py          # print cycles and relative imports of modules that
+                                          # do not exist; exit 1 if there are any, else 0
     python tools/import_graph.py --dot    # Graphviz DOT of module -> module edges, one
                                           # cluster per subpackage
 """
@@ -80,6 +81,27 @@ def graph(root: Path = ROOT) -> dict[str, set[str]]:
     """Module -> set of palpbayes modules it imports."""
     mods = modules(root)
     return {module: imports_of(module, mods) for module in mods}
+
+
+def unresolved(root: Path = ROOT) -> list[str]:
+    """Relative imports (anywhere in a module, functions included) whose module does not exist:
+    ``from .paper import X`` left behind in a module that moved into a subpackage.  Python
+    finds these only when the line runs; this finds them all at once."""
+    mods = modules(root)
+    out = []
+    for module, path in mods.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+        for node in ast.walk(tree):
+            if not (isinstance(node, ast.ImportFrom) and node.level):
+                continue
+            base = package.split(".")
+            if node.level > 1:
+                base = base[: len(base) - (node.level - 1)]
+            stem = ".".join(base + ([node.module] if node.module else []))
+            if stem not in mods:
+                out.append(f"{path.relative_to(root.parent)}:{node.lineno}: no module {stem}")
+    return out
 
 
 def cycles(edges: dict[str, set[str]]) -> list[list[str]]:
@@ -206,9 +228,12 @@ def main(argv: Iterable[str] | None = None) -> int:
     if args.dot:
         sys.stdout.write(dot(edges))
         return 0
+    missing = unresolved()
+    for line in missing:
+        print(f"unresolved relative import: {line}")
     found = cycles(edges)
     n_edges = sum(len(t) for t in edges.values())
-    if not found:
+    if not found and not missing:
         print(f"no import cycles ({len(edges)} modules, {n_edges} edges)")
         return 0
     for component in found:
@@ -216,7 +241,7 @@ def main(argv: Iterable[str] | None = None) -> int:
         for module in component:
             inside = sorted(edges[module] & set(component))
             print(f"  {module} -> {', '.join(inside)}")
-    return 1
+    return 1 if found or missing else 0
 
 
 if __name__ == "__main__":

@@ -22,6 +22,8 @@ Modules, one job each
 :mod:`~palpbayes.campaign.results`
     Reading a results folder back (:func:`load_results`) and one trace's fit
     (:func:`load_fit`, equal to the fit that was saved).
+:mod:`~palpbayes.campaign.reference`
+    What a campaign is compared with: the Instron ground truth and the paper's estimates.
 :mod:`~palpbayes.campaign.compare`, :mod:`~palpbayes.campaign.compare_text`
     Pooling per material × tip (:mod:`palpbayes.pooling`) and the comparison with the ground
     truth and the paper (``palpbayes compare``), and its text table.
@@ -29,8 +31,8 @@ Modules, one job each
     Fit, ground truth and compare in one call (``palpbayes report CAMPAIGN``).
 
 The package's public names are the ``__all__`` of the modules in :data:`API_MODULES`.  They are
-imported on first use (PEP 562), so that importing :mod:`~palpbayes.campaign.layout` alone (as
-lower layers such as :mod:`palpbayes.reference` do) does not load the fitting code.
+imported on first use (PEP 562), so that importing :mod:`~palpbayes.campaign.layout` or
+:mod:`~palpbayes.campaign.reference` alone does not load the fitting code.
 """
 
 from __future__ import annotations

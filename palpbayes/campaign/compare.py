@@ -49,7 +49,7 @@ flat/sphere/paraboloid (:data:`palpbayes.paper.PAPER_ROBOT_ESTIMATES`); ``paper_
 recomputed from the printed E and the paper's Instron means, because the printed sphere errors
 do not follow from the printed values (see that constant's note).
 
-Reference values are read by :mod:`palpbayes.reference`, the per-trace posteriors by
+Reference values are read by :mod:`palpbayes.campaign.reference`, the per-trace posteriors by
 :mod:`palpbayes.pooling.inputs`; the text layout is :mod:`palpbayes.campaign.compare_text`.
 """
 
@@ -73,16 +73,16 @@ from ..io.manifest import tip_from_row
 from ..io.tabular import parse_bool
 from ..pooling.inputs import fitdata_from_posterior, posterior_attrs, read_posterior
 from ..pooling.model import TAU_PRIOR_SD, log_normal_summary, pool_group
-from ..reference import (
+from . import layout
+from .compare_text import format_comparison
+from .fitjob import trace_seed
+from .reference import (
     gt_columns,
     load_groundtruth,
     new_specimen_sd,
     paper_columns,
     paper_estimates,
 )
-from . import layout
-from .compare_text import format_comparison
-from .fitjob import trace_seed
 from .settings import read_settings
 
 __all__ = ["COMPARISON_COLUMNS", "POOLED_COLUMNS", "STIFFENING_MIN_REST_TIMES", "Comparison",

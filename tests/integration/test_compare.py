@@ -16,7 +16,7 @@ from palpbayes.bayes import BudgetSpec
 from palpbayes.bayes.diagnostics import import_arviz
 from palpbayes.campaign.compare import COMPARISON_COLUMNS, _lsq_row, compare_campaign
 from palpbayes.campaign.compare_text import format_comparison
-from palpbayes.reference import gt_columns, new_specimen_sd
+from palpbayes.campaign.reference import gt_columns, new_specimen_sd
 
 Z90 = 1.6448536269514722  # Phi^-1(0.95)
 GT = pd.DataFrame({"material": ["White", "Grey"], "n": [5, 5],

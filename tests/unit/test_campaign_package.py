@@ -34,9 +34,9 @@ def test_pooling_exports_are_its_modules_all():
 
 
 def test_layout_and_reference_import_alone_without_the_fitting_code():
-    """``palpbayes.reference`` (imported by campaign.compare) imports campaign.layout: importing
+    """``campaign.reference`` (imported by campaign.compare) imports campaign.layout: importing
     it first must neither fail nor load the campaign run, the sampler or arviz."""
-    code = ("import sys, palpbayes.reference, palpbayes.campaign.layout\n"
+    code = ("import sys, palpbayes.campaign.reference, palpbayes.campaign.layout\n"
             "heavy = [m for m in ('palpbayes.campaign.run', 'palpbayes.campaign.compare', "
             "'arviz', 'emcee') if m in sys.modules]\n"
             "assert not heavy, heavy\n")
@@ -45,6 +45,7 @@ def test_layout_and_reference_import_alone_without_the_fitting_code():
 
 def test_every_campaign_and_pooling_module_imports_first_in_a_fresh_interpreter():
     mods = [f"palpbayes.campaign.{m}" for m in (*campaign.API_MODULES, "layout", "partial")]
-    mods += ["palpbayes.pooling.model", "palpbayes.pooling.inputs", "palpbayes.reference"]
+    mods += ["palpbayes.pooling.model", "palpbayes.pooling.inputs",
+             "palpbayes.campaign.reference"]
     for mod in mods:
         subprocess.run([sys.executable, "-c", f"import {mod}"], check=True)

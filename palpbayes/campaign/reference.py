@@ -19,9 +19,9 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from .campaign import layout
-from .errors import DataFileError
-from .intervals import LEVEL
+from ..errors import DataFileError
+from ..intervals import LEVEL
+from . import layout
 
 __all__ = ["load_groundtruth", "paper_estimates", "gt_columns", "paper_columns",
            "new_specimen_sd"]
@@ -29,7 +29,7 @@ __all__ = ["load_groundtruth", "paper_estimates", "gt_columns", "paper_columns",
 
 def paper_estimates() -> pd.DataFrame:
     """The paper's robot estimates: ``material, tip, paper_E_pa, paper_sd_pa, paper_err_pct``."""
-    from .paper import PAPER_MATERIALS, PAPER_ROBOT_ESTIMATES
+    from ..paper import PAPER_MATERIALS, PAPER_ROBOT_ESTIMATES
 
     rows = []
     for r in PAPER_ROBOT_ESTIMATES:
@@ -41,7 +41,7 @@ def paper_estimates() -> pd.DataFrame:
 
 
 def _gt_from_file(p: Path) -> pd.DataFrame:
-    from .groundtruth import analyse, summarise
+    from ..groundtruth import analyse, summarise
 
     try:
         cols = {str(c).strip() for c in pd.read_csv(p, nrows=0).columns}
@@ -68,7 +68,7 @@ def load_groundtruth(spec: str | os.PathLike | None, campaign_dir: Path | None
     with :func:`palpbayes.groundtruth.analyse` and its default strain window).  None: the
     ``groundtruth/`` folder of the campaign, if any.  Returns (None, None) when there is none.
     """
-    from .groundtruth import analyse
+    from ..groundtruth import analyse
 
     if spec is not None:
         p = Path(spec)
