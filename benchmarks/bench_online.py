@@ -26,7 +26,7 @@ from palpbayes.bayes import BudgetSpec, PriorSpec, fit_bayes
 from palpbayes.bayes.exact import exact_posterior
 from palpbayes.fitdata import ModelSpec, prepare_trace
 from palpbayes.lsq import fit_lsq
-from palpbayes.online import OnlineEstimator, StoppingRule
+from palpbayes.online import OnlineEstimator, StoppingRule, chunks, run_to_stop
 from palpbayes.sim import simulate_trace
 
 
@@ -57,13 +57,12 @@ def update_times() -> None:
     print(f"{'tip':<11} {'median':>8} {'p95':>8} {'max':>8} {'updates':>8}")
     for kind in TIPS:
         tr = paper_trace(kind)
-        seg = tr.loading_segment()
         times = []
         for rep in range(3):
             est = OnlineEstimator(ModelSpec(TIPS[kind]))
-            for a in range(0, seg.time.size, 100):
+            for t, z, f in chunks(tr, 100):
                 t0 = time.perf_counter()
-                s = est.update(seg.time[a:a + 100], seg.z[a:a + 100], seg.force[a:a + 100])
+                s = est.update(t, z, f)
                 if s.in_contact and rep:
                     times.append(time.perf_counter() - t0)
         t = np.array(times) * 1e3
@@ -81,14 +80,11 @@ def stopped_runs(n: int) -> None:
         tr = simulate_trace(E, tip, thickness=0.025, force_offset=float(rng.normal(0, 0.1)),
                             rng=rng)
         seg = tr.loading_segment()
-        est = OnlineEstimator(ModelSpec(tip, nu=0.3), rule=StoppingRule(target=0.02))
         full_depth = tr.metadata["z_surf_true"] - seg.z.min()
         full_force = seg.force.max() - np.median(seg.force[:100])
-        for a in range(0, seg.time.size, 100):
-            s = est.update(seg.time[a:a + 100], seg.z[a:a + 100], seg.force[a:a + 100])
-            if s.should_stop:
-                stops += 1
-                break
+        s = run_to_stop(tr, OnlineEstimator(ModelSpec(tip, nu=0.3),
+                                            rule=StoppingRule(target=0.02)))
+        stops += s.should_stop
         hits += s.E.lo <= E <= s.E.hi
         depth_saved.append(1 - s.depth / full_depth)
         force_saved.append(1 - s.peak_force / full_force)

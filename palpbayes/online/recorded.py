@@ -21,7 +21,7 @@ from ..fitdata import ModelSpec
 from ..trace import IndentationTrace
 from .estimator import OnlineEstimator, OnlineState, StoppingRule
 
-__all__ = ["ReplayResult", "replay", "HISTORY_COLUMNS"]
+__all__ = ["ReplayResult", "replay", "run_to_stop", "chunks", "HISTORY_COLUMNS"]
 
 #: Columns of :attr:`ReplayResult.history` (one row per update after contact).
 HISTORY_COLUMNS = ("n", "t_s", "z_m", "depth_m", "peak_force_n", "E_pa", "E_lo_pa", "E_hi_pa",
@@ -78,6 +78,29 @@ def _row(s: OnlineState) -> dict:
             "z_surf_sd_m": s.z_surf.sd, "stop": s.stop}
 
 
+def chunks(trace: IndentationTrace, chunk: int):
+    """The loading segment of ``trace`` as (t [s], z [m], F [N]) chunks of ``chunk`` samples,
+    in time order: what a robot would stream."""
+    if chunk < 1:
+        raise InputError(f"chunk = {chunk} samples must be at least 1")
+    seg = trace.loading_segment()
+    for a in range(0, seg.time.size, chunk):
+        b = min(a + chunk, seg.time.size)
+        yield seg.time[a:b], seg.z[a:b], seg.force[a:b]
+
+
+def run_to_stop(trace: IndentationTrace, estimator: OnlineEstimator,
+                chunk: int = 100) -> OnlineState:
+    """Feed ``trace`` to ``estimator`` until its rule fires (or the trace ends); the last
+    state.  The quick form of :func:`replay` for simulation studies of the stopping rule."""
+    state = None
+    for t, z, f in chunks(trace, chunk):
+        state = estimator.update(t, z, f)
+        if state.should_stop:
+            break
+    return state
+
+
 def replay(trace: IndentationTrace, model: ModelSpec | None = None, *,
            rule: StoppingRule | None = None, chunk: int = 100, noise: str = "gaussian",
            noise_pp: float | None = None, f_unc: float | None = None,
@@ -94,15 +117,11 @@ def replay(trace: IndentationTrace, model: ModelSpec | None = None, *,
         if trace.tip is None:
             raise InputError(f"{trace.trace_id}: no tip geometry; give the tip (--tip ...)")
         model = ModelSpec(trace.tip)
-    if chunk < 1:
-        raise InputError(f"chunk = {chunk} samples must be at least 1")
     rule = rule or StoppingRule()
     est = OnlineEstimator(model, noise=noise, noise_pp=noise_pp, f_unc=f_unc, rule=rule)
-    seg = trace.loading_segment()
     rows, at_stop, budget_at_stop = [], None, None
-    for a in range(0, seg.time.size, chunk):
-        b = min(a + chunk, seg.time.size)
-        state = est.update(seg.time[a:b], seg.z[a:b], seg.force[a:b])
+    for t, z, f in chunks(trace, chunk):
+        state = est.update(t, z, f)
         if state.in_contact:
             rows.append(_row(state))
             if at_stop is None and state.should_stop:

@@ -7,16 +7,15 @@ from palpbayes.bayes import PriorSpec
 from palpbayes.bayes.exact import exact_posterior
 from palpbayes.errors import InputError
 from palpbayes.fitdata import ModelSpec, prepare_trace
-from palpbayes.online import OnlineEstimator, StoppingRule, replay
+from palpbayes.online import OnlineEstimator, StoppingRule, chunks, replay, run_to_stop
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.sim import simulate_trace
 
 
 def _feed(est, tr, chunk):
-    seg = tr.loading_segment()
     state = None
-    for a in range(0, seg.time.size, chunk):
-        state = est.update(seg.time[a:a + chunk], seg.z[a:a + chunk], seg.force[a:a + chunk])
+    for t, z, f in chunks(tr, chunk):
+        state = est.update(t, z, f)
     return state
 
 
@@ -111,13 +110,9 @@ def test_intervals_at_the_stop_cover_the_truth():
         E = float(np.exp(rng.uniform(np.log(4e4), np.log(4e5))))
         tr = simulate_trace(E, tip, thickness=0.025, force_offset=float(rng.normal(0, 0.1)),
                             rng=rng)
-        est = OnlineEstimator(ModelSpec(tip, nu=0.3), rule=StoppingRule(target=0.02))
-        seg = tr.loading_segment()
-        for a in range(0, seg.time.size, 100):
-            s = est.update(seg.time[a:a + 100], seg.z[a:a + 100], seg.force[a:a + 100])
-            if s.should_stop:
-                stopped += 1
-                break
+        s = run_to_stop(tr, OnlineEstimator(ModelSpec(tip, nu=0.3),
+                                            rule=StoppingRule(target=0.02)))
+        stopped += s.should_stop
         hits += s.E.lo <= E <= s.E.hi
     assert stopped >= 0.95 * n
     assert 0.86 <= hits / n <= 0.94, hits / n
