@@ -184,6 +184,11 @@ class OnlineEstimator:
                      if self.noise == "ar1" else np.zeros(1))
         self.state: OnlineState | None = None
 
+    @property
+    def baseline_level(self) -> float:
+        """[N] Pre-contact force level read at contact (NaN before contact)."""
+        return float(self._base.level) if self._contact is not None else float("nan")
+
     # ------------------------------------------------------------------ data in
     def _append(self, t, z, f) -> None:
         t, z, f = (np.atleast_1d(np.asarray(a, dtype=float)) for a in (t, z, f))

@@ -21,7 +21,8 @@ from ..fitdata import ModelSpec
 from ..trace import IndentationTrace
 from .estimator import OnlineEstimator, OnlineState, StoppingRule
 
-__all__ = ["ReplayResult", "replay", "run_to_stop", "chunks", "HISTORY_COLUMNS"]
+__all__ = ["ReplayResult", "replay", "run_to_stop", "chunks", "needed_indentation",
+           "HISTORY_COLUMNS", "STUDY_COLUMNS"]
 
 #: Columns of :attr:`ReplayResult.history` (one row per update after contact).
 HISTORY_COLUMNS = ("n", "t_s", "z_m", "depth_m", "peak_force_n", "E_pa", "E_lo_pa", "E_hi_pa",
@@ -69,6 +70,53 @@ class ReplayResult:
                                     if f.peak_force > 0 else np.nan),
             })
         return row
+
+
+#: Columns of :func:`needed_indentation` (one row per trace).
+STUDY_COLUMNS = ("trace_id", "stopped", "reason", "t_stop_s", "depth_stop_m", "depth_full_m",
+                 "peak_force_stop_n", "peak_force_full_n", "E_stop_pa", "E_stop_lo_pa",
+                 "E_stop_hi_pa")
+
+
+def needed_indentation(traces, models, rule: StoppingRule, *, chunk: int = 100,
+                       noise: str = "gaussian") -> pd.DataFrame:
+    """How much of each recorded indentation the stopping rule needed.
+
+    Parameters
+    ----------
+    traces
+        Recorded traces.
+    models
+        One :class:`~palpbayes.fitdata.ModelSpec` per trace.
+    rule
+        The stopping rule.
+    chunk, noise
+        As :func:`replay`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        :data:`STUDY_COLUMNS`: where the rule fired (depth below the surface estimated then
+        [m], peak force above the baseline [N], E with its interval [Pa]) against the whole
+        recording (its deepest point below that surface, its peak force); a trace on which
+        the rule never fired has ``stopped = False`` and its last state.
+    """
+    rows = []
+    for trace, model in zip(traces, models, strict=True):
+        est = OnlineEstimator(model, noise=noise, rule=rule)
+        s = run_to_stop(trace, est, chunk)
+        seg = trace.loading_segment()
+        row = dict.fromkeys(STUDY_COLUMNS, np.nan)
+        row.update(trace_id=trace.trace_id, stopped=bool(s is not None and s.should_stop),
+                   reason="" if s is None else s.stop)
+        if s is not None and s.in_contact:
+            row.update(t_stop_s=s.t, depth_stop_m=s.depth,
+                       depth_full_m=s.z_surf.median - float(seg.z.min()),
+                       peak_force_stop_n=s.peak_force,
+                       peak_force_full_n=float(seg.force.max()) - est.baseline_level,
+                       E_stop_pa=s.E.median, E_stop_lo_pa=s.E.lo, E_stop_hi_pa=s.E.hi)
+        rows.append(row)
+    return pd.DataFrame(rows, columns=list(STUDY_COLUMNS))
 
 
 def _row(s: OnlineState) -> dict:

@@ -22,7 +22,10 @@
 7. the stiffening law E(t) vs rest time (:mod:`palpbayes.stiffening`) for every material × tip
    whose palpations have at least :data:`STIFFENING_MIN_REST_TIMES` distinct rest times, and
    ``stiffening.csv`` when present;
-8. methods: models, priors, noise model, least squares, the sampler's stopping rule (numbers
+8. "How much indentation did we need?": every trace whose file can be read, replayed through
+   the online estimator (:mod:`palpbayes.online`) with a ±2 % precision target; the median
+   depth and peak force at the stop per material × tip, against the recorded indentation;
+9. methods: models, priors, noise model, least squares, the sampler's stopping rule (numbers
    from ``settings.json``), pooling (:data:`palpbayes.pooling.POOLING_SETTINGS`, tau prior from
    ``pooled.csv``), ground-truth window.
 

@@ -18,6 +18,7 @@ from .pages_budget import _pages_budget
 from .pages_diagnostics import _page_diagnostics
 from .pages_group import _page_group
 from .pages_methods import _pages_methods
+from .pages_online import _pages_online
 from .pages_stiffening import _page_stiffening, _pages_stiffening_table, _stiffening_groups
 from .pages_summary import _pages_comparison, _pages_summary
 from .pages_title import _page_title
@@ -105,6 +106,7 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     pages += _pages_budget(res)
     pages += [_page_stiffening(res, m, t, seed) for m, t in _stiffening_groups(res)]
     pages += _pages_stiffening_table(res)
+    pages += _pages_online(res)
     pages += _pages_methods(res)
     footer = (f"palpbayes {__version__} · campaign {res.name} · {created} · results "
               f"{_shown(res.path)}")

@@ -577,3 +577,26 @@ def test_diagnostics_page_counts_failed_model_checks(fitted):
             assert f"{bad} of {len(ran)} {label} fits" in line, line
     res.summary = s.drop(columns=["model_ok"])
     assert "not run" in _model_check_line(res)
+
+
+def test_indentation_page_replays_every_trace_file(fitted, tmp_path):
+    """"How much indentation did we need?": each trace of the campaign replayed with a ±2 %
+    target stops well before the end of its recording, and the page is in the report; a
+    results folder whose trace files are gone gets no such page (and no error)."""
+    from palpbayes.report.pages_online import _pages_online, indentation_study
+
+    out, _, _ = fitted
+    res = load_results(out)
+    study = indentation_study(res)
+    assert len(study) == 4 and study["stopped"].all()
+    assert set(study["material"]) == {"White", "Pink"} and set(study["tip"]) == {"sphere"}
+    assert (study["depth_stop_m"] < 0.5 * study["depth_full_m"]).all()
+    assert (study["peak_force_stop_n"] < study["peak_force_full_n"]).all()
+    # the intervals at the stop are within the target
+    half = (study["E_stop_hi_pa"] - study["E_stop_lo_pa"]) / (2 * study["E_stop_pa"])
+    assert (half <= 0.02).all()
+    info = build_report(res, tmp_path / "r.pdf")
+    assert "How much indentation did we need?" in info.titles
+    moved = res.traces.assign(file=str(tmp_path / "gone.csv"))
+    gone = ResultsFolder(**{**res.__dict__, "traces": moved})
+    assert _pages_online(gone) == []
