@@ -22,9 +22,14 @@ noise e, iid or stationary AR(1) with lag-one correlation phi.  Given z_s (and p
   and β | z_s, phi, data is multivariate Student-t with nu degrees of freedom, centre b̂ and
   scale matrix (S/nu)·A⁻¹; tau² | z_s, phi, data is S/chi²_nu;
 * the emcee model's log-uniform prior on E* (bounded) is a factor 1{lo < E* < hi}/E* on top of
-  the flat one: an importance weight on the draws (:meth:`ExactPosterior.draws`) and, for the
-  node weights and E* quantiles, the exact integral of that factor against each node's
-  Student-t (:func:`palpbayes.bayes.mixture.tilted_mixture`).
+  the flat one: exact in the E* marginal (integrated on a grid against each node's Student-t,
+  :func:`palpbayes.bayes.mixture.tilted_mixture`) and in the draws (truncated proposals with
+  importance weights, :meth:`ExactPosterior.draws`); the surface marginal and the modes use the
+  truncation mass and a first-order 1/E* factor per node (:meth:`ExactPosterior.prior_factor`),
+  exact to O((sd/E*)²);
+* the noise prior is Jeffreys' (emcee's is log-normal around the noise spec) and the offset
+  prior is conditional on sigma: with thousands of samples both differences are far below the
+  Monte Carlo error (tested against emcee).
 
 The surface height is integrated on an adaptive grid (:func:`refine_grid`): a coarse grid over
 the prior's support, then every interval whose log density changes by more than
@@ -44,11 +49,12 @@ from scipy import special, stats
 from ..errors import InputError
 from ..fitdata import FitData
 from ..intervals import LEVEL
+from ..units import format_length, format_pressure
 from .conjugate import Gram, NodePosterior, gram, node_posterior
 from .mixture import NORMAL_NU, MixtureSummary, tilted_mixture
 from .priors import TracePrior
 
-__all__ = ["ExactPosterior", "exact_posterior", "refine_grid", "cell_widths",
+__all__ = ["ExactPosterior", "exact_posterior", "refine_grid", "cell_widths", "phi_grid",
            "log_marginal_phi", "COARSE_NODES",
            "MAX_STEP", "KEEP", "PHI_NODES"]
 
@@ -61,6 +67,8 @@ MAX_STEP = 0.5
 KEEP = 14.0
 #: Nodes of the first phi grid (AR(1) only), uniform on the prior's support.
 PHI_NODES = 41
+#: Proposals per returned draw in :meth:`ExactPosterior.draws` (importance resampling).
+PROPOSALS = 8
 #: Most surface nodes in all (refinement stops there and says so).
 MAX_NODES = 6000
 
@@ -175,14 +183,20 @@ class ExactPosterior:
             if self.post.nu > NORMAL_NU:
                 mass = _log_normal_mass(a, b)
             else:
-                mass = np.log(np.clip(stats.t.cdf(b, self.post.nu) - stats.t.cdf(a, self.post.nu),
-                                      1e-300, None))
+                nu = self.post.nu  # upper tail by the survival function (no cancellation)
+                p = np.where(a > 0, stats.t.sf(a, nu) - stats.t.sf(b, nu),
+                             stats.t.cdf(b, nu) - stats.t.cdf(a, nu))
+                mass = np.log(np.clip(p, 1e-300, None))
             tilt = -np.log(np.clip(mu, lo, hi))
         return np.where(np.isfinite(mass), mass + tilt, -np.inf)
 
     def modes(self) -> list[tuple[float, float]]:
         """Local maxima of the surface marginal [m] with the mass of their basins (between the
         neighbouring minima), largest mass first; basins under 1e-6 of the mass are left out."""
+        return [(z, m) for z, m, _, _ in self.basins()]
+
+    def basins(self) -> list[tuple[float, float, float, float]]:
+        """(peak [m], mass, lower edge [m], upper edge [m]) of each basin of :meth:`modes`."""
         adj = self.prior_factor()
         w = np.exp(_logsumexp(self.log_mass + adj, axis=1) - np.max(self.log_mass + adj))
         w /= w.sum()
@@ -197,7 +211,9 @@ class ExactPosterior:
                  else i + int(np.argmin(dens[i:peaks[k + 1] + 1])))
             mass = float(w[a:b].sum())
             if mass >= 1e-6:
-                out.append((float(self.z[i]), mass))
+                lo_edge = -np.inf if k == 0 else float(self.z[a])
+                hi_edge = np.inf if k == len(peaks) - 1 else float(self.z[b])
+                out.append((float(self.z[i]), mass, lo_edge, hi_edge))
         return sorted(out, key=lambda m: -m[1])
 
     def z_summary(self, level: float = LEVEL) -> MixtureSummary:
@@ -213,16 +229,17 @@ class ExactPosterior:
         return MixtureSummary(mean, sd, float(q[1]), float(q[0]), float(q[2]), level)
 
     def draws(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
-        """``n`` independent posterior draws under the emcee model's priors.
+        """``n`` posterior draws under the priors of the module docstring.
 
         A (phi node, surface interval) pair is drawn by its mass, z_s within the interval from
         the log-linear interpolation of the density between its two nodes, and the conditional
         centre and scale are interpolated linearly there; then tau² and β from their
         conditionals under the flat E* prior.  The log-uniform E* prior is applied by sampling
-        importance resampling from 2·n proposals: E* is drawn from its conditional normal
-        truncated to the prior range (the others given E*), with weights P(range)/E*.
+        importance resampling from :data:`PROPOSALS`·n proposals: E* is drawn from its
+        conditional normal truncated to the prior range (the others given E*), with weights
+        P(range)/E*.
         """
-        m = 2 * n
+        m = PROPOSALS * n
         adj = self.prior_factor()
         lp = self.post.logp + adj
         lp = np.where(np.isfinite(lp), lp, -np.inf)
@@ -246,9 +263,12 @@ class ExactPosterior:
             t = np.where(np.abs(d) < 1e-8, v, np.log1p(v * np.expm1(d)) / d)
         t = np.clip(np.nan_to_num(t, nan=0.5), 0.0, 1.0)
         z = self.z[gi] + t * dz[gi, 0]
-        phi = self.phi[hj]
-        if self.phi.size > 1:
-            phi = phi + (rng.random(m) - 0.5) * cell_widths(self.phi)[hj]
+        phi_node = self.phi[hj]
+        phi = phi_node
+        if self.phi.size > 1:  # uniform within the node's trapezoid cell, inside the prior
+            left = np.r_[0.0, np.diff(self.phi)][hj] / 2
+            right = np.r_[np.diff(self.phi), 0.0][hj] / 2
+            phi = phi_node - left + rng.random(m) * (left + right)
         lerp = lambda x: (1 - t)[(...,) + (None,) * (x.ndim - 2)] * x[gi, hj] + (  # noqa: E731
             t[(...,) + (None,) * (x.ndim - 2)] * x[gi + 1, hj])
         centre, cov, S = lerp(self.post.beta), lerp(self.post.scale), lerp(self.post.S)
@@ -271,18 +291,26 @@ class ExactPosterior:
         # conditional lies inside the range) times the log-uniform prior's 1/E*
         log_w = _log_normal_mass(a, b) - np.log(estar) - lerp(adj)
         if not np.isfinite(log_w).any():
-            raise InputError("exact engine: the posterior of E* has no mass inside its prior "
-                             "range; the force does not rise with depth")
+            raise InputError(f"exact engine: the posterior of E* has no mass inside its prior "
+                             f"range [{format_pressure(lo)}, {format_pressure(hi)}]; the "
+                             "force does not rise with depth there: check units and sign, or "
+                             "widen the E* prior (PriorSpec.Estar_bounds)")
         w = np.exp(log_w - np.max(log_w[np.isfinite(log_w)]))
         w = np.where(np.isfinite(w), w, 0.0)
         pick = rng.choice(m, size=n, p=w / w.sum())
         out = {"E_star": estar[pick], "z_surf": z[pick],
-               "sigma": tau[pick] / np.sqrt(1.0 - phi[pick] ** 2), "F0": beta[pick, 1]}
+               "sigma": tau[pick] / np.sqrt(1.0 - phi_node[pick] ** 2), "F0": beta[pick, 1]}
         if beta.shape[1] > 2:
             out["F1"] = beta[pick, 2]
         if self.phi.size > 1:
             out["phi"] = phi[pick]
         return out
+
+
+def phi_grid(bounds: tuple[float, float], n: int = PHI_NODES) -> np.ndarray:
+    """The first phi nodes: uniform on the prior's support, both bounds included (the
+    trapezoid cells then cover the whole prior)."""
+    return np.linspace(bounds[0], bounds[1], n)
 
 
 def _phi_nodes(values: np.ndarray, logp_phi: np.ndarray, bounds) -> np.ndarray:
@@ -319,8 +347,7 @@ def exact_posterior(data: FitData, prior: TracePrior) -> ExactPosterior:
     weights = (prior.sigma_center / np.array([prior.f0_sd] + ([prior.f1_sd] if linear
                                                                 else []))) ** 2
     centers = np.zeros(weights.size)
-    phi = (np.linspace(*prior.spec.phi_bounds, PHI_NODES + 2)[1:-1] if ar1
-           else np.zeros(1))
+    phi = phi_grid(prior.spec.phi_bounds) if ar1 else np.zeros(1)
     grams: list[Gram] = []
 
     def evaluate(nodes: np.ndarray) -> np.ndarray:
@@ -340,6 +367,11 @@ def exact_posterior(data: FitData, prior: TracePrior) -> ExactPosterior:
         lp_phi = _logsumexp(post.logp + np.log(zw)[:, None], axis=0)
         phi = _phi_nodes(phi, lp_phi, prior.spec.phi_bounds)
     post = node_posterior(g, phi, weights, centers)
+    if not np.isfinite(post.logp).any():
+        raise InputError(
+            f"exact engine: no surface height in [{format_length(lo)}, {format_length(hi)}] "
+            f"has {post.beta.shape[-1] + 1} or more samples in contact with a positive "
+            "residual; the trace has (almost) no contact: check the recording and its units")
     post.beta[..., 1] += prior.f0_center
     log_cell = (post.logp + np.log(cell_widths(g.z))[:, None]
                 + np.log(cell_widths(phi))[None, :])

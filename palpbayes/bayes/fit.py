@@ -9,7 +9,7 @@ import numpy as np
 
 from .. import __version__
 from ..checks import check_fit
-from ..errors import ConvergenceError, ConvergenceWarning, FitError, InputError
+from ..errors import ConvergenceError, ConvergenceWarning, FitError, InputError, PalpbayesError
 from ..fitdata import FitData, ModelSpec, prepare_trace
 from ..lsq import LSQResult, fit_lsq_data
 from ..trace import IndentationTrace
@@ -185,10 +185,15 @@ def _emcee_chains(data: FitData, prior: TracePrior, settings: SamplerSettings, t
                   init_ss, sampler_ss, trace_id: str):
     """emcee, its walkers started at every mode (:mod:`palpbayes.bayes.start`)."""
     names = list(prior.names)
+    modes = None
     if prior.noise in ("gaussian", "ar1") and prior.spec.surface == "loading":
-        modes = modes_from_exact(exact_posterior(data, prior),
-                                 np.random.default_rng(init_ss.spawn(1)[0]))
-    else:
+        try:
+            modes = modes_from_exact(exact_posterior(data, prior),
+                                     np.random.default_rng(init_ss.spawn(1)[0])) or None
+        except (PalpbayesError, ValueError, np.linalg.LinAlgError) as exc:
+            warnings.warn(f"{trace_id}: the exact engine could not place the walkers ({exc}); "
+                          "starting from the profile scan", RuntimeWarning, stacklevel=3)
+    if modes is None:
         modes = find_modes(data, prior)
     centers = tuple((m.z_surf, float(np.sqrt(m.cov[1, 1]))) for m in modes
                     if np.isfinite(m.cov[1, 1]))

@@ -31,6 +31,8 @@ __all__ = ["MixtureSummary", "tilted_mixture", "GRID", "SPAN", "TAIL", "NORMAL_N
 GRID = 512
 #: Half-width of the grid around each node, in that node's scales.
 SPAN = 12.0
+#: Points of the local grid around each node holding >= 1e-4 of the mass.
+LOCAL = 65
 #: Mass left out with the smallest nodes.
 TAIL = 1e-9
 #: Degrees of freedom above which the normal density stands in for Student-t.
@@ -69,6 +71,31 @@ def _t_logpdf(x: np.ndarray, nu: float) -> np.ndarray:
             - 0.5 * (nu + 1) * np.log1p(x * x / nu))
 
 
+def _grid(w: np.ndarray, mu: np.ndarray, scale: np.ndarray, lo: float, hi: float
+          ) -> np.ndarray:
+    """E* points: :data:`GRID` uniform points over the nodes holding all but 1e-6 of the mass,
+    plus :data:`LOCAL` points over ±SPAN scales of every distinct node holding >= 1e-4 of it,
+    so that a remote minor node cannot leave the main peak unresolved."""
+    order = np.argsort(w)
+    main = order[np.cumsum(w[order]) >= 1e-6 * w.sum()]
+    a = max(lo, float(np.min(mu[main] - SPAN * scale[main])))
+    b = min(hi, float(np.max(mu[main] + SPAN * scale[main])))
+    if a >= hi:  # every node beyond the upper bound: the mass piles up below it
+        a = max(lo, hi - SPAN * float(np.max(scale)))
+    if b <= lo:
+        b = min(hi, lo + SPAN * float(np.max(scale)))
+    parts = [np.linspace(a, b, GRID)]
+    leaders: list[int] = []
+    for i in order[::-1]:
+        if w[i] < 1e-4 * w.sum() or len(leaders) >= 16:
+            break
+        if all(abs(mu[i] - mu[j]) > 2 * scale[j] for j in leaders):
+            leaders.append(i)
+            parts.append(np.linspace(max(lo, mu[i] - SPAN * scale[i]),
+                                     min(hi, mu[i] + SPAN * scale[i]), LOCAL))
+    return np.unique(np.concatenate(parts))
+
+
 def tilted_mixture(log_w: np.ndarray, mu: np.ndarray, scale: np.ndarray, nu: float,
                    bounds: tuple[float, float], level: float = LEVEL,
                    tilt: bool = True) -> MixtureSummary:
@@ -100,13 +127,7 @@ def tilted_mixture(log_w: np.ndarray, mu: np.ndarray, scale: np.ndarray, nu: flo
     keep = np.setdiff1d(np.arange(w.size), small)
     w, mu, scale = w[keep], mu[keep], scale[keep]
     lo, hi = bounds
-    a = max(lo, float(np.min(mu - SPAN * scale)))
-    b = min(hi, float(np.max(mu + SPAN * scale)))
-    if a >= hi:  # every node beyond the upper bound: the mass piles up below it
-        a = max(lo, hi - SPAN * float(np.max(scale)))
-    if b <= lo:
-        b = min(hi, lo + SPAN * float(np.max(scale)))
-    x = np.linspace(a, b, GRID)
+    x = _grid(w, mu, scale, lo, hi)
     dens = (w[:, None] / scale[:, None]
             * np.exp(_t_logpdf((x[None, :] - mu[:, None]) / scale[:, None], nu))).sum(0)
     if tilt:

@@ -250,14 +250,15 @@ def modes_from_exact(post, rng: np.random.Generator, n_draws: int = 4000) -> lis
     Used instead of :func:`find_modes` for Gaussian and AR(1) noise: the walkers then start
     at every mode in proportion to its posterior mass, not to a Laplace approximation of it.
     """
-    found = post.modes()
+    found = post.basins()
     d = post.draws(rng, n_draws)
     z = d["z_surf"]
-    centres = np.array([m[0] for m in found])
-    owner = np.argmin(np.abs(z[:, None] - centres[None, :]), axis=1)
+    owner = np.full(z.size, -1)
+    for k, (_, _, lo, hi) in enumerate(found):  # each draw to the basin it lies in
+        owner[(z >= lo) & (z < hi)] = k
     cols = ["E_star", "z_surf", "F0"] + (["F1"] if "F1" in d else [])
     out = []
-    for k, (_, mass) in enumerate(found):
+    for k, (_, mass, _, _) in enumerate(found):
         sel = owner == k
         if sel.sum() < 10:
             continue

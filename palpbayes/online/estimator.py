@@ -33,10 +33,10 @@ from ..bayes.budget import BudgetSpec, propagate
 from ..bayes.conjugate import Gram, fixed_columns, node_posterior
 from ..bayes.exact import (
     COARSE_NODES,
-    PHI_NODES,
     ExactPosterior,
     cell_widths,
     log_marginal_phi,
+    phi_grid,
     refine_grid,
 )
 from ..bayes.mixture import MixtureSummary
@@ -144,7 +144,8 @@ class OnlineEstimator:
     model
         Contact model (tip, nu, optional finite-thickness correction).
     noise
-        ``"gaussian"`` or ``"ar1"`` (phi on a fixed grid of :data:`PHI_NODES` nodes).
+        ``"gaussian"`` or ``"ar1"`` (phi on a fixed grid with the prior's bounds,
+        :func:`palpbayes.bayes.exact.phi_grid`; not refined online, flagged at its ends).
     noise_pp
         [N] Sensor peak-to-peak noise; None: 6 sd of the pre-contact baseline.
     f_unc
@@ -169,6 +170,17 @@ class OnlineEstimator:
     persist: int = 5
 
     def __post_init__(self) -> None:
+        for name in ("noise_pp", "f_unc"):
+            v = getattr(self, name)
+            if v is not None and not (math.isfinite(v) and v > 0):
+                raise InputError(f"online estimation: {name} = {v!r} must be a positive force "
+                                 "in newtons (the sensor's peak-to-peak noise), or None to "
+                                 "read it from the baseline")
+        if not (isinstance(self.persist, int) and self.persist >= 1):
+            raise InputError(f"online estimation: persist = {self.persist!r} must be a whole "
+                             "number of samples >= 1")
+        if not 0 < self.level < 1:
+            raise InputError(f"online estimation: level = {self.level!r} must lie in (0, 1)")
         if self.noise not in ("gaussian", "ar1"):
             raise InputError(f"online estimation takes noise 'gaussian' or 'ar1', not "
                              f"{self.noise!r}")
@@ -180,8 +192,7 @@ class OnlineEstimator:
         self._gram: Gram | None = None
         self._active: np.ndarray | None = None
         self._logp: np.ndarray | None = None
-        self._phi = (np.linspace(*self.priors.phi_bounds, PHI_NODES + 2)[1:-1]
-                     if self.noise == "ar1" else np.zeros(1))
+        self._phi = phi_grid(self.priors.phi_bounds) if self.noise == "ar1" else np.zeros(1)
         self.state: OnlineState | None = None
 
     @property
@@ -324,9 +335,15 @@ class OnlineEstimator:
 
     def _make_state(self) -> OnlineState:
         n = self._n
+        if n == 0:  # an empty first chunk
+            return OnlineState(0, float("nan"), float("nan"), False, 0, 0.0, 0.0, None, None, "")
         t, z = float(self._t[n - 1]), float(self._z[n - 1])
         if self._contact is None:
             return OnlineState(n, t, z, False, 0, 0.0, 0.0, None, None, "")
+        peak = float(np.max(self._f[:n] - self._base.level))
+        if not np.isfinite(self._post.logp).any():  # no surface has enough samples in contact
+            return OnlineState(n, t, z, True, n - self._contact, 0.0, peak, None, None, "",
+                               ("no surface height has enough samples in contact yet",))
         post = self.posterior()
         estar = post.estar_summary(self.level)
         zs = post.z_summary(self.level)
@@ -337,7 +354,11 @@ class OnlineEstimator:
             flags.append("z_surf posterior at the lower end of the online surface prior")
         if not post.complete:
             flags.append("surface grid refinement cut short")
-        peak = float(np.max(self._f[:n] - self._base.level))
+        if self._phi.size > 1:
+            w_phi = np.exp(post.log_mass - post.log_mass.max()).sum(axis=0)
+            if w_phi[[0, -1]].max() > 0.5 * w_phi.sum():
+                flags.append("noise correlation phi at the end of its grid: the residuals wander "
+                             "like drift, or the noise is correlated beyond the prior's ±0.99")
         partial = OnlineState(n, t, z, True, n - self._contact, max(zs.median - z, 0.0),
                               peak, E, zs, "", tuple(flags))
         return OnlineState(**{**partial.__dict__, "stop": self.rule.reason(partial)})

@@ -16,7 +16,7 @@ import pandas as pd
 
 from ..bayes.budget import BudgetSpec
 from ..bayes.mixture import MixtureSummary
-from ..errors import InputError
+from ..errors import InputError, PalpbayesError
 from ..fitdata import ModelSpec
 from ..trace import IndentationTrace
 from .estimator import OnlineEstimator, OnlineState, StoppingRule
@@ -99,17 +99,23 @@ def needed_indentation(traces, models, rule: StoppingRule, *, chunk: int = 100,
         :data:`STUDY_COLUMNS`: where the rule fired (depth below the surface estimated then
         [m], peak force above the baseline [N], E with its interval [Pa]) against the whole
         recording (its deepest point below that surface, its peak force); a trace on which
-        the rule never fired has ``stopped = False`` and its last state.
+        the rule never fired has ``stopped = False`` and its last state; one that could not be
+        replayed (no approach, no contact) has the error in ``reason``.
     """
     rows = []
     for trace, model in zip(traces, models, strict=True):
         est = OnlineEstimator(model, noise=noise, rule=rule)
-        s = run_to_stop(trace, est, chunk)
-        seg = trace.loading_segment()
         row = dict.fromkeys(STUDY_COLUMNS, np.nan)
+        try:
+            s = run_to_stop(trace, est, chunk)
+            seg = trace.loading_segment()
+        except PalpbayesError as exc:  # one unusable recording does not stop the study
+            row.update(trace_id=trace.trace_id, stopped=False, reason=f"error: {exc}")
+            rows.append(row)
+            continue
         row.update(trace_id=trace.trace_id, stopped=bool(s is not None and s.should_stop),
                    reason="" if s is None else s.stop)
-        if s is not None and s.in_contact:
+        if s is not None and s.in_contact and s.E is not None:
             row.update(t_stop_s=s.t, depth_stop_m=s.depth,
                        depth_full_m=s.z_surf.median - float(seg.z.min()),
                        peak_force_stop_n=s.peak_force,

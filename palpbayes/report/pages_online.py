@@ -17,7 +17,7 @@ from .format import _wrap
 from .layout import _Page, _text_lines
 from .tables import _chunks, _continued, _draw_table
 
-__all__ = ["REPLAY_TARGET", "indentation_study"]
+__all__ = ["REPLAY_TARGET", "indentation_study", "online_noise"]
 
 #: Relative half-width of the 90 % interval of E at which the replay stops (±2 %).
 REPLAY_TARGET = 0.02
@@ -46,8 +46,16 @@ def indentation_study(res: ResultsFolder, target: float = REPLAY_TARGET) -> pd.D
         meta.append({"material": str(row.get("material", "")), "tip": trace.tip.kind})
     if not traces:
         return pd.DataFrame()
-    study = needed_indentation(traces, models, StoppingRule(target=target))
+    study = needed_indentation(traces, models, StoppingRule(target=target),
+                               noise=online_noise(opts))
     return pd.concat([pd.DataFrame(meta), study], axis=1)
+
+
+def online_noise(options: dict) -> str:
+    """The campaign's noise model when the online estimator has it (gaussian, ar1), else
+    gaussian (Student-t noise is emcee's alone)."""
+    noise = str(options.get("noise", "gaussian"))
+    return noise if noise in ("gaussian", "ar1") else "gaussian"
 
 
 def _group_table(study: pd.DataFrame) -> pd.DataFrame:
@@ -77,7 +85,7 @@ def _pages_online(res: ResultsFolder, target: float = REPLAY_TARGET) -> list[_Pa
     n_stop = int(study["stopped"].sum())
     text = (f"Each recorded trace replayed as if live (palpbayes.online, chunks of 100 samples), "
             f"stopped when the 90 % interval of E is within ±{100 * target:g} % (statistical, "
-            f"exact posterior): {n_stop} of {len(study)} traces reached it. Medians per "
+            f"exact posterior, {online_noise(res.options)} noise): {n_stop} of {len(study)} traces reached it. Medians per "
             "material and tip: the depth below the estimated surface and the peak force above "
             "the baseline at the stop, and their fractions of the recorded indentation. "
             "One trace: palpbayes replay TRACE --tip ... --target 2% --out DIR.")
