@@ -85,7 +85,8 @@ def _pages_online(res: ResultsFolder, target: float = REPLAY_TARGET) -> list[_Pa
     n_stop = int(study["stopped"].sum())
     text = (f"Each recorded trace replayed as if live (palpbayes.online, chunks of 100 samples), "
             f"stopped when the 90 % interval of E is within ±{100 * target:g} % (statistical, "
-            f"exact posterior, {online_noise(res.options)} noise): {n_stop} of {len(study)} traces reached it. Medians per "
+            f"exact posterior, {online_noise(res.options)} noise): {n_stop} of {len(study)} "
+            "traces reached it. Medians per "
             "material and tip: the depth below the estimated surface and the peak force above "
             "the baseline at the stop, and their fractions of the recorded indentation. "
             "One trace: palpbayes replay TRACE --tip ... --target 2% --out DIR.")
