@@ -45,6 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import special, stats
+from scipy.special import logsumexp
 
 from ..errors import InputError
 from ..fitdata import FitData
@@ -55,6 +56,7 @@ from .mixture import NORMAL_NU, MixtureSummary, tilted_mixture
 from .priors import TracePrior
 
 __all__ = ["ExactPosterior", "exact_posterior", "refine_grid", "cell_widths", "phi_grid",
+           "node_log_mass",
            "log_marginal_phi", "COARSE_NODES",
            "MAX_STEP", "KEEP", "PHI_NODES"]
 
@@ -198,7 +200,7 @@ class ExactPosterior:
     def basins(self) -> list[tuple[float, float, float, float]]:
         """(peak [m], mass, lower edge [m], upper edge [m]) of each basin of :meth:`modes`."""
         adj = self.prior_factor()
-        w = np.exp(_logsumexp(self.log_mass + adj, axis=1) - np.max(self.log_mass + adj))
+        w = np.exp(logsumexp(self.log_mass + adj, axis=1) - np.max(self.log_mass + adj))
         w /= w.sum()
         dens = w / cell_widths(self.z)
         peaks = [i for i in range(dens.size)
@@ -220,7 +222,7 @@ class ExactPosterior:
         """Marginal of z_surf [m]: mean, sd and the equal-tailed interval from the node masses
         with the E* prior's factor (:meth:`prior_factor`)."""
         lm = self.log_mass + self.prior_factor()
-        w = np.exp(_logsumexp(lm - np.max(lm), axis=1))
+        w = np.exp(logsumexp(lm - np.max(lm), axis=1))
         w /= w.sum()
         mean = float(w @ self.z)
         sd = float(np.sqrt(max(w @ (self.z - mean) ** 2, 0.0)))
@@ -364,7 +366,7 @@ def exact_posterior(data: FitData, prior: TracePrior) -> ExactPosterior:
     if ar1:  # a finer phi grid around its marginal, then the nodes again
         post = node_posterior(g, phi, weights, centers)
         zw = cell_widths(g.z)
-        lp_phi = _logsumexp(post.logp + np.log(zw)[:, None], axis=0)
+        lp_phi = logsumexp(post.logp + np.log(zw)[:, None], axis=0)
         phi = _phi_nodes(phi, lp_phi, prior.spec.phi_bounds)
     post = node_posterior(g, phi, weights, centers)
     if not np.isfinite(post.logp).any():
@@ -373,24 +375,20 @@ def exact_posterior(data: FitData, prior: TracePrior) -> ExactPosterior:
             f"has {post.beta.shape[-1] + 1} or more samples in contact with a positive "
             "residual; the trace has (almost) no contact: check the recording and its units")
     post.beta[..., 1] += prior.f0_center
-    log_cell = (post.logp + np.log(cell_widths(g.z))[:, None]
-                + np.log(cell_widths(phi))[None, :])
-    log_mass = log_cell - _logsumexp(log_cell.ravel())
-    return ExactPosterior(z=g.z, phi=phi, post=post, log_mass=log_mass, complete=complete,
+    return ExactPosterior(z=g.z, phi=phi, post=post, log_mass=node_log_mass(post.logp, g.z, phi),
+                          complete=complete,
                           prior=prior)
 
 
-def _logsumexp(x: np.ndarray, axis=None) -> np.ndarray:
-    m = np.max(x, axis=axis, keepdims=True)
-    m = np.where(np.isfinite(m), m, 0.0)
-    with np.errstate(divide="ignore"):
-        out = np.log(np.sum(np.exp(x - m), axis=axis, keepdims=True)) + m
-    return np.squeeze(out, axis=axis) if axis is not None else float(out.squeeze())
+def node_log_mass(logp: np.ndarray, z: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """Normalised log mass (G, H) of each node's trapezoid cell from its log density."""
+    log_cell = logp + np.log(cell_widths(z))[:, None] + np.log(cell_widths(phi))[None, :]
+    return log_cell - logsumexp(log_cell)
 
 
 def log_marginal_phi(lp: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """log ∫ p(z, phi) dphi on the phi nodes (the value itself for iid noise)."""
     if phi.size == 1:
         return lp[:, 0]
-    return _logsumexp(lp + np.log(cell_widths(phi))[None, :], axis=1)
+    return logsumexp(lp + np.log(cell_widths(phi))[None, :], axis=1)
 

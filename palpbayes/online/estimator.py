@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -34,8 +34,8 @@ from ..bayes.conjugate import Gram, fixed_columns, node_posterior
 from ..bayes.exact import (
     COARSE_NODES,
     ExactPosterior,
-    cell_widths,
     log_marginal_phi,
+    node_log_mass,
     phi_grid,
     refine_grid,
 )
@@ -43,7 +43,7 @@ from ..bayes.mixture import MixtureSummary
 from ..bayes.priors import PriorSpec, TracePrior, param_names
 from ..errors import InputError
 from ..fitdata import ModelSpec
-from ..intervals import LEVEL
+from ..intervals import LEVEL, central
 from ..noise import sigma_from_pp
 
 __all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE"]
@@ -191,7 +191,6 @@ class OnlineEstimator:
         self._contact: int | None = None
         self._gram: Gram | None = None
         self._active: np.ndarray | None = None
-        self._logp: np.ndarray | None = None
         self._phi = phi_grid(self.priors.phi_bounds) if self.noise == "ar1" else np.zeros(1)
         self.state: OnlineState | None = None
 
@@ -296,20 +295,20 @@ class OnlineEstimator:
         g = self._gram_active()
         post = self._node_posterior(g)
         lp = log_marginal_phi(post.logp, self._phi)
-        nodes, lp, self._complete = refine_grid(self._z_lo, self._z_top, evaluate,
-                                                start=(g.z, lp))
+        _, _, self._complete = refine_grid(self._z_lo, self._z_top, evaluate,
+                                           start=(g.z, lp))
         for other in added:
             g = g.concat(other)
         self._gram = g
         if added:
             post = self._node_posterior(g)
         self._post = post
-        self._logp = log_marginal_phi(post.logp, self._phi)
-        best = np.max(self._logp)
+        lp = log_marginal_phi(post.logp, self._phi)
+        best = np.max(lp)
         # the first coarse nodes always stay, so refinement can reach any part of the range
         keep = np.isin(g.z, self._skeleton)
         if np.isfinite(best):
-            keep |= self._logp > best - PRUNE
+            keep |= lp > best - PRUNE
         self._active = np.flatnonzero(keep)
 
     def posterior(self) -> ExactPosterior:
@@ -320,17 +319,13 @@ class OnlineEstimator:
         post = copy.copy(self._post)
         post.beta = post.beta.copy()
         post.beta[..., 1] += self._base.level
-        log_cell = (post.logp + np.log(cell_widths(g.z))[:, None]
-                    + np.log(cell_widths(self._phi))[None, :])
-        finite = log_cell[np.isfinite(log_cell)]
-        top = finite.max() if finite.size else 0.0
-        log_mass = log_cell - (np.log(np.exp(log_cell - top).sum()) + top)
         prior = TracePrior(spec=self.priors, names=tuple(param_names(self.noise)),
                            noise=self.noise, baseline="constant",
                            z_bounds=(self._z_lo, self._z_top), sigma_center=self._sigma_c,
                            f0_center=self._base.level, f0_sd=self._f_unc, f1_sd=np.nan,
                            z_ref=self._z_top, f_unc=self._f_unc, data=None)
-        return ExactPosterior(z=g.z, phi=self._phi, post=post, log_mass=log_mass,
+        return ExactPosterior(z=g.z, phi=self._phi, post=post,
+                              log_mass=node_log_mass(post.logp, g.z, self._phi),
                               complete=self._complete, prior=prior)
 
     def _make_state(self) -> OnlineState:
@@ -361,7 +356,7 @@ class OnlineEstimator:
                              "like drift, or the noise is correlated beyond the prior's ±0.99")
         partial = OnlineState(n, t, z, True, n - self._contact, max(zs.median - z, 0.0),
                               peak, E, zs, "", tuple(flags))
-        return OnlineState(**{**partial.__dict__, "stop": self.rule.reason(partial)})
+        return replace(partial, stop=self.rule.reason(partial))
 
     def budget_interval(self, budget: BudgetSpec | None = None, n_draws: int = 4000,
                         seed: int = 0) -> MixtureSummary:
@@ -375,6 +370,6 @@ class OnlineEstimator:
         bud = propagate(d["E_star"], seen, float(np.median(d["z_surf"])),
                         budget or BudgetSpec(), rng)
         E = bud.E
-        lo, med, hi = np.quantile(E, [(1 - self.level) / 2, 0.5, (1 + self.level) / 2])
-        return MixtureSummary(float(E.mean()), float(E.std()), float(med), float(lo),
-                              float(hi), self.level)
+        lo, hi = central(E, self.level)
+        return MixtureSummary(float(E.mean()), float(E.std()), float(np.median(E)), lo, hi,
+                              self.level)
