@@ -22,7 +22,8 @@ from ..lsq import LSQResult, fit_lsq_data
 from ..trace import IndentationTrace
 from .layout import posterior_file
 
-__all__ = ["FitOptions", "FitOutcome", "fit_trace", "check_fittable", "SUMMARY_COLUMNS", "METHODS"]
+__all__ = ["FitOptions", "FitOutcome", "fit_trace", "check_fittable", "trace_model",
+           "SUMMARY_COLUMNS", "METHODS"]
 
 METHODS = ("bayes", "lsq", "both")
 
@@ -124,6 +125,34 @@ def trace_seed(base: int, trace_id: str) -> int:
     return int(np.random.SeedSequence([int(base), *words.tolist()]).generate_state(1)[0])
 
 
+def trace_model(trace: IndentationTrace, *, nu: float, thickness_correction: bool,
+                bonded: bool) -> ModelSpec:
+    """The contact model a fit of ``trace`` uses: its tip (checked for plausibility), the
+    run's ``nu`` unless the manifest row gives its own (``trace.metadata["nu"]``), and its
+    thickness when the finite-thickness correction is on.
+
+    Raises
+    ------
+    GeometryError
+        No tip, an implausible tip size, or the correction without a thickness.
+    """
+    src = trace.source or trace.trace_id
+    tip = trace.tip
+    if tip is None:
+        raise GeometryError(f"{src}: no tip geometry; give --tip and its size")
+    try:
+        check_tip_plausible(tip)
+    except GeometryError as exc:
+        raise GeometryError(f"{src}: {exc}") from None
+    thickness = trace.thickness if thickness_correction else None
+    if thickness_correction and thickness is None:
+        raise GeometryError(f"{src}: the thickness correction needs the specimen "
+                            "thickness (--thickness or the manifest's thickness_m)")
+    # a manifest's per-row nu (trace.metadata["nu"]) overrides the run's option
+    nu = trace.metadata.get("nu", nu)
+    return ModelSpec(tip, nu=nu, thickness=thickness, bonded=bonded)
+
+
 def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     """The trace's prepared fit data; raises the :class:`InputError` a fit would raise.
 
@@ -154,20 +183,9 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
         As :func:`palpbayes.fitdata.prepare`.
     """
     src = trace.source or trace.trace_id
-    tip = trace.tip
-    if tip is None:
-        raise GeometryError(f"{src}: no tip geometry; give --tip and its size")
-    try:
-        check_tip_plausible(tip)
-    except GeometryError as exc:
-        raise GeometryError(f"{src}: {exc}") from None
-    thickness = trace.thickness if options.thickness_correction else None
-    if options.thickness_correction and thickness is None:
-        raise GeometryError(f"{src}: the thickness correction needs the specimen "
-                            "thickness (--thickness or the manifest's thickness_m)")
-    # a manifest's per-row nu (trace.metadata["nu"]) overrides the run's option
-    nu = trace.metadata.get("nu", options.nu)
-    model = ModelSpec(tip, nu=nu, thickness=thickness, bonded=options.bonded)
+    model = trace_model(trace, nu=options.nu, thickness_correction=options.thickness_correction,
+                        bonded=options.bonded)
+    tip = model.tip
     data = prepare(trace, model, f_unc=options.f_unc, fit_fraction=options.fit_fraction,
                    max_depth=options.max_depth, tare=options.tare)
 

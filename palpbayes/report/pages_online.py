@@ -7,9 +7,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from ..campaign.fitjob import trace_model
 from ..campaign.results import ResultsFolder
 from ..errors import PalpbayesError
-from ..fitdata import ModelSpec
 from ..io.manifest import load_trace
 from ..online import StoppingRule, needed_indentation
 from ..units import format_force, format_length
@@ -30,19 +30,17 @@ def indentation_study(res: ResultsFolder, target: float = REPLAY_TARGET) -> pd.D
     if res.traces is None or "file" not in res.traces:
         return pd.DataFrame()
     opts = res.options
-    nu = float(opts.get("nu", 0.3) or 0.3)
     traces, models, meta = [], [], []
     for _, row in res.traces.iterrows():
-        try:
+        try:  # the model the fit used (tip, the row's or the run's nu, thickness)
             trace = load_trace(row, **res.settings.get("read_options", {}))
+            model = trace_model(trace, nu=float(opts.get("nu", 0.3)),
+                                thickness_correction=bool(opts.get("thickness_correction")),
+                                bonded=bool(opts.get("bonded", True)))
         except (PalpbayesError, OSError):
             continue
-        if trace.tip is None:
-            continue
-        thick = trace.thickness if opts.get("thickness_correction") else None
         traces.append(trace)
-        models.append(ModelSpec(trace.tip, nu=nu, thickness=thick,
-                                bonded=bool(opts.get("bonded", True))))
+        models.append(model)
         meta.append({"material": str(row.get("material", "")), "tip": trace.tip.kind})
     if not traces:
         return pd.DataFrame()
