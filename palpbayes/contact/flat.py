@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..units import format_length
-from .registry import ContactLaw, Tip, register
+from .registry import ContactLaw, register, scale_radius
 from .thickness import hayes_tip_factor
 
 __all__ = ["EXPONENT", "LAW", "prefactor", "shape"]
@@ -50,7 +50,7 @@ LAW = register(ContactLaw(
     summary="Flat punch of radius a: F = 2·a·E*·d.",
     describe=lambda tip: f"flat a={format_length(tip.radius, 6)}",
     order=10,
-    scaled=lambda tip, factor: Tip("flat", radius=tip.radius * factor),
+    scaled=scale_radius,
     thickness_factor=hayes_tip_factor,
     default_fit_fraction=0.2,  # the paper's: the start of a flat punch's contact is not linear
 ))

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..units import format_length
-from .registry import ContactLaw, Tip, register
+from .registry import ContactLaw, register, scale_radius
 from .thickness import dimitriadis_tip_factor
 
 __all__ = ["EXPONENT", "LAW", "prefactor", "shape"]
@@ -50,7 +50,7 @@ LAW = register(ContactLaw(
     summary="Paraboloid (Hertz) of radius R: F = (4/3)·E*·sqrt(R)·d^(3/2).",
     describe=lambda tip: f"paraboloid R={format_length(tip.radius, 6)}",
     order=30,
-    scaled=lambda tip, factor: Tip("paraboloid", radius=tip.radius * factor),
+    scaled=scale_radius,
     thickness_factor=dimitriadis_tip_factor,
     max_depth=lambda tip: tip.radius,
     max_depth_name="tip radius",

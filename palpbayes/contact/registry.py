@@ -16,6 +16,7 @@ still being imported when the law registers).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -25,7 +26,7 @@ from ..errors import GeometryError
 from .parameters import TIP_PARAMETERS
 
 __all__ = ["Tip", "ContactLaw", "register", "unregister", "get_law", "registered_kinds",
-           "registered_laws"]
+           "registered_laws", "scale_radius"]
 
 
 @dataclass(frozen=True)
@@ -239,3 +240,9 @@ class Tip:
         """
         scaled = get_law(self).scaled
         return self if scaled is None else scaled(self, factor)
+
+
+def scale_radius(tip: Tip, factor: float) -> Tip:
+    """``tip`` with its radius multiplied by ``factor``: the ``scaled`` of every law whose only
+    length is the radius (flat, sphere, paraboloid)."""
+    return dataclasses.replace(tip, radius=tip.radius * factor)

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..units import format_length
 from . import paraboloid
-from .registry import ContactLaw, Tip, register
+from .registry import ContactLaw, Tip, register, scale_radius
 from .thickness import dimitriadis_tip_factor
 
 __all__ = ["LAW", "contact_radius", "hertz_difference", "shape"]
@@ -117,7 +117,7 @@ LAW = register(ContactLaw(
              "is reported beside the Sneddon fits as E_hertz)."),
     describe=lambda tip: f"sphere R={format_length(tip.radius, 6)}",
     order=20,
-    scaled=lambda tip, factor: Tip("sphere", radius=tip.radius * factor),
+    scaled=scale_radius,
     # Dimitriadis' series is derived for the paraboloid; applied with chi = sqrt(R·d)/h
     thickness_factor=dimitriadis_tip_factor,
     max_depth=lambda tip: tip.radius,
