@@ -19,7 +19,8 @@ Columns (SI units; file paths relative to the manifest's folder):
 
 The tip-size columns are those of :data:`palpbayes.contact.TIP_PARAMETERS` (a tip kind reads the
 ones its law needs, :func:`palpbayes.contact.get_law`).  Optional: ``nu`` (Poisson ratio for
-that row).  A manifest is recognised by its ``file`` and ``tip`` columns.
+that row) and ``x_m``, ``y_m`` (lateral position of the palpation [m], for stiffness maps).
+A manifest is recognised by its ``file`` and ``tip`` columns.
 
 :func:`read_manifest` validates every row before any trace is read: ``trace_id``, ``file``,
 ``material`` and ``tip`` must not be empty, the numeric columns (:data:`NUMERIC_COLUMNS`) must
@@ -70,6 +71,8 @@ NUMERIC_COLUMNS = {
     "repetition": ("a whole number", "1", True),
     "rest_time_s": ("seconds", "60", False),
     "nu": ("-", "0.3", False),
+    "x_m": ("metres", "0.012", False),
+    "y_m": ("metres", "0.012", False),
 }
 
 

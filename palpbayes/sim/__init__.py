@@ -1,7 +1,7 @@
 """The simulator: synthetic palpation traces, compression tests and campaigns from a known truth.
 
-One module per job, imports flowing one way (``campaign`` -> ``series``/``compression`` ->
-``trace`` -> ``force``):
+One module per job, imports flowing one way (``map`` -> ``campaign``/``inclusion``;
+``campaign`` -> ``series``/``compression`` -> ``trace`` -> ``force``):
 
 * :mod:`~palpbayes.sim.force` -- the noise-free contact force and its physics knobs (strain
   stiffening, gradual onset, finite thickness, series compliance);
@@ -9,7 +9,11 @@ One module per job, imports flowing one way (``campaign`` -> ``series``/``compre
   registration and encoder errors, with the truth in its metadata;
 * :mod:`~palpbayes.sim.compression` -- an Instron compression test and its export file;
 * :mod:`~palpbayes.sim.series` -- repeated palpation with rest-time stiffening;
-* :mod:`~palpbayes.sim.campaign` -- a whole campaign folder with its truth tables.
+* :mod:`~palpbayes.sim.campaign` -- a whole campaign folder with its truth tables;
+* :mod:`~palpbayes.sim.inclusion` -- the apparent modulus over a buried stiff sphere (Reuss
+  average over the Boussinesq stress under the tip);
+* :mod:`~palpbayes.sim.sensitivity_table` -- its fast interpolation table (for the lump model);
+* :mod:`~palpbayes.sim.map` -- a stiffness-map phantom folder: a grid of palpations over it.
 
 The paper's numbers the simulator reproduces live in :mod:`palpbayes.paper`, the peak-to-peak
 noise convention in :mod:`palpbayes.noise` (both are shared with the fitting side).
@@ -22,10 +26,13 @@ noise convention in :mod:`palpbayes.noise` (both are shared with the fitting sid
 
 from __future__ import annotations
 
-from . import campaign, compression, force, series, trace
+from . import campaign, compression, force, inclusion, map, sensitivity_table, series, trace
 from .campaign import *  # noqa: F403
 from .compression import *  # noqa: F403
 from .force import *  # noqa: F403
+from .inclusion import *  # noqa: F403
+from .map import *  # noqa: F403
+from .sensitivity_table import *  # noqa: F403
 from .series import *  # noqa: F403
 from .trace import *  # noqa: F403
 
@@ -36,3 +43,6 @@ __all__ += trace.__all__
 __all__ += compression.__all__
 __all__ += series.__all__
 __all__ += campaign.__all__
+__all__ += inclusion.__all__
+__all__ += map.__all__
+__all__ += sensitivity_table.__all__
