@@ -350,6 +350,10 @@ def read_bag(
             z_pose = z_pose + _quat_z_row(pose.values[:, 1:]) @ offset
     inside, z = _align(force, pose, z_pose, max_gap, source)
     t_ns, raw = force.t_ns[inside], force.values[inside]
+    if not np.any(raw):
+        raise DataFileError(source, f"force topic {ft.topic!r}: wrench.force.{force_axis} is 0 "
+                            "in every message", "choose the axis along the indentation with "
+                            "--force-axis x|y|z")
     if sign == "auto":
         sign = auto_force_sign(z, raw)
     kwargs, free = split_trace_metadata(metadata, {

@@ -111,6 +111,8 @@ def test_force_axis_and_explicit_sign(sim, tmp_path):
     np.testing.assert_array_equal(got.force, sim.force)
     with pytest.raises(DataFileError, match=r"flip the sign: --force-sign \+1"):
         read_bag(tmp_path / "b", force_axis="x", force_sign=-1)
+    with pytest.raises(DataFileError, match=r"wrench.force.z is 0 in every message"):
+        read_bag(tmp_path / "b")
 
 
 def test_misaligned_clocks_name_the_offset_and_time_offset_fixes_them(sim, tmp_path):
