@@ -27,7 +27,7 @@ def write_afm_h5(path: Path, traces: Sequence[IndentationTrace],
     """One curve per trace: its time, force and ``height (measured)`` = z - force/k (so that the
     tip position is z), all in the approach segment; ``position x/y`` [m] when given."""
     import h5py
-    from afmformats.mod_force_distance import AFMForceDistance
+    from afmformats import AFMForceDistance
 
     with h5py.File(path, "w") as h5:
         for i, t in enumerate(traces):
