@@ -14,6 +14,7 @@ __all__ = [
     "PalpbayesError",
     "InputError",
     "DataFileError",
+    "MissingExtraError",
     "GeometryError",
     "NoContactError",
     "FitError",
@@ -53,6 +54,11 @@ class DataFileError(InputError):
         if fix:
             msg += f" ({fix})"
         super().__init__(msg)
+
+
+class MissingExtraError(InputError):
+    """Reading a file needs an optional extra that is not installed (``pip install
+    'palpbayes[afm]'``, ``'palpbayes[ros]'``); the message says which."""
 
 
 class GeometryError(InputError):

@@ -18,7 +18,7 @@ from ..errors import InputError
 from ..io.manifest import MANIFEST_COLUMNS, load_trace, read_manifest, tip_columns
 from ..trace import IndentationTrace
 
-__all__ = ["load_source", "traces_table"]
+__all__ = ["load_source", "traces_table", "POSITION_COLUMNS"]
 
 
 def load_source(source: str | os.PathLike | Sequence[IndentationTrace],
@@ -74,9 +74,20 @@ def load_source(source: str | os.PathLike | Sequence[IndentationTrace],
     return traces, path
 
 
+#: Where on the sample a trace was taken [m] (AFM force maps), added to ``traces.csv`` when
+#: some trace has it in its metadata.
+POSITION_COLUMNS = ("x_m", "y_m")
+
+
 def traces_table(traces: Sequence[IndentationTrace]) -> pd.DataFrame:
-    """``traces.csv``: the geometry and labels of every trace, in the manifest's columns."""
-    return pd.DataFrame([_geometry_row(t) for t in traces], columns=MANIFEST_COLUMNS)
+    """``traces.csv``: the geometry and labels of every trace, in the manifest's columns, and
+    its position ``x_m, y_m`` [m] when a trace has one (the curves of an AFM force map)."""
+    columns = list(MANIFEST_COLUMNS)
+    if any(c in t.metadata for t in traces for c in POSITION_COLUMNS):
+        columns += POSITION_COLUMNS
+    rows = [{**_geometry_row(t), **{c: t.metadata.get(c, np.nan) for c in POSITION_COLUMNS}}
+            for t in traces]
+    return pd.DataFrame(rows, columns=columns)
 
 
 def _geometry_row(t: IndentationTrace) -> dict:

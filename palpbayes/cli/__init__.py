@@ -17,7 +17,7 @@ from ..errors import InputError, PalpbayesError
 __all__ = ["main", "build_parser", "SUBCOMMANDS"]
 
 #: Subcommand modules, in the order ``--help`` lists them.
-SUBCOMMANDS = ("simulate", "fit", "groundtruth", "compare", "report", "replay")
+SUBCOMMANDS = ("simulate", "fit", "groundtruth", "compare", "report", "replay", "inspect")
 
 
 class _Parser(argparse.ArgumentParser):

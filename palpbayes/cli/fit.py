@@ -23,7 +23,8 @@ from ..io.manifest import is_manifest
 from ..units import format_pressure
 
 __all__ = ["register", "run", "add_model_options", "add_trace_options", "options_from_args",
-           "trace_from_args", "read_options_from_args"]
+           "trace_from_args", "traces_from_args", "read_options_from_args",
+           "recording_options_from_args"]
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:
@@ -85,11 +86,14 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "fit", help="fit E to a trace CSV or a campaign manifest",
-        description="Fit the elastic modulus of one trace or of every trace of a manifest. "
-        "Writes DIR/summary.csv (one row per trace x method) and DIR/posterior/<id>.nc.",
+        "fit", help="fit E to a trace CSV, ROS 2 bag, AFM file or campaign manifest",
+        description="Fit the elastic modulus of one trace, of every curve of an AFM force map "
+        "or of every trace of a manifest. Writes DIR/summary.csv (one row per trace x method) "
+        "and DIR/posterior/<id>.nc.",
     )
-    p.add_argument("input", metavar="INPUT", help="trace CSV or campaign manifest CSV")
+    p.add_argument("input", metavar="INPUT",
+                   help="trace CSV, ROS 2 bag (folder, .mcap, .db3), AFM file (.jpk-force, "
+                        ".jpk-force-map, .ibw, ...) or campaign manifest CSV")
     p.add_argument("--out", required=True, metavar="DIR", help="results folder")
     p.add_argument("--force", action="store_true", help="overwrite an existing results folder")
     p.add_argument("--resume", action="store_true",
@@ -111,10 +115,27 @@ def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -
     for q, unit in (("time", "s"), ("z", "m"), ("force", "N")):
         c.add_argument(f"--{q}-column", metavar="NAME", help=f"column holding {q}")
         c.add_argument(f"--{q}-unit", metavar="UNIT", help=f"unit of {q} (default {unit})")
-    c.add_argument("--force-sign", type=float, choices=(1.0, -1.0), default=1.0,
-                   help="-1 if pressing gives negative force")
+    c.add_argument("--force-sign", type=float, choices=(1.0, -1.0), default=None,
+                   help="-1 if pressing gives negative force (default +1; for a ROS 2 bag the "
+                        "sign that makes the force grow as the tip goes down)")
     c.add_argument("--z-sign", type=float, choices=(1.0, -1.0), default=1.0,
                    help="-1 if z is down-positive")
+    r = p.add_argument_group("ROS 2 bags and AFM files (palpbayes inspect FILE lists what is in "
+                             "one)")
+    r.add_argument("--force-topic", metavar="TOPIC",
+                   help="geometry_msgs/WrenchStamped topic (default: the bag's only one)")
+    r.add_argument("--pose-topic", metavar="TOPIC",
+                   help="geometry_msgs/PoseStamped tip pose or sensor_msgs/JointState topic "
+                        "(UR3e kinematics; default: the bag's only one)")
+    r.add_argument("--force-axis", choices=("x", "y", "z"), default=None,
+                   help="wrench force component along the indentation (default z)")
+    r.add_argument("--time-offset", type=float, metavar="S", default=None,
+                   help="seconds added to the pose stamps (clocks that differ; default 0)")
+    r.add_argument("--tool-offset", type=float, metavar="M", default=None,
+                   help="sensor + tip length along the flange z axis for a JointState "
+                        "topic, or an extra offset of a PoseStamped tip [m] (default 0)")
+    r.add_argument("--curve", type=int, action="append", metavar="I", dest="curves",
+                   help="fit only curve I of an AFM force map (repeatable; default all)")
 
 
 def options_from_args(args: argparse.Namespace) -> FitOptions:
@@ -168,7 +189,7 @@ def read_options_from_args(args: argparse.Namespace) -> dict:
         opts["columns"] = columns
     if units:
         opts["units"] = units
-    if args.force_sign != 1.0:
+    if args.force_sign not in (None, 1.0):
         opts["force_sign"] = args.force_sign
     if args.z_sign != 1.0:
         opts["z_sign"] = args.z_sign
@@ -180,10 +201,24 @@ def _dest(option: str) -> str:
     return option.lstrip("-").replace("-", "_")
 
 
-def trace_from_args(args: argparse.Namespace):
-    """Read the single trace named by ``args.input`` with the tip and column options."""
-    from ..io.trace_csv import read_trace
+#: Reader option (= argparse attribute) -> its flag, of the options for bags and AFM files.
+_RECORDING_FLAGS = {"force_topic": "--force-topic", "pose_topic": "--pose-topic",
+                    "force_axis": "--force-axis", "time_offset": "--time-offset",
+                    "tool_offset": "--tool-offset", "curves": "--curve"}
 
+
+def recording_options_from_args(args: argparse.Namespace) -> dict:
+    """Reader options of a ROS 2 bag or AFM file from the arguments (only those given)."""
+    opts = {key: getattr(args, key) for key in _RECORDING_FLAGS
+            if getattr(args, key, None) is not None}
+    if args.force_sign is not None:
+        opts["force_sign"] = args.force_sign
+    if args.z_sign != 1.0:
+        opts["z_sign"] = args.z_sign
+    return opts
+
+
+def _tip_from_args(args: argparse.Namespace) -> Tip:
     if args.tip is None:
         sizes = ", ".join(f"{p.option} {p.metavar}" if p.metavar else p.option
                           for p in TIP_PARAMETERS.values())
@@ -194,17 +229,54 @@ def trace_from_args(args: argparse.Namespace):
     for p in TIP_PARAMETERS.values():  # in the option's unit (degrees for the half-angle)
         value = getattr(args, _dest(p.option))
         sizes[p.name] = None if value is None else p.from_user(value)
-    tip = Tip(args.tip, **sizes)
-    return read_trace(args.input, tip=tip, thickness=args.thickness, material=args.material,
-                      **read_options_from_args(args))
+    return Tip(args.tip, **sizes)
+
+
+def traces_from_args(args: argparse.Namespace) -> list:
+    """Read the recording named by ``args.input`` (trace CSV, ROS 2 bag or AFM file, the
+    reader chosen by :func:`palpbayes.io.recording.recording_kind`) with the tip, column,
+    sign and recording options; one trace, or one per curve of an AFM force map."""
+    from ..io.recording import KIND_NAMES, read_recording, recording_kind
+
+    tip = _tip_from_args(args)
+    kind = recording_kind(args.input)
+    if kind == "table":
+        bag_or_afm = recording_options_from_args(args)
+        extra = sorted(set(bag_or_afm) - {"force_sign", "z_sign"})
+        if extra:
+            raise InputError(f"{args.input} is {KIND_NAMES[kind]}: "
+                             f"{_RECORDING_FLAGS[extra[0]]} applies to ROS 2 bags and AFM "
+                             "files only")
+        opts = read_options_from_args(args)
+    else:
+        if any(getattr(args, f"{q}_{w}") for q in ("time", "z", "force")
+               for w in ("column", "unit")):
+            raise InputError(f"{args.input} is {KIND_NAMES[kind]}: --*-column and --*-unit "
+                             "apply to text tables only (the file names its own columns)")
+        opts = recording_options_from_args(args)
+    return read_recording(args.input, tip=tip, thickness=args.thickness,
+                          material=args.material, **opts)
+
+
+def trace_from_args(args: argparse.Namespace):
+    """The single trace named by ``args.input`` (:func:`traces_from_args`); an AFM force map
+    must be narrowed to one curve with ``--curve I``."""
+    traces = traces_from_args(args)
+    if len(traces) != 1:
+        raise InputError(f"{args.input} holds {len(traces)} curves; pick one with --curve I "
+                         f"(0 to {len(traces) - 1})")
+    return traces[0]
 
 
 def _check_input_path(path: Path) -> None:
-    """INPUT must be an existing file; a folder gets its own message (and the manifest in it)."""
-    if path.is_dir():
+    """INPUT must be an existing file or bag folder; another folder gets its own message."""
+    from ..io.bagfile import is_bag
+
+    if path.is_dir() and not is_bag(path):
         manifest = path / "manifest.csv"
         fix = (f"did you mean {manifest}?" if manifest.is_file() else
-               "give a trace CSV or a campaign manifest CSV")
+               "give a trace CSV, a ROS 2 bag folder (with metadata.yaml), an AFM file or a "
+               "campaign manifest CSV")
         raise DataFileError(path, "is a folder, not a file", fix)
     if not path.exists():
         raise DataFileError(path, "file not found", "check the path")
@@ -217,10 +289,14 @@ def run(args: argparse.Namespace) -> int:
     path = Path(args.input)
     _check_input_path(path)
     read_options = read_options_from_args(args)
-    if is_manifest(path):  # the column/unit/sign options apply to every trace of the manifest
+    if path.is_file() and is_manifest(path):  # column/unit/sign options apply to every trace
+        given = [f for k, f in _RECORDING_FLAGS.items() if getattr(args, k) is not None]
+        if given:
+            raise InputError(f"{path} is a manifest of trace CSVs: {given[0]} applies to a ROS "
+                             "2 bag or AFM file given as INPUT")
         source, manifest_options = path, read_options
     else:
-        source, manifest_options = [trace_from_args(args)], None
+        source, manifest_options = traces_from_args(args), None
     if args.progress is not None:
         options = options.with_progress(args.progress)
     summary = fit_campaign(source, args.out, options, workers=args.workers, resume=args.resume,

@@ -47,6 +47,7 @@ from ..errors import DataFileError, InputError
 from ..kinematics import UR3E, DHParameters, _as_offset, tip_z
 from ..trace import IndentationTrace
 from .tabular import (
+    auto_force_sign,
     check_force_sign,
     check_plausible,
     numeric_column,
@@ -111,15 +112,6 @@ def _require(df: pd.DataFrame, columns: list[str], source: str, fix: str) -> Non
             f"missing column{'s' if len(missing) > 1 else ''} {shown}; the file has {have}",
             fix,
         )
-
-
-def _auto_sign(z: np.ndarray, raw_force: np.ndarray) -> float:
-    """+1 or -1: the sign making the force larger at the deepest point than at the start."""
-    end = int(np.argmin(z)) + 1
-    f = raw_force[:end] if end >= 3 else raw_force
-    head = np.median(f[: max(1, f.size // 10)])
-    tail = np.median(f[int(0.9 * f.size):])
-    return 1.0 if tail >= head else -1.0
 
 
 # ---------------------------------------------------------------------------------- RTDE
@@ -234,7 +226,7 @@ def read_rtde(
                                   for c in RTDE_TCP_POSE_COLUMNS[3:]])
             z = z + rotvec_to_matrix(rv)[:, 2, :] @ offset
     if sign == "auto":
-        sign = _auto_sign(z, raw_force)
+        sign = auto_force_sign(z, raw_force)
 
     kwargs, free = split_trace_metadata(metadata, {
         "reader": "rtde",

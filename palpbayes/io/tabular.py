@@ -25,7 +25,8 @@ from ..units import format_force, format_length
 
 __all__ = ["SEPARATORS", "WHITESPACE", "sniff_delimiter", "is_decimal_comma", "numeric_column",
            "check_force_sign", "check_plausible", "parse_bool", "MAX_Z_SPAN_M", "MAX_FORCE_N",
-           "check_file", "read_table", "split_trace_metadata", "validate_force_sign"]
+           "check_file", "read_table", "split_trace_metadata", "validate_force_sign",
+           "auto_force_sign"]
 
 #: Plausibility limits: a palpation moves the tip by less than this [m] ...
 MAX_Z_SPAN_M = 0.5
@@ -224,3 +225,13 @@ def validate_force_sign(force_sign: float | str, allow_auto: bool) -> float | st
         allowed = "+1, -1 or 'auto'" if allow_auto else "+1 or -1"
         raise InputError(f"force_sign must be {allowed}, got {force_sign!r}")
     return float(force_sign)
+
+
+def auto_force_sign(z: np.ndarray, raw_force: np.ndarray) -> float:
+    """+1 or -1: the sign making the force larger at the deepest point (lowest z [m]) than at
+    the start (median of the first and last tenth of the loading samples) [N]."""
+    end = int(np.argmin(z)) + 1
+    f = raw_force[:end] if end >= 3 else raw_force
+    head = np.median(f[: max(1, f.size // 10)])
+    tail = np.median(f[int(0.9 * f.size):])
+    return 1.0 if tail >= head else -1.0

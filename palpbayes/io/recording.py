@@ -1,0 +1,86 @@
+"""One entry point for every recording palpbayes reads: the reader is chosen from the path.
+
+=====================================  ============================================  ==========
+path                                   reader                                        traces
+=====================================  ============================================  ==========
+rosbag2 folder, ``.mcap``, ``.db3``    :func:`palpbayes.io.rosbag.read_bag`          one
+``.jpk-force``, ``.jpk-force-map``,    :func:`palpbayes.io.afm.read_afm`             one per
+``.jpk-qi-*``, ``.ibw``, ``.h5``                                                     curve
+anything else (CSV, text)              :func:`palpbayes.io.trace_csv.read_trace`     one
+=====================================  ============================================  ==========
+
+Each reader's module documents its units and sign conventions.  UR RTDE logs and Instron
+exports keep their own functions (:func:`palpbayes.io.rtde.read_rtde`, :mod:`palpbayes.io.instron`).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Literal
+
+from ..contact import Tip
+from ..errors import InputError
+from ..trace import IndentationTrace
+from .afm import is_afm_file, read_afm
+from .bagfile import is_bag
+from .rosbag import read_bag
+from .trace_csv import read_trace
+
+__all__ = ["recording_kind", "read_recording", "READER_OPTIONS", "KIND_NAMES"]
+
+#: Reader options each kind of recording accepts (besides ``tip`` and trace metadata).
+READER_OPTIONS = {
+    "bag": {"force_topic", "pose_topic", "force_axis", "force_sign", "time_offset",
+            "tool_offset", "dh", "max_gap", "check"},
+    "afm": {"curves", "force_sign", "z_sign", "check"},
+    "table": {"columns", "units", "force_sign", "z_sign", "check", "delimiter"},
+}
+#: How messages name each kind.
+KIND_NAMES = {"bag": "a ROS 2 bag", "afm": "an AFM file", "table": "a trace CSV"}
+
+
+def recording_kind(path: str | os.PathLike) -> Literal["bag", "afm", "table"]:
+    """``"bag"`` (rosbag2 folder or storage file), ``"afm"`` (a suffix afmformats reads and
+    palpbayes does not) or ``"table"`` (everything else: CSV and text tables)."""
+    if is_bag(path):
+        return "bag"
+    if is_afm_file(path):
+        return "afm"
+    return "table"
+
+
+def read_recording(path: str | os.PathLike, *, tip: Tip | None = None,
+                   **options) -> list[IndentationTrace]:
+    """Read a recording with the reader its path calls for; a list of traces (SI units).
+
+    Parameters
+    ----------
+    path
+        Trace CSV, ROS 2 bag (folder, ``.mcap``, ``.db3``) or AFM file.
+    tip
+        The indenter, stored in every trace.
+    **options
+        Reader options (:data:`READER_OPTIONS` of the kind) and trace metadata (``material``,
+        ``thickness``, ``trace_id`` ...).
+
+    Raises
+    ------
+    InputError
+        An option that belongs to another kind of recording (the message names both).
+    DataFileError, MissingExtraError
+        From the reader.
+    """
+    kind = recording_kind(path)
+    others = set().union(*READER_OPTIONS.values()) - READER_OPTIONS[kind]
+    wrong = sorted(k for k in options if k in others and options[k] is not None)
+    if wrong:
+        owners = sorted(KIND_NAMES[k] for k, v in READER_OPTIONS.items() if wrong[0] in v)
+        raise InputError(f"{Path(path)} is {KIND_NAMES[kind]}: option {wrong[0]!r} applies to "
+                         f"{' and '.join(owners)} only")
+    options = {k: v for k, v in options.items() if v is not None or k not in others}
+    if kind == "bag":
+        return [read_bag(path, tip=tip, **options)]
+    if kind == "afm":
+        return read_afm(path, tip=tip, **options)
+    return [read_trace(path, tip=tip, **options)]
