@@ -1,0 +1,155 @@
+"""The files of a map folder (``palpbayes map MANIFEST --out DIR``)::
+
+    DIR/
+      points.csv      one row per trace: its own posterior of E and the naive least squares
+      map.csv         one row per lattice node: posterior mean, sd, 90 % interval of E,
+                      P(E > k × background), the points' own values
+      lump.csv        the lump: centre, radius, depth, stiffness ratio, apparent peak ratio
+                      and FWHM, background, nugget (mean, sd, median, 90 % interval)
+      hyper.csv       the field's hyperparameters (sigma_f, range, nugget) over their grid
+      map.nc          arviz InferenceData: posterior draws of log E on the lattice (chain,
+                      draw, y, x), the background and the hyperparameters; observed_data the
+                      per-point summaries
+      lump.nc         arviz InferenceData of the lump sampler (walkers as chains)
+      settings.json   options, versions, flags, detection score
+      map.png         heat map, uncertainty, probability, profile (palpbayes.report.map_pages)
+      map-report.pdf  the report pages
+
+Every file is written atomically; the csv files open in pandas (``pd.read_csv``), the netCDF
+files in arviz (``az.from_netcdf``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .. import __version__
+from ..bayes.diagnostics import import_arviz
+from ..errors import OutputExistsError
+from ..io.atomic import write_csv_atomic, write_text_atomic, write_with
+from .run import MapResult
+
+__all__ = ["POINTS", "MAP", "LUMP", "HYPER", "MAP_NC", "LUMP_NC", "SETTINGS", "FIGURE",
+           "REPORT", "MAP_OUTPUTS", "prepare_out_dir", "write_map"]
+
+POINTS = "points.csv"
+MAP = "map.csv"
+LUMP = "lump.csv"
+HYPER = "hyper.csv"
+MAP_NC = "map.nc"
+LUMP_NC = "lump.nc"
+SETTINGS = "settings.json"
+FIGURE = "map.png"
+REPORT = "map-report.pdf"
+#: Every file a map run writes (``--force`` removes them first).
+MAP_OUTPUTS = (POINTS, MAP, LUMP, HYPER, MAP_NC, LUMP_NC, SETTINGS, FIGURE, REPORT)
+
+
+def prepare_out_dir(out: str | os.PathLike, force: bool) -> Path:
+    """Create ``out``; refuse one holding map files unless ``force`` (then remove them)."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise OutputExistsError(f"{out} exists and is not a folder; choose another --out")
+    present = [n for n in MAP_OUTPUTS if (out / n).exists()]
+    if present and not force:
+        raise OutputExistsError(f"{out} already holds a map ({', '.join(present)}); use --force "
+                                "to replace it or choose another --out")
+    for n in present:
+        (out / n).unlink()
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def _field_idata(res: MapResult):
+    az = import_arviz()
+    n = res.draws.shape[0]
+    chains = 4 if n % 4 == 0 else 1
+    shape = (chains, n // chains)
+    lat = res.field.lattice
+    hyper = res.hyper_draws
+    post = {"log_E": res.draws.reshape(*shape, lat.ny, lat.nx),
+            "background_E": np.exp(res.background).reshape(shape)}
+    post.update({k: np.asarray(v).reshape(shape) for k, v in hyper.items()})
+    ok = res.points["error"].fillna("") == ""
+    pts = res.points[ok]
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
+        idata = az.from_dict(
+            posterior=post,
+            observed_data={"logE_mean": pts["logE_mean"].to_numpy(),
+                           "logE_sd": pts["logE_sd"].to_numpy()},
+            constant_data={"x_m": lat.node_x[0, :] if lat.node_x.ndim == 2 else lat.node_x,
+                           "y_m": lat.node_y[:, 0] if lat.node_y.ndim == 2 else lat.node_y,
+                           "point_x_m": pts["x_m"].to_numpy(),
+                           "point_y_m": pts["y_m"].to_numpy()},
+            dims={"log_E": ["y", "x"], "logE_mean": ["point"], "logE_sd": ["point"],
+                  "point_x_m": ["point"], "point_y_m": ["point"], "x_m": ["x"], "y_m": ["y"]},
+        )
+    idata.posterior.attrs.update({"units": "log_E: natural log of E/Pa; background_E: Pa",
+                                  "threshold_k": res.options.threshold,
+                                  "palpbayes_version": __version__})
+    return idata
+
+
+def _lump_idata(res: MapResult):
+    az = import_arviz()
+    from .lump import LUMP_PARAMS
+
+    ch = res.lump.chains
+    post = {name: ch[..., i] for i, name in enumerate(LUMP_PARAMS)}
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
+        return az.from_dict(posterior=post, sample_stats={"lp": res.lump.log_prob})
+
+
+def _settings(res: MapResult, extra: dict) -> dict:
+    import dask
+    import scipy
+
+    return {"palpbayes": __version__, "python": platform.python_version(),
+            "numpy": np.__version__, "scipy": scipy.__version__, "dask": dask.__version__,
+            **res.settings, "detection": res.detection, "flags": res.flags,
+            "contact_radius_m": res.contact_radius, "thickness_m": res.thickness,
+            "lattice": {"x0_m": res.field.lattice.x0, "y0_m": res.field.lattice.y0,
+                        "step_m": res.field.lattice.step, "nx": res.field.lattice.nx,
+                        "ny": res.field.lattice.ny}, **extra}
+
+
+def _write_nc(idata, path: Path) -> None:
+    write_with(lambda tmp: idata.to_netcdf(str(tmp), engine="h5netcdf"), path, suffix=".nc")
+
+
+def write_map(res: MapResult, out: str | os.PathLike, *, extra: dict | None = None) -> list[Path]:
+    """Write the tables, netCDF files and settings of a map into ``out`` (figures and the
+    report: :func:`palpbayes.report.map_pages.write_map_report`); return the paths."""
+    out = Path(out)
+    paths = [write_csv_atomic(res.points, out / POINTS, index=False),
+             write_csv_atomic(res.nodes, out / MAP, index=False),
+             write_csv_atomic(res.field.hyper, out / HYPER, index=False)]
+    if res.lump is not None:
+        paths.append(write_csv_atomic(res.lump.summary(), out / LUMP, index=False))
+    _write_nc(_field_idata(res), out / MAP_NC)
+    paths.append(out / MAP_NC)
+    if res.lump is not None:
+        _write_nc(_lump_idata(res), out / LUMP_NC)
+        paths.append(out / LUMP_NC)
+    text = json.dumps(_settings(res, extra or {}), indent=2, default=_jsonable)
+    paths.append(write_text_atomic(text + "\n", out / SETTINGS))
+    return paths
+
+
+def _jsonable(v):
+    if isinstance(v, (np.integer, np.floating)):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, pd.DataFrame):
+        return v.to_dict("records")
+    return str(v)

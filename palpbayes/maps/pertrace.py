@@ -1,0 +1,277 @@
+"""Per-point fits of a stiffness map: each palpation's posterior of log E, on Dask.
+
+Every trace of a map manifest (rows with ``x_m``, ``y_m``) is fitted with the exact engine
+(:mod:`palpbayes.bayes.exact`: E*, F0 and the noise integrated out in closed form, the surface
+on an adaptive grid) and summarised by the mean and sd of log E over 2,000 posterior draws —
+the Gaussian summary the spatial model (:mod:`palpbayes.maps.gmrf`) combines.  The paper's
+least squares is fitted beside it: the naive per-point map the Bayesian map is compared with.
+
+The per-point E excludes the uncertainty budget's systematic terms (tip radius, Poisson ratio,
+sensor calibration): they are common to every point of a map and cancel in the ratios to the
+background that the map reports.
+
+The fits run on ``dask.distributed``: a :class:`~dask.distributed.LocalCluster` with one
+single-threaded worker process per core by default, or the scheduler at ``scheduler``
+(``tcp://host:8786``), whose workers must see the trace files under the same paths.  Traces
+go out in chunks and at most a few chunks per worker are in flight, so memory stays bounded
+whatever the map size; only the small result rows come back.  ``scheduler="synchronous"``
+runs in this process (debugging, tests).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import warnings
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..bayes.exact import exact_posterior
+from ..bayes.fit import bound_flags
+from ..campaign.fitjob import FitOptions, check_fittable
+from ..errors import FitError, InputError, PalpbayesError
+from ..intervals import LEVEL, central
+from ..io.manifest import load_trace
+from ..lsq import fit_lsq_data
+
+__all__ = ["PointOptions", "POINT_COLUMNS", "CONNECT_TIMEOUT", "fit_point", "fit_points",
+           "dask_client", "close_client"]
+
+#: How long to wait for a remote Dask scheduler before giving up.
+CONNECT_TIMEOUT = "20s"
+
+#: Columns of the per-point table (``points.csv``), in order.
+POINT_COLUMNS = [
+    "trace_id", "x_m", "y_m", "logE_mean", "logE_sd", "E_median_pa", "E_lo_pa", "E_hi_pa",
+    "E_lsq_pa", "z_surf_m", "depth_m", "n_nodes", "flags", "error",
+]
+
+
+@dataclass(frozen=True)
+class PointOptions:
+    """How each point is fitted (picklable: it travels to the Dask workers).
+
+    Parameters
+    ----------
+    fit
+        The trace preparation (Poisson ratio, fit window, tare, thickness correction); its
+        ``noise`` must be ``"gaussian"`` or ``"ar1"`` (the exact engine's noise models).
+    draws
+        Posterior draws per point for the log-E summary.
+    seed
+        Base seed; each point's draws use (seed, row number).
+    read_options
+        Passed to the trace reader (columns, units, signs) for every file.
+    """
+
+    fit: FitOptions = field(default_factory=FitOptions)
+    draws: int = 2000
+    seed: int = 0
+    read_options: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.fit.noise not in ("gaussian", "ar1"):
+            raise InputError(f"map fits use the exact engine: noise 'gaussian' or 'ar1', not "
+                             f"{self.fit.noise!r}")
+        if int(self.draws) < 100:
+            raise InputError(f"draws per point {self.draws!r} must be at least 100")
+
+
+def _empty_row(row: pd.Series) -> dict:
+    out = {c: np.nan for c in POINT_COLUMNS}
+    out.update(trace_id=str(row["trace_id"]), x_m=float(row["x_m"]), y_m=float(row["y_m"]),
+               flags="", error="")
+    return out
+
+
+def fit_point(row: pd.Series, options: PointOptions, index: int = 0) -> dict:
+    """Fit one manifest row; return its :data:`POINT_COLUMNS` record.
+
+    A trace that cannot be fitted (no contact, bad geometry, unreadable file) gives a record
+    with the reason in ``error`` and NaN estimates: the map leaves its node without data
+    instead of stopping.
+
+    Parameters
+    ----------
+    row
+        A validated manifest row (:func:`palpbayes.io.manifest.read_manifest`) with ``x_m``
+        and ``y_m`` [m].
+    options
+        :class:`PointOptions`.
+    index
+        Row number (seeds the draws).
+    """
+    out = _empty_row(row)
+    try:
+        trace = load_trace(row, **options.read_options)
+        data = check_fittable(trace, options.fit)
+        prior = options.fit.priors.for_trace(data, options.fit.noise, options.fit.baseline)
+        post = exact_posterior(data, prior)
+        rng = np.random.default_rng([int(options.seed), int(index)])
+        d = post.draws(rng, int(options.draws))
+    except PalpbayesError as exc:
+        out["error"] = str(exc)
+        return out
+    E = data.model.to_E(d["E_star"])
+    logE = np.log(E)
+    lo, hi = central(E, LEVEL)
+    theta = {"log_Estar": np.log(d["E_star"]), "z_surf": d["z_surf"],
+             "log_sigma": np.log(d["sigma"]), "F0": d["F0"], "F1": d.get("F1"),
+             "phi": d.get("phi")}
+    flags = bound_flags({n: theta[n] for n in prior.bounds}, prior)
+    if not post.complete:
+        flags.append("surface grid stopped at its node cap: the posterior may be incomplete")
+    try:
+        e_lsq = float(fit_lsq_data(data, trace_id=trace.trace_id).E)
+    except FitError:
+        e_lsq = np.nan
+    out.update(logE_mean=float(logE.mean()), logE_sd=float(logE.std(ddof=1)),
+               E_median_pa=float(np.median(E)), E_lo_pa=float(lo), E_hi_pa=float(hi),
+               E_lsq_pa=e_lsq, z_surf_m=float(np.median(d["z_surf"])),
+               depth_m=float(np.median(d["z_surf"])) - data.z_min,
+               n_nodes=post.n_nodes, flags="; ".join(flags))
+    return out
+
+
+def _fit_chunk(rows: list[tuple[int, dict]], options: PointOptions) -> list[dict]:
+    """Worker task: fit a chunk of (row number, manifest row as dict)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return [fit_point(pd.Series(r), options, i) for i, r in rows]
+
+
+def _chunks(manifest: pd.DataFrame, size: int) -> Iterator[list[tuple[int, dict]]]:
+    records = manifest.to_dict("records")
+    for start in range(0, len(records), size):
+        yield [(start + k, r) for k, r in enumerate(records[start:start + size])]
+
+
+def dask_client(scheduler: str | None = None, workers: int | None = None):
+    """A ``dask.distributed`` client: a new LocalCluster (``scheduler`` None or ``"local"``:
+    ``workers`` single-threaded processes, default one per core) or the scheduler at an
+    address.  The caller closes it (and its cluster) with ``client.close()``."""
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError as exc:  # pragma: no cover - dask is a dependency
+        raise InputError("the map's per-point fits need dask.distributed: "
+                         "pip install 'dask[distributed]'") from exc
+    if scheduler in (None, "local"):
+        n = int(workers or os.cpu_count() or 1)
+        if n < 1:
+            raise InputError(f"workers {workers!r} must be at least 1")
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=40)
+        client = Client(cluster)
+        client._palpbayes_cluster = cluster  # closed with the client below
+        return client
+    try:
+        return Client(scheduler, timeout=CONNECT_TIMEOUT)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise InputError(f"cannot reach the Dask scheduler at {scheduler!r} ({exc}); start it "
+                         "with 'dask scheduler' and workers with 'dask worker ADDRESS', or "
+                         "leave --scheduler out for a local cluster") from None
+
+
+def close_client(client) -> None:
+    """Close a client made by :func:`dask_client` (and its LocalCluster)."""
+    cluster = getattr(client, "_palpbayes_cluster", None)
+    client.close()
+    if cluster is not None:
+        cluster.close()
+
+
+def fit_points(manifest: pd.DataFrame, options: PointOptions | None = None, *,
+               scheduler: str | None = None, workers: int | None = None, chunk: int = 25,
+               progress: bool | None = None,
+               on_done: Callable[[int], None] | None = None) -> pd.DataFrame:
+    """Fit every row of a map manifest; return the per-point table (:data:`POINT_COLUMNS`).
+
+    Parameters
+    ----------
+    manifest
+        Validated manifest with ``x_m`` and ``y_m`` (:func:`palpbayes.io.manifest.read_manifest`).
+    options
+        :class:`PointOptions`.
+    scheduler
+        ``None``/``"local"`` (a LocalCluster), ``"synchronous"`` (this process) or a Dask
+        scheduler address.
+    workers
+        Worker processes of the LocalCluster (default: one per core).
+    chunk
+        Traces per task.
+    progress
+        Progress bar on stderr (None: when stderr is a terminal).
+    on_done
+        Called with the number of traces finished after every chunk.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per trace, in manifest order.
+    """
+    options = options or PointOptions()
+    for col in ("x_m", "y_m"):
+        if col not in manifest.columns or manifest[col].isna().any():
+            raise InputError(f"a map needs the palpation position of every trace: manifest "
+                             f"column {col!r} (metres) is missing or has empty cells")
+    if chunk < 1:
+        raise InputError(f"chunk {chunk!r} must be at least 1")
+    from tqdm.auto import tqdm
+
+    show = sys.stderr.isatty() if progress is None else bool(progress)
+    bar = tqdm(total=len(manifest), disable=not show, desc="fitting points", unit="trace",
+               file=sys.stderr, dynamic_ncols=True)
+    results: list[dict] = []
+
+    def done(part: list[dict]) -> None:
+        results.extend(part)
+        bar.update(len(part))
+        if on_done is not None:
+            on_done(len(results))
+
+    try:
+        if scheduler == "synchronous":
+            for rows in _chunks(manifest, chunk):
+                done(_fit_chunk(rows, options))
+        else:
+            _run_dask(manifest, options, scheduler, workers, chunk, done)
+    finally:
+        bar.close()
+    table = pd.DataFrame(results, columns=POINT_COLUMNS)
+    order = {t: i for i, t in enumerate(manifest["trace_id"].astype(str))}
+    return table.sort_values("trace_id", key=lambda s: s.map(order)).reset_index(drop=True)
+
+
+def _run_dask(manifest: pd.DataFrame, options: PointOptions, scheduler: str | None,
+              workers: int | None, chunk: int, done: Callable[[list[dict]], None]) -> None:
+    from dask.distributed import as_completed
+
+    client = dask_client(scheduler, workers)
+    try:
+        n_workers = max(1, len(client.scheduler_info().get("workers", {})) or 1)
+        in_flight = 3 * n_workers  # bounded queue: memory does not grow with the map
+        chunks = _chunks(manifest, chunk)
+        opts = client.scatter(options, broadcast=True)
+        pending = as_completed()
+        for rows in _take(chunks, in_flight):
+            pending.add(client.submit(_fit_chunk, rows, opts, pure=False))
+        for fut in pending:
+            done(fut.result())
+            fut.release()
+            for rows in _take(chunks, 1):
+                pending.add(client.submit(_fit_chunk, rows, opts, pure=False))
+    finally:
+        close_client(client)
+
+
+def _take(it: Iterator, n: int) -> Sequence:
+    out = []
+    for _ in range(n):
+        try:
+            out.append(next(it))
+        except StopIteration:
+            break
+    return out
