@@ -8,7 +8,7 @@ values (see :mod:`palpbayes.sim.campaign`).  The shipped example was made with::
 With ``--map`` it writes a stiffness-map phantom instead (:mod:`palpbayes.sim.map`): a grid of
 palpations over a block hiding a stiff sphere, e.g.::
 
-    palpbayes simulate phantom --map --grid 15x15 --step 3e-3 --lump-ratio 5
+    palpbayes simulate phantom --map --grid 15x15 --step 3e-3 --lump-ratio 10
 """
 
 from __future__ import annotations
@@ -67,16 +67,16 @@ def register(subparsers) -> argparse.ArgumentParser:
     m.add_argument("--tip", choices=sorted(PAPER_TIPS), default=None,
                    help="the paper's tip (default paraboloid)")
     m.add_argument("--lump-ratio", type=float, default=None, metavar="R",
-                   help="lump modulus / background (default 5)")
+                   help="lump modulus / background (default 10)")
     m.add_argument("--lump-radius", type=float, default=None, metavar="M",
-                   help="lump radius (default 5e-3)")
+                   help="lump radius (default 6e-3)")
     m.add_argument("--lump-depth", type=float, default=None, metavar="M",
-                   help="depth of the lump's centre (default 8e-3)")
+                   help="depth of the lump's centre (default 7e-3: 1 mm of cover)")
     m.add_argument("--lump-x", type=float, default=None, metavar="M", help="lump centre x")
     m.add_argument("--lump-y", type=float, default=None, metavar="M", help="lump centre y")
     m.add_argument("--no-lump", action="store_true", help="a homogeneous block")
     m.add_argument("--heterogeneity", type=float, default=None, metavar="CV",
-                   help="point-to-point sd of ln E (default 0.05)")
+                   help="point-to-point sd of ln E (default 0.03)")
     m.add_argument("--workers", type=int, default=None, metavar="N",
                    help="processes writing the traces (default 1)")
     p.set_defaults(func=run)

@@ -51,8 +51,8 @@ __all__ = ["simulate_map", "read_map_truth", "default_inclusion", "lump_summary"
 LUMP_FILE = "truth_lump.json"
 
 
-def default_inclusion(nx: int, ny: int, step: float, *, depth: float = 8e-3,
-                      radius: float = 5e-3, ratio: float = 5.0) -> Inclusion:
+def default_inclusion(nx: int, ny: int, step: float, *, depth: float = 7e-3,
+                      radius: float = 6e-3, ratio: float = 10.0) -> Inclusion:
     """The default lump: near the grid's centre but off the nodes (+0.3 step in x, +0.2 in y).
 
     Centre ((nx − 1)/2 + 0.3)·step, ((ny − 1)/2 + 0.2)·step; ``depth`` of the centre, ``radius``
@@ -129,7 +129,7 @@ def simulate_map(
     thickness: float = 0.02,
     depth: float | None = None,
     inclusion: Inclusion | None | str = "default",
-    heterogeneity: float = 0.05,
+    heterogeneity: float = 0.03,
     noise_pp: float = PAPER_NOISE_PP,
     force_offset_sd: float = 5e-3,
     z_surf: float = 0.1,

@@ -81,6 +81,7 @@ def test_truth_is_what_each_trace_was_simulated_with(phantom, tmp_path):
     """Redraw each point's stream as documented (ln E = ln E_app + h·N(0,1), then surface,
     offset, trace noise): the truth row and the trace file are reproduced exactly."""
     truth = pd.read_csv(phantom / "truth.csv")
+    het = read_map_truth(phantom)["heterogeneity"]
     lump = default_inclusion(NX, NY, STEP)
     E_app = apparent_modulus(truth["x_m"], truth["y_m"], E_background=50e3, inclusion=lump,
                              contact_radius=A, thickness=0.02)
@@ -89,7 +90,7 @@ def test_truth_is_what_each_trace_was_simulated_with(phantom, tmp_path):
         row = truth.iloc[k]
         j, i = divmod(k, NX)
         gen = np.random.default_rng(child_seed(SEED, "map", j, i))
-        E = row["E_apparent_pa"] * math.exp(0.05 * gen.standard_normal())
+        E = row["E_apparent_pa"] * math.exp(het * gen.standard_normal())
         zs = 0.1 + 1e-3 * gen.uniform(-1, 1)
         f0 = 5e-3 * gen.standard_normal()
         assert (row["E_true_pa"], row["z_surf_true_m"], row["force_offset_true_n"]) == (

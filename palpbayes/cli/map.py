@@ -1,0 +1,127 @@
+"""``palpbayes map MANIFEST --out DIR``: a stiffness map with its uncertainty and the lump.
+
+The manifest's rows carry the palpation position (``x_m``, ``y_m`` in metres) on a regular
+grid.  Per-point fits run on Dask (a LocalCluster by default, ``--scheduler ADDRESS`` for a
+cluster whose workers see the same files); then the spatial field and the lump model
+(:mod:`palpbayes.maps`).  Files: :mod:`palpbayes.maps.files`.  Try it with::
+
+    palpbayes simulate phantom --map
+    palpbayes map phantom/manifest.csv --out phantom-map
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from ..campaign.fitjob import FitOptions
+from ..errors import InputError
+from ..io.manifest import read_manifest
+from ..units import format_length, format_pressure
+
+__all__ = ["register", "run"]
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``map`` subcommand to an argparse ``subparsers`` object; return its parser."""
+    p = subparsers.add_parser(
+        "map",
+        help="stiffness map of a grid of palpations: E with its uncertainty, P(stiff lump), "
+             "the lump's centre, size and stiffness ratio",
+        description=(
+            "Fit every trace of MANIFEST (columns x_m, y_m: palpation position in metres) with "
+            "the exact engine on Dask, combine them with a spatial GMRF prior and fit the stiff "
+            "lump; write map.csv, points.csv, lump.csv, map.nc, map.png and map-report.pdf "
+            "into --out."),
+    )
+    p.add_argument("manifest", metavar="MANIFEST", help="manifest CSV with x_m and y_m columns")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    p.add_argument("--force", action="store_true", help="replace the map files in DIR")
+    g = p.add_argument_group("per-point fits")
+    g.add_argument("--nu", type=float, default=0.3, help="Poisson ratio (default 0.3)")
+    g.add_argument("--noise", choices=("gaussian", "ar1"), default="gaussian",
+                   help="noise model of the exact engine (default gaussian)")
+    g.add_argument("--tare", action="store_true", help="subtract the pre-contact force level")
+    g.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="Dask scheduler address (tcp://host:8786); default: a LocalCluster; "
+                        "'synchronous' runs in this process")
+    g.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="LocalCluster worker processes (default: one per core)")
+    g = p.add_argument_group("map")
+    g.add_argument("--threshold", type=float, default=1.1, metavar="K",
+                   help="report P(E > K x background) per point (default 1.1)")
+    g.add_argument("--detect", type=float, default=0.5, metavar="P",
+                   help="fit the lump model when some point has that probability >= P "
+                        "(default 0.5)")
+    g.add_argument("--no-lump", action="store_true", help="skip the lump model")
+    g.add_argument("--lump-max-steps", type=int, default=20000, metavar="N",
+                   help="cap on the emcee steps per walker of the lump model; it stops "
+                        "earlier once converged (default 20000)")
+    g.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    g.add_argument("--no-report", action="store_true", help="skip map.png and the PDF")
+    g.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bars (default: when stderr is a terminal)")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    """Fit, map, write; print where and the lump.  Returns 0."""
+    from ..maps.files import FIGURE, REPORT, prepare_out_dir, write_map
+    from ..maps.pertrace import PointOptions
+    from ..maps.run import MapOptions, check_map_manifest, make_map
+
+    if args.lump_max_steps < 1000:
+        raise InputError(f"--lump-max-steps {args.lump_max_steps} is too few; use at least "
+                         "1000")
+    manifest = read_manifest(args.manifest)
+    point_opts = PointOptions(fit=FitOptions(nu=args.nu, noise=args.noise, tare=args.tare,
+                                             engine="exact", seed=args.seed), seed=args.seed)
+    map_opts = MapOptions(threshold=args.threshold, detect=args.detect, seed=args.seed,
+                          lump=not args.no_lump, lump_max_steps=args.lump_max_steps)
+    check_map_manifest(manifest)
+    out = prepare_out_dir(args.out, args.force)  # before the fits: a bad --out fails fast
+    t0 = time.perf_counter()
+    res = make_map(manifest, point_options=point_opts, options=map_opts,
+                   scheduler=args.scheduler, workers=args.workers, progress=args.progress)
+    elapsed = time.perf_counter() - t0
+    truth = _truth(Path(args.manifest).parent)
+    write_map(res, out, extra={"manifest": str(Path(args.manifest).resolve()),
+                               "elapsed_s": elapsed})
+    if not args.no_report:
+        from ..report.map_pages import write_map_figure, write_map_report
+
+        write_map_figure(res, out / FIGURE, truth=truth)
+        write_map_report(res, out / REPORT, name=Path(args.manifest).parent.name, truth=truth)
+    n_ok = int((res.points["error"].fillna("") == "").sum())
+    lat = res.field.lattice
+    print(f"mapped {n_ok} of {len(res.points)} palpations on a {lat.nx} x {lat.ny} lattice "
+          f"(step {format_length(lat.step)}) in {elapsed:.1f} s "
+          f"({len(res.points) / elapsed:.1f} traces/s) -> {out}")
+    med, lo, hi = res.background_interval()
+    print(f"  background E {format_pressure(med, 4)} [{format_pressure(lo, 4)}, "
+          f"{format_pressure(hi, 4)}] (90 %)")
+    print(f"  largest P(E > {args.threshold:g} x background): {res.detection:.3f}")
+    if res.lump is not None:
+        s = res.lump.summary().set_index("quantity")
+        for q, label, fmt in (("x_m", "centre x", format_length),
+                              ("y_m", "centre y", format_length),
+                              ("radius_m", "radius", format_length),
+                              ("apparent_ratio", "apparent peak ratio", lambda v: f"{v:.3g}"),
+                              ("ratio", "stiffness ratio", lambda v: f"{v:.3g}")):
+            r = s.loc[q]
+            print(f"  lump {label}: {fmt(r['median'])} [{fmt(r['lo'])}, {fmt(r['hi'])}] (90 %)")
+    for f in res.flags:
+        print(f"  flag: {f}")
+    return 0
+
+
+def _truth(folder: Path) -> dict | None:
+    """The simulator's lump truth next to the manifest (for the figures), if any."""
+    try:
+        from ..sim.map import read_map_truth
+
+        return read_map_truth(folder)
+    except (ImportError, OSError, ValueError, KeyError, InputError):
+        return None

@@ -1,0 +1,176 @@
+"""Stiffness maps: posterior mean, uncertainty, probability of a stiff lump, a profile.
+
+Every function takes the node table of a map (:data:`palpbayes.maps.run.NODE_COLUMNS`, one row
+per lattice node with ``ix``, ``iy``, ``x_m``, ``y_m``) and draws positions in mm and moduli in
+kPa.  The estimated lump centre (when there is one) is marked with its 90 % interval.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from .style import _KPA, _MM, METHOD_COLORS, _fig_ax
+
+__all__ = ["plot_map", "plot_map_panel", "plot_profile", "map_grid"]
+
+#: What each map panel shows: (node column, title, colour-bar label, colormap, scale).
+PANELS: dict[str, tuple[str, str, str, str, float]] = {
+    "mean": ("E_mean_pa", "posterior mean of E", "E [kPa]", "viridis", _KPA),
+    "uncertainty": ("E_rel_sd", "posterior sd / mean of E", "sd / mean [%]", "magma", 100.0),
+    "probability": ("p_stiffer", "P(E > k × background)", "probability", "RdPu", 1.0),
+    "lsq": ("E_lsq_pa", "naive per-point least squares", "E [kPa]", "viridis", _KPA),
+}
+
+
+def map_grid(nodes: pd.DataFrame, column: str) -> np.ndarray:
+    """The node column as a (ny, nx) array (NaN where a node has no value)."""
+    nx, ny = int(nodes["ix"].max()) + 1, int(nodes["iy"].max()) + 1
+    out = np.full((ny, nx), np.nan)
+    out[nodes["iy"].to_numpy(int), nodes["ix"].to_numpy(int)] = nodes[column].to_numpy(float)
+    return out
+
+
+def _extent(nodes: pd.DataFrame) -> tuple[float, float, float, float]:
+    x, y = nodes["x_m"].to_numpy() * _MM, nodes["y_m"].to_numpy() * _MM
+    hx = 0.5 * (np.ptp(x) / max(int(nodes["ix"].max()), 1)) if np.ptp(x) > 0 else 0.5
+    hy = 0.5 * (np.ptp(y) / max(int(nodes["iy"].max()), 1)) if np.ptp(y) > 0 else 0.5
+    return (x.min() - hx, x.max() + hx, y.min() - hy, y.max() + hy)
+
+
+def _mark_lump(ax: Axes, lump: Mapping[str, tuple[float, float, float]] | None) -> None:
+    """Cross at the lump centre with its interval in x and y (mm)."""
+    if not lump:
+        return
+    (cx, xlo, xhi), (cy, ylo, yhi) = lump["x_m"], lump["y_m"]
+    ax.errorbar([cx * _MM], [cy * _MM], xerr=[[(cx - xlo) * _MM], [(xhi - cx) * _MM]],
+                yerr=[[(cy - ylo) * _MM], [(yhi - cy) * _MM]], fmt="+", color="w", ms=10,
+                mew=2, capsize=4, lw=1.5, label="lump centre (90 % interval)")
+    ax.errorbar([cx * _MM], [cy * _MM], fmt="+", color="k", ms=7, mew=1)
+
+
+def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None = None,
+                   lump: Mapping[str, tuple[float, float, float]] | None = None,
+                   threshold: float | None = None, truth: tuple[float, float] | None = None,
+                   title: str | None = None) -> Figure:
+    """One map: ``kind`` is ``mean``, ``uncertainty``, ``probability`` or ``lsq``.
+
+    Parameters
+    ----------
+    nodes
+        Node table of a map.
+    kind
+        Which panel (:data:`PANELS`).
+    ax
+        Axes to draw on (a new figure otherwise).
+    lump
+        ``{"x_m": (median, lo, hi), "y_m": (...)}`` [m] of the estimated centre.
+    threshold
+        k of the probability panel (shown in the title).
+    truth
+        [m] True lump centre of a simulated phantom (a circle).
+    title
+        Overrides the panel's title.
+    """
+    if kind not in PANELS:
+        raise ValueError(f"unknown map panel {kind!r}; use one of {', '.join(PANELS)}")
+    col, default_title, label, cmap, scale = PANELS[kind]
+    fig, ax = _fig_ax(ax, (5.6, 4.6))
+    z = map_grid(nodes, col) * scale
+    kw = {"vmin": 0.0, "vmax": 1.0} if kind == "probability" else {}
+    im = ax.imshow(z, origin="lower", extent=_extent(nodes), cmap=cmap, interpolation="nearest",
+                   aspect="equal", **kw)
+    fig.colorbar(im, ax=ax, label=label, shrink=0.9)
+    if kind == "probability" and np.isfinite(z).any() and np.nanmax(z) >= 0.5:
+        xs = np.unique(nodes["x_m"]) * _MM
+        ys = np.unique(nodes["y_m"]) * _MM
+        if xs.size > 1 and ys.size > 1:
+            ax.contour(xs, ys, z, levels=[0.5, 0.9], colors=["0.3", "k"], linewidths=[0.8, 1.2])
+    _mark_lump(ax, lump)
+    if truth is not None:
+        ax.plot([truth[0] * _MM], [truth[1] * _MM], "o", mfc="none", mec=METHOD_COLORS["truth"],
+                ms=12, mew=2, label="true centre")
+    if lump or truth is not None:
+        ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
+    t = title or default_title
+    if kind == "probability" and threshold is not None:
+        t = f"P(E > {threshold:g} × background)"
+    ax.set(xlabel="x [mm]", ylabel="y [mm]", title=t)
+    return fig
+
+
+def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None = None,
+                 background: tuple[float, float, float] | None = None,
+                 truth: np.ndarray | None = None, title: str = "") -> Figure:
+    """E along one lattice row (default: the row of the largest posterior mean).
+
+    Posterior mean with its 90 % band, each point's own posterior (median, interval), the
+    naive least-squares value and the background level.
+
+    Parameters
+    ----------
+    nodes
+        Node table of a map.
+    row
+        Lattice row index iy.
+    background
+        [Pa] (median, lo, hi) of the background modulus.
+    truth
+        [Pa] True apparent modulus at each node of the row (simulated phantoms).
+    """
+    if row is None:
+        row = int(nodes.loc[nodes["E_mean_pa"].idxmax(), "iy"])
+    r = nodes[nodes["iy"] == row].sort_values("ix")
+    fig, ax = _fig_ax(ax, (7.0, 4.0))
+    x = r["x_m"].to_numpy() * _MM
+    c = METHOD_COLORS["bayes"]
+    ax.fill_between(x, r["E_lo_pa"] * _KPA, r["E_hi_pa"] * _KPA, color=c, alpha=0.25, lw=0,
+                    label="map: 90 % band")
+    ax.plot(x, r["E_mean_pa"] * _KPA, color=c, lw=1.8, label="map: posterior mean")
+    pts = r[np.isfinite(r["E_point_pa"])]
+    if len(pts):
+        ax.errorbar(pts["x_m"] * _MM, pts["E_point_pa"] * _KPA,
+                    yerr=[(pts["E_point_pa"] - pts["E_point_lo_pa"]) * _KPA,
+                          (pts["E_point_hi_pa"] - pts["E_point_pa"]) * _KPA],
+                    fmt="o", ms=3, color="0.25", capsize=2, lw=0.8,
+                    label="each point's own posterior")
+    ax.plot(r["x_m"] * _MM, r["E_lsq_pa"] * _KPA, "x", color=METHOD_COLORS["lsq"], ms=5,
+            label="naive least squares")
+    if background is not None:
+        med, lo, hi = background
+        ax.axhspan(lo * _KPA, hi * _KPA, color="0.6", alpha=0.2, lw=0)
+        ax.axhline(med * _KPA, color="0.4", lw=1, ls="--", label="background (90 %)")
+    if truth is not None:
+        ax.plot(x, np.asarray(truth) * _KPA, color=METHOD_COLORS["truth"], lw=1.2,
+                label="true apparent E")
+    y_mm = float(r["y_m"].iloc[0]) * _MM
+    ax.set(xlabel="x [mm]", ylabel="E [kPa]",
+           title=title or f"profile through the lump (row y = {y_mm:.3g} mm)")
+    ax.legend(fontsize=7, loc="upper left")
+    return fig
+
+
+def plot_map(nodes: pd.DataFrame, *, lump: Mapping | None = None, threshold: float = 1.1,
+             background: tuple[float, float, float] | None = None,
+             truth_centre: tuple[float, float] | None = None, title: str = "") -> Figure:
+    """The four panels of a map in one figure (``map.png``): mean, uncertainty, probability
+    and the profile through the lump."""
+    fig = Figure(figsize=(12.0, 9.0), layout="constrained")
+    axes = fig.subplots(2, 2)
+    plot_map_panel(nodes, "mean", ax=axes[0, 0], lump=lump, truth=truth_centre)
+    plot_map_panel(nodes, "uncertainty", ax=axes[0, 1], lump=lump)
+    plot_map_panel(nodes, "probability", ax=axes[1, 0], lump=lump, threshold=threshold,
+                   truth=truth_centre)
+    row = None
+    if lump:
+        iy = np.unique(nodes["iy"])
+        ys = np.array([nodes.loc[nodes["iy"] == k, "y_m"].iloc[0] for k in iy])
+        row = int(iy[np.argmin(np.abs(ys - lump["y_m"][0]))])
+    plot_profile(nodes, row=row, ax=axes[1, 1], background=background)
+    if title:
+        fig.suptitle(title)
+    return fig

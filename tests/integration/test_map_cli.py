@@ -1,0 +1,88 @@
+"""``palpbayes simulate --map`` then ``palpbayes map``: whole traces to the lump, from the CLI."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from palpbayes.cli import main
+from palpbayes.maps.run import NODE_COLUMNS
+from palpbayes.sim.map import read_map_truth
+
+
+@pytest.fixture(scope="module")
+def phantom(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("phantom") / "block"
+    rc = main(["simulate", str(folder), "--map", "--grid", "9x9", "--step", "3e-3",
+               "--lump-ratio", "20", "--lump-radius", "5e-3", "--lump-depth", "5.5e-3",
+               "--lump-x", "12.5e-3", "--lump-y", "11.2e-3", "--heterogeneity", "0.03",
+               "--seed", "4"])
+    assert rc == 0
+    return folder
+
+
+@pytest.fixture(scope="module")
+def mapped(phantom, tmp_path_factory):
+    out = tmp_path_factory.mktemp("map") / "out"
+    rc = main(["map", str(phantom / "manifest.csv"), "--out", str(out), "--workers", "2",
+               "--no-progress"])
+    assert rc == 0
+    return out
+
+
+def test_map_writes_every_file_a_user_opens(mapped):
+    import arviz as az
+    from pypdf import PdfReader
+
+    nodes = pd.read_csv(mapped / "map.csv")
+    assert list(nodes.columns) == NODE_COLUMNS and len(nodes) == 81
+    assert (nodes["n_traces"] == 1).all()
+    assert np.all((0 <= nodes["p_stiffer"]) & (nodes["p_stiffer"] <= 1))
+    assert np.all(nodes["E_lo_pa"] < nodes["E_mean_pa"]) and np.all(
+        nodes["E_mean_pa"] < nodes["E_hi_pa"])
+    points = pd.read_csv(mapped / "points.csv")
+    assert len(points) == 81 and points["error"].isna().all()
+    idata = az.from_netcdf(mapped / "map.nc")
+    assert idata.posterior["log_E"].dims == ("chain", "draw", "y", "x")
+    assert idata.posterior["log_E"].shape[2:] == (9, 9)
+    lump_nc = az.from_netcdf(mapped / "lump.nc")
+    assert "log_A" in lump_nc.posterior
+    pages = [p.extract_text() for p in PdfReader(mapped / "map-report.pdf").pages]
+    assert len(pages) == 6
+    for want in ("summary", "Heat map", "Uncertainty map", "Probability map", "Profile",
+                 "apparent peak ratio"):
+        assert any(want in t for t in pages), want
+    assert (mapped / "map.png").stat().st_size > 20_000
+
+
+def test_the_lump_is_found_where_it_is(mapped, phantom):
+    truth = read_map_truth(phantom)
+    lump = pd.read_csv(mapped / "lump.csv").set_index("quantity")
+    d = math.hypot(lump.loc["x_m", "median"] - truth["x_m"],
+                   lump.loc["y_m", "median"] - truth["y_m"])
+    assert d <= truth["step_m"], f"centre {d * 1e3:.2f} mm from the truth"
+    a = lump.loc["apparent_ratio"]
+    assert a["lo"] <= truth["peak_apparent_ratio"] <= a["hi"], (a, truth["peak_apparent_ratio"])
+    nodes = pd.read_csv(mapped / "map.csv")
+    peak = nodes.loc[nodes["p_stiffer"].idxmax()]
+    assert peak["p_stiffer"] > 0.8
+    far = np.hypot(nodes["x_m"] - truth["x_m"], nodes["y_m"] - truth["y_m"]) > 10e-3
+    assert nodes.loc[far, "p_stiffer"].max() < 0.5
+
+
+def test_map_refuses_what_it_cannot_do(phantom, mapped, tmp_path, capsys):
+    assert main(["map", str(phantom / "manifest.csv"), "--out", str(mapped)]) == 2
+    assert "--force" in capsys.readouterr().err
+    m = pd.read_csv(phantom / "manifest.csv").drop(columns=["x_m"])
+    m["file"] = [str(phantom / f) for f in m["file"]]
+    m.to_csv(tmp_path / "no_xy.csv", index=False)
+    assert main(["map", str(tmp_path / "no_xy.csv"), "--out", str(tmp_path / "o"),
+                 "--scheduler", "synchronous"]) == 2
+    assert "x_m" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()  # refused before any folder is made
+    assert main(["map", str(phantom / "manifest.csv"), "--out", str(tmp_path / "o2"),
+                 "--threshold", "0.9"]) == 2
+    assert "threshold" in capsys.readouterr().err
