@@ -50,7 +50,7 @@ class MapOptions:
     threshold
         k of P(E > k × background) (> 1).
     detect
-        Run the lump model when some node has P(E > k × background) >= this.
+        Run the lump model when some node has P(E > k × background) >= this (0: always).
     field_draws
         Joint posterior draws of the field.
     lump_max_steps
@@ -72,8 +72,8 @@ class MapOptions:
         if not (self.threshold > 1 and math.isfinite(self.threshold)):
             raise InputError(f"threshold k = {self.threshold!r} must be a number above 1 (E > k "
                              "× background), e.g. 1.1")
-        if not 0 < self.detect <= 1:
-            raise InputError(f"detect = {self.detect!r} must be a probability in (0, 1]")
+        if not 0 <= self.detect <= 1:
+            raise InputError(f"detect = {self.detect!r} must be a probability in [0, 1]")
         if self.field_draws < 100:
             raise InputError(f"field_draws = {self.field_draws!r} must be at least 100")
 
@@ -207,7 +207,7 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
     lump = None
     if not options.lump:
         pass
-    elif detection < options.detect:
+    elif options.detect > 0 and detection < options.detect:
         flags.append(f"no lump: no node has P(E > {options.threshold:g} × background) >= "
                      f"{options.detect:g} (largest {detection:.2f})")
     elif thickness is None:

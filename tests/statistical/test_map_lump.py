@@ -46,10 +46,10 @@ def phantom_points(seed: int, inc: Inclusion | None, n: int = 13, het: float = 0
     return pts, peak
 
 
-def _run(seed: int, inc: Inclusion | None, **kw):
+def _run(seed: int, inc: Inclusion | None, detect: float = 0.5, **kw):
     pts, peak = phantom_points(seed, inc, **kw)
     res = map_from_points(pts, tip=TIP, thickness=H,
-                          options=MapOptions(threshold=1.05, seed=seed, lump_max_steps=12000))
+                          options=MapOptions(threshold=1.05, seed=seed, detect=detect))
     out = {"peak": peak, "detection": res.detection, "flags": res.flags}
     if res.lump is not None:
         s = res.lump.summary().set_index("quantity")
@@ -91,23 +91,30 @@ def _draw_inclusion(rng: np.random.Generator, n: int = 13) -> Inclusion:
 
 @pytest.mark.slow
 def test_lump_coverage_over_simulated_phantoms():
-    """20 phantoms with a lump drawn at random: the 90 % intervals of the centre and of the
-    apparent stiffness ratio cover the truth at the nominal rate; the centre is within one
-    grid step.  The inclusion's own ratio is not identified at one depth (see the flags);
-    its coverage is printed, not asserted."""
+    """20 phantoms with a lump drawn at random, the lump model fitted whether or not the map
+    detects it (coverage conditional on detection would be biased by the selection): the 90 %
+    intervals of the centre and of the apparent stiffness ratio cover the truth at the
+    nominal rate, and every detected lump's centre is within one grid step.  The inclusion's
+    own ratio is not identified at one depth (see the flags); its coverage is printed."""
     rng = np.random.default_rng(2026)
     incs = [_draw_inclusion(rng) for _ in range(20)]
     with cf.ProcessPoolExecutor(max_workers=2) as pool:
-        runs = list(pool.map(_run, range(100, 120), incs))
-    pairs = [(r, i) for r, i in zip(runs, incs, strict=True) if "x_m" in r]
-    assert len(pairs) >= 19
-    dist = np.array([math.hypot(r["x_m"][0] - i.x, r["y_m"][0] - i.y) / STEP for r, i in pairs])
+        runs = list(pool.map(_run, range(100, 120), incs, [0.0] * 20))
+    pairs = list(zip(runs, incs, strict=True))
+    assert all("x_m" in r for r in runs)
+    for r, i in pairs:
+        print(f"detect {r['detection']:.2f} peak {r['peak']:.3f} A {r['apparent_ratio']} "
+              f"dx {(r['x_m'][0] - i.x) / STEP:+.2f} dy {(r['y_m'][0] - i.y) / STEP:+.2f}")
+    found = [(r, i) for r, i in pairs if r["detection"] >= 0.5]
+    dist = np.array([math.hypot(r["x_m"][0] - i.x, r["y_m"][0] - i.y) / STEP for r, i in found])
     cov = {"x_m": np.mean([_covers(r["x_m"], i.x) for r, i in pairs]),
            "y_m": np.mean([_covers(r["y_m"], i.y) for r, i in pairs]),
            "apparent_ratio": np.mean([_covers(r["apparent_ratio"], r["peak"]) for r, _ in pairs])}
     cov_ratio = np.mean([_covers(r["ratio"], i.ratio) for r, i in pairs])
-    print(f"centre error [steps]: median {np.median(dist):.2f}, max {dist.max():.2f}; "
-          f"coverage {cov}; inclusion ratio (not identified) {cov_ratio:.2f}")
-    assert np.mean(dist <= 1.0) >= 0.9
-    for q, c in cov.items():  # binomial(19-20, 0.9): P(< 15/20) ~ 1 %
+    print(f"detected {len(found)}/20; centre error of the detected [steps]: median "
+          f"{np.median(dist):.2f}, max {dist.max():.2f}; coverage {cov}; inclusion ratio "
+          f"(not identified) {cov_ratio:.2f}")
+    assert len(found) >= 10
+    assert np.all(dist <= 1.0)
+    for q, c in cov.items():  # binomial(20, 0.9): P(< 15/20) ~ 4 %
         assert 0.75 <= c <= 1.0, (q, c)
