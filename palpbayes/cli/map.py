@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
                                              engine="exact", seed=args.seed), seed=args.seed)
     map_opts = MapOptions(threshold=args.threshold, detect=args.detect, seed=args.seed,
                           lump=not args.no_lump, lump_max_steps=args.lump_max_steps)
-    check_map_manifest(manifest)
+    check_map_manifest(manifest, lump=not args.no_lump)
     out = prepare_out_dir(args.out, args.force)  # before the fits: a bad --out fails fast
     t0 = time.perf_counter()
     res = make_map(manifest, point_options=point_opts, options=map_opts,
@@ -102,8 +102,11 @@ def run(args: argparse.Namespace) -> int:
     med, lo, hi = res.background_interval()
     print(f"  background E {format_pressure(med, 4)} [{format_pressure(lo, 4)}, "
           f"{format_pressure(hi, 4)}] (90 %)")
-    print(f"  largest P(E > {args.threshold:g} x background): {res.detection:.3f}")
+    print(f"  largest P(E > {args.threshold:g} x background) over the map: {res.detection:.3f}")
     if res.lump is not None:
+        print(f"  P(lump with apparent peak ratio > {args.threshold:g}): {res.p_lump:.3f}"
+              + ("" if res.lump_found else " -> no lump found"))
+    if res.lump_found:
         s = res.lump.summary().set_index("quantity")
         for q, label, fmt in (("x_m", "centre x", format_length),
                               ("y_m", "centre y", format_length),

@@ -181,8 +181,9 @@ def _run_map(args: argparse.Namespace) -> int:
         mm = {k: format_length(t[k]) for k in ("x_m", "y_m", "depth_m", "radius_m")}
         print(f"  lump at ({mm['x_m']}, {mm['y_m']}), centre depth {mm['depth_m']}, radius "
               f"{mm['radius_m']}, modulus ratio {t['ratio']:g}: apparent peak ratio "
-              f"{t['peak_apparent_ratio']:.3f}, "
-              f"FWHM {format_length(t['apparent_fwhm_diameter_m'])}")
+              f"{t['peak_apparent_ratio']:.3f}, FWHM "
+              + ("n/a (no contrast)" if t["apparent_fwhm_diameter_m"] is None
+                 else format_length(t["apparent_fwhm_diameter_m"])))
     else:
         print("  no lump (a homogeneous block)")
     print("  true values in truth.csv (per trace) and truth_lump.json")

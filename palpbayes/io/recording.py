@@ -41,9 +41,10 @@ KIND_NAMES = {"bag": "a ROS 2 bag", "afm": "an AFM file", "table": "a trace CSV"
 
 
 def recording_kind(path: str | os.PathLike) -> Literal["bag", "afm", "table"]:
-    """``"bag"`` (rosbag2 folder or storage file), ``"afm"`` (a suffix afmformats reads and
-    palpbayes does not) or ``"table"`` (everything else: CSV and text tables)."""
-    if is_bag(path):
+    """``"bag"`` (rosbag2 folder or storage file; any folder goes to the bag reader, which says
+    what a folder without ``metadata.yaml`` is missing), ``"afm"`` (a suffix afmformats reads
+    and palpbayes does not) or ``"table"`` (everything else: CSV and text tables)."""
+    if is_bag(path) or Path(path).is_dir():
         return "bag"
     if is_afm_file(path):
         return "afm"

@@ -17,7 +17,8 @@ single ``.mcap`` or ``.db3`` file inside it is accepted too.  Needs the optional
 Time
 ----
 Each message's ``header.stamp`` [s] is its time (the bag's receive time instead, with a warning,
-when a topic's stamps are zero).  The pose is interpolated linearly (``np.interp``) onto the
+when all of a topic's stamps are zero; messages with a zero stamp are dropped when only some
+are).  The pose is interpolated linearly (``np.interp``) onto the
 force stamps: the trace has one sample per force message inside the pose stream's time range.
 ``time_offset`` [s] is *added to the pose stamps* (a pose clock that runs behind the force clock).
 Refused, naming the topic: clocks that do not overlap (the message gives the offset to pass),
@@ -179,19 +180,31 @@ def _extractor(msgtype: str, axis: str, topic: str, source: str) -> Callable:
 
 def _stream(topic: BagTopic, stamps: list[int], received: list[int], values: list,
             source: str) -> _Stream:
-    """Sorted, de-duplicated samples of one topic; receive times when stamps are zero."""
+    """Sorted, de-duplicated samples of one topic; receive times when every stamp is zero
+    (a driver that does not stamp), messages with a zero stamp dropped when only some are (a
+    simulation clock starting at 0 must not switch one topic to wall-clock time)."""
     t = np.asarray(stamps, dtype=np.int64)
-    kind = "header"
-    if np.any(t <= 0):
-        warnings.warn(f"{source}: topic {topic.topic!r}: {int(np.sum(t <= 0))} of {t.size} "
-                      "header stamps are zero; using the bag's receive times instead (they "
-                      "include transport delays)", UserWarning, stacklevel=4)
-        t, kind = np.asarray(received, dtype=np.int64), "receive"
     v = np.asarray(values, dtype=float)
+    kind = "header"
+    zero = t <= 0
+    if np.all(zero):
+        warnings.warn(f"{source}: topic {topic.topic!r}: every header stamp is zero; using the "
+                      "bag's receive times instead (they include transport delays)",
+                      UserWarning, stacklevel=4)
+        t, kind = np.asarray(received, dtype=np.int64), "receive"
+    elif np.any(zero):
+        warnings.warn(f"{source}: topic {topic.topic!r}: {int(zero.sum())} of {t.size} header "
+                      "stamps are zero; those messages are dropped", UserWarning, stacklevel=4)
+        t, v = t[~zero], v[~zero]
     order = np.argsort(t, kind="stable")
     t, v = t[order], v[order]
     keep = np.concatenate([[True], np.diff(t) > 0])
-    return _Stream(topic.topic, topic.msgtype, t[keep], v[keep], kind, int(np.sum(~keep)))
+    n_dup = int(np.sum(~keep))
+    if n_dup > 0.01 * t.size:
+        warnings.warn(f"{source}: topic {topic.topic!r}: {n_dup} of {t.size} messages repeat an "
+                      "earlier stamp and are dropped; check the publisher's clock",
+                      UserWarning, stacklevel=4)
+    return _Stream(topic.topic, topic.msgtype, t[keep], v[keep], kind, n_dup)
 
 
 def _quat_z_row(q: np.ndarray) -> np.ndarray:

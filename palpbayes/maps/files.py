@@ -8,8 +8,8 @@
                       and FWHM, background, nugget (mean, sd, median, 90 % interval)
       hyper.csv       the field's hyperparameters (sigma_f, range, nugget) over their grid
       map.nc          arviz InferenceData: posterior draws of log E on the lattice (chain,
-                      draw, y, x), the background and the hyperparameters; observed_data the
-                      per-point summaries
+                      draw, y, x; coordinates in metres), the background and the
+                      hyperparameters; observed_data the per-point summaries
       lump.nc         arviz InferenceData of the lump sampler (walkers as chains)
       settings.json   options, versions, flags, detection score
       map.png         heat map, uncertainty, probability, profile (palpbayes.report.map_pages)
@@ -85,14 +85,15 @@ def _field_idata(res: MapResult):
             posterior=post,
             observed_data={"logE_mean": pts["logE_mean"].to_numpy(),
                            "logE_sd": pts["logE_sd"].to_numpy()},
-            constant_data={"x_m": lat.node_x[0, :] if lat.node_x.ndim == 2 else lat.node_x,
-                           "y_m": lat.node_y[:, 0] if lat.node_y.ndim == 2 else lat.node_y,
-                           "point_x_m": pts["x_m"].to_numpy(),
+            constant_data={"point_x_m": pts["x_m"].to_numpy(),
                            "point_y_m": pts["y_m"].to_numpy()},
+            coords={"x": lat.x0 + lat.step * np.arange(lat.nx),
+                    "y": lat.y0 + lat.step * np.arange(lat.ny)},
             dims={"log_E": ["y", "x"], "logE_mean": ["point"], "logE_sd": ["point"],
-                  "point_x_m": ["point"], "point_y_m": ["point"], "x_m": ["x"], "y_m": ["y"]},
+                  "point_x_m": ["point"], "point_y_m": ["point"]},
         )
-    idata.posterior.attrs.update({"units": "log_E: natural log of E/Pa; background_E: Pa",
+    idata.posterior.attrs.update({"units": "log_E: natural log of E/Pa; background_E: Pa; "
+                                           "x, y: palpation position [m]",
                                   "threshold_k": res.options.threshold,
                                   "palpbayes_version": __version__})
     return idata
@@ -115,7 +116,8 @@ def _settings(res: MapResult, extra: dict) -> dict:
 
     return {"palpbayes": __version__, "python": platform.python_version(),
             "numpy": np.__version__, "scipy": scipy.__version__, "dask": dask.__version__,
-            **res.settings, "detection": res.detection, "flags": res.flags,
+            **res.settings, "detection": res.detection, "p_lump": res.p_lump,
+            "lump_found": res.lump_found, "flags": res.flags,
             "contact_radius_m": res.contact_radius, "thickness_m": res.thickness,
             "lattice": {"x0_m": res.field.lattice.x0, "y0_m": res.field.lattice.y0,
                         "step_m": res.field.lattice.step, "nx": res.field.lattice.nx,

@@ -44,7 +44,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from ..errors import InputError
+from ..errors import FitError, InputError
 from .hyper import HYPER_NAMES, explore, log_pc_prior, weighted_summary
 from .lattice import Lattice, lattice_from_positions, pad
 from .spde import SpdeModel
@@ -280,6 +280,12 @@ def fit_field(x, y, mean, sd, *, prior: FieldPrior | None = None, step: float | 
              (2, 0): "a nugget this small is below what the traces' own sd can resolve"}
     grid, flags = explore(log_post, t0, bounds, grid_points=grid_points, workers=_workers(),
                           bound_notes=notes, progress=say)
+    # a point whose factorisation failed has no mean (and weight 0): leave it out
+    grid = grid[np.isfinite(grid["log_post"].to_numpy())].reset_index(drop=True)
+    if grid.empty:
+        raise FitError("the spatial field: no hyperparameter value could be factorised; check "
+                       "the per-point values for outliers or a degenerate lattice")
+    grid["weight"] = grid["weight"] / grid["weight"].sum()
     T = grid[[f"t_{n}" for n in HYPER_NAMES]].to_numpy()
     hyper = pd.DataFrame(np.exp(T), columns=list(HYPER_NAMES))
     hyper["log_post"] = grid["log_post"].to_numpy()

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -83,6 +83,26 @@ class LumpPosterior:
     acceptance: float
     n_steps: int
     flags: list[str]
+    table: SensitivityTable = field(repr=False)
+
+    def excess(self, x: np.ndarray, y: np.ndarray, *, chunk: int = 64) -> np.ndarray:
+        """The lump's log-excess log(E_app/E_b) = −log(1 − (1 − 1/rho)·V) at positions
+        (``x``, ``y``) [m], one row per draw: shape (n_draws, n_points)."""
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        d = self.draws
+        cx, cy = d["x_m"].to_numpy(), d["y_m"].to_numpy()
+        r, depth = d["radius_m"].to_numpy(), d["depth_m"].to_numpy()
+        g = 1.0 - 1.0 / d["ratio"].to_numpy()
+        out = np.empty((len(d), x.size))
+        for k in range(0, len(d), chunk):
+            sl = slice(k, k + chunk)
+            s = np.hypot(x[None, :] - cx[sl, None], y[None, :] - cy[sl, None])
+            out[sl] = -np.log1p(-g[sl, None] * self.table.batch(s, r[sl], depth[sl]))
+        return out
+
+    def p_apparent_above(self, k: float) -> float:
+        """Posterior probability that the apparent peak ratio exceeds ``k``."""
+        return float(np.mean(self.draws["apparent_ratio"].to_numpy() > k))
 
     @property
     def converged(self) -> bool:
@@ -339,7 +359,7 @@ def fit_lump(x: np.ndarray, y: np.ndarray, mean: np.ndarray, sd: np.ndarray, *,
                      f"{np.hypot(x - guess['x'], y - guess['y']).max() * 1e3:.3g} mm of the "
                      "map's guessed centre")
     return LumpPosterior(draws=draws, chains=chain, log_prob=lp, acceptance=acc,
-                         n_steps=int(sampler.iteration), flags=flags)
+                         n_steps=int(sampler.iteration), flags=flags, table=table)
 
 
 def _lump_flags(d: pd.DataFrame, p: _Problem) -> list[str]:

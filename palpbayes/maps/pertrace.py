@@ -37,8 +37,8 @@ from ..intervals import LEVEL, central
 from ..io.manifest import load_trace
 from ..lsq import fit_lsq_data
 
-__all__ = ["PointOptions", "POINT_COLUMNS", "CONNECT_TIMEOUT", "fit_point", "fit_points",
-           "dask_client", "close_client"]
+__all__ = ["PointOptions", "POINT_COLUMNS", "CONNECT_TIMEOUT", "check_positions", "fit_point",
+           "fit_points", "dask_client", "close_client"]
 
 #: How long to wait for a remote Dask scheduler before giving up.
 CONNECT_TIMEOUT = "20s"
@@ -90,9 +90,9 @@ def _empty_row(row: pd.Series) -> dict:
 def fit_point(row: pd.Series, options: PointOptions, index: int = 0) -> dict:
     """Fit one manifest row; return its :data:`POINT_COLUMNS` record.
 
-    A trace that cannot be fitted (no contact, bad geometry, unreadable file) gives a record
-    with the reason in ``error`` and NaN estimates: the map leaves its node without data
-    instead of stopping.
+    A trace that cannot be fitted (no contact, bad geometry, unreadable file, a numerical
+    failure) gives a record with the reason in ``error`` and NaN estimates: the map leaves its
+    node without data instead of stopping.
 
     Parameters
     ----------
@@ -114,6 +114,9 @@ def fit_point(row: pd.Series, options: PointOptions, index: int = 0) -> dict:
         d = post.draws(rng, int(options.draws))
     except PalpbayesError as exc:
         out["error"] = str(exc)
+        return out
+    except (ValueError, ArithmeticError, OSError) as exc:  # one odd trace must not stop a map
+        out["error"] = f"{type(exc).__name__}: {exc}"
         return out
     E = data.model.to_E(d["E_star"])
     logE = np.log(E)
@@ -149,6 +152,14 @@ def _chunks(manifest: pd.DataFrame, size: int) -> Iterator[list[tuple[int, dict]
         yield [(start + k, r) for k, r in enumerate(records[start:start + size])]
 
 
+def check_positions(manifest: pd.DataFrame) -> None:
+    """Raise :class:`InputError` unless every row has its palpation position ``x_m``, ``y_m``."""
+    for col in ("x_m", "y_m"):
+        if col not in manifest.columns or manifest[col].isna().any():
+            raise InputError(f"a map needs the palpation position of every trace: manifest "
+                             f"column {col!r} (metres) is missing or has empty cells")
+
+
 def dask_client(scheduler: str | None = None, workers: int | None = None):
     """A ``dask.distributed`` client: a new LocalCluster (``scheduler`` None or ``"local"``:
     ``workers`` single-threaded processes, default one per core) or the scheduler at an
@@ -159,14 +170,21 @@ def dask_client(scheduler: str | None = None, workers: int | None = None):
         raise InputError("the map's per-point fits need dask.distributed: "
                          "pip install 'dask[distributed]'") from exc
     if scheduler in (None, "local"):
-        n = int(workers or os.cpu_count() or 1)
+        n = int(os.cpu_count() or 1) if workers is None else int(workers)
         if n < 1:
             raise InputError(f"workers {workers!r} must be at least 1")
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                dashboard_address=None, silence_logs=40)
-        client = Client(cluster)
+        try:
+            client = Client(cluster)
+        except BaseException:
+            cluster.close()
+            raise
         client._palpbayes_cluster = cluster  # closed with the client below
         return client
+    if workers is not None:
+        raise InputError(f"workers = {workers!r} applies to the local cluster only; a cluster at "
+                         f"{scheduler!r} has the workers it was started with")
     try:
         return Client(scheduler, timeout=CONNECT_TIMEOUT)
     except (OSError, TimeoutError, ValueError) as exc:
@@ -213,10 +231,9 @@ def fit_points(manifest: pd.DataFrame, options: PointOptions | None = None, *,
         One row per trace, in manifest order.
     """
     options = options or PointOptions()
-    for col in ("x_m", "y_m"):
-        if col not in manifest.columns or manifest[col].isna().any():
-            raise InputError(f"a map needs the palpation position of every trace: manifest "
-                             f"column {col!r} (metres) is missing or has empty cells")
+    check_positions(manifest)
+    if scheduler == "synchronous" and workers is not None:
+        raise InputError("workers applies to the local cluster, not to scheduler='synchronous'")
     if chunk < 1:
         raise InputError(f"chunk {chunk!r} must be at least 1")
     from tqdm.auto import tqdm

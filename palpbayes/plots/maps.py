@@ -56,7 +56,8 @@ def _mark_lump(ax: Axes, lump: Mapping[str, tuple[float, float, float]] | None) 
 def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None = None,
                    lump: Mapping[str, tuple[float, float, float]] | None = None,
                    threshold: float | None = None, truth: tuple[float, float] | None = None,
-                   title: str | None = None) -> Figure:
+                   title: str | None = None,
+                   limits: tuple[float, float] | None = None) -> Figure:
     """One map: ``kind`` is ``mean``, ``uncertainty``, ``probability`` or ``lsq``.
 
     Parameters
@@ -75,6 +76,8 @@ def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None =
         [m] True lump centre of a simulated phantom (a circle).
     title
         Overrides the panel's title.
+    limits
+        Colour-scale limits in the panel's units (e.g. the same kPa range for two maps).
     """
     if kind not in PANELS:
         raise ValueError(f"unknown map panel {kind!r}; use one of {', '.join(PANELS)}")
@@ -82,6 +85,8 @@ def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None =
     fig, ax = _fig_ax(ax, (5.6, 4.6))
     z = map_grid(nodes, col) * scale
     kw = {"vmin": 0.0, "vmax": 1.0} if kind == "probability" else {}
+    if limits is not None:
+        kw = {"vmin": limits[0], "vmax": limits[1]}
     im = ax.imshow(z, origin="lower", extent=_extent(nodes), cmap=cmap, interpolation="nearest",
                    aspect="equal", **kw)
     fig.colorbar(im, ax=ax, label=label, shrink=0.9)

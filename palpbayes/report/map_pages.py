@@ -46,8 +46,10 @@ def _fmt(v: float, kind: str) -> str:
     return f"{v:.4g}"
 
 
-def lump_lines(res: MapResult) -> list[tuple[str, str]]:
-    """The summary page's lines: the lump, the background, the hyperparameters, the flags."""
+def lump_lines(res: MapResult, truth: dict | None = None) -> list[tuple[str, str]]:
+    """The summary page's lines: the lump, the background, the hyperparameters, the flags
+    (and the simulated phantom's truth, ``truth`` from :func:`palpbayes.sim.map.read_map_truth`,
+    beside the estimates)."""
     lat = res.field.lattice
     ok = int((res.points["error"].fillna("") == "").sum())
     lines = [("h", "The map"),
@@ -56,20 +58,29 @@ def lump_lines(res: MapResult) -> list[tuple[str, str]]:
                    f"indentation {format_length(res.settings.get('depth_m', np.nan), 3)}, "
                    f"contact radius {format_length(res.contact_radius, 3)}."),
              ("t", f"Largest P(E > {res.options.threshold:g} × background) over the map: "
-                   f"{res.detection:.3f}.")]
+                   f"{res.detection:.3f}." + ("" if res.lump is None else
+                   f"  P(a lump with apparent peak ratio > {res.options.threshold:g}): "
+                   f"{res.p_lump:.3f}" + ("." if res.lump_found else
+                                          " — below the detection level: no lump found.")))]
     med, lo, hi = res.background_interval()
     lines.append(("t", f"Background (median of the field): {format_pressure(med, 4)}, 90 % "
                        f"interval [{format_pressure(lo, 4)}, {format_pressure(hi, 4)}]."))
-    lines.append(("h", "The lump (one spherical inclusion, 90 % intervals)"))
+    lines.append(("h", "The lump (one spherical inclusion, 90 % intervals)" if res.lump_found
+                  else "The largest bump the data allow (no lump found; 90 % intervals)"))
     if res.lump is None:
         lines.append(("t", "No lump model was fitted (see the flags below)."))
     else:
         s = res.lump.summary().set_index("quantity")
-        lines.append(("m", f"{'quantity':40s} {'median':>12s} {'90 % interval':>28s}"))
+        known = _truth_values(truth)
+        head = f"{'quantity':40s} {'median':>12s} {'90 % interval':>28s}"
+        lines.append(("m", head + ("   truth (simulated)" if known else "")))
         for q, (label, kind) in _QUANTITIES.items():
             r = s.loc[q]
-            lines.append(("m", f"{label:40s} {_fmt(r['median'], kind):>12s} "
-                               f"[{_fmt(r['lo'], kind)}, {_fmt(r['hi'], kind)}]".rjust(0)))
+            row = (f"{label:40s} {_fmt(r['median'], kind):>12s} "
+                   f"{'[' + _fmt(r['lo'], kind) + ', ' + _fmt(r['hi'], kind) + ']':>28s}")
+            if q in known:
+                row += f"   {_fmt(known[q], kind)}"
+            lines.append(("m", row))
         lines.append(("t", f"Sampler: emcee, acceptance {res.lump.acceptance:.2f}, largest "
                            f"{res.lump.n_steps} steps per walker (first half burn-in)."))
     hs = res.field.hyper_summary()
@@ -81,6 +92,17 @@ def lump_lines(res: MapResult) -> list[tuple[str, str]]:
     for f in res.flags or ["none: every stage ran without a warning"]:
         lines += [("t", w) for w in _wrap("• " + f, 150)]
     return lines
+
+
+def _truth_values(truth: dict | None) -> dict[str, float]:
+    """The lump quantities a simulated phantom's truth record knows."""
+    if not truth or not truth.get("has_lump"):
+        return {}
+    keys = {"x_m": "x_m", "y_m": "y_m", "radius_m": "radius_m", "depth_m": "depth_m",
+            "ratio": "ratio", "apparent_ratio": "peak_apparent_ratio",
+            "apparent_fwhm_m": "apparent_fwhm_diameter_m", "E_background_pa": "E_background_pa",
+            "tau": "heterogeneity"}
+    return {q: float(truth[k]) for q, k in keys.items() if truth.get(k) is not None}
 
 
 _METHODS = (
@@ -122,8 +144,10 @@ def _pages(res: MapResult, truth: dict | None) -> list[_Page]:
     def heat(fig: Figure) -> None:
         a1, a2 = fig.subplots(1, 2)
         fig.subplots_adjust(top=0.86, bottom=0.1, wspace=0.3)
-        plot_map_panel(res.nodes, "mean", ax=a1, lump=lump, truth=centre)
-        plot_map_panel(res.nodes, "lsq", ax=a2, truth=centre)
+        both = np.r_[res.nodes["E_mean_pa"], res.nodes["E_lsq_pa"]] * 1e-3  # one kPa scale
+        lim = (float(np.nanmin(both)), float(np.nanmax(both)))
+        plot_map_panel(res.nodes, "mean", ax=a1, lump=lump, truth=centre, limits=lim)
+        plot_map_panel(res.nodes, "lsq", ax=a2, truth=centre, limits=lim)
 
     def one(kind: str):
         def draw(fig: Figure) -> None:
@@ -143,7 +167,7 @@ def _pages(res: MapResult, truth: dict | None) -> list[_Page]:
     for para in _METHODS:
         methods += [("t", w) for w in _wrap(para, 150)] + [("", "")]
     return [
-        _page_text("Stiffness map: summary", lump_lines(res)),
+        _page_text("Stiffness map: summary", lump_lines(res, truth)),
         _page_plot("Heat map: posterior mean of E (left) and the naive least-squares map", heat),
         _page_plot("Uncertainty map: posterior sd of E relative to its mean", one("uncertainty")),
         _page_plot(f"Probability map: P(E > {k:g} × background)", one("probability")),

@@ -163,8 +163,8 @@ def simulate_map(
     depth
         [m] Commanded indentation depth; default 10 % of ``thickness`` (the paper's protocol).
     inclusion
-        The lump; ``"default"`` is :func:`default_inclusion` (centre depth 8 mm, radius 5 mm,
-        ratio 5, near the middle of the grid but off its nodes); None for a homogeneous block.
+        The lump; ``"default"`` is :func:`default_inclusion` (centre depth 7 mm, radius 6 mm,
+        ratio 10, near the middle of the grid but off its nodes); None for a homogeneous block.
         It must lie inside the block (depth + radius <= thickness).
     heterogeneity
         sd of ln E between points (about the coefficient of variation), >= 0.

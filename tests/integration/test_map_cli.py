@@ -48,6 +48,10 @@ def test_map_writes_every_file_a_user_opens(mapped):
     idata = az.from_netcdf(mapped / "map.nc")
     assert idata.posterior["log_E"].dims == ("chain", "draw", "y", "x")
     assert idata.posterior["log_E"].shape[2:] == (9, 9)
+    np.testing.assert_allclose(idata.posterior["x"].values, np.arange(9) * 3e-3, atol=1e-12)
+    # the map's own numbers are those draws: the node table is their summary
+    logE = idata.posterior["log_E"].values.reshape(-1, 81)
+    np.testing.assert_allclose(nodes["logE_mean"], logE.mean(axis=0), rtol=1e-12)
     lump_nc = az.from_netcdf(mapped / "lump.nc")
     assert "log_A" in lump_nc.posterior
     pages = [p.extract_text() for p in PdfReader(mapped / "map-report.pdf").pages]

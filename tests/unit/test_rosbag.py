@@ -176,10 +176,23 @@ def test_dropped_pose_messages_are_refused_with_gap_and_time(sim, tmp_path):
 
 def test_zero_header_stamps_fall_back_to_receive_times_with_a_warning(sim, tmp_path):
     bag = write_trace_bag(sim, tmp_path / "b", zero_stamps=True)
-    with pytest.warns(UserWarning, match="header stamps are zero; using the bag's receive"):
+    with pytest.warns(UserWarning, match="every header stamp is zero; using the bag's receive"):
         got = read_bag(bag)
     assert got.metadata["stamps"] == "receive"
     np.testing.assert_array_equal(got.z, sim.z)
+
+
+def test_a_simulation_clock_starting_at_zero_keeps_the_header_stamps(sim, tmp_path):
+    """Sim time: the first messages are stamped 0; they are dropped, the others keep their
+    header stamps (switching one topic to receive times would misalign the two)."""
+    (tf, f), (tp, z) = _streams(sim)
+    write_bag(tmp_path / "b", (tf - tf[0], f), pose=(tp - tp[0], z), t0_ns=0)
+    with pytest.warns(UserWarning, match="1 of .* header stamps are zero; those messages are "
+                                         "dropped"):
+        got = read_bag(tmp_path / "b")
+    assert got.metadata["stamps"] == "header"
+    assert got.n_points == sim.n_points - 1
+    np.testing.assert_allclose(got.z, sim.z[1:], atol=1e-7)
 
 
 def test_not_a_bag_and_a_broken_bag_give_data_file_errors(sim, tmp_path):
