@@ -68,7 +68,7 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Fit, map, write; print where and the lump.  Returns 0."""
-    from ..maps.files import FIGURE, REPORT, prepare_out_dir, write_map
+    from ..maps.files import FIGURE, REPORT, discard, prepare_out_dir, publish, write_map
     from ..maps.pertrace import PointOptions
     from ..maps.run import MapOptions, check_map_manifest, make_map
 
@@ -81,19 +81,25 @@ def run(args: argparse.Namespace) -> int:
     map_opts = MapOptions(threshold=args.threshold, detect=args.detect, seed=args.seed,
                           lump=not args.no_lump, lump_max_steps=args.lump_max_steps)
     check_map_manifest(manifest, lump=not args.no_lump)
-    out = prepare_out_dir(args.out, args.force)  # before the fits: a bad --out fails fast
-    t0 = time.perf_counter()
-    res = make_map(manifest, point_options=point_opts, options=map_opts,
-                   scheduler=args.scheduler, workers=args.workers, progress=args.progress)
-    elapsed = time.perf_counter() - t0
-    truth = _truth(Path(args.manifest).parent)
-    write_map(res, out, extra={"manifest": str(Path(args.manifest).resolve()),
-                               "elapsed_s": elapsed})
-    if not args.no_report:
-        from ..report.map_pages import write_map_figure, write_map_report
+    stage = prepare_out_dir(args.out, args.force)  # before the fits: a bad --out fails fast
+    try:
+        t0 = time.perf_counter()
+        res = make_map(manifest, point_options=point_opts, options=map_opts,
+                       scheduler=args.scheduler, workers=args.workers, progress=args.progress)
+        elapsed = time.perf_counter() - t0
+        truth = _truth(Path(args.manifest).parent)
+        write_map(res, stage, extra={"manifest": str(Path(args.manifest).resolve()),
+                                     "elapsed_s": elapsed})
+        if not args.no_report:
+            from ..report.map_pages import write_map_figure, write_map_report
 
-        write_map_figure(res, out / FIGURE, truth=truth)
-        write_map_report(res, out / REPORT, name=Path(args.manifest).parent.name, truth=truth)
+            write_map_figure(res, stage / FIGURE, truth=truth)
+            write_map_report(res, stage / REPORT, name=Path(args.manifest).parent.name,
+                             truth=truth)
+    except BaseException:
+        discard(stage)
+        raise
+    out = publish(stage, args.out)
     n_ok = int((res.points["error"].fillna("") == "").sum())
     lat = res.field.lattice
     print(f"mapped {n_ok} of {len(res.points)} palpations on a {lat.nx} x {lat.ny} lattice "

@@ -15,8 +15,9 @@
       map.png         heat map, uncertainty, probability, profile (palpbayes.report.map_pages)
       map-report.pdf  the report pages
 
-Every file is written atomically; the csv files open in pandas (``pd.read_csv``), the netCDF
-files in arviz (``az.from_netcdf``).
+The files are written into a staging folder beside ``DIR`` and moved into it only when the
+whole run succeeded (:func:`prepare_out_dir`, :func:`publish`); the csv files open in pandas
+(``pd.read_csv``), the netCDF files in arviz (``az.from_netcdf``).
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ from __future__ import annotations
 import json
 import os
 import platform
+import shutil
+import tempfile
 import warnings
 from pathlib import Path
 
@@ -37,7 +40,7 @@ from ..io.atomic import write_csv_atomic, write_text_atomic, write_with
 from .run import MapResult
 
 __all__ = ["POINTS", "MAP", "LUMP", "HYPER", "MAP_NC", "LUMP_NC", "SETTINGS", "FIGURE",
-           "REPORT", "MAP_OUTPUTS", "prepare_out_dir", "write_map"]
+           "REPORT", "MAP_OUTPUTS", "prepare_out_dir", "publish", "discard", "write_map"]
 
 POINTS = "points.csv"
 MAP = "map.csv"
@@ -53,7 +56,10 @@ MAP_OUTPUTS = (POINTS, MAP, LUMP, HYPER, MAP_NC, LUMP_NC, SETTINGS, FIGURE, REPO
 
 
 def prepare_out_dir(out: str | os.PathLike, force: bool) -> Path:
-    """Create ``out``; refuse one holding map files unless ``force`` (then remove them)."""
+    """Check that ``out`` can take a map (refuse one holding map files unless ``force``) and
+    return a new, empty staging folder beside it.  Write everything there, then
+    :func:`publish` it: a run that fails leaves ``out`` as it was (the old map, if any, stays
+    until the new one is complete)."""
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise OutputExistsError(f"{out} exists and is not a folder; choose another --out")
@@ -61,10 +67,26 @@ def prepare_out_dir(out: str | os.PathLike, force: bool) -> Path:
     if present and not force:
         raise OutputExistsError(f"{out} already holds a map ({', '.join(present)}); use --force "
                                 "to replace it or choose another --out")
-    for n in present:
-        (out / n).unlink()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    return Path(tempfile.mkdtemp(prefix=f".{out.name}-partial-", dir=out.parent))
+
+
+def publish(stage: Path, out: str | os.PathLike) -> Path:
+    """Replace the map files in ``out`` by those of the staging folder ``stage``; remove it."""
+    out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    for n in MAP_OUTPUTS:
+        if (out / n).exists() and not (stage / n).exists():
+            (out / n).unlink()  # e.g. an old lump.csv when this map has no lump model
+    for f in stage.iterdir():
+        os.replace(f, out / f.name)
+    stage.rmdir()
     return out
+
+
+def discard(stage: Path) -> None:
+    """Remove a staging folder after a failed run."""
+    shutil.rmtree(stage, ignore_errors=True)
 
 
 def _field_idata(res: MapResult):

@@ -90,3 +90,19 @@ def test_map_refuses_what_it_cannot_do(phantom, mapped, tmp_path, capsys):
     assert main(["map", str(phantom / "manifest.csv"), "--out", str(tmp_path / "o2"),
                  "--threshold", "0.9"]) == 2
     assert "threshold" in capsys.readouterr().err
+
+
+def test_a_failed_rerun_leaves_the_previous_map_as_it_was(phantom, mapped, monkeypatch):
+    """--force writes into a staging folder and replaces the map only when the run succeeded."""
+    import palpbayes.maps.run as run
+    from palpbayes.errors import FitError
+
+    before = {p.name: p.read_bytes() for p in mapped.iterdir()}
+
+    def broken(*args, **kwargs):
+        raise FitError("simulated failure after the fits")
+
+    monkeypatch.setattr(run, "make_map", broken)
+    assert main(["map", str(phantom / "manifest.csv"), "--out", str(mapped), "--force"]) == 1
+    assert {p.name: p.read_bytes() for p in mapped.iterdir()} == before
+    assert not [p for p in mapped.parent.iterdir() if "-partial-" in p.name]
