@@ -31,9 +31,9 @@ def register(subparsers) -> argparse.ArgumentParser:
              "the lump's centre, size and stiffness ratio",
         description=(
             "Fit every trace of MANIFEST (columns x_m, y_m: palpation position in metres) with "
-            "the exact engine on Dask, combine them with a spatial GMRF prior and fit the stiff "
-            "lump; write map.csv, points.csv, lump.csv, map.nc, map.png and map-report.pdf "
-            "into --out."),
+            "the exact engine on Dask, fit the stiff lump (one spherical inclusion), then a "
+            "spatial GMRF field to what it leaves; write map.csv, points.csv, lump.csv, map.nc, "
+            "map.png and map-report.pdf into --out."),
     )
     p.add_argument("manifest", metavar="MANIFEST", help="manifest CSV with x_m and y_m columns")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
@@ -52,8 +52,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--threshold", type=float, default=1.1, metavar="K",
                    help="report P(E > K x background) per point (default 1.1)")
     g.add_argument("--detect", type=float, default=0.5, metavar="P",
-                   help="fit the lump model when some point has that probability >= P "
-                        "(default 0.5)")
+                   help="report a lump as found when P(its apparent peak ratio > K) >= P "
+                        "(default 0.5; 0: always)")
     g.add_argument("--no-lump", action="store_true", help="skip the lump model")
     g.add_argument("--lump-max-steps", type=int, default=20000, metavar="N",
                    help="cap on the emcee steps per walker of the lump model; it stops "
