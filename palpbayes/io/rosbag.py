@@ -66,7 +66,6 @@ from .bagfile import (
 )
 from .tabular import (
     auto_force_sign,
-    check_force_sign,
     check_plausible,
     split_trace_metadata,
     validate_force_sign,
@@ -385,7 +384,6 @@ def read_bag(
         source=source, metadata=free, **kwargs,
     )
     if check:
-        check_force_sign(source, trace, f"flip the sign: --force-sign {-sign:+g} "
-                         "(force_sign in the API), or leave it to auto")
-        check_plausible(trace)
+        check_plausible(trace, f"flip the sign: --force-sign {-sign:+g} (force_sign in the "
+                        "API), or leave it to auto")
     return trace

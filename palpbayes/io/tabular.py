@@ -141,12 +141,14 @@ def check_force_sign(source: str, trace: IndentationTrace, fix: str) -> None:
         )
 
 
-def check_plausible(trace: IndentationTrace) -> None:
+def check_plausible(trace: IndentationTrace,
+                    sign_fix: str = "flip the force sign with --force-sign -1") -> None:
     """Reject traces whose units or signs cannot be right for a palpation.
 
     Raises :class:`DataFileError` when z spans more than :data:`MAX_Z_SPAN_M`, when |force|
     exceeds :data:`MAX_FORCE_N`, or when the force at the deepest indentation falls below its
-    pre-contact baseline (sign flipped, :func:`palpbayes.baseline.sign_flipped`).
+    pre-contact baseline (sign flipped, :func:`palpbayes.baseline.sign_flipped`; ``sign_fix``
+    is the reader's advice for that case).
     """
     src = trace.source or trace.trace_id
     span = float(np.ptp(trace.z))
@@ -162,7 +164,7 @@ def check_plausible(trace: IndentationTrace) -> None:
             src, f"|force| reaches {format_force(fmax)}, implausible for soft-material palpation",
             "is force in mN? give the force unit, e.g. --force-unit mN",
         )
-    check_force_sign(src, trace, "flip the force sign with --force-sign -1")
+    check_force_sign(src, trace, sign_fix)
 
 
 def check_file(path: Path, source: str) -> None:
