@@ -56,7 +56,7 @@ from .mixture import NORMAL_NU, MixtureSummary, tilted_mixture
 from .priors import TracePrior
 
 __all__ = ["ExactPosterior", "exact_posterior", "refine_grid", "cell_widths", "phi_grid",
-           "node_log_mass",
+           "node_log_mass", "sampled_coordinates",
            "log_marginal_phi", "COARSE_NODES",
            "MAX_STEP", "KEEP", "PHI_NODES"]
 
@@ -307,6 +307,17 @@ class ExactPosterior:
         if self.phi.size > 1:
             out["phi"] = phi[pick]
         return out
+
+
+def sampled_coordinates(draws: dict[str, np.ndarray], names: tuple[str, ...] | list[str]
+                        ) -> dict[str, np.ndarray]:
+    """The exact engine's draws (:meth:`ExactPosterior.draws`) in the coordinates emcee
+    samples: ``log_Estar``, ``z_surf``, ``log_sigma``, ``F0`` and, when in ``names``, ``F1``
+    and ``phi`` (the prior's parameter names, :attr:`TracePrior.names`)."""
+    theta = {"log_Estar": np.log(draws["E_star"]), "z_surf": draws["z_surf"],
+             "log_sigma": np.log(draws["sigma"]), "F0": draws["F0"], "F1": draws.get("F1"),
+             "phi": draws.get("phi")}
+    return {n: theta[n] for n in names}
 
 
 def phi_grid(bounds: tuple[float, float], n: int = PHI_NODES) -> np.ndarray:

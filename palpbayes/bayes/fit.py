@@ -16,7 +16,7 @@ from ..trace import IndentationTrace
 from ..units import format_length
 from .budget import BudgetSpec, propagate
 from .diagnostics import chain_passes, compute_diagnostics, import_arviz
-from .exact import exact_posterior
+from .exact import exact_posterior, sampled_coordinates
 from .likelihood import TraceLikelihood
 from .priors import PriorSpec, TracePrior
 from .result import BayesResult
@@ -219,9 +219,7 @@ def _exact_chains(data: FitData, prior: TracePrior, rng: np.random.Generator):
     post = exact_posterior(data, prior)
     n_chains, n_draws = EXACT_DRAWS
     d = post.draws(rng, n_chains * n_draws)
-    theta = {"log_Estar": np.log(d["E_star"]), "z_surf": d["z_surf"],
-             "log_sigma": np.log(d["sigma"]), "F0": d["F0"], "F1": d.get("F1"),
-             "phi": d.get("phi")}
+    theta = sampled_coordinates(d, prior.names)
     ndim = len(prior.names)
     samples = np.column_stack([theta[n] for n in prior.names]).reshape(n_chains, n_draws, ndim)
     zs = post.z_summary()

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..bayes.exact import exact_posterior
+from ..bayes.exact import exact_posterior, sampled_coordinates
 from ..bayes.fit import bound_flags
 from ..campaign.fitjob import FitOptions, check_fittable
 from ..errors import FitError, InputError, PalpbayesError
@@ -121,10 +121,7 @@ def fit_point(row: pd.Series, options: PointOptions, index: int = 0) -> dict:
     E = data.model.to_E(d["E_star"])
     logE = np.log(E)
     lo, hi = central(E, LEVEL)
-    theta = {"log_Estar": np.log(d["E_star"]), "z_surf": d["z_surf"],
-             "log_sigma": np.log(d["sigma"]), "F0": d["F0"], "F1": d.get("F1"),
-             "phi": d.get("phi")}
-    flags = bound_flags({n: theta[n] for n in prior.bounds}, prior)
+    flags = bound_flags(sampled_coordinates(d, list(prior.bounds)), prior)
     if not post.complete:
         flags.append("surface grid stopped at its node cap: the posterior may be incomplete")
     try:
