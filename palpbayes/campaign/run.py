@@ -57,7 +57,7 @@ from .partial import fit_and_record, raise_input, read_partial
 from .settings import read_settings, settings_record
 from .source import load_source, traces_table
 
-__all__ = ["fit_campaign"]
+__all__ = ["fit_campaign", "progress_bar"]
 
 
 def _check_out_dir(out: Path, resume: bool, force: bool) -> None:
@@ -90,11 +90,13 @@ def _clear_outputs(out: Path) -> None:
 # ----------------------------------------------------------------------------- campaign
 
 
-def _progress_bar(total: int, initial: int, progress: bool | None):
+def progress_bar(total: int, progress: bool | None, *, initial: int = 0,
+                 desc: str = "fitting"):
+    """A tqdm bar of traces on stderr; ``progress`` None shows it when stderr is a terminal."""
     from tqdm.auto import tqdm
 
     show = sys.stderr.isatty() if progress is None else bool(progress)
-    return tqdm(total=total, initial=initial, disable=not show, desc="fitting", unit="trace",
+    return tqdm(total=total, initial=initial, disable=not show, desc=desc, unit="trace",
                 file=sys.stderr, dynamic_ncols=True)
 
 
@@ -229,7 +231,7 @@ def fit_campaign(
 
     done = {t.trace_id for t in traces if resume and read_partial(out, t, options) is not None}
     todo = [t for t in traces if t.trace_id not in done]
-    with _progress_bar(len(traces), len(done), progress) as bar:
+    with progress_bar(len(traces), progress, initial=len(done)) as bar:
         _run(todo, options, out, workers, lambda: bar.update(1))
 
     rows = []

@@ -21,10 +21,10 @@ runs in this process (debugging, tests).
 from __future__ import annotations
 
 import os
-import sys
 import warnings
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from itertools import islice
 
 import numpy as np
 import pandas as pd
@@ -32,6 +32,7 @@ import pandas as pd
 from ..bayes.exact import exact_posterior, sampled_coordinates
 from ..bayes.fit import bound_flags
 from ..campaign.fitjob import FitOptions, check_fittable
+from ..campaign.run import progress_bar
 from ..errors import FitError, InputError, PalpbayesError
 from ..intervals import LEVEL, central
 from ..io.manifest import load_trace
@@ -233,11 +234,7 @@ def fit_points(manifest: pd.DataFrame, options: PointOptions | None = None, *,
         raise InputError("workers applies to the local cluster, not to scheduler='synchronous'")
     if chunk < 1:
         raise InputError(f"chunk {chunk!r} must be at least 1")
-    from tqdm.auto import tqdm
-
-    show = sys.stderr.isatty() if progress is None else bool(progress)
-    bar = tqdm(total=len(manifest), disable=not show, desc="fitting points", unit="trace",
-               file=sys.stderr, dynamic_ncols=True)
+    bar = progress_bar(len(manifest), progress, desc="fitting points")
     results: list[dict] = []
 
     def done(part: list[dict]) -> None:
@@ -270,22 +267,12 @@ def _run_dask(manifest: pd.DataFrame, options: PointOptions, scheduler: str | No
         chunks = _chunks(manifest, chunk)
         opts = client.scatter(options, broadcast=True)
         pending = as_completed()
-        for rows in _take(chunks, in_flight):
+        for rows in islice(chunks, in_flight):
             pending.add(client.submit(_fit_chunk, rows, opts, pure=False))
         for fut in pending:
             done(fut.result())
             fut.release()
-            for rows in _take(chunks, 1):
+            for rows in islice(chunks, 1):
                 pending.add(client.submit(_fit_chunk, rows, opts, pure=False))
     finally:
         close_client(client)
-
-
-def _take(it: Iterator, n: int) -> Sequence:
-    out = []
-    for _ in range(n):
-        try:
-            out.append(next(it))
-        except StopIteration:
-            break
-    return out
