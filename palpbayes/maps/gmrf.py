@@ -49,7 +49,7 @@ from .hyper import HYPER_NAMES, explore, log_pc_prior, weighted_summary
 from .lattice import Lattice, lattice_from_positions, pad
 from .spde import SpdeModel
 
-__all__ = ["FieldPrior", "FieldPosterior", "fit_field", "default_margin"]
+__all__ = ["FieldPrior", "FieldPosterior", "fit_field", "default_margin", "robust_spread"]
 
 
 #: Largest range searched, in map extents (longer ranges: numerically singular precision).
@@ -66,7 +66,8 @@ def default_margin(lattice: Lattice) -> int:
     return int(min(max(math.ceil(0.2 * max(lattice.nx, lattice.ny)), 4), 20))
 
 
-def _spread(y: np.ndarray) -> float:
+def robust_spread(y: np.ndarray) -> float:
+    """1.4826·median|y − median(y)|: the sd of normal values, robust to a lump's outliers."""
     return float(1.4826 * np.median(np.abs(y - np.median(y))))
 
 
@@ -94,7 +95,7 @@ class FieldPrior:
     def resolved(self, step: float, y: np.ndarray) -> FieldPrior:
         """The prior with every ``None`` replaced by its default for lattice step ``step``
         [m] and observations ``y``; checks every value."""
-        spread = _spread(y)
+        spread = robust_spread(y)
         out = replace(self, range_0=2.0 * step if self.range_0 is None else self.range_0,
                       sigma_0=max(3 * spread, 0.05) if self.sigma_0 is None else self.sigma_0,
                       tau_0=max(2 * spread, 0.05) if self.tau_0 is None else self.tau_0)
@@ -245,7 +246,7 @@ def fit_field(x, y, mean, sd, *, prior: FieldPrior | None = None, step: float | 
     m = default_margin(lat) if margin is None else margin
     padded, index = pad(lat, m)
     pr = (prior or FieldPrior()).resolved(lat.step, yv)
-    spread = _spread(yv)
+    spread = robust_spread(yv)
     model = SpdeModel(padded, index[node], yv, sv, m0=float(np.median(yv)),
                       v0=(10.0 * (spread + 1.0)) ** 2)
     t_start = time.perf_counter()

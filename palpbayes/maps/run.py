@@ -30,7 +30,7 @@ from ..errors import InputError
 from ..intervals import LEVEL, central, central_band
 from ..io.manifest import tip_from_row
 from ..sim.inclusion import contact_radius as tip_contact_radius
-from .gmrf import FieldPosterior, FieldPrior, fit_field
+from .gmrf import FieldPosterior, FieldPrior, fit_field, robust_spread
 from .lattice import lattice_from_positions
 from .lump import LumpPosterior, fit_lump
 from .pertrace import PointOptions, check_positions, fit_points
@@ -227,7 +227,7 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
                      "thickness_m, metres)")
     else:  # the lump first: a local bump a stationary field alone would shrink away
         a = tip_contact_radius(tip, depth)
-        spread = 1.4826 * float(np.median(np.abs(good["logE_mean"] - good["logE_mean"].median())))
+        spread = robust_spread(good["logE_mean"].to_numpy())
         guess = _guess(lat, node[ok], good["logE_mean"].to_numpy(), a, max(spread, 1e-3))
         lump = fit_lump(good["x_m"].to_numpy(), good["y_m"].to_numpy(),
                         good["logE_mean"].to_numpy(), good["logE_sd"].to_numpy(),
