@@ -13,7 +13,7 @@ from ..campaign.results import ResultsFolder, load_results
 from ..errors import InputError
 from ..io.tabular import parse_bool
 from .format import _shown
-from .layout import _decorate, _new_page, _Page
+from .layout import RASTER_DPI, _Page, write_pages
 from .pages_budget import _pages_budget
 from .pages_diagnostics import _page_diagnostics
 from .pages_group import _page_group
@@ -28,9 +28,6 @@ __all__ = ["REPORT_NAME", "RASTER_DPI", "ReportInfo", "build_report"]
 
 #: Default file name of the report inside a results folder.
 REPORT_NAME = REPORT
-#: Resolution [dpi] of the rasterized parts (dense scatter, walker traces); text, axes,
-#: curves and bands stay vector graphics.
-RASTER_DPI = 110
 
 
 @dataclass
@@ -88,10 +85,6 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     -------
     ReportInfo
     """
-    from matplotlib.backends.backend_pdf import PdfPages
-
-    from ..io.atomic import write_with
-
     res = results if isinstance(results, ResultsFolder) else load_results(results)
     out = Path(pdf) if pdf is not None else res.path / REPORT_NAME
     if out.suffix.lower() != ".pdf":
@@ -113,21 +106,10 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     titles = [p.title or "palpbayes report" for p in pages]
     contents.extend(titles)
 
-    def write(tmp: Path) -> None:
-        meta = {"Title": f"palpbayes report: {res.name}", "Creator": f"palpbayes {__version__}",
-                "Subject": "Elastic modulus from robotic palpation"}
-        with PdfPages(tmp, metadata=meta) as pdfp:
-            for i, page in enumerate(pages, start=1):
-                fig = _new_page()
-                page.build(fig)
-                if page.title:
-                    _decorate(fig, page.title, footer, i, len(pages))
-                else:
-                    fig.text(0.96, 0.02, f"page {i} / {len(pages)}", fontsize=7, color="0.4",
-                             ha="right")
-                pdfp.savefig(fig, dpi=RASTER_DPI)
-
-    write_with(write, out, suffix=".pdf")
+    write_pages(pages, out, footer=footer,
+                meta={"Title": f"palpbayes report: {res.name}",
+                      "Creator": f"palpbayes {__version__}",
+                      "Subject": "Elastic modulus from robotic palpation"})
     b = res.bayes_rows()
     n_pool = 0
     if res.pooled is not None and "converged" in res.pooled:

@@ -7,8 +7,12 @@ from dataclasses import dataclass
 
 from matplotlib.figure import Figure
 
-__all__ = ["PAGE_SIZE", "TABLE_ROWS_PER_PAGE", "CHART_GROUPS_PER_PAGE", "BUDGET_GROUPS_PER_PAGE"]
+__all__ = ["PAGE_SIZE", "TABLE_ROWS_PER_PAGE", "CHART_GROUPS_PER_PAGE", "BUDGET_GROUPS_PER_PAGE",
+           "RASTER_DPI", "write_pages"]
 
+#: Resolution [dpi] of the rasterized parts (dense scatter, walker traces); text, axes,
+#: curves and bands stay vector graphics.
+RASTER_DPI = 110
 #: Page size [in]: A4 landscape.
 PAGE_SIZE = (11.69, 8.27)
 _MONO = "DejaVu Sans Mono"
@@ -85,3 +89,25 @@ def _paginate(lines: list[tuple[str, str]], per_page: float) -> list[list[tuple[
     if cur:
         pages.append(cur)
     return pages
+
+
+def write_pages(pages: Sequence[_Page], path, *, footer: str, meta: dict[str, str]):
+    """Draw ``pages`` into the PDF ``path``, written atomically: each titled page with its
+    title, ``footer`` and "page i / n"; an untitled page (a title page) with its number only."""
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    from ..io.atomic import write_with
+
+    def write(tmp) -> None:
+        with PdfPages(tmp, metadata=meta) as pdf:
+            for i, page in enumerate(pages, start=1):
+                fig = _new_page()
+                page.build(fig)
+                if page.title:
+                    _decorate(fig, page.title, footer, i, len(pages))
+                else:
+                    fig.text(0.96, 0.02, f"page {i} / {len(pages)}", fontsize=7, color="0.4",
+                             ha="right")
+                pdf.savefig(fig, dpi=RASTER_DPI)
+
+    return write_with(write, path, suffix=".pdf")

@@ -21,11 +21,10 @@ from ..maps.run import MapResult
 from ..plots.maps import plot_map, plot_map_panel, plot_profile
 from ..units import format_length, format_pressure
 from .format import _wrap
-from .layout import _decorate, _new_page, _Page, _text_lines
+from .layout import _Page, _text_lines, write_pages
 
 __all__ = ["write_map_figure", "write_map_report", "lump_lines"]
 
-_RASTER_DPI = 110
 _QUANTITIES = {
     "x_m": ("centre x", "length"), "y_m": ("centre y", "length"),
     "radius_m": ("radius", "length"), "depth_m": ("depth of the centre", "length"),
@@ -131,10 +130,6 @@ def _page_text(title: str, lines: list[tuple[str, str]]) -> _Page:
     return _Page(title, lambda fig: _text_lines(fig, lines, top=0.9, size=9))
 
 
-def _page_plot(title: str, draw) -> _Page:
-    return _Page(title, draw)
-
-
 def _pages(res: MapResult, truth: dict | None) -> list[_Page]:
     lump = res.lump_centre()
     centre = None if not truth or not truth.get("has_lump") else (truth["x_m"], truth["y_m"])
@@ -168,10 +163,10 @@ def _pages(res: MapResult, truth: dict | None) -> list[_Page]:
         methods += [("t", w) for w in _wrap(para, 150)] + [("", "")]
     return [
         _page_text("Stiffness map: summary", lump_lines(res, truth)),
-        _page_plot("Heat map: posterior mean of E (left) and the naive least-squares map", heat),
-        _page_plot("Uncertainty map: posterior sd of E relative to its mean", one("uncertainty")),
-        _page_plot(f"Probability map: P(E > {k:g} × background)", one("probability")),
-        _page_plot("Profile through the lump", profile),
+        _Page("Heat map: posterior mean of E (left) and the naive least-squares map", heat),
+        _Page("Uncertainty map: posterior sd of E relative to its mean", one("uncertainty")),
+        _Page(f"Probability map: P(E > {k:g} × background)", one("probability")),
+        _Page("Profile through the lump", profile),
         _page_text("Methods", methods),
     ]
 
@@ -188,20 +183,7 @@ def write_map_figure(res: MapResult, path: str | os.PathLike,
 def write_map_report(res: MapResult, path: str | os.PathLike, *, name: str = "map",
                      truth: dict | None = None, created: str | None = None) -> Path:
     """The map's PDF pages (module docstring), written atomically; return the path."""
-    from matplotlib.backends.backend_pdf import PdfPages
-
     created = created or _dt.date.today().isoformat()
-    pages = _pages(res, truth)
-    footer = f"palpbayes {__version__} · map {name} · {created}"
-
-    def write(tmp: Path) -> None:
-        meta = {"Title": f"palpbayes stiffness map: {name}",
-                "Creator": f"palpbayes {__version__}"}
-        with PdfPages(tmp, metadata=meta) as pdf:
-            for i, page in enumerate(pages, start=1):
-                fig = _new_page()
-                page.build(fig)
-                _decorate(fig, page.title, footer, i, len(pages))
-                pdf.savefig(fig, dpi=_RASTER_DPI)
-
-    return write_with(write, path, suffix=".pdf")
+    return write_pages(_pages(res, truth), path, footer=f"palpbayes {__version__} · map {name} · "
+                       f"{created}", meta={"Title": f"palpbayes stiffness map: {name}",
+                                          "Creator": f"palpbayes {__version__}"})
