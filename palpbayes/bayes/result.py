@@ -24,7 +24,7 @@ from ..contact import Tip
 from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
 from ..intervals import LEVEL, central, central_band
-from ..io.atomic import write_with
+from ..io.atomic import write_netcdf_atomic
 from .budget import Budget
 from .diagnostics import Diagnostics, import_arviz
 
@@ -207,11 +207,7 @@ class BayesResult:
         """
         self.idata.posterior.attrs[STATE_ATTR] = json.dumps(self._state(), default=_to_json,
                                                             allow_nan=True)
-
-        def _write(tmp: Path) -> None:
-            self.idata.to_netcdf(str(tmp), engine="h5netcdf")
-
-        return write_with(_write, path, suffix=".nc")
+        return write_netcdf_atomic(self.idata, path)
 
     def _state(self) -> dict:
         """Everything but the draws, the fitted points and the least-squares fit."""

@@ -84,3 +84,12 @@ def write_with(writer: Callable[[Path], None], path: str | os.PathLike,
 
 
 __all__.append("write_with")
+
+
+def write_netcdf_atomic(idata, path: str | os.PathLike) -> Path:
+    """Write an arviz InferenceData with the h5netcdf engine atomically; return the path."""
+    return write_with(lambda tmp: idata.to_netcdf(str(tmp), engine="h5netcdf"), path,
+                      suffix=".nc")
+
+
+__all__.append("write_netcdf_atomic")

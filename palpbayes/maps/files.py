@@ -36,7 +36,7 @@ import pandas as pd
 from .. import __version__
 from ..bayes.diagnostics import import_arviz
 from ..errors import OutputExistsError
-from ..io.atomic import write_csv_atomic, write_text_atomic, write_with
+from ..io.atomic import write_csv_atomic, write_netcdf_atomic, write_text_atomic
 from .run import MapResult
 
 __all__ = ["POINTS", "MAP", "LUMP", "HYPER", "MAP_NC", "LUMP_NC", "SETTINGS", "FIGURE",
@@ -146,10 +146,6 @@ def _settings(res: MapResult, extra: dict) -> dict:
                         "ny": res.field.lattice.ny}, **extra}
 
 
-def _write_nc(idata, path: Path) -> None:
-    write_with(lambda tmp: idata.to_netcdf(str(tmp), engine="h5netcdf"), path, suffix=".nc")
-
-
 def write_map(res: MapResult, out: str | os.PathLike, *, extra: dict | None = None) -> list[Path]:
     """Write the tables, netCDF files and settings of a map into ``out`` (figures and the
     report: :func:`palpbayes.report.map_pages.write_map_report`); return the paths."""
@@ -159,10 +155,10 @@ def write_map(res: MapResult, out: str | os.PathLike, *, extra: dict | None = No
              write_csv_atomic(res.field.hyper, out / HYPER, index=False)]
     if res.lump is not None:
         paths.append(write_csv_atomic(res.lump.summary(), out / LUMP, index=False))
-    _write_nc(_field_idata(res), out / MAP_NC)
+    write_netcdf_atomic(_field_idata(res), out / MAP_NC)
     paths.append(out / MAP_NC)
     if res.lump is not None:
-        _write_nc(_lump_idata(res), out / LUMP_NC)
+        write_netcdf_atomic(_lump_idata(res), out / LUMP_NC)
         paths.append(out / LUMP_NC)
     text = json.dumps(_settings(res, extra or {}), indent=2, default=_jsonable)
     paths.append(write_text_atomic(text + "\n", out / SETTINGS))
