@@ -5,6 +5,24 @@ repository checkout (``$PALPBAYES_SHARED/data`` when that variable is set).  Tes
 through the :func:`shared_data` fixture, so that a missing folder skips the test on a
 developer's machine but FAILS it on CI (``CI=true``), where a silent skip would hide that the
 real-data tests never ran.
+
+Hypothesis (the property tests in ``tests/unit``) runs under a settings profile loaded here,
+before any test module is imported:
+
+``deterministic`` (the default)
+    ``derandomize=True``: the examples are a fixed function of each test (and of the
+    Hypothesis version), so the default suite, locally and on CI, checks the same examples every
+    run; a failure is a real regression, never the luck of the draw.  100 examples
+    (Hypothesis' own default), no deadline (CI machines are slow and uneven), and a failing
+    example is printed with its ``@reproduce_failure`` blob.
+``wide`` (``HYPOTHESIS_PROFILE=wide pytest ...``)
+    Random examples, 10 times as many, for a deliberate search; add what it finds to the test
+    with ``@example(...)`` so the default run checks it from then on.
+
+A test that sets its own ``max_examples`` states it as ``examples(n)``
+(``from propbudget import examples``): n in the default profile, scaled with the profile's
+count in ``wide``.  Per-test ``@settings`` must not set ``derandomize``, ``database`` or use
+``@seed``, which would override the profile.
 """
 
 from __future__ import annotations
@@ -14,6 +32,15 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
+
+#: Name of the Hypothesis profile used unless HYPOTHESIS_PROFILE names another one.
+DEFAULT_HYPOTHESIS_PROFILE = "deterministic"
+settings.register_profile(DEFAULT_HYPOTHESIS_PROFILE, derandomize=True, max_examples=100,
+                          deadline=None, print_blob=True)
+settings.register_profile("wide", derandomize=False, max_examples=1000, deadline=None,
+                          print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or DEFAULT_HYPOTHESIS_PROFILE)
 
 #: The shared folder: $PALPBAYES_SHARED, else ../shared beside the repository (as on CI).
 SHARED = Path(os.environ.get("PALPBAYES_SHARED")

@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+from propbudget import examples
 
 from palpbayes.errors import InputError
 from palpbayes.kinematics import (
@@ -202,7 +203,7 @@ def test_input_error_is_value_error():
 angles = arrays(np.float64, (8, 6), elements=st.floats(-2 * PI, 2 * PI, allow_nan=False))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(q=angles, offset=st.floats(0.0, 0.3))
 def test_rotation_is_proper_orthonormal(q, offset):
     T = forward_kinematics(q, UR3E, offset)
@@ -213,7 +214,7 @@ def test_rotation_is_proper_orthonormal(q, offset):
     np.testing.assert_array_equal(T[:, 3], np.broadcast_to([0.0, 0.0, 0.0, 1.0], (8, 4)))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(q=angles, theta=st.floats(-2 * PI, 2 * PI), offset=st.floats(0.0, 0.3))
 def test_base_rotation_leaves_z_unchanged(q, theta, offset):
     q2 = q.copy()

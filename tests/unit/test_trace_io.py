@@ -5,6 +5,7 @@ import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from propbudget import examples
 
 from palpbayes.contact import Tip, force
 from palpbayes.errors import DataFileError, InputError, NoContactError
@@ -218,7 +219,7 @@ def test_manifest_round_trip_and_missing_file(tmp_path):
         read_manifest(tmp_path / "neg.csv")
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=examples(25), deadline=None)
 @given(z_unit=st.sampled_from(["m", "mm", "um", "cm"]),
        f_unit=st.sampled_from(["N", "mN", "uN", "kN"]),
        t_unit=st.sampled_from(["s", "ms"]), sign=st.sampled_from([1.0, -1.0]))

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from propbudget import examples
 
 from palpbayes.units import (
     FORCE_PREFIXES,
@@ -138,7 +139,7 @@ _FINITE = st.floats(min_value=-1e15, max_value=1e15, allow_nan=False, allow_infi
 @pytest.mark.parametrize("fmt, prefixes", [(format_force, FORCE_PREFIXES),
                                            (format_length, LENGTH_PREFIXES),
                                            (format_pressure, PRESSURE_PREFIXES)])
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(x=_FINITE, digits=st.integers(min_value=1, max_value=8))
 def test_round_trip(fmt, prefixes, x, digits):
     """The printed number times the prefix factor is x to within rounding to ``digits``."""
