@@ -3,15 +3,16 @@
 Every law is written as F = E*·s(d), with E* = E/(1-nu²) the effective modulus and s(d) the
 *shape function* [m²] of the tip (0 for d <= 0).  Power laws have s(d) = g·d^m, so
 F = k·d^m with k = E*·g; the exact sphere has no power form but stays linear in E*.  An optional
-finite-thickness factor (see :mod:`.thickness`) multiplies s(d).
+bottom-effect factor of a layer on a rigid base (:mod:`.layer`; the literature's closed forms
+in :mod:`.thickness`) multiplies s(d).
 
 Each tip kind is one module of this package (``flat``, ``paraboloid``, ``sphere``, ``cone``,
 ``power``) holding its formulas and its :class:`~.registry.ContactLaw`, registered by
 ``LAW = register(ContactLaw(...))``.  Importing this package imports every module in it, so a
 new tip kind is one new file here: :func:`get_law` and :func:`registered_kinds` find it, and so
 do :class:`Tip`, the fits, the checks, the manifest and the command line.  Helper modules
-(:mod:`.registry`, :mod:`.parameters`, :mod:`.thickness`, :mod:`.mdr`) register
-nothing.
+(:mod:`.registry`, :mod:`.parameters`, :mod:`.layer`, :mod:`.thickness`, :mod:`.mdr`)
+register nothing.
 
     >>> from palpbayes.contact import Tip, force
     >>> round(float(force(1e-3, E=100e3, nu=0.3, tip=Tip("paraboloid", radius=0.01))), 4)
@@ -28,6 +29,7 @@ import numpy as np
 
 from ..errors import GeometryError
 from ..units import format_length
+from . import layer
 from .parameters import TIP_PARAMETERS, TipParameter, half_angle_from_degrees
 from .registry import (
     ContactLaw,
@@ -155,43 +157,62 @@ def youngs_modulus(Estar, nu: float):
 
 
 def thickness_factor(
-    depth: np.ndarray, tip: Tip, thickness_m: float, nu: float, bonded: bool = True
+    depth: np.ndarray, tip: Tip, thickness_m, nu: float, base: str = "bonded"
 ) -> np.ndarray:
-    """Finite-thickness factor on the force for ``tip`` on a layer of thickness h [m].
+    """Bottom-effect factor F_layer/F_half-space for ``tip`` on a layer of thickness h [-].
 
-    The correction of the tip's law (``ContactLaw.thickness_factor``): Dimitriadis et al.
-    (2002) for paraboloid and sphere, Hayes et al. (1972) for the bonded flat punch; see
-    :mod:`palpbayes.contact.thickness` for sources and validity.
+    The exact linear-elastic solution of :mod:`palpbayes.contact.layer` (the layer's
+    integral equation, Hayes et al. 1972; Dimitriadis et al. 2002), read at chi = a(d)/h with
+    a(d) the tip's half-space contact radius (``ContactLaw.contact_radius``: the punch radius,
+    sqrt(R·d), Sneddon's sphere radius, (2/pi)·d·tan(alpha), the MDR radius of c·r^n).
+    The closed-form series of the literature are in :mod:`palpbayes.contact.thickness`.
+
+    Parameters
+    ----------
+    depth
+        [m] Indentation depth(s).
+    tip
+        The indenter.
+    thickness_m
+        [m] Layer thickness h, a number or an array broadcastable with ``depth`` (one per
+        walker or draw); ``inf`` is the half-space (factor 1).
+    nu
+        Poisson ratio [-] (the bonded base depends on it; the frictionless one does not).
+    base
+        ``"bonded"`` (no slip at the base) or ``"free"`` (frictionless base).
 
     Raises
     ------
     GeometryError
-        For a tip whose law has no correction (cone, power law), for a non-bonded flat punch,
-        or outside the correction's range (Dimitriadis: chi = sqrt(R·d)/h <= 1; Hayes:
-        a/h <= 1 and 0.2 <= nu <= 0.5).
+        For a tip whose law has no layer solution, a non-positive thickness or an unknown base.
     """
-    if not (thickness_m is not None and math.isfinite(thickness_m) and thickness_m > 0):
+    h = np.asarray(thickness_m, dtype=float)
+    if not (h.size and np.all(h > 0)):  # inf: no layer (the half-space limit), factor 1
         raise GeometryError(f"specimen thickness {thickness_m!r} m must be positive")
-    correction = get_law(tip).thickness_factor
-    if correction is None:
-        have = [law.kind for law in registered_laws() if law.thickness_factor is not None]
-        listed = " and ".join([", ".join(have[:-1]), have[-1]] if len(have) > 1 else have)
+    if base not in layer.BASES:
+        raise GeometryError(f"unknown base condition {base!r}; use one of "
+                            f"{', '.join(layer.BASES)}")
+    law = get_law(tip)
+    if law.contact_radius is None:
+        have = [x.kind for x in registered_laws() if x.contact_radius is not None]
         raise GeometryError(
-            f"no finite-thickness correction for tip '{tip.kind}' (only {listed} "
-            f"{'has' if len(have) == 1 else 'have'} one); switch the correction off: drop "
-            "--finite-thickness on the command line (thickness_correction=False, or "
-            "thickness_m=None, in the API)"
-        )
-    return correction(np.asarray(depth, dtype=float), tip, thickness_m, nu, bonded)
+            f"no layer (finite-thickness) solution for tip '{tip.kind}' (only "
+            f"{', '.join(have)} have one); fit it as a half-space: --half-space on the "
+            "command line (thickness=None in the API)")
+    n = law.profile_exponent(tip)
+    a = law.contact_radius(np.asarray(depth, dtype=float), tip)
+    if math.isinf(n):  # flat punch: a is the punch radius at every depth
+        return layer.flat_table(nu, base).factor(a / h)
+    return layer.profile_factor(a / h, n, nu, base)
 
 
 def shape(
     depth: np.ndarray,
     tip: Tip,
     *,
-    thickness_m: float | None = None,
+    thickness_m=None,
     nu: float | None = None,
-    bonded: bool = True,
+    base: str = "bonded",
 ) -> np.ndarray:
     """Force per unit effective modulus F/E* [m²] (0 for non-positive depth).
 
@@ -202,17 +223,18 @@ def shape(
     tip
         The indenter.
     thickness_m
-        [m] Specimen thickness for the finite-thickness correction; None for a half-space.
+        [m] Layer thickness for the bottom effect (:func:`thickness_factor`; a number or an
+        array broadcastable with ``depth``); None for a half-space.
     nu
         Poisson ratio [-], needed only with ``thickness_m``.
-    bonded
-        Specimen bonded to the base (finite-thickness correction only).
+    base
+        ``"bonded"`` or ``"free"`` base of the layer (only with ``thickness_m``).
     """
     s = get_law(tip).shape(depth, tip)
     if thickness_m is not None:
         if nu is None:
             raise GeometryError("the finite-thickness correction needs the Poisson ratio nu")
-        s = s * thickness_factor(depth, tip, thickness_m, nu, bonded)
+        s = s * thickness_factor(depth, tip, thickness_m, nu, base)
     return s
 
 
@@ -228,7 +250,7 @@ def force(
     tip: Tip,
     *,
     thickness_m: float | None = None,
-    bonded: bool = True,
+    base: str = "bonded",
 ) -> np.ndarray:
     """Contact force F [N] of ``tip`` pressed ``depth`` [m] into a material (E [Pa], nu [-]).
 
@@ -236,7 +258,7 @@ def force(
     broadcasting).
     """
     nu = check_nu(nu)
-    s = shape(depth, tip, thickness_m=thickness_m, nu=nu, bonded=bonded)
+    s = shape(depth, tip, thickness_m=thickness_m, nu=nu, base=base)
     return effective_modulus(E, nu) * s
 
 

@@ -12,7 +12,7 @@ import numpy as np
 
 from .registry import ContactLaw, register
 
-__all__ = ["EXPONENT", "LAW", "prefactor", "shape"]
+__all__ = ["EXPONENT", "LAW", "contact_radius", "prefactor", "shape"]
 
 EXPONENT = 2.0
 
@@ -36,6 +36,11 @@ def shape(depth: np.ndarray, half_angle: float) -> np.ndarray:
     return prefactor(half_angle) * d * d
 
 
+def contact_radius(depth: np.ndarray, half_angle: float) -> np.ndarray:
+    """Contact radius a = (2/pi)·d·tan(alpha) [m] (Sneddon 1965); 0 for non-positive depth."""
+    return 2.0 / np.pi * np.tan(half_angle) * np.clip(np.asarray(depth, dtype=float), 0.0, None)
+
+
 #: The cone's entry of the registry (no length scale: ``scaled`` is None).
 LAW = register(ContactLaw(
     kind="cone",
@@ -52,4 +57,6 @@ LAW = register(ContactLaw(
     summary="Cone of half-opening angle alpha: F = (2/pi)·E*·tan(alpha)·d² (Sneddon).",
     describe=lambda tip: f"cone alpha={math.degrees(tip.half_angle):g} deg",
     order=40,
+    contact_radius=lambda depth, tip: contact_radius(depth, tip.half_angle),
+    profile_exponent=lambda tip: 1.0,
 ))

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..units import format_length
 from .registry import ContactLaw, register, scale_radius
-from .thickness import hayes_tip_factor
 
 __all__ = ["EXPONENT", "LAW", "prefactor", "shape"]
 
@@ -51,6 +52,8 @@ LAW = register(ContactLaw(
     describe=lambda tip: f"flat a={format_length(tip.radius, 6)}",
     order=10,
     scaled=scale_radius,
-    thickness_factor=hayes_tip_factor,
+    # on a layer: Hayes et al. (1972)'s punch, solved for any nu and base (.layer)
+    contact_radius=lambda depth, tip: np.full(np.shape(depth), float(tip.radius)),
+    profile_exponent=lambda tip: math.inf,
     default_fit_fraction=0.2,  # the paper's: the start of a flat punch's contact is not linear
 ))

@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import gammaln
 
-__all__ = ["hess_factor", "power_law_exponent", "power_law_prefactor", "shape"]
+__all__ = ["hess_factor", "power_law_exponent", "power_law_prefactor", "shape",
+           "contact_radius"]
 
 
 def hess_factor(n: float) -> float:
@@ -50,3 +51,10 @@ def shape(depth: np.ndarray, c: float, n: float) -> np.ndarray:
     """
     d = np.clip(np.asarray(depth, dtype=float), 0.0, None)
     return power_law_prefactor(c, n) * d ** power_law_exponent(n)
+
+
+def contact_radius(depth: np.ndarray, c: float, n: float) -> np.ndarray:
+    """Contact radius a = (d/(kappa_n·c))^(1/n) [m] of the profile f = c·r^n (the MDR's
+    d = g(a)); 0 for non-positive depth."""
+    d = np.clip(np.asarray(depth, dtype=float), 0.0, None)
+    return (d / (hess_factor(n) * c)) ** (1.0 / n)

@@ -9,9 +9,8 @@ import numpy as np
 
 from ..units import format_length
 from .registry import ContactLaw, register, scale_radius
-from .thickness import dimitriadis_tip_factor
 
-__all__ = ["EXPONENT", "LAW", "prefactor", "shape"]
+__all__ = ["EXPONENT", "LAW", "contact_radius", "prefactor", "shape"]
 
 EXPONENT = 1.5
 
@@ -35,6 +34,11 @@ def shape(depth: np.ndarray, radius: float) -> np.ndarray:
     return prefactor(radius) * d * np.sqrt(d)
 
 
+def contact_radius(depth: np.ndarray, radius: float) -> np.ndarray:
+    """Hertz contact radius a = sqrt(R·d) [m]; 0 for non-positive depth."""
+    return np.sqrt(radius * np.clip(np.asarray(depth, dtype=float), 0.0, None))
+
+
 #: The paraboloid's entry of the registry.
 LAW = register(ContactLaw(
     kind="paraboloid",
@@ -51,7 +55,8 @@ LAW = register(ContactLaw(
     describe=lambda tip: f"paraboloid R={format_length(tip.radius, 6)}",
     order=30,
     scaled=scale_radius,
-    thickness_factor=dimitriadis_tip_factor,
+    contact_radius=lambda depth, tip: contact_radius(depth, tip.radius),
+    profile_exponent=lambda tip: 2.0,
     max_depth=lambda tip: tip.radius,
     max_depth_name="tip radius",
 ))

@@ -3,7 +3,7 @@ Reduction (Popov & Hess 2015); the formulas are in :mod:`.mdr`."""
 
 from __future__ import annotations
 
-from .mdr import power_law_exponent, power_law_prefactor, shape
+from .mdr import contact_radius, power_law_exponent, power_law_prefactor, shape
 from .registry import ContactLaw, Tip, register
 
 __all__ = ["LAW"]
@@ -30,4 +30,6 @@ LAW = register(ContactLaw(
     describe=lambda tip: f"power c={tip.c:g} n={tip.n:g}",
     order=50,
     scaled=_scaled,
+    contact_radius=lambda depth, tip: contact_radius(depth, tip.c, tip.n),
+    profile_exponent=lambda tip: float(tip.n),
 ))

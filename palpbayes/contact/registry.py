@@ -66,9 +66,15 @@ class ContactLaw:
     scaled
         ``scaled(tip, factor) -> Tip`` with every length multiplied by ``factor`` (the budget's
         tip-radius tolerance), or None when the tip has no length scale (cone).
-    thickness_factor
-        ``thickness_factor(depth, tip, h, nu, bonded) -> factor`` on s for a layer of thickness
-        h [m] (:mod:`.thickness`), or None when no correction is implemented.
+    contact_radius
+        ``contact_radius(depth, tip) -> a`` [m], the contact radius on the half-space at each
+        depth (the punch's radius for a flat punch): the length the bottom effect of a layer of
+        thickness h is read against (:mod:`.layer`), or None when the law has no layer
+        solution.
+    profile_exponent
+        ``profile_exponent(tip) -> n`` of the tip's profile f(r) = c·r^n near the apex (2 for
+        paraboloid and sphere, 1 for the cone, ``math.inf`` for the flat punch), selecting the
+        layer solution (:mod:`.layer`); None together with ``contact_radius``.
     default_fit_fraction
         Fraction of the penetration not fitted by default (the paper: 0.2 for the flat punch).
     max_depth, max_depth_name
@@ -92,7 +98,8 @@ class ContactLaw:
     describe: Callable[[Tip], str]
     order: int = 100
     scaled: Callable[[Tip, float], Tip] | None = None
-    thickness_factor: Callable[..., np.ndarray] | None = None
+    contact_radius: Callable[[np.ndarray, Tip], np.ndarray] | None = None
+    profile_exponent: Callable[[Tip], float] | None = None
     default_fit_fraction: float = 0.0
     max_depth: Callable[[Tip], float] | None = None
     max_depth_name: str = ""
@@ -109,6 +116,9 @@ class ContactLaw:
         if (self.exponent is None) != (self.prefactor is None):
             raise ValueError(f"contact law {self.kind!r}: give both exponent and prefactor "
                              "(a power law) or neither")
+        if (self.contact_radius is None) != (self.profile_exponent is None):
+            raise ValueError(f"contact law {self.kind!r}: give both contact_radius and "
+                             "profile_exponent (a layer solution) or neither")
         if not 0.0 <= self.default_fit_fraction < 1.0:
             raise ValueError(f"contact law {self.kind!r}: default_fit_fraction must lie in "
                              "[0, 1)")

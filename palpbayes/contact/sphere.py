@@ -18,7 +18,6 @@ import numpy as np
 from ..units import format_length
 from . import paraboloid
 from .registry import ContactLaw, Tip, register, scale_radius
-from .thickness import dimitriadis_tip_factor
 
 __all__ = ["LAW", "contact_radius", "hertz_difference", "shape"]
 
@@ -118,8 +117,9 @@ LAW = register(ContactLaw(
     describe=lambda tip: f"sphere R={format_length(tip.radius, 6)}",
     order=20,
     scaled=scale_radius,
-    # Dimitriadis' series is derived for the paraboloid; applied with chi = sqrt(R·d)/h
-    thickness_factor=dimitriadis_tip_factor,
+    # on a layer: the paraboloid's solution at the sphere's own contact radius (.layer)
+    contact_radius=lambda depth, tip: contact_radius(depth, tip.radius),
+    profile_exponent=lambda tip: 2.0,
     max_depth=lambda tip: tip.radius,
     max_depth_name="tip radius",
     hertz_approximation=lambda tip: Tip("paraboloid", radius=tip.radius),

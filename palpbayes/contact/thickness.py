@@ -1,75 +1,72 @@
-"""Finite-thickness corrections for a layer of thickness h on a rigid base.
+"""The literature's closed-form bottom-effect corrections, beside the exact layer solution.
 
-Each function returns a multiplicative factor on the half-space force; the force stays linear
-in E*, so least squares and the posterior keep their structure.  The ``*_tip_factor``
-functions take a :class:`~palpbayes.contact.registry.Tip`: the law modules name them as their
-``ContactLaw.thickness_factor``.
+palpbayes computes the bottom effect of a layer on a rigid base from the exact linear-elastic
+solution (:mod:`palpbayes.contact.layer`, used by :func:`palpbayes.contact.thickness_factor`).
+The closed forms that AFM and indentation software use are kept here, with their sources, so
+that they can be compared with it and used where a reader needs a published formula.  Their
+validity, measured against the layer solution (``tests/unit/test_layer.py``):
 
-* Paraboloid / sphere: Dimitriadis et al., *Biophys. J.* 82 (2002) 2798-2810, eqs. 11-12 with
-  chi = sqrt(R·d)/h, for general nu, bonded or non-bonded to the base.  The series is derived
-  for small chi and is accurate to a few percent up to chi ~ 1 (validity stated in the paper as
-  contact radius well below the thickness).  **Validity enforced here: chi <= 1**
-  (:data:`DIMITRIADIS_CHI_MAX`); beyond it the truncated series is no longer a correction but
-  an artefact of the truncation: at nu = 0.3 the bonded factor peaks near chi = 1.65 and turns
-  negative at chi = 2.5 (nu = 0: at chi = 2.1), so :func:`dimitriadis_factor` raises
-  :class:`~palpbayes.errors.GeometryError` rather than return it.  At nu = 0.5 the general form
-  gives the bonded
-  factor 1 + 1.133·chi + 1.283·chi² + 0.769·chi³ - 0.0975·chi⁴; the paper's printed table has
-  +0.0975.  **palpbayes uses the general form (minus sign)**; the term is below 0.1 % for
-  chi < 0.3.  A public implementation writes 4·a0²/pi instead of 4·a0²/pi²: this one does not
-  (tested against the nu = 0.5 coefficients).  For the exact sphere the same factor is applied
-  with chi = sqrt(R·d)/h (Dimitriadis' derivation is for the paraboloid).
-* Flat punch bonded to the base: Hayes et al., *J. Biomech.* 5 (1972) 541-551, F = 2·a·E*·d·
-  kappa(a/h, nu).  Tabulated kappa at a/h = 0.2/0.4/0.6/1.0 for nu = 0.3 and 0.5, interpolated
-  with a monotone cubic (PCHIP) through kappa(0) = 1 in a/h and linearly in nu.  Valid for
-  a/h <= 1 and 0.3 <= nu <= 0.5; nu in [0.2, 0.3) is linearly extrapolated (documented,
-  < 3 % from the nu = 0.3 value at a/h <= 0.6); outside that it raises.
+* **Dimitriadis et al.**, *Biophys. J.* 82 (2002) 2798–2810, eqs. 11–12: paraboloid, chi =
+  sqrt(R·d)/h, general nu, bonded or not.  A small-chi series, below the solution as chi grows:
+  bonded at nu = 0.3 −0.6 % at chi = 0.2, −1.2 % at 0.27, −2.2 % at 0.36, −4 % at 0.49; at
+  nu = 0.5 −1.1 %, −2.2 %, −4.3 %, −8 %.  The non-bonded form is within 0.8 % for chi <= 0.36
+  at nu = 0.3 but +1.4 % at chi = 0.1 and +3.9 % at 0.27 at nu = 0.5: its coefficients
+  depend on nu, the frictionless layer's exact kernel does not. At nu = 0.5 the general form gives
+  the bonded 1 + 1.133·chi + 1.283·chi² + 0.769·chi³ − 0.0975·chi⁴ (the paper's table prints
+  +0.0975; the general form is used here). A public implementation writes 4·a0²/pi for 4·a0²/pi²;
+  this one does not.  **Validity enforced: chi <= 1** (:data:`DIMITRIADIS_CHI_MAX`): beyond it the
+  truncated series is an artefact (at nu = 0.3 the bonded factor turns negative at chi = 2.5).
+* **Garcia & Garcia**, *Biophys. J.* 114 (2018) 2923–2932: bonded, nu = 0.5 polynomials for
+  the paraboloid (within 0.2 % of the solution for chi <= 0.35, 0.6 % at 0.49), the cone
+  (within 0.3 % for x = d·tan(alpha)/h <= 0.75) and the flat punch (within 3 % for
+  a/h <= 1).  Fits at nu = 0.5: **not valid at other nu** (at nu = 0.3 the paraboloid's is
+  10 % above the solution at chi = 0.27).
+* **Hayes et al.**, *J. Biomech.* 5 (1972) 541–551: the bonded flat punch's kappa(a/h, nu),
+  tabulated here at a/h = 0.2/0.4/0.6/1.0 for nu = 0.3 and 0.5 (docs/design.md §1).  The layer
+  solution reproduces these eight numbers to 4 digits and extends them to any nu, any a/h and
+  the frictionless base.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 
 from ..errors import GeometryError
 from ..units import format_length
 
-if TYPE_CHECKING:
-    from .registry import Tip
-
 __all__ = [
+    "DIMITRIADIS_CHI_MAX",
     "dimitriadis_coefficients",
     "dimitriadis_factor",
-    "dimitriadis_tip_factor",
-    "hayes_kappa",
-    "hayes_tip_factor",
+    "GARCIA_COEFFICIENTS",
+    "garcia_factor",
     "HAYES_A_OVER_H",
     "HAYES_KAPPA",
-    "DIMITRIADIS_CHI_MAX",
+    "HAYES_NU",
 ]
 
 #: Largest chi = sqrt(R·d)/h at which the Dimitriadis et al. (2002) series is used [-].
 DIMITRIADIS_CHI_MAX = 1.0
 
 
-def dimitriadis_coefficients(nu: float, bonded: bool = True) -> np.ndarray:
-    """Coefficients [1, c1, c2, c3, c4] of the Dimitriadis polynomial in chi.
+def dimitriadis_coefficients(nu: float, base: str = "bonded") -> np.ndarray:
+    """Coefficients [1, c1, c2, c3, c4] of the Dimitriadis et al. (2002) polynomial in chi.
 
     Parameters
     ----------
     nu
         Poisson ratio [-], 0 <= nu < 0.5 (0.5 allowed as a limit).
-    bonded
-        True if the layer is bonded to the rigid base, False if it may slip.
+    base
+        ``"bonded"`` (layer bonded to the rigid base) or ``"free"`` (may slip).
     """
-    if bonded:
+    if base == "bonded":
         a0 = -(1.2876 - 1.4678 * nu + 1.3442 * nu**2) / (1.0 - nu)
         b0 = (0.6387 - 1.0277 * nu + 1.5164 * nu**2) / (1.0 - nu)
-    else:
+    elif base == "free":
         a0 = -0.347 * (3.0 - 2.0 * nu) / (1.0 - nu)
         b0 = 0.056 * (5.0 - 2.0 * nu) / (1.0 - nu)
+    else:
+        raise GeometryError(f"unknown base condition {base!r}; use 'bonded' or 'free'")
     pi = np.pi
     return np.array(
         [
@@ -82,10 +79,9 @@ def dimitriadis_coefficients(nu: float, bonded: bool = True) -> np.ndarray:
     )
 
 
-def dimitriadis_factor(
-    depth: np.ndarray, radius: float, thickness: float, nu: float, bonded: bool = True
-) -> np.ndarray:
-    """Force correction factor for a paraboloid/sphere on a layer of thickness h [-].
+def dimitriadis_factor(depth: np.ndarray, radius: float, thickness: float, nu: float,
+                       base: str = "bonded") -> np.ndarray:
+    """Dimitriadis et al. (2002)'s force factor for a paraboloid on a layer [-].
 
     Parameters
     ----------
@@ -97,101 +93,52 @@ def dimitriadis_factor(
         [m] Layer thickness h.
     nu
         Poisson ratio [-].
-    bonded
-        Layer bonded to the base (True) or free to slip (False).
+    base
+        ``"bonded"`` or ``"free"``.
 
     Raises
     ------
     GeometryError
-        If chi = sqrt(R·d)/h exceeds :data:`DIMITRIADIS_CHI_MAX` (= 1) at any depth: the series
-        is outside its validity (Dimitriadis et al. 2002; see the module notes).
+        If chi = sqrt(R·d)/h exceeds :data:`DIMITRIADIS_CHI_MAX` (= 1) at any depth.
     """
     d = np.clip(np.asarray(depth, dtype=float), 0.0, None)
     chi = np.sqrt(radius * d) / thickness
     if chi.size and np.nanmax(chi) > DIMITRIADIS_CHI_MAX:
         i = int(np.nanargmax(chi))
         raise GeometryError(
-            f"finite-thickness correction out of range: chi = sqrt(R*d)/h = "
-            f"{chi.flat[i]:.3g} at depth d = {format_length(d.flat[i])} (R = "
-            f"{format_length(radius, 6)}, h = {format_length(thickness, 6)}) exceeds "
-            f"{DIMITRIADIS_CHI_MAX:g}, the validity of "
-            "Dimitriadis' series; check the thickness (--thickness, thickness_m), fit a "
-            "shallower window (--max-depth) or switch the correction off (drop "
-            "--finite-thickness; thickness_correction=False in the API)"
-        )
-    c = dimitriadis_coefficients(nu, bonded)
+            f"Dimitriadis' series out of range: chi = sqrt(R*d)/h = {chi.flat[i]:.3g} at depth "
+            f"d = {format_length(d.flat[i])} (R = {format_length(radius, 6)}, h = "
+            f"{format_length(thickness, 6)}) exceeds {DIMITRIADIS_CHI_MAX:g}; use the layer "
+            "solution (palpbayes.contact.thickness_factor), valid at any chi")
+    c = dimitriadis_coefficients(nu, base)
     return c[0] + chi * (c[1] + chi * (c[2] + chi * (c[3] + chi * c[4])))
 
 
-#: a/h grid of Hayes et al. (1972) as solved in docs/design.md §1.
-HAYES_A_OVER_H = np.array([0.0, 0.2, 0.4, 0.6, 1.0])
+#: Garcia & Garcia (2018) bonded, nu = 0.5 polynomials [1, c1, c2, c3, c4] in their variable:
+#: paraboloid chi = sqrt(R·d)/h, cone x = d·tan(alpha)/h, flat punch x = a/h (depth-free).
+GARCIA_COEFFICIENTS = {
+    "paraboloid": np.array([1.0, 1.133, 1.497, 1.469, 0.755]),
+    "cone": np.array([1.0, 0.721, 0.650, 0.491, 0.225]),
+    "flat": np.array([1.0, 1.133, 1.283, 0.598, -0.291]),
+}
+
+
+def garcia_factor(x: np.ndarray, kind: str) -> np.ndarray:
+    """Garcia & Garcia (2018)'s bonded, nu = 0.5 bottom-effect polynomial [-] in the
+    variable of :data:`GARCIA_COEFFICIENTS` for tip ``kind`` (paraboloid, cone, flat)."""
+    try:
+        c = GARCIA_COEFFICIENTS[kind]
+    except KeyError:
+        raise GeometryError(f"no Garcia & Garcia (2018) polynomial for tip {kind!r}; they "
+                            f"give {', '.join(GARCIA_COEFFICIENTS)}") from None
+    x = np.clip(np.asarray(x, dtype=float), 0.0, None)
+    return c[0] + x * (c[1] + x * (c[2] + x * (c[3] + x * c[4])))
+
+
+#: a/h of Hayes et al. (1972)'s bonded flat-punch table (docs/design.md §1).
+HAYES_A_OVER_H = np.array([0.2, 0.4, 0.6, 1.0])
+#: Poisson ratios of the rows of :data:`HAYES_KAPPA`.
+HAYES_NU = np.array([0.3, 0.5])
 #: kappa(a/h) for nu = 0.3 and nu = 0.5 (rows), bonded flat punch.
-HAYES_KAPPA = np.array(
-    [
-        [1.0, 1.207, 1.473, 1.785, 2.484],
-        [1.0, 1.281, 1.684, 2.213, 3.619],
-    ]
-)
-_HAYES_NU = np.array([0.3, 0.5])
-_HAYES_SPLINES = [PchipInterpolator(HAYES_A_OVER_H, row) for row in HAYES_KAPPA]
-
-
-def hayes_kappa(radius: float, thickness: float, nu: float) -> float:
-    """Hayes' correction kappa(a/h, nu) for a flat punch on a bonded layer [-].
-
-    Parameters
-    ----------
-    radius
-        [m] Punch radius a.
-    thickness
-        [m] Layer thickness h.
-    nu
-        Poisson ratio [-], 0.2 <= nu <= 0.5.
-
-    Raises
-    ------
-    GeometryError
-        If a/h > 1 or nu is outside [0.2, 0.5] (outside the tabulated solution).
-    """
-    ratio = radius / thickness
-    if not 0.0 <= ratio <= 1.0:
-        raise GeometryError(
-            f"flat-punch radius/thickness a/h = {ratio:.3g} (a = {format_length(radius, 6)}, h = "
-            f"{format_length(thickness, 6)}) is outside Hayes' table (0..1); check the thickness "
-            "(--thickness, thickness_m) or switch the correction off (drop --finite-thickness; "
-            "thickness_correction=False in the API)"
-        )
-    if not 0.2 <= nu <= 0.5:
-        raise GeometryError(
-            f"Poisson ratio {nu:g} is outside the Hayes correction's range 0.2..0.5; give "
-            "--nu in that range or switch the correction off for this nu (drop "
-            "--finite-thickness; thickness_correction=False in the API)"
-        )
-    k03, k05 = (float(s(ratio)) for s in _HAYES_SPLINES)
-    w = (nu - 0.3) / 0.2
-    return k03 + w * (k05 - k03)
-
-
-def dimitriadis_tip_factor(depth: np.ndarray, tip: Tip, thickness: float, nu: float,
-                           bonded: bool = True) -> np.ndarray:
-    """:func:`dimitriadis_factor` at the radius of ``tip`` (paraboloid, sphere) [-]."""
-    return dimitriadis_factor(depth, tip.radius, thickness, nu, bonded)
-
-
-def hayes_tip_factor(depth: np.ndarray, tip: Tip, thickness: float, nu: float,
-                     bonded: bool = True) -> np.ndarray:
-    """:func:`hayes_kappa` for the flat punch ``tip``, at every depth [-].
-
-    Raises
-    ------
-    GeometryError
-        For a non-bonded layer (Hayes et al. solved the bonded one), and as
-        :func:`hayes_kappa`.
-    """
-    if not bonded:
-        raise GeometryError(
-            "no non-bonded finite-thickness correction for the flat punch; drop "
-            "--non-bonded (bonded=True in the API) or switch the correction off (drop "
-            "--finite-thickness)"
-        )
-    return np.full_like(np.asarray(depth, dtype=float), hayes_kappa(tip.radius, thickness, nu))
+HAYES_KAPPA = np.array([[1.207, 1.473, 1.785, 2.484],
+                        [1.281, 1.684, 2.213, 3.619]])

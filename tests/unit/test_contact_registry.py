@@ -151,19 +151,20 @@ def test_new_law_through_tip_force_and_exponent(blunt):
     k = k_from_modulus(E_TRUE, nu, tip)
     assert modulus_from_k(k, nu, tip) == pytest.approx(E_TRUE, rel=1e-14)
     assert default_fit_fraction(tip) == 0.0
-    with pytest.raises(GeometryError, match="no finite-thickness correction for tip 'blunt'"):
+    with pytest.raises(GeometryError,
+                       match="no layer \\(finite-thickness\\) solution for tip 'blunt'"):
         shape(d, tip, thickness_m=0.02, nu=nu)
     assert tip.scaled(1.01).radius == pytest.approx(0.0101)
 
 
 def test_new_law_exponent_check_and_least_squares(blunt):
     tip = Tip("blunt", **BLUNT)
-    tr = simulate_trace(E_TRUE, tip, thickness=0.03, noise_pp=0.0, rng=0)
+    tr = simulate_trace(E_TRUE, tip, thickness=0.03, noise_pp=0.0, rng=0, base=None)
     r = fit_lsq(tr, f_unc=48e-3)
     assert r.E == pytest.approx(E_TRUE, rel=1e-6)
     assert r.m == M_BLUNT
 
-    noisy = simulate_trace(E_TRUE, tip, thickness=0.03, rng=1)
+    noisy = simulate_trace(E_TRUE, tip, thickness=0.03, rng=1, base=None)
     r = fit_lsq(noisy)
     assert r.E == pytest.approx(E_TRUE, rel=0.02)
     data = prepare(noisy, ModelSpec(tip))
@@ -177,7 +178,7 @@ def test_new_law_exponent_check_and_least_squares(blunt):
 
 
 def test_new_law_from_the_command_line(blunt, tmp_path):
-    tr = simulate_trace(E_TRUE, Tip("blunt", **BLUNT), thickness=0.03, rng=2)
+    tr = simulate_trace(E_TRUE, Tip("blunt", **BLUNT), thickness=0.03, rng=2, base=None)
     path = tmp_path / "blunt.csv"
     write_trace(tr, path)
     out = tmp_path / "res"
