@@ -45,7 +45,7 @@ _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*$")
 #: simulate_trace options a campaign passes through (the others it sets itself).
 _PASS_THROUGH = frozenset({
     "approach", "speed", "rate", "hold", "retract", "drift", "position_noise", "repeatability",
-    "compliance", "finite_thickness", "bonded", "stiffening", "depth",
+    "compliance", "base", "stiffening", "depth",
 })
 
 
@@ -132,7 +132,7 @@ def _truth_row(trace: IndentationTrace, tip_name: str) -> dict:
         "position_noise_true_m": m["position_noise_true"],
         "repeatability_m": m["repeatability"],
         "compliance_true_m_per_n": m["compliance_true"],
-        "finite_thickness": m["finite_thickness"],
+        "base": "" if m["base"] is None else m["base"],
         "stiffening": m["stiffening"],
         "thickness_m": trace.thickness,
         "depth_m": m["depth_true"],
@@ -175,8 +175,10 @@ def simulate_campaign(
     new specimen location with its own modulus E_i ~ Normal(E_m, sd_m), surface height
     z_surf_i ~ Uniform(z_surf ± z_surf_halfwidth) and force offset F0_i ~ Normal(0,
     force_offset_sd); depth 10 % of the thickness, approach 1 mm, 50 mm/min, 800 Hz, Gaussian
-    noise ``noise_pp`` p-p (sigma = pp/6), half-space physics (as the paper).  The defaults
-    match the package's default model, which is therefore well specified.  ``gt_specimens``
+    noise ``noise_pp`` p-p (sigma = pp/6), each specimen a layer of its thickness lying free on
+    a rigid plate (``base="free"``; ``base=None``: half-spaces, the paper's model).  The
+    defaults match the package's default model (a layer of known thickness, base unknown),
+    which is therefore well specified.  ``gt_specimens``
     compression blocks per material are drawn from the same Normal(E_m, sd_m).
 
     Each trace and block has its own random stream, :func:`child_seed` (seed, kind, material,
@@ -212,8 +214,9 @@ def simulate_campaign(
         significant digits.
     **trace_options
         Passed to :func:`~palpbayes.sim.trace.simulate_trace`: approach, speed, rate, hold,
-        retract, depth, drift, position_noise, repeatability, compliance, finite_thickness,
-        bonded, stiffening.
+        retract, depth, drift, position_noise, repeatability, compliance, base (the
+        specimens as layers on a rigid base: "bonded", "free" or a partial bond in [0, 1];
+        None: half-spaces), stiffening.
 
     Returns
     -------

@@ -7,9 +7,10 @@ SI units, depth d = z_surf - z (positive in contact), force positive when pressi
     delta  = d_cmd - C·F_true              (series compliance C, :func:`solve_series_compliance`)
     F_on   = gradual onset before the surface (:func:`onset_force_profile`)
 
-with s(d) the tip's shape function (:func:`palpbayes.contact.shape`, optionally with the bonded
-finite-thickness factor) and xi the strain-stiffening factor (:func:`stiffening_factor`).  Every
-knob is off by default, and then :func:`true_force` is exactly :func:`palpbayes.contact.force`.
+with s(d) the tip's shape function (:func:`palpbayes.contact.shape`, optionally on a layer of
+thickness h over a rigid base: :func:`layer_factor`) and xi the strain-stiffening factor
+(:func:`stiffening_factor`).  Every knob is off by default, and then :func:`true_force` is
+exactly :func:`palpbayes.contact.force`.
 Noise, offsets and drift are added by :func:`palpbayes.sim.trace.simulate_trace`.
 """
 
@@ -20,10 +21,12 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..contact import Tip, effective_modulus, shape
+from ..contact import Tip, effective_modulus, shape, thickness_factor
 from ..errors import GeometryError, InputError
 
 __all__ = [
+    "SIM_BASES",
+    "layer_factor",
     "STIFFENING_STRAIN0",
     "stiffening_factor",
     "true_force",
@@ -60,6 +63,48 @@ def stiffening_factor(depth: ArrayLike, thickness: float | None, stiffening: flo
     return np.exp(stiffening * np.maximum(0.0, d / thickness - STIFFENING_STRAIN0))
 
 
+#: Base conditions the simulator knows by name (a number in [0, 1] is a partial bond).
+SIM_BASES = ("bonded", "free")
+
+
+def layer_factor(depth: ArrayLike, tip: Tip, thickness: float | None, nu: float,
+                 base: str | float | None) -> np.ndarray:
+    """The bottom effect of the simulated specimen: F_layer/F_half-space [-].
+
+    Parameters
+    ----------
+    depth
+        [m] Indentation depth.
+    tip
+        The indenter.
+    thickness
+        [m] Specimen thickness h.
+    nu
+        Poisson ratio [-].
+    base
+        None: a half-space (factor 1); ``"bonded"`` or ``"free"``: a layer on a rigid base,
+        bonded to it or lying on it without friction (:func:`palpbayes.contact.
+        thickness_factor`, the exact layer solution); a number w in [0, 1]: a *partial* bond,
+        (1 − w)·f_free + w·f_bonded — a misspecification knob for a block lying on a plate with
+        friction, which the fit's two-component model (bonded or free) does not contain.
+    """
+    d = np.asarray(depth, dtype=float)
+    if base is None:
+        return np.ones_like(d)
+    if thickness is None:
+        raise GeometryError("a layer (base=...) needs the specimen thickness (give thickness=)")
+    if isinstance(base, str):
+        if base not in SIM_BASES:
+            raise InputError(f"unknown base {base!r}; use one of {', '.join(SIM_BASES)}, a "
+                             "number in [0, 1] (partial bond) or None (half-space)")
+        return thickness_factor(d, tip, thickness, nu, base)
+    w = float(base)
+    if not 0.0 <= w <= 1.0:
+        raise InputError(f"partial bond {base!r} must lie in [0, 1] (0 free, 1 bonded)")
+    return ((1.0 - w) * thickness_factor(d, tip, thickness, nu, "free")
+            + w * thickness_factor(d, tip, thickness, nu, "bonded"))
+
+
 def true_force(
     depth: ArrayLike,
     E: float,
@@ -67,21 +112,19 @@ def true_force(
     tip: Tip,
     *,
     thickness: float | None = None,
-    finite_thickness: bool = False,
-    bonded: bool = True,
+    base: str | float | None = None,
     stiffening: float = 0.0,
 ) -> np.ndarray:
-    """The simulator's noise-free force F = E*·s(d)·xi(d) [N] (0 for d <= 0).
+    """The simulator's noise-free force F = E*·s(d)·f(d)·xi(d) [N] (0 for d <= 0).
 
-    s is :func:`palpbayes.contact.shape`, with the bonded Dimitriadis/Hayes finite-thickness
-    factor when ``finite_thickness``; xi is :func:`stiffening_factor`.  With both off this is
-    exactly :func:`palpbayes.contact.force`.
+    s is :func:`palpbayes.contact.shape` on a half-space, f the specimen's bottom effect
+    (:func:`layer_factor`: off with ``base=None``), xi :func:`stiffening_factor`.  With both
+    off this is exactly :func:`palpbayes.contact.force`.
     """
     d = np.asarray(depth, dtype=float)
-    h = thickness if finite_thickness else None
-    if finite_thickness and thickness is None:
-        raise GeometryError("finite_thickness=True needs the specimen thickness (give thickness=)")
-    s = shape(d, tip, thickness_m=h, nu=nu, bonded=bonded)
+    s = shape(d, tip)
+    if base is not None:
+        s = s * layer_factor(d, tip, thickness, nu, base)
     f = effective_modulus(E, nu) * s
     if stiffening != 0:
         f = f * stiffening_factor(d, thickness, stiffening)

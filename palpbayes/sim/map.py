@@ -102,7 +102,8 @@ def _write_rows(job: dict) -> list[dict]:
             trace = simulate_trace(
                 E, tip, nu=o["nu"], z_surf=zs, thickness=o["thickness"], depth=o["depth"],
                 approach=o["approach"], noise_pp=o["noise_pp"], force_offset=f0, rng=gen,
-                trace_id=tid, specimen="phantom", material="phantom", repetition=1)
+                trace_id=tid, specimen="phantom", material="phantom", repetition=1,
+                base=None)  # a half-space at E_app: the map's model (palpbayes.maps)
             if not job["dry_run"]:
                 write_trace(trace, out / "traces" / f"{tid}.csv", float_format=o["float_format"])
             m = trace.metadata

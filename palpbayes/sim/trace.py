@@ -56,23 +56,32 @@ def ar1_noise(n: int, sigma: float, phi: float, w: np.ndarray) -> np.ndarray:
     return e
 
 
+#: Sample periods by which the motion may end after the last sample (rounding in T·rate).
+_SLACK = 1e-6
+
+
 def _motion(travel: float, speed: float, rate: float, hold: float,
             retract: bool) -> tuple[np.ndarray, np.ndarray]:
     """Sample times t_k = k/rate (k = 1..N) and distance moved down s(t_k) [m].
 
     Down at ``speed`` for travel/speed, hold, then (optionally) back up at ``speed``.  N =
     ceil(T·rate) for the programme's duration T, so the last sample falls at or after the end;
-    samples past the end stay at the final position.
+    samples past the end stay at the final position.  A programme that ends less than
+    ``_SLACK`` of a sample period after a sample ends *at* that sample (no extra sample for
+    rounding in T·rate): such a sample is at the end position, the bottom or the start.
     """
     t_down = travel / speed
     t_end = t_down + hold + (t_down if retract else 0.0)
-    n = max(3, math.ceil(t_end * rate - 1e-6))
-    t = np.arange(1, n + 1) / rate
+    n = max(3, math.ceil(t_end * rate - _SLACK))
+    k = np.arange(1, n + 1)
+    t = k / rate
     s = np.minimum(speed * t, travel)
     s[np.isclose(s, travel, rtol=1e-12, atol=0.0)] = travel
+    s[k >= t_down * rate - _SLACK] = travel  # the bottom, also when N rounded T·rate down
     if retract:
         up = np.clip(speed * (t - t_down - hold), 0.0, travel)
         up[np.isclose(up, travel, rtol=1e-12, atol=0.0)] = travel
+        up[k >= t_end * rate - _SLACK] = travel  # back at the start
         s = s - up
     return t, s
 
@@ -99,8 +108,7 @@ def simulate_trace(
     position_noise: float = 0.0,
     repeatability: float = 0.0,
     compliance: float = 0.0,
-    finite_thickness: bool = False,
-    bonded: bool = True,
+    base: str | float | None = "free",
     stiffening: float = 0.0,
     rng: np.random.Generator | int | None = None,
     trace_id: str = "sim",
@@ -129,7 +137,7 @@ def simulate_trace(
     z_surf
         [m] Surface height in the robot's commanded frame.
     thickness
-        [m] Specimen thickness h (for the default depth, ``finite_thickness``, ``stiffening``).
+        [m] Specimen thickness h (for the default depth, ``base``, ``stiffening``).
     depth
         [m] Commanded maximum depth; default 10 % of ``thickness`` (required without it).
     approach
@@ -168,9 +176,12 @@ def simulate_trace(
     compliance
         [m/N] Series compliance C of robot and sensor: the tip sits C·F above the recorded
         position; solved by :func:`~palpbayes.sim.force.solve_series_compliance`.
-    finite_thickness, bonded
-        Apply the finite-thickness correction (Dimitriadis 2002 / Hayes 1972, bonded by
-        default) to the truth; needs ``thickness``.
+    base
+        A specimen of known ``thickness`` is a layer on a rigid base
+        (:func:`~palpbayes.sim.force.layer_factor`): ``"free"`` (default: lying on it without
+        friction), ``"bonded"`` or a number in [0, 1] (a partial bond); None: a half-space (the
+        paper's model) whatever the thickness.  Without ``thickness`` the specimen is a
+        half-space.
     stiffening
         beta of :func:`~palpbayes.sim.force.stiffening_factor` (0 = linear elastic); needs
         ``thickness``.
@@ -189,8 +200,9 @@ def simulate_trace(
         z_surf + b, what a perfect fit recovers), ``z_surf_commanded``, ``z_offset_true`` (b),
         ``sigma_true``, ``noise_pp``, ``phi_true``, ``force_offset_true``, ``drift_true``,
         ``onset_force_true``, ``onset_length_true``,
-        ``position_noise_true``, ``repeatability``, ``compliance_true``, ``finite_thickness``,
-        ``bonded``, ``stiffening``, ``depth_true``, ``max_force_true``, motion settings, and
+        ``position_noise_true``, ``repeatability``, ``compliance_true``, ``base`` (None, a
+        name or a number), ``stiffening``, ``depth_true``, ``max_force_true``, motion
+        settings, and
         ``seed`` when ``rng`` was an int.
 
     Raises
@@ -229,8 +241,10 @@ def simulate_trace(
     repeatability = nonneg(repeatability, "repeatability [m]")
     compliance = nonneg(compliance, "compliance [m/N]")
     stiffening = nonneg(stiffening, "stiffening beta")
-    law = {"nu": nu, "tip": tip, "thickness": thickness, "finite_thickness": finite_thickness,
-           "bonded": bool(bonded), "stiffening": stiffening}
+    if thickness is None:
+        base = None
+    law = {"nu": nu, "tip": tip, "thickness": thickness, "base": base,
+           "stiffening": stiffening}
     true_force(np.array([depth]), E, **law)  # validate geometry before drawing anything
 
     gen = np.random.default_rng(rng)
@@ -270,8 +284,7 @@ def simulate_trace(
         "position_noise_true": position_noise,
         "repeatability": repeatability,
         "compliance_true": compliance,
-        "finite_thickness": bool(finite_thickness),
-        "bonded": bool(bonded),
+        "base": base,
         "stiffening": stiffening,
         "depth_true": depth,
         "max_depth_actual": float(delta.max()),

@@ -96,7 +96,7 @@ def test_truth_is_what_each_trace_was_simulated_with(phantom, tmp_path):
         assert (row["E_true_pa"], row["z_surf_true_m"], row["force_offset_true_n"]) == (
             E, zs, f0)
         tr = simulate_trace(E, PAPER_TIPS["paraboloid"], z_surf=zs, thickness=0.02,
-                            approach=5e-4, force_offset=f0, rng=gen)
+                            approach=5e-4, force_offset=f0, rng=gen, base=None)
         assert tr.metadata["E_true"] == row["E_true_pa"]
         write_trace(tr, tmp_path / "t.csv", float_format="%.8g")
         assert (tmp_path / "t.csv").read_bytes() == (phantom / "traces" /
