@@ -10,7 +10,12 @@ Carlo, one independent input draw per posterior draw:
 input              default distribution                   effect
 =================  =====================================  ===================================
 Poisson ratio nu   Uniform(nu − 0.05, nu + 0.05) in        factor 1 − nu² (design.md §8: PE foam
-                   [0, 0.5] (half_width=0 fixes it)        estimates 0.27-0.33)
+                   [0, 0.5] (half_width=0 fixes it)        estimates 0.27-0.33); on a bonded
+                                                          layer also the refit of its bottom
+                                                          effect at nu (a free one has none)
+thickness h        Uniform ±2 % of a known layer           refit of the model curve (a sampled
+                   thickness (caliper, a block that is     thickness is in the posterior
+                   not flat)                               already)
 tip radius         Uniform ±1 % (machining tolerance)     E* ∝ 1/g(R): refit of the model curve
 force gain         Normal(1, 1 %) (calibration)           E* ∝ 1/gain
 compliance C       Uniform(0, 2e-6 m/N) robot + sensor    depth d − C·F: refit of the curve
@@ -25,13 +30,14 @@ the factors: the *share* of each input is its term over the total.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
 
 from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
+from ..refit import refit_factor
 
 __all__ = ["BudgetSpec", "Budget", "propagate"]
 
@@ -52,6 +58,8 @@ class BudgetSpec:
         Relative standard deviation of the force-sensor gain.
     compliance_max
         [m/N] Upper bound of the uniform series compliance.
+    thickness_tolerance
+        Relative half-width of the uniform error of a known layer thickness (0.02 = ±2 %).
     """
 
     nu_range: tuple[float, float] | None = None
@@ -59,6 +67,7 @@ class BudgetSpec:
     radius_tolerance: float = 0.01
     gain_sd: float = 0.01
     compliance_max: float = 2e-6
+    thickness_tolerance: float = 0.02
 
     def nu_bounds(self, nu: float) -> tuple[float, float]:
         lo, hi = self.nu_range if self.nu_range is not None else (
@@ -72,7 +81,7 @@ class BudgetSpec:
     def none() -> BudgetSpec:
         """A budget with every input fixed (statistical uncertainty only)."""
         return BudgetSpec(nu_half_width=0.0, radius_tolerance=0.0, gain_sd=0.0,
-                          compliance_max=0.0)
+                          compliance_max=0.0, thickness_tolerance=0.0)
 
 
 @dataclass
@@ -92,13 +101,16 @@ class Budget:
 
 
 def _refit_factor(model: ModelSpec, depth: np.ndarray, alt_shape) -> float:
-    s = model.shape(depth)
-    s2 = alt_shape(depth)
-    return float(s @ s2 / (s2 @ s2))
+    return refit_factor(depth, model.shape, alt_shape)
+
+
+#: Poisson ratios at which a bonded layer's refit is computed (then interpolated).
+_NU_NODES = 5
 
 
 def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
-              rng: np.random.Generator) -> Budget:
+              rng: np.random.Generator, bonded: np.ndarray | None = None,
+              sampled_thickness: bool = False) -> Budget:
     """Propagate the budget over posterior draws ``estar`` [Pa] (any shape).
 
     Parameters
@@ -113,6 +125,13 @@ def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
         Input distributions.
     rng
         Random generator for the input draws.
+    bonded
+        Per-draw base of a layer whose base was sampled (1.0 bonded, 0.0 free, NaN no layer):
+        the nu refit of the bottom effect applies to the bonded draws only.  None: the base of
+        ``data.model``.
+    sampled_thickness
+        The thickness was a parameter of the fit (its uncertainty is in ``estar``): no
+        thickness input.
     """
     model = data.model
     shape = estar.shape
@@ -123,20 +142,38 @@ def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
 
     lo, hi = spec.nu_bounds(model.nu)
     nu = rng.uniform(lo, hi, n) if hi > lo else np.full(n, model.nu)
-    log_terms = {"E* (posterior)": np.log(estar.ravel()),
-                 "Poisson ratio": np.log1p(-nu**2)}
+    log_nu = np.log1p(-nu**2)
+    layered = model.has_layer and np.isfinite(model.thickness)
+    if layered and hi > lo and depth.size and (bonded is not None or model.base == "bonded"):
+        grid = np.linspace(lo, hi, _NU_NODES)
+        bonded_model = model.variant(base="bonded")
+        fac = [_refit_factor(bonded_model, depth, replace(bonded_model, nu=v).shape)
+               for v in grid]
+        shift = np.log(np.interp(nu, grid, fac))
+        is_bonded = (np.ones(n, dtype=bool) if bonded is None
+                     else np.asarray(bonded, dtype=float).ravel() == 1.0)
+        log_nu = log_nu + np.where(is_bonded, shift, 0.0)
+    log_terms = {"E* (posterior)": np.log(estar.ravel()), "Poisson ratio": log_nu}
     rows = [("E* (posterior)", "posterior draws"),
             ("Poisson ratio", f"Uniform({lo:.3g}, {hi:.3g})" if hi > lo else f"fixed {lo:.3g}")]
 
     tol = spec.radius_tolerance
     if tol > 0 and model.tip.has_length_scale:
         grid = np.linspace(-tol, tol, 9)
-        fac = [_refit_factor(model, depth, ModelSpec(model.tip.scaled(1 + e), model.nu,
-                                                     model.thickness, model.bonded).shape)
+        fac = [_refit_factor(model, depth, replace(model, tip=model.tip.scaled(1 + e)).shape)
                for e in grid]
         eps = rng.uniform(-tol, tol, n)
         log_terms["tip radius"] = np.log(np.interp(eps, grid, fac))
         rows.append(("tip radius", f"Uniform(±{tol * 100:g} %)"))
+    tol_h = spec.thickness_tolerance
+    if tol_h > 0 and layered and not sampled_thickness and depth.size:
+        grid = np.linspace(-tol_h, tol_h, 9)
+        fac = [_refit_factor(model, depth,
+                             replace(model, thickness=model.thickness * (1 + e)).shape)
+               for e in grid]
+        eps = rng.uniform(-tol_h, tol_h, n)
+        log_terms["thickness"] = np.log(np.interp(eps, grid, fac))
+        rows.append(("thickness", f"Uniform(±{tol_h * 100:g} %)"))
     if spec.gain_sd > 0:
         gain = rng.normal(1.0, spec.gain_sd, n)
         log_terms["force gain"] = -np.log(gain)

@@ -77,13 +77,15 @@ MAX_NODES = 6000
 
 def refine_grid(lo: float, hi: float, evaluate, coarse: int = COARSE_NODES,
                 max_nodes: int = MAX_NODES, start: tuple[np.ndarray, np.ndarray] | None = None,
+                max_step: float = MAX_STEP, keep: float = KEEP,
                 ) -> tuple[np.ndarray, np.ndarray, bool]:
     """Adaptive nodes on [lo, hi] for a log density given by ``evaluate(nodes) -> logp``.
 
     Starts from ``coarse`` uniform nodes (or from the sorted nodes and log densities
     ``start``, as the online estimator does after each update) and halves every interval within
-    :data:`KEEP` of the best whose log density changes by more than :data:`MAX_STEP`, or that
-    ends at a local maximum whose other side drops by more than that, until none is left.
+    ``keep`` (:data:`KEEP`) of the best whose log density changes by more than ``max_step``
+    (:data:`MAX_STEP`), or that ends at a local maximum whose other side drops by more than
+    that, until none is left.
 
     Returns
     -------
@@ -99,13 +101,13 @@ def refine_grid(lo: float, hi: float, evaluate, coarse: int = COARSE_NODES,
         best = np.max(logp)
         if not np.isfinite(best):
             return nodes, logp, True
-        lp = np.where(np.isfinite(logp), logp, best - 10 * KEEP)
+        lp = np.where(np.isfinite(logp), logp, best - 10 * keep)
         step = np.abs(np.diff(lp))
         peak = np.r_[False, (lp[1:-1] >= lp[:-2]) & (lp[1:-1] >= lp[2:]), False]
         drop = np.r_[0.0, np.maximum(lp[1:-1] - lp[:-2], lp[1:-1] - lp[2:]), 0.0]
-        sharp = peak & (drop > MAX_STEP)
-        split = ((np.maximum(lp[:-1], lp[1:]) > best - KEEP)
-                 & ((step > MAX_STEP) | sharp[:-1] | sharp[1:])
+        sharp = peak & (drop > max_step)
+        split = ((np.maximum(lp[:-1], lp[1:]) > best - keep)
+                 & ((step > max_step) | sharp[:-1] | sharp[1:])
                  & (np.diff(nodes) > 1e-12 * max(abs(hi), abs(lo), hi - lo)))
         if not split.any():
             return nodes, logp, True

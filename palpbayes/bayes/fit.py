@@ -17,8 +17,9 @@ from ..units import format_length
 from .budget import BudgetSpec, propagate
 from .diagnostics import chain_passes, compute_diagnostics, import_arviz
 from .exact import exact_posterior, sampled_coordinates
+from .layer_fit import emcee_layer_chains, exact_layer_chains, layer_columns, layer_notes
 from .likelihood import TraceLikelihood
-from .priors import PriorSpec, TracePrior
+from .priors import LAYER_PARAMETERS, PriorSpec, TracePrior
 from .result import BayesResult
 from .sampler import ChainResult, SamplerSettings, run_emcee
 from .start import Mode, find_modes, initial_ensemble, modes_from_exact
@@ -36,9 +37,10 @@ EXACT_DRAWS = (4, 1000)
 BOUND_SDS = 3.0
 
 
-def _posterior_dict(samples: np.ndarray, names: list[str], nu: float) -> dict[str, np.ndarray]:
+def _posterior_dict(samples: np.ndarray, prior: TracePrior, nu: float
+                    ) -> dict[str, np.ndarray]:
     post = {}
-    for i, name in enumerate(names):
+    for i, name in enumerate(prior.names):
         x = samples[..., i]
         if name == "log_Estar":
             post["E_star"] = np.exp(x)
@@ -47,8 +49,14 @@ def _posterior_dict(samples: np.ndarray, names: list[str], nu: float) -> dict[st
             post["sigma"] = np.exp(x)
         elif name == "log_nu_t":
             post["nu_t"] = np.exp(x)
+        elif name == "bond":
+            post["bonded"] = (x >= 0.5).astype(float)
+        elif name == "log_h":
+            post["thickness"] = prior.thickness_of(x)
         else:
             post[name] = x
+    if "bonded" in post and "thickness" in post:  # no layer, no base
+        post["bonded"] = np.where(np.isfinite(post["thickness"]), post["bonded"], np.nan)
     return post
 
 
@@ -92,6 +100,8 @@ def bound_flags(post_theta: dict[str, np.ndarray], prior: TracePrior) -> list[st
         ("log_nu_t", "upper"): "Student-t degrees of freedom at 200: the noise is Gaussian",
     }
     for name, (lo, hi) in prior.bounds.items():
+        if name in LAYER_PARAMETERS:  # answers, not prior artefacts: see layer_notes
+            continue
         x = post_theta[name]
         med, sd = float(np.median(x)), float(np.std(x))
         for side, bound in (("lower", lo), ("upper", hi)):
@@ -141,21 +151,33 @@ def fit_bayes_data(
     names = list(prior.names)
     if lsq is None:
         try:  # the paper's fit, recorded beside the posterior; the posterior does not need it
-            lsq = fit_lsq_data(data, trace_id=trace_id)
+            lsq = fit_lsq_data(replace(data, model=data.model.half_space()), trace_id=trace_id)
         except FitError:
             lsq = None
     ss = np.random.SeedSequence(seed)
     init_ss, sampler_ss, budget_ss, check_ss = ss.spawn(4)  # first three as before
-    if engine == "exact":
+    mixture = None
+    if engine == "exact" and data.model.is_concrete:
         chains, modes, like = _exact_chains(data, prior, np.random.default_rng(sampler_ss))
         settings = f"exact engine, {chains.n_steps} (surface, phi) nodes"
-    else:
+    elif engine == "exact":
+        chains, modes, like, mixture = exact_layer_chains(
+            data, prior, np.random.default_rng(sampler_ss), EXACT_DRAWS)
+        settings = (f"exact engine, {len(mixture.components)} layer components, "
+                    f"{chains.n_steps} (surface, phi) nodes")
+    elif data.model.is_concrete:
         chains, modes, like, settings = _emcee_chains(data, prior, settings, tabulate,
                                                       init_ss, sampler_ss, trace_id)
-    post = _posterior_dict(chains.samples, names, data.model.nu)
+    else:
+        chains, modes, like, settings = emcee_layer_chains(
+            data, prior, settings, tabulate, init_ss, sampler_ss, chain_passes)
+    post = _posterior_dict(chains.samples, prior, data.model.nu)
     post_theta = {n: chains.samples[..., i] for i, n in enumerate(names)}
-    bud = propagate(post["E_star"], data, float(np.median(post["z_surf"])), budget,
-                    np.random.default_rng(budget_ss))
+    best = _best_model(data.model, post, mixture)
+    fitted = replace(data, model=best)
+    bud = propagate(post["E_star"], fitted, float(np.median(post["z_surf"])), budget,
+                    np.random.default_rng(budget_ss), bonded=post.get("bonded"),
+                    sampled_thickness=data.model.thickness_unknown)
     post["E_total"] = bud.E
     az = import_arviz()
     with warnings.catch_warnings():
@@ -164,10 +186,32 @@ def fit_bayes_data(
         idata = _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed,
                           lsq, noise, prior, modes)
     idata.posterior.attrs["engine"] = engine
+    idata.posterior.attrs["model_fitted"] = best.describe()
+    if mixture is not None and data.model.bonding == "unknown":
+        idata.posterior.attrs["log_bf_bonded"] = mixture.log_bayes_factor()
     flags = _flags(post, post_theta, prior)
-    checks = _model_checks(post, data, like, int(check_ss.generate_state(1)[0]))
+    notes = layer_notes(post, data, best)
+    checks = _model_checks(post, fitted, like, int(check_ss.generate_state(1)[0]))
     return _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
-                   like, checks)
+                   like, checks, notes, best)
+
+
+def _best_model(model: ModelSpec, post: dict, mixture) -> ModelSpec:
+    """The concrete model at the posterior's centre (checks, budget): the model itself, the
+    exact mixture's :meth:`~palpbayes.bayes.layers.LayerPosterior.best`, or the same read
+    off the draws (the more probable base, the median thickness, no layer if most draws have
+    none)."""
+    if model.is_concrete:
+        return model
+    if mixture is not None:
+        return mixture.best()
+    h = np.ravel(post["thickness"]) if "thickness" in post else None
+    if h is not None and np.mean(~np.isfinite(h)) > 0.5:
+        return model.half_space()
+    b = np.ravel(post["bonded"]) if "bonded" in post else None
+    base = model.bonding if b is None else ("bonded" if not np.nanmean(b) < 0.5 else "free")
+    thickness = model.thickness if h is None else float(np.median(h[np.isfinite(h)]))
+    return model.variant(thickness=thickness, base=base)
 
 
 def _log_prob(prior: TracePrior, like: TraceLikelihood):
@@ -235,12 +279,25 @@ def _exact_chains(data: FitData, prior: TracePrior, rng: np.random.Generator):
     return chains, modes, like
 
 
-def _model_checks(post: dict, data: FitData, like: TraceLikelihood, seed: int) -> list:
-    """Model-adequacy checks (:func:`palpbayes.checks.check_fit`) at the posterior medians,
-    with the posterior-predictive check on the draws."""
-    draws = {n: np.ravel(post[n]) for n in ("E_star", "z_surf", "F0", "F1", "sigma", "phi")
+def _model_checks(post: dict, data: FitData, like, seed: int) -> list:
+    """Model-adequacy checks (:func:`palpbayes.checks.check_fit`) at the posterior medians of
+    the concrete model ``data.model`` — over the draws of that model's base (and layer or
+    none), so that a two-base mixture's E* does not mix into its medians — with the
+    posterior-predictive check on all the draws (each with its own thickness and base when
+    the layer is sampled)."""
+    draws = {n: np.ravel(post[n]) for n in ("E_star", "z_surf", "F0", "F1", "sigma", "phi",
+                                            "thickness", "bonded")
              if n in post}
-    med = {n: float(np.median(x)) for n, x in draws.items()}
+    best = data.model
+    mine = np.ones(draws["E_star"].size, dtype=bool)
+    if "thickness" in draws:
+        mine &= np.isfinite(draws["thickness"]) == best.has_layer
+    if "bonded" in draws and best.has_layer:
+        mine &= draws["bonded"] == (1.0 if best.base == "bonded" else 0.0)
+    if mine.sum() < 50:
+        mine[:] = True
+    med = {n: float(np.median(x[mine])) for n, x in draws.items()
+           if n not in ("thickness", "bonded")}
     return check_fit(data, z_surf=med["z_surf"], estar=med["E_star"], f0=med["F0"],
                      f1=med.get("F1", 0.0), sigma=med["sigma"], baseline=like.baseline,
                      z_ref=like.z_ref, draws=draws, seed=seed)
@@ -258,6 +315,7 @@ def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, 
             "trace_id": trace_id,
             "palpbayes_version": __version__,
             "model": data.model.describe(),
+            "layer": data.model.describe_layer(),
             "tip": data.model.tip.kind,
             "nu": data.model.nu,
             "noise_model": noise,
@@ -286,15 +344,18 @@ def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, 
 
 
 def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags, like,
-            checks):
+            checks, notes, best):
     """Diagnostics, flags and the warning (or error in strict mode)."""
     diag_names = [n for n in ("E_star", "z_surf", "sigma", "F0", "F1", "phi", "nu_t")
                   if n in post]
-    diag = compute_diagnostics(idata, diag_names, chains.tau, chains.acceptance,
-                               chains.n_steps, chains.hit_cap)
+    # tau follows θ, whose first entries are these in this order (the layer's come last)
+    diag = compute_diagnostics(idata, diag_names, chains.tau[:len(diag_names)],
+                               chains.acceptance, chains.n_steps, chains.hit_cap)
     result = BayesResult(idata=idata, diagnostics=diag, budget=bud, data=data, noise=noise,
                          trace_id=trace_id, lsq=lsq, warnings=flags,
-                         baseline=like.baseline, z_ref=like.z_ref, checks=checks)
+                         baseline=like.baseline, z_ref=like.z_ref, checks=checks,
+                         notes=notes, fitted_model=best,
+                         layer=layer_columns(post, data))
     if not result.converged:
         problems = "; ".join(result.warnings + diag.problems())
         msg = f"{trace_id}: Bayesian fit flagged as not converged: {problems}"
@@ -327,9 +388,11 @@ def fit_bayes(
     Parameters
     ----------
     trace
-        The measurement; its ``tip`` is used when ``model`` is None.
+        The measurement; its ``tip`` (and ``thickness``) are used when ``model`` is None.
     model
-        Contact model (tip, nu, optional finite-thickness correction).
+        Contact model (tip, nu, layer).  None: the trace's tip at nu = 0.3, as a layer of the
+        trace's thickness on a rigid base with an unknown base condition when the thickness
+        is known, else a half-space — the command line's default.
     f_unc
         [N] Sensor uncertainty: contact onset, fit window and the F0 prior's scale (None: the
         pre-contact baseline's noise as a peak-to-peak spec).
@@ -364,8 +427,13 @@ def fit_bayes(
     -------
     BayesResult
     """
-    data = prepare_trace(trace, model, f_unc=f_unc, fit_fraction=fit_fraction,
+    if model is None and trace.tip is not None and trace.thickness is not None:
+        model = ModelSpec(trace.tip, thickness=trace.thickness)
+    half = None if model is None else model.half_space()
+    data = prepare_trace(trace, half, f_unc=f_unc, fit_fraction=fit_fraction,
                          max_depth=max_depth, tare=tare)
+    if model is not None:
+        data = replace(data, model=model)
     return fit_bayes_data(data, noise=noise, baseline=baseline, priors=priors, budget=budget,
                           settings=settings, seed=seed, tabulate=tabulate, strict=strict,
                           trace_id=trace.trace_id, engine=engine)

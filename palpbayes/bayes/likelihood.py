@@ -178,10 +178,19 @@ class TraceLikelihood:
         """Log-likelihood for θ of shape (W, ndim) (or (ndim,)); returns shape (W,)."""
         theta = np.atleast_2d(theta)
         estar, zs, sigma, f0, f1, extra = self._split(theta)
-        n = self._F.size
         if self.noise == "student":
             return self._student(estar, zs, sigma, f0, f1, np.exp(extra))
-        stats = self.statistics(zs, direct=direct)
+        return self.from_statistics(self.statistics(zs, direct=direct), theta)
+
+    def stats_of_rows(self, s: np.ndarray) -> np.ndarray:
+        """Quadratic-form statistics (W, K) of given shape rows ``s`` (W, N) [m²]: for models
+        whose shape differs per walker (:mod:`palpbayes.bayes.layer_likelihood`)."""
+        return _quad_forms(s, self._F, self._u, self._ar1)
+
+    def from_statistics(self, stats: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Gaussian or AR(1) log-likelihood (W,) from the statistics of each walker's shape."""
+        estar, _, sigma, f0, f1, extra = self._split(np.atleast_2d(theta))
+        n = self._F.size
         q0 = _form_value(stats, self._const, estar, f0, f1, 0, self._n_m)
         if not self._ar1:
             return -n * np.log(sigma) - 0.5 * n * _LOG2PI - 0.5 * q0 / sigma**2
@@ -193,12 +202,13 @@ class TraceLikelihood:
         return (-n * np.log(sigma) - 0.5 * (n - 1) * np.log(one_m) - 0.5 * n * _LOG2PI
                 - 0.5 * quad / sigma**2)
 
-    def _student(self, estar, zs, sigma, f0, f1, nu_t) -> np.ndarray:
+    def _student(self, estar, zs, sigma, f0, f1, nu_t, shape_rows=None) -> np.ndarray:
         n = self._F.size
         nu = nu_t
         tail = np.empty(zs.size)
         for rows in self.data.blocks(zs.size):
-            s = self.data.shape(zs[rows, None] - self._z[None, :])
+            s = (self.data.shape(zs[rows, None] - self._z[None, :]) if shape_rows is None
+                 else shape_rows(rows))
             mean = estar[rows, None] * s + f0[rows, None]
             if f1 is not None:
                 mean = mean + f1[rows, None] * self._u[None, :]
@@ -206,6 +216,12 @@ class TraceLikelihood:
             tail[rows] = np.log1p(r * r / nu[rows, None]).sum(axis=1)
         return (n * (gammaln((nu + 1) / 2) - gammaln(nu / 2) - 0.5 * np.log(nu * np.pi))
                 - n * np.log(sigma) - 0.5 * (nu + 1) * tail)
+
+    def student_rows(self, theta: np.ndarray, shape_rows) -> np.ndarray:
+        """Student-t log-likelihood (W,) with each walker's shape row from
+        ``shape_rows(rows) -> (len(rows), N)``."""
+        estar, zs, sigma, f0, f1, extra = self._split(np.atleast_2d(theta))
+        return self._student(estar, zs, sigma, f0, f1, np.exp(extra), shape_rows)
 
     def mean_force(self, theta: np.ndarray, z: np.ndarray | None = None) -> np.ndarray:
         """Model force [N] at heights ``z`` (default: the fitted samples) for one θ."""

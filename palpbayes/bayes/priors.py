@@ -23,6 +23,12 @@ Parameters, in the order of the sampler's vector θ (:func:`param_names`):
                   produce the whole contact force over the recorded span is 1 sd.
 ``phi``           (AR(1) only) lag-one correlation, Uniform(−0.99, 0.99).
 ``log_nu_t``      (Student-t only) ln of the degrees of freedom, Uniform(ln 2, ln 200).
+``bond``          (a layer whose base is unknown) the base condition as a coordinate in
+                  [0, 1]: bonded when >= 0.5, free below; uniform within each half with the
+                  masses p and 1 − p (``ModelSpec.p_bonded``, 0.5).
+``log_h``         (an unknown thickness) ln(h/m), uniform on [ln h_lo, ln h_hi] and, with the
+                  same prior mass again, on (ln h_hi, ln h_hi + ln(h_hi/h_lo)]: there the
+                  specimen is a half-space (no layer; :data:`P_HALFSPACE` = 0.5).
 ================  ==============================================================
 
 :class:`PriorSpec` holds the user's settings; :class:`TracePrior` the numbers for one trace
@@ -41,15 +47,35 @@ from ..fitdata import FitData
 from ..noise import sigma_from_pp
 
 __all__ = ["NOISE_MODELS", "BASELINES", "SURFACE_PRIORS", "PriorSpec", "TracePrior",
-           "param_names"]
+           "param_names", "layer_names", "LAYER_PARAMETERS", "P_HALFSPACE"]
+
+#: Prior probability of no layer at all (a half-space) when the thickness is unknown.
+P_HALFSPACE = 0.5
+
+#: The layer's sampled parameters (never flagged at their bounds: a base coordinate near 0 or
+#: 1 and a thickness in the half-space segment are answers, not prior artefacts).
+LAYER_PARAMETERS = ("bond", "log_h")
 
 NOISE_MODELS = ("gaussian", "ar1", "student")
 BASELINES = ("constant", "linear")
 SURFACE_PRIORS = ("loading", "soft")
 
 
-def param_names(noise: str, baseline: str = "constant") -> list[str]:
-    """Names of the sampled parameters for a noise model and a baseline model."""
+def layer_names(model) -> list[str]:
+    """The layer's sampled parameters of a contact model: ``bond`` when the base is unknown,
+    ``log_h`` when the thickness is; none for a half-space or a concrete layer."""
+    names = []
+    if model.has_layer and model.bonding == "unknown":
+        names.append("bond")
+    if model.thickness_unknown:
+        names.append("log_h")
+    return names
+
+
+def param_names(noise: str, baseline: str = "constant", layer: tuple[str, ...] | list[str] = ()
+                ) -> list[str]:
+    """Names of the sampled parameters for a noise model, a baseline model and the layer's
+    unknowns (:func:`layer_names`, appended last)."""
     names = ["log_Estar", "z_surf", "log_sigma", "F0"]
     if baseline == "linear":
         names.append("F1")
@@ -61,7 +87,7 @@ def param_names(noise: str, baseline: str = "constant") -> list[str]:
         names.append("log_nu_t")
     elif noise != "gaussian":
         raise InputError(f"unknown noise model {noise!r}; use one of {', '.join(NOISE_MODELS)}")
-    return names
+    return names + list(layer)
 
 
 @dataclass(frozen=True)
@@ -126,11 +152,17 @@ class PriorSpec:
         f0_sd = data.f_unc if self.F0_sd is None else float(self.F0_sd)
         span = max(data.z_top - data.z_min, 1e-300)
         rise = max(float(np.max(data.force)) - center, data.f_unc)
+        model = data.model
+        log_h = None
+        if model.thickness_unknown:
+            lo, hi = (math.log(v) for v in model.thickness_range)
+            log_h = (lo, hi)
         return TracePrior(
-            spec=self, names=tuple(param_names(noise, baseline)), noise=noise,
-            baseline=baseline, z_bounds=data.z_prior, sigma_center=sigma_from_pp(pp),
-            f0_center=center, f0_sd=f0_sd, f1_sd=rise / span, z_ref=z_ref,
-            f_unc=data.f_unc, data=data,
+            spec=self, names=tuple(param_names(noise, baseline, layer_names(model))),
+            noise=noise, baseline=baseline, z_bounds=data.z_prior,
+            sigma_center=sigma_from_pp(pp), f0_center=center, f0_sd=f0_sd, f1_sd=rise / span,
+            z_ref=z_ref, f_unc=data.f_unc, data=data, p_bonded=model.p_bonded,
+            log_h_range=log_h,
         )
 
 
@@ -152,6 +184,11 @@ class TracePrior:
         [N/m] Sd of the baseline-slope prior (linear baseline).
     z_ref
         [m] Height where the baseline equals F0 (the linear baseline's reference).
+    p_bonded
+        Prior probability of the bonded base (``bond`` >= 0.5).
+    log_h_range
+        (ln h_lo, ln h_hi) of an unknown thickness, or None; ``log_h`` beyond ln h_hi (up to
+        :attr:`log_h_top`) stands for the half-space.
     """
 
     spec: PriorSpec
@@ -166,9 +203,23 @@ class TracePrior:
     z_ref: float
     f_unc: float
     data: FitData
+    p_bonded: float = 0.5
+    log_h_range: tuple[float, float] | None = None
 
     def index(self, name: str) -> int:
         return self.names.index(name)
+
+    @property
+    def log_h_top(self) -> float:
+        """Upper end of the ``log_h`` coordinate: ln h_hi plus the half-space segment, whose
+        length gives it the prior probability :data:`~palpbayes.bayes.layers.P_HALFSPACE`."""
+        lo, hi = self.log_h_range
+        return hi + (hi - lo) * P_HALFSPACE / (1.0 - P_HALFSPACE)
+
+    def thickness_of(self, log_h: np.ndarray) -> np.ndarray:
+        """[m] The thickness of ``log_h`` coordinates (``inf`` in the half-space segment)."""
+        x = np.asarray(log_h, dtype=float)
+        return np.where(x <= self.log_h_range[1], np.exp(np.minimum(x, 700.0)), np.inf)
 
     @property
     def bounds(self) -> dict[str, tuple[float, float]]:
@@ -180,6 +231,10 @@ class TracePrior:
             out["phi"] = s.phi_bounds
         if "log_nu_t" in self.names:
             out["log_nu_t"] = (math.log(s.nu_t_bounds[0]), math.log(s.nu_t_bounds[1]))
+        if "bond" in self.names:
+            out["bond"] = (0.0, 1.0)
+        if "log_h" in self.names:
+            out["log_h"] = (self.log_h_range[0], self.log_h_top)
         return out
 
     def log_prior(self, theta: np.ndarray) -> np.ndarray:
@@ -189,8 +244,13 @@ class TracePrior:
         for name, (lo, hi) in self.bounds.items():
             x = theta[:, self.index(name)]
             ok &= (x >= lo) & (x <= hi) if name == "z_surf" else (x > lo) & (x < hi)
+        lp = np.zeros(theta.shape[0])
+        if "bond" in self.names:
+            b = theta[:, self.index("bond")]
+            lp += np.where(b >= 0.5, math.log(2 * self.p_bonded),
+                           math.log(2 * (1.0 - self.p_bonded)))
         ls = theta[:, 2]
-        lp = -0.5 * ((ls - math.log(self.sigma_center)) / self.spec.log_sigma_sd) ** 2
+        lp += -0.5 * ((ls - math.log(self.sigma_center)) / self.spec.log_sigma_sd) ** 2
         f0 = theta[:, 3]
         lp += -0.5 * ((f0 - self.f0_center) / self.f0_sd) ** 2
         if self.baseline == "linear":
@@ -215,4 +275,9 @@ class TracePrior:
             "phi": rng.uniform(*s.phi_bounds, n),
             "log_nu_t": rng.uniform(*np.log(s.nu_t_bounds), n),
         }
+        if "bond" in self.names:
+            bonded = rng.random(n) < self.p_bonded
+            cols["bond"] = np.where(bonded, 0.5, 0.0) + 0.5 * rng.random(n)
+        if "log_h" in self.names:
+            cols["log_h"] = rng.uniform(self.log_h_range[0], self.log_h_top, n)
         return np.column_stack([cols[name] for name in self.names])

@@ -25,10 +25,12 @@ from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
 from ..intervals import LEVEL, central, central_band
 from ..io.atomic import write_netcdf_atomic
+from ..refit import layer_alternatives
 from .budget import Budget
 from .diagnostics import Diagnostics, import_arviz
 
-__all__ = ["BayesResult", "LEVEL", "STATE_ATTR", "saved_state", "saved_model"]
+__all__ = ["BayesResult", "LEVEL", "STATE_ATTR", "saved_state", "saved_model",
+           "saved_fitted_model"]
 
 #: Posterior attribute of a saved fit holding, as JSON, what its draws do not.
 STATE_ATTR = "palpbayes_result"
@@ -64,6 +66,14 @@ class BayesResult:
         [m] Reference height of the linear baseline F0 + F1·(z − z_ref).
     checks
         Model-adequacy checks (:mod:`palpbayes.checks`), empty if not run.
+    notes
+        What the fit says but is no failure (the layer's base or thickness not identified,
+        a thin-layer regime): reported in ``flags`` as ``info: ...``.
+    fitted_model
+        The concrete model at the posterior's centre (the more probable base, the median
+        thickness), which the checks and the budget used; ``data.model`` when it is concrete.
+    layer
+        The layer's ``summary.csv`` columns (:func:`palpbayes.bayes.layer_fit.layer_columns`).
     """
 
     idata: object
@@ -77,6 +87,13 @@ class BayesResult:
     baseline: str = "constant"
     z_ref: float = 0.0
     checks: list = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    fitted_model: ModelSpec | None = None
+    layer: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.fitted_model is None:
+            self.fitted_model = self.data.model
 
     # ----------------------------------------------------------------- access
     def draws(self, name: str) -> np.ndarray:
@@ -91,11 +108,14 @@ class BayesResult:
         """Per-parameter table: mean, sd, median, central 90 % interval, 90 % HDI, R-hat, ESS."""
         az = import_arviz()
         names = [n for n in ("E_total", "E", "E_star", "z_surf", "sigma", "F0", "F1", "phi",
-                             "nu_t")
+                             "nu_t", "thickness", "bonded")
                  if n in self.idata.posterior]
         rows = []
         for n in names:
             x = self.draws(n)
+            x = x[np.isfinite(x)]  # no layer (h = inf) has no thickness and no base
+            if x.size < 2:
+                continue
             lo, hi = central(x)
             hdi = np.asarray(az.hdi(x, hdi_prob=LEVEL))
             rows.append({
@@ -117,6 +137,18 @@ class BayesResult:
         lo, hi = central(E)
         slo, shi = central(Es)
         d = self.diagnostics
+        E_med = float(np.median(E))
+        z_med = float(np.median(z))
+        best = self.fitted_model
+        if "bonded" in self.idata.posterior and best.has_layer:  # the best base's E
+            b = self.draws("bonded")
+            sel = b == (1.0 if best.base == "bonded" else 0.0)
+            if sel.any():
+                E_med = float(np.median(E[sel]))
+        if "thickness" in self.idata.posterior and not best.has_layer:
+            sel = ~np.isfinite(self.draws("thickness"))
+            if sel.any():
+                E_med = float(np.median(E[sel]))
         return {
             "trace_id": self.trace_id,
             "method": "bayes",
@@ -145,12 +177,28 @@ class BayesResult:
             "baseline_model": self.baseline,
             "F0_n": float(np.median(self.draws("F0"))),
             "flags": "; ".join(self.warnings + d.problems()
-                               + [c.flag for c in self.checks if not c.passed]),
+                               + [c.flag for c in self.checks if not c.passed]
+                               + [f"info: {n}" for n in self.notes]),
             "model_ok": all(c.passed for c in self.checks) if self.checks else np.nan,
             "m_free": next((c.statistic for c in self.checks if c.name == "exponent"),
                            np.nan),
             "engine": self.idata.posterior.attrs.get("engine", "emcee"),
+            "model_fitted": best.describe_layer(),
+            **self.layer,
+            **self._alternatives(E, E_med, z_med, best),
         }
+
+    def _alternatives(self, E: np.ndarray, E_med: float, z_med: float, best: ModelSpec
+                      ) -> dict:
+        """E_halfspace/bonded/free_pa: the refits of :func:`palpbayes.refit.
+        layer_alternatives`, and where the base was sampled the median of each base's draws."""
+        out = layer_alternatives(E_med, z_med, self.data.z, best, self.data.model)
+        if "bonded" in self.idata.posterior:
+            b = self.draws("bonded")
+            for base, v in (("bonded", 1.0), ("free", 0.0)):
+                if (b == v).sum() >= 20:
+                    out[f"E_{base}_pa"] = float(np.median(E[b == v]))
+        return out
 
     # ----------------------------------------------------------------- predictive
     def predictive(self, z: np.ndarray | None = None, n_draws: int = 200, noise: bool = False,
@@ -182,12 +230,16 @@ class BayesResult:
         z = self.data.z if z is None else np.asarray(z, dtype=float)
         rng = rng or np.random.default_rng(0)
         post = self.idata.posterior
-        names = [n for n in ("E_star", "z_surf", "F0", "F1") if n in post]
+        names = [n for n in ("E_star", "z_surf", "F0", "F1", "thickness", "bonded")
+                 if n in post]
         flat = {n: np.asarray(post[n]).ravel() for n in names}
         size = flat["E_star"].size
         idx = np.sort(rng.choice(size, size=min(n_draws, size), replace=False))
-        curves = (flat["E_star"][idx, None] * self.data.shape(flat["z_surf"][idx, None] - z)
-                  + flat["F0"][idx, None])
+        layer = {k: flat[k][idx] if k in flat else None for k in ("thickness", "bonded")}
+        depth = flat["z_surf"][idx, None] - z
+        s = (self.fitted_model.shape_of_draws(depth, **layer)
+             if any(v is not None for v in layer.values()) else self.fitted_model.shape(depth))
+        curves = flat["E_star"][idx, None] * s + flat["F0"][idx, None]
         if "F1" in flat:
             curves = curves + flat["F1"][idx, None] * (z - self.z_ref)
         return idx, curves
@@ -218,8 +270,10 @@ class BayesResult:
             "checks": [dataclasses.asdict(c) for c in self.checks],
             "diagnostics": dataclasses.asdict(self.diagnostics),
             "budget_table": None if self.budget is None else self.budget.table.to_dict("list"),
-            "model": {"tip": dataclasses.asdict(model.tip), "nu": model.nu,
-                      "thickness": model.thickness, "bonded": model.bonded},
+            "model": _model_state(model),
+            "fitted_model": _model_state(self.fitted_model),
+            "notes": list(self.notes),
+            "layer": dict(self.layer),
         }
 
     @classmethod
@@ -236,10 +290,14 @@ class BayesResult:
         table = state["budget_table"]
         budget = None if table is None else Budget(
             E=np.asarray(idata.posterior["E_total"]), table=pd.DataFrame(table))
+        fitted = state.get("fitted_model")
         return cls(idata=idata, diagnostics=Diagnostics(**state["diagnostics"]), budget=budget,
                    data=data, noise=state["noise"], trace_id=state["trace_id"], lsq=lsq,
                    warnings=list(state["warnings"]), baseline=state["baseline"],
-                   z_ref=state["z_ref"], checks=[CheckResult(**c) for c in state["checks"]])
+                   z_ref=state["z_ref"], checks=[CheckResult(**c) for c in state["checks"]],
+                   notes=list(state.get("notes", [])),
+                   fitted_model=None if fitted is None else _model_from_state(fitted),
+                   layer=dict(state.get("layer", {})))
 
 
 def saved_state(idata) -> dict:
@@ -259,9 +317,32 @@ def saved_state(idata) -> dict:
 
 
 def saved_model(idata) -> ModelSpec:
-    """The contact model of a saved fit, exactly as fitted (tip, nu, thickness, bonded)."""
-    m = saved_state(idata)["model"]
-    return ModelSpec(Tip(**m["tip"]), nu=m["nu"], thickness=m["thickness"], bonded=m["bonded"])
+    """The contact model of a saved fit, exactly as fitted (tip, nu and the layer: thickness,
+    bonding, thickness range)."""
+    return _model_from_state(saved_state(idata)["model"])
+
+
+def saved_fitted_model(idata) -> ModelSpec:
+    """The concrete model at a saved fit's posterior centre (what its checks and budget used;
+    the fitted model itself for fits written before layers were sampled)."""
+    state = saved_state(idata)
+    return _model_from_state(state.get("fitted_model") or state["model"])
+
+
+def _model_state(model: ModelSpec) -> dict:
+    return {"tip": dataclasses.asdict(model.tip), "nu": model.nu, "thickness": model.thickness,
+            "bonding": model.bonding,
+            "thickness_range": None if model.thickness_range is None
+            else list(model.thickness_range), "p_bonded": model.p_bonded}
+
+
+def _model_from_state(m: dict) -> ModelSpec:
+    """A :class:`ModelSpec` from :func:`_model_state` (or the older ``bonded`` flag)."""
+    bonding = m.get("bonding") or ("bonded" if m.get("bonded", True) else "free")
+    rng = m.get("thickness_range")
+    return ModelSpec(Tip(**m["tip"]), nu=m["nu"], thickness=m["thickness"], bonding=bonding,
+                     thickness_range=None if rng is None else tuple(rng),
+                     p_bonded=m.get("p_bonded", 0.5))
 
 
 def _to_json(obj):
@@ -280,5 +361,5 @@ def _from_json(obj: dict):
 
 
 _UNITS = {"E_total": "Pa", "E": "Pa", "E_star": "Pa", "z_surf": "m", "sigma": "N", "F0": "N",
-          "F1": "N/m", "phi": "-", "nu_t": "-"}
+          "F1": "N/m", "phi": "-", "nu_t": "-", "thickness": "m", "bonded": "-"}
 _SAMPLED = {"E_total": "E_star", "E": "E_star"}

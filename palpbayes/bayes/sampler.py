@@ -137,8 +137,20 @@ def _burn_thin(tau: np.ndarray, n_steps: int) -> tuple[int, int]:
     return burn, thin
 
 
+def _with_extra(moves, extra: list | None):
+    """The configured moves plus ``extra`` [(move, weight)], the configured ones sharing
+    1 − Σ weights."""
+    if not extra:
+        return moves
+    base = [(emcee.moves.StretchMove(), 1.0)] if moves is None else (
+        moves if isinstance(moves, list) else [(moves, 1.0)])
+    rest = 1.0 - sum(w for _, w in extra)
+    return [(m, w * rest) for m, w in base] + list(extra)
+
+
 def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | None,
-              accept: Callable[[np.ndarray, np.ndarray], bool] | None = None) -> ChainResult:
+              accept: Callable[[np.ndarray, np.ndarray], bool] | None = None,
+              extra_moves: list | None = None) -> ChainResult:
     """Sample ``log_prob`` (vectorised over walkers) from the initial ensemble ``p0``.
 
     Parameters
@@ -155,10 +167,13 @@ def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | N
         Optional extra test ``accept(chain, log_prob)`` on the burnt-in, thinned chain
         (walkers, draws, ndim) and its log-posterior (walkers, draws), e.g. R-hat and ESS
         thresholds; sampling goes on while it fails (up to ``max_steps``).
+    extra_moves
+        [(move, weight)] added to the configured moves (e.g. the layer's base swap,
+        :func:`palpbayes.bayes.layer_likelihood.base_swap_move`).
     """
     n_walkers, ndim = p0.shape
     sampler = emcee.EnsembleSampler(n_walkers, ndim, log_prob, vectorize=True,
-                                    moves=_moves(settings.moves))
+                                    moves=_with_extra(_moves(settings.moves), extra_moves))
     sampler._random = np.random.RandomState(np.random.MT19937(np.random.SeedSequence(seed)))
     progress = settings.progress
     if progress is None:

@@ -64,8 +64,9 @@ import pandas as pd
 from scipy import stats
 
 from ..bayes.budget import BudgetSpec
+from ..bayes.result import saved_fitted_model, saved_model
 from ..contact import registered_kinds
-from ..errors import DataFileError, FitError
+from ..errors import DataFileError, FitError, InputError
 from ..fitdata import ModelSpec
 from ..intervals import LEVEL, central
 from ..io.atomic import write_csv_atomic
@@ -73,6 +74,7 @@ from ..io.manifest import tip_from_row
 from ..io.tabular import parse_bool
 from ..pooling.inputs import fitdata_from_posterior, posterior_attrs, read_posterior
 from ..pooling.model import TAU_PRIOR_SD, log_normal_summary, pool_group
+from ..refit import ALTERNATIVE_COLUMNS
 from . import layout
 from .compare_text import format_comparison
 from .fitjob import trace_seed
@@ -95,6 +97,10 @@ COMPARISON_COLUMNS = [
     "paper_err_pct", "z_surf_err_mean_m",
     # extras
     "E_new_sd_pa", "tau", "gt_n", "n_failed", "flags", "E_new_sd_eq_pa", "tau_prior_sd",
+    # the layer: group means of the rows' E read as a half-space, a bonded and a free layer
+    # (for lsq: what the layer would do to the paper's estimate), and for bayes the group's
+    # posterior probability of a bonded base (every trace lies on the same plate)
+    "E_halfspace_pa", "E_bonded_pa", "E_free_pa", "p_bonded",
 ]
 #: A material × tip gets a stiffening fit when its Bayesian rows span this many rest times.
 STIFFENING_MIN_REST_TIMES = 3
@@ -108,7 +114,8 @@ POOLED_COLUMNS = (
                                              ("factor", ""))
        for q in ("", "_sd", "_lo", "_hi")]
     + ["m_spread", "s_max", "tau_prior_sd", "rhat_max", "ess_min", "tau_max", "n_steps",
-       "n_draws", "converged", "flags", "representative_trace", "budget_applied"]
+       "n_draws", "converged", "flags", "representative_trace", "budget_applied", "p_bonded",
+       "base_ratio"]
 )
 
 
@@ -191,47 +198,91 @@ def _lsq_row(g: pd.DataFrame, level: float) -> dict:
     return row
 
 
-def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None, fields: dict,
+def _base_evidence(idata, p_prior: float) -> float:
+    """ln Bayes factor bonded/free of one trace: the exact engine's, or (emcee) from the
+    share of bonded draws, clipped to what the number of draws can tell."""
+    bf = dict(idata.posterior.attrs).get("log_bf_bonded")
+    if bf is not None and np.isfinite(float(bf)):
+        return float(bf)
+    b = np.asarray(idata.posterior["bonded"], dtype=float).ravel()
+    b = b[~np.isnan(b)]
+    if b.size == 0:
+        return 0.0
+    p = np.clip(b.mean(), 1.0 / (b.size + 1), b.size / (b.size + 1))
+    return float(np.log(p / (1 - p)) - np.log(p_prior / (1 - p_prior)))
+
+
+def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None,
                  budget: BudgetSpec, seed: int, tau_prior_sd: float, settings, level: float
                  ) -> tuple[dict, dict | None, pd.DataFrame | None]:
     material, tip = g["material"].iloc[0], g["tip"].iloc[0]
-    ids, ms, ss, meds = [], [], [], []
-    for tid, E in zip(g["trace_id"], g["E_pa"], strict=True):
+    ids, ms, ss, meds, log_bf, ratios, models = [], [], [], [], [], [], []
+    sampled_base = False
+    for _, trow in g.iterrows():
+        tid, E = trow["trace_id"], trow["E_pa"]
         path = layout.posterior_path(res, tid)
         if not (np.isfinite(E) and path.is_file()):
             continue
         idata = read_posterior(path)
-        m, s = log_normal_summary(np.asarray(idata.posterior["E"]))
+        draws = np.asarray(idata.posterior["E"]).ravel()
+        estar = np.asarray(idata.posterior["E_star"]).ravel()
+        try:
+            model = saved_model(idata)
+        except InputError:  # written without the fit's state: no layer to read
+            model = None
+        if model is not None and "bonded" in idata.posterior and model.bonding == "unknown":
+            # every trace read as bonded: the base is shared by the group (pooling/model.py)
+            sampled_base = True
+            r = float(trow.get("E_free_pa", np.nan) / trow.get("E_bonded_pa", np.nan))
+            r = r if np.isfinite(r) and r > 0 else 1.0
+            free = np.asarray(idata.posterior["bonded"]).ravel() == 0.0
+            draws = np.where(free, draws / r, draws)
+            estar = np.where(free, estar / r, estar)
+            ratios.append(r)
+            log_bf.append(_base_evidence(idata, model.p_bonded))
+        m, s = log_normal_summary(draws)
         ids.append(tid)
         ms.append(m)
         ss.append(s)
+        models.append(model)
         meds.append((float(np.median(np.asarray(idata.posterior["z_surf"]))),
-                     float(np.median(np.asarray(idata.posterior["E_star"])))))
+                     float(np.median(estar))))
     flags = []
     conv = g["converged"].map(parse_bool) if "converged" in g else pd.Series(False, index=g.index)
     row = {"n_traces": len(ids), "n_failed": len(g) - len(ids)}
     if not ids:
         row.update({"converged_all": False, "flags": "no Bayesian posterior to pool"})
         return row, None, None
+    i_rep = int(np.argmin(np.abs(np.asarray(ms) - np.median(ms))))
+    idata = read_posterior(layout.posterior_path(res, ids[i_rep]))
     data = z_med = e_med = None
     spec = budget
-    i_rep = int(np.argmin(np.abs(np.asarray(ms) - np.median(ms))))
-    if geometry is not None and ids[i_rep] in geometry.index:
-        grow = geometry.loc[ids[i_rep]]
-        idata = read_posterior(layout.posterior_path(res, ids[i_rep]))
-        attrs = posterior_attrs(idata)
-        thick = grow.get("thickness_m") if fields.get("thickness_correction") else None
-        model = ModelSpec(tip_from_row(grow), nu=float(attrs.get("nu", fields.get("nu", 0.3))),
-                          thickness=None if thick is None or pd.isna(thick) else float(thick),
-                          bonded=bool(fields.get("bonded", True)))
-        data = fitdata_from_posterior(idata, model)
-        z_med, e_med = meds[i_rep]
-    else:
+    try:
+        fitted = saved_fitted_model(idata)
+    except InputError:  # no saved state: the geometry of traces.csv, as a half-space
+        fitted = None
+        if geometry is not None and ids[i_rep] in geometry.index:
+            nu = float(posterior_attrs(idata).get("nu", 0.3))
+            fitted = ModelSpec(tip_from_row(geometry.loc[ids[i_rep]]), nu=nu)
+    if fitted is None:
         spec = None
-        flags.append("uncertainty budget not applied (no traces.csv geometry)")
+        flags.append("uncertainty budget not applied (no saved model and no traces.csv "
+                     "geometry)")
+    else:
+        if sampled_base and fitted.has_layer:
+            fitted = fitted.variant(base="bonded")  # the draws were read as bonded
+        data = fitdata_from_posterior(idata, fitted)
+        z_med, e_med = meds[i_rep]
+    p_bonded = base_ratio = None
+    if sampled_base:
+        p0 = models[i_rep].p_bonded
+        odds = np.log(p0 / (1 - p0)) + float(np.sum(log_bf))
+        p_bonded = float(1.0 / (1.0 + np.exp(-odds)))
+        base_ratio = float(np.median(ratios))
     pooled = pool_group(ms, ss, material=material, tip=tip, data=data, z_surf=z_med,
                         estar=e_med, budget=spec, tau_prior_sd=tau_prior_sd,
-                        seed=trace_seed(seed, f"pool/{material}/{tip}"), settings=settings)
+                        seed=trace_seed(seed, f"pool/{material}/{tip}"), settings=settings,
+                        p_bonded=p_bonded, base_ratio=1.0 if base_ratio is None else base_ratio)
     if not pooled.posterior.converged:
         flags.append("pooled chain not converged: " + "; ".join(
             pooled.posterior.diagnostics.problems()))
@@ -247,12 +298,23 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None, fiel
         "E_new_hi_pa": nhi, "tau": float(np.median(pooled.posterior.tau)),
         "tau_prior_sd": pooled.posterior.tau_prior_sd,
         "converged_all": bool(n_conv == len(g) and pooled.posterior.converged),
-        "flags": "; ".join(flags),
+        "flags": "; ".join(flags), "p_bonded": np.nan if p_bonded is None else p_bonded,
     })
     prow = {**pooled.row(level), "representative_trace": ids[i_rep],
-            "budget_applied": spec is not None}
+            "budget_applied": spec is not None,
+            "p_bonded": row["p_bonded"], "base_ratio": np.nan if base_ratio is None
+            else base_ratio}
     btab = pooled.budget.assign(material=material, tip=tip)[BUDGET_COLUMNS]
     return row, prow, btab
+
+
+def _layer_means(g: pd.DataFrame) -> dict:
+    """Group means of the rows' E read as a half-space, a bonded and a free layer."""
+    out = {}
+    for col in ALTERNATIVE_COLUMNS:
+        x = pd.to_numeric(g[col], errors="coerce") if col in g else pd.Series(dtype=float)
+        out[col] = float(x.mean()) if x.notna().any() else np.nan
+    return out
 
 
 # ----------------------------------------------------------------------------- main
@@ -326,12 +388,13 @@ def compare_campaign(
                 if method == "lsq":
                     row = _lsq_row(g, level)
                 else:
-                    row, prow, btab = _bayes_group(g, res, geometry, fields, budget, seed,
+                    row, prow, btab = _bayes_group(g, res, geometry, budget, seed,
                                                    tau_prior_sd, pooling_settings, level)
                     if prow is not None:
                         pooled_rows.append(prow)
                         budgets.append(btab)
-                row = {"material": mat, "tip": tip, "method": method, **row}
+                row = {"material": mat, "tip": tip, "method": method, **row,
+                       **_layer_means(g)}
                 row["E_new_sd_eq_pa"] = new_specimen_sd(row.get("E_new_lo_pa", np.nan),
                                                         row.get("E_new_hi_pa", np.nan), level)
                 row.update(gt_columns(row, gt, mat, level))

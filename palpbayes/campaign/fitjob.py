@@ -14,16 +14,18 @@ from pathlib import Path
 import numpy as np
 
 from ..bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
+from ..bayes.layers import default_thickness_range
 from ..checks import CheckResult, check_fit
 from ..contact import check_tip_plausible, get_law
-from ..errors import ConvergenceWarning, FitError, GeometryError
-from ..fitdata import FitData, ModelSpec, prepare
+from ..errors import ConvergenceWarning, FitError, GeometryError, InputError
+from ..fitdata import BONDINGS, FitData, ModelSpec, prepare
 from ..lsq import LSQResult, fit_lsq_data
+from ..refit import layer_alternatives
 from ..trace import IndentationTrace
 from .layout import posterior_file
 
 __all__ = ["FitOptions", "FitOutcome", "fit_trace", "check_fittable", "trace_model",
-           "SUMMARY_COLUMNS", "METHODS"]
+           "SUMMARY_COLUMNS", "METHODS", "LAYER_MODES"]
 
 METHODS = ("bayes", "lsq", "both")
 
@@ -45,7 +47,19 @@ SUMMARY_COLUMNS = [
     # sphere, least squares with the paraboloid (Hertz) law at the sphere's radius on the same
     # points, and (E_hertz − E)/E
     "E_hertz_pa", "E_hertz_rel_diff",
+    # the specimen's layer (finite thickness): the model of the row (lsq: always the paper's
+    # half-space; bayes: a layer on a rigid base wherever the thickness is known), the concrete
+    # model at the posterior's centre, the thickness (its 90 % interval when sampled), the
+    # posterior probabilities of a bonded base and of no layer, and the row's fitted curve
+    # read as a half-space, a bonded and a free layer (palpbayes.refit.layer_alternatives)
+    "layer", "model_fitted", "thickness_m", "thickness_lo_m", "thickness_hi_m", "p_bonded",
+    "p_halfspace", "E_halfspace_pa", "E_bonded_pa", "E_free_pa",
 ]
+
+#: How a fit treats the specimen's thickness: ``auto`` a layer on a rigid base wherever the
+#: trace's thickness is known (else a half-space), ``off`` a half-space everywhere (the
+#: paper's model), ``unknown`` a layer of unknown thickness (or none) everywhere.
+LAYER_MODES = ("auto", "off", "unknown")
 
 
 @dataclass(frozen=True)
@@ -58,10 +72,18 @@ class FitOptions:
         ``"bayes"``, ``"lsq"`` or ``"both"``.
     nu
         Poisson ratio used for E = E*·(1 − nu²).
-    thickness_correction
-        Apply the finite-thickness correction with the trace's thickness.
-    bonded
-        Specimen bonded to the base (thickness correction only).
+    layer
+        How the specimen's thickness enters the Bayesian model (:data:`LAYER_MODES`):
+        ``"auto"`` (default) a layer on a rigid base wherever the trace's thickness is known,
+        ``"off"`` a half-space (the paper's model, ``--half-space``), ``"unknown"`` a layer
+        of unknown thickness, or none (``--thickness unknown``).  The least-squares baseline
+        is always the paper's half-space; its row says what the layer would change.
+    bonding
+        Base of the layer: ``"bonded"``, ``"free"`` or ``"unknown"`` (default: both, weighted
+        by the data).
+    thickness_range
+        [m] (lo, hi) of the log-uniform prior of an unknown thickness; None: 1.5 to 1,000 times
+        the indentation depth (:func:`palpbayes.bayes.layers.default_thickness_range`).
     f_unc
         [N] Sensor uncertainty (surface constraint, contact onset and F0 prior scale); None:
         the pre-contact baseline's noise as a peak-to-peak spec.
@@ -90,8 +112,9 @@ class FitOptions:
 
     method: str = "bayes"
     nu: float = 0.3
-    thickness_correction: bool = False
-    bonded: bool = True
+    layer: str = "auto"
+    bonding: str = "unknown"
+    thickness_range: tuple[float, float] | None = None
     f_unc: float | None = None
     fit_fraction: float | None = None
     max_depth: float | None = None
@@ -104,6 +127,19 @@ class FitOptions:
     seed: int = 0
     strict: bool = False
     engine: str = "emcee"
+
+    def __post_init__(self) -> None:
+        if self.layer not in LAYER_MODES:
+            raise InputError(f"unknown layer mode {self.layer!r}; use one of "
+                             f"{', '.join(LAYER_MODES)}")
+        if self.bonding not in BONDINGS:
+            raise InputError(f"unknown bonding {self.bonding!r}; use one of "
+                             f"{', '.join(BONDINGS)}")
+        if self.thickness_range is not None:
+            lo, hi = self.thickness_range
+            if not (0 < lo < hi and np.isfinite(hi)):
+                raise InputError(f"thickness range {self.thickness_range!r} m must satisfy "
+                                 "0 < LO < HI")
 
     def with_progress(self, progress: bool | None) -> FitOptions:
         return replace(self, settings=replace(self.settings, progress=progress))
@@ -125,16 +161,25 @@ def trace_seed(base: int, trace_id: str) -> int:
     return int(np.random.SeedSequence([int(base), *words.tolist()]).generate_state(1)[0])
 
 
-def trace_model(trace: IndentationTrace, *, nu: float, thickness_correction: bool,
-                bonded: bool) -> ModelSpec:
-    """The contact model a fit of ``trace`` uses: its tip (checked for plausibility), the
-    run's ``nu`` unless the manifest row gives its own (``trace.metadata["nu"]``), and its
-    thickness when the finite-thickness correction is on.
+def trace_model(trace: IndentationTrace, options: FitOptions,
+                depth: float | None = None) -> ModelSpec:
+    """The contact model a Bayesian fit of ``trace`` uses: its tip (checked for
+    plausibility), the run's ``nu`` unless the manifest row gives its own
+    (``trace.metadata["nu"]``), and its layer (``options.layer``, ``options.bonding``).
+
+    Parameters
+    ----------
+    trace
+        The trace.
+    options
+        The fit options.
+    depth
+        [m] Indentation depth, for the default range of an unknown thickness.
 
     Raises
     ------
     GeometryError
-        No tip, an implausible tip size, or the correction without a thickness.
+        No tip or an implausible tip size.
     """
     src = trace.source or trace.trace_id
     tip = trace.tip
@@ -144,13 +189,16 @@ def trace_model(trace: IndentationTrace, *, nu: float, thickness_correction: boo
         check_tip_plausible(tip)
     except GeometryError as exc:
         raise GeometryError(f"{src}: {exc}") from None
-    thickness = trace.thickness if thickness_correction else None
-    if thickness_correction and thickness is None:
-        raise GeometryError(f"{src}: the thickness correction needs the specimen "
-                            "thickness (--thickness or the manifest's thickness_m)")
     # a manifest's per-row nu (trace.metadata["nu"]) overrides the run's option
-    nu = trace.metadata.get("nu", nu)
-    return ModelSpec(tip, nu=nu, thickness=thickness, bonded=bonded)
+    nu = trace.metadata.get("nu", options.nu)
+    if options.layer == "off" or (options.layer == "auto" and trace.thickness is None):
+        return ModelSpec(tip, nu=nu, bonding=options.bonding)
+    if options.layer == "auto":
+        return ModelSpec(tip, nu=nu, thickness=trace.thickness, bonding=options.bonding)
+    rng = options.thickness_range
+    if rng is None:
+        rng = default_thickness_range(np.nan if depth is None else depth)
+    return ModelSpec(tip, nu=nu, bonding=options.bonding, thickness_range=tuple(rng))
 
 
 def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
@@ -169,10 +217,12 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     * paraboloid and sphere: depth (contact onset to deepest fitted point) at most the tip
       radius R, the limit of the Hertz and Sneddon laws;
     * the model's shape function finite and positive at the deepest admissible depth
-      d = z_top − min(z) (surface at the start of the approach): this evaluates the
-      finite-thickness correction over its whole range (Dimitriadis chi <= 1, Hayes a/h <= 1
-      and 0.2 <= nu <= 0.5, no correction for cone and power tips), also with the tip radius
-      scaled by the budget's tolerance when the Bayesian fit runs.
+      d = z_top − min(z) (surface at the start of the approach), for every base and (an
+      unknown thickness) at the thinnest layer allowed, also with the tip radius scaled by
+      the budget's tolerance when the Bayesian fit runs.
+
+    The returned data carry the Bayesian model (:func:`trace_model`); the least-squares
+    baseline fits them as a half-space (``data.model.half_space()``).
 
     Raises
     ------
@@ -183,11 +233,12 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
         As :func:`palpbayes.fitdata.prepare`.
     """
     src = trace.source or trace.trace_id
-    model = trace_model(trace, nu=options.nu, thickness_correction=options.thickness_correction,
-                        bonded=options.bonded)
-    tip = model.tip
-    data = prepare(trace, model, f_unc=options.f_unc, fit_fraction=options.fit_fraction,
+    half = trace_model(trace, replace(options, layer="off"))
+    tip = half.tip
+    data = prepare(trace, half, f_unc=options.f_unc, fit_fraction=options.fit_fraction,
                    max_depth=options.max_depth, tare=options.tare)
+    model = trace_model(trace, options, depth=data.z_contact - data.z_min)
+    data = replace(data, model=model)
 
     depth = data.z_contact - data.z_min
     if trace.thickness is not None and depth > trace.thickness:
@@ -214,11 +265,15 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     approach = (f"; fits try every surface up to the start of the recorded approach, i.e. "
                 f"depths up to {deepest * 1e3:.4g} mm (indentation {fitted * 1e3:.4g} mm): "
                 "cropping a long approach from the file lowers this")
-    models = [("", model)]
+    models = [("", half)]
+    if options.method in ("bayes", "both") and model.has_layer:
+        h = model.thickness if model.thickness is not None else model.thickness_range[0]
+        models += [(f" (on a {b} layer)", model.variant(thickness=h, base=b))
+                   for b in model.bases]
     tol = options.budget.radius_tolerance
     if options.method in ("bayes", "both") and tol > 0 and tip.has_length_scale:
-        models.append((f" (with the tip radius scaled by the budget's +{tol * 100:g} % "
-                       "tolerance)", replace(model, tip=tip.scaled(1.0 + tol))))
+        models += [(f"{note} (with the tip radius scaled by the budget's +{tol * 100:g} % "
+                    "tolerance)", replace(m, tip=tip.scaled(1.0 + tol))) for note, m in models]
     for note, m in models:
         for d, where in ((max(fitted, 0.0), ""), (deepest, approach)):
             try:
@@ -259,9 +314,12 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     depths (about −3 % at d/R ≈ 0.3).  Other tips: NaN.
     """
     data = check_fittable(trace, options)
+    paper = replace(data, model=data.model.half_space())  # the least-squares baseline's
     try:
-        lsq = fit_lsq_data(data, trace_id=trace.trace_id)
-        lsq_row = lsq.summary_row()
+        lsq = fit_lsq_data(paper, trace_id=trace.trace_id)
+        lsq_row = {**lsq.summary_row(), "layer": "half-space (the paper's)",
+                   "model_fitted": "half-space",
+                   **layer_alternatives(lsq.E, lsq.z_surf, paper.z, paper.model, data.model)}
     except FitError as exc:
         if options.method == "lsq":
             raise
@@ -273,7 +331,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     e_hertz = float("nan")
     approximation = get_law(data.model.tip).hertz_approximation
     if approximation is not None:
-        hertz = replace(data, model=replace(data.model, tip=approximation(data.model.tip)))
+        hertz = replace(paper, model=replace(paper.model, tip=approximation(paper.model.tip)))
         try:
             e_hertz = float(fit_lsq_data(hertz, trace_id=trace.trace_id).E)
         except FitError:
@@ -294,7 +352,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     if options.method in ("lsq", "both"):
         if lsq is not None:  # the paper's model: no offset term
             lsq_row.update(check_columns(check_fit(
-                data, z_surf=lsq.z_surf, estar=lsq.Estar, f0=0.0, sigma=lsq.rms, seed=seed),
+                paper, z_surf=lsq.z_surf, estar=lsq.Estar, f0=0.0, sigma=lsq.rms, seed=seed),
                 lsq_row.get("flags", "")))
         rows.append(with_hertz({**lsq_row, **meta}))
     bayes = None

@@ -20,7 +20,7 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -219,8 +219,8 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
             data = None
     if data is None:  # the trace file is gone or changed: the fitted points stored in the netCDF
         data = stored
-    try:
-        lsq = fit_lsq_data(data, trace_id=trace_id)
+    try:  # the paper's least squares: a half-space
+        lsq = fit_lsq_data(replace(data, model=model.half_space()), trace_id=trace_id)
     except FitError:
         lsq = None
     return BayesResult.from_idata(idata, data, lsq)

@@ -27,6 +27,11 @@ THRESHOLDS: dict[str, float] = {
 
 _MIN_BIN = 8  # fewest samples in a bin
 
+#: What a check says when a half-space fit stiffens with depth as a layer on a base would.
+FINITE_THICKNESS = ("finite thickness -> give the specimen's thickness (--thickness H, the "
+                    "manifest's thickness_m) or --thickness unknown: the Bayesian model then "
+                    "includes the layer (least squares stays the paper's half-space)")
+
 
 @dataclass(frozen=True)
 class CheckResult:

@@ -11,6 +11,7 @@ from scipy import optimize
 from ..errors import FitError
 from ..fitdata import ModelSpec
 from .core import (
+    FINITE_THICKNESS,
     THRESHOLDS,
     CheckResult,
     _contact_inputs,
@@ -113,8 +114,8 @@ def depth_consistency_check(z, force, model: ModelSpec, z_surf: float, *,
         head = (f"E* over the shallow half = {ratio:.3f} ± {ratio_se:.3f} × E* over all "
                 "depths")
         if dev < 0:
-            cause = ("finite thickness -> --thickness/--finite-thickness" if model.thickness
-                     is None else "thickness under-corrected (check --thickness, bonded)")
+            cause = (FINITE_THICKNESS if not model.has_layer
+                     else "thickness under-corrected (check --thickness and --bonding)")
             flag = (f"{head}: apparent modulus rises with depth ({cause}, strain-stiffening "
                     "material, a gradual onset before the surface, or wrong tip sharper than "
                     "the law)")

@@ -12,6 +12,7 @@ from ..contact import fixed_exponents
 from ..errors import FitError
 from ..fitdata import ModelSpec
 from .core import (
+    FINITE_THICKNESS,
     THRESHOLDS,
     CheckResult,
     _arrays,
@@ -215,11 +216,11 @@ def exponent_check(z, force, model: ModelSpec, z_surf: float, *, baseline: str =
                 f"{model.tip.kind} law")
         hint = _wrong_tip_hint(model, m)
         if delta > 0:
-            causes = ("finite thickness -> --thickness/--finite-thickness, strain-stiffening "
+            causes = (f"{FINITE_THICKNESS}, strain-stiffening "
                       "material, a gradual onset before the surface (see residual_structure), "
                       "or wrong tip (sharper than the law)")
-            if model.thickness is not None:
-                causes = ("thickness under-corrected (check --thickness, bonded or not), "
+            if model.has_layer:
+                causes = ("thickness under-corrected (check --thickness and --bonding), "
                           "strain-stiffening material, a gradual onset before the surface, or "
                           "wrong tip (sharper than the law)")
             if hint:

@@ -34,7 +34,8 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
         Point estimates (posterior medians): [m], [Pa], [N], [N/m], [N].
     draws
         Optional posterior draws: dict of equal-length arrays ``E_star`` [Pa], ``z_surf``
-        [m], ``F0`` [N], ``sigma`` [N], optional ``F1`` [N/m] and ``phi``.
+        [m], ``F0`` [N], ``sigma`` [N], optional ``F1`` [N/m] and ``phi``, and, for a layer
+        whose thickness or base was sampled, ``thickness`` [m] and ``bonded`` (1/0/NaN).
     baseline_lag1
         Lag-1 autocorrelation of the noise; default the fit's median ``phi`` if drawn, else
         :func:`noise_lag1` of the pre-contact samples, else estimated from the residuals.
@@ -72,9 +73,14 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
         f0s = np.asarray(draws["F0"], dtype=float)
         f1s = np.asarray(draws.get("F1", np.zeros_like(es)), dtype=float)
         keep = np.linspace(0, es.size - 1, min(es.size, 200)).round().astype(int)
-        table = _ShapeTable(model, 1.5 * (float(np.max(zs[keep])) - float(z.min())))
-        curves = (es[keep, None] * table.shape(zs[keep, None] - z[None, :])
-                  + f0s[keep, None] + f1s[keep, None] * (z - z_ref)[None, :])
+        depth = zs[keep, None] - z[None, :]
+        if "thickness" in draws or "bonded" in draws:  # each draw its own layer
+            layer = {k: np.asarray(draws[k], dtype=float)[keep] if k in draws else None
+                     for k in ("thickness", "bonded")}
+            s = model.shape_of_draws(depth, **layer)
+        else:
+            s = _ShapeTable(model, 1.5 * (float(np.max(zs[keep])) - float(z.min()))).shape(depth)
+        curves = (es[keep, None] * s + f0s[keep, None] + f1s[keep, None] * (z - z_ref)[None, :])
         sig = np.asarray(draws["sigma"], dtype=float)[keep]
         ph = np.asarray(draws["phi"], dtype=float)[keep] if "phi" in draws else None
         out.append(posterior_predictive_check(z, f, curves, sig, phi=ph, rng=rng,

@@ -19,10 +19,12 @@ from ..contact import (
     registered_kinds,
 )
 from ..errors import DataFileError, InputError
+from ..fitdata import BONDINGS
 from ..io.manifest import is_manifest
 from ..units import format_pressure
 
 __all__ = ["register", "run", "add_model_options", "add_trace_options", "options_from_args",
+           "thickness_from_args",
            "trace_from_args", "traces_from_args", "read_options_from_args",
            "recording_options_from_args"]
 
@@ -61,10 +63,19 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                    f"{default_fit_fraction_text()})")
     g.add_argument("--max-depth", type=float, default=None, metavar="M",
                    help="fit only down to this depth below the contact onset [m]")
-    g.add_argument("--finite-thickness", action="store_true",
-                   help="apply the finite-thickness correction (Dimitriadis / Hayes)")
-    g.add_argument("--non-bonded", action="store_true",
-                   help="specimen not bonded to its base (finite-thickness correction)")
+    g.add_argument("--half-space", action="store_true",
+                   help="fit the specimen as a half-space even where its thickness is known "
+                        "(the paper's model; default: a layer on a rigid base wherever "
+                        "--thickness or the manifest's thickness_m gives the thickness)")
+    g.add_argument("--bonding", choices=BONDINGS, default="unknown",
+                   help="base of the layer: bonded to it, free (lying on it without "
+                        "friction) or unknown (default: both, weighted by the data)")
+    g.add_argument("--thickness-range", type=float, nargs=2, metavar=("LO", "HI"),
+                   help="log-uniform prior range of an unknown thickness [m] (with "
+                        "--thickness unknown; default 1.5 to 1000 times the indentation "
+                        "depth)")
+    g.add_argument("--finite-thickness", action="store_true", help=argparse.SUPPRESS)
+    g.add_argument("--non-bonded", action="store_true", help=argparse.SUPPRESS)
     g.add_argument("--radius-tolerance", type=float, default=0.01,
                    help="relative tip-radius tolerance of the budget (default 0.01)")
     g.add_argument("--gain-sd", type=float, default=0.01,
@@ -109,7 +120,9 @@ def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -
     for par in TIP_PARAMETERS.values():  # the tip's size, in the option's unit
         t.add_argument(par.option, type=float, metavar=par.metavar, dest=_dest(par.option),
                        help=par.help)
-    t.add_argument("--thickness", type=float, metavar="M", help="specimen thickness [m]")
+    t.add_argument("--thickness", metavar="M|unknown",
+                   help="specimen thickness [m] (the Bayesian model then treats it as a layer "
+                        "on a rigid base), or 'unknown' to sample it")
     t.add_argument("--material", default="", help="material label")
     c = p.add_argument_group("columns, units and signs (every trace, also of a manifest)")
     for q, unit in (("time", "s"), ("z", "m"), ("force", "N")):
@@ -166,15 +179,48 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
     budget = BudgetSpec(nu_range=budget_nu, radius_tolerance=args.radius_tolerance,
                         gain_sd=args.gain_sd, compliance_max=args.compliance_max)
     settings = SamplerSettings(max_steps=args.max_steps, progress=args.progress)
+    layer, bonding = _layer_from_args(args)
     return FitOptions(
-        method=args.method, nu=nu, thickness_correction=args.finite_thickness,
-        bonded=not args.non_bonded, f_unc=args.f_unc if args.f_unc is not None else args.noise_pp,
+        method=args.method, nu=nu, layer=layer, bonding=bonding,
+        thickness_range=(None if args.thickness_range is None
+                         else tuple(args.thickness_range)),
+        f_unc=args.f_unc if args.f_unc is not None else args.noise_pp,
         fit_fraction=args.fit_fraction, max_depth=args.max_depth, noise=args.noise,
         baseline=args.baseline, tare=args.tare,
         priors=PriorSpec(noise_pp=args.noise_pp, surface=args.surface_prior), budget=budget,
         settings=settings,
         seed=args.seed, strict=args.strict, engine=args.engine,
     )
+
+
+def thickness_from_args(args: argparse.Namespace) -> float | None:
+    """The known thickness [m] of ``--thickness`` (None when absent or 'unknown')."""
+    value = getattr(args, "thickness", None)
+    if value is None or str(value).strip().lower() == "unknown":
+        return None
+    try:
+        h = float(value)
+    except ValueError:
+        raise InputError(f"--thickness {value!r} is neither a thickness in metres nor "
+                         "'unknown'") from None
+    if not (math.isfinite(h) and h > 0):
+        raise InputError(f"--thickness {value!r} must be a positive thickness in metres")
+    return h
+
+
+def _layer_from_args(args: argparse.Namespace) -> tuple[str, str]:
+    """(FitOptions.layer, .bonding) from --half-space, --thickness, --bonding and the old
+    --finite-thickness (now the default) / --non-bonded (= --bonding free)."""
+    unknown = str(getattr(args, "thickness", None) or "").strip().lower() == "unknown"
+    thickness_from_args(args)  # validates a number
+    if args.half_space and unknown:
+        raise InputError("--half-space and --thickness unknown contradict each other; "
+                         "give one")
+    if args.thickness_range is not None and not unknown:
+        raise InputError("--thickness-range is the prior of an unknown thickness: give it "
+                         "with --thickness unknown")
+    bonding = "free" if args.non_bonded and args.bonding == "unknown" else args.bonding
+    return ("off" if args.half_space else "unknown" if unknown else "auto"), bonding
 
 
 def read_options_from_args(args: argparse.Namespace) -> dict:
@@ -254,7 +300,7 @@ def traces_from_args(args: argparse.Namespace) -> list:
             raise InputError(f"{args.input} is {KIND_NAMES[kind]}: --*-column and --*-unit "
                              "apply to text tables only (the file names its own columns)")
         opts = recording_options_from_args(args)
-    return read_recording(args.input, tip=tip, thickness=args.thickness,
+    return read_recording(args.input, tip=tip, thickness=thickness_from_args(args),
                           material=args.material, **opts)
 
 

@@ -76,8 +76,11 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--lump-max-steps {args.lump_max_steps} is too few; use at least "
                          "1000")
     manifest = read_manifest(args.manifest)
+    # each point a half-space: the lump's forward model (palpbayes.sim.inclusion) reads the
+    # block's thickness itself, and the map's per-point fits compare points with each other
     point_opts = PointOptions(fit=FitOptions(nu=args.nu, noise=args.noise, tare=args.tare,
-                                             engine="exact", seed=args.seed), seed=args.seed)
+                                             engine="exact", seed=args.seed, layer="off"),
+                              seed=args.seed)
     map_opts = MapOptions(threshold=args.threshold, detect=args.detect, seed=args.seed,
                           lump=not args.no_lump, lump_max_steps=args.lump_max_steps)
     check_map_manifest(manifest, lump=not args.no_lump)

@@ -1,7 +1,9 @@
 """``palpbayes simulate OUT_DIR``: write a synthetic palpation campaign (docs/design.md §7).
 
 The folder holds a manifest, one CSV per trace, Instron-like ground-truth exports and the true
-values (see :mod:`palpbayes.sim.campaign`).  The shipped example was made with::
+values (see :mod:`palpbayes.sim.campaign`).  Its specimens are layers of the paper's thickness
+lying on a rigid plate without friction (``--base free``; the paper's blocks rest on a plate).
+The shipped example was made with::
 
     palpbayes simulate data/example-campaign --seed 2026 --repetitions 3
 
@@ -53,6 +55,10 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="AR(1) coefficient of the force noise, |PHI| < 1 (default 0: white)")
     c.add_argument("--gt-specimens", type=int, default=None, metavar="N",
                    help="compression tests per material (default 5)")
+    c.add_argument("--base", type=_base, default=None, metavar="BASE",
+                   help="the specimens as layers of their thickness on a rigid plate: 'free' "
+                        "(lying on it without friction, the default), 'bonded', a partial bond "
+                        "in [0, 1], or 'none' (half-spaces, the paper's model)")
     m = p.add_argument_group(
         "stiffness map (--map)", "a grid of palpations over a block hiding a stiff sphere; "
         "lengths in metres, the lump centred near the middle of the grid, off its nodes")
@@ -86,7 +92,24 @@ def register(subparsers) -> argparse.ArgumentParser:
 _MAP_ONLY = ("grid", "step", "background_e", "tip", "lump_ratio", "lump_radius", "lump_depth",
              "lump_x", "lump_y", "heterogeneity", "workers")
 _LUMP = ("lump_ratio", "lump_radius", "lump_depth", "lump_x", "lump_y")
-_CAMPAIGN_ONLY = ("repetitions", "ar1", "gt_specimens")
+_CAMPAIGN_ONLY = ("repetitions", "ar1", "gt_specimens", "base")
+#: How the campaign's specimens rest on their plate unless --base says otherwise.
+DEFAULT_BASE = "free"
+
+
+def _base(text: str):
+    """argparse type of --base: a name, 'none' or a number in [0, 1]."""
+    t = text.strip().lower()
+    if t in ("bonded", "free", "none"):
+        return t
+    try:
+        w = float(t)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"base {text!r} is not 'bonded', 'free', 'none' or a number in [0, 1]") from None
+    if not 0.0 <= w <= 1.0:
+        raise argparse.ArgumentTypeError(f"partial bond {text!r} must lie in [0, 1]")
+    return w
 
 
 def _grid(text: str) -> tuple[int, int]:
@@ -121,7 +144,8 @@ def run(args: argparse.Namespace) -> int:
     if wrong:
         raise InputError(f"{', '.join(wrong)} only apply with --map (a stiffness-map "
                          "phantom); add --map or drop them")
-    for name, default in (("repetitions", 3), ("ar1", 0.0), ("gt_specimens", 5)):
+    for name, default in (("repetitions", 3), ("ar1", 0.0), ("gt_specimens", 5),
+                          ("base", DEFAULT_BASE)):
         if getattr(args, name) is None:
             setattr(args, name, default)
     out = simulate_campaign(
@@ -132,6 +156,7 @@ def run(args: argparse.Namespace) -> int:
         noise_pp=args.noise_pp,
         noise_ar1=args.ar1,
         gt_specimens=args.gt_specimens,
+        base=None if args.base == "none" else args.base,
     )
     n_mat, n_tip = len(PAPER_MATERIALS), len(PAPER_TIPS)
     noise = f"{format_force(args.noise_pp, 6)} p-p"
@@ -139,6 +164,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote a synthetic campaign to {out} (seed {args.seed}, noise {noise}):")
     print(f"  {n_mat * n_tip * args.repetitions} traces ({n_mat} materials x {n_tip} tips x "
           f"{args.repetitions} repetitions) in traces/, listed in manifest.csv")
+    names = {"none": "half-spaces", "free": "layers lying free on a rigid plate",
+             "bonded": "layers bonded to a rigid plate"}
+    rest = (names[args.base] if isinstance(args.base, str)
+            else f"layers partly bonded ({args.base:g}) to a rigid plate")
+    print(f"  specimens simulated as {rest}")
     if args.gt_specimens:
         print(f"  {n_mat * args.gt_specimens} Instron-style compression exports in "
               "groundtruth/ (listed in groundtruth/manifest.csv)")

@@ -68,7 +68,7 @@ class PointOptions:
         Passed to the trace reader (columns, units, signs) for every file.
     """
 
-    fit: FitOptions = field(default_factory=FitOptions)
+    fit: FitOptions = field(default_factory=lambda: FitOptions(layer="off"))
     draws: int = 2000
     seed: int = 0
     read_options: dict = field(default_factory=dict)
@@ -77,6 +77,9 @@ class PointOptions:
         if self.fit.noise not in ("gaussian", "ar1"):
             raise InputError(f"map fits use the exact engine: noise 'gaussian' or 'ar1', not "
                              f"{self.fit.noise!r}")
+        if self.fit.layer != "off":
+            raise InputError("map fits take each point as a half-space (FitOptions.layer "
+                             "'off'): the lump model carries the block's thickness")
         if int(self.draws) < 100:
             raise InputError(f"draws per point {self.draws!r} must be at least 100")
 

@@ -24,11 +24,9 @@ def _title(result: Any) -> str:
 
 
 def _posterior_median_curve(result: Any, z: np.ndarray) -> np.ndarray:
-    """Force of the posterior-median parameters at heights ``z`` [N] (E*·s(d) + F0)."""
-    es = _median(result, "E_star")
-    zs = _median(result, "z_surf")
-    f0 = _median(result, "F0")
-    return es * result.data.shape(zs - z) + f0
+    """Pointwise median of the posterior's mean force curves at heights ``z`` [N] (each draw
+    with its own layer when the layer was sampled)."""
+    return result.predictive(z, n_draws=200)["median_n"].to_numpy()
 
 
 def _lsq_curve(lsq: Any, model: Any, z: np.ndarray) -> np.ndarray:
@@ -104,7 +102,7 @@ def plot_force_depth(
     zg = np.linspace(float(zsrc.min()), float(zsrc.max()), n_grid)
     obs = result.predictive(zg, n_draws=n_draws, noise=True, level=level, seed=seed)
     mean = result.predictive(zg, n_draws=n_draws, noise=False, level=level, seed=seed)
-    lsq_f = None if lsq is None else _lsq_curve(lsq, data.model, zg)
+    lsq_f = None if lsq is None else _lsq_curve(lsq, lsq.model, zg)
     excluded = None
     if show_excluded and getattr(data, "loading", None) is not None:
         lz, lf = data.loading.z, data.loading.force
@@ -193,7 +191,7 @@ def plot_residuals(
     x, m = _binned_mean(depth, rb, bins)
     ax.plot(x, m, color=METHOD_COLORS["bayes"], lw=1.4, label="Bayes, binned mean")
     if lsq is not None:
-        rl = (data.force - _lsq_curve(lsq, data.model, data.z)) * _MN
+        rl = (data.force - _lsq_curve(lsq, lsq.model, data.z)) * _MN
         x, m = _binned_mean(depth, rl, bins)
         ax.plot(x, m, "--", color=METHOD_COLORS["lsq"], lw=1.4,
                 label="least squares, binned mean")

@@ -54,6 +54,15 @@ radius and compliance factors depend on the depths and force level, which the tr
 group share up to a few per cent).  E_new, the posterior predictive of a new specimen, is what
 compares with the Instron mean ± sd.
 
+A layer's base
+--------------
+A specimen's base condition (bonded to its plate or lying free on it;
+:mod:`palpbayes.bayes.layers`) is shared too: every trace of a group lies on the same plate.
+Each trace's posterior is read as if bonded (its free draws divided by the ratio r =
+E_free/E_bonded of the same curve), the group's evidence for the base is the product of the
+traces' Bayes factors, and the base is drawn once per pooled draw with that posterior weight,
+multiplying E by r when free.
+
 Reporting E_new
 ---------------
 With a handful of traces the posterior of tau keeps a long right tail (the half-normal prior allows
@@ -324,8 +333,8 @@ class PooledEstimate:
 def pool_group(m, s, *, material: str = "", tip: str = "", data: FitData | None = None,
                z_surf: float | None = None, estar: float | None = None,
                budget: BudgetSpec | None = None, tau_prior_sd: float = TAU_PRIOR_SD,
-               seed: int | None = 0, settings: SamplerSettings | None = None
-               ) -> PooledEstimate:
+               seed: int | None = 0, settings: SamplerSettings | None = None,
+               p_bonded: float | None = None, base_ratio: float = 1.0) -> PooledEstimate:
     """Pool one group: stage-2 posterior, shared systematic factor and predictive draws.
 
     Parameters
@@ -346,6 +355,12 @@ def pool_group(m, s, *, material: str = "", tip: str = "", data: FitData | None 
         children of it.
     settings
         emcee settings of stage 2.
+    p_bonded, base_ratio
+        A layer whose base was sampled: the traces' ``m`` are read as bonded (each free draw
+        divided by ``base_ratio`` = E_free/E_bonded of the same curve), and the base, shared by
+        the group, is drawn once per pooled draw — free with probability 1 − ``p_bonded``,
+        then E is multiplied by ``base_ratio`` (a row ``base condition`` of the budget).
+        None: no sampled base.
     """
     post_ss, factor_ss, pred_ss = np.random.SeedSequence(seed).spawn(3)
     post = sample_hierarchical(m, s, tau_prior_sd=tau_prior_sd,
@@ -362,6 +377,14 @@ def pool_group(m, s, *, material: str = "", tip: str = "", data: FitData | None 
         rows += tab.to_dict("records")
     else:
         factor = np.ones(n)
+    if p_bonded is not None:
+        free = np.random.default_rng(factor_ss.spawn(1)[0]).random(n) >= p_bonded
+        f_base = np.where(free, base_ratio, 1.0)
+        factor = factor * f_base
+        rows.append({"input": "base condition",
+                     "distribution": f"bonded {p_bonded:.3g} / free {1 - p_bonded:.3g} "
+                                     f"(E x {base_ratio:.3g} if free)",
+                     "var_log": float(np.var(np.log(f_base)))})
     table = pd.DataFrame(rows)
     total = float(table["var_log"].sum())
     table["rel_sd_pct"] = 100.0 * np.sqrt(table["var_log"])

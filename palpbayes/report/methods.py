@@ -42,6 +42,22 @@ PRIORS_TABLE: tuple[str, ...] = (
 )
 
 
+def layer_setting_text(o: dict) -> str:
+    """How a run treated the specimen's thickness, in words (from ``settings.json``)."""
+    layer = o.get("layer", "auto" if o.get("thickness_correction") else "off")
+    bonding = o.get("bonding", "unknown")
+    base = {"bonded": "bonded to its base", "free": "lying free on its base",
+            "unknown": "bonded or free, weighted by the data"}.get(bonding, bonding)
+    if layer == "off":
+        return "half-space everywhere (the paper's model)"
+    if layer == "unknown":
+        return (f"a layer of unknown thickness (log-uniform prior) or none, {base} (Bayesian "
+                "rows; least squares: the paper's half-space)")
+    return (f"a layer on a rigid base wherever the thickness is known (exact layer solution: "
+            f"Hayes et al. 1972, Dimitriadis et al. 2002), {base} (Bayesian rows; least "
+            "squares: the paper's half-space, with the layer's effect in E_bonded/E_free)")
+
+
 def _sampler_settings(recorded: dict | None) -> tuple[dict, bool]:
     """Sampler settings as a dict: the recorded ones (``settings.json``) completed by the
     package defaults; the flag says whether anything came from the defaults."""
@@ -124,9 +140,7 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         "Rigid axisymmetric tip on an elastic half-space, F = E*·s(d) with E* = E/(1 − nu²) and "
         "depth d = z_surf − z_tip (F = 0 for d ≤ 0). "
         + " ".join(law.summary for law in registered_laws())
-        + " Finite-thickness correction (Dimitriadis et al. 2002 / Hayes et al. 1972) "
-        + ("ON for this run." if o.get("thickness_correction") else
-           "OFF for this run (half-space, as the paper)."), W)]
+        + " Finite thickness: " + layer_setting_text(o) + ".", W)]
     lines += [("h", "Least-squares baseline (the paper's eqs. 12–13)")]
     lines += [("t", ln) for ln in _wrap(
         "Minimise L = Σ (F_j − k·d_j^m)² over k and z_surf subject to |F(z_surf)| ≤ F_unc "

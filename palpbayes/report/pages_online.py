@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from ..campaign.fitjob import trace_model
+from ..campaign.fitjob import FitOptions, trace_model
 from ..campaign.results import ResultsFolder
 from ..errors import PalpbayesError
 from ..io.manifest import load_trace
@@ -32,11 +32,14 @@ def indentation_study(res: ResultsFolder, target: float = REPLAY_TARGET) -> pd.D
     opts = res.options
     traces, models, meta = [], [], []
     for _, row in res.traces.iterrows():
-        try:  # the model the fit used (tip, the row's or the run's nu, thickness)
+        try:  # the model the fit used (tip, the row's or the run's nu, layer)
             trace = load_trace(row, **res.settings.get("read_options", {}))
-            model = trace_model(trace, nu=float(opts.get("nu", 0.3)),
-                                thickness_correction=bool(opts.get("thickness_correction")),
-                                bonded=bool(opts.get("bonded", True)))
+            model = trace_model(trace, FitOptions(
+                nu=float(opts.get("nu", 0.3)), layer=opts.get("layer", "off"),
+                bonding=opts.get("bonding", "unknown")), depth=np.nan)
+            if not model.is_concrete:  # the online estimator takes one shape function
+                model = (model.variant(base="bonded") if model.thickness is not None
+                         else model.half_space())
         except (PalpbayesError, OSError):
             continue
         traces.append(trace)

@@ -13,7 +13,7 @@ from ..noise import PAPER_NOISE_PP
 from ..units import format_length
 from .format import _fmt, _force_setting, _range, _shown, _wrap
 from .layout import PAGE_SIZE, _Page, _text_lines
-from .methods import MOVES_TEXT, _sampler_settings
+from .methods import MOVES_TEXT, _sampler_settings, layer_setting_text
 
 
 def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
@@ -23,10 +23,7 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     pri = o.get("priors") or {}
     bud = o.get("budget") or {}
     smp, _ = _sampler_settings(o.get("settings"))
-    if o.get("thickness_correction"):
-        thick = "on (" + ("bonded" if o.get("bonded", True) else "non-bonded") + ")"
-    else:
-        thick = "off (half-space, as the paper)"
+    thick = layer_setting_text(o)
     frac = o.get("fit_fraction")
     if frac is None:
         from ..contact import default_fit_fraction_text
@@ -41,8 +38,7 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     return [
         ("t", f"Methods fitted: {s.get('method', '?')};  base seed: {s.get('seed', '?')};  "
               f"traces: {n_tr}"),
-        ("t", f"Contact model: Poisson ratio nu = {o.get('nu')}; finite-thickness correction "
-              f"{thick}"),
+        ("t", f"Contact model: Poisson ratio nu = {o.get('nu')}; {thick}"),
         ("t", f"Fit window: F_unc = {_force_setting(o.get('f_unc', PAPER_NOISE_PP))}; fit "
               f"fraction {frac}; max depth {depth}"),
         ("t", f"Noise model: {o.get('noise', 'gaussian')}; baseline "

@@ -27,10 +27,8 @@ from palpbayes.errors import (
     NoContactError,
     OutputExistsError,
 )
-from palpbayes.fitdata import ModelSpec, prepare
 from palpbayes.io.manifest import iter_traces
 from palpbayes.io.trace_csv import write_trace
-from palpbayes.lsq import fit_lsq_data
 from palpbayes.paper import PAPER_MATERIALS, PAPER_TIPS
 from palpbayes.sim import simulate_campaign, simulate_palpation_series, simulate_trace
 
@@ -236,54 +234,47 @@ def test_fit_error_is_recorded_and_does_not_stop_the_campaign(traces, tmp_path, 
 def sphere_trace():
     """Sphere R = 10 mm, 2 mm into a 20 mm specimen after a 1 mm approach."""
     return simulate_trace(136e3, Tip("sphere", radius=0.01), thickness=0.02, rng=1,
-                          trace_id="sph")
+                          trace_id="sph", base=None)
 
 
-@pytest.mark.parametrize("tip, thickness, nu, match", [
-    (Tip("cone", half_angle=np.radians(70)), 0.02, 0.3, "no finite-thickness correction"),
-    (Tip("power", c=50.0, n=2.0), 0.02, 0.3, "no finite-thickness correction"),
-    (Tip("flat", radius=0.03), 0.02, 0.3, "outside Hayes' table"),
-    (Tip("flat", radius=0.01), 0.02, 0.1, "outside the Hayes correction's range"),
-    (Tip("sphere", radius=0.01), 0.004, 0.3, "Dimitriadis"),
+@pytest.mark.parametrize("tip, thickness, nu", [
+    (Tip("cone", half_angle=np.radians(70)), 0.02, 0.3),
+    (Tip("power", c=50.0, n=2.0), 0.02, 0.3),
+    (Tip("flat", radius=0.03), 0.02, 0.3),      # a/h 1.5: beyond Hayes' table
+    (Tip("flat", radius=0.01), 0.02, 0.1),      # nu below Hayes' 0.3..0.5
+    (Tip("sphere", radius=0.01), 0.004, 0.3),   # chi > 1: beyond Dimitriadis' series
 ])
-def test_precheck_evaluates_the_thickness_correction(sphere_trace, tip, thickness, nu, match):
-    """These used to pass check_fittable and fail inside the fit, after outputs were written."""
-    tr = sphere_trace.replace(tip=tip, thickness=thickness)
-    opts = FitOptions(method="lsq", thickness_correction=True, nu=nu)
-    with pytest.raises(GeometryError, match=match):
-        check_fittable(tr.replace(metadata={}), opts)
-    check_fittable(tr.replace(metadata={}), replace(opts, thickness_correction=False))
-
-
-def test_precheck_covers_every_depth_the_fit_evaluates(sphere_trace):
-    """chi <= 1 at the fitted depth but > 1 for trial surfaces up in the approach: the fit
-    itself raises there, so the pre-check must refuse the trace too (and say why)."""
-    tr = sphere_trace.replace(metadata={})
-    opts = FitOptions(method="lsq", thickness_correction=False)
-    data = check_fittable(tr, opts)
-    fitted = data.z_contact - data.z.min()
+def test_every_tip_and_thickness_has_a_layer_model(sphere_trace, tip, thickness, nu):
+    """What the literature's corrections refused, the layer solution covers: the pre-check
+    gives the Bayesian model a layer of the trace's thickness with an unknown base, and every
+    base's shape is finite and positive up to the start of the approach."""
+    tr = sphere_trace.replace(tip=tip, thickness=thickness, metadata={})
+    data = check_fittable(tr, FitOptions(method="both", nu=nu))
+    m = data.model
+    assert m.thickness == thickness and m.bonding == "unknown" and not m.is_concrete
     deepest = data.z_top - data.z.min()
-    h = np.sqrt(0.01 * 0.5 * (fitted + deepest))  # chi = 1 between the two depths
-    tr_h = tr.replace(thickness=h)
-    model = ModelSpec(tr.tip, nu=0.3, thickness=h)
-    with pytest.raises(GeometryError, match="Dimitriadis"):  # what the fit would do
-        fit_lsq_data(prepare(tr_h, model))
-    with pytest.raises(GeometryError, match="start of the recorded approach"):
-        check_fittable(tr_h, replace(opts, thickness_correction=True))
-    # a thickness that passes the pre-check also passes the fit
-    ok = tr.replace(thickness=1.01 * np.sqrt(0.01 * deepest) / 0.99)
-    check_fittable(ok, replace(opts, thickness_correction=True, method="bayes"))
-    fit_lsq_data(prepare(ok, ModelSpec(tr.tip, nu=0.3, thickness=ok.thickness)))
+    for base in m.bases:
+        s = m.variant(base=base).shape(np.array([deepest]))
+        assert np.isfinite(s).all() and (s > 0).all()
+    half = check_fittable(tr, FitOptions(method="both", nu=nu, layer="off")).model
+    assert half.thickness is None and half.is_concrete
 
 
-def test_precheck_includes_the_budget_radius_tolerance(sphere_trace):
+def test_layer_options_set_the_model(sphere_trace):
     tr = sphere_trace.replace(metadata={})
-    data = check_fittable(tr, FitOptions(method="lsq"))
-    deepest = data.z_top - data.z.min()
-    tr = tr.replace(thickness=np.sqrt(0.01 * deepest) / 0.997)  # chi 0.997; +1 % radius: 1.002
-    check_fittable(tr, FitOptions(method="lsq", thickness_correction=True))
-    with pytest.raises(GeometryError, match="budget's \\+1 % tolerance"):
-        check_fittable(tr, FitOptions(method="bayes", thickness_correction=True))
+    known = check_fittable(tr, FitOptions(bonding="free")).model
+    assert known.describe_layer() == "h=20 mm, free base" and known.is_concrete
+    data = check_fittable(tr, FitOptions(layer="unknown"))
+    depth = data.z_contact - data.z_min
+    lo, hi = data.model.thickness_range
+    assert lo == pytest.approx(1.5 * depth) and hi == pytest.approx(1000 * depth)
+    assert data.model.thickness is None
+    given = check_fittable(tr, FitOptions(layer="unknown", thickness_range=(5e-3, 0.1))).model
+    assert given.thickness_range == (5e-3, 0.1)
+    with pytest.raises(InputError, match="layer mode"):
+        FitOptions(layer="thin")
+    with pytest.raises(InputError, match="0 < LO < HI"):
+        FitOptions(layer="unknown", thickness_range=(0.1, 0.01))
 
 
 @pytest.mark.parametrize("change, match", [
@@ -300,10 +291,9 @@ def test_force_keeps_old_results_when_a_trace_fails_the_precheck(traces, tmp_pat
     out = tmp_path / "res"
     campaign.fit_campaign(traces[:1], out, replace(OPTS, method="lsq"), workers=1)
     before = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
-    cone = traces[1].replace(tip=Tip("cone", half_angle=np.radians(70)))
-    with pytest.raises(GeometryError, match=f"{cone.trace_id}.*tip 'cone'"):
-        campaign.fit_campaign([traces[0], cone], out,
-                              replace(OPTS, method="lsq", thickness_correction=True),
+    thin = traces[1].replace(thickness=1e-4)  # thinner than the indentation
+    with pytest.raises(GeometryError, match=f"{thin.trace_id}.*exceeds the specimen thickness"):
+        campaign.fit_campaign([traces[0], thin], out, replace(OPTS, method="lsq"),
                               workers=1, force=True)
     after = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
     assert after == before
@@ -321,7 +311,7 @@ def test_manifest_read_options_reach_every_trace(tmp_path):
     camp.mkdir()
     rows = []
     for i in range(2):
-        tr = simulate_trace(136e3, Tip("sphere", radius=0.01), thickness=0.02, rng=i + 1)
+        tr = simulate_trace(136e3, Tip("sphere", radius=0.01), thickness=0.02, rng=i + 1, base=None)
         pd.DataFrame({"t": tr.time, "height_mm": tr.z * 1e3, "fz": -tr.force}).to_csv(
             camp / f"r{i}.csv", index=False, float_format="%.17g")
         rows.append({"trace_id": f"r{i}", "file": f"r{i}.csv", "material": "W",
@@ -346,7 +336,7 @@ def test_manifest_read_options_reach_every_trace(tmp_path):
 
 
 def test_bad_manifest_number_writes_nothing(tmp_path):
-    tr = simulate_trace(136e3, Tip("sphere", radius=0.01), thickness=0.02, rng=1)
+    tr = simulate_trace(136e3, Tip("sphere", radius=0.01), thickness=0.02, rng=1, base=None)
     write_trace(tr, tmp_path / "a.csv")
     pd.DataFrame([{"trace_id": "a", "file": "a.csv", "material": "W", "tip": "sphere",
                    "radius_m": "abc"}]).to_csv(tmp_path / "manifest.csv", index=False)
@@ -407,8 +397,9 @@ def test_pooled_and_budget_tables(compared, fitted):
                                     "share_pct"]
     shares = budget.groupby(["material", "tip"])["share_pct"].sum()
     assert np.allclose(shares, 100.0)
+    # the specimens are layers of known thickness whose base the fits sampled: both inputs
     assert set(budget["input"]) == {"mu (pooled posterior)", "Poisson ratio", "tip radius",
-                                    "force gain", "compliance"}
+                                    "force gain", "compliance", "thickness", "base condition"}
 
 
 def test_compare_cli(fitted, tmp_path, capsys, monkeypatch):
@@ -490,7 +481,8 @@ def test_fit_options_nu_applies_to_simulated_traces():
     from palpbayes.campaign.fitjob import fit_trace
     from palpbayes.sim import simulate_trace
 
-    tr = simulate_trace(136e3, Tip("paraboloid", radius=0.0117), nu=0.3, thickness=0.02, rng=1)
+    tr = simulate_trace(136e3, Tip("paraboloid", radius=0.0117), nu=0.3, thickness=0.02, rng=1,
+                        base=None)
     assert tr.metadata["nu_true"] == 0.3 and "nu" not in tr.metadata
     rows = {nu: fit_trace(tr, FitOptions(method="lsq", nu=nu)).rows[0] for nu in (0.3, 0.45)}
     assert rows[0.45]["nu"] == 0.45

@@ -22,7 +22,7 @@ TIP = ["--tip", "sphere", "--radius", "0.01"]
 @pytest.fixture(scope="module")
 def good(tmp_path_factory):
     d = tmp_path_factory.mktemp("good")
-    tr = simulate_trace(136e3, Tip("sphere", radius=0.01), thickness=0.02, rng=1)
+    tr = simulate_trace(136e3, Tip("sphere", radius=0.01), thickness=0.02, rng=1, base=None)
     return tr, write_trace(tr, d / "good.csv")
 
 
@@ -133,26 +133,6 @@ def test_bad_options(tmp_path, capsys, good, args, match):
 
 #: Geometry the pre-check must refuse before anything is written (the trace file is named).
 GEOMETRY = {
-    "cone_thickness": (["--tip", "cone", "--half-angle", "70", "--thickness", "0.02",
-                        "--finite-thickness"],
-                       "no finite-thickness correction for tip 'cone'.*drop --finite-thickness"),
-    "power_thickness": (["--tip", "power", "--profile-c", "50", "--profile-n", "2",
-                         "--thickness", "0.02", "--finite-thickness"],
-                        "no finite-thickness correction for tip 'power'"),
-    "flat_a_over_h": (["--tip", "flat", "--radius", "0.03", "--thickness", "0.02",
-                       "--finite-thickness"], "a/h = 1.5 \\(a = 30 mm, h = 20 mm\\) is outside"),
-    "flat_hayes_nu": (["--tip", "flat", "--radius", "0.01", "--thickness", "0.02",
-                       "--finite-thickness", "--nu", "0.1"],
-                      "Poisson ratio 0.1 is outside the Hayes correction's range 0.2..0.5"),
-    "flat_non_bonded": (["--tip", "flat", "--radius", "0.01", "--thickness", "0.02",
-                         "--finite-thickness", "--non-bonded"], "no non-bonded"),
-    "dimitriadis_chi": (["--tip", "sphere", "--radius", "0.01", "--thickness", "0.004",
-                         "--finite-thickness"],
-                        "chi = sqrt\\(R\\*d\\)/h = 1.05 at depth d = 1.77 mm .*exceeds 1"),
-    "dimitriadis_approach": (["--tip", "sphere", "--radius", "0.01", "--thickness", "0.005",
-                              "--finite-thickness"],
-                             "chi = .* = 1.1 at depth d = 3 mm .*start of the recorded "
-                             "approach, i.e. depths up to 2.999 mm"),
     "radius_mm": (["--tip", "sphere", "--radius", "10"],
                   "tip radius 10 m is implausibly large.*--radius is in metres.*did you mean "
                   "0.010\\?"),
@@ -173,6 +153,27 @@ def test_bad_geometry_is_refused_before_writing(tmp_path, capsys, good, case):
     assert not out.exists()
 
 
+#: Layer options that must be refused before anything is read: (options, expected message).
+LAYER_OPTIONS = {
+    "thickness_word": (["--thickness", "thick"], "neither a thickness in metres nor 'unknown'"),
+    "thickness_zero": (["--thickness", "0"], "must be a positive thickness in metres"),
+    "half_space_and_unknown": (["--half-space", "--thickness", "unknown"],
+                               "contradict each other"),
+    "range_without_unknown": (["--thickness", "0.02", "--thickness-range", "0.001", "0.1"],
+                              "prior of an unknown thickness: give it with --thickness unknown"),
+    "range_reversed": (["--thickness", "unknown", "--thickness-range", "0.1", "0.01"],
+                       "0 < LO < HI"),
+}
+
+
+@pytest.mark.parametrize("case", list(LAYER_OPTIONS))
+def test_bad_layer_options_are_one_line(tmp_path, capsys, good, case):
+    args, match = LAYER_OPTIONS[case]
+    rc, err, out = _run(tmp_path, capsys, [str(good[1]), *TIP, *args])
+    assert rc == 2 and len(err.splitlines()) == 1 and re.search(match, err), err
+    assert not out.exists()
+
+
 def test_failed_precheck_keeps_previous_results_with_force(tmp_path, capsys, good):
     """Issue: a bad model that escaped the pre-check deleted the old results under --force and
     left settings.json + traces.csv of the failed run."""
@@ -180,9 +181,9 @@ def test_failed_precheck_keeps_previous_results_with_force(tmp_path, capsys, goo
     assert rc == 0
     before = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
     assert Path("summary.csv") in before
-    rc, err, _ = _run(tmp_path, capsys, [str(good[1]), *GEOMETRY["cone_thickness"][0],
+    rc, err, _ = _run(tmp_path, capsys, [str(good[1]), *GEOMETRY["thinner_than_depth"][0],
                                          "--force"])
-    assert rc == 2 and len(err.splitlines()) == 1 and "tip 'cone'" in err, err
+    assert rc == 2 and len(err.splitlines()) == 1 and "specimen thickness" in err, err
     after = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
     assert after == before
 
@@ -309,7 +310,7 @@ def test_million_row_trace(tmp_path, capsys):
     """A 10^6-row trace (3 mm at ~208 kHz) fits end to end with both methods.  Time and memory
     are measured by benchmarks/bench_long_trace.py (10 s, 357 MB peak RSS on 2 cores)."""
     tr = simulate_trace(111e3, Tip("paraboloid", radius=0.0117), thickness=0.03,
-                        rate=208_333.0, rng=1)
+                        rate=208_333.0, rng=1, base=None)
     assert tr.n_points > 999_000
     path = write_trace(tr, tmp_path / "big.csv")
     out = tmp_path / "res"

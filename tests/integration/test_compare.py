@@ -127,7 +127,7 @@ def test_compare_pools_the_statistical_E_and_applies_the_budget_once(tmp_path, m
     real_pool = pooling.pool_group
 
     def spy(m, s, *, material, tip, data, z_surf, estar, budget, tau_prior_sd, seed,
-            settings):
+            settings, p_bonded=None, base_ratio=1.0):
         calls.append({"material": material, "tip": tip, "m": list(m), "s": list(s),
                       "data": data, "z_surf": z_surf, "estar": estar, "budget": budget})
         return real_pool(m, s, material=material, tip=tip, tau_prior_sd=tau_prior_sd,

@@ -133,8 +133,9 @@ def test_a_reloaded_fit_keeps_its_model_checks(tmp_path):
     from palpbayes.campaign.results import load_fit
 
     tr = simulate_trace(136e3, Tip("paraboloid", radius=0.0117), thickness=0.03, depth=3e-3,
-                        finite_thickness=True, rng=3, trace_id="layer")
-    summary = campaign.fit_campaign([tr], tmp_path / "res", FitOptions(seed=1), workers=1)
+                        base="bonded", rng=3, trace_id="layer")
+    summary = campaign.fit_campaign([tr], tmp_path / "res", FitOptions(seed=1, layer="off"),
+                                    workers=1)
     back = load_fit(tmp_path / "res", "layer")
     assert [c.name for c in back.checks] == ["exponent", "residual_structure",
                                              "depth_consistency", "ppc"]

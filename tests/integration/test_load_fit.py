@@ -90,7 +90,7 @@ def layer():
     """A paraboloid 3 mm into a 30 mm layer fitted as a half-space: the model checks fail and
     name finite thickness; the tip radius has more digits than traces.csv keeps."""
     return simulate_trace(136e3, Tip("paraboloid", radius=0.0117 + 1e-13), thickness=0.03,
-                          depth=3e-3, finite_thickness=True, rng=3, trace_id="layer")
+                          depth=3e-3, base="bonded", rng=3, trace_id="layer")
 
 
 def test_a_flagged_fit_with_failed_checks_and_a_budget_comes_back_equal(layer, tmp_path,
@@ -100,7 +100,7 @@ def test_a_flagged_fit_with_failed_checks_and_a_budget_comes_back_equal(layer, t
         "trace_id": "layer", "file": str(path), "material": "Pink", "tip": "paraboloid",
         "radius_m": layer.tip.radius, "thickness_m": 0.03}]), tmp_path / "manifest.csv")
     # short chains: the step cap is reached (a diagnostics flag the draws alone do not show)
-    opts = FitOptions(seed=1, settings=TINY)
+    opts = FitOptions(seed=1, settings=TINY, layer="off")
     summary, kept = _fit_and_keep(monkeypatch, tmp_path / "manifest.csv", tmp_path / "res",
                                   opts)
     saved = kept["layer"]

@@ -22,7 +22,8 @@ def _manifest(folder, moduli, *, no_contact=()):
     rows = []
     for k, E in enumerate(moduli):
         tid = f"p{k:02d}"
-        tr = simulate_trace(E, TIP, thickness=0.02, rng=100 + k, approach=5e-4, trace_id=tid)
+        tr = simulate_trace(E, TIP, thickness=0.02, rng=100 + k, approach=5e-4, trace_id=tid,
+                            base=None)
         if k in no_contact:  # the same motion, sensor noise only: the tip never touched
             noise = np.random.default_rng(k).normal(0.0, 8e-3, tr.z.size)
             pd.DataFrame({"time_s": tr.time, "z_m": tr.z, "force_n": noise}).to_csv(

@@ -18,7 +18,7 @@ E_TRUE = 1.25e5
 @pytest.fixture(scope="module")
 def trace_csv(tmp_path_factory):
     tr = simulate_trace(E_TRUE, PAPER_TIPS["paraboloid"], thickness=0.03, force_offset=0.05,
-                        rng=17)
+                        rng=17, base=None)
     return write_trace(tr, tmp_path_factory.mktemp("trace") / "para.csv"), tr
 
 

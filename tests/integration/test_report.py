@@ -97,7 +97,8 @@ def test_campaign_report_pipeline_writes_every_table(fitted):
     # sphere traces: the paper's Hertz fit beside every row, a few per cent below E
     summ = pd.read_csv(out / "summary.csv")
     assert summ["E_hertz_pa"].notna().all()
-    assert ((summ["E_hertz_rel_diff"] < 0) & (summ["E_hertz_rel_diff"] > -0.06)).all()
+    lsq = summ[summ["method"] == "lsq"]  # (the Bayesian rows model the layer, Hertz does not)
+    assert ((lsq["E_hertz_rel_diff"] < 0) & (lsq["E_hertz_rel_diff"] > -0.06)).all()
     assert comp["gt_E_pa"].notna().all()
     assert pdf.is_file()
     assert f"wrote {pdf}" in stdout

@@ -23,7 +23,7 @@ TIPS = {
 
 @pytest.mark.parametrize("kind", list(TIPS))
 def test_recovery_at_paper_noise(kind):
-    tr = simulate_trace(E_TRUE, TIPS[kind], thickness=0.02, rng=11)
+    tr = simulate_trace(E_TRUE, TIPS[kind], depth=2e-3, rng=11)
     res = fit_bayes(tr, seed=5, budget=BudgetSpec.none())
     E = res.draws("E")
     lo, hi = np.quantile(E, [0.05, 0.95])
@@ -38,7 +38,7 @@ def test_recovery_at_paper_noise(kind):
 
 @pytest.mark.parametrize("noise", ["gaussian", "ar1"])
 def test_tabulated_likelihood_matches_direct_sum(noise):
-    tr = simulate_trace(E_TRUE, TIPS["paraboloid"], thickness=0.02, noise_ar1=0.5, rng=2)
+    tr = simulate_trace(E_TRUE, TIPS["paraboloid"], depth=2e-3, noise_ar1=0.5, rng=2)
     data = prepare(tr, ModelSpec(tr.tip))
     lsq = fit_lsq_data(data)
     like = TraceLikelihood(data, noise, z_center=lsq.z_surf, z_scale=lsq.z_surf_sd)
@@ -99,7 +99,7 @@ def _grid_oracle(data, priors):
 
 
 def test_posterior_matches_grid_oracle():
-    tr = simulate_trace(E_TRUE, TIPS["paraboloid"], thickness=0.02, rng=7)
+    tr = simulate_trace(E_TRUE, TIPS["paraboloid"], depth=2e-3, rng=7)
     res = fit_bayes(tr, seed=3, budget=BudgetSpec.none())
     from palpbayes.bayes import PriorSpec
 
@@ -113,7 +113,7 @@ def test_posterior_matches_grid_oracle():
 
 
 def test_summary_netcdf_and_predictive(tmp_path):
-    tr = simulate_trace(E_TRUE, TIPS["sphere"], thickness=0.02, rng=1)
+    tr = simulate_trace(E_TRUE, TIPS["sphere"], depth=2e-3, rng=1)
     res = fit_bayes(tr, seed=1)
     table = res.summary()
     assert {"E_total", "E", "E_star", "z_surf", "sigma", "F0"} <= set(table.index)
@@ -138,7 +138,7 @@ def test_summary_netcdf_and_predictive(tmp_path):
 
 
 def test_seed_reproducible_and_step_cap_is_flagged():
-    tr = simulate_trace(E_TRUE, TIPS["paraboloid"], thickness=0.02, noise_ar1=0.6, rng=4)
+    tr = simulate_trace(E_TRUE, TIPS["paraboloid"], depth=2e-3, noise_ar1=0.6, rng=4)
     kw = dict(noise="ar1", seed=9, settings=SamplerSettings(min_steps=250, max_steps=400))
     with pytest.warns(ConvergenceWarning, match="step cap reached"):
         a = fit_bayes(tr, **kw)
@@ -192,7 +192,7 @@ def test_log_posterior_rhat_catches_a_walker_off_a_thin_ridge():
 def test_diagnostics_include_log_posterior_and_moves_are_selectable():
     from palpbayes.bayes.sampler import MOVES
 
-    tr = simulate_trace(E_TRUE, TIPS["paraboloid"], thickness=0.02, rng=3)
+    tr = simulate_trace(E_TRUE, TIPS["paraboloid"], depth=2e-3, rng=3)
     res = fit_bayes(tr, seed=2, budget=BudgetSpec.none(),
                     settings=SamplerSettings(moves="de-snooker"))
     assert "lp" in res.diagnostics.rhat

@@ -28,7 +28,7 @@ def test_exact_engine_agrees_with_emcee_within_monte_carlo_error(case):
     c = dict(CASES[case])
     tip = PAPER_TIPS[c.pop("tip")]
     noise, baseline = c.pop("noise", "gaussian"), c.pop("baseline", "constant")
-    tr = simulate_trace(140e3, tip, thickness=0.03, force_offset=0.02, rng=21, **c)
+    tr = simulate_trace(140e3, tip, depth=3e-3, force_offset=0.02, rng=21, **c)
     kw = dict(noise=noise, baseline=baseline, budget=BudgetSpec.none(), seed=3)
     mc = fit_bayes(tr, ModelSpec(tip), **kw)
     ex = fit_bayes(tr, ModelSpec(tip), engine="exact", **kw)
@@ -55,7 +55,7 @@ def test_exact_intervals_cover_the_truth_at_the_nominal_rate():
         tip = PAPER_TIPS[kind]
         E = float(np.exp(rng.uniform(np.log(5e4), np.log(3e5))))
         z0 = 0.1 + rng.uniform(-1e-3, 1e-3)
-        tr = simulate_trace(E, tip, thickness=0.02, z_surf=z0,
+        tr = simulate_trace(E, tip, depth=2e-3, z_surf=z0,
                             force_offset=float(rng.normal(0, 0.05)), rng=rng)
         data = prepare_trace(tr, ModelSpec(tip, nu=0.3))
         post = exact_posterior(data, PriorSpec().for_trace(data, "gaussian"))
@@ -68,7 +68,7 @@ def test_exact_intervals_cover_the_truth_at_the_nominal_rate():
 
 def test_exact_engine_refuses_what_it_does_not_model():
     tip = Tip("paraboloid", radius=0.0117)
-    tr = simulate_trace(1e5, tip, thickness=0.03, rng=1)
+    tr = simulate_trace(1e5, tip, depth=3e-3, rng=1)
     with pytest.raises(InputError, match="Student|student|emcee"):
         fit_bayes(tr, engine="exact", noise="student")
     with pytest.raises(InputError, match="soft"):
@@ -81,7 +81,7 @@ def test_exact_engine_flags_a_posterior_at_the_prior_bound():
     """A prior range that ends below the true E* puts the posterior on its bound: the exact
     engine's result carries the same flag as emcee's and is not reported as converged."""
     tip = PAPER_TIPS["paraboloid"]
-    tr = simulate_trace(1.4e5, tip, thickness=0.03, rng=4)
+    tr = simulate_trace(1.4e5, tip, depth=3e-3, rng=4)
     with pytest.warns(ConvergenceWarning, match="upper prior bound"):
         res = fit_bayes(tr, engine="exact", budget=BudgetSpec.none(),
                         priors=PriorSpec(Estar_bounds=(1.0, 1.3e5)))

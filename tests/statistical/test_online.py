@@ -22,7 +22,7 @@ def _feed(est, tr, chunk):
 @pytest.mark.parametrize("kind", ["flat", "paraboloid"])
 def test_online_estimate_at_the_end_equals_the_whole_trace_posterior(kind):
     tip = PAPER_TIPS[kind]
-    tr = simulate_trace(1.3e5, tip, thickness=0.03, force_offset=0.15, rng=8)
+    tr = simulate_trace(1.3e5, tip, thickness=0.03, force_offset=0.15, rng=8, base=None)
     model = ModelSpec(tip)
     state = _feed(OnlineEstimator(model), tr, 100)
     data = prepare_trace(tr, model, fit_fraction=0.0)
@@ -36,7 +36,7 @@ def test_online_estimate_at_the_end_equals_the_whole_trace_posterior(kind):
 
 def test_chunk_size_does_not_change_the_answer():
     tip = PAPER_TIPS["sphere"]
-    tr = simulate_trace(9e4, tip, thickness=0.02, rng=9)
+    tr = simulate_trace(9e4, tip, thickness=0.02, rng=9, base=None)
     a = _feed(OnlineEstimator(ModelSpec(tip)), tr, 37)
     b = _feed(OnlineEstimator(ModelSpec(tip)), tr, 400)
     assert a.n == b.n
@@ -47,7 +47,7 @@ def test_chunk_size_does_not_change_the_answer():
 
 def test_no_estimate_before_contact_and_contact_where_the_force_rises():
     tip = PAPER_TIPS["paraboloid"]
-    tr = simulate_trace(1e5, tip, thickness=0.03, approach=1e-3, rng=2)
+    tr = simulate_trace(1e5, tip, thickness=0.03, approach=1e-3, rng=2, base=None)
     est = OnlineEstimator(ModelSpec(tip))
     seg = tr.loading_segment()
     # the approach is 1 mm at 50 mm/min and 800 Hz: 960 samples before the surface
@@ -66,7 +66,7 @@ def test_no_estimate_before_contact_and_contact_where_the_force_rises():
 ])
 def test_each_stopping_rule_fires_where_it_should(rule, reason):
     tip = PAPER_TIPS["paraboloid"]
-    tr = simulate_trace(1.2e5, tip, thickness=0.03, rng=5)
+    tr = simulate_trace(1.2e5, tip, thickness=0.03, rng=5, base=None)
     res = replay(tr, ModelSpec(tip), rule=rule, chunk=50)
     s = res.at_stop
     assert s is not None and s.stop == reason
@@ -109,7 +109,7 @@ def test_intervals_at_the_stop_cover_the_truth():
         tip = PAPER_TIPS[("flat", "sphere", "paraboloid")[i % 3]]
         E = float(np.exp(rng.uniform(np.log(4e4), np.log(4e5))))
         tr = simulate_trace(E, tip, thickness=0.025, force_offset=float(rng.normal(0, 0.1)),
-                            rng=rng)
+                            rng=rng, base=None)
         s = run_to_stop(tr, OnlineEstimator(ModelSpec(tip, nu=0.3),
                                             rule=StoppingRule(target=0.02)))
         stopped += s.should_stop

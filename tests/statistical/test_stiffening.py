@@ -127,7 +127,7 @@ def test_series_from_the_simulator_fitted_by_least_squares():
     E0, tip = 111e3, PAPER_TIPS["paraboloid"]
     rest = [2.0, 4.0, 8.0, 12.0, 20.0, 30.0, 45.0, 60.0, 90.0, 150.0, 240.0, 400.0]
     series = simulate_palpation_series(E0, tip, rest, rng=7, thickness=0.03,
-                                       material="White", trace_prefix="w")
+                                       material="White", trace_prefix="w", base=None)
     rows = []
     for tr in series:
         res = fit_lsq(tr)

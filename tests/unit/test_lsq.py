@@ -23,7 +23,7 @@ E_TRUE, Z_TRUE = 111e3, 0.1
 
 @pytest.mark.parametrize("kind", list(TIPS))
 def test_noise_free_recovery(kind):
-    tr = simulate_trace(E_TRUE, TIPS[kind], thickness=0.03, noise_pp=0.0, rng=0)
+    tr = simulate_trace(E_TRUE, TIPS[kind], thickness=0.03, noise_pp=0.0, rng=0, base=None)
     r = fit_lsq(tr, f_unc=48e-3)  # noise-free: no noise spec can be read from the baseline
     assert r.E == pytest.approx(E_TRUE, rel=1e-6)
     assert r.z_surf == pytest.approx(Z_TRUE, abs=1e-6 * 3e-3)  # 1e-6 of the depth
@@ -36,7 +36,7 @@ def test_paper_noise_recovery(kind):
     """48 mN p-p: E within 1 % and z_surf within 0.05 mm (issue 4), over 10 seeds."""
     errs_E, errs_z, cover = [], [], 0
     for seed in range(10):
-        tr = simulate_trace(E_TRUE, TIPS[kind], thickness=0.03, rng=seed)
+        tr = simulate_trace(E_TRUE, TIPS[kind], thickness=0.03, rng=seed, base=None)
         r = fit_lsq(tr)
         errs_E.append(r.E / E_TRUE - 1)
         errs_z.append(r.z_surf - tr.metadata["z_surf_true"])
@@ -50,7 +50,7 @@ def test_flat_tip_paper_noise():
     """Flat punch, data past 20 % of the penetration (the paper's rule)."""
     errs = []
     for seed in range(10):
-        tr = simulate_trace(E_TRUE, TIPS["flat"], thickness=0.03, rng=seed)
+        tr = simulate_trace(E_TRUE, TIPS["flat"], thickness=0.03, rng=seed, base=None)
         r = fit_lsq(tr)
         data = prepare(tr, ModelSpec(tr.tip))
         # the paper's window: only samples past 20 % of the penetration below the onset
@@ -66,7 +66,7 @@ def test_flat_tip_paper_noise():
 def test_constraint_is_respected_when_the_free_optimum_violates_it():
     # Hertz data fitted with the flat-punch law: the best straight line cuts the depth
     # axis below the real surface, where the measured force already exceeds F_unc.
-    tr = simulate_trace(E_TRUE, TIPS["paraboloid"], thickness=0.03, rng=3)
+    tr = simulate_trace(E_TRUE, TIPS["paraboloid"], thickness=0.03, rng=3, base=None)
     model = ModelSpec(Tip("flat", radius=0.01))
     data = prepare(tr, model, fit_fraction=0.0)
     r = fit_lsq(tr, model, fit_fraction=0.0)
@@ -83,7 +83,7 @@ def test_constraint_is_respected_when_the_free_optimum_violates_it():
 
 
 def test_no_contact_is_a_clear_error():
-    tr = simulate_trace(E_TRUE, TIPS["sphere"], thickness=0.03, rng=0)
+    tr = simulate_trace(E_TRUE, TIPS["sphere"], thickness=0.03, rng=0, base=None)
     shallow = tr.replace(force=tr.force * 0.0 + 0.001)
     with pytest.raises(NoContactError, match="never leaves"):
         fit_lsq(shallow)
@@ -97,7 +97,7 @@ def test_surface_force_obeys_the_constraint_with_noisy_z(position_noise):
     model = ModelSpec(Tip("flat", radius=0.01))  # Hertz data, flat law: the constraint binds
     for seed in range(10):
         tr = simulate_trace(E_TRUE, TIPS["paraboloid"], thickness=0.03,
-                            position_noise=position_noise, rng=seed)
+                            position_noise=position_noise, rng=seed, base=None)
         data = prepare(tr, model, fit_fraction=0.0)
         assert float(data.measured_force_at(data.z_contact)) == pytest.approx(data.f_unc)
         r = fit_lsq(tr, model, fit_fraction=0.0)

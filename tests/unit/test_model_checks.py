@@ -75,6 +75,7 @@ def _laplace_draws(z, model, p, phi, rng, n=200):
 
 
 def _case(true_tip, seed, *, fit_tip=None, phi=0.0, draws=False, **kw):
+    kw.setdefault("base", None)  # a half-space unless the case says otherwise
     tr = simulate_trace(E_WHITE, TIPS[true_tip], nu=0.3, thickness=0.03, rng=seed,
                         noise_ar1=phi, **kw)
     lo = tr.loading_segment()
@@ -124,7 +125,8 @@ def test_law_exponent():
     m_sph = C.law_exponent(ModelSpec(TIPS["sphere"]), z, 0.1)
     assert 1.44 < m_sph < 1.49
     # and a thickness-corrected paraboloid (chi = 0.2 at 3 mm) stiffens: m > 1.5
-    m_th = C.law_exponent(ModelSpec(TIPS["paraboloid"], thickness=0.03), z, 0.1)
+    m_th = C.law_exponent(ModelSpec(TIPS["paraboloid"], thickness=0.03, bonding="bonded"), z,
+                          0.1)
     assert 1.55 < m_th < 1.7
 
 
@@ -186,7 +188,7 @@ def test_false_alarm_rate_40_seeds():
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_finite_thickness_detected(seed):
     """Paraboloid R = 11.7 mm, 3 mm into a 30 mm bonded layer, fitted as a half-space."""
-    res, p, tr = _case("paraboloid", seed, finite_thickness=True)
+    res, p, tr = _case("paraboloid", seed, base="bonded")
     assert p["estar"] / tr.metadata["Estar_true"] > 1.2  # the bias the checks must explain
     named = [r for r in (res["exponent"], res["depth_consistency"])
              if not r.passed and "finite thickness" in r.flag]
@@ -231,14 +233,15 @@ def test_drift_named(seed, drift):
 def test_ppc_fails_for_wrong_law_passes_for_right_one():
     good, _, _ = _case("paraboloid", 7, draws=True)
     assert good["ppc"].passed and good["ppc"].statistic > 0.01
-    bad, _, _ = _case("paraboloid", 7, draws=True, finite_thickness=True)
+    bad, _, _ = _case("paraboloid", 7, draws=True, base="bonded")
     assert not bad["ppc"].passed and bad["ppc"].statistic < 0.01
     assert "posterior-predictive" in bad["ppc"].flag
 
 
 def test_run_checks_on_16000_points():
     """A long trace passes every check (timing: benchmarks/bench_real.py)."""
-    tr = simulate_trace(E_WHITE, TIPS["sphere"], nu=0.3, thickness=0.03, rng=1, rate=3333.3)
+    tr = simulate_trace(E_WHITE, TIPS["sphere"], nu=0.3, thickness=0.03, rng=1, rate=3333.3,
+                        base=None)
     lo = tr.loading_segment()
     z, f = lo.z, lo.force
     assert z.size == 16000

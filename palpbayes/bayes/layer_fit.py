@@ -1,0 +1,209 @@
+"""Both engines for a layer whose base or thickness is unknown, and what the fit says about it.
+
+:func:`exact_layer_chains` draws from the exact mixture (:mod:`palpbayes.bayes.layers`);
+:func:`emcee_layer_chains` samples it with emcee (:mod:`palpbayes.bayes.layer_likelihood`),
+its walkers started at draws of the exact mixture (with Gaussian noise and the 'loading'
+surface prior standing in when the fit's own are not conjugate).  :func:`layer_notes` says what
+the data did and did not tell about the layer; :func:`layer_columns` are its ``summary.csv``
+columns.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..contact.layer import LAMBDA_VALID
+from ..fitdata import FitData, ModelSpec
+from ..intervals import central
+from ..units import format_length, format_pressure
+from .exact import sampled_coordinates
+from .layer_likelihood import SWAP_WEIGHT, LayerLikelihood, base_swap_move
+from .layers import LayerPosterior, layer_posterior
+from .priors import TracePrior, param_names
+from .sampler import ChainResult, SamplerSettings, run_emcee
+from .start import Mode
+
+__all__ = ["exact_layer_chains", "emcee_layer_chains", "layer_coordinates", "layer_notes",
+           "layer_columns", "P_UNDECIDED", "STRAIN_VALID"]
+
+#: A base posterior between P_UNDECIDED and 1 − P_UNDECIDED is reported as not identified.
+P_UNDECIDED = 0.1
+#: Indentation deeper than this fraction of the layer is beyond small strain (a note).
+STRAIN_VALID = 0.25
+
+
+def layer_coordinates(draws: dict[str, np.ndarray], prior: TracePrior,
+                      rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """The exact mixture's draws in emcee's coordinates, ``bond`` and ``log_h`` included.
+
+    ``bond`` is drawn uniformly within the half of the draw's base (from the prior where the
+    draw has no layer); ``log_h`` is ln h, or uniform in the half-space segment for h = inf.
+    """
+    theta = sampled_coordinates(draws, [n for n in prior.names if n not in ("bond", "log_h")])
+    n = draws["E_star"].size
+    if "bond" in prior.names:
+        b = np.asarray(draws.get("bonded", np.full(n, np.nan)), dtype=float)
+        b = np.where(np.isnan(b), (rng.random(n) < prior.p_bonded).astype(float), b)
+        theta["bond"] = 0.5 * b + 0.5 * rng.random(n)
+    if "log_h" in prior.names:
+        h = np.asarray(draws["thickness"], dtype=float)
+        _, hi = prior.log_h_range
+        seg = rng.uniform(hi, prior.log_h_top, n)
+        theta["log_h"] = np.where(np.isfinite(h), np.log(np.where(np.isfinite(h), h, 1.0)), seg)
+    return theta
+
+
+def _chains_of(theta: dict[str, np.ndarray], prior: TracePrior, shape: tuple[int, int]
+               ) -> np.ndarray:
+    ndim = len(prior.names)
+    return np.column_stack([theta[n] for n in prior.names]).reshape(*shape, ndim)
+
+
+def _log_prob(prior: TracePrior, like):
+    def log_prob(theta: np.ndarray) -> np.ndarray:
+        lp = prior.log_prior(theta)
+        ok = np.isfinite(lp)
+        if ok.any():
+            lp[ok] += like(theta[ok])
+        return lp
+    return log_prob
+
+
+def _modes(post: LayerPosterior) -> list[Mode]:
+    """The surface modes of the most probable component (for the fit's record)."""
+    best = post.components[int(np.argmax(post.weights))].post
+    return [Mode(z_surf=z, beta=np.full(2, np.nan), rss=np.nan, loglik=np.nan,
+                 cov=np.full((3, 3), np.nan), lag1=np.nan, weight=w) for z, w in best.modes()]
+
+
+def exact_layer_chains(data: FitData, prior: TracePrior, rng: np.random.Generator,
+                       shape: tuple[int, int]):
+    """Independent draws of the exact mixture, shaped as ``shape`` = (chains, draws).
+
+    Returns the chains, the surface modes, the likelihood and the mixture posterior.
+    """
+    post = layer_posterior(data, prior)
+    d = post.draws(rng, shape[0] * shape[1])
+    samples = _chains_of(layer_coordinates(d, prior, rng), prior, shape)
+    z = d["z_surf"]
+    like = LayerLikelihood(data, prior, centers=((float(np.mean(z)), float(np.std(z))),))
+    lp = _log_prob(prior, like)(samples.reshape(-1, samples.shape[-1]))
+    chains = ChainResult(samples=samples, log_prob=lp.reshape(shape),
+                         tau=np.ones(samples.shape[-1]), n_steps=post.n_nodes, burn=0, thin=1,
+                         acceptance=1.0, hit_cap=not post.complete)
+    return chains, _modes(post), like, post
+
+
+def emcee_layer_chains(data: FitData, prior: TracePrior, settings: SamplerSettings,
+                       tabulate: bool, init_ss, sampler_ss, accept):
+    """emcee on the mixture, started at draws of the exact one (module docstring)."""
+    start_prior = prior
+    if prior.noise not in ("gaussian", "ar1") or prior.spec.surface != "loading":
+        start_prior = replace(prior, noise="gaussian", spec=replace(prior.spec,
+                                                                     surface="loading"),
+                              names=tuple(param_names("gaussian", prior.baseline)
+                                          + [n for n in prior.names
+                                             if n in ("bond", "log_h")]))
+    rng = np.random.default_rng(init_ss)
+    post = layer_posterior(data, start_prior)
+    n_walkers = max(settings.n_walkers, 2 * len(prior.names) + 2)
+    d = post.draws(rng, n_walkers)
+    theta = layer_coordinates(d, start_prior, rng)
+    if "log_nu_t" in prior.names:
+        theta["log_nu_t"] = np.log(20.0) + 0.2 * rng.standard_normal(n_walkers)
+    if "phi" in prior.names and "phi" not in theta:
+        theta["phi"] = 0.02 * rng.standard_normal(n_walkers)
+    p0 = np.column_stack([theta[n] for n in prior.names])
+    z = d["z_surf"]
+    like = LayerLikelihood(data, prior, tabulate=tabulate,
+                           centers=((float(np.median(z)), float(np.std(z)) or 1e-9),))
+    log_prob = _log_prob(prior, like)
+    extra = ([(base_swap_move(like, float(np.median(z))), SWAP_WEIGHT)]
+             if "bond" in prior.names else None)
+    chains = run_emcee(log_prob, p0, settings, int(sampler_ss.generate_state(1)[0]),
+                       accept=accept, extra_moves=extra)
+    return chains, _modes(post), like, settings
+
+
+def _fitted_depth(z_surf: float, data: FitData) -> float:
+    return max(z_surf - float(np.min(data.z)), 0.0)
+
+
+def layer_notes(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> list[str]:
+    """What the data told about the layer, as notes (information, not failures)."""
+    model = data.model
+    notes: list[str] = []
+    E = np.ravel(post["E"])
+    if "bonded" in post and model.bonding == "unknown":
+        b = np.ravel(post["bonded"])
+        layer = ~np.isnan(b)
+        if layer.any():
+            pb = float(np.mean(b[layer]))
+            if P_UNDECIDED < pb < 1.0 - P_UNDECIDED:
+                eb = float(np.median(E[layer & (b == 1.0)])) if (b == 1.0).any() else np.nan
+                ef = float(np.median(E[layer & (b == 0.0)])) if (b == 0.0).any() else np.nan
+                notes.append(
+                    f"base not identified: P(bonded) = {pb:.2f}; E is {format_pressure(eb)} "
+                    f"if the specimen is bonded to its base, {format_pressure(ef)} if it lies "
+                    "free on it, and the interval spans both (give --bonding bonded|free if "
+                    "it is known)")
+    if "thickness" in post and model.thickness_unknown:
+        h = np.ravel(post["thickness"])
+        p_half = float(np.mean(~np.isfinite(h)))
+        lo, hi = central(np.where(np.isfinite(h), h, np.inf))
+        lo_t, hi_t = model.thickness_range
+        if p_half > 0.5:
+            notes.append(
+                f"no layer needed: P(half-space) = {p_half:.2f}; the data only say h > "
+                f"{format_length(lo)} (prior {format_length(lo_t)}..{format_length(hi_t)} or "
+                "none)")
+        elif not np.isfinite(hi) or hi / lo > 3.0:
+            notes.append(
+                f"thickness not identified: h in [{format_length(lo)}, "
+                f"{'no layer' if not np.isfinite(hi) else format_length(hi)}] (90 %); E's "
+                "interval carries it")
+    if best.has_layer:
+        d_max = _fitted_depth(float(np.median(post["z_surf"])), data)
+        a = _contact_radius(best, d_max)
+        h = best.thickness
+        if a / h > LAMBDA_VALID:
+            notes.append(f"contact radius {a / h:.2g} times the layer thickness: the thin-layer "
+                         "regime, where the answer hangs on compressibility and the base")
+        if d_max / h > STRAIN_VALID:
+            notes.append(f"indentation {100 * d_max / h:.0f} % of the layer thickness: "
+                         "beyond the small strain of the layer solution")
+    return notes
+
+
+def _contact_radius(model: ModelSpec, depth: float) -> float:
+    from ..contact import get_law
+
+    law = get_law(model.tip)
+    return float(law.contact_radius(np.array([depth]), model.tip)[0])
+
+
+def layer_columns(post: dict[str, np.ndarray], data: FitData) -> dict:
+    """``summary.csv`` columns of the layer: ``layer``, ``thickness_m`` (and its interval when
+    sampled), ``p_bonded``, ``p_halfspace``."""
+    model = data.model
+    out = {"layer": model.describe_layer(), "thickness_m": model.thickness,
+           "thickness_lo_m": np.nan, "thickness_hi_m": np.nan, "p_bonded": np.nan,
+           "p_halfspace": np.nan}
+    if model.has_layer and model.bonding != "unknown":
+        out["p_bonded"] = 1.0 if model.bonding == "bonded" else 0.0
+    if "bonded" in post:
+        b = np.ravel(post["bonded"])
+        if (~np.isnan(b)).any():
+            out["p_bonded"] = float(np.nanmean(b))
+    if "thickness" in post and model.thickness_unknown:
+        h = np.ravel(post["thickness"])
+        out["thickness_m"] = float(np.median(h))
+        out["thickness_lo_m"], out["thickness_hi_m"] = central(h)
+        out["p_halfspace"] = float(np.mean(~np.isfinite(h)))
+    elif model.thickness is None:
+        out["thickness_m"] = np.nan
+    if not model.has_layer:
+        out["thickness_m"] = np.nan
+    return out
