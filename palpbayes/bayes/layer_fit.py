@@ -16,7 +16,7 @@ import numpy as np
 
 from ..contact.layer import LAMBDA_VALID
 from ..fitdata import FitData, ModelSpec
-from ..intervals import central
+from ..intervals import LEVEL
 from ..units import format_length, format_pressure
 from .exact import sampled_coordinates
 from .layer_likelihood import SWAP_WEIGHT, LayerLikelihood, base_swap_move
@@ -127,6 +127,14 @@ def emcee_layer_chains(data: FitData, prior: TracePrior, settings: SamplerSettin
     return chains, _modes(post), like, settings
 
 
+def _h_interval(h: np.ndarray) -> tuple[float, float]:
+    """Central 90 % interval of thickness draws, ``inf`` (no layer) included: order statistics
+    (no interpolation between a finite draw and ``inf``)."""
+    a = (1.0 - LEVEL) / 2.0
+    lo, hi = np.quantile(np.asarray(h, dtype=float), [a, 1.0 - a], method="inverted_cdf")
+    return float(lo), float(hi)
+
+
 def _fitted_depth(z_surf: float, data: FitData) -> float:
     return max(z_surf - float(np.min(data.z)), 0.0)
 
@@ -152,7 +160,7 @@ def layer_notes(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> 
     if "thickness" in post and model.thickness_unknown:
         h = np.ravel(post["thickness"])
         p_half = float(np.mean(~np.isfinite(h)))
-        lo, hi = central(np.where(np.isfinite(h), h, np.inf))
+        lo, hi = _h_interval(h)
         lo_t, hi_t = model.thickness_range
         if p_half > 0.5:
             notes.append(
@@ -200,7 +208,7 @@ def layer_columns(post: dict[str, np.ndarray], data: FitData) -> dict:
     if "thickness" in post and model.thickness_unknown:
         h = np.ravel(post["thickness"])
         out["thickness_m"] = float(np.median(h))
-        out["thickness_lo_m"], out["thickness_hi_m"] = central(h)
+        out["thickness_lo_m"], out["thickness_hi_m"] = _h_interval(h)
         out["p_halfspace"] = float(np.mean(~np.isfinite(h)))
     elif model.thickness is None:
         out["thickness_m"] = np.nan

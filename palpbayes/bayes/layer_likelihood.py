@@ -145,7 +145,8 @@ def _swap_maps(like: LayerLikelihood, z_surf: float):
     Unknown thickness: a free layer of another thickness mimics a bonded one best (a 30 mm
     bonded layer under a paraboloid looks like a ~20 mm free one), so h moves too, along the
     map g(h_bonded) = h_free of the free layer whose shape fits the bonded one best (least
-    squares on the fitted depths, tabulated on 48 nodes of ln h and made monotone); the
+    squares on the fitted depths, tabulated on 48 nodes of ln h, made increasing with a slope of
+    at least 0.05); the
     Jacobian of g enters the acceptance.  Points whose image would leave the tabulated range,
     and the half-space segment, are left where they are (the identity is its own inverse).
     """
@@ -181,7 +182,9 @@ def _swap_maps(like: LayerLikelihood, z_surf: float):
         k = int(np.argmin(res))
         g.append(yf[k])
         shift.append(np.log(c[k]))               # E*_free = c·E*_bonded
-    g = np.maximum.accumulate(np.asarray(g)) + 1e-9 * np.arange(xb.size)  # strictly monotone
+    g = np.asarray(g)
+    for i in range(1, g.size):  # strictly increasing, slope >= 0.05: a well-posed inverse
+        g[i] = max(g[i], g[i - 1] + 0.05 * (xb[i] - xb[i - 1]))
     shift = np.asarray(shift)
     dg = np.gradient(g, xb)
 
