@@ -14,6 +14,7 @@ A results folder (``palpbayes fit MANIFEST --out DIR``) holds::
       stiffening.csv           stiffening law per group          (compare)
       groundtruth.csv          per compression test              (groundtruth)
       groundtruth_summary.csv  per material                      (groundtruth)
+      gap.csv                  the paper's robot-vs-Instron gap   (report, paper's materials)
       report.pdf               the PDF report                    (report)
 
 Modules use these constants and helpers instead of literals, so that a file added here is also
@@ -27,7 +28,8 @@ from pathlib import Path
 
 __all__ = [
     "SETTINGS", "TRACES", "SUMMARY", "POSTERIOR_DIR", "PARTIAL_DIR", "COMPARISON", "POOLED",
-    "BUDGET", "STIFFENING", "GROUNDTRUTH", "GROUNDTRUTH_SUMMARY", "REPORT", "COMPARE_OUTPUTS",
+    "BUDGET", "STIFFENING", "GROUNDTRUTH", "GROUNDTRUTH_SUMMARY", "GAP", "REPORT",
+    "COMPARE_OUTPUTS",
     "FIT_OUTPUTS", "REPLAY_HISTORY", "REPLAY_SUMMARY", "REPLAY_FIGURE", "posterior_path",
     "posterior_file", "partial_path",
 ]
@@ -54,6 +56,9 @@ STIFFENING = "stiffening.csv"
 GROUNDTRUTH = "groundtruth.csv"
 #: Per material ground truth (``palpbayes groundtruth``).
 GROUNDTRUTH_SUMMARY = "groundtruth_summary.csv"
+#: The paper's robot-vs-Instron gap decomposed (:func:`palpbayes.gap.gap_table`), written by
+#: the report pipeline when the campaign has the paper's materials.
+GAP = "gap.csv"
 #: The PDF report (``palpbayes report``).
 REPORT = "report.pdf"
 #: One row per online update of a replayed trace (``palpbayes replay --out``).

@@ -29,7 +29,8 @@ if TYPE_CHECKING:
 
     from .fitjob import FitOptions
 
-__all__ = ["example_campaign_dir", "run_pipeline", "write_groundtruth", "check_reusable"]
+__all__ = ["example_campaign_dir", "run_pipeline", "write_groundtruth", "check_reusable",
+           "write_gap"]
 
 
 def write_groundtruth(per_file: pd.DataFrame, per_group: pd.DataFrame,
@@ -145,4 +146,26 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
 
     # exactly `palpbayes compare OUT`: the campaign's groundtruth/ is found via settings.json
     compare_campaign(out)
+    write_gap(out)
     return out
+
+
+def write_gap(out_dir: str | os.PathLike) -> Path | None:
+    """Write the paper's robot-vs-Instron gap, decomposed (:func:`palpbayes.gap.gap_table`),
+    as ``gap.csv`` when the results hold one of the paper's materials; return its path (None
+    otherwise, and a stale table is removed).  About 10 s on one core."""
+    import pandas as pd
+
+    from ..gap import gap_table
+    from ..io.atomic import write_csv_atomic
+    from ..paper import PAPER_MATERIALS
+
+    out = Path(out_dir)
+    path = out / layout.GAP
+    summary = pd.read_csv(out / layout.SUMMARY, usecols=["material"], dtype=str)
+    mats = [m for m in PAPER_MATERIALS if m in set(summary["material"].dropna())]
+    if not mats:
+        path.unlink(missing_ok=True)
+        return None
+    write_csv_atomic(gap_table(), path, float_format="%.6g")
+    return path

@@ -96,6 +96,8 @@ class ResultsFolder:
         The compare step's tables.
     groundtruth, groundtruth_summary
         Per-test and per-material ground truth.
+    gap
+        The paper's robot-vs-Instron gap decomposed (``gap.csv``, :mod:`palpbayes.gap`).
     """
 
     path: Path
@@ -108,6 +110,7 @@ class ResultsFolder:
     stiffening: pd.DataFrame | None = None
     groundtruth: pd.DataFrame | None = None
     groundtruth_summary: pd.DataFrame | None = None
+    gap: pd.DataFrame | None = None
 
     @property
     def options(self) -> dict:
@@ -161,6 +164,7 @@ def load_results(path: str | os.PathLike) -> ResultsFolder:
         stiffening=_read_csv(p / layout.STIFFENING),
         groundtruth=_read_csv(p / layout.GROUNDTRUTH),
         groundtruth_summary=_read_csv(p / layout.GROUNDTRUTH_SUMMARY),
+        gap=_read_csv(p / layout.GAP),
     )
 
 

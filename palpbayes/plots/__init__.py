@@ -24,16 +24,20 @@ Functions
 :func:`plot_comparison`      ground truth vs least squares vs Bayes per material × tip
 :func:`plot_forest`          per-trace intervals of one material × tip with the pooled result
 :func:`plot_stiffening`      modulus vs rest time with the fitted stiffening law and its band
+:func:`plot_gap`             the paper's robot-vs-Instron gap against the layer's prediction
+:func:`plot_halfspace_vs_layer` a campaign's half-space and layer estimates side by side
 
 Modules, by subject: :mod:`~palpbayes.plots.style` (colours, units, shared helpers),
 :mod:`~palpbayes.plots.trace` (force-depth, residuals), :mod:`~palpbayes.plots.posterior`,
 :mod:`~palpbayes.plots.walkers`, :mod:`~palpbayes.plots.budget`,
-:mod:`~palpbayes.plots.campaign` (comparison, forest) and
+:mod:`~palpbayes.plots.campaign` (comparison, forest), :mod:`~palpbayes.plots.layer`
+(finite thickness) and
 :mod:`~palpbayes.plots.stiffening`; the functions are imported from here.
 """
 
 from .budget import plot_budget
 from .campaign import plot_comparison, plot_forest
+from .layer import plot_gap, plot_halfspace_vs_layer
 from .posterior import plot_pair, plot_posterior, plot_posterior_E, plot_posterior_zsurf
 from .stiffening import plot_stiffening
 from .style import INPUT_COLORS, METHOD_COLORS, METHOD_LABELS
@@ -55,4 +59,6 @@ __all__ = [
     "plot_comparison",
     "plot_forest",
     "plot_stiffening",
+    "plot_gap",
+    "plot_halfspace_vs_layer",
 ]

@@ -11,7 +11,11 @@
    least squares and Bayes E ± sd per material × tip, errors, whether each new-specimen
    interval covers the ground truth (with the overall count), the paper's robot numbers and,
    for spheres, the paper's Hertz fit of the same traces;
-3. the same comparison as a figure;
+3. the same comparison as a figure; then finite thickness: the half-space (the paper's)
+   least squares, the same fits read as a free and a bonded layer, and the Bayesian layer
+   model against the Instron, and, when ``gap.csv`` is there, "Why does the robot read stiffer
+   than the Instron?" (the paper's published gap against the layer model's prediction,
+   :mod:`palpbayes.gap`, with a verdict per tip);
 4. one page per material × tip: force-depth data of a representative trace with the
    posterior-predictive band and the least-squares curve, residuals, posterior of E and of
    (E, z_surf), per-trace intervals with the pooled result; sphere pages also state the
@@ -45,7 +49,7 @@ Modules: :mod:`~palpbayes.report.build` (:func:`build_report`, page order),
 :mod:`~palpbayes.report.format` (numbers and cells), :mod:`~palpbayes.report.tables` (the
 summary table, drawn tables, pagination), :mod:`~palpbayes.report.layout` (page geometry),
 :mod:`~palpbayes.report.methods` (the methods text) and one ``pages_*`` module per page kind
-(title, summary, group, diagnostics, budget, stiffening, methods).
+(title, summary, layer, group, diagnostics, budget, stiffening, methods).
 """
 
 from __future__ import annotations

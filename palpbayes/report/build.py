@@ -17,6 +17,7 @@ from .layout import RASTER_DPI, _Page, write_pages
 from .pages_budget import _pages_budget
 from .pages_diagnostics import _page_diagnostics
 from .pages_group import _page_group
+from .pages_layer import _pages_layer
 from .pages_methods import _pages_methods
 from .pages_online import _pages_online
 from .pages_stiffening import _page_stiffening, _pages_stiffening_table, _stiffening_groups
@@ -94,6 +95,7 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     pages: list[_Page] = [_page_title(res, created, contents), *_pages_summary(res)]
     if res.comparison is not None and not res.comparison.empty:
         pages += _pages_comparison(res)
+    pages += _pages_layer(res)
     pages += [_page_group(res, m, t, seed) for m, t in res.groups()]
     pages += _page_diagnostics(res)
     pages += _pages_budget(res)

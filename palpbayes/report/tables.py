@@ -143,8 +143,11 @@ def _pooled_of(res: ResultsFolder, mat: str, tip: str) -> pd.Series | None:
 
 def _flagged(res: ResultsFolder) -> pd.DataFrame:
     b = res.bayes_rows().copy()
-    flags = b["flags"].astype(str) if "flags" in b else pd.Series("", index=b.index)
-    bad = ~b["converged"].map(parse_bool) | (flags.str.len() > 0)
+    flags = b["flags"].fillna("").astype(str) if "flags" in b else pd.Series("", index=b.index)
+    # notes ('info: ...', e.g. a base the data cannot tell) are no failure
+    real = flags.map(lambda f: any(p.strip() and not p.strip().startswith("info:")
+                                   for p in f.split("; ")))
+    bad = ~b["converged"].map(parse_bool) | real
     return b[bad]
 
 

@@ -1,0 +1,132 @@
+"""Finite-thickness figures: the paper's robot-vs-Instron gap against the tool's prediction, and
+a campaign's half-space and layer estimates side by side."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from ..campaign.results import MATERIAL_ORDER, TIP_ORDER, ordered
+from .style import _KPA, METHOD_COLORS, METHOD_LABELS, _fig_ax
+
+__all__ = ["plot_gap", "plot_halfspace_vs_layer"]
+
+_LAYER = "#E69F00"  # orange: what the layer model predicts
+
+
+def plot_gap(gap: pd.DataFrame, *, ax: Axes | None = None) -> Figure:
+    """The paper's robot estimate against the Instron, and what the tool's models predict.
+
+    Per material × tip (grouped by tip): the published ratio E_robot/E_Instron − 1 with its
+    90 % interval (the two published sd's), the layer's prediction at nu 0.3 from a free to a
+    bonded base (dark bar) and the whole modelled range (base × nu 0.1–0.35 × compliance, Hertz
+    for the sphere; light bar).
+
+    Parameters
+    ----------
+    gap
+        :func:`palpbayes.gap.gap_table` (``gap.csv``).
+    ax
+        Axes to draw on (default: a new 9 × 4 in figure).
+    """
+    fig, ax = _fig_ax(ax, (9.0, 4.0))
+    tips = ordered(gap["tip"], TIP_ORDER)
+    mats = ordered(gap["material"], MATERIAL_ORDER)
+    xt, xl = [], []
+    x = 0.0
+    for tip in tips:
+        for mat in mats:
+            r = gap[(gap["tip"] == tip) & (gap["material"] == mat)]
+            if r.empty:
+                continue
+            r = r.iloc[0]
+            ax.bar(x, r["predicted_hi_pct"] - r["predicted_lo_pct"],
+                   bottom=r["predicted_lo_pct"], width=0.55, color=_LAYER, alpha=0.25, lw=0)
+            lo = min(r["thickness_free_pct"], r["thickness_bonded_pct"])
+            hi = max(r["thickness_free_pct"], r["thickness_bonded_pct"])
+            ax.bar(x, max(hi - lo, 0.4), bottom=lo, width=0.3, color=_LAYER, lw=0)
+            ax.errorbar([x], [r["observed_pct"]],
+                        yerr=[[r["observed_pct"] - r["observed_lo_pct"]],
+                              [r["observed_hi_pct"] - r["observed_pct"]]],
+                        fmt="o", ms=5, color=METHOD_COLORS["paper"], capsize=3, zorder=3)
+            xt.append(x)
+            xl.append(f"{mat}\n{tip}")
+            x += 1.0
+        x += 0.6
+    ax.axhline(0.0, color="0.3", lw=0.7)
+    ax.set_xticks(xt, xl, fontsize="small")
+    ax.set_ylabel("robot ÷ Instron − 1 [%]")
+    ax.set_title("The paper's robot estimates against its Instron, and what the block's "
+                 "thickness predicts", fontsize="medium")
+    ax.legend(handles=[
+        Line2D([], [], marker="o", ls="", color=METHOD_COLORS["paper"],
+               label="published (90 % interval from both sd's)"),
+        Patch(color=_LAYER, label="layer, free to bonded base (nu 0.3)"),
+        Patch(color=_LAYER, alpha=0.25,
+              label="everything modelled (base, nu 0.1–0.35, compliance, Hertz)")],
+        fontsize="x-small", frameon=False, loc="upper right")
+    return fig
+
+
+def plot_halfspace_vs_layer(comparison: pd.DataFrame, *, ax: Axes | None = None) -> Figure:
+    """A campaign's estimates per material × tip [kPa]: the paper's half-space least squares,
+    the same fits read as a free and a bonded layer, and the Bayesian layer model's interval for
+    a new specimen, against the Instron mean ± sd.
+
+    Parameters
+    ----------
+    comparison
+        ``comparison.csv`` with ``E_free_pa``/``E_bonded_pa`` (group means of the traces).
+    ax
+        Axes to draw on (default: a new 10 × 4.5 in figure).
+    """
+    fig, ax = _fig_ax(ax, (10.0, 4.5))
+    mats = ordered(comparison["material"], MATERIAL_ORDER)
+    tips = ordered(comparison["tip"], TIP_ORDER)
+    xt, xl = [], []
+    x = 0.0
+    for mat in mats:
+        sub = comparison[comparison["material"] == mat]
+        group = [t for t in tips if t in set(sub["tip"])]
+        if "gt_E_pa" in sub and sub["gt_E_pa"].notna().any():
+            gt = float(sub["gt_E_pa"].dropna().iloc[0]) * _KPA
+            sd = float(sub["gt_sd_pa"].fillna(0).iloc[0]) * _KPA if "gt_sd_pa" in sub else 0.0
+            ax.fill_between([x - 0.5, x + len(group) - 0.5], gt - sd, gt + sd, color="0.88",
+                            lw=0, zorder=0)
+            ax.hlines(gt, x - 0.5, x + len(group) - 0.5, color=METHOD_COLORS["gt"], lw=1.2)
+        for tip in group:
+            g = sub[sub["tip"] == tip].set_index("method")
+            if "lsq" in g.index:
+                r = g.loc["lsq"]
+                ax.plot([x - 0.2], [r["E_pa"] * _KPA], "s", ms=5, color=METHOD_COLORS["lsq"])
+                alt = [r.get(c, np.nan) for c in ("E_free_pa", "E_bonded_pa")]
+                if np.all(np.isfinite(alt)):
+                    ax.vlines(x - 0.05, min(alt) * _KPA, max(alt) * _KPA, color=_LAYER, lw=4)
+            if "bayes" in g.index:
+                r = g.loc["bayes"]
+                ax.errorbar([x + 0.15], [r["E_new_pa"] * _KPA],
+                            yerr=[[(r["E_new_pa"] - r["E_new_lo_pa"]) * _KPA],
+                                  [(r["E_new_hi_pa"] - r["E_new_pa"]) * _KPA]],
+                            fmt="o", ms=5, color=METHOD_COLORS["bayes"], capsize=3)
+            xt.append(x)
+            xl.append(f"{mat}\n{tip}")
+            x += 1.0
+        x += 0.5
+    ax.set_xticks(xt, xl, fontsize="small")
+    ax.set_ylabel("E [kPa]")
+    ax.set_title("Half-space (the paper's) and layer estimates against the Instron",
+                 fontsize="medium")
+    ax.legend(handles=[
+        Patch(facecolor="0.88", edgecolor=METHOD_COLORS["gt"],
+              label=f"{METHOD_LABELS['gt']} (mean ± sd)"),
+        Line2D([], [], marker="s", ls="", color=METHOD_COLORS["lsq"],
+               label="least squares, half-space (the paper's method), mean"),
+        Line2D([], [], color=_LAYER, lw=4, label="the same fits read as a free to bonded layer"),
+        Line2D([], [], marker="o", color=METHOD_COLORS["bayes"],
+               label="Bayes with the layer: a new specimen, 90 %")],
+        fontsize="x-small", frameon=False, loc="upper left")
+    return fig
