@@ -37,11 +37,13 @@ EXACT_DRAWS = (4, 1000)
 BOUND_SDS = 3.0
 
 
-def _posterior_dict(samples: np.ndarray, prior: TracePrior, nu: float
+def _posterior_dict(samples: np.ndarray, prior: TracePrior, nu: float, like=None
                     ) -> dict[str, np.ndarray]:
     post = {}
     for i, name in enumerate(prior.names):
         x = samples[..., i]
+        if name == "log_Estar" and hasattr(like, "log_estar"):  # the layer's aligned ln E*
+            x = like.log_estar(samples.reshape(-1, samples.shape[-1])).reshape(x.shape)
         if name == "log_Estar":
             post["E_star"] = np.exp(x)
             post["E"] = np.exp(x) * (1 - nu**2)
@@ -171,7 +173,7 @@ def fit_bayes_data(
     else:
         chains, modes, like, settings = emcee_layer_chains(
             data, prior, settings, tabulate, init_ss, sampler_ss, chain_passes)
-    post = _posterior_dict(chains.samples, prior, data.model.nu)
+    post = _posterior_dict(chains.samples, prior, data.model.nu, like)
     post_theta = {n: chains.samples[..., i] for i, n in enumerate(names)}
     best = _best_model(data.model, post, mixture)
     fitted = replace(data, model=best)

@@ -35,11 +35,14 @@ STRAIN_VALID = 0.25
 
 
 def layer_coordinates(draws: dict[str, np.ndarray], prior: TracePrior,
-                      rng: np.random.Generator) -> dict[str, np.ndarray]:
+                      rng: np.random.Generator, like: LayerLikelihood | None = None
+                      ) -> dict[str, np.ndarray]:
     """The exact mixture's draws in emcee's coordinates, ``bond`` and ``log_h`` included.
 
     ``bond`` is drawn uniformly within the half of the draw's base (from the prior where the
-    draw has no layer); ``log_h`` is ln h, or uniform in the half-space segment for h = inf.
+    draw has no layer); ``log_h`` is ln h, or uniform in the half-space segment for h = inf;
+    with ``like`` the first coordinate is the aligned ln E* (:mod:`palpbayes.bayes.
+    layer_likelihood`), without it the real ln E*.
     """
     theta = sampled_coordinates(draws, [n for n in prior.names if n not in ("bond", "log_h")])
     n = draws["E_star"].size
@@ -52,6 +55,9 @@ def layer_coordinates(draws: dict[str, np.ndarray], prior: TracePrior,
         _, hi = prior.log_h_range
         seg = rng.uniform(hi, prior.log_h_top, n)
         theta["log_h"] = np.where(np.isfinite(h), np.log(np.where(np.isfinite(h), h, 1.0)), seg)
+    if like is not None:
+        X = np.column_stack([theta[n] for n in prior.names])
+        theta["log_Estar"] = theta["log_Estar"] - like.offset(X)
     return theta
 
 
@@ -86,9 +92,10 @@ def exact_layer_chains(data: FitData, prior: TracePrior, rng: np.random.Generato
     """
     post = layer_posterior(data, prior)
     d = post.draws(rng, shape[0] * shape[1])
-    samples = _chains_of(layer_coordinates(d, prior, rng), prior, shape)
     z = d["z_surf"]
-    like = LayerLikelihood(data, prior, centers=((float(np.mean(z)), float(np.std(z))),))
+    like = LayerLikelihood(data, prior, centers=((float(np.mean(z)), float(np.std(z))),),
+                           z_reference=float(np.median(z)))
+    samples = _chains_of(layer_coordinates(d, prior, rng, like), prior, shape)
     lp = _log_prob(prior, like)(samples.reshape(-1, samples.shape[-1]))
     chains = ChainResult(samples=samples, log_prob=lp.reshape(shape),
                          tau=np.ones(samples.shape[-1]), n_steps=post.n_nodes, burn=0, thin=1,
@@ -110,15 +117,16 @@ def emcee_layer_chains(data: FitData, prior: TracePrior, settings: SamplerSettin
     post = layer_posterior(data, start_prior)
     n_walkers = max(settings.n_walkers, 2 * len(prior.names) + 2)
     d = post.draws(rng, n_walkers)
-    theta = layer_coordinates(d, start_prior, rng)
+    z = d["z_surf"]
+    like = LayerLikelihood(data, prior, tabulate=tabulate,
+                           centers=((float(np.median(z)), float(np.std(z)) or 1e-9),),
+                           z_reference=float(np.median(z)))
+    theta = layer_coordinates(d, start_prior, rng, like)
     if "log_nu_t" in prior.names:
         theta["log_nu_t"] = np.log(20.0) + 0.2 * rng.standard_normal(n_walkers)
     if "phi" in prior.names and "phi" not in theta:
         theta["phi"] = 0.02 * rng.standard_normal(n_walkers)
     p0 = np.column_stack([theta[n] for n in prior.names])
-    z = d["z_surf"]
-    like = LayerLikelihood(data, prior, tabulate=tabulate,
-                           centers=((float(np.median(z)), float(np.std(z)) or 1e-9),))
     log_prob = _log_prob(prior, like)
     extra = ([(base_swap_move(like, float(np.median(z))), SWAP_WEIGHT)]
              if "bond" in prior.names else None)
@@ -140,7 +148,8 @@ def _fitted_depth(z_surf: float, data: FitData) -> float:
 
 
 def layer_notes(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> list[str]:
-    """What the data told about the layer, as notes (information, not failures)."""
+    """What the data told about the layer, as notes (information, not failures).  A note
+    holds no '; ' (the separator of the ``flags`` column)."""
     model = data.model
     notes: list[str] = []
     E = np.ravel(post["E"])
@@ -153,7 +162,7 @@ def layer_notes(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> 
                 eb = float(np.median(E[layer & (b == 1.0)])) if (b == 1.0).any() else np.nan
                 ef = float(np.median(E[layer & (b == 0.0)])) if (b == 0.0).any() else np.nan
                 notes.append(
-                    f"base not identified: P(bonded) = {pb:.2f}; E is {format_pressure(eb)} "
+                    f"base not identified (P(bonded) = {pb:.2f}): E is {format_pressure(eb)} "
                     f"if the specimen is bonded to its base, {format_pressure(ef)} if it lies "
                     "free on it, and the interval spans both (give --bonding bonded|free if "
                     "it is known)")
@@ -164,13 +173,13 @@ def layer_notes(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> 
         lo_t, hi_t = model.thickness_range
         if p_half > 0.5:
             notes.append(
-                f"no layer needed: P(half-space) = {p_half:.2f}; the data only say h > "
+                f"no layer needed (P(half-space) = {p_half:.2f}): the data only say h > "
                 f"{format_length(lo)} (prior {format_length(lo_t)}..{format_length(hi_t)} or "
                 "none)")
         elif not np.isfinite(hi) or hi / lo > 3.0:
             notes.append(
                 f"thickness not identified: h in [{format_length(lo)}, "
-                f"{'no layer' if not np.isfinite(hi) else format_length(hi)}] (90 %); E's "
+                f"{'no layer' if not np.isfinite(hi) else format_length(hi)}] (90 %), and E's "
                 "interval carries it")
     if best.has_layer:
         d_max = _fitted_depth(float(np.median(post["z_surf"])), data)

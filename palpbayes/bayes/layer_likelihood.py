@@ -9,9 +9,18 @@ then has its own shape function:
 * thickness unknown: every walker's shape row E*-free, s(z_s − z; h, base), evaluated directly
   (O(n) per walker, no table) and turned into the same quadratic forms.
 
-**The base swap.**  Walkers cannot wander from the bonded to the free base on their own: the
-two bases explain the same curve with E* values a factor r apart (r = 1.08–1.3 for the paper's
-geometry), and the posterior of E* is ~0.03 % wide.  :func:`base_swap_move` proposes the
+**The aligned coordinate.**  The two bases explain the same curve with E* values a factor r
+apart (r = E*_free/E*_bonded of the same curve: 1.08–1.3 for the paper's geometry), while the
+posterior of E* is ~0.03 % wide: two modes that emcee's differential-evolution moves cannot
+bridge (half the walker pairs would propose jumps across the gap).  So the first coordinate is
+not ln E* but ln E* − [free]·ln r(h): both bases' modes then lie on top of each other, and the
+walkers move between them as freely as within one.  r(h) is the least-squares ratio of the
+same curve at a reference surface (:func:`palpbayes.refit.refit_factor`), a fixed function of
+the thickness; the map has unit Jacobian, so the log-uniform prior of E* is unchanged (its
+bounds, twelve decades wide, apply to the aligned coordinate).  ``E_star`` in the posterior is
+the real E*.
+
+**The base swap.**  :func:`base_swap_move` proposes the
 mirror image bond -> 1 − bond together with ln E* -> ln E* ± ln r, r the least-squares
 ratio E*_free/E*_bonded of the same curve (:func:`palpbayes.refit.refit_factor`), and, for an
 unknown thickness, ln h -> the thickness of the other base whose shape matches best
@@ -49,10 +58,14 @@ class LayerLikelihood:
         The trace's prior (names, the ``log_h`` segments).
     tabulate, centers
         As :class:`TraceLikelihood` (used when the thickness is known).
+    z_reference
+        [m] Surface height at which the aligned coordinate's ratio r(h) is computed (module
+        docstring; default: the contact onset).
     """
 
     def __init__(self, data: FitData, prior: TracePrior, tabulate: bool = True,
-                 centers: tuple[tuple[float, float], ...] = ()):
+                 centers: tuple[tuple[float, float], ...] = (),
+                 z_reference: float | None = None):
         self.data = data
         self.model = data.model
         self.prior = prior
@@ -73,6 +86,23 @@ class LayerLikelihood:
             self.parts = {}
             self.core = TraceLikelihood(replace(data, model=self.model.half_space()),
                                         tabulate=False, **kw)
+        self.z_reference = float(data.z_contact if z_reference is None else z_reference)
+        self._log_r = _log_ratio(self, self.z_reference) if self.i_bond is not None else None
+
+    def offset(self, theta: np.ndarray) -> np.ndarray:
+        """ln E* − θ[0] of each walker: ln r(h) on a free layer, 0 otherwise (module
+        docstring)."""
+        theta = np.atleast_2d(theta)
+        if self._log_r is None:
+            return np.zeros(theta.shape[0])
+        free = self.bases(theta) == "free"
+        log_h = theta[:, self.i_logh] if self.i_logh is not None else np.zeros(theta.shape[0])
+        return np.where(free, self._log_r(log_h), 0.0)
+
+    def log_estar(self, theta: np.ndarray) -> np.ndarray:
+        """The real ln E* of each walker."""
+        theta = np.atleast_2d(theta)
+        return theta[:, 0] + self.offset(theta)
 
     def bases(self, theta: np.ndarray) -> np.ndarray:
         """Each walker's base (``"bonded"``/``"free"``)."""
@@ -103,7 +133,8 @@ class LayerLikelihood:
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         """Log-likelihood (W,) of θ (W, ndim)."""
         theta = np.atleast_2d(theta)
-        head = theta[:, :self.k]
+        head = theta[:, :self.k].copy()
+        head[:, 0] = self.log_estar(theta)
         bases = self.bases(theta)
         out = np.empty(theta.shape[0])
         if self.core is None:
@@ -131,10 +162,39 @@ class LayerLikelihood:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         z = self.data.z if z is None else np.asarray(z, dtype=float)
         s = self.shape_rows(theta[:, 1], self.thickness(theta), self.bases(theta), z)[0]
-        out = np.exp(theta[0, 0]) * s + theta[0, 3]
+        out = np.exp(self.log_estar(theta)[0]) * s + theta[0, 3]
         if self.baseline == "linear":
             out = out + theta[0, 4] * (z - self.z_ref)
         return out
+
+
+def _depths(like: LayerLikelihood, z_surf: float) -> np.ndarray:
+    """The fitted depths at ``z_surf`` [m], at most 400 of them (evenly picked)."""
+    depth = fitted_depths(z_surf, like.data.z)
+    if depth.size > 400:
+        depth = depth[np.linspace(0, depth.size - 1, 400).round().astype(int)]
+    return depth
+
+
+def _log_ratio(like: LayerLikelihood, z_surf: float):
+    """ln r(ln h): E*_free/E*_bonded of the same curve at ``z_surf`` [m] (a constant for a
+    known thickness; interpolated on 64 nodes of ln h, 0 in the half-space segment)."""
+    depth = _depths(like, z_surf)
+    model = like.model
+
+    def log_r(h: float) -> float:
+        if depth.size == 0:
+            return 0.0
+        return float(np.log(refit_factor(depth, model.variant(thickness=h, base="bonded").shape,
+                                         model.variant(thickness=h, base="free").shape)))
+
+    if model.thickness is not None:
+        c = log_r(model.thickness)
+        return lambda log_h: np.full(np.shape(log_h), c)
+    lo, hi = like.prior.log_h_range
+    grid = np.linspace(lo, hi, 64)
+    vals = np.array([log_r(float(np.exp(g))) for g in grid])
+    return lambda log_h: np.where(np.asarray(log_h) <= hi, np.interp(log_h, grid, vals), 0.0)
 
 
 def _swap_maps(like: LayerLikelihood, z_surf: float):
@@ -150,10 +210,8 @@ def _swap_maps(like: LayerLikelihood, z_surf: float):
     Jacobian of g enters the acceptance.  Points whose image would leave the tabulated range,
     and the half-space segment, are left where they are (the identity is its own inverse).
     """
-    depth = fitted_depths(z_surf, like.data.z)
+    depth = _depths(like, z_surf)
     model = like.model
-    if depth.size > 400:
-        depth = depth[np.linspace(0, depth.size - 1, 400).round().astype(int)]
 
     def shape(h: float, base: str):
         return model.variant(thickness=h, base=base).shape
@@ -217,10 +275,11 @@ def base_swap_move(like: LayerLikelihood, z_surf: float) -> emcee.moves.MHMove:
         new_h, shift, log_jac = swap(log_h, to_free)
         moved = (new_h != log_h) | (i_h is None) | (log_h > like.prior.log_h_range[1]
                                                     if i_h is not None else False)
+        log_e = like.log_estar(coords) + np.where(moved, shift, 0.0)  # the real ln E*
         new[:, i_b] = np.where(moved, 1.0 - coords[:, i_b], coords[:, i_b])
-        new[:, 0] += np.where(moved, shift, 0.0)
         if i_h is not None:
             new[:, i_h] = new_h
+        new[:, 0] = log_e - like.offset(new)  # back to the aligned coordinate
         return new, np.where(moved, log_jac, 0.0)
 
     return emcee.moves.MHMove(proposal)

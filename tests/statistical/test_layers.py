@@ -137,16 +137,18 @@ def test_layer_likelihood_equals_each_concrete_model():
         post = layer_posterior(data, prior)
         rng = np.random.default_rng(0)
         d = post.draws(rng, 60)
-        theta = layer_coordinates(d, prior, rng)
-        X = np.column_stack([theta[n] for n in prior.names])
         like = LayerLikelihood(data, prior, tabulate=False)
+        theta = layer_coordinates(d, prior, rng, like)  # ln E* aligned between the bases
+        X = np.column_stack([theta[n] for n in prior.names])
+        np.testing.assert_allclose(like.log_estar(X), np.log(d["E_star"]), rtol=1e-12)
         got = like(X)
         for i in range(0, 60, 7):
             hh = d["thickness"][i]
             b = "free" if d["bonded"][i] == 0.0 else "bonded"
             m = model.half_space() if not np.isfinite(hh) else model.variant(thickness=hh,
                                                                             base=b)
-            ref = TraceLikelihood(replace(data, model=m), tabulate=False)(X[i, :4])
+            real = np.r_[np.log(d["E_star"][i]), X[i, 1:4]]
+            ref = TraceLikelihood(replace(data, model=m), tabulate=False)(real)
             assert got[i] == pytest.approx(ref[0], abs=1e-6)
 
 
