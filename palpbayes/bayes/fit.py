@@ -175,6 +175,7 @@ def fit_bayes_data(
             data, prior, settings, tabulate, init_ss, sampler_ss, chain_passes)
     post = _posterior_dict(chains.samples, prior, data.model.nu, like)
     post_theta = {n: chains.samples[..., i] for i, n in enumerate(names)}
+    post_theta["log_Estar"] = np.log(post["E_star"])  # the real one (a layer's is aligned)
     best = _best_model(data.model, post, mixture)
     fitted = replace(data, model=best)
     bud = propagate(post["E_star"], fitted, float(np.median(post["z_surf"])), budget,

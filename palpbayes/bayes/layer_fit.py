@@ -67,9 +67,13 @@ def _chains_of(theta: dict[str, np.ndarray], prior: TracePrior, shape: tuple[int
     return np.column_stack([theta[n] for n in prior.names]).reshape(*shape, ndim)
 
 
-def _log_prob(prior: TracePrior, like):
+def _log_prob(prior: TracePrior, like: LayerLikelihood):
+    """Log posterior of θ; the prior (its E* bounds) sees the real ln E*, not the aligned
+    coordinate (unit Jacobian: the density is the same)."""
     def log_prob(theta: np.ndarray) -> np.ndarray:
-        lp = prior.log_prior(theta)
+        real = np.array(theta, dtype=float, copy=True)
+        real[:, 0] = like.log_estar(theta)
+        lp = prior.log_prior(real)
         ok = np.isfinite(lp)
         if ok.any():
             lp[ok] += like(theta[ok])

@@ -24,7 +24,7 @@ nbformat = pytest.importorskip("nbformat")
 
 ROOT = Path(__file__).resolve().parents[2]
 NB_DIR = ROOT / "notebooks"
-NOTEBOOKS = ["01_paper_tables", "02_lsq_vs_bayes", "03_stiffening"]
+NOTEBOOKS = ["01_paper_tables", "02_lsq_vs_bayes", "03_stiffening", "04_robot_vs_instron"]
 
 
 def _on_ci() -> bool:
@@ -159,3 +159,16 @@ def test_notebook_03_runs(tmp_path, monkeypatch):
     nb, elapsed = _execute("03_stiffening", tmp_path)
     assert elapsed < 600
     assert "preferred law" in _text(nb)
+
+
+@pytest.mark.slow
+def test_notebook_04_decomposes_the_gap_and_covers_the_instron(tmp_path, monkeypatch):
+    monkeypatch.setenv("PALPBAYES_NB_WORKERS", "2")
+    monkeypatch.setenv("PALPBAYES_NB04_OUT", str(tmp_path / "res"))
+    nb, elapsed = _execute("04_robot_vs_instron", tmp_path)
+    assert elapsed < 600
+    text = _text(nb)
+    assert "wrong sign" in text and "over-predicts" in text
+    cmp_ = pd.read_csv(tmp_path / "res" / "comparison.csv")
+    bayes = cmp_[cmp_["method"] == "bayes"]
+    assert bayes["gt_in_interval"].all()  # 9/9: the layer model covers the Instron truth

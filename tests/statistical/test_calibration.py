@@ -93,7 +93,7 @@ def test_coverage_and_sbc_ranks():
 
 def _ar1_one(i: int) -> dict:
     rng = np.random.default_rng([1927, i])
-    tr = simulate_trace(136e3, TIP, nu=NU, thickness=0.02, noise_ar1=0.8, rng=rng)
+    tr = simulate_trace(136e3, TIP, nu=NU, depth=2e-3, noise_ar1=0.8, rng=rng)
     estar = 136e3 / (1 - NU**2)
     out = {}
     for noise in ("ar1", "gaussian"):
