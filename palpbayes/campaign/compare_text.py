@@ -69,6 +69,11 @@ def format_comparison(df: pd.DataFrame, groundtruth_source: str | None = None,
         if kind == "E":
             return _interval(r["E_new_pa"], r["E_new_lo_pa"], r["E_new_hi_pa"]) \
                 if method == "bayes" else _pm(r["E_pa"], r["E_sd_pa"])
+        if kind == "layer":  # lsq only: the same fits read as a free and a bonded layer
+            if not {"E_free_pa", "E_bonded_pa"} <= set(r.index) or not (
+                    np.isfinite(r["E_free_pa"]) and np.isfinite(r["E_bonded_pa"])):
+                return "-"
+            return f"{r['E_bonded_pa'] / 1e3:.1f}-{r['E_free_pa'] / 1e3:.1f}"
         if kind == "err":
             if not np.isfinite(r["rel_err_pct"]):
                 return "-"
@@ -80,7 +85,7 @@ def format_comparison(df: pd.DataFrame, groundtruth_source: str | None = None,
         cols = pd.MultiIndex.from_tuples(
             ([("GT", "Instron")] if with_gt else [])
             + [(t, label[m]) for t in tips for m in methods
-               if kind != "paper" or m == "lsq"])
+               if kind not in ("paper", "layer") or m == "lsq"])
         body = []
         for mat in mats:
             line = []
@@ -88,20 +93,24 @@ def format_comparison(df: pd.DataFrame, groundtruth_source: str | None = None,
                 g = df[df["material"] == mat].iloc[0]
                 line.append(_pm(g["gt_E_pa"], g["gt_sd_pa"]))
             line += [cell(mat, t, m, kind) for t in tips for m in methods
-                     if kind != "paper" or m == "lsq"]
+                     if kind not in ("paper", "layer") or m == "lsq"]
             body.append(line)
         return pd.DataFrame(body, index=pd.Index(mats, name="material"), columns=cols
                             ).to_string()
 
-    out = ["E [kPa]: GT and LSQ mean ± sd (LSQ over traces, as the paper); Bayes posterior-"
-           "predictive median [90 % interval] for a new specimen, pooled with the uncertainty "
-           "budget", block("E", True)]
+    out = ["E [kPa]: GT and LSQ mean ± sd (LSQ over traces: the paper's method, a half-space); "
+           "Bayes posterior-predictive median [90 % interval] for a new specimen, pooled with "
+           "the uncertainty budget (a layer wherever the thickness is known)", block("E", True)]
     prior = _tau_prior_line(df, tau_prior_sd)
     if prior:
         out.append(prior)
     if df["rel_err_pct"].notna().any():
         out += ["", "error (GT - E)/GT [%]; * = GT outside the 90 % interval for a new specimen",
                 block("err", False)]
+    if "lsq" in methods and "E_free_pa" in df and df["E_free_pa"].notna().any():
+        out += ["", "LSQ read as a layer of the specimen's thickness [kPa]: bonded to free base "
+                "(what the finite thickness changes in the paper's half-space estimate)",
+                block("layer", False)]
     src = groundtruth_source or "none found (give --groundtruth)"
     out += ["", f"ground truth: {src}"]
     if df["paper_E_pa"].notna().any():
