@@ -199,8 +199,14 @@ def thickness_factor(
             f"no layer (finite-thickness) solution for tip '{tip.kind}' (only "
             f"{', '.join(have)} have one); fit it as a half-space: --half-space on the "
             "command line (thickness=None in the API)")
-    n = law.profile_exponent(tip)
-    a = law.contact_radius(np.asarray(depth, dtype=float), tip)
+    return _factor_at_radius(law.contact_radius(np.asarray(depth, dtype=float), tip), tip, h,
+                             nu, base)
+
+
+def _factor_at_radius(a: np.ndarray, tip: Tip, h: np.ndarray, nu: float, base: str
+                      ) -> np.ndarray:
+    """The layer factor at half-space contact radii ``a`` [m] (:func:`thickness_factor`)."""
+    n = get_law(tip).profile_exponent(tip)
     if math.isinf(n):  # flat punch: a is the punch radius at every depth
         return layer.flat_table(nu, base).factor(a / h)
     return layer.profile_factor(a / h, n, nu, base)
@@ -230,12 +236,16 @@ def shape(
     base
         ``"bonded"`` or ``"free"`` base of the layer (only with ``thickness_m``).
     """
-    s = get_law(tip).shape(depth, tip)
-    if thickness_m is not None:
-        if nu is None:
-            raise GeometryError("the finite-thickness correction needs the Poisson ratio nu")
-        s = s * thickness_factor(depth, tip, thickness_m, nu, base)
-    return s
+    law = get_law(tip)
+    if thickness_m is None:
+        return law.shape(depth, tip)
+    if nu is None:
+        raise GeometryError("the finite-thickness correction needs the Poisson ratio nu")
+    if law.shape_and_radius is None:
+        return law.shape(depth, tip) * thickness_factor(depth, tip, thickness_m, nu, base)
+    thickness_factor(np.zeros(1), tip, thickness_m, nu, base)  # checks h, base, the law
+    s, a = law.shape_and_radius(np.asarray(depth, dtype=float), tip)  # one solve for both
+    return s * _factor_at_radius(a, tip, np.asarray(thickness_m, dtype=float), nu, base)
 
 
 def force_star(depth: np.ndarray, Estar, tip: Tip, **kwargs) -> np.ndarray:

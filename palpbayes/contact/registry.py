@@ -75,6 +75,9 @@ class ContactLaw:
         ``profile_exponent(tip) -> n`` of the tip's profile f(r) = c·r^n near the apex (2 for
         paraboloid and sphere, 1 for the cone, ``math.inf`` for the flat punch), selecting the
         layer solution (:mod:`.layer`); None together with ``contact_radius``.
+    shape_and_radius
+        Optional ``shape_and_radius(depth, tip) -> (s, a)``: both at once, for a law whose
+        contact radius costs as much as its shape (the exact sphere solves for it).
     default_fit_fraction
         Fraction of the penetration not fitted by default (the paper: 0.2 for the flat punch).
     max_depth, max_depth_name
@@ -100,6 +103,7 @@ class ContactLaw:
     scaled: Callable[[Tip, float], Tip] | None = None
     contact_radius: Callable[[np.ndarray, Tip], np.ndarray] | None = None
     profile_exponent: Callable[[Tip], float] | None = None
+    shape_and_radius: Callable[[np.ndarray, Tip], tuple[np.ndarray, np.ndarray]] | None = None
     default_fit_fraction: float = 0.0
     max_depth: Callable[[Tip], float] | None = None
     max_depth_name: str = ""

@@ -19,7 +19,7 @@ from ..units import format_length
 from . import paraboloid
 from .registry import ContactLaw, Tip, register, scale_radius
 
-__all__ = ["LAW", "contact_radius", "hertz_difference", "shape"]
+__all__ = ["LAW", "contact_radius", "hertz_difference", "shape", "shape_and_radius"]
 
 _SERIES_LIMIT = 0.1  # below this u the force bracket is summed as a series (no cancellation)
 _SERIES_TERMS = np.arange(1, 10)
@@ -89,6 +89,14 @@ def shape(depth: np.ndarray, radius: float) -> np.ndarray:
     return out if out.ndim else out[()]
 
 
+def shape_and_radius(depth: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """(:func:`shape`, :func:`contact_radius`) with one solve of t·tanh(t) = d/R."""
+    d = np.clip(np.asarray(depth, dtype=float), 0.0, None) / radius
+    t = _solve_t(d)
+    u = np.tanh(t)
+    return radius * radius * _bracket(u, t), u * radius
+
+
 def hertz_difference(d_over_r: float) -> float:
     """Relative force of the exact sphere vs Hertz at depth d/R, s_sphere/s_Hertz - 1 [-]
     (negative: less force; -0.030 at d/R = 0.3)."""
@@ -120,6 +128,7 @@ LAW = register(ContactLaw(
     # on a layer: the paraboloid's solution at the sphere's own contact radius (.layer)
     contact_radius=lambda depth, tip: contact_radius(depth, tip.radius),
     profile_exponent=lambda tip: 2.0,
+    shape_and_radius=lambda depth, tip: shape_and_radius(depth, tip.radius),
     max_depth=lambda tip: tip.radius,
     max_depth_name="tip radius",
     hertz_approximation=lambda tip: Tip("paraboloid", radius=tip.radius),
