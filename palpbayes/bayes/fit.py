@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import replace
 
@@ -13,13 +14,19 @@ from ..errors import ConvergenceError, ConvergenceWarning, FitError, InputError,
 from ..fitdata import FitData, ModelSpec, prepare_trace
 from ..lsq import LSQResult, fit_lsq_data
 from ..trace import IndentationTrace
-from ..units import format_length
+from ..units import format_length, format_pressure
 from .budget import BudgetSpec, propagate
 from .diagnostics import chain_passes, compute_diagnostics, import_arviz
 from .exact import exact_posterior, sampled_coordinates
-from .layer_fit import emcee_layer_chains, exact_layer_chains, layer_columns, layer_notes
+from .layer_fit import (
+    emcee_layer_chains,
+    exact_layer_chains,
+    layer_columns,
+    layer_notes,
+    layer_warnings,
+)
 from .likelihood import TraceLikelihood
-from .priors import LAYER_PARAMETERS, PriorSpec, TracePrior
+from .priors import PriorSpec, TracePrior
 from .result import BayesResult
 from .sampler import ChainResult, SamplerSettings, run_emcee
 from .start import Mode, find_modes, initial_ensemble, modes_from_exact
@@ -91,7 +98,7 @@ def bound_flags(post_theta: dict[str, np.ndarray], prior: TracePrior) -> list[st
     causes = {
         ("z_surf", "upper"): "the surface sits at the top of the recorded approach: the trace "
                              "may start in contact, or the baseline is not flat (try --baseline "
-                             "linear); record a longer approach",
+                             "linear), or record a longer approach",
         ("z_surf", "lower"): "the surface sits at the deepest point: no contact is resolved",
         ("log_Estar", "lower"): "E* at the lower end of its prior range (check units)",
         ("log_Estar", "upper"): "E* at the upper end of its prior range (check units)",
@@ -101,16 +108,37 @@ def bound_flags(post_theta: dict[str, np.ndarray], prior: TracePrior) -> list[st
         ("log_nu_t", "lower"): "Student-t degrees of freedom at 2: heavy outliers",
         ("log_nu_t", "upper"): "Student-t degrees of freedom at 200: the noise is Gaussian",
     }
+    causes[("log_h", "lower")] = (
+        "the layer's thickness piles up at the thinnest the prior allows: the data ask for a "
+        "layer thinner than the indentation, so the layer model does not explain how the "
+        "force stiffens (a strain-stiffening material, an onset before the surface, a wrong "
+        "tip?), and E and h are the prior's, not the data's")
     for name, (lo, hi) in prior.bounds.items():
-        if name in LAYER_PARAMETERS:  # answers, not prior artefacts: see layer_notes
+        # the base coordinate and the half-space end of log_h are answers, not prior
+        # artefacts (see layer_notes); a thickness at the lower end is one
+        if name == "bond":
             continue
         x = post_theta[name]
+        if name == "log_h":
+            x = x[x <= prior.log_h_range[1]]  # the layer's draws
+            if x.size < 20:
+                continue
         med, sd = float(np.median(x)), float(np.std(x))
         for side, bound in (("lower", lo), ("upper", hi)):
+            if name == "log_h" and side == "upper":
+                continue
             dist = abs(med - bound)
             if dist < BOUND_SDS * sd or (sd == 0 and dist == 0):
-                what = {"log_Estar": "E*", "log_nu_t": "nu_t"}.get(name, name)
-                value = format_length(bound) if name == "z_surf" else f"{bound:.4g}"
+                what = {"log_Estar": "E*", "log_nu_t": "nu_t", "log_h": "thickness"}.get(name,
+                                                                                       name)
+                if name == "z_surf":
+                    value = format_length(bound)
+                elif name == "log_h":
+                    value = format_length(math.exp(bound))
+                elif name == "log_Estar":
+                    value = format_pressure(math.exp(bound))
+                else:
+                    value = f"{bound:.4g}"
                 out.append(f"{what} posterior at its {side} prior bound ({value}): "
                            f"{causes[(name, side)]}")
     return out
@@ -192,7 +220,7 @@ def fit_bayes_data(
     idata.posterior.attrs["model_fitted"] = best.describe()
     if mixture is not None and data.model.bonding == "unknown":
         idata.posterior.attrs["log_bf_bonded"] = mixture.log_bayes_factor()
-    flags = _flags(post, post_theta, prior)
+    flags = _flags(post, post_theta, prior) + layer_warnings(post, data, best)
     notes = layer_notes(post, data, best)
     checks = _model_checks(post, fitted, like, int(check_ss.generate_state(1)[0]))
     return _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,

@@ -26,7 +26,7 @@ from .sampler import ChainResult, SamplerSettings, run_emcee
 from .start import Mode
 
 __all__ = ["exact_layer_chains", "emcee_layer_chains", "layer_coordinates", "layer_notes",
-           "layer_columns", "P_UNDECIDED", "STRAIN_VALID"]
+           "layer_warnings", "layer_columns", "P_UNDECIDED", "STRAIN_VALID"]
 
 #: A base posterior between P_UNDECIDED and 1 − P_UNDECIDED is reported as not identified.
 P_UNDECIDED = 0.1
@@ -192,10 +192,23 @@ def layer_notes(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> 
         if a / h > LAMBDA_VALID:
             notes.append(f"contact radius {a / h:.2g} times the layer thickness: the thin-layer "
                          "regime, where the answer hangs on compressibility and the base")
-        if d_max / h > STRAIN_VALID:
+        if STRAIN_VALID < d_max / h <= 1.0:
             notes.append(f"indentation {100 * d_max / h:.0f} % of the layer thickness: "
                          "beyond the small strain of the layer solution")
     return notes
+
+
+def layer_warnings(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> list[str]:
+    """What makes a layer fit wrong, not merely uncertain: the tip going through the layer
+    (the fitted indentation deeper than the fitted thickness)."""
+    if not best.has_layer:
+        return []
+    d_max = _fitted_depth(float(np.median(post["z_surf"])), data)
+    if d_max <= best.thickness:
+        return []
+    return [f"the fitted indentation ({format_length(d_max)}) is deeper than the fitted layer "
+            f"({format_length(best.thickness)}): the tip would go through it, so the layer "
+            "model cannot describe this curve (check --thickness, or the tip and the onset)"]
 
 
 def _contact_radius(model: ModelSpec, depth: float) -> float:

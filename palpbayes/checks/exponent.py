@@ -24,6 +24,9 @@ from .core import (
 
 #: scipy.optimize.least_squares settings of the free-exponent fit: tight enough to recover a
 #: noise-free power law to 1e-6 in m (tests/unit/test_model_checks.py).
+#: Bounds of the free exponent m.
+_M_BOUNDS = (0.6, 4.0)
+
 _LSQ_OPTIONS = {"ftol": 1e-12, "xtol": 1e-12, "gtol": 1e-12, "x_scale": "jac", "max_nfev": 200}
 
 
@@ -63,7 +66,7 @@ def law_exponent(model: ModelSpec, z, z_surf: float, *, baseline: str = "constan
 def free_exponent_fit(z, force, z_surf0: float, *, baseline: str = "constant",
                       z_ref: float | None = None, m0: float = 1.5,
                       noise_lag1: float | None = None,
-                      m_bounds: tuple[float, float] = (0.6, 4.0)) -> dict:
+                      m_bounds: tuple[float, float] = _M_BOUNDS) -> dict:
     """Least-squares fit of a free power law F = k·d_+^m + F0 (+ F1·(z - z_ref)).
 
     d_+ = max(z_surf - z, 0).  Started from z_surf0 and m0 with k, F0 (and F1) solved
@@ -212,7 +215,11 @@ def exponent_check(z, force, model: ModelSpec, z_surf: float, *, baseline: str =
                "rel_tol": rel_tol, "n_se": n_se, "converged": fit["success"]}
     flag = ""
     if failed:
-        head = (f"free-exponent fit m = {m:.3f} ± {se:.3f} vs {m_law:.3f} of the "
+        at_limit = ""
+        lo_m, hi_m = _M_BOUNDS
+        if m >= hi_m - 1e-3 or m <= lo_m + 1e-3:
+            at_limit = f" (at the free fit's limit {hi_m if m > 1 else lo_m:g}: steeper still)"
+        head = (f"free-exponent fit m = {m:.3f} ± {se:.3f}{at_limit} vs {m_law:.3f} of the "
                 f"{model.tip.kind} law")
         hint = _wrong_tip_hint(model, m)
         if delta > 0:
@@ -224,7 +231,7 @@ def exponent_check(z, force, model: ModelSpec, z_surf: float, *, baseline: str =
                           "strain-stiffening material, a gradual onset before the surface, or "
                           "wrong tip (sharper than the law)")
             if hint:
-                causes = f"wrong tip ({hint}; check --tip), or " + causes.replace(
+                causes = f"wrong tip ({hint}: check --tip), or " + causes.replace(
                     ", or wrong tip (sharper than the law)", "")
             flag = f"{head}: force stiffens with depth ({causes})"
         else:
@@ -232,7 +239,7 @@ def exponent_check(z, force, model: ModelSpec, z_surf: float, *, baseline: str =
                       "a soft or non-linear start of contact (tilt, roughness, onset: skip "
                       "the start), or yielding")
             if hint:
-                causes = f"wrong tip ({hint}; check --tip), or " + causes.replace(
+                causes = f"wrong tip ({hint}: check --tip), or " + causes.replace(
                     "wrong tip (blunter than the law), ", "")
             flag = f"{head}: force softens with depth ({causes})"
     return CheckResult("exponent", float(m), not failed, flag, details)

@@ -48,7 +48,9 @@ solution within 0.3 % for d/R <= 0.35 (0.05 % at d/R = 0.04), where sqrt(R·d) w
 
 **Validity.**  Linear elasticity with small strain, a frictionless tip, a layer of infinite
 lateral extent.  The tables cover a/h <= :data:`LAMBDA_MAX`; beyond, the factor is
-continued as a power law of chi (:func:`layer_validity` says when a fit relies on it).
+continued as a power law of chi; a fit whose contact is wider than :data:`LAMBDA_VALID`
+times the layer carries a note (:func:`palpbayes.bayes.layer_fit.layer_notes`), one whose
+indentation is deeper than the layer a warning.
 """
 
 from __future__ import annotations
@@ -79,8 +81,8 @@ __all__ = [
 BASES = ("bonded", "free")
 #: Largest contact radius / thickness a/h of the tabulated solution.
 LAMBDA_MAX = 8.0
-#: a/h beyond which a fit is flagged: a contact much wider than the layer (thin-layer regime:
-#: the answer hangs on compressibility and the base condition; strains are large).
+#: a/h beyond which a fit carries a note: a contact much wider than the layer (thin-layer
+#: regime: the answer hangs on compressibility and the base condition; strains are large).
 LAMBDA_VALID = 2.0
 
 # k(y) = ∫_0^∞ (K(u) − 1)·cos(u·y) du by Gauss–Legendre on [0, U_MAX] (K − 1 ~ e^(−2u):

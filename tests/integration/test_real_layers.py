@@ -7,7 +7,7 @@ exponent 2.0 and 3.3).  What the unknown-thickness model makes of that, measured
 
 * it rejects the half-space (P(half-space) = 0), but the thickness it reports is the lower end
   of its prior range (1.5 times the indentation depth), not a measurement: the posterior piles
-  up there, and moving that end moves h and E with it;
+  up there, moving that end moves h and E with it, and the row is flagged (not converged);
 * E falls 3.5 to 13 times below the half-space E, far outside its own interval;
 * force-save-example: a free layer at that edge has the data's exponent (m_law 2.00 against
   the data's 2.00), so the exponent check passes; the residual, depth and predictive checks
@@ -65,6 +65,9 @@ def test_the_half_space_is_rejected_and_h_sits_on_the_prior_edge(fits, name):
     assert row["p_halfspace"] < 0.01
     assert lo_prior <= row["thickness_lo_m"] <= row["thickness_m"] <= row["thickness_hi_m"]
     assert row["thickness_hi_m"] < 1.05 * lo_prior, (row["thickness_m"], lo_prior)
+    # and the row says so: a thickness at its prior's lower end is a failure, not an answer
+    assert "thickness posterior at its lower prior bound" in row["flags"], row["flags"]
+    assert "the layer model does not explain" in row["flags"] and not row["converged"]
 
 
 def test_moving_the_prior_edge_moves_the_thickness_and_the_modulus(fits):
