@@ -26,7 +26,7 @@ from .layer_fit import (
     layer_warnings,
 )
 from .likelihood import TraceLikelihood
-from .priors import PriorSpec, TracePrior
+from .priors import PriorSpec, TracePrior, log_posterior
 from .result import BayesResult
 from .sampler import ChainResult, SamplerSettings, run_emcee
 from .start import Mode, find_modes, initial_ensemble, modes_from_exact
@@ -121,8 +121,8 @@ def bound_flags(post_theta: dict[str, np.ndarray], prior: TracePrior) -> list[st
         x = post_theta[name]
         if name == "log_h":
             x = x[x <= prior.log_h_range[1]]  # the layer's draws
-            if x.size < 20:
-                continue
+            if x.size < 20 or not _piled_low(x, prior.log_h_range):
+                continue  # an h the data cannot tell is a note (layer_notes), not a bound
         med, sd = float(np.median(x)), float(np.std(x))
         for side, bound in (("lower", lo), ("upper", hi)):
             if name == "log_h" and side == "upper":
@@ -142,6 +142,14 @@ def bound_flags(post_theta: dict[str, np.ndarray], prior: TracePrior) -> list[st
                 out.append(f"{what} posterior at its {side} prior bound ({value}): "
                            f"{causes[(name, side)]}")
     return out
+
+
+def _piled_low(log_h: np.ndarray, log_h_range: tuple[float, float]) -> bool:
+    """True if over half the layer's draws lie in the lowest tenth of the prior's ln h range
+    (five times the prior's share): piled at the bound, not merely unidentified (a posterior
+    that is its prior puts a tenth there)."""
+    lo, hi = log_h_range
+    return bool(np.mean(log_h <= lo + 0.1 * (hi - lo)) > 0.5)
 
 
 def _flags(post: dict, post_theta: dict, prior: TracePrior) -> list[str]:
@@ -245,17 +253,6 @@ def _best_model(model: ModelSpec, post: dict, mixture) -> ModelSpec:
     return model.variant(thickness=thickness, base=base)
 
 
-def _log_prob(prior: TracePrior, like: TraceLikelihood):
-    """Log posterior density of θ (W, ndim), −inf outside the prior."""
-    def log_prob(theta: np.ndarray) -> np.ndarray:
-        lp = prior.log_prior(theta)
-        ok = np.isfinite(lp)
-        if ok.any():
-            lp[ok] += like(theta[ok])
-        return lp
-    return log_prob
-
-
 def _emcee_chains(data: FitData, prior: TracePrior, settings: SamplerSettings, tabulate: bool,
                   init_ss, sampler_ss, trace_id: str):
     """emcee, its walkers started at every mode (:mod:`palpbayes.bayes.start`)."""
@@ -274,7 +271,7 @@ def _emcee_chains(data: FitData, prior: TracePrior, settings: SamplerSettings, t
                     if np.isfinite(m.cov[1, 1]))
     like = TraceLikelihood(data, prior.noise, tabulate=tabulate, baseline=prior.baseline,
                            z_ref=prior.z_ref, centers=centers)
-    log_prob = _log_prob(prior, like)
+    log_prob = log_posterior(prior, like)
     n_walkers = max(settings.n_walkers, 2 * len(names) + 2)
     p0, used = initial_ensemble(modes, names, n_walkers, np.random.default_rng(init_ss),
                                 prior.z_bounds, prior.bounds["log_Estar"], data.n_points)
@@ -300,7 +297,7 @@ def _exact_chains(data: FitData, prior: TracePrior, rng: np.random.Generator):
     zs = post.z_summary()
     like = TraceLikelihood(data, prior.noise, baseline=prior.baseline, z_ref=prior.z_ref,
                            z_center=zs.mean, z_scale=zs.sd)
-    lp = _log_prob(prior, like)(samples.reshape(-1, ndim))
+    lp = log_posterior(prior, like)(samples.reshape(-1, ndim))
     modes = [Mode(z_surf=z, beta=np.full(2, np.nan), rss=np.nan, loglik=np.nan,
                   cov=np.full((3, 3), np.nan), lag1=np.nan, weight=w)
              for z, w in post.modes()]

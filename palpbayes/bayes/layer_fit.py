@@ -21,7 +21,7 @@ from ..units import format_length, format_pressure
 from .exact import sampled_coordinates
 from .layer_likelihood import SWAP_WEIGHT, LayerLikelihood, base_swap_move
 from .layers import LayerPosterior, layer_posterior
-from .priors import TracePrior, param_names
+from .priors import TracePrior, log_posterior, param_names
 from .sampler import ChainResult, SamplerSettings, run_emcee
 from .start import Mode
 
@@ -67,20 +67,6 @@ def _chains_of(theta: dict[str, np.ndarray], prior: TracePrior, shape: tuple[int
     return np.column_stack([theta[n] for n in prior.names]).reshape(*shape, ndim)
 
 
-def _log_prob(prior: TracePrior, like: LayerLikelihood):
-    """Log posterior of θ; the prior (its E* bounds) sees the real ln E*, not the aligned
-    coordinate (unit Jacobian: the density is the same)."""
-    def log_prob(theta: np.ndarray) -> np.ndarray:
-        real = np.array(theta, dtype=float, copy=True)
-        real[:, 0] = like.log_estar(theta)
-        lp = prior.log_prior(real)
-        ok = np.isfinite(lp)
-        if ok.any():
-            lp[ok] += like(theta[ok])
-        return lp
-    return log_prob
-
-
 def _modes(post: LayerPosterior) -> list[Mode]:
     """The surface modes of the most probable component (for the fit's record)."""
     best = post.components[int(np.argmax(post.weights))].post
@@ -100,7 +86,7 @@ def exact_layer_chains(data: FitData, prior: TracePrior, rng: np.random.Generato
     like = LayerLikelihood(data, prior, centers=((float(np.mean(z)), float(np.std(z))),),
                            z_reference=float(np.median(z)))
     samples = _chains_of(layer_coordinates(d, prior, rng, like), prior, shape)
-    lp = _log_prob(prior, like)(samples.reshape(-1, samples.shape[-1]))
+    lp = log_posterior(prior, like, like.log_estar)(samples.reshape(-1, samples.shape[-1]))
     chains = ChainResult(samples=samples, log_prob=lp.reshape(shape),
                          tau=np.ones(samples.shape[-1]), n_steps=post.n_nodes, burn=0, thin=1,
                          acceptance=1.0, hit_cap=not post.complete)
@@ -131,7 +117,7 @@ def emcee_layer_chains(data: FitData, prior: TracePrior, settings: SamplerSettin
     if "phi" in prior.names and "phi" not in theta:
         theta["phi"] = 0.02 * rng.standard_normal(n_walkers)
     p0 = np.column_stack([theta[n] for n in prior.names])
-    log_prob = _log_prob(prior, like)
+    log_prob = log_posterior(prior, like, like.log_estar)
     extra = ([(base_swap_move(like, float(np.median(z))), SWAP_WEIGHT)]
              if "bond" in prior.names else None)
     chains = run_emcee(log_prob, p0, settings, int(sampler_ss.generate_state(1)[0]),
@@ -149,6 +135,11 @@ def _h_interval(h: np.ndarray) -> tuple[float, float]:
 
 def _fitted_depth(z_surf: float, data: FitData) -> float:
     return max(z_surf - float(np.min(data.z)), 0.0)
+
+
+#: P(half-space) above which a thickness-unknown fit says "no layer needed" (the prior gives
+#: the half-space 0.5; a flat punch, whose curve is linear at any thickness, stays there).
+P_NO_LAYER = 0.8
 
 
 def layer_notes(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> list[str]:
@@ -175,7 +166,7 @@ def layer_notes(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> 
         p_half = float(np.mean(~np.isfinite(h)))
         lo, hi = _h_interval(h)
         lo_t, hi_t = model.thickness_range
-        if p_half > 0.5:
+        if p_half > P_NO_LAYER:
             notes.append(
                 f"no layer needed (P(half-space) = {p_half:.2f}): the data only say h > "
                 f"{format_length(lo)} (prior {format_length(lo_t)}..{format_length(hi_t)} or "
@@ -183,8 +174,8 @@ def layer_notes(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> 
         elif not np.isfinite(hi) or hi / lo > 3.0:
             notes.append(
                 f"thickness not identified: h in [{format_length(lo)}, "
-                f"{'no layer' if not np.isfinite(hi) else format_length(hi)}] (90 %), and E's "
-                "interval carries it")
+                f"{'no layer' if not np.isfinite(hi) else format_length(hi)}] (90 %, "
+                f"P(half-space) = {p_half:.2f}), and E's interval carries it")
     if best.has_layer:
         d_max = _fitted_depth(float(np.median(post["z_surf"])), data)
         a = _contact_radius(best, d_max)

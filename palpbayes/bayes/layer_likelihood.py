@@ -18,7 +18,12 @@ walkers move between them as freely as within one.  r(h) is the least-squares ra
 same curve at a reference surface (:func:`palpbayes.refit.refit_factor`), a fixed function of
 the thickness; the map has unit Jacobian, so the log-uniform prior of E* is unchanged (its
 bounds, twelve decades wide, apply to the aligned coordinate).  ``E_star`` in the posterior is
-the real E*.
+the real E*.  With the thickness unknown the same holds along h: a thinner layer explains the
+curve with a smaller E* (for the flat punch, whose factor does not depend on depth, h and E*
+are exactly degenerate), a curved ridge 0.03 % wide in ln E* and decades long in ln h on which
+stretch moves stall.  There the first coordinate is ln E* − ln c(h, base), c the least-squares
+ratio E*_layer/E*_half-space of the same curve (1 in the half-space segment): the ridge becomes
+a straight line along ln h.
 
 **The base swap.**  :func:`base_swap_move` proposes the
 mirror image bond -> 1 − bond together with ln E* -> ln E* ± ln r, r the least-squares
@@ -87,17 +92,31 @@ class LayerLikelihood:
             self.core = TraceLikelihood(replace(data, model=self.model.half_space()),
                                         tabulate=False, **kw)
         self.z_reference = float(data.z_contact if z_reference is None else z_reference)
-        self._log_r = _log_ratio(self, self.z_reference) if self.i_bond is not None else None
+        if self.i_logh is not None:
+            self._log_c = {b: _log_layer_ratio(self, self.z_reference, b)
+                           for b in self.model.bases}
+            self._log_r = None
+        else:
+            self._log_c = None
+            self._log_r = _log_ratio(self, self.z_reference) if self.i_bond is not None else None
 
     def offset(self, theta: np.ndarray) -> np.ndarray:
-        """ln E* − θ[0] of each walker: ln r(h) on a free layer, 0 otherwise (module
-        docstring)."""
+        """ln E* − θ[0] of each walker (module docstring): thickness known, ln r on a free
+        layer and 0 on a bonded one; thickness unknown, ln c(h, base)."""
         theta = np.atleast_2d(theta)
+        if self._log_c is not None:
+            bases = self.bases(theta)
+            log_h = theta[:, self.i_logh]
+            out = np.zeros(theta.shape[0])
+            for b, log_c in self._log_c.items():
+                rows = bases == b
+                if rows.any():
+                    out[rows] = log_c(log_h[rows])
+            return out
         if self._log_r is None:
             return np.zeros(theta.shape[0])
         free = self.bases(theta) == "free"
-        log_h = theta[:, self.i_logh] if self.i_logh is not None else np.zeros(theta.shape[0])
-        return np.where(free, self._log_r(log_h), 0.0)
+        return np.where(free, self._log_r, 0.0)
 
     def log_estar(self, theta: np.ndarray) -> np.ndarray:
         """The real ln E* of each walker."""
@@ -176,24 +195,30 @@ def _depths(like: LayerLikelihood, z_surf: float) -> np.ndarray:
     return depth
 
 
-def _log_ratio(like: LayerLikelihood, z_surf: float):
-    """ln r(ln h): E*_free/E*_bonded of the same curve at ``z_surf`` [m] (a constant for a
-    known thickness; interpolated on 64 nodes of ln h, 0 in the half-space segment)."""
+def _log_ratio(like: LayerLikelihood, z_surf: float) -> float:
+    """ln r: E*_free/E*_bonded of the same curve at ``z_surf`` [m] on the known thickness."""
+    depth = _depths(like, z_surf)
+    if depth.size == 0:
+        return 0.0
+    model = like.model
+    return float(np.log(refit_factor(depth, model.variant(base="bonded").shape,
+                                     model.variant(base="free").shape)))
+
+
+def _log_layer_ratio(like: LayerLikelihood, z_surf: float, base: str):
+    """ln c(ln h): E*_layer/E*_half-space of the same curve at ``z_surf`` [m] on a layer of
+    ``base`` (interpolated on 64 nodes of ln h; 0 in the half-space segment)."""
     depth = _depths(like, z_surf)
     model = like.model
-
-    def log_r(h: float) -> float:
-        if depth.size == 0:
-            return 0.0
-        return float(np.log(refit_factor(depth, model.variant(thickness=h, base="bonded").shape,
-                                         model.variant(thickness=h, base="free").shape)))
-
-    if model.thickness is not None:
-        c = log_r(model.thickness)
-        return lambda log_h: np.full(np.shape(log_h), c)
     lo, hi = like.prior.log_h_range
     grid = np.linspace(lo, hi, 64)
-    vals = np.array([log_r(float(np.exp(g))) for g in grid])
+    if depth.size == 0:
+        vals = np.zeros(grid.size)
+    else:
+        half = model.half_space().shape
+        vals = np.array([np.log(refit_factor(
+            depth, half, model.variant(thickness=float(np.exp(g)), base=base).shape))
+            for g in grid])
     return lambda log_h: np.where(np.asarray(log_h) <= hi, np.interp(log_h, grid, vals), 0.0)
 
 

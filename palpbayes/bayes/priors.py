@@ -47,7 +47,7 @@ from ..fitdata import FitData
 from ..noise import sigma_from_pp
 
 __all__ = ["NOISE_MODELS", "BASELINES", "SURFACE_PRIORS", "PriorSpec", "TracePrior",
-           "param_names", "layer_names", "LAYER_PARAMETERS", "P_HALFSPACE"]
+           "param_names", "layer_names", "LAYER_PARAMETERS", "P_HALFSPACE", "log_posterior"]
 
 #: Prior probability of no layer at all (a half-space) when the thickness is unknown.
 P_HALFSPACE = 0.5
@@ -281,3 +281,24 @@ class TracePrior:
         if "log_h" in self.names:
             cols["log_h"] = rng.uniform(self.log_h_range[0], self.log_h_top, n)
         return np.column_stack([cols[name] for name in self.names])
+
+
+def log_posterior(prior: TracePrior, like, to_real=None):
+    """The log posterior density of θ (W, ndim) for emcee: ``prior.log_prior`` + ``like``,
+    −inf outside the prior (the likelihood is evaluated only inside it).
+
+    ``to_real(theta) -> ln E*`` (W,), if given, is what the prior's E* bounds see when the
+    sampled first coordinate is an aligned one (:mod:`palpbayes.bayes.layer_likelihood`: a
+    shift with unit Jacobian, so the density is the same).
+    """
+    def log_prob(theta: np.ndarray) -> np.ndarray:
+        real = theta
+        if to_real is not None:
+            real = np.array(theta, dtype=float, copy=True)
+            real[:, 0] = to_real(theta)
+        lp = prior.log_prior(real)
+        ok = np.isfinite(lp)
+        if ok.any():
+            lp[ok] += like(theta[ok])
+        return lp
+    return log_prob
