@@ -39,7 +39,7 @@ def main() -> None:
             # sample rate giving ~n rows over the 4 mm of travel (approach + indentation)
             rate = n * SPEED / (DEPTH + APPROACH)
             tr = simulate_trace(111e3, Tip("paraboloid", radius=0.0117), thickness=0.03,
-                                rate=rate, rng=1)
+                                rate=rate, rng=1, base=None)
             path = write_trace(tr, Path(tmp) / f"trace{n}.csv")
             before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
             t0 = time.perf_counter()

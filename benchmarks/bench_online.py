@@ -78,7 +78,7 @@ def stopped_runs(n: int) -> None:
         tip = list(TIPS.values())[i % 3]
         E = float(np.exp(rng.uniform(np.log(4e4), np.log(4e5))))
         tr = simulate_trace(E, tip, thickness=0.025, force_offset=float(rng.normal(0, 0.1)),
-                            rng=rng)
+                            rng=rng, base=None)
         seg = tr.loading_segment()
         full_depth = tr.metadata["z_surf_true"] - seg.z.min()
         full_force = seg.force.max() - np.median(seg.force[:100])

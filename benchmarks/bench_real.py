@@ -56,7 +56,7 @@ def main() -> None:
     print("Bayesian fit of a paraboloid trace (E = 111 kPa, 3 mm into 30 mm), seed 1")
     times = {}
     for rate in (800.0, 3200.0):
-        tr = simulate_trace(E_TRUE, TIPS["paraboloid"], thickness=0.03, rate=rate, rng=3)
+        tr = simulate_trace(E_TRUE, TIPS["paraboloid"], thickness=0.03, rate=rate, rng=3, base=None)
         out, wall = _fit(tr)
         row = out.rows[0]
         times[rate] = wall

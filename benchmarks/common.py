@@ -18,7 +18,7 @@ E_TRUE = 111e3  # White foam, 30 mm thick -> 3 mm indentation, 3,840 samples at 
 
 
 def paper_trace(kind: str, seed: int = 0):
-    tr = simulate_trace(E_TRUE, TIPS[kind], thickness=0.03, rng=seed)
+    tr = simulate_trace(E_TRUE, TIPS[kind], thickness=0.03, rng=seed, base=None)
     assert tr.n_points == 3840, tr.n_points
     return tr
 
