@@ -173,6 +173,9 @@ def fit_one(curve: Curve, layer: str, args: argparse.Namespace) -> dict:
         E_stat_lo_pa=r["E_stat_lo_pa"], E_stat_hi_pa=r["E_stat_hi_pa"],
         z_surf_m=r["z_surf_m"], sigma_n=r["sigma_n"], converged=r["converged"],
         model_ok=r["model_ok"], n_checks=len(res.checks), failed_checks="+".join(failed),
+        misfit_effect=_finite(r.get("misfit_effect")), misfit_checks=r.get("misfit_checks", ""),
+        **{f"effect_{c.name}": _finite(c.details.get("effect")) for c in res.checks},
+        **{f"severity_{c.name}": c.details.get("severity", "") for c in res.checks},
         m_free=_finite(r["m_free"]),
         m_se=_finite(ex.details.get("m_se")) if ex else np.nan,
         m_law=_finite(ex.details.get("m_law")) if ex else np.nan,
@@ -245,6 +248,18 @@ def summarize(df: pd.DataFrame, refusals: list[Curve]) -> str:
         combos = failed.map(lambda s: "+".join(c for c in CHECKS if c in s) or "(none)")
         lines.append("failure patterns: " + ", ".join(
             f"{k} x{v}" for k, v in combos.value_counts().items()))
+        okm = ok["model_ok"].astype(str).str.lower() == "true"
+        lines.append(f"no material misfit (model_ok): {int(okm.sum())}; material: "
+                     f"{int((~okm).sum())}")
+        for c in CHECKS:
+            if f"severity_{c}" in ok:
+                sev = ok[f"severity_{c}"].fillna("").replace("", "passed").value_counts()
+                eff = ok.loc[ok[f"severity_{c}"] != "", f"effect_{c}"] * 100
+                lines.append(f"  {c}: " + ", ".join(f"{k} {v}" for k, v in sev.items())
+                             + (f"; effect of the failures on E [%]: {_dist(eff, '{:+.1f}')}"
+                                if eff.size else ""))
+        lines.append(f"largest material effect on E [%]: "
+                     f"{_dist(ok.loc[~okm, 'misfit_effect'] * 100, '{:+.1f}')}")
         lines.append(f"m_free: {_dist(ok['m_free'])}")
         lines.append(f"m_law: {_dist(ok['m_law'])}")
         lines.append(f"m_free - m_law: {_dist(ok['m_free'] - ok['m_law'], '{:+.3f}')}")

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..checks import CheckResult
+from ..checks import CheckResult, checks_summary
 from ..contact import Tip
 from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
@@ -149,6 +149,7 @@ class BayesResult:
             sel = ~np.isfinite(self.draws("thickness"))
             if sel.any():
                 E_med = float(np.median(E[sel]))
+        checks = checks_summary(self.checks)
         return {
             "trace_id": self.trace_id,
             "method": "bayes",
@@ -176,12 +177,12 @@ class BayesResult:
             "n_steps": d.n_steps,
             "baseline_model": self.baseline,
             "F0_n": float(np.median(self.draws("F0"))),
-            "flags": "; ".join(self.warnings + d.problems()
-                               + [c.flag for c in self.checks if not c.passed]
+            "flags": "; ".join(self.warnings + d.problems() + checks["flags"]
                                + [f"info: {n}" for n in self.notes]),
-            "model_ok": all(c.passed for c in self.checks) if self.checks else np.nan,
-            "m_free": next((c.statistic for c in self.checks if c.name == "exponent"),
-                           np.nan),
+            "model_ok": checks["model_ok"],
+            "m_free": checks["m_free"],
+            "misfit_effect": checks["misfit_effect"],
+            "misfit_checks": checks["misfit_checks"],
             "engine": self.idata.posterior.attrs.get("engine", "emcee"),
             "model_fitted": best.describe_layer(),
             **self.layer,

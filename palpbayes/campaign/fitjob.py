@@ -15,7 +15,7 @@ import numpy as np
 
 from ..bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
 from ..bayes.layers import default_thickness_range
-from ..checks import CheckResult, check_fit
+from ..checks import CheckResult, check_fit, checks_summary
 from ..contact import check_tip_plausible, get_law
 from ..errors import ConvergenceWarning, FitError, GeometryError, InputError
 from ..fitdata import BONDINGS, FitData, ModelSpec, prepare
@@ -38,9 +38,11 @@ SUMMARY_COLUMNS = [
     "constraint_active", "tau_max", "acceptance", "n_steps", "flags",
     # the pre-contact baseline and the noise spec used (F_unc), read from the data unless given
     "baseline_n", "f_unc_n", "baseline_model", "F0_n",
-    # model-adequacy checks (palpbayes.checks): all passed, and the free exponent m of
-    # F = k·d^m + baseline (compare with the tip law's); failed checks are named in flags
-    "model_ok", "m_free",
+    # model-adequacy checks (palpbayes.checks): no material misfit, and the free exponent m of
+    # F = k·d^m + baseline (compare with the tip law's); the largest effect on E of a
+    # material check [-] and the names of those checks; failed checks are named in flags
+    # (negligible ones as info: lines with their effect)
+    "model_ok", "m_free", "misfit_effect", "misfit_checks",
     # the Bayesian engine: emcee, or the exact quadrature (palpbayes.bayes.exact)
     "engine",
     # tip "sphere" only (a law with a hertz_approximation; else NaN): the paper's choice for a
@@ -289,11 +291,11 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
 
 
 def check_columns(checks: list[CheckResult], flags: str) -> dict:
-    """``model_ok``, ``m_free`` and the failed checks' flags appended to ``flags``."""
-    failed = [c.flag for c in checks if not c.passed]
-    m = next((c.statistic for c in checks if c.name == "exponent"), float("nan"))
-    return {"model_ok": not failed if checks else float("nan"), "m_free": m,
-            "flags": "; ".join([f for f in [flags] if f] + failed)}
+    """``model_ok``, ``m_free``, ``misfit_effect``, ``misfit_checks`` and the failed checks'
+    flags appended to ``flags`` (:func:`palpbayes.checks.checks_summary`)."""
+    out = checks_summary(checks)
+    out["flags"] = "; ".join([f for f in [flags] if f] + out["flags"])
+    return out
 
 
 def fit_trace(trace: IndentationTrace, options: FitOptions,

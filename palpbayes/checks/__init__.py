@@ -31,6 +31,12 @@ statistical test *and* a physical effect size agree (:data:`THRESHOLDS`): expone
 > 0.2 sigma; posterior-predictive p < 0.01; depth consistency |E*_shallow/E*_all - 1| > 3 se
 and > 5 %.  They were calibrated on simulated traces (``tests/unit/test_model_checks.py``).
 
+**Effect on E and severity** (:mod:`.effect`).  Each check also says how much its failure
+moves E (the free exponent's E at the mean depth, the shallow-half window ratio, E with the
+alternative the residual pattern names) and grades a failure *negligible* (|effect| within
+2 % or within the statistical 90 % interval) or *material*.  ``model_ok`` follows material
+misfit; a negligible failure is an ``info:`` line with its effect.
+
 **Correlated noise.**  800 Hz force noise is autocorrelated.  The variance of the mean of n
 consecutive AR(1) samples with lag-1 coefficient phi and marginal sd sigma is
 (sigma²/n)·[(1+phi)/(1-phi) - 2·phi·(1-phi^n)/(n·(1-phi)²)] (e.g. Box & Jenkins); standard
@@ -47,13 +53,15 @@ Pure numpy/scipy, no plotting.  Inputs are the fitted samples in time order (loa
 
 Modules: :mod:`.core` (result type, thresholds, AR(1) factors, least-squares helpers),
 :mod:`.exponent`, :mod:`.residuals`, :mod:`.ppc`, :mod:`.depth` (one check each) and
-:mod:`.run` (:func:`run_checks`).
+:mod:`.effect` (effect sizes, severity, the summary columns) and :mod:`.run`
+(:func:`run_checks`).
 """
 
 from __future__ import annotations
 
 from .core import THRESHOLDS, CheckResult, ar1_mean_variance_factor, noise_lag1
 from .depth import depth_consistency_check
+from .effect import EFFECT_REL, checks_summary, grade_checks, material
 from .exponent import exponent_check, free_exponent_fit, law_exponent
 from .ppc import posterior_predictive_check
 from .residuals import binned_residuals, residual_structure_check
@@ -73,4 +81,8 @@ __all__ = [
     "depth_consistency_check",
     "run_checks",
     "check_fit",
+    "EFFECT_REL",
+    "grade_checks",
+    "material",
+    "checks_summary",
 ]

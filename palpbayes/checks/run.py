@@ -8,6 +8,7 @@ from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
 from .core import CheckResult, _arrays, _ShapeTable, noise_lag1
 from .depth import depth_consistency_check
+from .effect import grade_checks
 from .exponent import exponent_check
 from .ppc import posterior_predictive_check
 from .residuals import residual_structure_check
@@ -49,7 +50,9 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
     Returns
     -------
     list of CheckResult
-        In the order exponent, residual_structure, depth_consistency[, ppc].
+        In the order exponent, residual_structure, depth_consistency[, ppc], each graded
+        (:func:`~palpbayes.checks.effect.grade_checks`: its effect on E and severity; the
+        statistical interval is the draws' 90 % interval of E*, else 1.645 se).
     """
     z, f = _arrays(z, force)
     z_ref = float(z.max()) if z_ref is None else float(z_ref)
@@ -85,7 +88,12 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
         ph = np.asarray(draws["phi"], dtype=float)[keep] if "phi" in draws else None
         out.append(posterior_predictive_check(z, f, curves, sig, phi=ph, rng=rng,
                                               z_surf=z_surf))
-    return out
+    half = None
+    if draws is not None:
+        lo, hi = np.quantile(np.asarray(draws["E_star"], dtype=float), [0.05, 0.95])
+        half = 0.5 * (hi - lo) / estar if estar > 0 else None
+    return grade_checks(out, z, f, model, z_surf=z_surf, estar=estar, stat_rel_halfwidth=half,
+                        baseline=baseline, z_ref=z_ref, noise_lag1=phi)
 
 
 def check_fit(data: FitData, *, z_surf: float, estar: float, f0: float, f1: float = 0.0,

@@ -38,13 +38,20 @@ def _model_check_line(res: ResultsFolder) -> str:
         m = s[s["method"] == method]
         ran = m[m["model_ok"].notna()]
         if len(ran):
-            bad = int((~ran["model_ok"].map(parse_bool)).sum())
-            parts.append(f"{bad} of {len(ran)} {label} fits")
+            bad_rows = ran[~ran["model_ok"].map(parse_bool)]
+            text = f"{len(bad_rows)} of {len(ran)} {label} fits"
+            if len(bad_rows) and "misfit_effect" in bad_rows:
+                eff = 100 * bad_rows["misfit_effect"].abs()
+                if eff.notna().any():
+                    text += f" (effect on E up to {eff.max():.0f} %)"
+            parts.append(text)
     if not parts:
         return "Model checks: none ran."
     return ("Model checks (free exponent, residual structure, depth consistency, posterior "
-            f"predictive) fail for {' and '.join(parts)}; each failure names its likely cause "
-            "in the flags column of summary.csv.")
+            f"predictive) find a material misfit (one that moves E by more than 2 % and more "
+            f"than the statistical interval) in {' and '.join(parts)}; each names its likely "
+            "cause and its effect on E in the flags column of summary.csv, and negligible "
+            "failures are info lines.")
 
 
 def _page_diagnostics(res: ResultsFolder) -> list[_Page]:

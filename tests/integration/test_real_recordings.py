@@ -202,10 +202,21 @@ def test_fit_bayes_itself_carries_the_model_checks():
 def test_a_small_offset_is_named_in_the_least_squares_row():
     """8 mN offset (within the sensor's ±48 mN spec, so no 'untared' note): the paper's model
     has no offset term, its residuals sit at a constant level before contact, and the check
-    says so; the Bayesian row, which fits F0, passes."""
+    says so, with what it does to E: under 1 %, so the misfit is negligible and model_ok
+    stays True; a 60 mN offset moves E by more than 2 % and is material.  The Bayesian row,
+    which fits F0, passes."""
     tr = simulate_trace(111e3, PARA, thickness=0.03, rng=2, force_offset=0.008, base=None)
     rows = {r["method"]: r
             for r in fit_trace(tr, FitOptions(layer="off", method="both", seed=1)).rows}
-    assert not rows["lsq"]["model_ok"] and "constant offset" in rows["lsq"]["flags"]
+    lsq = rows["lsq"]
+    assert lsq["model_ok"] and lsq["misfit_effect"] == 0.0, lsq["flags"]
+    assert "info: residual_structure (offset pattern) check fails statistically but is " \
+           "negligible" in lsq["flags"]
+    assert abs(lsq["E_pa"] / rows["bayes"]["E_pa"] - 1) < 0.02  # what "negligible" claims
+    big = simulate_trace(111e3, PARA, thickness=0.03, rng=2, force_offset=0.06, base=None)
+    lsq60 = next(r for r in fit_trace(big, FitOptions(layer="off", method="lsq")).rows)
+    assert not lsq60["model_ok"] and "residual_structure" in lsq60["misfit_checks"]
+    assert "constant offset" in lsq60["flags"] and "[material: moves E by" in lsq60["flags"]
+    assert abs(lsq60["misfit_effect"]) > 0.02
     assert "untared sensor: the pre-contact force" not in rows["lsq"]["flags"]
     assert rows["bayes"]["model_ok"] and not rows["bayes"]["flags"], rows["bayes"]["flags"]
