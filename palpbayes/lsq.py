@@ -204,7 +204,7 @@ def fit_lsq_data(data: FitData, *, level: float = LEVEL, trace_id: str = "") -> 
     if base is not None and data.tare == 0.0 and abs(base.level) > data.f_unc:
         notes.append(
             f"untared sensor: the pre-contact force is {format_force(base.level)} (beyond "
-            f"F_unc = {format_force(data.f_unc)}); the paper's model has no offset term, so E "
+            f"F_unc = {format_force(data.f_unc)}), and the paper's model has no offset term, so E "
             "and z_surf are biased: refit with --tare (or read the Bayesian row, which fits "
             "the offset)")
     return LSQResult(

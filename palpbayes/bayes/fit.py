@@ -312,7 +312,8 @@ def _model_checks(post: dict, data: FitData, like, seed: int) -> list:
     the concrete model ``data.model`` — over the draws of that model's base (and layer or
     none), so that a two-base mixture's E* does not mix into its medians — with the
     posterior-predictive check on all the draws (each with its own thickness and base when
-    the layer is sampled)."""
+    the layer is sampled).  The grading's statistical interval is that of the same draws
+    (a base or thickness the data cannot tell does not widen it)."""
     draws = {n: np.ravel(post[n]) for n in ("E_star", "z_surf", "F0", "F1", "sigma", "phi",
                                             "thickness", "bonded")
              if n in post}
@@ -326,9 +327,11 @@ def _model_checks(post: dict, data: FitData, like, seed: int) -> list:
         mine[:] = True
     med = {n: float(np.median(x[mine])) for n, x in draws.items()
            if n not in ("thickness", "bonded")}
+    lo, hi = np.quantile(draws["E_star"][mine], [0.05, 0.95])
     return check_fit(data, z_surf=med["z_surf"], estar=med["E_star"], f0=med["F0"],
                      f1=med.get("F1", 0.0), sigma=med["sigma"], baseline=like.baseline,
-                     z_ref=like.z_ref, draws=draws, seed=seed)
+                     z_ref=like.z_ref, draws=draws, seed=seed,
+                     stat_rel_halfwidth=0.5 * float(hi - lo) / med["E_star"])
 
 
 def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, lsq, noise,

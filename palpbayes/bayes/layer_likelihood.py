@@ -9,21 +9,21 @@ then has its own shape function:
 * thickness unknown: every walker's shape row E*-free, s(z_s − z; h, base), evaluated directly
   (O(n) per walker, no table) and turned into the same quadratic forms.
 
-**The aligned coordinate.**  The two bases explain the same curve with E* values a factor r
+**The aligned coordinate.** The two bases explain the same curve with E* values a factor r
 apart (r = E*_free/E*_bonded of the same curve: 1.08–1.3 for the paper's geometry), while the
 posterior of E* is ~0.03 % wide: two modes that emcee's differential-evolution moves cannot
-bridge (half the walker pairs would propose jumps across the gap).  So the first coordinate is
-not ln E* but ln E* − [free]·ln r(h): both bases' modes then lie on top of each other, and the
-walkers move between them as freely as within one.  r(h) is the least-squares ratio of the
-same curve at a reference surface (:func:`palpbayes.refit.refit_factor`), a fixed function of
-the thickness; the map has unit Jacobian, so the log-uniform prior of E* is unchanged (its
-bounds, twelve decades wide, apply to the aligned coordinate).  ``E_star`` in the posterior is
-the real E*.  With the thickness unknown the same holds along h: a thinner layer explains the
-curve with a smaller E* (for the flat punch, whose factor does not depend on depth, h and E*
-are exactly degenerate), a curved ridge 0.03 % wide in ln E* and decades long in ln h on which
-stretch moves stall.  There the first coordinate is ln E* − ln c(h, base), c the least-squares
-ratio E*_layer/E*_half-space of the same curve (1 in the half-space segment): the ridge becomes
-a straight line along ln h.
+bridge (half the walker pairs would propose jumps across the gap). So the first coordinate is
+not ln E* but ln E* − [free]·ln r: both bases' modes then lie on top of each other, and the
+walkers move between them as freely as within one. r is the least-squares ratio of the same
+curve at a reference surface (:func:`palpbayes.refit.refit_factor`) on the known thickness; the
+map has unit Jacobian, so the log-uniform prior of E* is unchanged (it is evaluated on the real
+ln E*, :func:`palpbayes.bayes.priors.log_posterior`). ``E_star`` in the posterior is the real
+E*. With the thickness unknown the same holds along h: a thinner layer explains the curve with
+a smaller E* (for the flat punch, whose factor does not depend on depth, h and E* are exactly
+degenerate), a curved ridge 0.03 % wide in ln E* and decades long in ln h on which stretch
+moves stall. There the first coordinate is ln E* − ln c(h, base), c the least-squares ratio
+E*_layer/E*_half-space of the same curve (1 in the half-space segment): the ridge becomes a
+straight line along ln h.
 
 **The base swap.**  :func:`base_swap_move` proposes the
 mirror image bond -> 1 − bond together with ln E* -> ln E* ± ln r, r the least-squares
@@ -231,8 +231,8 @@ def _swap_maps(like: LayerLikelihood, z_surf: float):
     bonded layer under a paraboloid looks like a ~20 mm free one), so h moves too, along the
     map g(h_bonded) = h_free of the free layer whose shape fits the bonded one best (least
     squares on the fitted depths, tabulated on 48 nodes of ln h, made increasing with a slope of
-    at least 0.05); the
-    Jacobian of g enters the acceptance.  Points whose image would leave the tabulated range,
+    at least 0.05, linear between the nodes); the Jacobian of g (its segment's slope) enters
+    the acceptance.  Points whose image would leave the tabulated range,
     and the half-space segment, are left where they are (the identity is its own inverse).
     """
     depth = _depths(like, z_surf)
@@ -269,7 +269,11 @@ def _swap_maps(like: LayerLikelihood, z_surf: float):
     for i in range(1, g.size):  # strictly increasing, slope >= 0.05: a well-posed inverse
         g[i] = max(g[i], g[i - 1] + 0.05 * (xb[i] - xb[i - 1]))
     shift = np.asarray(shift)
-    dg = np.gradient(g, xb)
+    slope = np.diff(g) / np.diff(xb)  # g is piecewise linear: its slope per segment
+
+    def log_slope(x):
+        i = np.clip(np.searchsorted(xb, x, side="right") - 1, 0, slope.size - 1)
+        return np.log(np.maximum(slope[i], 1e-12))
 
     def swap(log_h, to_free):
         x = np.asarray(log_h, dtype=float)
@@ -278,11 +282,11 @@ def _swap_maps(like: LayerLikelihood, z_surf: float):
         back = ~to_free & (x >= g[0]) & (x <= g[-1])
         new[fwd] = np.interp(x[fwd], xb, g)
         sh[fwd] = np.interp(x[fwd], xb, shift)
-        jac[fwd] = np.log(np.maximum(np.interp(x[fwd], xb, dg), 1e-12))
+        jac[fwd] = log_slope(x[fwd])
         xi = np.interp(x[back], g, xb)               # g⁻¹
         new[back] = xi
         sh[back] = -np.interp(xi, xb, shift)
-        jac[back] = -np.log(np.maximum(np.interp(xi, xb, dg), 1e-12))
+        jac[back] = -log_slope(xi)
         return new, sh, jac
     return swap
 

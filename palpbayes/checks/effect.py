@@ -6,13 +6,16 @@ reports its **effect**, the relative change of E* [-] under the alternative it p
 a **severity**:
 
 ``exponent``
-    E* that the free power law F = k·d^m (:func:`~palpbayes.checks.free_exponent_fit`) implies
-    at the mean contact depth d̄ of the fit, E*_alt = k·d_free(d̄)^m / s(d̄), against E*:
-    the modulus a user would read at the curve's typical depth if the law's shape were wrong.
+    E* that the free power law F = k·d^m + F0' (+ F1'·(z − z_ref),
+    :func:`~palpbayes.checks.free_exponent_fit`) implies at the height z̄ of the fit's mean
+    contact depth d̄: E*_alt = [k·d_free(z̄)^m + F0' + F1'·(z̄ − z_ref) − F0 − F1·(z̄ − z_ref)]
+    / s(d̄), against E*, each fit with its own surface and baseline: the modulus the law needs
+    to reproduce the free law's contact force at the curve's typical depth.
 ``depth_consistency``
     The window ratio E*_shallow / E*_all − 1 (the shallow half of the depth against all).
 ``residual_structure``, ``ppc``
-    The larger in magnitude of the two effects above (the curve's E* changes at least that
+    The larger in magnitude of the two effects above (the exponent's only when that check
+    failed) (the curve's E* changes at least that
     much when the law is changed to follow the structure) and of the alternative the residual
     pattern names: a drifting baseline under a constant one, E* refitted with a linear
     baseline; a constant offset (the paper's model has none), E* refitted with one.
@@ -31,6 +34,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..errors import FitError
 from ..fitdata import ModelSpec
 from .core import CheckResult, _ShapeTable
 from .depth import _profile_law_fit
@@ -49,22 +53,28 @@ _Z90 = 1.6448536269514722
 
 
 def free_exponent_effect(check: CheckResult, z, model: ModelSpec, z_surf: float,
-                         estar: float) -> float:
+                         estar: float, f0: float = 0.0, f1: float = 0.0,
+                         z_ref: float | None = None) -> float:
     """E*_alt/E* − 1 [-] of a free-exponent check at the mean contact depth (module
-    docstring); NaN without contact or without the free fit's numbers."""
+    docstring; ``f0`` [N], ``f1`` [N/m] the law fit's baseline, ``z_ref`` [m] its reference,
+    default the highest z); NaN without contact or without the free fit's numbers."""
     d = details = check.details
-    if not {"k", "m", "z_surf_free"} <= set(details) or not estar > 0:
+    if not {"k", "m", "z_surf_free", "F0"} <= set(details) or not estar > 0:
         return float("nan")
     z = np.asarray(z, dtype=float)
     depth = z_surf - z[z < z_surf]
     if depth.size == 0:
         return float("nan")
+    z_ref = float(z.max()) if z_ref is None else float(z_ref)
     d_mean = float(np.mean(depth))
-    d_free = max(float(d["z_surf_free"]) - (z_surf - d_mean), 0.0)
+    z_bar = z_surf - d_mean
+    d_free = max(float(d["z_surf_free"]) - z_bar, 0.0)
     s = float(_ShapeTable(model, 1.5 * float(depth.max())).shape(np.array([d_mean]))[0])
     if not s > 0:
         return float("nan")
-    return float(d["k"]) * d_free ** float(d["m"]) / s / estar - 1.0
+    contact = (float(d["k"]) * d_free ** float(d["m"]) + float(d["F0"])
+               + float(d.get("F1", 0.0)) * (z_bar - z_ref) - f0 - f1 * (z_bar - z_ref))
+    return contact / s / estar - 1.0
 
 
 def _baseline_effect(z, f, model: ModelSpec, z_surf: float, z_ref: float,
@@ -88,7 +98,8 @@ def _largest(*effects: tuple[str, float]) -> tuple[str, float]:
 
 
 def grade_checks(checks: list[CheckResult], z, force, model: ModelSpec, *, z_surf: float,
-                 estar: float, stat_rel_halfwidth: float | None = None,
+                 estar: float, f0: float = 0.0, f1: float = 0.0,
+                 stat_rel_halfwidth: float | None = None,
                  baseline: str = "constant", z_ref: float | None = None,
                  noise_lag1: float | None = None) -> list[CheckResult]:
     """The checks with their effect on E and severity filled in (module docstring).
@@ -101,8 +112,8 @@ def grade_checks(checks: list[CheckResult], z, force, model: ModelSpec, *, z_sur
         [m], [N] The fitted samples.
     model
         The fitted contact model.
-    z_surf, estar
-        [m], [Pa] The fit's surface and E*.
+    z_surf, estar, f0, f1
+        [m], [Pa], [N], [N/m] The fit's surface, E* and baseline.
     stat_rel_halfwidth
         Half width of E*'s statistical 90 % interval over E* [-]; default 1.645 se/E* of the
         depth check's full fit.
@@ -121,12 +132,13 @@ def grade_checks(checks: list[CheckResult], z, force, model: ModelSpec, *, z_sur
     z_ref = float(z.max()) if z_ref is None else float(z_ref)
     effects: dict[str, tuple[str, float]] = {}
     if "exponent" in by:
-        effects["exponent"] = ("free exponent at the mean depth",
-                               free_exponent_effect(by["exponent"], z, model, z_surf, estar))
+        effects["exponent"] = ("free exponent at the mean depth", free_exponent_effect(
+            by["exponent"], z, model, z_surf, estar, f0, f1, z_ref))
     if "depth_consistency" in by:
         effects["depth_consistency"] = ("shallow-half window",
                                         float(by["depth_consistency"].statistic) - 1.0)
-    shape_effect = _largest(*effects.values())
+    shape_effect = _largest(*(v for k, v in effects.items()
+                              if k == "depth_consistency" or not by[k].passed))
     res = by.get("residual_structure")
     pattern = res.details.get("pattern", "") if res is not None else ""
     misfit_effect = shape_effect
@@ -134,7 +146,7 @@ def grade_checks(checks: list[CheckResult], z, force, model: ModelSpec, *, z_sur
         try:
             misfit_effect = _largest(shape_effect, (
                 "linear baseline", _baseline_effect(z, f, model, z_surf, z_ref, noise_lag1)))
-        except (ValueError, np.linalg.LinAlgError):
+        except (ValueError, np.linalg.LinAlgError, FitError):
             pass
     dc = by.get("depth_consistency")
     if pattern == "offset" and dc is not None and estar > 0:  # e.g. the paper's model (no F0)

@@ -211,7 +211,7 @@ def exponent_check(z, force, model: ModelSpec, z_surf: float, *, baseline: str =
     delta = m - m_law
     failed = abs(delta) > n_se * se and abs(delta) > rel_tol * m_law
     details = {"m": m, "m_se": se, "m_law": m_law, "delta_m": delta,
-               "z_surf_free": fit["z_surf"], "k": fit["k"], "F0": fit["F0"],
+               "z_surf_free": fit["z_surf"], "k": fit["k"], "F0": fit["F0"], "F1": fit["F1"],
                "rel_tol": rel_tol, "n_se": n_se, "converged": fit["success"]}
     flag = ""
     if failed:

@@ -162,8 +162,8 @@ def _pattern(b: dict) -> tuple[str, str, dict]:
                          "tilt -> linear baseline (F1) or re-tare"), scores
     if scores["pre_level"] > 0.3 * total and scores["pre_level"] > scores["pre_line"]:
         return "offset", ("pre-contact residuals sit at a constant offset: a force offset the "
-                          "model lacks (an untared sensor; the paper's least squares has no "
-                          "offset term) -> --tare, or the Bayesian fit's F0"), scores
+                          "model lacks (an untared sensor, or the paper's least squares, which "
+                          "has no offset term) -> --tare, or the Bayesian fit's F0"), scores
     ex = scores["near_excess"]
     if (abs(ex) > 3 and con.size and np.sign(ex) == np.sign(zb[con[0]])
             and scores["deep"] < 0.9 * scores["near"]):

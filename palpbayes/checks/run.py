@@ -17,7 +17,7 @@ from .residuals import residual_structure_check
 def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: float,
                f1: float = 0.0, sigma: float, draws: dict | None = None,
                baseline_lag1: float | None = None, baseline: str | None = None,
-               z_ref: float | None = None,
+               z_ref: float | None = None, stat_rel_halfwidth: float | None = None,
                rng: np.random.Generator | int | None = None) -> list[CheckResult]:
     """Run every adequacy check on one fit.
 
@@ -44,6 +44,9 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
         ``"constant"`` or ``"linear"``; default linear when f1 != 0 or ``F1`` is drawn.
     z_ref
         [m] Linear-baseline reference height.
+    stat_rel_halfwidth
+        Half width of E*'s statistical 90 % interval over E* [-] for the grading; default
+        that of ``draws["E_star"]``, else 1.645 se of the depth check's fit.
     rng
         Generator or seed for the posterior-predictive replicates.
 
@@ -88,17 +91,19 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
         ph = np.asarray(draws["phi"], dtype=float)[keep] if "phi" in draws else None
         out.append(posterior_predictive_check(z, f, curves, sig, phi=ph, rng=rng,
                                               z_surf=z_surf))
-    half = None
-    if draws is not None:
+    half = stat_rel_halfwidth
+    if half is None and draws is not None:
         lo, hi = np.quantile(np.asarray(draws["E_star"], dtype=float), [0.05, 0.95])
         half = 0.5 * (hi - lo) / estar if estar > 0 else None
-    return grade_checks(out, z, f, model, z_surf=z_surf, estar=estar, stat_rel_halfwidth=half,
+    return grade_checks(out, z, f, model, z_surf=z_surf, estar=estar, f0=f0, f1=f1,
+                        stat_rel_halfwidth=half,
                         baseline=baseline, z_ref=z_ref, noise_lag1=phi)
 
 
 def check_fit(data: FitData, *, z_surf: float, estar: float, f0: float, f1: float = 0.0,
               sigma: float, baseline: str = "constant", z_ref: float | None = None,
-              draws: dict | None = None, seed: int = 0) -> list[CheckResult]:
+              draws: dict | None = None, stat_rel_halfwidth: float | None = None,
+              seed: int = 0) -> list[CheckResult]:
     """:func:`run_checks` on the points of a prepared fit.
 
     The noise's own lag-one correlation is read from the pre-contact baseline
@@ -116,6 +121,8 @@ def check_fit(data: FitData, *, z_surf: float, estar: float, f0: float, f1: floa
     draws
         Posterior draws (``E_star``, ``z_surf``, ``F0``, ``sigma`` [, ``F1``, ``phi``]) for
         the posterior-predictive check; None skips it.
+    stat_rel_halfwidth
+        As :func:`run_checks`.
     seed
         Seed of the replicated data.
     """
@@ -124,6 +131,7 @@ def check_fit(data: FitData, *, z_surf: float, estar: float, f0: float, f1: floa
     try:
         return run_checks(data.z, data.force, data.model, z_surf=z_surf, estar=estar, f0=f0,
                           f1=f1, sigma=sigma, draws=draws, baseline_lag1=lag1,
-                          baseline=baseline, z_ref=z_ref, rng=seed)
+                          baseline=baseline, z_ref=z_ref,
+                          stat_rel_halfwidth=stat_rel_halfwidth, rng=seed)
     except InputError:
         return []

@@ -216,7 +216,12 @@ def test_a_small_offset_is_named_in_the_least_squares_row():
     big = simulate_trace(111e3, PARA, thickness=0.03, rng=2, force_offset=0.06, base=None)
     lsq60 = next(r for r in fit_trace(big, FitOptions(layer="off", method="lsq")).rows)
     assert not lsq60["model_ok"] and "residual_structure" in lsq60["misfit_checks"]
-    assert "constant offset" in lsq60["flags"] and "[material: moves E by" in lsq60["flags"]
-    assert abs(lsq60["misfit_effect"]) > 0.02
+    assert "constant offset" in lsq60["flags"] and "[material: moves E by +" in lsq60["flags"]
+    # the effect is what fitting the offset does: E of the offset-fitting Bayesian row
+    bayes60 = next(r for r in fit_trace(big, FitOptions(layer="off", method="bayes",
+                                                        engine="exact")).rows)
+    assert lsq60["misfit_effect"] == pytest.approx(bayes60["E_pa"] / lsq60["E_pa"] - 1,
+                                                   abs=0.01)
+    assert lsq60["misfit_effect"] > 0.02
     assert "untared sensor: the pre-contact force" not in rows["lsq"]["flags"]
     assert rows["bayes"]["model_ok"] and not rows["bayes"]["flags"], rows["bayes"]["flags"]

@@ -43,15 +43,23 @@ def _check(name, passed, statistic=1.0, **details):
 
 
 def test_free_exponent_effect_closed_form():
-    """A curve F = k·(z_f − z)^m read with the paraboloid law at E*: the effect is
-    k·d_free(d̄)^m / (E*·s(d̄)) − 1 at the mean contact depth d̄, computed by hand."""
+    """Noise-free: a free law that is the fitted law itself (k = E*·s(1 m), m = 1.5, same
+    surface) has no effect whatever the offset, as long as both fits carry it; a law fit
+    without the 60 mN offset (the paper's) that the free fit carries is off by exactly
+    0.06 N / (E*·s(d̄)) at the mean depth; a free surface 10 µm higher changes the effect by
+    (d̄ + 10 µm)^1.5/d̄^1.5 − 1."""
     z = np.linspace(0.1005, 0.097, 400)
-    zs, z_free, k, m, estar = 0.1, 0.1001, 3e6, 1.7, 1.2e5
-    chk = _check("exponent", False, m, k=k, m=m, z_surf_free=z_free)
-    d_bar = np.mean(zs - z[z < zs])
-    expected = k * (z_free - (zs - d_bar)) ** m / (estar * MODEL.shape(np.array([d_bar]))[0])
-    assert free_exponent_effect(chk, z, MODEL, zs, estar) == pytest.approx(expected - 1,
-                                                                             rel=1e-3)
+    zs, estar = 0.1, 1.2e5
+    k = estar * MODEL.shape(np.array([1.0]))[0]
+    d_bar = float(np.mean(zs - z[z < zs]))
+    s_bar = MODEL.shape(np.array([d_bar]))[0]
+    same = _check("exponent", True, 1.5, k=k, m=1.5, z_surf_free=zs, F0=0.06)
+    assert free_exponent_effect(same, z, MODEL, zs, estar, f0=0.06) == pytest.approx(0, abs=1e-6)
+    assert free_exponent_effect(same, z, MODEL, zs, estar, f0=0.0) == pytest.approx(
+        0.06 / (estar * s_bar), rel=1e-4)
+    high = _check("exponent", True, 1.5, k=k, m=1.5, z_surf_free=zs + 1e-5, F0=0.0)
+    assert free_exponent_effect(high, z, MODEL, zs, estar) == pytest.approx(
+        ((d_bar + 1e-5) / d_bar) ** 1.5 - 1, rel=1e-4)
     assert math.isnan(free_exponent_effect(_check("exponent", False), z, MODEL, zs, estar))
 
 
