@@ -174,8 +174,11 @@ def dask_client(scheduler: str | None = None, workers: int | None = None):
         n = int(os.cpu_count() or 1) if workers is None else int(workers)
         if n < 1:
             raise InputError(f"workers {workers!r} must be at least 1")
+        # loopback only, and the HTTP server on a free port: distributed's default (8787,
+        # all interfaces) collides with any other cluster or dashboard on the machine
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=40)
+                               host="127.0.0.1", dashboard_address="127.0.0.1:0",
+                               silence_logs=40)
         try:
             client = Client(cluster)
         except BaseException:

@@ -87,3 +87,32 @@ def test_unreachable_scheduler_is_a_clear_error(tmp_path, monkeypatch):
     m = _manifest(tmp_path, [50e3])
     with pytest.raises(InputError, match="Dask scheduler"):
         fit_points(m, scheduler="tcp://127.0.0.1:9", progress=False)
+
+
+def test_local_cluster_listens_on_loopback_and_survives_a_busy_8787(tmp_path):
+    """The map's LocalCluster binds to 127.0.0.1 and puts its HTTP server on a free port, so
+    a dashboard or another cluster on distributed's default port 8787 does not stop it (it
+    did: "Port 8787 is already in use", an error under this suite's warnings-as-errors)."""
+    import socket
+
+    from palpbayes.maps.pertrace import dask_client
+
+    busy = socket.socket()
+    try:
+        busy.bind(("127.0.0.1", 8787))
+        busy.listen()
+    except OSError:  # 8787 already taken by something else: the same situation
+        pass
+    try:
+        client = dask_client(None, 1)
+        try:
+            assert client.scheduler.address.startswith("tcp://127.0.0.1:")
+            assert client.submit(abs, -3).result() == 3
+            info = client.scheduler_info()
+            assert all(w.startswith("tcp://127.0.0.1:") for w in info["workers"])
+        finally:
+            cluster = client._palpbayes_cluster
+            client.close()
+            cluster.close()
+    finally:
+        busy.close()
