@@ -19,6 +19,8 @@ from .budget import BudgetSpec, propagate
 from .diagnostics import chain_passes, compute_diagnostics, import_arviz
 from .exact import exact_posterior, sampled_coordinates
 from .layer_fit import (
+    best_model,
+    concrete_draws,
     emcee_layer_chains,
     exact_layer_chains,
     layer_columns,
@@ -212,7 +214,7 @@ def fit_bayes_data(
     post = _posterior_dict(chains.samples, prior, data.model.nu, like)
     post_theta = {n: chains.samples[..., i] for i, n in enumerate(names)}
     post_theta["log_Estar"] = np.log(post["E_star"])  # the real one (a layer's is aligned)
-    best = _best_model(data.model, post, mixture)
+    best = best_model(data.model, post, mixture)
     fitted = replace(data, model=best)
     bud = propagate(post["E_star"], fitted, float(np.median(post["z_surf"])), budget,
                     np.random.default_rng(budget_ss), bonded=post.get("bonded"),
@@ -233,24 +235,6 @@ def fit_bayes_data(
     checks = _model_checks(post, fitted, like, int(check_ss.generate_state(1)[0]))
     return _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
                    like, checks, notes, best)
-
-
-def _best_model(model: ModelSpec, post: dict, mixture) -> ModelSpec:
-    """The concrete model at the posterior's centre (checks, budget): the model itself, the
-    exact mixture's :meth:`~palpbayes.bayes.layers.LayerPosterior.best`, or the same read
-    off the draws (the more probable base, the median thickness, no layer if most draws have
-    none)."""
-    if model.is_concrete:
-        return model
-    if mixture is not None:
-        return mixture.best()
-    h = np.ravel(post["thickness"]) if "thickness" in post else None
-    if h is not None and np.mean(~np.isfinite(h)) > 0.5:
-        return model.half_space()
-    b = np.ravel(post["bonded"]) if "bonded" in post else None
-    base = model.bonding if b is None else ("bonded" if not np.nanmean(b) < 0.5 else "free")
-    thickness = model.thickness if h is None else float(np.median(h[np.isfinite(h)]))
-    return model.variant(thickness=thickness, base=base)
 
 
 def _emcee_chains(data: FitData, prior: TracePrior, settings: SamplerSettings, tabulate: bool,
@@ -317,12 +301,8 @@ def _model_checks(post: dict, data: FitData, like, seed: int) -> list:
     draws = {n: np.ravel(post[n]) for n in ("E_star", "z_surf", "F0", "F1", "sigma", "phi",
                                             "thickness", "bonded")
              if n in post}
-    best = data.model
-    mine = np.ones(draws["E_star"].size, dtype=bool)
-    if "thickness" in draws:
-        mine &= np.isfinite(draws["thickness"]) == best.has_layer
-    if "bonded" in draws and best.has_layer:
-        mine &= draws["bonded"] == (1.0 if best.base == "bonded" else 0.0)
+    mine = concrete_draws(data.model, draws["E_star"].size, draws.get("thickness"),
+                          draws.get("bonded"))
     if mine.sum() < 50:
         mine[:] = True
     med = {n: float(np.median(x[mine])) for n, x in draws.items()

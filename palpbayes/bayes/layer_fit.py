@@ -5,7 +5,8 @@
 its walkers started at draws of the exact mixture (with Gaussian noise and the 'loading'
 surface prior standing in when the fit's own are not conjugate).  :func:`layer_notes` says what
 the data did and did not tell about the layer; :func:`layer_columns` are its ``summary.csv``
-columns.
+columns; :func:`best_model` is the concrete model at the posterior's centre and
+:func:`concrete_draws` the draws that belong to it.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ from .sampler import ChainResult, SamplerSettings, run_emcee
 from .start import Mode
 
 __all__ = ["exact_layer_chains", "emcee_layer_chains", "layer_coordinates", "layer_notes",
-           "layer_warnings", "layer_columns", "P_UNDECIDED", "STRAIN_VALID"]
+           "layer_warnings", "layer_columns", "best_model", "concrete_draws", "P_UNDECIDED",
+           "STRAIN_VALID"]
 
 #: A base posterior between P_UNDECIDED and 1 − P_UNDECIDED is reported as not identified.
 P_UNDECIDED = 0.1
@@ -232,3 +234,34 @@ def layer_columns(post: dict[str, np.ndarray], data: FitData) -> dict:
     if not model.has_layer:
         out["thickness_m"] = np.nan
     return out
+
+
+def best_model(model: ModelSpec, post: dict, mixture) -> ModelSpec:
+    """The concrete model at the posterior's centre (checks, budget): the model itself, the
+    exact mixture's :meth:`~palpbayes.bayes.layers.LayerPosterior.best`, or the same read
+    off the draws (the more probable base, the median thickness, no layer if most draws have
+    none)."""
+    if model.is_concrete:
+        return model
+    if mixture is not None:
+        return mixture.best()
+    h = np.ravel(post["thickness"]) if "thickness" in post else None
+    if h is not None and np.mean(~np.isfinite(h)) > 0.5:
+        return model.half_space()
+    b = np.ravel(post["bonded"]) if "bonded" in post else None
+    base = model.bonding if b is None else ("bonded" if not np.nanmean(b) < 0.5 else "free")
+    thickness = model.thickness if h is None else float(np.median(h[np.isfinite(h)]))
+    return model.variant(thickness=thickness, base=base)
+
+
+def concrete_draws(model: ModelSpec, n: int, thickness: np.ndarray | None = None,
+                   bonded: np.ndarray | None = None) -> np.ndarray:
+    """Mask (n,) of the draws that belong to the concrete ``model``: a layer's (finite
+    ``thickness`` [m], ``bonded`` 1/0 matching its base) or the half-space's (``inf``);
+    all draws when neither was sampled."""
+    mine = np.ones(n, dtype=bool)
+    if thickness is not None:
+        mine &= np.isfinite(np.ravel(thickness)) == model.has_layer
+    if bonded is not None and model.has_layer:
+        mine &= np.ravel(bonded) == (1.0 if model.base == "bonded" else 0.0)
+    return mine

@@ -28,6 +28,7 @@ from ..io.atomic import write_netcdf_atomic
 from ..refit import layer_alternatives
 from .budget import Budget
 from .diagnostics import Diagnostics, import_arviz
+from .layer_fit import concrete_draws
 
 __all__ = ["BayesResult", "LEVEL", "STATE_ATTR", "saved_state", "saved_model",
            "saved_fitted_model"]
@@ -140,13 +141,10 @@ class BayesResult:
         E_med = float(np.median(E))
         z_med = float(np.median(z))
         best = self.fitted_model
-        if "bonded" in self.idata.posterior and best.has_layer:  # the best base's E
-            b = self.draws("bonded")
-            sel = b == (1.0 if best.base == "bonded" else 0.0)
-            if sel.any():
-                E_med = float(np.median(E[sel]))
-        if "thickness" in self.idata.posterior and not best.has_layer:
-            sel = ~np.isfinite(self.draws("thickness"))
+        sampled = {k: self.draws(k) for k in ("thickness", "bonded")
+                   if k in self.idata.posterior}
+        if sampled:  # the E of the fitted model's own draws (its base, layer or none)
+            sel = concrete_draws(best, E.size, sampled.get("thickness"), sampled.get("bonded"))
             if sel.any():
                 E_med = float(np.median(E[sel]))
         checks = checks_summary(self.checks)
