@@ -27,16 +27,17 @@ Rules (docs/design.md §2):
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from .baseline import MIN_BASELINE_POINTS, Baseline, estimate_baseline
-from .contact import Tip, check_nu, exponent, get_law, shape
+from .contact import Tip, get_law
 from .errors import FitError, InputError, NoContactError
+from .modelspec import BONDINGS, ModelSpec
 from .noise import PAPER_NOISE_PP
 from .trace import IndentationTrace
-from .units import format_force, format_length
+from .units import format_force
 
 __all__ = ["ModelSpec", "BONDINGS", "FitData", "prepare", "prepare_trace", "first_passage",
            "DEFAULT_F_UNC", "default_fit_fraction", "noise_from_baseline", "onset_reference"]
@@ -50,192 +51,6 @@ def default_fit_fraction(tip: Tip) -> float:
     """Fraction of the penetration skipped by default: the tip law's
     (``ContactLaw.default_fit_fraction``; the paper's 0.2 for the flat punch, 0 otherwise)."""
     return get_law(tip).default_fit_fraction
-
-
-#: Base conditions of a layer that a fit can assume: bonded, free (frictionless) or unknown
-#: (both, weighted by the data: a two-component mixture).
-BONDINGS = ("bonded", "free", "unknown")
-
-
-@dataclass(frozen=True)
-class ModelSpec:
-    """Contact model: tip, Poisson ratio and the specimen's layer (finite thickness).
-
-    A specimen of known thickness is a layer on a rigid base (:mod:`palpbayes.contact.layer`);
-    without a thickness it is a half-space, the paper's model.  What is not known about the
-    layer is a parameter of the Bayesian model: the base condition (``bonding="unknown"``: the
-    bonded and the frictionless base as two components weighted by the data) and, with
-    ``thickness_range``, the thickness itself (log-uniform prior).  A model with nothing
-    unknown is *concrete*: it has one shape function (:meth:`shape`); :meth:`variant` gives
-    the concrete model of each component.
-
-    Parameters
-    ----------
-    tip
-        The indenter.
-    nu
-        Poisson ratio [-] used to turn E* into E (and in the bonded layer solution).
-    thickness
-        [m] Layer thickness h when known; None for a half-space (or, with
-        ``thickness_range``, an unknown thickness).
-    bonding
-        ``"bonded"``, ``"free"`` (frictionless base) or ``"unknown"`` (default: a block lying
-        on a plate is neither).  Irrelevant for a half-space.
-    thickness_range
-        [m] (lo, hi) of the log-uniform prior of an unknown thickness; None when the thickness
-        is known or absent.
-    p_bonded
-        Prior probability of the bonded base when ``bonding`` is unknown.
-    """
-
-    tip: Tip
-    nu: float = 0.3
-    thickness: float | None = None
-    bonding: str = "unknown"
-    thickness_range: tuple[float, float] | None = None
-    p_bonded: float = 0.5
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "nu", check_nu(self.nu))
-        if self.bonding not in BONDINGS:
-            raise InputError(f"unknown bonding {self.bonding!r}; use one of "
-                             f"{', '.join(BONDINGS)}")
-        if self.thickness is not None:
-            h = float(self.thickness)
-            if not (np.isfinite(h) and h > 0):
-                raise InputError(f"specimen thickness {self.thickness!r} m must be positive")
-            object.__setattr__(self, "thickness", h)
-        if self.thickness_range is not None:
-            if self.thickness is not None:
-                raise InputError("give either a known thickness or a thickness range (unknown "
-                                 "thickness), not both")
-            lo, hi = (float(v) for v in self.thickness_range)
-            if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
-                raise InputError(f"thickness range {self.thickness_range!r} m must satisfy "
-                                 "0 < lo < hi")
-            object.__setattr__(self, "thickness_range", (lo, hi))
-        if not 0.0 < self.p_bonded < 1.0:
-            raise InputError(f"prior probability of a bonded base {self.p_bonded!r} must lie "
-                             "strictly between 0 and 1")
-
-    @property
-    def has_layer(self) -> bool:
-        """True when the specimen is modelled as a layer (thickness known or sampled)."""
-        return self.thickness is not None or self.thickness_range is not None
-
-    @property
-    def thickness_unknown(self) -> bool:
-        return self.thickness_range is not None
-
-    @property
-    def bases(self) -> tuple[str, ...]:
-        """The base conditions the model allows: ``("bonded", "free")`` when unknown."""
-        if not self.has_layer:
-            return ("bonded",)
-        return ("bonded", "free") if self.bonding == "unknown" else (self.bonding,)
-
-    @property
-    def base(self) -> str:
-        """The base condition of a concrete layer model (``"bonded"`` for a half-space)."""
-        self._require_concrete("a single base condition")
-        return self.bases[0]
-
-    @property
-    def is_concrete(self) -> bool:
-        """True when the model has one shape function (nothing about the layer unknown)."""
-        return not self.has_layer or (self.thickness is not None and self.bonding != "unknown")
-
-    def variant(self, *, thickness: float | None = None, base: str | None = None) -> ModelSpec:
-        """The concrete model with the given thickness [m] and base (defaults: the known
-        thickness, the known base)."""
-        h = self.thickness if thickness is None else float(thickness)
-        b = base if base is not None else (self.bonding if self.bonding != "unknown" else None)
-        if self.has_layer and (h is None or b is None):
-            raise InputError("a concrete variant of a layer model needs its thickness and base")
-        return replace(self, thickness=h, thickness_range=None,
-                       bonding=b if b is not None else self.bonding)
-
-    def half_space(self) -> ModelSpec:
-        """The same tip and nu on a half-space (the paper's model)."""
-        return replace(self, thickness=None, thickness_range=None)
-
-    def _require_concrete(self, what: str) -> None:
-        if not self.is_concrete:
-            raise FitError(f"the model {self.describe()} has no {what}: its layer is partly "
-                           "unknown (base or thickness); take a concrete variant "
-                           "(ModelSpec.variant)")
-
-    @property
-    def exponent(self) -> float | None:
-        """Exponent m of F = k·d^m on a half-space, None for the exact sphere or a layer."""
-        return exponent(self.tip) if not self.has_layer else None
-
-    def shape(self, depth: np.ndarray) -> np.ndarray:
-        """F/E* [m²] at depth [m] (with the layer's bottom effect when it has one)."""
-        self._require_concrete("single shape function")
-        if self.thickness is None:
-            return shape(depth, self.tip)
-        return shape(depth, self.tip, thickness_m=self.thickness, nu=self.nu,
-                     base=self.bases[0])
-
-    def shape_at(self, depth: np.ndarray, thickness=None, base: str | None = None
-                 ) -> np.ndarray:
-        """F/E* [m²] at ``depth`` for a thickness [m] (number or array broadcastable with
-        ``depth``, e.g. one per draw) and a base; None: the model's own."""
-        h = self.thickness if thickness is None else thickness
-        if h is None:
-            return shape(depth, self.tip)
-        b = base if base is not None else self.base
-        return shape(depth, self.tip, thickness_m=h, nu=self.nu, base=b)
-
-    def shape_of_draws(self, depth: np.ndarray, thickness=None, bonded=None) -> np.ndarray:
-        """F/E* [m²] of posterior draws (rows of ``depth``, shape (D, N)), each with its own
-        thickness [m] (``inf``: no layer) and base (``bonded`` 1.0 / 0.0; NaN where there is
-        no layer); None: the model's own."""
-        depth = np.asarray(depth, dtype=float)
-        if thickness is None and bonded is None:
-            return self.shape(depth)
-        rows_n = depth.shape[0]
-        h = np.broadcast_to(np.inf if self.thickness is None and thickness is None
-                            else (self.thickness if thickness is None else thickness),
-                            (rows_n,)).astype(float)
-        if bonded is None:
-            b = np.full(rows_n, self.bases[0])
-        else:
-            b = np.where(np.asarray(bonded, dtype=float) == 0.0, "free", "bonded")
-        out = np.empty(depth.shape)
-        for base in np.unique(b):
-            rows = b == base
-            out[rows] = shape(depth[rows], self.tip, thickness_m=h[rows, None], nu=self.nu,
-                              base=str(base))
-        return out
-
-    def shape_derivative(self, depth: np.ndarray) -> np.ndarray:
-        """d(F/E*)/dd [m] by central differences (step 1e-9 m, one-sided at d = 0)."""
-        h = 1e-9
-        d = np.asarray(depth, dtype=float)
-        return (self.shape(d + h) - self.shape(np.maximum(d - h, 0.0))) / (
-            d + h - np.maximum(d - h, 0.0)
-        )
-
-    def to_E(self, Estar):
-        """Young's modulus E = E*·(1 − nu²) [Pa]."""
-        return Estar * (1.0 - self.nu**2)
-
-    def describe_layer(self) -> str:
-        """The layer in words: ``half-space``, ``h=20 mm, base unknown``, ..."""
-        if not self.has_layer:
-            return "half-space"
-        if self.thickness is not None:
-            h = f"h={self.thickness * 1e3:g} mm"
-        else:
-            lo, hi = self.thickness_range
-            h = f"h unknown in [{format_length(lo)}, {format_length(hi)}]"
-        base = {"bonded": "bonded", "free": "free base", "unknown": "base unknown"}[self.bonding]
-        return f"{h}, {base}"
-
-    def describe(self) -> str:
-        return f"{self.tip.describe()}, nu={self.nu:g}, {self.describe_layer()}"
 
 
 @dataclass(frozen=True)
