@@ -4,7 +4,7 @@ One module per job, imports flowing one way (``map`` -> ``campaign``/``inclusion
 ``campaign`` -> ``series``/``compression`` -> ``trace`` -> ``force``):
 
 * :mod:`~palpbayes.sim.force` -- the noise-free contact force and its physics knobs (strain
-  stiffening, gradual onset, finite thickness, series compliance);
+  stiffening, gradual onset, finite thickness, a blunted apex, series compliance);
 * :mod:`~palpbayes.sim.trace` -- one palpation trace: motion, AR(1) force noise, offset, drift,
   registration and encoder errors, with the truth in its metadata;
 * :mod:`~palpbayes.sim.compression` -- an Instron compression test and its export file;
@@ -13,7 +13,9 @@ One module per job, imports flowing one way (``map`` -> ``campaign``/``inclusion
 * :mod:`~palpbayes.sim.inclusion` -- the apparent modulus over a buried stiff sphere (Reuss
   average over the Boussinesq stress under the tip);
 * :mod:`~palpbayes.sim.sensitivity_table` -- its fast interpolation table (for the lump model);
-* :mod:`~palpbayes.sim.map` -- a stiffness-map phantom folder: a grid of palpations over it.
+* :mod:`~palpbayes.sim.map` -- a stiffness-map phantom folder: a grid of palpations over it;
+* :mod:`~palpbayes.sim.misfit` -- palpations with a misfit the user did not model (an unknown
+  layer, stiffening, a gradual onset, a blunted apex), the model-form calibration's traces.
 
 The paper's numbers the simulator reproduces live in :mod:`palpbayes.paper`, the peak-to-peak
 noise convention in :mod:`palpbayes.noise` (both are shared with the fitting side).
@@ -26,12 +28,23 @@ noise convention in :mod:`palpbayes.noise` (both are shared with the fitting sid
 
 from __future__ import annotations
 
-from . import campaign, compression, force, inclusion, map, sensitivity_table, series, trace
+from . import (
+    campaign,
+    compression,
+    force,
+    inclusion,
+    map,
+    misfit,
+    sensitivity_table,
+    series,
+    trace,
+)
 from .campaign import *  # noqa: F403
 from .compression import *  # noqa: F403
 from .force import *  # noqa: F403
 from .inclusion import *  # noqa: F403
 from .map import *  # noqa: F403
+from .misfit import *  # noqa: F403
 from .sensitivity_table import *  # noqa: F403
 from .series import *  # noqa: F403
 from .trace import *  # noqa: F403
@@ -45,4 +58,5 @@ __all__ += series.__all__
 __all__ += campaign.__all__
 __all__ += inclusion.__all__
 __all__ += map.__all__
+__all__ += misfit.__all__
 __all__ += sensitivity_table.__all__

@@ -32,6 +32,7 @@ __all__ = [
     "true_force",
     "onset_force_profile",
     "solve_series_compliance",
+    "blunted_paraboloid_shape",
 ]
 
 #: Nominal strain d/h below which the stiffening law is inactive.
@@ -105,6 +106,36 @@ def layer_factor(depth: ArrayLike, tip: Tip, thickness: float | None, nu: float,
             + w * thickness_factor(d, tip, thickness, nu, "bonded"))
 
 
+def blunted_paraboloid_shape(depth: ArrayLike, radius: float, flat_radius: float
+                             ) -> np.ndarray:
+    """Shape function s(d) = F/E* [m²] of a paraboloid whose apex is worn flat.
+
+    The profile f(r) = max(0, r² − b²)/(2R) (a paraboloid of apex radius R with a flat of
+    radius b, the apex removed down to b²/2R) maps by the MDR (Popov & Hess 2015, ch. 3) to
+    g(x) = x·sqrt(x² − b²)/R for x > b (0 inside), so the contact radius a solves
+    a²(a² − b²) = (dR)² and
+
+        F = 2E*·[d·a − (a² − b²)^(3/2)/(3R)],   a² = (b² + sqrt(b⁴ + 4d²R²))/2.
+
+    b = 0 gives Hertz's (4/3)·E*·R^(1/2)·d^(3/2); at d ≪ b²/R it is the flat punch 2E*·b·d.
+    A misspecification knob of the simulator (a worn or badly printed tip fitted with the
+    paraboloid law), not a registered contact law.
+
+    Parameters
+    ----------
+    depth
+        [m] Indentation depth d (0 for d <= 0).
+    radius
+        [m] Apex radius R of the paraboloid.
+    flat_radius
+        [m] Radius b of the flat, >= 0.
+    """
+    d = np.clip(np.asarray(depth, dtype=float), 0.0, None)
+    R, b = float(radius), float(flat_radius)
+    a2 = 0.5 * (b * b + np.sqrt(b**4 + 4.0 * (d * R) ** 2))
+    return 2.0 * (d * np.sqrt(a2) - np.clip(a2 - b * b, 0.0, None) ** 1.5 / (3.0 * R))
+
+
 def true_force(
     depth: ArrayLike,
     E: float,
@@ -114,15 +145,25 @@ def true_force(
     thickness: float | None = None,
     base: str | float | None = None,
     stiffening: float = 0.0,
+    apex_flat_radius: float = 0.0,
 ) -> np.ndarray:
     """The simulator's noise-free force F = E*·s(d)·f(d)·xi(d) [N] (0 for d <= 0).
 
-    s is :func:`palpbayes.contact.shape` on a half-space, f the specimen's bottom effect
-    (:func:`layer_factor`: off with ``base=None``), xi :func:`stiffening_factor`.  With both
-    off this is exactly :func:`palpbayes.contact.force`.
+    s is :func:`palpbayes.contact.shape` on a half-space (or, with ``apex_flat_radius`` b > 0
+    on a paraboloid tip, :func:`blunted_paraboloid_shape`: an apex worn flat), f the
+    specimen's bottom effect (:func:`layer_factor`: off with ``base=None``; the layer factor
+    is that of the sharp tip), xi :func:`stiffening_factor`.  With every knob off this is
+    exactly :func:`palpbayes.contact.force`.
     """
     d = np.asarray(depth, dtype=float)
-    s = shape(d, tip)
+    if apex_flat_radius:
+        if tip.kind != "paraboloid" or apex_flat_radius < 0:
+            raise GeometryError(f"a blunted apex (apex_flat_radius={apex_flat_radius!r} m) "
+                                "is a paraboloid tip's knob and must be >= 0; got tip "
+                                f"{tip.kind!r}")
+        s = blunted_paraboloid_shape(d, tip.radius, apex_flat_radius)
+    else:
+        s = shape(d, tip)
     if base is not None:
         s = s * layer_factor(d, tip, thickness, nu, base)
     f = effective_modulus(E, nu) * s

@@ -110,6 +110,7 @@ def simulate_trace(
     compliance: float = 0.0,
     base: str | float | None = "free",
     stiffening: float = 0.0,
+    apex_flat_radius: float = 0.0,
     rng: np.random.Generator | int | None = None,
     trace_id: str = "sim",
     specimen: str = "",
@@ -185,6 +186,10 @@ def simulate_trace(
     stiffening
         beta of :func:`~palpbayes.sim.force.stiffening_factor` (0 = linear elastic); needs
         ``thickness``.
+    apex_flat_radius
+        [m] Radius b of a flat worn into a paraboloid tip's apex
+        (:func:`~palpbayes.sim.force.blunted_paraboloid_shape`); 0 (default) is the sharp
+        paraboloid.
     rng
         numpy Generator or seed.  The draws are made in a fixed order whatever the options
         (one uniform for b, N normals for the force, N normals for z), so the same seed gives
@@ -201,8 +206,8 @@ def simulate_trace(
         ``sigma_true``, ``noise_pp``, ``phi_true``, ``force_offset_true``, ``drift_true``,
         ``onset_force_true``, ``onset_length_true``,
         ``position_noise_true``, ``repeatability``, ``compliance_true``, ``base`` (None, a
-        name or a number), ``stiffening``, ``depth_true``, ``max_force_true``, motion
-        settings, and
+        name or a number), ``stiffening``, ``apex_flat_radius_true``, ``depth_true``,
+        ``max_force_true``, motion settings, and
         ``seed`` when ``rng`` was an int.
 
     Raises
@@ -241,10 +246,11 @@ def simulate_trace(
     repeatability = nonneg(repeatability, "repeatability [m]")
     compliance = nonneg(compliance, "compliance [m/N]")
     stiffening = nonneg(stiffening, "stiffening beta")
+    apex_flat_radius = nonneg(apex_flat_radius, "apex flat radius [m]")
     if thickness is None:
         base = None
     law = {"nu": nu, "tip": tip, "thickness": thickness, "base": base,
-           "stiffening": stiffening}
+           "stiffening": stiffening, "apex_flat_radius": apex_flat_radius}
     true_force(np.array([depth]), E, **law)  # validate geometry before drawing anything
 
     gen = np.random.default_rng(rng)
@@ -286,6 +292,7 @@ def simulate_trace(
         "compliance_true": compliance,
         "base": base,
         "stiffening": stiffening,
+        "apex_flat_radius_true": apex_flat_radius,
         "depth_true": depth,
         "max_depth_actual": float(delta.max()),
         "max_force_true": float(f_true.max()),
