@@ -20,7 +20,8 @@ notebook uses), R = 10 µm for every other file (the afm-curves references' radi
 curves the readers refuse (and fits the package refuses) are recorded with the message.
 
 One CSV row per curve and model (``--out``): file, curve index, n_points, E and its 90 %
-interval (full budget and statistical), model_ok, the failed checks, m_free and the law's m
+interval (full: with the model form; budget; statistical), the model form's share of the
+width and its alternatives, model_ok, the failed checks, m_free and the law's m
 (``details["m_law"]`` of the exponent check), the thickness' median and 90 % interval, its
 prior range, p_halfspace, p_bonded, the fitted concrete model, the fit time, numpy/runtime
 warnings raised inside the fit, and the flags.  Then a summary is printed: per model the curves
@@ -171,6 +172,8 @@ def fit_one(curve: Curve, layer: str, args: argparse.Namespace) -> dict:
         status="ok", message="",
         E_pa=r["E_pa"], E_lo_pa=r["E_lo_pa"], E_hi_pa=r["E_hi_pa"], E_stat_pa=r["E_stat_pa"],
         E_stat_lo_pa=r["E_stat_lo_pa"], E_stat_hi_pa=r["E_stat_hi_pa"],
+        E_budget_lo_pa=r["E_budget_lo_pa"], E_budget_hi_pa=r["E_budget_hi_pa"],
+        modelform_share_pct=r["modelform_share_pct"], modelform_models=r["modelform_models"],
         z_surf_m=r["z_surf_m"], sigma_n=r["sigma_n"], converged=r["converged"],
         model_ok=r["model_ok"], n_checks=len(res.checks), failed_checks="+".join(failed),
         misfit_effect=_finite(r.get("misfit_effect")), misfit_checks=r.get("misfit_checks", ""),
@@ -260,6 +263,21 @@ def summarize(df: pd.DataFrame, refusals: list[Curve]) -> str:
                                 if eff.size else ""))
         lines.append(f"largest material effect on E [%]: "
                      f"{_dist(ok.loc[~okm, 'misfit_effect'] * 100, '{:+.1f}')}")
+        if "modelform_share_pct" in ok:
+            share = pd.to_numeric(ok["modelform_share_pct"], errors="coerce")
+            full = 100 * (ok["E_hi_pa"] - ok["E_lo_pa"]) / ok["E_pa"]
+            bud = 100 * (ok["E_budget_hi_pa"] - ok["E_budget_lo_pa"]) / ok["E_pa"]
+            lines.append(f"interval width [% of E]: budget {_dist(bud, '{:.1f}')}; full "
+                         f"(with the model form) {_dist(full, '{:.1f}')}")
+            lines.append(f"model-form share of the full width [%]: {_dist(share, '{:.0f}')}")
+            alts = ok["modelform_models"].fillna("").str.split("; ").explode()
+            alts = alts[alts != ""]
+            kept = alts[~alts.str.contains("left out")].str.extract(r"^([a-z ,]+?) [\d.]")[0]
+            out = alts[alts.str.contains("left out")].str.extract(r"^([a-z ,]+?) [\d.]")[0]
+            lines.append("model-form alternatives kept: " + ", ".join(
+                f"{k} x{v}" for k, v in kept.value_counts().items())
+                + "; left out: " + (", ".join(f"{k} x{v}" for k, v in
+                                              out.value_counts().items()) or "none"))
         lines.append(f"m_free: {_dist(ok['m_free'])}")
         lines.append(f"m_law: {_dist(ok['m_law'])}")
         lines.append(f"m_free - m_law: {_dist(ok['m_free'] - ok['m_law'], '{:+.3f}')}")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 
@@ -28,6 +29,7 @@ from .layer_fit import (
     layer_warnings,
 )
 from .likelihood import TraceLikelihood
+from .modelform import layer_alternative, model_form
 from .priors import PriorSpec, TracePrior, log_posterior
 from .result import BayesResult
 from .sampler import ChainResult, SamplerSettings, run_emcee
@@ -180,8 +182,10 @@ def fit_bayes_data(
     trace_id: str = "trace",
     lsq: LSQResult | None = None,
     engine: str = "emcee",
+    with_model_form: bool = True,
 ) -> BayesResult:
-    """Posterior of one prepared trace; see :func:`fit_bayes`."""
+    """Posterior of one prepared trace; see :func:`fit_bayes` (``with_model_form=False``
+    skips the model-form alternatives, :mod:`palpbayes.bayes.modelform`)."""
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}")
     priors = priors or PriorSpec()
@@ -195,7 +199,7 @@ def fit_bayes_data(
         except FitError:
             lsq = None
     ss = np.random.SeedSequence(seed)
-    init_ss, sampler_ss, budget_ss, check_ss = ss.spawn(4)  # first three as before
+    init_ss, sampler_ss, budget_ss, check_ss, form_ss = ss.spawn(5)  # first four as before
     mixture = None
     if engine == "exact" and data.model.is_concrete:
         chains, modes, like = _exact_chains(data, prior, np.random.default_rng(sampler_ss))
@@ -233,8 +237,15 @@ def fit_bayes_data(
     flags = _flags(post, post_theta, prior) + layer_warnings(post, data, best)
     notes = layer_notes(post, data, best)
     checks = _model_checks(post, fitted, like, int(check_ss.generate_state(1)[0]))
+    form = None
+    if with_model_form:
+        layer = None if data.model.has_layer else partial(
+            layer_alternative, fit_bayes_data, data, float(np.median(post["z_surf"])),
+            noise=noise, baseline=baseline, priors=priors, budget=budget, seed=seed,
+            trace_id=trace_id, lsq=lsq)
+        form = model_form(post["E_total"], checks, np.random.default_rng(form_ss), layer)
     return _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
-                   like, checks, notes, best)
+                   like, checks, notes, best, form)
 
 
 def _emcee_chains(data: FitData, prior: TracePrior, settings: SamplerSettings, tabulate: bool,
@@ -355,7 +366,7 @@ def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, 
 
 
 def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags, like,
-            checks, notes, best):
+            checks, notes, best, form=None):
     """Diagnostics, flags and the warning (or error in strict mode)."""
     diag_names = [n for n in ("E_star", "z_surf", "sigma", "F0", "F1", "phi", "nu_t")
                   if n in post]
@@ -366,7 +377,7 @@ def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
                          trace_id=trace_id, lsq=lsq, warnings=flags,
                          baseline=like.baseline, z_ref=like.z_ref, checks=checks,
                          notes=notes, fitted_model=best,
-                         layer=layer_columns(post, data))
+                         layer=layer_columns(post, data), model_form=form)
     if not result.converged:
         problems = "; ".join(result.warnings + diag.problems())
         msg = f"{trace_id}: Bayesian fit flagged as not converged: {problems}"
@@ -393,6 +404,7 @@ def fit_bayes(
     tabulate: bool = True,
     strict: bool = False,
     engine: str = "emcee",
+    with_model_form: bool = True,
 ) -> BayesResult:
     """Bayesian fit of E*, z_surf, sigma and F0 (and phi or nu_t) to one trace.
 
@@ -433,6 +445,10 @@ def fit_bayes(
         ``"emcee"`` (default: every noise model and prior) or ``"exact"`` (quadrature over
         the surface height with the linear parameters and the noise scale integrated out,
         :mod:`palpbayes.bayes.exact`; Gaussian or AR(1) noise; ``settings`` is then unused).
+    with_model_form
+        When a model check finds a material misfit, refit E under the alternatives it points
+        to and widen E's interval to their envelope (:mod:`palpbayes.bayes.modelform`;
+        default True).
 
     Returns
     -------
@@ -447,4 +463,5 @@ def fit_bayes(
         data = replace(data, model=model)
     return fit_bayes_data(data, noise=noise, baseline=baseline, priors=priors, budget=budget,
                           settings=settings, seed=seed, tabulate=tabulate, strict=strict,
-                          trace_id=trace.trace_id, engine=engine)
+                          trace_id=trace.trace_id, engine=engine,
+                          with_model_form=with_model_form)

@@ -29,6 +29,7 @@ from ..refit import layer_alternatives
 from .budget import Budget
 from .diagnostics import Diagnostics, import_arviz
 from .layer_fit import concrete_draws
+from .modelform import ModelForm
 
 __all__ = ["BayesResult", "LEVEL", "STATE_ATTR", "saved_state", "saved_model",
            "saved_fitted_model"]
@@ -75,6 +76,9 @@ class BayesResult:
         thickness), which the checks and the budget used; ``data.model`` when it is concrete.
     layer
         The layer's ``summary.csv`` columns (:func:`palpbayes.bayes.layer_fit.layer_columns`).
+    model_form
+        The alternatives of a fit with a material misfit and their envelope, E's full
+        interval (:mod:`palpbayes.bayes.modelform`); None without material misfit.
     """
 
     idata: object
@@ -91,6 +95,7 @@ class BayesResult:
     notes: list[str] = field(default_factory=list)
     fitted_model: ModelSpec | None = None
     layer: dict = field(default_factory=dict)
+    model_form: ModelForm | None = None
 
     def __post_init__(self) -> None:
         if self.fitted_model is None:
@@ -135,8 +140,10 @@ class BayesResult:
         E = self.draws("E_total")
         Es = self.draws("E")
         z = self.draws("z_surf")
-        lo, hi = central(E)
+        blo, bhi = central(E)
         slo, shi = central(Es)
+        form = self.model_form
+        lo, hi = (blo, bhi) if form is None else (form.lo_pa, form.hi_pa)
         d = self.diagnostics
         E_med = float(np.median(E))
         z_med = float(np.median(z))
@@ -169,6 +176,10 @@ class BayesResult:
             "E_stat_sd_pa": float(Es.std(ddof=1)),
             "E_stat_lo_pa": slo,
             "E_stat_hi_pa": shi,
+            "E_budget_lo_pa": blo,
+            "E_budget_hi_pa": bhi,
+            **({"modelform_share_pct": 0.0, "modelform_models": ""} if form is None
+               else form.columns()),
             "noise_model": self.noise,
             "tau_max": float(max(d.tau.values())),
             "acceptance": d.acceptance,
@@ -273,6 +284,7 @@ class BayesResult:
             "fitted_model": _model_state(self.fitted_model),
             "notes": list(self.notes),
             "layer": dict(self.layer),
+            "model_form": None if self.model_form is None else self.model_form.to_state(),
         }
 
     @classmethod
@@ -296,7 +308,9 @@ class BayesResult:
                    z_ref=state["z_ref"], checks=[CheckResult(**c) for c in state["checks"]],
                    notes=list(state.get("notes", [])),
                    fitted_model=None if fitted is None else _model_from_state(fitted),
-                   layer=dict(state.get("layer", {})))
+                   layer=dict(state.get("layer", {})),
+                   model_form=None if state.get("model_form") is None
+                   else ModelForm.from_state(state["model_form"]))
 
 
 def saved_state(idata) -> dict:

@@ -43,6 +43,12 @@ SUMMARY_COLUMNS = [
     # material check [-] and the names of those checks; failed checks are named in flags
     # (negligible ones as info: lines with their effect)
     "model_ok", "m_free", "misfit_effect", "misfit_checks",
+    # E's interval in three parts (bayes; palpbayes.bayes.modelform): E_stat_lo/hi the
+    # statistical 90 % interval, E_budget_lo/hi with the budget's inputs, E_lo/hi the full one
+    # (with a material misfit: the envelope of the fitted model's and its plausible
+    # alternatives' budget intervals), the share of the full width the model form adds [%]
+    # and the alternatives with their E and interval
+    "E_budget_lo_pa", "E_budget_hi_pa", "modelform_share_pct", "modelform_models",
     # the Bayesian engine: emcee, or the exact quadrature (palpbayes.bayes.exact)
     "engine",
     # tip "sphere" only (a law with a hertz_approximation; else NaN): the paper's choice for a
@@ -110,6 +116,9 @@ class FitOptions:
     engine
         Posterior engine of the Bayesian fit: ``"emcee"`` or ``"exact"``
         (:mod:`palpbayes.bayes.exact`: Gaussian or AR(1) noise only).
+    model_form
+        Widen a Bayesian fit's interval by the model form when a check finds a material
+        misfit (:mod:`palpbayes.bayes.modelform`; default True).
     """
 
     method: str = "bayes"
@@ -129,6 +138,7 @@ class FitOptions:
     seed: int = 0
     strict: bool = False
     engine: str = "emcee"
+    model_form: bool = True
 
     def __post_init__(self) -> None:
         if self.layer not in LAYER_MODES:
@@ -368,7 +378,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
                 budget=options.budget,
                 settings=options.settings, seed=seed,
                 strict=options.strict, trace_id=trace.trace_id, lsq=lsq,
-                engine=options.engine,
+                engine=options.engine, with_model_form=options.model_form,
             )
         rows.append(with_hertz({**bayes.summary_row(), **meta}))
         if posterior_dir is not None:

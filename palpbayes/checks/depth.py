@@ -43,7 +43,26 @@ def _profile_law_fit(z, f, model, z_surf0: float, half_width: float,
     J = np.column_stack([beta[0] * dsdz, X])
     cov, rs, _ = _residual_cov(J, r, phi)
     return {"z_surf": zs, "estar": float(beta[0]), "estar_se": math.sqrt(max(cov[1, 1], 0.0)),
-            "F0": float(beta[1]), "rss": rs, "n": int(f.size)}
+            "F0": float(beta[1]), "F1": float(beta[2]) if beta.size > 2 else 0.0, "rss": rs,
+            "n": int(f.size)}
+
+
+def _deep_window(z, f, table, full: dict, d_half: float, baseline: str, z_ref: float,
+                 phi: float | None) -> tuple[float, float]:
+    """E* [Pa] and its se over the deeper half of the depth, with the surface and a force
+    offset of its own (the full fit's drift slope kept): what the law gives when whatever
+    happens near the surface (a soft skin, a gradual onset, a blunted apex) is left out.
+    (NaN, NaN) with fewer than 10 samples there."""
+    sel = z <= full["z_surf"] - d_half
+    if np.count_nonzero(sel) < 10:
+        return float("nan"), float("nan")
+    fd = f[sel] - (full["F1"] * (z[sel] - z_ref) if baseline == "linear" else 0.0)
+    try:
+        deep = _profile_law_fit(z[sel], fd, table, full["z_surf"], 0.5 * d_half, "constant",
+                                z_ref, phi)
+    except (FitError, np.linalg.LinAlgError):
+        return float("nan"), float("nan")
+    return deep["estar"], deep["estar_se"]
 
 
 def depth_consistency_check(z, force, model: ModelSpec, z_surf: float, *,
@@ -84,8 +103,10 @@ def depth_consistency_check(z, force, model: ModelSpec, z_surf: float, *,
     -------
     CheckResult
         ``statistic`` = E*_shallow/E*_all; ``details``: ``estar_all``, ``estar_shallow``
-        [Pa], their se, ``ratio``, ``ratio_se``, ``z_surf_all``, ``z_surf_shallow`` [m],
-        ``d_half`` [m].
+        [Pa], their se, ``estar_deep`` [Pa] and its se (the deeper half with its own surface
+        and force offset: not part of the test, an alternative for the model-form interval,
+        :mod:`palpbayes.bayes.modelform`), ``ratio``, ``ratio_se``, ``z_surf_all``,
+        ``z_surf_shallow``, ``d_half`` [m].
     """
     z, f, z_ref, dmax = _contact_inputs(z, force, z_surf, z_ref,
                                         "the surface lies below every sample: no contact to check")
@@ -98,6 +119,8 @@ def depth_consistency_check(z, force, model: ModelSpec, z_surf: float, *,
         raise FitError("too few samples in the shallow half of the contact")
     shallow = _profile_law_fit(z[sel], f[sel], table, full["z_surf"], 0.5 * d_half, baseline,
                                z_ref, noise_lag1)
+    estar_deep, estar_deep_se = _deep_window(z, f, table, full, d_half, baseline, z_ref,
+                                             noise_lag1)
     ratio = shallow["estar"] / full["estar"]
     se_diff = math.sqrt(max(shallow["estar_se"] ** 2 - full["estar_se"] ** 2,
                             0.25 * shallow["estar_se"] ** 2))
@@ -108,6 +131,7 @@ def depth_consistency_check(z, force, model: ModelSpec, z_surf: float, *,
                "estar_shallow": shallow["estar"], "estar_shallow_se": shallow["estar_se"],
                "ratio": ratio, "ratio_se": ratio_se, "z_surf_all": full["z_surf"],
                "z_surf_shallow": shallow["z_surf"], "d_half": d_half, "rel_tol": rel_tol,
+               "estar_deep": estar_deep, "estar_deep_se": estar_deep_se,
                "n_se": n_se}
     flag = ""
     if failed:

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
 from ..bayes.fit import ENGINES
+from ..bayes.modelform import interval_parts
 from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
 from ..campaign import layout
 from ..campaign.fitjob import METHODS, FitOptions
@@ -86,6 +87,10 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                    help="posterior engine: emcee (every noise model and prior) or exact "
                         "(quadrature over the surface height with the linear parameters and "
                         "the noise integrated out; gaussian or ar1 noise; 10-100x faster)")
+    g.add_argument("--model-form", action=argparse.BooleanOptionalAction, default=True,
+                   help="widen E's interval to the envelope of the alternatives a material "
+                        "misfit points to: shallow half, deep half, a layer of unknown "
+                        "thickness (default on; --no-model-form: statistical + budget only)")
     g.add_argument("--strict", action="store_true",
                    help="make non-converged or flagged Bayesian fits an error")
     g.add_argument("--max-steps", type=int, default=20000, help="emcee step cap")
@@ -190,6 +195,7 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
         priors=PriorSpec(noise_pp=args.noise_pp, surface=args.surface_prior), budget=budget,
         settings=settings,
         seed=args.seed, strict=args.strict, engine=args.engine,
+        model_form=getattr(args, "model_form", True),
     )
 
 
@@ -328,6 +334,21 @@ def _check_input_path(path: Path) -> None:
         raise DataFileError(path, "file not found", "check the path")
 
 
+def _print_interval_parts(summary) -> None:
+    """Under the table: what E_lo..E_hi of each Bayesian row is made of (90 %: statistical,
+    + budget, + model form where a model check found a material misfit)."""
+    rows = summary[summary["method"] == "bayes"]
+    if rows.empty or "E_budget_lo_pa" not in rows:
+        return
+    print("bayes E_lo..E_hi is a 90 % interval; its parts (% of E):")
+    for _, r in rows.iterrows():
+        parts = interval_parts(r["E_pa"], (r["E_stat_lo_pa"], r["E_stat_hi_pa"]),
+                               (r["E_budget_lo_pa"], r["E_budget_hi_pa"]),
+                               (r["E_lo_pa"], r["E_hi_pa"]))
+        misfit = "" if r["model_ok"] else f"; material misfit: {r['misfit_checks']}"
+        print(f"  {r['trace_id']}: {parts}{misfit}")
+
+
 def run(args: argparse.Namespace) -> int:
     from ..campaign.run import fit_campaign
 
@@ -353,6 +374,7 @@ def run(args: argparse.Namespace) -> int:
     for c in ("E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa"):
         show[c.removesuffix("_pa")] = show.pop(c).map(format_pressure)
     print(show.to_string(index=False))
+    _print_interval_parts(summary)
     flagged = summary[(summary["method"] == "bayes") & (summary["converged"] == False)]  # noqa: E712
     if len(flagged):
         print(f"warning: {len(flagged)} Bayesian fit(s) not converged or flagged; see the "

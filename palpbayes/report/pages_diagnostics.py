@@ -51,7 +51,25 @@ def _model_check_line(res: ResultsFolder) -> str:
             f"predictive) find a material misfit (one that moves E by more than 2 % and more "
             f"than the statistical interval) in {' and '.join(parts)}; each names its likely "
             "cause and its effect on E in the flags column of summary.csv, and negligible "
-            "failures are info lines.")
+            "failures are info lines." + _model_form_sentence(s[s["method"] == "bayes"]))
+
+
+def _model_form_sentence(b: pd.DataFrame) -> str:
+    """The interval's three parts over the Bayesian fits (statistical, budget, model form)."""
+    if "modelform_share_pct" not in b or b.empty:
+        return ""
+    share = pd.to_numeric(b["modelform_share_pct"], errors="coerce")
+    widened = share[share > 0]
+    stat = 100 * (b["E_stat_hi_pa"] - b["E_stat_lo_pa"]) / b["E_pa"]
+    bud = 100 * (b["E_budget_hi_pa"] - b["E_budget_lo_pa"]) / b["E_pa"]
+    text = (f" E's 90 % interval (E_lo..E_hi) has three parts: statistical (median width "
+            f"{stat.median():.2g} % of E), + budget ({bud.median():.2g} %), + model form")
+    if widened.empty:
+        return text + ": none (no Bayesian fit has a material misfit)."
+    return (text + f": in the {len(widened)} fits with a material misfit the interval is the "
+            "envelope of the fitted model's and its plausible alternatives' (shallow half, "
+            "deep half, a layer of unknown thickness), the model form taking a median "
+            f"{widened.median():.0f} % of its width (summary.csv: modelform_models).")
 
 
 def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
