@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 
 from ..bayes.exact import exact_posterior, sampled_coordinates
-from ..bayes.fit import bound_flags
+from ..bayes.flags import bound_flags
 from ..campaign.fitjob import FitOptions, check_fittable
 from ..campaign.run import progress_bar
 from ..errors import FitError, InputError, PalpbayesError
