@@ -55,6 +55,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from palpbayes.bayes.modelform import SEPARATOR
 from palpbayes.campaign.fitjob import FitOptions, fit_trace
 from palpbayes.contact import Tip
 from palpbayes.errors import ConvergenceWarning, PalpbayesError
@@ -270,10 +271,12 @@ def summarize(df: pd.DataFrame, refusals: list[Curve]) -> str:
             lines.append(f"interval width [% of E]: budget {_dist(bud, '{:.1f}')}; full "
                          f"(with the model form) {_dist(full, '{:.1f}')}")
             lines.append(f"model-form share of the full width [%]: {_dist(share, '{:.0f}')}")
-            alts = ok["modelform_models"].fillna("").str.split("; ").explode()
+            alts = ok["modelform_models"].fillna("").str.split(SEPARATOR,
+                                                               regex=False).explode()
             alts = alts[alts != ""]
-            kept = alts[~alts.str.contains("left out")].str.extract(r"^([a-z ,]+?) [\d.]")[0]
-            out = alts[alts.str.contains("left out")].str.extract(r"^([a-z ,]+?) [\d.]")[0]
+            name = alts.str.extract(r"^([a-z ,]+?)(?: [\d.]| \(left out)")[0]
+            left = alts.str.contains("(left out", regex=False)
+            kept, out = name[~left], name[left]
             lines.append("model-form alternatives kept: " + ", ".join(
                 f"{k} x{v}" for k, v in kept.value_counts().items())
                 + "; left out: " + (", ".join(f"{k} x{v}" for k, v in

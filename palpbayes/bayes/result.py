@@ -136,7 +136,10 @@ class BayesResult:
         return pd.DataFrame(rows).set_index("parameter")
 
     def summary_row(self) -> dict:
-        """One row of ``summary.csv`` (docs/design.md §7): E with the full budget."""
+        """One row of ``summary.csv`` (docs/design.md §7): E with the full budget;
+        ``E_lo_pa``/``E_hi_pa`` the full interval (the budget's central 90 % interval, or with
+        a material misfit the envelope of the model-form alternatives',
+        :mod:`palpbayes.bayes.modelform`)."""
         E = self.draws("E_total")
         Es = self.draws("E")
         z = self.draws("z_surf")

@@ -52,15 +52,19 @@ def _deep_window(z, f, table, full: dict, d_half: float, baseline: str, z_ref: f
     """E* [Pa] and its se over the deeper half of the depth, with the surface and a force
     offset of its own (the full fit's drift slope kept): what the law gives when whatever
     happens near the surface (a soft skin, a gradual onset, a blunted apex) is left out.
-    (NaN, NaN) with fewer than 10 samples there."""
+    (NaN, NaN) with fewer than 10 samples there, or when its surface sits at the search
+    bound (±d_half/2 around the full fit's: e.g. strain stiffening, where the deep half
+    has no interior optimum and its E* would be the bound's)."""
     sel = z <= full["z_surf"] - d_half
     if np.count_nonzero(sel) < 10:
         return float("nan"), float("nan")
     fd = f[sel] - (full["F1"] * (z[sel] - z_ref) if baseline == "linear" else 0.0)
+    hw = 0.5 * d_half
     try:
-        deep = _profile_law_fit(z[sel], fd, table, full["z_surf"], 0.5 * d_half, "constant",
-                                z_ref, phi)
+        deep = _profile_law_fit(z[sel], fd, table, full["z_surf"], hw, "constant", z_ref, phi)
     except (FitError, np.linalg.LinAlgError):
+        return float("nan"), float("nan")
+    if abs(deep["z_surf"] - full["z_surf"]) > 0.99 * hw:  # at its search bound: no optimum
         return float("nan"), float("nan")
     return deep["estar"], deep["estar_se"]
 

@@ -340,7 +340,9 @@ def _print_interval_parts(summary) -> None:
     rows = summary[summary["method"] == "bayes"]
     if rows.empty or "E_budget_lo_pa" not in rows:
         return
-    print("bayes E_lo..E_hi is a 90 % interval; its parts (% of E):")
+    print("bayes E_lo..E_hi: 90 % interval, statistical + budget (+ model form: with a "
+          "material misfit, the envelope of the alternatives' 90 % intervals); its parts (% of "
+          "E):")
     for _, r in rows.iterrows():
         parts = interval_parts(r["E_pa"], (r["E_stat_lo_pa"], r["E_stat_hi_pa"]),
                                (r["E_budget_lo_pa"], r["E_budget_hi_pa"]),

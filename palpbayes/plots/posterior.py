@@ -67,7 +67,9 @@ def plot_posterior_E(
     ``E`` at the model's Poisson ratio (statistical uncertainty of the trace only) and
     ``E_total`` with the uncertainty budget (Poisson ratio, tip radius, force gain,
     compliance).  Medians and central ``level`` intervals are marked; the
-    least-squares estimate with its own interval is drawn as an error bar above.
+    least-squares estimate with its own interval is drawn as an error bar above.  A fit with
+    a material misfit also shades its full interval, the envelope over the model-form
+    alternatives (:mod:`palpbayes.bayes.modelform`).
 
     Parameters
     ----------
@@ -104,9 +106,15 @@ def plot_posterior_E(
                       f"least squares ± {_level_label(getattr(lsq, 'level', level))}")
     if truth is not None:
         _truth_line(ax, truth * _KPA)
+    title = f"E = {med:.1f} kPa, {_level_label(level)} interval [{lo:.1f}, {hi:.1f}]"
+    form = getattr(result, "model_form", None)
+    if form is not None and np.isfinite(form.lo_pa) and np.isfinite(form.hi_pa):
+        f_lo, f_hi = form.lo_pa * _KPA, form.hi_pa * _KPA
+        ax.axvspan(f_lo, f_hi, color="0.88", zorder=0, lw=0,
+                   label="with the model form (material misfit)")
+        title += f",\nwith the model form [{f_lo:.1f}, {f_hi:.1f}]"
     ax.set_ylim(0, 1.45)
-    _decorate(ax, "Young's modulus, E [kPa]", "Posterior density (peak = 1)",
-              f"E = {med:.1f} kPa, {_level_label(level)} interval [{lo:.1f}, {hi:.1f}]",
+    _decorate(ax, "Young's modulus, E [kPa]", "Posterior density (peak = 1)", title,
               "upper left")
     return fig
 

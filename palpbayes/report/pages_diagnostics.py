@@ -59,17 +59,21 @@ def _model_form_sentence(b: pd.DataFrame) -> str:
     if "modelform_share_pct" not in b or b.empty:
         return ""
     share = pd.to_numeric(b["modelform_share_pct"], errors="coerce")
+    n_material = int((~b["model_ok"].map(parse_bool).fillna(True).astype(bool)).sum())
     widened = share[share > 0]
     stat = 100 * (b["E_stat_hi_pa"] - b["E_stat_lo_pa"]) / b["E_pa"]
     bud = 100 * (b["E_budget_hi_pa"] - b["E_budget_lo_pa"]) / b["E_pa"]
     text = (f" E's 90 % interval (E_lo..E_hi) has three parts: statistical (median width "
             f"{stat.median():.2g} % of E), + budget ({bud.median():.2g} %), + model form")
     if widened.empty:
-        return text + ": none (no Bayesian fit has a material misfit)."
-    return (text + f": in the {len(widened)} fits with a material misfit the interval is the "
-            "envelope of the fitted model's and its plausible alternatives' (shallow half, "
-            "deep half, a layer of unknown thickness), the model form taking a median "
-            f"{widened.median():.0f} % of its width (summary.csv: modelform_models).")
+        return text + (": none (no Bayesian fit has a material misfit)." if n_material == 0
+                       else f": none (the {n_material} fits with a material misfit were run "
+                       "without it, or their alternatives fall inside the budget interval).")
+    return (text + f": of the {n_material} fits with a material misfit, {len(widened)} have "
+            "an interval widened to the envelope of the fitted model's and its plausible "
+            "alternatives' (shallow half, deep half, a layer of unknown thickness), the model "
+            f"form taking a median {widened.median():.0f} % of its width (summary.csv: "
+            "modelform_models).")
 
 
 def _page_diagnostics(res: ResultsFolder) -> list[_Page]:

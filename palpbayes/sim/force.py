@@ -129,6 +129,11 @@ def blunted_paraboloid_shape(depth: ArrayLike, radius: float, flat_radius: float
         [m] Apex radius R of the paraboloid.
     flat_radius
         [m] Radius b of the flat, >= 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        [m²] s(d), F = E*·s(d).
     """
     d = np.clip(np.asarray(depth, dtype=float), 0.0, None)
     R, b = float(radius), float(flat_radius)
@@ -157,10 +162,11 @@ def true_force(
     """
     d = np.asarray(depth, dtype=float)
     if apex_flat_radius:
-        if tip.kind != "paraboloid" or apex_flat_radius < 0:
+        if tip.kind != "paraboloid":
             raise GeometryError(f"a blunted apex (apex_flat_radius={apex_flat_radius!r} m) "
-                                "is a paraboloid tip's knob and must be >= 0; got tip "
-                                f"{tip.kind!r}")
+                                f"is a paraboloid tip's knob; got tip {tip.kind!r}")
+        if apex_flat_radius < 0:
+            raise GeometryError(f"apex flat radius {apex_flat_radius!r} m must be >= 0")
         s = blunted_paraboloid_shape(d, tip.radius, apex_flat_radius)
     else:
         s = shape(d, tip)

@@ -63,7 +63,14 @@ def misfit_trace(scenario: str, index: int, *, rate: float = 200.0
     rate
         [Hz] Sample rate (200 Hz keeps a calibration of hundreds of fits short; the paper's
         sensor runs at 800).
+
+    Returns
+    -------
+    (IndentationTrace, Tip)
+        The trace (no thickness; the truth in its metadata) and the nominal tip.
     """
+    if not (isinstance(index, int | np.integer) and index >= 0):
+        raise InputError(f"misfit trace index {index!r} must be an integer >= 0")
     if scenario not in MISFIT_SCENARIOS:
         raise InputError(f"unknown misfit scenario {scenario!r}; use one of "
                          f"{', '.join(MISFIT_SCENARIOS)}")

@@ -215,7 +215,8 @@ def simulate_trace(
     InputError, GeometryError
         Non-positive E, speed or rate, missing depth and thickness, |phi| >= 1, negative noise,
         an invalid nu, a finite-thickness request for a tip without a correction, or a
-        non-zero ``onset_force`` without a positive ``onset_length``.
+        non-zero ``onset_force`` without a positive ``onset_length``, a blunted apex
+        (``apex_flat_radius`` > 0) on a tip other than a paraboloid.
     """
     if not isinstance(tip, Tip):
         raise InputError(f"tip must be a palpbayes.contact.Tip, got {type(tip).__name__}")

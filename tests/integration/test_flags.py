@@ -1,10 +1,10 @@
 """Posterior flags reach ``summary.csv``: a flagged fit is reported as not converged.
 
-The Bayesian fit flags failure modes that R-hat and ESS cannot see (``bayes.fit._flags``): a
-bimodal surface posterior, a prior-dominated surface and a posterior at a prior bound. These
-tests check that each flag is raised on inputs that show it and that it ends up in the
-``flags`` column of ``summary.csv`` with ``converged = False``, although the chains themselves
-pass their diagnostics.
+The Bayesian fit flags failure modes that R-hat and ESS cannot see
+(``bayes.flags.posterior_flags``): a bimodal surface posterior, a prior-dominated surface and
+a posterior at a prior bound.  These tests check that each flag is raised on inputs that show
+it and that it ends up in the ``flags`` column of ``summary.csv`` with ``converged = False``,
+although the chains themselves pass their diagnostics.
 """
 
 from __future__ import annotations
@@ -44,9 +44,9 @@ def test_bimodal_detector_on_a_synthetic_posterior(clean):
     z0, sd = clean.metadata["z_surf_true"], 1e-6
     one = {"z_surf": z0 + sd * rng.standard_normal(4000),
            "E_star": 1.5e5 * np.exp(0.01 * rng.standard_normal(4000))}
-    assert bayes_fit._flags(one, _theta(one), prior) == []
+    assert bayes_fit.posterior_flags(one, _theta(one), prior) == []
     two = dict(one, z_surf=np.concatenate([one["z_surf"][:2000], one["z_surf"][2000:] + 20 * sd]))
-    flags = bayes_fit._flags(two, _theta(two), prior)
+    flags = bayes_fit.posterior_flags(two, _theta(two), prior)
     assert any(f.startswith(BIMODAL) for f in flags), flags
 
 
@@ -56,7 +56,7 @@ def test_bimodal_flag_reaches_summary_csv(clean, tmp_path, monkeypatch):
     control = campaign.fit_campaign([clean], tmp_path / "control", opts, workers=1)
     assert bool(control["converged"].iloc[0]) and not control["flags"].iloc[0]
 
-    real = bayes_fit._flags
+    real = bayes_fit.posterior_flags
 
     def split_surface(post, post_theta, prior):
         z = np.array(post["z_surf"], dtype=float)
@@ -64,7 +64,7 @@ def test_bimodal_flag_reaches_summary_csv(clean, tmp_path, monkeypatch):
         flat[: flat.size // 2] += 20 * np.std(flat)  # two separated surface heights
         return real(dict(post, z_surf=z), dict(post_theta, z_surf=z), prior)
 
-    monkeypatch.setattr(bayes_fit, "_flags", split_surface)
+    monkeypatch.setattr(bayes_fit, "posterior_flags", split_surface)
     out = tmp_path / "res"
     campaign.fit_campaign([clean], out, opts, workers=1)
     row = pd.read_csv(out / "summary.csv").iloc[0]
@@ -108,9 +108,10 @@ def test_prior_dominated_detector():
     lo, hi = prior.z_bounds
     wide = {"z_surf": rng.uniform(lo + 0.3 * (hi - lo), hi, 4000),
             "E_star": 1.5e5 * np.exp(0.01 * rng.standard_normal(4000))}
-    assert any(f.startswith(PRIOR_DOMINATED) for f in bayes_fit._flags(wide, _theta(wide), prior))
+    flags = bayes_fit.posterior_flags(wide, _theta(wide), prior)
+    assert any(f.startswith(PRIOR_DOMINATED) for f in flags)
     narrow = dict(wide, z_surf=0.5 * (lo + hi) + 1e-7 * rng.standard_normal(4000))
-    assert bayes_fit._flags(narrow, _theta(narrow), prior) == []
+    assert bayes_fit.posterior_flags(narrow, _theta(narrow), prior) == []
 
 
 def test_a_reloaded_fit_keeps_its_flags_and_model_checks(tmp_path):

@@ -13,6 +13,7 @@ from palpbayes.bayes.modelform import (
     Alternative,
     ModelForm,
     interval_parts,
+    layer_alternative,
     model_form,
     window_alternatives,
 )
@@ -20,7 +21,7 @@ from palpbayes.bayes.result import BayesResult
 from palpbayes.checks import CheckResult
 from palpbayes.contact import Tip, shape
 from palpbayes.errors import ConvergenceWarning, GeometryError, InputError
-from palpbayes.fitdata import ModelSpec
+from palpbayes.fitdata import ModelSpec, prepare_trace
 from palpbayes.sim import simulate_trace
 from palpbayes.sim.force import blunted_paraboloid_shape, true_force
 from palpbayes.sim.misfit import MISFIT_NU, MISFIT_SCENARIOS, misfit_trace
@@ -106,8 +107,9 @@ def test_no_material_misfit_no_model_form():
 def test_envelope_keeps_plausible_alternatives_only():
     rng = np.random.default_rng(1)
     E = 50e3 * np.exp(0.02 * rng.standard_normal(4000))
-    depth = _check("depth_consistency", "material", estar_all=100.0, estar_shallow=80.0,
-                   estar_shallow_se=0.4, estar_deep=110.0, estar_deep_se=1.1)
+    depth = _check("depth_consistency", "material", ratio=0.8, estar_all=100.0,
+                   estar_shallow=80.0, estar_shallow_se=0.4, estar_deep=110.0,
+                   estar_deep_se=1.1)
     bad = Alternative("layer, thickness unknown", 20e3, 18e3, 22e3, False,
                       "its own checks fail")
     form = model_form(E, [depth], np.random.default_rng(2), lambda: bad)
@@ -125,6 +127,43 @@ def test_envelope_keeps_plausible_alternatives_only():
     assert ModelForm.from_state(form.to_state()) == form
 
 
+def test_layer_alternative_only_where_the_modulus_rises_with_depth():
+    E = np.full(1000, 50e3)
+    calls = []
+
+    def fit_layer():
+        calls.append(1)
+        return Alternative("layer, thickness unknown", 40e3, 38e3, 42e3)
+
+    falls = _check("depth_consistency", "material", ratio=1.2, estar_all=100.0,
+                   estar_shallow=120.0, estar_shallow_se=1.0)
+    form = model_form(E, [falls], np.random.default_rng(0), fit_layer)
+    assert calls == [] and [a.name for a in form.alternatives] == ["as fitted", "shallow half"]
+    steeper = _check("exponent", "negligible", m=2.1, m_law=1.5)  # the direction counts
+    form = model_form(E, [falls, steeper], np.random.default_rng(0), fit_layer)
+    assert calls == [1] and form.lo_pa == 38e3
+
+
+def test_no_finite_interval_gives_a_nan_envelope_not_an_error():
+    E = np.full(100, np.nan)
+    form = model_form(E, [_check("ppc", "material")], np.random.default_rng(0))
+    assert np.isnan(form.lo_pa) and np.isnan(form.hi_pa) and form.share() == 0.0
+    failed = Alternative("layer, thickness unknown", np.nan, np.nan, np.nan, False,
+                         "not fitted: singular matrix")
+    assert failed.describe() == "layer, thickness unknown (left out: not fitted: singular matrix)"
+
+
+def test_a_numerical_failure_of_the_layer_fit_is_an_implausible_alternative():
+    trace, tip = misfit_trace("layer_bonded", 1)
+    data = prepare_trace(trace, ModelSpec(tip, nu=MISFIT_NU))
+
+    def broken_fit(*args, **kwargs):
+        raise np.linalg.LinAlgError("singular matrix")
+
+    alt = layer_alternative(broken_fit, data, float(data.z.max()) - 1e-3)
+    assert not alt.plausible and "singular matrix" in alt.note
+
+
 def test_window_alternative_spread_follows_its_standard_error():
     E = np.full(20000, 50e3)
     alts = window_alternatives(E, {"estar_all": 100.0, "estar_shallow": 90.0,
@@ -134,6 +173,12 @@ def test_window_alternative_spread_follows_its_standard_error():
     # log-normal with sd 0.05: 90 % interval exp(±1.645·0.05)
     assert a.lo_pa / a.E_pa == pytest.approx(np.exp(-1.645 * 0.05), rel=0.01)
     assert a.hi_pa / a.E_pa == pytest.approx(np.exp(1.645 * 0.05), rel=0.01)
+    alts = window_alternatives(E, {"estar_all": 100.0, "estar_shallow": 90.0,
+                                   "estar_shallow_se": 4.5, "estar_deep": np.nan,
+                                   "estar_deep_se": np.nan}, np.random.default_rng(0))
+    assert [(a.name, a.plausible) for a in alts] == [("shallow half", True),
+                                                     ("deep half", False)]
+    assert "search bound" in alts[1].describe()
 
 
 def test_interval_parts_text():
