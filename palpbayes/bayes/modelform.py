@@ -28,7 +28,11 @@ plausible alternatives (the interval of a probability box: Ferson et al., *Const
 probability boxes and Dempster–Shafer structures*, SAND2002-4015, 2003; for model form, Riley &
 Grandhi, *Reliab. Eng. Syst. Saf.* 96 (2011) 1137), not a weighted average: the depth windows are
 fits to different points, so no likelihood weighs them against each other, and every one of
-these models is itself an approximation.  Chosen by what calibrates (slow suite,
+these models is itself an approximation.  The two weighted alternatives the literature offers
+were not taken: stacking (Yao, Vehtari, Simpson & Gelman, *Bayesian Anal.* 13 (2018) 917)
+collapses onto one model with 10^4 autocorrelated samples unless the folds are blocked, and a
+Kennedy–O'Hagan discrepancy with a vague prior confounds E and can leave it wrong and
+overconfident (Brynjarsdóttir & O'Hagan, *Inverse Probl.* 30 (2014) 114007).  Chosen by what calibrates (slow suite,
 ``tests/statistical/test_modelform_calibration.py``: unmodelled layers of 20–30 mm, bonded and lying
 free, strain stiffening, a gradual onset, a blunted paraboloid apex, with the budget's inputs
 drawn).  Without a material misfit the full interval is the budget interval.
