@@ -32,10 +32,11 @@ these models is itself an approximation.  The two weighted alternatives the lite
 were not taken: stacking (Yao, Vehtari, Simpson & Gelman, *Bayesian Anal.* 13 (2018) 917)
 collapses onto one model with 10^4 autocorrelated samples unless the folds are blocked, and a
 Kennedy–O'Hagan discrepancy with a vague prior confounds E and can leave it wrong and
-overconfident (Brynjarsdóttir & O'Hagan, *Inverse Probl.* 30 (2014) 114007).  Chosen by what calibrates (slow suite,
-``tests/statistical/test_modelform_calibration.py``: unmodelled layers of 20–30 mm, bonded and lying
-free, strain stiffening, a gradual onset, a blunted paraboloid apex, with the budget's inputs
-drawn).  Without a material misfit the full interval is the budget interval.
+overconfident (Brynjarsdóttir & O'Hagan, *Inverse Probl.* 30 (2014) 114007).  Chosen by what
+calibrates (slow suite, ``tests/statistical/test_modelform_calibration.py``: unmodelled layers
+of 20–30 mm, bonded and lying free, strain stiffening, a gradual onset, a blunted paraboloid
+apex, with the budget's inputs drawn).  Without a material misfit the full interval is the
+budget interval.
 """
 
 from __future__ import annotations
