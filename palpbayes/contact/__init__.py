@@ -40,6 +40,17 @@ from .registry import (
     registered_laws,
     unregister,
 )
+from .viscoelastic import (
+    SOE_TOLERANCE,
+    HereditaryContact,
+    PowerLawKernel,
+    PronyKernel,
+    constant_strain_rate_stress,
+    hereditary_contact,
+    hereditary_force,
+    ramp_apparent_modulus,
+    standard_linear_solid,
+)
 
 # every module of the package: the law modules register themselves on import
 for _module in pkgutil.iter_modules(__path__):
@@ -73,6 +84,15 @@ __all__ = [
     "MAX_TIP_RADIUS_M",
     "half_angle_from_degrees",
     "thickness_factor",
+    "PowerLawKernel",
+    "PronyKernel",
+    "standard_linear_solid",
+    "HereditaryContact",
+    "hereditary_contact",
+    "hereditary_force",
+    "ramp_apparent_modulus",
+    "constant_strain_rate_stress",
+    "SOE_TOLERANCE",
 ]
 
 
