@@ -34,11 +34,14 @@ def _model_check_line(res: ResultsFolder) -> str:
     if "model_ok" not in s:
         return "Model checks: not run (results of an older palpbayes)."
     parts = []
+    n_material = 0  # Bayesian fits with a material misfit
     for method, label in (("bayes", "Bayesian"), ("lsq", "least-squares")):
         m = s[s["method"] == method]
         ran = m[m["model_ok"].notna()]
         if len(ran):
             bad_rows = ran[~ran["model_ok"].map(parse_bool)]
+            if method == "bayes":
+                n_material = len(bad_rows)
             text = f"{len(bad_rows)} of {len(ran)} {label} fits"
             if len(bad_rows) and "misfit_effect" in bad_rows:
                 eff = 100 * bad_rows["misfit_effect"].abs()
@@ -51,15 +54,16 @@ def _model_check_line(res: ResultsFolder) -> str:
             f"predictive) find a material misfit (one that moves E by more than 2 % and more "
             f"than the statistical interval) in {' and '.join(parts)}; each names its likely "
             "cause and its effect on E in the flags column of summary.csv, and negligible "
-            "failures are info lines." + _model_form_sentence(s[s["method"] == "bayes"]))
+            "failures are info lines."
+            + _model_form_sentence(s[s["method"] == "bayes"], n_material))
 
 
-def _model_form_sentence(b: pd.DataFrame) -> str:
-    """The interval's three parts over the Bayesian fits (statistical, budget, model form)."""
+def _model_form_sentence(b: pd.DataFrame, n_material: int) -> str:
+    """The interval's three parts over the Bayesian fits ``b`` (statistical, budget, model
+    form), ``n_material`` of which have a material misfit."""
     if "modelform_share_pct" not in b or b.empty:
         return ""
     share = pd.to_numeric(b["modelform_share_pct"], errors="coerce")
-    n_material = int((~b["model_ok"].map(parse_bool).fillna(True).astype(bool)).sum())
     widened = share[share > 0]
     stat = 100 * (b["E_stat_hi_pa"] - b["E_stat_lo_pa"]) / b["E_pa"]
     bud = 100 * (b["E_budget_hi_pa"] - b["E_budget_lo_pa"]) / b["E_pa"]
