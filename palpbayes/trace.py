@@ -15,7 +15,11 @@ from .contact import Tip
 from .errors import DataFileError, InputError, NoContactError
 from .units import format_force, format_length
 
-__all__ = ["IndentationTrace"]
+__all__ = ["IndentationTrace", "SEGMENTS"]
+
+#: Names of the segments of one palpation cycle, in the order they happen; the codes stored in
+#: :attr:`IndentationTrace.segment` index this tuple.
+SEGMENTS = ("approach", "hold", "retract")
 
 
 @dataclass(frozen=True, eq=False)
@@ -46,12 +50,17 @@ class IndentationTrace:
         File the trace was read from, used in error messages.
     metadata
         Anything else (free-form).
+    segment
+        Per-sample segment code, an index into :data:`SEGMENTS` (0 approach, 1 hold,
+        2 retract), non-decreasing in time (one cycle); None when not known (the trace is read
+        as one loading segment, hold and retract told apart by the motion alone).
 
     Raises
     ------
     DataFileError
         If arrays differ in length, have fewer than 3 samples, hold NaN/inf, or time is not
-        strictly increasing; if ``thickness`` or ``rest_time`` is not a positive (non-negative)
+        strictly increasing; if ``segment`` is not a code of :data:`SEGMENTS` per sample in
+        time order; if ``thickness`` or ``rest_time`` is not a positive (non-negative)
         number or ``repetition`` not a whole number.  The message names ``source``.
 
     Notes
@@ -72,6 +81,7 @@ class IndentationTrace:
     rest_time: float | None = None
     source: str | None = None
     metadata: dict = field(default_factory=dict)
+    segment: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         where = self.source or f"trace {self.trace_id!r}"
@@ -114,6 +124,9 @@ class IndentationTrace:
                 "strictly increasing",
                 "sort the rows by time and drop duplicated samples",
             )
+        if self.segment is not None:
+            object.__setattr__(self, "segment", _segment_codes(self.segment, arrays["time"].size,
+                                                               where))
         for name, must, example in (("thickness", "positive", "0.02 [m]"),
                                     ("rest_time", "non-negative", "60.0 [s]")):
             v = getattr(self, name)
@@ -205,8 +218,47 @@ class IndentationTrace:
 
     def _slice(self, index) -> IndentationTrace:
         return replace(
-            self, time=self.time[index], z=self.z[index], force=self.force[index]
+            self, time=self.time[index], z=self.z[index], force=self.force[index],
+            segment=None if self.segment is None else self.segment[index],
         )
+
+    @property
+    def segment_names(self) -> tuple[str, ...]:
+        """The segments the trace holds, in time order (``()`` when :attr:`segment` is None)."""
+        if self.segment is None:
+            return ()
+        return tuple(SEGMENTS[c] for c in np.unique(self.segment))
+
+    def segments(self, names: tuple[str, ...] | list[str] | str) -> IndentationTrace:
+        """The samples of the named segments (e.g. ``("approach", "hold")``), in time order.
+
+        Raises
+        ------
+        InputError
+            If a name is not one of :data:`SEGMENTS`, or the trace does not record segments,
+            or lacks one of them (the message names what is missing and what the trace has).
+        """
+        names = tuple(n.strip() for n in names.split(",")) if isinstance(names, str) \
+            else tuple(names)
+        where = self.source or f"trace {self.trace_id!r}"
+        bad = [n for n in names if n not in SEGMENTS]
+        if bad or not names:
+            raise InputError(f"unknown segment {bad[0] if bad else '(none given)'!r}; the "
+                             f"segments are {', '.join(SEGMENTS)}")
+        if self.segment is None:
+            raise InputError(f"{where}: the trace does not record its segments, so the "
+                             f"{', '.join(names)} samples cannot be told apart; give the "
+                             "file a 'segment' column (approach, hold, retract) or read it "
+                             "with segments from the motion")
+        missing = [n for n in names if n not in self.segment_names]
+        if missing:
+            has = ", ".join(self.segment_names) or "none"
+            raise InputError(f"{where}: asked for the {' and '.join(missing)} segment"
+                             f"{'s' if len(missing) > 1 else ''}, but the trace has only "
+                             f"{has}; record a {missing[0]} or leave it out of --segments")
+        keep = np.isin(self.segment, [SEGMENTS.index(n) for n in names])
+        self._check_window(keep, f"lie in the {', '.join(names)} segments")
+        return self._slice(keep)
 
     def max_depth(self, z_surf: float) -> float:
         """[m] Deepest indentation for a given surface height."""
@@ -219,6 +271,44 @@ class IndentationTrace:
             f"z {format_length(self.z.min(), 6)}..{format_length(self.z.max(), 6)}, "
             f"F {format_force(self.force.min())}..{format_force(self.force.max())})"
         )
+
+
+def _segment_codes(segment, n: int, where: str) -> np.ndarray:
+    """``segment`` (codes or names of :data:`SEGMENTS`) as a read-only int8 array of length n."""
+    raw = np.asarray(segment)
+    if raw.ndim != 1 or raw.size != n:
+        raise DataFileError(where, f"column 'segment' has {raw.size} value(s) for {n} samples")
+    if raw.dtype.kind in "OUS":
+        names = np.char.strip(np.char.lower(raw.astype(str)))
+        bad = ~np.isin(names, SEGMENTS)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise DataFileError(where, f"column 'segment' has {raw.tolist()[i]!r} at data "
+                                f"row {i + 1}",
+                                f"use {', '.join(SEGMENTS)}")
+        codes = np.zeros(n, dtype=np.int8)
+        for c, name in enumerate(SEGMENTS):
+            codes[names == name] = c
+    else:
+        values = raw.astype(float)
+        bad = ~np.isin(values, np.arange(len(SEGMENTS)))
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise DataFileError(where, f"column 'segment' has {raw.tolist()[i]!r} at data "
+                                f"row {i + 1}",
+                                f"use the codes 0 ({SEGMENTS[0]}), 1 ({SEGMENTS[1]}), "
+                                f"2 ({SEGMENTS[2]}) or the names")
+        codes = values.astype(np.int8)
+    back = np.diff(codes) < 0
+    if back.any():
+        i = int(np.argmax(back)) + 1
+        raise DataFileError(where, f"segment goes back from {SEGMENTS[codes[i - 1]]} to "
+                            f"{SEGMENTS[codes[i]]} at data row {i + 1}; a trace holds one "
+                            "cycle (approach, hold, retract in that order)",
+                            "split the recording into one trace per cycle")
+    codes = np.ascontiguousarray(codes, dtype=np.int8)
+    codes.setflags(write=False)
+    return codes
 
 
 def _frozen(a: np.ndarray) -> bool:

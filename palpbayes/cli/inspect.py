@@ -65,6 +65,19 @@ def _bag(path: Path) -> None:
                   "or JointState)")
 
 
+def _segment_counts(counts: dict[int, int], names: dict[int, str]) -> str:
+    """Points per afmformats segment under their classified names, in time order, consecutive
+    segments of one name joined: ``approach 256 + 2048, hold 7680, retract 1951``."""
+    parts: list[tuple[str, list[int]]] = []
+    for k in names or counts:
+        name = names.get(k, f"segment {k}")
+        if parts and parts[-1][0] == name:
+            parts[-1][1].append(counts[k])
+        else:
+            parts.append((name, [counts[k]]))
+    return ", ".join(f"{name} {' + '.join(map(str, ns))}" for name, ns in parts)
+
+
 def _afm(path: Path) -> None:
     from ..io.afm import describe_afm
 
@@ -73,9 +86,8 @@ def _afm(path: Path) -> None:
     print(f"{path}: AFM file, {len(curves)} curve(s) ({', '.join(kinds)})")
     first = curves[0]
     print(f"  columns: {', '.join(first.columns)}")
-    names = {0: "approach", 1: "retract"}
     for c in curves[:MAX_CURVES_SHOWN]:
-        segs = ", ".join(f"{names.get(k, f'segment {k}')} {n}" for k, n in c.segments.items())
+        segs = _segment_counts(c.segments, c.segment_names)
         where = ("" if c.x_m is None else
                  f"  at x = {format_length(c.x_m, 5)}, y = {format_length(c.y_m or 0.0, 5)}")
         print(f"  curve {c.index}: {segs} points{where}")

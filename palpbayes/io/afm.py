@@ -1,19 +1,57 @@
 """Read AFM force curves and force maps (JPK, Igor, afmformats HDF5) through ``afmformats``.
 
-Every force-distance curve of the file becomes one :class:`~palpbayes.trace.IndentationTrace`
-of its **approach segment** (``segment == 0``):
+Every curve of the file becomes one :class:`~palpbayes.trace.IndentationTrace`, by default of
+its **approach** (``segments=("approach",)``), or of the segments asked for
+(``segments="all"``: approach, hold and retract), with their codes in ``trace.segment``:
 
   =======================  ====================================================  ==========
   trace                    from afmformats                                       unit
   =======================  ====================================================  ==========
-  ``time``                 ``time`` (else sample index / ``rate approach``)      [s]
+  ``time``                 ``time`` (else sample index / ``rate approach``),     [s]
+                           minus the first kept sample's time
   ``z``                    ``tip position`` if the file has it, else             [m]
                            ``height (measured)`` + ``force`` / ``spring
                            constant`` (nanite's ``compute_tip_position``)
   ``force``                ``force`` (deflection × spring constant)              [N]
+  ``segment``              afmformats' ``segment`` numbers classified as          codes
+                           approach / hold / retract (below)
   ``metadata["x_m"]``,     ``position x``, ``position y`` of the curve (force     [m]
   ``metadata["y_m"]``      maps: where on the sample it was taken)
   =======================  ====================================================  ==========
+
+Modalities: force-distance (approach, retract), stress-relaxation (approach, hold at constant
+height, retract) and creep-compliance (approach, hold at constant force, retract) curves are
+read; ``metadata["afm_modality"]`` says which.  The approach of all three is a force-distance
+approach and fits as one.
+
+Segments: afmformats numbers the segments of a curve (0, 1, 2 ...) without saying what they
+are (JPK stress-relaxation files start with a pause before the approach), so each segment is
+classified by its **motion**, the height (``height (measured)``, else ``height (piezo)``, else
+the tip position) relative to the height range of the whole curve: *descending* when it goes
+more than :data:`MOTION_FRACTION` (10 %) of the range below its start (its 1st percentile
+below the median of its first twentieth), else *ascending* when it ends more than 10 % above
+its start (medians of its last and first twentieth), else *flat* (approach and retract move
+through 70-100 % of the range in the files seen, pauses and holds 0-5 %).  Then, in time
+order:
+
+1. **approach**: every segment up to and including the first descending one (a flat segment
+   before it is the pre-contact baseline, e.g. the pause of a stress-relaxation file), and the
+   descending segments directly after it (an approach in several speeds), except in a
+   creep-compliance curve, where the segment after the approach is the hold;
+2. **hold**: the following segments up to the first ascending one, whatever their motion
+   (constant height in stress relaxation; at constant force the height creeps down);
+3. **retract**: the first ascending segment and the ascending or flat ones after it (a pause
+   after the retract);
+4. a descending segment after the retract starts a second cycle: it and the rest of the curve
+   are not read (``metadata["afm_segments_ignored"]`` counts their samples).
+
+A curve without a descending segment has no approach (its segments before the first ascending
+one are hold).  A curve recorded as one segment (or without a ``segment`` column) that goes
+down and up again is descending, so it is read whole as its approach, as before segments were
+classified; split such a trace with
+:func:`palpbayes.io.motion_segments.segments_from_motion`.  Force-distance curves come out as
+afmformats labels them (segment 0 approach, segment 1 retract), so their default read is
+segment 0, as before segments were classified.
 
 Units and signs: afmformats gives SI units.  The height is that of the cantilever base, up
 (away from the sample) positive, and a cantilever pushed up by the sample gives a positive
@@ -29,23 +67,34 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..contact import Tip
 from ..errors import DataFileError, InputError
-from ..trace import IndentationTrace
+from ..trace import SEGMENTS, IndentationTrace
 from .extras import import_extra
 from .tabular import check_file, check_plausible, split_trace_metadata, validate_force_sign
 
-__all__ = ["AFM_SUFFIXES", "AFMCurveInfo", "is_afm_file", "read_afm", "describe_afm"]
+__all__ = ["AFM_SUFFIXES", "AFM_MODALITIES", "MOTION_FRACTION", "IGNORED", "AFMCurveInfo",
+           "is_afm_file", "read_afm", "describe_afm", "classify_segments", "parse_segments"]
 
 #: File suffixes read through afmformats (its .txt/.csv/.tab/.zip formats are not claimed:
 #: palpbayes reads those as its own tables).
 AFM_SUFFIXES = (".jpk-force", ".jpk-force-map", ".jpk-qi-data", ".jpk-qi-series", ".ibw",
                 ".h5")
+
+#: afmformats modalities read: each starts with a force-distance approach.
+AFM_MODALITIES = ("force-distance", "stress-relaxation", "creep-compliance")
+
+#: A segment whose height changes by more than this fraction of the curve's height range is
+#: descending (approach) or ascending (retract); otherwise it is flat (pause or hold).
+MOTION_FRACTION = 0.10
+
+#: Name given (by :func:`classify_segments`) to the segments of a second cycle, not read.
+IGNORED = "ignored"
 
 #: afmformats metadata -> trace metadata key (SI units).
 _META = {"position x": "x_m", "position y": "y_m", "grid index x": "grid_index_x",
@@ -57,7 +106,8 @@ _META = {"position x": "x_m", "position y": "y_m", "grid index x": "grid_index_x
 @dataclass(frozen=True)
 class AFMCurveInfo:
     """What ``palpbayes inspect`` shows of one curve: index, modality, columns, points per
-    segment, position [m] (None when the file has none)."""
+    afmformats segment, position [m] (None when the file has none), and what each afmformats
+    segment is (``{0: "approach", 1: "retract"}``; :func:`classify_segments`)."""
 
     index: int
     modality: str
@@ -65,6 +115,7 @@ class AFMCurveInfo:
     segments: dict[int, int]
     x_m: float | None
     y_m: float | None
+    segment_names: dict[int, str] = field(default_factory=dict)
 
 
 def is_afm_file(path: str | os.PathLike) -> bool:
@@ -118,46 +169,195 @@ def _metadata(curve) -> dict:
     return meta
 
 
-def _approach(curve, index: int, source: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
-    """time [s], z [m], force [N] of the approach segment, and how z and time were made."""
+def parse_segments(segments: str | Sequence[str]) -> tuple[str, ...]:
+    """The segment names asked for, in :data:`~palpbayes.trace.SEGMENTS` order.
+
+    Parameters
+    ----------
+    segments
+        ``"all"`` (every name), a comma-separated string (``"approach,hold"``) or a sequence
+        of names of :data:`~palpbayes.trace.SEGMENTS`.
+
+    Raises
+    ------
+    InputError
+        For an unknown name or none at all.
+    """
+    if isinstance(segments, str):
+        if _is_all(segments):
+            return SEGMENTS
+        names = [n.strip().lower() for n in segments.split(",")]
+    else:
+        try:
+            names = [str(n).strip().lower() for n in segments]
+        except TypeError:
+            raise InputError(f"segments {segments!r} must be 'all', names separated by commas "
+                             f"or a list of names ({', '.join(SEGMENTS)})") from None
+    names = [n for n in names if n]
+    bad = [n for n in names if n not in SEGMENTS]
+    if bad or not names:
+        what = f"unknown segment {bad[0]!r}" if bad else "no segment given"
+        raise InputError(f"{what}; give 'all' or names from {', '.join(SEGMENTS)}, e.g. "
+                         "segments='approach,hold'")
+    return tuple(n for n in SEGMENTS if n in names)
+
+
+def _is_all(segments) -> bool:
+    return isinstance(segments, str) and segments.strip().lower() == "all"
+
+
+def _segment_ids(curve) -> np.ndarray:
+    cols = set(curve.columns)
+    return np.asarray(curve["segment"]) if "segment" in cols else np.zeros(len(curve), int)
+
+
+def _height(curve) -> np.ndarray | None:
+    """The column whose motion tells the segments apart (base height, else tip position)."""
+    cols = set(curve.columns)
+    name = next((c for c in ("height (measured)", "height (piezo)", "tip position")
+                 if c in cols), None)
+    return None if name is None else np.asarray(curve[name], dtype=float)
+
+
+def classify_segments(seg: np.ndarray, height: np.ndarray | None,
+                      modality: str = "force-distance") -> dict[int, str]:
+    """What each afmformats segment of a curve is: approach, hold, retract or ``"ignored"``.
+
+    See the module docstring for the rule: motion (descending / flat / ascending by more than
+    :data:`MOTION_FRACTION` of the curve's height range), then order.
+
+    Parameters
+    ----------
+    seg
+        afmformats' ``segment`` number per sample.
+    height
+        [m] Height per sample (up positive); None (no height column) classifies the segments
+        by their order alone: the first is the approach, the last (of two or more) the
+        retract, any between them hold.
+    modality
+        afmformats' modality: in ``"creep-compliance"`` the segment after the approach is the
+        hold (it creeps down at constant force).
+
+    Returns
+    -------
+    dict
+        afmformats segment number -> name, in time order.
+    """
+    seg = np.asarray(seg)
+    # segments in time order (afmformats numbers them in time order; sort by first sample)
+    ids, first = np.unique(seg, return_index=True)
+    ids = ids[np.argsort(first)]
+    if height is None:
+        names = ["approach"] + ["hold"] * (len(ids) - 2) + ["retract"] * (len(ids) > 1)
+        return {int(i): n for i, n in zip(ids, names, strict=True)}
+    height = np.asarray(height, dtype=float)
+    span = float(np.ptp(height)) if height.size else 0.0
+    motion = []
+    limit = MOTION_FRACTION * span
+    for i in ids:
+        h = height[seg == i]
+        k = max(1, h.size // 20)
+        start = float(np.median(h[:k]))
+        descent = start - float(np.quantile(h, 0.01))
+        rise = float(np.median(h[-k:])) - start
+        motion.append(-1 if span > 0 and descent > limit else
+                      1 if span > 0 and rise > limit else 0)
+    names: list[str] = []
+    state = "approach"  # approach before its descent, "descended" after it, hold, retract
+    for m in motion:
+        if state == "approach":
+            names.append("approach")
+            if m < 0:
+                state = "descended"
+            elif m > 0:  # ascending before any descent: no approach in this curve
+                names[:] = ["hold"] * (len(names) - 1) + ["retract"]
+                state = "retract"
+        elif state == "descended":
+            if m < 0 and modality != "creep-compliance":
+                names.append("approach")
+            elif m > 0:
+                names.append("retract")
+                state = "retract"
+            else:
+                names.append("hold")
+                state = "hold"
+        elif state == "hold":
+            names.append("retract" if m > 0 else "hold")
+            state = "retract" if m > 0 else "hold"
+        elif state == "retract":
+            if m < 0:
+                state = IGNORED
+            names.append("retract" if m >= 0 else IGNORED)
+        else:
+            names.append(IGNORED)
+    if state == "approach":  # flat throughout: no approach
+        names = ["hold"] * len(names)
+    return {int(i): n for i, n in zip(ids, names, strict=True)}
+
+
+def _curve_arrays(curve, index: int, source: str, wanted: tuple[str, ...] | None
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
+    """time [s], z [m], force [N] and segment codes of the wanted segments (None: all the
+    curve has), and how they were made (trace metadata)."""
     where = f"curve {index}"
-    if curve.modality != "force-distance":
+    if curve.modality not in AFM_MODALITIES:
         raise DataFileError(source, f"{where} is a {curve.modality} measurement",
-                            "palpbayes reads force-distance (indentation) curves")
+                            f"palpbayes reads {', '.join(AFM_MODALITIES)} curves")
     cols = set(curve.columns)
     if "force" not in cols:
         raise DataFileError(source, f"{where} has no force column; it has "
                             f"{', '.join(sorted(cols))}")
-    seg = np.asarray(curve["segment"]) if "segment" in cols else np.zeros(len(curve), int)
-    appr = seg == 0
-    if np.count_nonzero(appr) < 3:
-        raise DataFileError(source, f"{where}: the approach segment has "
-                            f"{np.count_nonzero(appr)} point(s)", "check the curve")
-    force = np.asarray(curve["force"], dtype=float)[appr]
-    how = {}
+    seg = _segment_ids(curve)
+    kinds = classify_segments(seg, _height(curve), curve.modality)
+    has = [n for n in SEGMENTS if n in kinds.values()]
+    if wanted is None:
+        wanted = tuple(has)
+    missing = [n for n in wanted if n not in has]
+    if missing:
+        listing = ", ".join(f"{i} {n}" for i, n in kinds.items())
+        raise DataFileError(
+            source, f"{where} ({curve.modality}) has no {' and no '.join(missing)} segment; it "
+            f"has {', '.join(has) or 'no approach, hold or retract'} (afmformats segments: "
+            f"{listing})", f"read segments={','.join(has) or 'all'} instead"
+            if has else "check the curve")
+    name_of = np.array([kinds[int(i)] for i in np.unique(seg)], dtype=object)
+    sample_names = name_of[np.searchsorted(np.unique(seg), seg)]
+    keep = np.isin(sample_names, wanted)
+    n_keep = int(np.count_nonzero(keep))
+    if n_keep < 3:
+        raise DataFileError(source, f"{where}: the {', '.join(wanted)} segment(s) have "
+                            f"{n_keep} point(s)", "check the curve")
+    codes = np.array([SEGMENTS.index(n) for n in sample_names[keep]], dtype=np.int8)
+    force = np.asarray(curve["force"], dtype=float)[keep]
+    how = {"afm_modality": str(curve.modality),
+           "afm_segments": ", ".join(f"{i} {n}" for i, n in kinds.items())}
+    ignored = int(np.count_nonzero(sample_names == IGNORED))
+    if ignored:
+        how["afm_segments_ignored"] = ignored
     if "tip position" in cols:
-        z = np.asarray(curve["tip position"], dtype=float)[appr]
+        z = np.asarray(curve["tip position"], dtype=float)[keep]
         how["z_column"] = "tip position"
     else:
         height = next((c for c in ("height (measured)", "height (piezo)") if c in cols), None)
         k = dict.get(curve.metadata, "spring constant")
         if height is None or not k or not np.isfinite(k):
-            missing = "a height column" if height is None else "the spring constant"
+            missing_what = "a height column" if height is None else "the spring constant"
             raise DataFileError(source, f"{where}: cannot compute the tip position without "
-                                f"{missing}", "export the curve with height and spring constant")
-        z = np.asarray(curve[height], dtype=float)[appr] + force / float(k)
+                                f"{missing_what}",
+                                "export the curve with height and spring constant")
+        z = np.asarray(curve[height], dtype=float)[keep] + force / float(k)
         how["z_column"] = f"{height} + force / spring constant"
     if "time" in cols:
-        t = np.asarray(curve["time"], dtype=float)[appr]
+        t = np.asarray(curve["time"], dtype=float)[keep]
         how["time_column"] = "time"
     else:
         rate = dict.get(curve.metadata, "rate approach")
         if not rate or not np.isfinite(rate):
             raise DataFileError(source, f"{where} has neither a time column nor a sample rate",
                                 "export the curve with its time column")
-        t = np.arange(force.size) / float(rate)
+        t = np.flatnonzero(keep) / float(rate)
         how["time_column"] = f"index / rate approach ({float(rate):g} Hz)"
-    return t, z, force, how
+    return t, z, force, codes, how
 
 
 def read_afm(
@@ -165,12 +365,13 @@ def read_afm(
     *,
     tip: Tip | None = None,
     curves: Sequence[int] | None = None,
+    segments: str | Sequence[str] = ("approach",),
     force_sign: float = 1.0,
     z_sign: float = 1.0,
     check: bool = True,
     **metadata,
 ) -> list[IndentationTrace]:
-    """Read the approach curves of an AFM file into traces (SI units, z up, pressing positive).
+    """Read the curves of an AFM file into traces (SI units, z up, pressing positive).
 
     Parameters
     ----------
@@ -181,6 +382,12 @@ def read_afm(
         The indenter (an AFM file does not record its geometry), stored in every trace.
     curves
         Indices of the curves to read (default all).
+    segments
+        Which segments of each curve to keep: names of :data:`~palpbayes.trace.SEGMENTS` as
+        a sequence or a comma-separated string (``"approach,hold"``), or ``"all"`` (every
+        segment the curve has).  Default the approach only.  The segments are classified by
+        their motion (module docstring); ``trace.segment`` holds the code of every kept
+        sample.
     force_sign, z_sign
         +1 or -1 multiplying force and z.
     check
@@ -193,14 +400,20 @@ def read_afm(
     -------
     list of IndentationTrace
         One per curve; ``trace_id`` the file stem for a single curve, ``<stem>-<index>`` for a
-        map; ``metadata`` has ``curve_index``, ``x_m``/``y_m`` [m] when the file gives the
+        map; time [s] from the first kept sample, on the file's time axis (a segment left out
+        leaves a gap); ``metadata`` has ``curve_index``, ``afm_modality``, ``afm_segments``
+        (each afmformats segment and its name), ``x_m``/``y_m`` [m] when the file gives the
         position, the spring constant and how z and time were made.
 
     Raises
     ------
     DataFileError
-        Missing or unreadable file, not force-distance data, missing columns, an empty approach,
-        a curve index out of range, implausible sign or units (naming the curve).
+        Missing or unreadable file, a modality other than :data:`AFM_MODALITIES`, missing
+        columns, a segment asked for that the curve lacks (naming the curve, what it has and
+        what is missing), a curve index out of range, implausible sign or units (naming the
+        curve).
+    InputError
+        An unknown segment name or sign.
     MissingExtraError
         afmformats is not installed: "reading .jpk-force files needs the optional extra:
         pip install 'palpbayes[afm]'".
@@ -208,6 +421,10 @@ def read_afm(
     force_sign = validate_force_sign(force_sign, allow_auto=False)
     if z_sign not in (1, -1):
         raise InputError(f"z_sign must be +1 or -1, got {z_sign!r}")
+    wanted = None if _is_all(segments) else parse_segments(segments)
+    if "segment" in metadata:
+        raise InputError("metadata may not set 'segment'; it comes from the file (choose the "
+                         "segments with segments=...)")
     data, source = _load(path)
     stem = str(metadata.pop("trace_id", None) or _stem(Path(path)))
     chosen = range(len(data)) if curves is None else list(curves)
@@ -217,13 +434,14 @@ def read_afm(
                             f"give an index from 0 to {len(data) - 1}")
     traces = []
     for i in chosen:
-        t, z, force, how = _approach(data[i], i, source)
+        t, z, force, codes, how = _curve_arrays(data[i], i, source, wanted)
         kwargs, free = split_trace_metadata(metadata, {
             "reader": "afm", "curve_index": i, "n_curves": len(data), **_metadata(data[i]),
             **how, "force_sign": force_sign, "z_sign": float(z_sign)})
         tid = stem if len(data) == 1 else f"{stem}-{i}"
         trace = IndentationTrace(time=t - t[0], z=z_sign * z, force=force_sign * force, tip=tip,
-                                 trace_id=tid, source=source, metadata=free, **kwargs)
+                                 trace_id=tid, source=source, metadata=free, segment=codes,
+                                 **kwargs)
         if check:
             try:
                 check_plausible(trace)
@@ -236,14 +454,16 @@ def read_afm(
 
 
 def describe_afm(path: str | os.PathLike) -> list[AFMCurveInfo]:
-    """The curves of an AFM file: modality, columns, points per segment, position."""
+    """The curves of an AFM file: modality, columns, points per segment, what each segment is
+    (:func:`classify_segments`), position."""
     data, _ = _load(path)
     out = []
     for i, c in enumerate(data):
-        seg = np.asarray(c["segment"]) if "segment" in c.columns else np.zeros(len(c), int)
+        seg = _segment_ids(c)
         values, counts = np.unique(seg, return_counts=True)
         meta = _metadata(c)
         out.append(AFMCurveInfo(i, c.modality, tuple(c.columns),
                                 {int(v): int(n) for v, n in zip(values, counts, strict=True)},
-                                meta.get("x_m"), meta.get("y_m")))
+                                meta.get("x_m"), meta.get("y_m"),
+                                classify_segments(seg, _height(c), c.modality)))
     return out

@@ -7,6 +7,11 @@ forward kinematics.  Other files are read through a column mapping, unit and sig
     read_trace("run.csv", columns={"time": "t", "z": "Z", "force": "Fz"},
                units={"z": "mm", "force": "mN"}, force_sign=-1)
 
+An optional column ``segment`` says which segment of the cycle each row belongs to: the names
+``approach``, ``hold``, ``retract`` (any case) or the codes 0, 1, 2, non-decreasing in time; it
+becomes :attr:`~palpbayes.trace.IndentationTrace.segment`, and :func:`write_trace` writes it
+(as names) when the trace has segments.
+
 Columns named ``<quantity>_<unit>`` (``z_mm``, ``force_mn``, ``time_ms``; AFM ``z_um``, ``z_nm``,
 ``force_nn``, ``force_pn``) are recognised without options, case-insensitively (``force_mn``
 is millinewtons: no one records in meganewtons).  The separator (comma, semicolon, tab or
@@ -20,11 +25,12 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from ..contact import Tip
 from ..errors import DataFileError, InputError
-from ..trace import IndentationTrace
+from ..trace import SEGMENTS, IndentationTrace
 from .atomic import write_csv_atomic
 from .joint_trace import trace_from_joint_frame
 from .tabular import (
@@ -42,6 +48,40 @@ __all__ = ["read_trace", "write_trace", "trace_from_frame", "check_plausible",
 
 _QUANTITIES = {"time": TIME_UNITS, "z": LENGTH_UNITS, "force": FORCE_UNITS}
 _FACTORS = {"time": time_factor, "z": length_factor, "force": force_factor}
+#: Name of the optional segment column (matched case-insensitively).
+SEGMENT_COLUMN = "segment"
+
+
+def _segment_column(df: pd.DataFrame, source: str) -> np.ndarray | None:
+    """The ``segment`` column as names or codes for :class:`IndentationTrace` (which checks
+    them and names the data row of a bad one), or None when the file has no such column.
+
+    Code strings ("0", "1", "2") in a column of names are read as codes; an empty cell is an
+    error naming its data row.
+    """
+    col = next((c for c in df.columns if str(c).strip().lower() == SEGMENT_COLUMN), None)
+    if col is None:
+        return None
+    raw = df[col]
+    empty = raw.isna().to_numpy()
+    if empty.any():
+        i = int(np.argmax(empty))
+        raise DataFileError(source, f"column {str(col)!r} is empty at data row {i + 1}",
+                            f"give every row a segment ({', '.join(SEGMENTS)}) or drop the "
+                            "column")
+    if raw.dtype.kind in "iuf":
+        values = raw.to_numpy(dtype=float)
+        bad = ~np.isin(values, np.arange(len(SEGMENTS)))
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise DataFileError(source, f"column {str(col)!r} has {values[i]:g} at data row "
+                                f"{i + 1}", "use the codes 0 (approach), 1 (hold), 2 (retract) "
+                                "or the names")
+        return values.astype(np.int8)
+    text = raw.astype(str).str.strip().str.lower()
+    codes = {str(c): name for c, name in enumerate(SEGMENTS)}
+    return text.map(lambda v: codes.get(v, v)).to_numpy(dtype=object)
+
 
 def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: str | None,
                  source: str) -> tuple[str, str]:
@@ -83,7 +123,11 @@ def trace_from_frame(
     tool_offset: float = 0.0,
     **metadata,
 ) -> IndentationTrace:
-    """Build a trace from a parsed table; see :func:`read_trace` for the options."""
+    """Build a trace from a parsed table; see :func:`read_trace` for the options.
+
+    A ``segment`` column (names or codes) becomes the trace's ``segment`` unless ``segment``
+    is given in ``metadata``.
+    """
     columns = dict(columns or {})
     units = dict(units or {})
     unknown = set(columns) | set(units)
@@ -95,6 +139,10 @@ def trace_from_frame(
     if df.shape[0] == 0:
         raise DataFileError(source, "no data rows (header only or empty)",
                             "check that the recording was saved")
+    if "segment" not in metadata:
+        segment = _segment_column(df, source)
+        if segment is not None:
+            metadata["segment"] = segment
     lower = {str(c).strip().lower() for c in df.columns}
     has_q = any(c.startswith("q0_") for c in lower)
     if "z" not in columns and not any(c.startswith("z") for c in lower) and has_q:
@@ -139,7 +187,8 @@ def read_trace(
     Parameters
     ----------
     path
-        CSV file; lines starting with ``#`` are comments.
+        CSV file; lines starting with ``#`` are comments.  Besides time, z (or joint angles)
+        and force it may have a ``segment`` column: approach/hold/retract or 0/1/2 per row.
     columns
         Mapping from quantity (``time``, ``z``, ``force``) to the file's column name.
     units
@@ -163,7 +212,8 @@ def read_trace(
     DataFileError
         Missing file or column, a folder instead of a file, non-numeric or non-finite cell,
         decimal commas, empty file, time not strictly increasing, implausible units or flipped
-        sign.  The message names the file.
+        sign, a ``segment`` cell that is empty, not a segment, or goes back in the cycle (the
+        message names its data row).  The message names the file.
     """
     path = Path(path)
     source = str(path)
@@ -204,8 +254,13 @@ def write_trace(trace: IndentationTrace, path: str | os.PathLike, *,
                 float_format: str = "%.10g") -> Path:
     """Write the canonical CSV ``time_s, z_m, force_n`` atomically; return the path.
 
+    A trace with segments (:attr:`~palpbayes.trace.IndentationTrace.segment` not None) gets a
+    fourth column ``segment`` holding their names (approach, hold, retract).
+
     ``float_format`` "%.10g" keeps z to 1e-10 m and force to 10 significant digits; use
     "%.17g" for a bit-exact round trip.
     """
     df = pd.DataFrame({"time_s": trace.time, "z_m": trace.z, "force_n": trace.force})
+    if trace.segment is not None:
+        df[SEGMENT_COLUMN] = np.asarray(SEGMENTS, dtype=object)[trace.segment]
     return write_csv_atomic(df, path, float_format=float_format)

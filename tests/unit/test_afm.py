@@ -1,6 +1,7 @@
 """AFM files (issue 16): the approach segment of every curve as a trace in SI units (z up,
-pressing positive), a force map as one trace per curve with its x, y; the approach curve equals
-the canonical CSV the shared data were converted to; a missing extra is named."""
+pressing positive) with its segment codes, a force map as one trace per curve with its x, y; the
+approach curve equals the canonical CSV the shared data were converted to; a missing extra is
+named.  Segments of stress-relaxation and creep files: tests/unit/test_segments_io.py."""
 
 from __future__ import annotations
 
@@ -48,6 +49,23 @@ def test_a_real_jpk_force_file_gives_its_approach_segment():
     assert trace.metadata["x_m"] == pytest.approx(-16.67e-6, rel=1e-3)
     assert trace.metadata["spring_constant_n_per_m"] == pytest.approx(k)
     assert recording_kind(JPK) == "afm"
+    assert trace.segment_names == ("approach",) and trace.metadata["afm_modality"] == \
+        "force-distance" and trace.metadata["afm_segments"] == "0 approach, 1 retract"
+    (both,) = read_afm(JPK, tip=AFM_TIP, segments="approach,retract")
+    assert both.n_points == 4000 and both.segment_names == ("approach", "retract")
+    np.testing.assert_array_equal(both.segments("approach").z, trace.z)
+
+
+def test_a_one_segment_curve_with_hold_and_retract_is_read_whole(tmp_path):
+    """An afmformats curve whose only segment (0) holds a whole cycle reads as before."""
+    s = simulate_trace(1000.0, AFM_TIP, nu=0.5, z_surf=50e-6, depth=2e-6, approach=4e-6,
+                       speed=10e-6, rate=1000.0, noise_pp=6 * 20e-12, rng=1, hold=0.1,
+                       retract=True)
+    path = write_afm_h5(tmp_path / "cycle.h5", [s])
+    (got,) = read_afm(path)
+    assert got.n_points == s.n_points and got.segment_names == ("approach",)
+    np.testing.assert_array_equal(got.force, s.force)
+    assert describe_afm(path)[0].segment_names == {0: "approach"}
 
 
 def test_a_force_map_becomes_one_trace_per_curve_with_its_position(tmp_path):
@@ -66,6 +84,8 @@ def test_a_force_map_becomes_one_trace_per_curve_with_its_position(tmp_path):
         read_afm(path, curves=[7])
     info = describe_afm(path)
     assert len(info) == 4 and info[1].segments == {0: sims[1].n_points}
+    assert info[1].segment_names == {0: "approach"}
+    assert all(t.segment_names == ("approach",) for t in traces)
     assert info[3].x_m == 20e-6 and "height (measured)" in info[0].columns
     assert len(read_recording(path, tip=AFM_TIP)) == 4
 

@@ -1,0 +1,156 @@
+"""Segments of one palpation cycle (approach, hold, retract) told apart by the tip motion alone.
+
+For recordings that do not label their segments (a robot trace, a CSV without a ``segment``
+column), :func:`segments_from_motion` gives the per-sample codes that
+:class:`~palpbayes.trace.IndentationTrace` stores in its ``segment`` field::
+
+    trace = trace.replace(segment=segments_from_motion(trace.time, trace.z))
+    loading = trace.segments("approach,hold")
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+from ..errors import InputError
+from ..trace import SEGMENTS
+
+__all__ = ["segments_from_motion", "default_hold_tolerance", "SMOOTH_WINDOW",
+           "NOISE_MULTIPLE", "RANGE_FRACTION"]
+
+#: Samples in the running median that smooths z before the deepest point is looked for, so that
+#: a single noise spike neither sets the deepest z nor ends the hold.
+SMOOTH_WINDOW = 5
+#: The default hold tolerance is at least this many noise standard deviations of z ...
+NOISE_MULTIPLE = 6.0
+#: ... and at least this fraction of the z range (for noise-free or quantised z).
+RANGE_FRACTION = 1e-3
+
+_APPROACH, _HOLD, _RETRACT = (SEGMENTS.index(n) for n in ("approach", "hold", "retract"))
+
+
+def default_hold_tolerance(z: np.ndarray) -> float:
+    """[m] The hold tolerance :func:`segments_from_motion` uses when none is given.
+
+    ``max(NOISE_MULTIPLE * sigma, RANGE_FRACTION * (max(z) - min(z)))`` where ``sigma`` is a
+    robust estimate of the z noise: 1.4826 × the median absolute deviation of the second
+    differences of z, divided by √6 (the standard deviation of a second difference of white
+    noise is √6 σ).  Second differences vanish on a ramp at constant speed and on a hold, so
+    the estimate sees the noise, not the motion; the median ignores the few samples at the
+    turning points.
+
+    Why these numbers: the hold is judged on the 5-sample running median of z, whose noise is
+    about 0.55 σ, so the samples of a true hold stay within about ±2.5 σ of their level and the
+    deepest of them lies about 2 σ below it: 6 σ keeps a noisy hold in one piece.  A tolerance
+    proportional to the z range instead (e.g. 2 %) would cut the end of the approach: on a robot
+    stroke of 10 mm with a 2 mm indentation, 2 % is 0.2 mm, a tenth of the depth; the 0.1 %
+    floor costs at most 0.1 % of the stroke and only matters when the noise estimate is zero
+    (simulated or quantised z, where most second differences are exactly 0).
+
+    Parameters
+    ----------
+    z
+        [m] Tip height, one value per sample.
+
+    Returns
+    -------
+    float
+        [m] Tolerance, >= 0 (0 only for a constant z).
+    """
+    z = np.asarray(z, dtype=float)
+    d2 = np.diff(z, 2)
+    sigma = 0.0
+    if d2.size:
+        sigma = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / np.sqrt(6.0)
+    return max(NOISE_MULTIPLE * sigma, RANGE_FRACTION * float(np.ptp(z)))
+
+
+def _running_median(z: np.ndarray, window: int) -> np.ndarray:
+    """Centred running median of odd ``window`` samples; the ends are padded with the end
+    values, so the result has the length of ``z``."""
+    if z.size < window:
+        return z.copy()
+    half = window // 2
+    padded = np.pad(z, half, mode="edge")
+    return np.median(sliding_window_view(padded, window), axis=1)
+
+
+def segments_from_motion(time, z, *, hold_tolerance: float | None = None) -> np.ndarray:
+    """Per-sample segment codes (indices into :data:`~palpbayes.trace.SEGMENTS`) of one cycle.
+
+    The deepest point is the minimum of z after a 5-sample running median (:data:`SMOOTH_WINDOW`;
+    a single spike does not count).  Then
+
+    * **approach**: the samples before z first comes within ``hold_tolerance`` of the deepest
+      point;
+    * **hold**: from there to the last sample within ``hold_tolerance`` of the deepest point
+      (a brief excursion above the band in between stays hold);
+    * **retract**: the samples after the tip leaves the band for good.
+
+    A trace that ends within the band (no return) has only approach and hold; a trace that
+    starts within it has no approach.  One cycle is assumed: a second press deeper than the
+    first would end the approach there.  The last ``hold_tolerance`` of the approach's depth is
+    counted as hold, which is why the default tolerance is kept small
+    (:func:`default_hold_tolerance`).
+
+    Parameters
+    ----------
+    time
+        [s] Sample times, strictly increasing.
+    z
+        [m] Tip height, up positive (pressing moves z down), one value per sample.
+    hold_tolerance
+        [m] How far above the deepest point the tip may be and still hold.  Default
+        :func:`default_hold_tolerance`: ``max(6 σ, 0.1 % of the z range)``, σ the robust
+        noise of z.  For a hold at constant force, where z creeps down, give the creep depth.
+
+    Returns
+    -------
+    numpy.ndarray
+        int8 codes, non-decreasing: 0 approach, 1 hold, 2 retract.
+
+    Raises
+    ------
+    InputError
+        If time and z are not one-dimensional of the same length, have fewer than 3 samples,
+        hold NaN/inf, time is not strictly increasing, or ``hold_tolerance`` is not a
+        non-negative number.
+    """
+    t = np.asarray(time, dtype=float)
+    zz = np.asarray(z, dtype=float)
+    if t.ndim != 1 or zz.ndim != 1:
+        raise InputError(f"time and z must be one-dimensional arrays, got shapes {t.shape} "
+                         f"and {zz.shape}")
+    if t.size != zz.size:
+        raise InputError(f"time has {t.size} samples but z has {zz.size}; give one z per time")
+    if t.size < 3:
+        raise InputError(f"only {t.size} sample(s); telling the segments apart needs at least 3")
+    for name, a in (("time", t), ("z", zz)):
+        bad = ~np.isfinite(a)
+        if bad.any():
+            raise InputError(f"{name} has {int(bad.sum())} non-finite value(s) (NaN/inf), first "
+                             f"at sample {int(np.argmax(bad))}; remove or repair them")
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.argmax(dt <= 0))
+        raise InputError(f"time is not strictly increasing at sample {i + 1} ({t[i]:g} s -> "
+                         f"{t[i + 1]:g} s); sort the samples by time")
+    if hold_tolerance is None:
+        tol = default_hold_tolerance(zz)
+    else:
+        if isinstance(hold_tolerance, bool) or not isinstance(hold_tolerance, numbers.Real) \
+                or not np.isfinite(hold_tolerance) or hold_tolerance < 0:
+            raise InputError(f"hold_tolerance {hold_tolerance!r} must be a non-negative "
+                             "number [m], e.g. 1e-5")
+        tol = float(hold_tolerance)
+    smooth = _running_median(zz, SMOOTH_WINDOW)
+    near = smooth <= smooth.min() + tol
+    first = int(np.argmax(near))
+    last = zz.size - 1 - int(np.argmax(near[::-1]))
+    codes = np.full(zz.size, _APPROACH, dtype=np.int8)
+    codes[first:last + 1] = _HOLD
+    codes[last + 1:] = _RETRACT
+    return codes
