@@ -15,7 +15,9 @@ One module per job, imports flowing one way (``map`` -> ``campaign``/``inclusion
 * :mod:`~palpbayes.sim.sensitivity_table` -- its fast interpolation table (for the lump model);
 * :mod:`~palpbayes.sim.map` -- a stiffness-map phantom folder: a grid of palpations over it;
 * :mod:`~palpbayes.sim.misfit` -- palpations with a misfit the user did not model (an unknown
-  layer, stiffening, a gradual onset, a blunted apex), the model-form calibration's traces.
+  layer, stiffening, a gradual onset, a blunted apex), the model-form calibration's traces;
+* :mod:`~palpbayes.sim.viscoelastic` -- a ramp–hold–retract on a viscoelastic half-space
+  (power-law or Prony relaxation, Lee–Radok/Ting), one trace or one per speed.
 
 The paper's numbers the simulator reproduces live in :mod:`palpbayes.paper`, the peak-to-peak
 noise convention in :mod:`palpbayes.noise` (both are shared with the fitting side).
@@ -38,6 +40,7 @@ from . import (
     sensitivity_table,
     series,
     trace,
+    viscoelastic,
 )
 from .campaign import *  # noqa: F403
 from .compression import *  # noqa: F403
@@ -48,6 +51,7 @@ from .misfit import *  # noqa: F403
 from .sensitivity_table import *  # noqa: F403
 from .series import *  # noqa: F403
 from .trace import *  # noqa: F403
+from .viscoelastic import *  # noqa: F403
 
 # built from the submodules' own lists (the form static checkers follow), never re-typed
 __all__: list[str] = []
@@ -60,3 +64,4 @@ __all__ += inclusion.__all__
 __all__ += map.__all__
 __all__ += misfit.__all__
 __all__ += sensitivity_table.__all__
+__all__ += viscoelastic.__all__

@@ -1,0 +1,309 @@
+"""Palpations of a linear viscoelastic specimen: a ramp–hold–retract from a known relaxation
+kernel, with the truth in the trace's metadata.
+
+The motion (:func:`ramp_hold_motion`) is sampled at t_k = k/rate, k = 0..N-1, from rest: the
+tip starts ``approach`` above the surface, moves down at ``speed`` to ``depth`` below it, holds
+and (optionally) moves back up at the same speed to where it started.  The force is that of a
+rigid tip with the elastic law F = E*·g·d^m (the tip's own law, :func:`palpbayes.contact.exponent`
+and :func:`~palpbayes.contact.prefactor`) on a viscoelastic half-space whose relaxation modulus
+is the kernel, Lee–Radok while the contact grows and Ting when it shrinks
+(:func:`palpbayes.contact.hereditary_force`, ``../shared/DESIGN.md`` §9)::
+
+    F_rec(t) = F0 + g·∫_0^t E*(t - s)·d/ds[d(s)^m] ds + e(t)     (Ting's upper limit on retract)
+    z_rec(t) = z(t) + eta(t)
+    e(t)     = phi·e(t-1) + sqrt(1 - phi²)·sigma·w(t),  e(0) = sigma·w(0)
+
+The kernel's moduli are **reduced** moduli E* (palpbayes works in E*; E = E*·(1 - nu²)).  The
+noise model is :mod:`palpbayes.sim.trace`'s; the default sigma is the paper's 48 mN peak-to-peak
+read as ±3 sigma (8 mN).  A paper-scale foam is E* ~ 50–150 kPa under the paper's tips
+(:data:`palpbayes.paper.PAPER_TIPS`: the paraboloid and the flat punch; the exact sphere has no
+power law, use its Hertz paraboloid), a few mm deep at 50 mm/min, 800 Hz.
+
+>>> from palpbayes.contact import PowerLawKernel
+>>> from palpbayes.paper import PAPER_TIPS
+>>> tr = simulate_viscoelastic(PowerLawKernel(100e3, 0.1), PAPER_TIPS["paraboloid"],
+...                            depth=3e-3, speed=50 / 60e3, hold_time=2.0, rng=1)
+>>> tr.segment_names, tr.metadata["kernel"]
+(('approach', 'hold', 'retract'), 'power-law')
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from ..contact import PowerLawKernel, PronyKernel, Tip, exponent, get_law, hereditary_force
+from ..contact import prefactor as tip_prefactor
+from ..errors import GeometryError, InputError
+from ..noise import PAPER_NOISE_PP, pp_from_sigma, sigma_from_pp
+from ..trace import IndentationTrace
+from ._checks import ar1_phi, finite, nonneg, positive
+from .trace import ar1_noise
+
+__all__ = ["ramp_hold_motion", "simulate_viscoelastic", "multi_speed", "VISCO_BASELINE_TIME"]
+
+#: [s] Default pre-contact baseline: the default approach is ``speed`` times this.
+VISCO_BASELINE_TIME = 0.5
+#: Sample periods by which a duration may exceed a whole number of them and still round down.
+_SLACK = 1e-6
+
+
+def _steps(duration: float, rate: float) -> int:
+    """Whole sample periods covering ``duration`` [s] at ``rate`` [Hz] (rounded up, but a
+    duration within :data:`_SLACK` of a period above a whole number rounds down)."""
+    return max(0, math.ceil(duration * rate - _SLACK))
+
+
+def ramp_hold_motion(*, depth: float, speed: float, hold_time: float, retract: bool = True,
+                     rate: float = 800.0, approach: float | None = None, z_surf: float = 0.0
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Time, tip height and segment codes of one ramp–hold–retract, sampled at ``rate``.
+
+    The samples are t_k = k/rate, k = 0..N-1, the first at the start height.  The descent is a
+    whole number n of sample periods: the start height is z_surf + approach', with approach'
+    the requested ``approach`` raised to the next multiple of speed/rate above depth (by less
+    than one sample's travel), so that the deepest point z_surf - depth is sampled exactly at
+    k = n and the speed is exact.  The hold is ``hold_time`` rounded up to whole sample periods
+    (h samples at the bottom, 0 for no hold); the retract (if any) takes n more samples back up
+    to the start height.  N = n + 1 + h (+ n).
+
+    Parameters
+    ----------
+    depth
+        [m] Depth below the surface at the bottom (> 0).
+    speed
+        [m/s] Tip speed down and up (> 0; the paper's 50 mm/min is 8.33e-4 m/s).
+    hold_time
+        [s] Hold at the bottom (>= 0).
+    retract
+        Move back up to the start height after the hold.
+    rate
+        [Hz] Sample rate (> 0).
+    approach
+        [m] Height above the surface where the motion starts (>= 0); default
+        :data:`VISCO_BASELINE_TIME` · speed (a 0.5 s pre-contact baseline).
+    z_surf
+        [m] Surface height (z up, depth d = z_surf - z).
+
+    Returns
+    -------
+    (time [s], z [m], segment)
+        ``segment`` codes into :data:`palpbayes.trace.SEGMENTS`: 0 while descending (the bottom
+        sample included), 1 on the hold, 2 on the retract.
+
+    Raises
+    ------
+    InputError
+        A non-positive depth, speed or rate, a negative hold time or approach, a non-finite
+        z_surf, or a motion of fewer than 3 samples.
+    """
+    depth = positive(depth, "indentation depth [m]")
+    speed = positive(speed, "speed [m/s]")
+    hold_time = nonneg(hold_time, "hold time [s]")
+    rate = positive(rate, "sample rate [Hz]")
+    z_surf = finite(z_surf, "surface height z_surf [m]")
+    approach = VISCO_BASELINE_TIME * speed if approach is None else nonneg(
+        approach, "approach distance [m]")
+    n_down = max(1, _steps((approach + depth) / speed, rate))
+    n_hold = _steps(hold_time, rate)
+    n_up = n_down if retract else 0
+    if n_down + 1 + n_hold + n_up < 3:
+        raise InputError(f"the motion has only {n_down + 1 + n_hold + n_up} samples at "
+                         f"{rate:g} Hz (a trace needs 3): raise the rate, the approach "
+                         "distance [m] or the hold time [s]")
+    # sample periods of travel above the bottom: n..0 down, 0 on the hold, 1..n up
+    above = np.concatenate([np.arange(n_down, -1, -1), np.zeros(n_hold),
+                            np.arange(1, n_up + 1)])
+    bottom = z_surf - depth
+    z = bottom + above * (speed / rate)
+    z[0] = max(z[0], z_surf)  # out of contact at rest even when approach' rounds to 0
+    if retract:
+        z[-1] = z[0]
+    segment = np.repeat(np.array([0, 1, 2], dtype=np.int8), [n_down + 1, n_hold, n_up])
+    return np.arange(above.size) / rate, z, segment
+
+
+def _kernel_truth(kernel) -> dict:
+    """The kernel's kind and parameters as metadata entries."""
+    if isinstance(kernel, PowerLawKernel):
+        return {"kernel": "power-law", "E0_true": kernel.E0, "alpha_true": kernel.alpha,
+                "t0_true": kernel.t0}
+    if len(kernel.E) == 1:
+        return {"kernel": "sls", "E_inf_true": kernel.E_inf, "E1_true": kernel.E[0],
+                "tau_true": kernel.tau[0]}
+    return {"kernel": "prony", "E_inf_true": kernel.E_inf, "E_prony_true": tuple(kernel.E),
+            "tau_prony_true": tuple(kernel.tau)}
+
+
+def _power_law_tip(tip) -> tuple[float, float]:
+    """(g, m) of the tip's law F = E*·g·d^m, else InputError/GeometryError."""
+    if not isinstance(tip, Tip):
+        raise InputError(f"tip must be a palpbayes.contact.Tip, got {type(tip).__name__}")
+    g, m = tip_prefactor(tip), exponent(tip)
+    if g is None or m is None:
+        law = get_law(tip)
+        hint = ""
+        if law.hertz_approximation is not None:
+            hint = f"; use tip '{law.hertz_approximation(tip).kind}' (its Hertz approximation)"
+        raise GeometryError(f"tip '{tip.kind}' has no power-law form F = E*·g·d^m, which the "
+                            f"viscoelastic simulator needs{hint}")
+    return float(g), float(m)
+
+
+def simulate_viscoelastic(
+    kernel: PowerLawKernel | PronyKernel,
+    tip: Tip,
+    *,
+    depth: float,
+    speed: float,
+    hold_time: float,
+    retract: bool = True,
+    rate: float = 800.0,
+    z_surf: float = 0.0,
+    noise_sd: float = sigma_from_pp(PAPER_NOISE_PP),
+    phi: float = 0.0,
+    offset: float = 0.0,
+    position_noise_sd: float = 0.0,
+    approach: float | None = None,
+    rng: np.random.Generator | np.random.SeedSequence | int | None = None,
+    trace_id: str = "visco",
+) -> IndentationTrace:
+    """One ramp–hold–retract palpation of a viscoelastic half-space (module docstring).
+
+    Parameters
+    ----------
+    kernel
+        Relaxation modulus of the reduced modulus E*(t): a
+        :class:`~palpbayes.contact.PowerLawKernel` or a
+        :class:`~palpbayes.contact.PronyKernel` (e.g.
+        :func:`~palpbayes.contact.standard_linear_solid`).
+    tip
+        A power-law tip (paraboloid, flat punch, cone, power); F = E*·g·d^m when elastic.
+    depth, speed, hold_time, retract, rate, approach, z_surf
+        The motion: :func:`ramp_hold_motion`.
+    noise_sd
+        [N] Marginal sd sigma of the force noise (default 8 mN: the paper's 48 mN p-p / 6).
+    phi
+        Lag-one correlation of the AR(1) force noise, |phi| < 1 (0: white).
+    offset
+        [N] Constant force offset F0 (tare error).
+    position_noise_sd
+        [m] White noise sd added to the recorded z.
+    rng
+        numpy Generator, SeedSequence or seed.  Two draws of N standard normals, force then
+        z, whatever the options (the same seed gives the same noise across settings).
+    trace_id
+        The trace's identifier.
+
+    Returns
+    -------
+    IndentationTrace
+        Recorded z (up positive), force positive when pressing, ``segment`` codes.
+        ``metadata`` holds the truth: ``kernel`` ("power-law" with ``E0_true`` [Pa],
+        ``alpha_true``, ``t0_true`` [s]; "sls" with ``E_inf_true``, ``E1_true`` [Pa],
+        ``tau_true`` [s]; "prony" with ``E_inf_true``, ``E_prony_true``, ``tau_prony_true``),
+        ``z_surf_true``, ``sigma_true``, ``noise_pp``, ``phi_true``, ``force_offset_true``,
+        ``position_noise_true``, ``depth_true``, ``max_force_true`` (noise-free), the tip's law
+        ``m_true`` and ``g_true``, the motion (``speed``, ``rate``, ``hold`` [s] as sampled,
+        ``hold_requested``, ``approach`` [m] as sampled, ``retract``), ``simulated`` and
+        ``seed`` when ``rng`` was an int.
+
+    Raises
+    ------
+    InputError, GeometryError
+        An unknown kernel, a tip without a power law (the exact sphere), a bad motion
+        (:func:`ramp_hold_motion`), negative noise, |phi| >= 1, a non-finite offset.
+    """
+    if not isinstance(kernel, PowerLawKernel | PronyKernel):
+        raise InputError(f"kernel {kernel!r} is neither a PowerLawKernel nor a PronyKernel "
+                         "(palpbayes.contact)")
+    g, m = _power_law_tip(tip)
+    sigma = nonneg(noise_sd, "force noise sd noise_sd [N]")
+    phi = ar1_phi(phi)
+    offset = finite(offset, "force offset [N]")
+    position_noise_sd = nonneg(position_noise_sd, "position noise sd position_noise_sd [m]")
+    t, z, segment = ramp_hold_motion(depth=depth, speed=speed, hold_time=hold_time,
+                                     retract=retract, rate=rate, approach=approach,
+                                     z_surf=z_surf)
+    z_surf, speed, rate = float(z_surf), float(speed), float(rate)
+
+    gen = np.random.default_rng(rng)
+    n = t.size
+    w_force = gen.standard_normal(n)
+    w_z = gen.standard_normal(n)
+    f_true = hereditary_force(t, z_surf - z, g, m, kernel)
+    force = offset + f_true + ar1_noise(n, sigma, phi, w_force)
+    z_rec = z + position_noise_sd * w_z
+
+    metadata = {
+        "simulated": True,
+        **_kernel_truth(kernel),
+        "z_surf_true": z_surf,
+        "sigma_true": sigma,
+        "noise_pp": pp_from_sigma(sigma),
+        "phi_true": phi,
+        "force_offset_true": offset,
+        "position_noise_true": position_noise_sd,
+        "depth_true": float(depth),
+        "max_force_true": float(f_true.max()),
+        "m_true": m,
+        "g_true": g,
+        "approach": float(z[0] - z_surf),
+        "speed": speed,
+        "rate": rate,
+        "hold": int(np.count_nonzero(segment == 1)) / rate,
+        "hold_requested": float(hold_time),
+        "retract": bool(retract),
+    }
+    if isinstance(rng, int | np.integer):
+        metadata["seed"] = int(rng)
+    return IndentationTrace(time=t, z=z_rec, force=force, tip=tip, trace_id=trace_id,
+                            source=f"simulated viscoelastic trace {trace_id!r}",
+                            metadata=metadata, segment=segment)
+
+
+def multi_speed(kernel: PowerLawKernel | PronyKernel, tip: Tip, speeds, **kwargs
+                ) -> list[IndentationTrace]:
+    """One :func:`simulate_viscoelastic` trace per speed in ``speeds`` [m/s], in that order.
+
+    The noise of the traces is independent: ``rng`` (a seed, SeedSequence or Generator in
+    ``kwargs``) is spawned into one child per trace (:meth:`numpy.random.SeedSequence.spawn`),
+    so the same seed gives the same list.  Trace ids are ``f"{trace_id}-{v:.4g}mm-min"`` with v
+    the speed in mm/min (``-{i}`` appended to every id when two speeds print alike);
+    ``metadata`` adds ``speed_index`` i and, for an int seed, ``seed``.
+
+    Raises
+    ------
+    InputError
+        No speeds, a speed that is not a positive number, ``speed`` among ``kwargs``, or any
+        error of :func:`simulate_viscoelastic`.
+    """
+    if "speed" in kwargs:
+        raise InputError("multi_speed takes the speeds as its third argument, not speed=")
+    try:
+        v = np.asarray(speeds, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"speeds {speeds!r} [m/s] are not numbers") from None
+    if v.ndim != 1 or v.size == 0:
+        raise InputError(f"speeds must be a non-empty list of speeds [m/s], got {speeds!r}")
+    v = [positive(x, f"speeds[{i}] [m/s]") for i, x in enumerate(v)]
+    rng = kwargs.pop("rng", None)
+    base = kwargs.pop("trace_id", "visco")
+    if isinstance(rng, np.random.Generator):
+        children = rng.spawn(len(v))
+    else:
+        seq = rng if isinstance(rng, np.random.SeedSequence) else np.random.SeedSequence(rng)
+        children = seq.spawn(len(v))
+    ids = [f"{base}-{x * 60e3:.4g}mm-min" for x in v]
+    if len(set(ids)) < len(ids):
+        ids = [f"{name}-{i}" for i, name in enumerate(ids)]
+    out = []
+    for i, (x, child, name) in enumerate(zip(v, children, ids, strict=True)):
+        tr = simulate_viscoelastic(kernel, tip, speed=x, rng=child, trace_id=name, **kwargs)
+        meta = dict(tr.metadata, speed_index=i)
+        if isinstance(rng, int | np.integer):
+            meta["seed"] = int(rng)
+        out.append(replace(tr, metadata=meta))
+    return out
