@@ -1,0 +1,303 @@
+"""Fit a relaxation modulus to one recorded cycle: :func:`fit_rheology` and its result.
+
+``fit_rheology(trace, rheology="power-law")`` prepares the block means of the chosen segments
+(:mod:`~palpbayes.rheology.cycle`), integrates the collapsed posterior on its grid
+(:mod:`~palpbayes.rheology.posterior`), draws from it and checks the fit:
+
+* a posterior-predictive check of the residuals binned in *time* (contact bins from the
+  surface to the end of the record; :func:`palpbayes.checks.posterior_predictive_check`,
+  Gelman, Meng & Stern 1996), the same test as the elastic fit's;
+* flags, never silent: alpha at a bound of its prior; tau outside the recorded time scales
+  (step to duration) or faster than one step; a surface at its prior bound; other basins of
+  the surface × theta density; a contact that shrinks during the hold (Lee–Radok overstates
+  the relaxation there; Ting's rule is not in the fit yet); a poor importance sample.
+
+Moduli are reduced moduli E* [Pa] as everywhere in palpbayes; give ``nu`` to have Young's
+moduli E = E*(1 − nu²) in the table too.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..checks import posterior_predictive_check
+from ..checks.core import CheckResult
+from ..contact import Tip, check_nu
+from ..contact.viscoelastic import PowerLawKernel, PronyKernel, ramp_apparent_modulus
+from ..errors import InputError
+from ..intervals import LEVEL
+from ..trace import IndentationTrace
+from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
+from .design import lag_matrix, lee_radok_columns
+from .posterior import ALPHA_MAX, PHI_BOUNDS, RHEOLOGIES, GridPosterior, grid_posterior
+
+__all__ = ["RheologyFit", "fit_rheology", "PARAMETERS", "SHRINK_FLAG", "MIN_ESS"]
+
+#: Parameters of each rheology in table order: (name, unit, is a modulus).
+PARAMETERS = {
+    "power-law": (("E0", "Pa", True), ("alpha", "-", False)),
+    "sls": (("E_inf", "Pa", True), ("E1", "Pa", True), ("tau", "s", False)),
+}
+_COMMON = (("z_surf", "m", False), ("offset", "N", False), ("sigma", "N", False),
+           ("phi", "-", False))
+#: Largest relative loss of depth during the hold before the shrinking contact is flagged.
+SHRINK_FLAG = 0.02
+#: Smallest effective importance sample before the draws are flagged.
+MIN_ESS = 400
+#: Draws used for the force band and the posterior-predictive check.
+_BAND_DRAWS = 100
+
+
+@dataclass
+class RheologyFit:
+    """A viscoelastic fit of one cycle.
+
+    Attributes
+    ----------
+    rheology
+        ``"power-law"`` (E*(t) = E0*·(t/t0)^(−alpha)) or ``"sls"``
+        (E*(t) = E_inf* + E1*·exp(−t/tau)).
+    data
+        The block means that were fitted.
+    grid
+        The collapsed posterior on its grid.
+    draws
+        Joint posterior draws (moduli E* [Pa], alpha or tau [s], z_surf [m], offset [N], sigma
+        [N] of a block mean, phi).
+    ppc
+        Posterior-predictive check (residuals binned in time).
+    flags
+        One line each; empty when nothing is flagged.
+    nu
+        Poisson's ratio if given (adds Young's moduli to the table).
+    seconds
+        Wall time of the fit [s].
+    """
+
+    rheology: str
+    data: CycleData
+    grid: GridPosterior
+    draws: dict[str, np.ndarray]
+    ppc: CheckResult
+    flags: list[str] = field(default_factory=list)
+    nu: float | None = None
+    seconds: float = 0.0
+
+    @property
+    def t0(self) -> float:
+        return self.grid.t0
+
+    @property
+    def model_ok(self) -> bool:
+        """The posterior-predictive check passes."""
+        return bool(self.ppc.passed)
+
+    def table(self, level: float = LEVEL) -> pd.DataFrame:
+        """One row per parameter: ``parameter``, ``unit``, ``median``, ``lo``, ``hi`` (the
+        central ``level`` interval) and, for moduli with ``nu`` given, ``E`` rows too."""
+        q = [50.0, 50.0 * (1 - level), 50.0 * (1 + level)]
+        rows = []
+        for name, unit, modulus in PARAMETERS[self.rheology] + _COMMON:
+            med, lo, hi = np.percentile(self.draws[name], q)
+            rows.append({"parameter": name + ("*" if modulus else ""), "unit": unit,
+                         "median": med, "lo": lo, "hi": hi})
+            if modulus and self.nu is not None:
+                f = 1.0 - self.nu**2
+                rows.append({"parameter": name, "unit": unit, "median": med * f, "lo": lo * f,
+                             "hi": hi * f})
+        out = pd.DataFrame(rows)
+        out.attrs.update(level=level, rheology=self.rheology, t0_s=self.t0, nu=self.nu)
+        return out
+
+    def relaxation(self, times, level: float = LEVEL) -> pd.DataFrame:
+        """E*(t) [Pa] at ``times`` [s] > 0: median and central ``level`` band of the draws."""
+        t = np.atleast_1d(np.asarray(times, dtype=float))
+        if np.any(~np.isfinite(t)) or np.any(t <= 0):
+            raise InputError("relaxation times must be positive numbers of seconds")
+        E = self._moduli_at(t)
+        q = np.percentile(E, [50.0, 50.0 * (1 - level), 50.0 * (1 + level)], axis=0)
+        return pd.DataFrame({"time_s": t, "E_star_pa": q[0], "E_star_lo_pa": q[1],
+                             "E_star_hi_pa": q[2]})
+
+    def _moduli_at(self, t: np.ndarray) -> np.ndarray:
+        d = self.draws
+        if self.rheology == "power-law":
+            return d["E0"][:, None] * (t[None, :] / self.t0) ** (-d["alpha"][:, None])
+        return d["E_inf"][:, None] + d["E1"][:, None] * np.exp(-t[None, :] / d["tau"][:, None])
+
+    def kernels(self, n: int | None = None) -> list[PowerLawKernel | PronyKernel]:
+        """The relaxation kernels of the first ``n`` draws (all by default)."""
+        d, k = self.draws, len(self.draws["z_surf"]) if n is None else n
+        if self.rheology == "power-law":
+            return [PowerLawKernel(d["E0"][i], d["alpha"][i], self.t0) for i in range(k)]
+        return [PronyKernel(d["E_inf"][i], (d["E1"][i],), (d["tau"][i],)) for i in range(k)]
+
+    def apparent_modulus(self, speed: float, depth: float, level: float = LEVEL
+                         ) -> tuple[float, float, float]:
+        """E* [Pa] an elastic fit would read on a constant-speed ramp to ``depth`` [m] at
+        ``speed`` [m/s] with this tip (:func:`~palpbayes.contact.viscoelastic.
+        ramp_apparent_modulus`): median and central ``level`` interval over the draws."""
+        if not (np.isfinite(speed) and speed > 0 and np.isfinite(depth) and depth > 0):
+            raise InputError("speed [m/s] and depth [m] must be positive")
+        n = min(len(self.draws["z_surf"]), 1000)
+        vals = np.array([float(ramp_apparent_modulus(k, speed, depth, self.data.m))
+                         for k in self.kernels(n)])
+        med, lo, hi = np.percentile(vals, [50.0, 50.0 * (1 - level), 50.0 * (1 + level)])
+        return float(med), float(lo), float(hi)
+
+    def force_curves(self, n: int = _BAND_DRAWS) -> np.ndarray:
+        """[N] Model force at the block means for ``n`` draws (n, points), offset included."""
+        return _force_curves(self.data, self.rheology, self.draws, self.t0, n)
+
+    def summary_line(self) -> str:
+        tab = self.table()
+        parts = []
+        for _, r in tab.iterrows():
+            if r["parameter"] in ("offset", "phi", "sigma"):
+                continue
+            parts.append(f"{r['parameter']} {r['median']:.4g} [{r['lo']:.4g}, {r['hi']:.4g}] "
+                         f"{r['unit']}")
+        return "; ".join(parts)
+
+
+def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int) -> np.ndarray:
+    k = min(n, len(draws["z_surf"]))
+    idx = np.linspace(0, len(draws["z_surf"]) - 1, k).round().astype(int)
+    lags = lag_matrix(data.time)
+    out = np.empty((k, data.n_points))
+    for r, i in enumerate(idx):
+        z = draws["z_surf"][i:i + 1]
+        if rheology == "power-law":
+            f = draws["E0"][i] * lee_radok_columns(data.time, lags, z, data.z, data.m,
+                                                   "power-law", float(draws["alpha"][i]), t0)[0]
+        else:
+            f = (draws["E_inf"][i] * lee_radok_columns(data.time, lags, z, data.z, data.m,
+                                                       None)[0]
+                 + draws["E1"][i] * lee_radok_columns(data.time, lags, z, data.z, data.m,
+                                                      "exponential", float(draws["tau"][i]))[0])
+        out[r] = data.C * f + draws["offset"][i]
+    return out
+
+
+def _flags(fit: RheologyFit) -> list[str]:
+    d, data, grid = fit.draws, fit.data, fit.grid
+    out = []
+    if fit.rheology == "power-law":
+        a = d["alpha"]
+        if np.mean(a < 0.01) > 0.05:
+            out.append(f"alpha piles up at 0, the lower bound of its prior (P(alpha < 0.01) = "
+                       f"{np.mean(a < 0.01):.2f}): no relaxation resolved; the elastic model "
+                       "may do")
+        if np.mean(a > ALPHA_MAX - 0.01) > 0.05:
+            out.append(f"alpha piles up at {ALPHA_MAX}, the upper bound of its prior: the "
+                       "material flows almost like a liquid, or the segments are wrong")
+    else:
+        tau = d["tau"]
+        lo, hi = np.percentile(tau, [5.0, 95.0])
+        if lo < data.dt_min:
+            out.append(f"tau reaches {lo:.3g} s, below one step of the fitted record "
+                       f"({data.dt_min:.3g} s): a relaxation faster than the sampling is not "
+                       "resolved (fit fewer blocks: max_points, or sample faster)")
+        if hi > data.span:
+            out.append(f"tau reaches {hi:.3g} s, beyond the recorded {data.span:.3g} s: the "
+                       "slow relaxation is not resolved (hold longer)")
+    if np.mean(d["phi"] > PHI_BOUNDS[1] - 0.02) > 0.05:
+        out.append(f"the noise correlation phi piles up at {PHI_BOUNDS[1]}, the upper bound of "
+                   "its prior: the residuals drift slowly, which is model misfit rather than "
+                   "sensor noise")
+    zlo, zhi = np.percentile(d["z_surf"], [5.0, 95.0])
+    if zlo <= grid.z.min() <= data.z_lo or zhi >= grid.z.max() >= data.z_hi:
+        out.append("the surface posterior reaches a bound of its prior (the deepest or the first "
+                   "height): the contact point is not resolved")
+    if not grid.converged:
+        out.append("the posterior grid did not settle in its iterations: the intervals may be "
+                   "too narrow or too wide (report this record)")
+    for z, th, drop in grid.other_basins:
+        out.append(f"another basin of the posterior at z_surf = {z:.6g} m, "
+                   f"{grid.theta_name} = {th:.3g}, {drop:.1f} below the best in log density")
+    ess = float(d["ess"])
+    if ess < MIN_ESS:
+        out.append(f"the moduli's priors leave an effective sample of {ess:.0f} draws: the "
+                   "intervals are rough")
+    hold = data.segment == 1
+    if hold.any():
+        dep = np.median(d["z_surf"]) - data.z
+        peak = float(dep[~hold].max()) if (~hold).any() else float(dep.max())
+        loss = (peak - float(dep[hold].min())) / peak if peak > 0 else 0.0
+        if loss > SHRINK_FLAG:
+            out.append(f"the contact shrinks by {100 * loss:.1f} % of the depth during the hold "
+                       "(the tip backs out as the force relaxes): Lee–Radok overstates the "
+                       "relaxation there; Ting's rule is not in the fit yet")
+    if not fit.ppc.passed:
+        out.append(fit.ppc.flag)
+    return out
+
+
+def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
+                 tip: Tip | None = None, segments=DEFAULT_SEGMENTS, t0: float = 1.0,
+                 nu: float | None = None, n_draws: int = 4000,
+                 max_points: int = MAX_POINTS,
+                 rng: np.random.Generator | int | None = 0) -> RheologyFit:
+    """Posterior of a relaxation modulus, the surface, offset and noise from one cycle.
+
+    Parameters
+    ----------
+    trace
+        The recording (SI; z up, pressing positive), with its segments or segments from the
+        motion.
+    rheology
+        ``"power-law"``: E*(t) = E0*·(t/t0)^(−alpha) (Lee & Radok 1960); ``"sls"``: the
+        standard linear solid E*(t) = E_inf* + E1*·exp(−t/tau).
+    tip
+        Indenter (default ``trace.tip``), a power law F = C·E*·d^m.
+    segments
+        Fitted segments (default approach and hold; retract is refused for now).
+    t0
+        [s] Reference time of the power law (E0* is the modulus at t0).
+    nu
+        Poisson's ratio, only to add Young's moduli to the table.
+    n_draws
+        Posterior draws kept.
+    max_points
+        Most block means fitted (:mod:`~palpbayes.rheology.cycle`).
+    rng
+        Seed or Generator of the draws and the check.
+
+    Returns
+    -------
+    RheologyFit
+    """
+    start = _time.perf_counter()
+    if rheology not in RHEOLOGIES:
+        raise InputError(f"unknown rheology {rheology!r}; use one of "
+                         f"{', '.join(RHEOLOGIES)} (or the elastic fit)")
+    if nu is not None:
+        nu = check_nu(nu)
+    if not (isinstance(n_draws, int | np.integer) and n_draws >= 100):
+        raise InputError(f"n_draws = {n_draws!r} must be a whole number >= 100")
+    gen = np.random.default_rng(rng)
+    data = prepare_cycle(trace, tip, segments=segments, max_points=max_points)
+    grid = grid_posterior(data, rheology, t0=t0)
+    draws = grid.draws(gen, int(n_draws))
+    curves = _force_curves(data, rheology, draws, t0, _BAND_DRAWS)
+    sub = np.linspace(0, n_draws - 1, curves.shape[0]).round().astype(int)
+    t_contact = float(np.median(_contact_times(data, draws["z_surf"][sub])))
+    # residuals binned in time: -time as the "height", the contact time as the "surface"
+    ppc = posterior_predictive_check(-data.time, data.force, curves, draws["sigma"][sub],
+                                     phi=draws["phi"][sub], rng=gen, z_surf=-t_contact,
+                                     n_bins=12)
+    fit = RheologyFit(rheology, data, grid, draws, ppc, nu=nu)
+    fit.flags = _flags(fit)
+    fit.seconds = _time.perf_counter() - start
+    return fit
+
+
+def _contact_times(data: CycleData, z_surf: np.ndarray) -> np.ndarray:
+    """[s] First block time in contact for each surface height."""
+    inside = data.z[None, :] < np.asarray(z_surf)[:, None]
+    first = np.argmax(inside, axis=1)
+    return data.time[first]

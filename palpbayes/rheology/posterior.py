@@ -1,0 +1,351 @@
+"""Collapsed posterior of a viscoelastic fit on a (surface × alpha or tau) grid.
+
+Model: block means F_i = β·X_i(z_s, θ) + F0 + e_i, with X the Lee–Radok columns of
+:mod:`~palpbayes.rheology.design` (power law: β = E0*, θ = alpha; standard linear solid:
+β = (E_inf*, E1*), θ = tau) and e stationary AR(1) Gaussian noise (lag-one correlation phi).
+Given (z_s, θ, phi) the mean is linear in β and F0, so they and the noise scale integrate out
+in closed form, exactly as the elastic exact engine does (:mod:`palpbayes.bayes.exact`,
+:func:`palpbayes.bayes.conjugate.node_posterior`: Jeffreys prior on the innovation sd, the
+offset prior N(baseline level, (100·sigma_c)²) as a pseudo-observation, flat on β).  What is
+left is a 3-D density on (z_s, θ, phi), integrated on a grid:
+
+1. a coarse grid (:data:`COARSE_THETA` × :data:`COARSE_Z`) over the whole prior finds the
+   best basin (other basins within :data:`KEEP` of it are reported);
+2. a sheared grid of :data:`FINE` × :data:`FINE` nodes follows the basin: θ_i spans
+   ±:data:`SPAN_SD` marginal sd of θ, and on each θ_i the surface nodes span ±SPAN_SD
+   *conditional* sd of z_s around its conditional mean (the regression line of z_s on θ), so
+   a narrow, tilted ridge (surface and alpha trade off) is resolved as well as a round basin;
+   the grid's moments are recomputed and the grid rebuilt until they are steady and every sd
+   is at least :data:`RESOLVE` node steps (clipped at the prior bounds);
+3. the moduli's priors are applied to draws by importance resampling: log-uniform (1/E) on
+   E0* and E1*, flat on E_inf* >= 0, each modulus positive.
+
+Priors on θ: alpha uniform on [0, :data:`ALPHA_MAX`]; tau log-uniform on
+[dt/10, 100·span] (dt the shortest step, span the record).  phi uniform on [0, 0.98].
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.special import logsumexp
+
+from ..bayes.conjugate import Gram, NodePosterior, node_posterior
+from ..bayes.exact import cell_widths
+from ..errors import FitError, InputError
+from .cycle import CycleData
+from .design import lag_matrix, lee_radok_columns
+
+__all__ = ["RHEOLOGIES", "GridPosterior", "grid_posterior", "ALPHA_MAX", "KEEP", "FINE",
+           "SPAN_SD", "COARSE_THETA", "COARSE_Z", "PHI_BOUNDS"]
+
+#: Relaxation models the grid engine fits, and the name of their grid parameter.
+RHEOLOGIES = {"power-law": "alpha", "sls": "tau"}
+#: Upper end of the uniform alpha prior (1 is a dashpot).
+ALPHA_MAX = 0.95
+#: Coarse grid: theta nodes and surface nodes.
+COARSE_THETA, COARSE_Z = 13, 97
+#: Nodes per axis of the fine box.
+FINE = 25
+#: Half-width of the fine grid in (marginal, conditional) standard deviations.
+SPAN_SD = 6.0
+#: Smallest sd of the final grid, in node steps.
+RESOLVE = 1.5
+#: Basins lower than the best by more than this (log density) are not reported.
+KEEP = 14.0
+#: Support of the uniform phi prior and its grid.
+PHI_BOUNDS = (0.0, 0.98)
+PHI_NODES = 25
+#: Offset prior sd in units of the block-mean noise scale (vague: the data fix the offset).
+OFFSET_SD = 100.0
+#: Proposals per returned draw (importance resampling of the moduli's priors).
+PROPOSALS = 8
+
+
+@dataclass
+class GridPosterior:
+    """The posterior on the final grid.
+
+    ``theta`` (Gt,) alpha [-] or tau [s]; ``z`` (Gt, Gz) surface nodes [m] on each theta node
+    (sheared: ``z[i] = z_c + slope·(θ_i − θ_c) + offsets``), ``slope`` dz/dθ-coordinate;
+    ``phi`` (H,);
+    ``log_mass`` (Gt, Gz, H) normalised log mass of each node's cell; ``post`` the conditional
+    posterior of β = (modulus columns…, offset) at every node (arrays (Gt·Gz, H, …));
+    ``names`` of β; ``other_basins`` [(z_s, θ, log density below the best)] of the coarse grid.
+    """
+
+    rheology: str
+    data: CycleData
+    z: np.ndarray
+    theta: np.ndarray
+    phi: np.ndarray
+    log_mass: np.ndarray
+    post: NodePosterior
+    names: tuple[str, ...]
+    t0: float
+    bounds: tuple[float, float]
+    slope: float = 0.0
+    other_basins: list = field(default_factory=list)
+    n_evaluations: int = 0
+    converged: bool = True
+
+    @property
+    def theta_name(self) -> str:
+        return RHEOLOGIES[self.rheology]
+
+    def marginal(self, axis: str) -> tuple[np.ndarray, np.ndarray]:
+        """Nodes and normalised cell masses of ``"z"`` (all nodes, sorted), ``"theta"`` or
+        ``"phi"``."""
+        m = np.exp(self.log_mass)
+        if axis == "z":
+            order = np.argsort(self.z.ravel())
+            return self.z.ravel()[order], m.sum(axis=2).ravel()[order]
+        if axis == "theta":
+            return self.theta, m.sum(axis=(1, 2))
+        return self.phi, m.sum(axis=(0, 1))
+
+    def draws(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
+        """``n`` joint draws: moduli [Pa] (E*), theta, z_surf [m], offset [N], sigma [N] (block
+        mean noise sd), phi; the moduli's priors by importance resampling (module docstring).
+        ``ess`` is the importance sample's effective size."""
+        Gt, Gz, H = self.log_mass.shape
+        k = PROPOSALS * n
+        p = np.exp(self.log_mass.ravel() - logsumexp(self.log_mass.ravel()))
+        pick = rng.choice(p.size, size=k, p=p)
+        it, iz, ih = np.unravel_index(pick, (Gt, Gz, H))
+        node = it * Gz + iz
+        theta_c = self._theta_coord()
+        ct = theta_c[it] + rng.uniform(-0.5, 0.5, k) * cell_widths(theta_c)[it]
+        ct = np.clip(ct, theta_c[0], theta_c[-1])
+        zw = np.stack([cell_widths(row) for row in self.z])
+        zs = (self.z[it, iz] + self.slope * (ct - theta_c[it])
+              + rng.uniform(-0.5, 0.5, k) * zw[it, iz])
+        th = self._from_coord(ct)
+        S, nu = self.post.S[node, ih], self.post.nu
+        tau2 = S / rng.chisquare(nu, k)
+        cov = self.post.scale[node, ih] * (tau2 * nu / S)[:, None, None]
+        L = np.linalg.cholesky(cov)
+        beta = self.post.beta[node, ih] + np.einsum("kij,kj->ki", L, rng.standard_normal(
+            (k, cov.shape[-1])))
+        phi = self.phi[ih]
+        out = {name: beta[:, j] for j, name in enumerate(self.names)}
+        out["offset"] = out.pop("offset") + self.data.f0_center
+        logw = np.zeros(k)
+        for name in self.names:
+            if name == "offset":
+                continue
+            ok = out[name] > 0
+            logw = np.where(ok, logw - (np.log(np.where(ok, out[name], 1.0))
+                                        if name != "E_inf" else 0.0), -np.inf)
+        if not np.isfinite(logw).any():
+            raise FitError("no posterior draw has positive moduli: the relaxation model does "
+                           "not describe this record (check the segments and the sign of z)")
+        w = np.exp(logw - logw.max())
+        w /= w.sum()
+        ess = 1.0 / float(w @ w)
+        keep = rng.choice(k, size=n, p=w)
+        out.update({self.theta_name: th, "z_surf": zs,
+                    "sigma": np.sqrt(tau2 / (1.0 - phi**2)), "phi": phi})
+        res = {key: np.asarray(v)[keep] for key, v in out.items()}
+        res["ess"] = np.array(ess)
+        return res
+
+    def _theta_coord(self) -> np.ndarray:
+        return np.log(self.theta) if self.rheology == "sls" else self.theta
+
+    def _from_coord(self, c: np.ndarray) -> np.ndarray:
+        return np.exp(c) if self.rheology == "sls" else c
+
+
+def _theta_bounds(rheology: str, data: CycleData) -> tuple[float, float]:
+    if rheology == "power-law":
+        return 0.0, ALPHA_MAX
+    return data.dt_min / 10.0, 100.0 * data.span
+
+
+class _Evaluator:
+    """log p(z_s, θ, phi | data) on (θ nodes × z nodes × phi), β and noise integrated."""
+
+    def __init__(self, data: CycleData, rheology: str, t0: float):
+        self.data, self.rheology, self.t0 = data, rheology, t0
+        self.lags = lag_matrix(data.time)
+        self.y = data.force - data.f0_center
+        self.weights = np.array([1.0 / OFFSET_SD**2])
+        self.centers = np.zeros(1)
+        self.phi = np.linspace(*PHI_BOUNDS, PHI_NODES)
+        self.n = 0
+
+    def columns(self, theta: float, z: np.ndarray) -> np.ndarray:
+        """X (G, N, q): [modulus column, 1, (second modulus), y] for surfaces ``z``."""
+        d = self.data
+        kind = "power-law" if self.rheology == "power-law" else "exponential"
+        b = d.C * lee_radok_columns(d.time, self.lags, z, d.z, d.m, kind, theta, self.t0)
+        G, N = b.shape
+        ones, y = np.ones((G, N)), np.broadcast_to(self.y, (G, N))
+        if self.rheology == "power-law":
+            return np.stack([b, ones, y], axis=-1)
+        inf = d.C * lee_radok_columns(d.time, self.lags, z, d.z, d.m, None)
+        return np.stack([inf, ones, b, y], axis=-1)
+
+    def gram(self, thetas: np.ndarray, z: np.ndarray) -> Gram:
+        n_contact = np.count_nonzero(self.data.z[None, :] < z[:, None], axis=1)
+        X = np.concatenate([self.columns(float(th), z) for th in thetas])  # (Gt·Gz, N, q)
+        self.n += thetas.size * z.size
+        m0 = np.einsum("gni,gnj->gij", X, X)
+        m1 = np.einsum("gni,gnj->gij", X[:, 1:], X[:, :-1])
+        return Gram(np.tile(z, thetas.size), m0, m1, X[:, 0].copy(), X[:, -1].copy(),
+                    np.tile(n_contact, thetas.size), X.shape[1])
+
+    def logp_rows(self, thetas: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, NodePosterior]:
+        """As :meth:`logp` with its own surface nodes on every theta node: ``z`` (Gt, Gz)."""
+        grams = [self.gram(np.array([th]), row) for th, row in zip(thetas, z, strict=True)]
+        g = Gram(np.concatenate([q.z for q in grams]), *[np.concatenate([getattr(q, f) for q
+                 in grams]) for f in ("m0", "m1", "first", "last", "n_contact")], n=grams[0].n)
+        post = node_posterior(g, self.phi, self.weights, self.centers)
+        lp = logsumexp(post.logp + np.log(cell_widths(self.phi))[None, :], axis=1)
+        return lp.reshape(z.shape), post
+
+    def logp(self, thetas: np.ndarray, z: np.ndarray, phi: np.ndarray | None = None
+             ) -> tuple[np.ndarray, NodePosterior]:
+        """(Gt, Gz) log density marginal over phi, and the node posteriors (Gt·Gz, H)."""
+        phi = self.phi if phi is None else phi
+        post = node_posterior(self.gram(thetas, z), phi, self.weights, self.centers)
+        lp = logsumexp(post.logp + np.log(cell_widths(phi))[None, :], axis=1)
+        return lp.reshape(thetas.size, z.size), post
+
+
+def _moments(ct: np.ndarray, z: np.ndarray, lp: np.ndarray) -> tuple[float, ...]:
+    """Mean and sd of θ, the slope of z on θ, the conditional mean of z at the mean θ and its
+    conditional sd, from the grid's masses (lp + log cell areas)."""
+    w = np.exp(lp - lp.max())
+    w /= w.sum()
+    mt = float((w.sum(1)) @ ct)
+    vt = float(w.sum(1) @ (ct - mt) ** 2)
+    mz = float((w * z).sum())
+    vz = float((w * (z - mz) ** 2).sum())
+    cov = float((w * (ct[:, None] - mt) * (z - mz)).sum())
+    slope = cov / vt if vt > 0 else 0.0
+    return mt, math.sqrt(max(vt, 0.0)), slope, mz, math.sqrt(max(vz - slope * cov, 0.0))
+
+
+def _log_cells(ct: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """log area (Gt, Gz) of every node's cell of a sheared grid (θ width × its row's z width;
+    a shear keeps areas)."""
+    return np.log(cell_widths(ct))[:, None] + np.log(np.stack([cell_widths(r) for r in z]))
+
+
+def _sheared(centre, sd, slope, bounds) -> tuple[np.ndarray, np.ndarray]:
+    (tlo, thi), (zlo, zhi) = bounds
+    (mt, mz), (st, sz) = (min(max(centre[0], tlo), thi), centre[1]), sd
+    ct = np.linspace(max(tlo, mt - SPAN_SD * st), min(thi, mt + SPAN_SD * st), FINE)
+    mid = mz + slope * (ct - mt)
+    mid = np.clip(mid, zlo, zhi)  # a ridge may leave the prior: keep every row inside it
+    z = np.stack([np.linspace(max(zlo, c - SPAN_SD * sz), min(zhi, c + SPAN_SD * sz), FINE)
+                  for c in mid])
+    return ct, z
+
+
+def _coarse_basins(lp: np.ndarray, thetas: np.ndarray, z: np.ndarray) -> list:
+    """Local maxima of the coarse grid (8-neighbourhood) within KEEP of the best."""
+    pad = np.pad(lp, 1, constant_values=-np.inf)
+    peak = np.ones_like(lp, dtype=bool)
+    for di in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            if di or dj:
+                peak &= lp >= pad[1 + di:1 + di + lp.shape[0], 1 + dj:1 + dj + lp.shape[1]]
+    top = lp.max()
+    out = [(float(z[j]), float(thetas[i]), float(top - lp[i, j]))
+           for i, j in zip(*np.nonzero(peak & (lp > top - KEEP)), strict=True)]
+    return sorted(out, key=lambda b: b[2])
+
+
+def _separate_basins(ev: _Evaluator, from_c, basins: list, best: tuple[float, float],
+                     best_lp: float, step: tuple[float, float]) -> list:
+    """The coarse grid's basins that a valley (a dip of more than 1 in log density below the
+    lower end) separates from the final mode, as (z_s, θ, log density below the mode); a
+    tilted ridge puts the coarse maximum far from the mode without a second basin."""
+    out = []
+    for z, c, _ in basins[:4]:
+        if abs(z - best[1]) <= step[1] and abs(c - best[0]) <= step[0]:
+            continue
+        f = np.linspace(0.0, 1.0, 9)
+        ct = best[0] + f * (c - best[0])
+        zs = best[1] + f * (z - best[1])
+        lp, _ = ev.logp_rows(from_c(ct), zs[:, None])
+        line = lp[:, 0]
+        if line[1:-1].min() >= min(line[0], line[-1]) - 1.0:
+            continue
+        out.append((float(z), float(from_c(c)), float(best_lp - line[-1])))
+    return out
+
+
+def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 1.0,
+                   max_iterations: int = 10) -> GridPosterior:
+    """The collapsed posterior of ``data`` under ``rheology`` (module docstring).
+
+    Raises
+    ------
+    InputError
+        An unknown rheology or t0 <= 0.
+    FitError
+        No node has enough samples in contact (the record has no contact).
+    """
+    if rheology not in RHEOLOGIES:
+        raise InputError(f"unknown rheology {rheology!r}; the viscoelastic fit knows "
+                         f"{', '.join(RHEOLOGIES)}")
+    if not (math.isfinite(t0) and t0 > 0):
+        raise InputError(f"t0 = {t0!r} s must be positive")
+    ev = _Evaluator(data, rheology, t0)
+    lo, hi = _theta_bounds(rheology, data)
+    log_theta = rheology == "sls"
+    to_c = (lambda v: np.log(v)) if log_theta else (lambda v: np.asarray(v, float))  # noqa
+    from_c = (lambda c: np.exp(c)) if log_theta else (lambda c: c)  # noqa: E731
+    c_lo, c_hi = float(to_c(lo)), float(to_c(hi))
+    ct = np.linspace(c_lo, c_hi, COARSE_THETA)
+    cz = np.linspace(data.z_lo, data.z_hi, COARSE_Z)
+    lp, _ = ev.logp(from_c(ct), cz)
+    if not np.isfinite(lp).any():
+        raise FitError(f"{data.trace.source or data.trace.trace_id}: no surface height has "
+                       "enough block means in contact; the record has (almost) no contact")
+    i, j = np.unravel_index(np.argmax(lp), lp.shape)
+    basins = _coarse_basins(lp, ct, cz)
+    step = (ct[1] - ct[0], cz[1] - cz[0])
+    centre, sd, slope = (float(ct[i]), float(cz[j])), step, 0.0
+    bounds = ((c_lo, c_hi), (data.z_lo, data.z_hi))
+    converged = False
+    for _ in range(max_iterations):
+        gt, gz = _sheared(centre, sd, slope, bounds)
+        lp, post = ev.logp_rows(from_c(gt), gz)
+        if not np.isfinite(lp).any():
+            raise FitError("the fine grid holds no finite density; report this record")
+        a, b = np.unravel_index(np.argmax(lp), lp.shape)
+        mt, st, new_slope, mz, sz = _moments(gt, gz, lp + _log_cells(gt, gz))
+        spacing = (max(np.diff(gt).min(), 0.0), float(np.diff(gz, axis=1).min()))
+        edge = (a in (0, FINE - 1) and gt[a] not in bounds[0],
+                b in (0, FINE - 1) and gz[a, b] not in bounds[1])
+        resolved = all(s_ >= RESOLVE * h or s_ == 0.0 and h == 0.0
+                       for s_, h in zip((st, sz), spacing, strict=True))
+        steady = (abs(st - sd[0]) <= 0.3 * sd[0] and abs(sz - sd[1]) <= 0.3 * sd[1]
+                  and abs(mt - centre[0]) <= 0.5 * sd[0]
+                  and abs(mz - centre[1]) <= 0.5 * max(sd[1], abs(slope) * sd[0]))
+        if edge[0] or edge[1]:  # the mode sits on the grid's edge: go there, widen
+            centre = (float(gt[a]), float(gz[a, b]))
+            sd = (sd[0] * (2 if edge[0] else 1), sd[1] * (2 if edge[1] else 1))
+            continue
+        if steady and resolved:
+            converged = True
+            break
+        floor = (spacing[0] / 4, spacing[1] / 4)  # all mass on one node: shrink, do not stop
+        centre, slope = (mt, mz), new_slope
+        sd = (max(st, floor[0], (c_hi - c_lo) * 1e-9), max(sz, floor[1], 1e-15))
+    log_cell = (post.logp.reshape(FINE, FINE, -1) + _log_cells(gt, gz)[:, :, None]
+                + np.log(cell_widths(ev.phi))[None, None, :])
+    log_mass = log_cell - logsumexp(log_cell)
+    names = ("E0", "offset") if rheology == "power-law" else ("E_inf", "offset", "E1")
+    k, l = np.unravel_index(np.argmax(lp), lp.shape)
+    others = _separate_basins(ev, from_c, basins, (float(gt[k]), float(gz[k, l])),
+                              float(lp.max()), step)
+    return GridPosterior(rheology, data, gz, from_c(gt), ev.phi, log_mass, post,
+                         names, t0, (lo, hi), float(slope), others, ev.n, converged)
