@@ -7,6 +7,7 @@ down and depth is d = z_surf - z; force is the compressive normal force, positiv
 from __future__ import annotations
 
 import numbers
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -15,7 +16,7 @@ from .contact import Tip
 from .errors import DataFileError, InputError, NoContactError
 from .units import format_force, format_length
 
-__all__ = ["IndentationTrace", "SEGMENTS"]
+__all__ = ["IndentationTrace", "SEGMENTS", "parse_segments"]
 
 #: Names of the segments of one palpation cycle, in the order they happen; the codes stored in
 #: :attr:`IndentationTrace.segment` index this tuple.
@@ -230,7 +231,8 @@ class IndentationTrace:
         return tuple(SEGMENTS[c] for c in np.unique(self.segment))
 
     def segments(self, names: tuple[str, ...] | list[str] | str) -> IndentationTrace:
-        """The samples of the named segments (e.g. ``("approach", "hold")``), in time order.
+        """The samples of the named segments (e.g. ``("approach", "hold")``, ``"hold"`` or
+        ``"all"``: :func:`parse_segments`), in time order.
 
         Raises
         ------
@@ -238,13 +240,8 @@ class IndentationTrace:
             If a name is not one of :data:`SEGMENTS`, or the trace does not record segments,
             or lacks one of them (the message names what is missing and what the trace has).
         """
-        names = tuple(n.strip() for n in names.split(",")) if isinstance(names, str) \
-            else tuple(names)
         where = self.source or f"trace {self.trace_id!r}"
-        bad = [n for n in names if n not in SEGMENTS]
-        if bad or not names:
-            raise InputError(f"unknown segment {bad[0] if bad else '(none given)'!r}; the "
-                             f"segments are {', '.join(SEGMENTS)}")
+        names = parse_segments(names)
         if self.segment is None:
             raise InputError(f"{where}: the trace does not record its segments, so the "
                              f"{', '.join(names)} samples cannot be told apart; give the "
@@ -271,6 +268,39 @@ class IndentationTrace:
             f"z {format_length(self.z.min(), 6)}..{format_length(self.z.max(), 6)}, "
             f"F {format_force(self.force.min())}..{format_force(self.force.max())})"
         )
+
+
+def parse_segments(segments: str | Sequence[str]) -> tuple[str, ...]:
+    """The segment names asked for, in :data:`~palpbayes.trace.SEGMENTS` order.
+
+    Parameters
+    ----------
+    segments
+        ``"all"`` (every name), a comma-separated string (``"approach,hold"``) or a sequence
+        of names of :data:`~palpbayes.trace.SEGMENTS`.
+
+    Raises
+    ------
+    InputError
+        For an unknown name or none at all.
+    """
+    if isinstance(segments, str):
+        if segments.strip().lower() == "all":
+            return SEGMENTS
+        names = [n.strip().lower() for n in segments.split(",")]
+    else:
+        try:
+            names = [str(n).strip().lower() for n in segments]
+        except TypeError:
+            raise InputError(f"segments {segments!r} must be 'all', names separated by commas "
+                             f"or a list of names ({', '.join(SEGMENTS)})") from None
+    names = [n for n in names if n]
+    bad = [n for n in names if n not in SEGMENTS]
+    if bad or not names:
+        what = f"unknown segment {bad[0]!r}" if bad else "no segment given"
+        raise InputError(f"{what}; give 'all' or names from {', '.join(SEGMENTS)}, e.g. "
+                         "segments='approach,hold'")
+    return tuple(n for n in SEGMENTS if n in names)
 
 
 def _segment_codes(segment, n: int, where: str) -> np.ndarray:

@@ -74,7 +74,7 @@ import numpy as np
 
 from ..contact import Tip
 from ..errors import DataFileError, InputError
-from ..trace import SEGMENTS, IndentationTrace
+from ..trace import SEGMENTS, IndentationTrace, parse_segments
 from .extras import import_extra
 from .tabular import check_file, check_plausible, split_trace_metadata, validate_force_sign
 
@@ -167,39 +167,6 @@ def _metadata(curve) -> dict:
             continue
         meta[name] = value
     return meta
-
-
-def parse_segments(segments: str | Sequence[str]) -> tuple[str, ...]:
-    """The segment names asked for, in :data:`~palpbayes.trace.SEGMENTS` order.
-
-    Parameters
-    ----------
-    segments
-        ``"all"`` (every name), a comma-separated string (``"approach,hold"``) or a sequence
-        of names of :data:`~palpbayes.trace.SEGMENTS`.
-
-    Raises
-    ------
-    InputError
-        For an unknown name or none at all.
-    """
-    if isinstance(segments, str):
-        if _is_all(segments):
-            return SEGMENTS
-        names = [n.strip().lower() for n in segments.split(",")]
-    else:
-        try:
-            names = [str(n).strip().lower() for n in segments]
-        except TypeError:
-            raise InputError(f"segments {segments!r} must be 'all', names separated by commas "
-                             f"or a list of names ({', '.join(SEGMENTS)})") from None
-    names = [n for n in names if n]
-    bad = [n for n in names if n not in SEGMENTS]
-    if bad or not names:
-        what = f"unknown segment {bad[0]!r}" if bad else "no segment given"
-        raise InputError(f"{what}; give 'all' or names from {', '.join(SEGMENTS)}, e.g. "
-                         "segments='approach,hold'")
-    return tuple(n for n in SEGMENTS if n in names)
 
 
 def _is_all(segments) -> bool:
@@ -320,14 +287,17 @@ def _curve_arrays(curve, index: int, source: str, wanted: tuple[str, ...] | None
             f"has {', '.join(has) or 'no approach, hold or retract'} (afmformats segments: "
             f"{listing})", f"read segments={','.join(has) or 'all'} instead"
             if has else "check the curve")
-    name_of = np.array([kinds[int(i)] for i in np.unique(seg)], dtype=object)
-    sample_names = name_of[np.searchsorted(np.unique(seg), seg)]
+    ids = np.unique(seg)
+    name_of = np.array([kinds[int(i)] for i in ids], dtype=object)
+    code_of = np.array([SEGMENTS.index(n) if n in SEGMENTS else -1 for n in name_of], np.int8)
+    where_id = np.searchsorted(ids, seg)
+    sample_names = name_of[where_id]
     keep = np.isin(sample_names, wanted)
     n_keep = int(np.count_nonzero(keep))
     if n_keep < 3:
         raise DataFileError(source, f"{where}: the {', '.join(wanted)} segment(s) have "
                             f"{n_keep} point(s)", "check the curve")
-    codes = np.array([SEGMENTS.index(n) for n in sample_names[keep]], dtype=np.int8)
+    codes = code_of[where_id[keep]]
     force = np.asarray(curve["force"], dtype=float)[keep]
     how = {"afm_modality": str(curve.modality),
            "afm_segments": ", ".join(f"{i} {n}" for i, n in kinds.items())}

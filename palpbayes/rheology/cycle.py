@@ -28,7 +28,7 @@ import numpy as np
 from ..baseline import estimate_baseline
 from ..contact import Tip, exponent, prefactor
 from ..errors import FitError, InputError, NoContactError
-from ..trace import SEGMENTS, IndentationTrace
+from ..trace import IndentationTrace, parse_segments
 
 __all__ = ["CycleData", "prepare_cycle", "DEFAULT_SEGMENTS", "MAX_POINTS"]
 
@@ -93,20 +93,14 @@ class CycleData:
 
 
 def _segment_names(segments) -> tuple[str, ...]:
-    if isinstance(segments, str):
-        segments = [s for s in segments.split(",") if s.strip()]
-    names = tuple(str(s).strip().lower() for s in segments)
-    bad = [s for s in names if s not in SEGMENTS]
-    if bad or not names:
-        raise InputError(f"unknown segment {bad[0] if bad else '(none)'!r} in --segments; "
-                         f"give a comma-separated list of {', '.join(SEGMENTS)}")
+    names = parse_segments(segments)
     if "approach" not in names:
         raise InputError("--segments must include the approach: the hereditary integral "
                          "starts from the material at rest before contact")
     if "retract" in names:
         raise InputError("the retract segment (Ting's rule, a shrinking contact) is not in the "
                          "viscoelastic fit yet; fit --segments approach,hold")
-    return tuple(s for s in SEGMENTS if s in names)
+    return names
 
 
 def _blocks(trace: IndentationTrace, block: int) -> np.ndarray:
