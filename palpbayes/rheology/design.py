@@ -1,30 +1,42 @@
-"""The Lee–Radok hereditary integral as regression columns, for many trial surfaces at once.
+"""The Lee–Radok hereditary integral as regression columns for the block means of a record.
 
 While the contact does not shrink, a rigid tip with elastic law F = C·E·d^m on a linear
 viscoelastic half-space with relaxation modulus E(t) gives (Lee & Radok 1960; DESIGN §9)
 
     F(t) = C·∫_0^t E(t − s)·du/ds ds,    u(s) = d(s)^m,  d = z_s − z(s) (0 out of contact).
 
-With u linear in time between samples (slope r_j on [t_j, t_{j+1}]) and Φ(x) = ∫_0^x E(y) dy,
+A fit sees block means of the force (:mod:`~palpbayes.rheology.cycle`), so the model is the
+*mean of F over each block's samples*, not F at the block's mean time: at the contact onset
+and where the hold starts F bends within a block, and the point value would miss the block
+mean by several noise sd.  The source u is linear between knots e_k (the blocks' window
+edges, and the corner where a hold starts), slope r_k, plus a quadratic bump per step
+(below).  With Φ(x) = ∫_0^x E(y) dy and Ψ(x) = ∫_0^x Φ(y) dy (0 for x <= 0), the response of
+block o to a unit slope on step k is the mean over its samples t of Φ(t − e_k) − Φ(t − e_{k+1});
+far from the source Φ is smooth and that mean is the average over the block's window
+[a_o, b_o] (half a step beyond its first and last samples: the midpoint rule, error
+~dt²·Φ''/24), (Ψ(b_o − e_k) − Ψ(a_o − e_k))/(b_o − a_o); on the :data:`BAND` knots nearest the
+block, where Φ bends within it, the mean is taken over the samples themselves.  So
 
-    F(t_i) = C·Σ_{j<i} r_j·[Φ(t_i − t_j) − Φ(t_i − t_{j+1})] = C·(W·r)_i,
+    F̄_o = C·Σ_k r_k·W[o, k] = C·(W·r)_o,
 
-a lower-triangular matrix W on the measured time axis that does not depend on the surface
-height z_s: every trial surface's column is one matrix product (BLAS), and the modulus enters
+one lower-triangular matrix W on the knot axis that does not depend on the surface height
+z_s: every trial surface's column is one matrix product (BLAS), and the modulus enters
 linearly.  Kernels (per unit modulus):
 
-* power law (springpot) E(t) = (t/t0)^(−alpha): Φ(x) = t0^alpha·x^(1−alpha)/(1 − alpha);
-* exponential branch E(t) = exp(−t/tau): Φ(x) = tau·(1 − exp(−x/tau));
-* constant (the SLS's E_inf, the elastic limit): W·r = u(t_i) − u(t_0), no matrix.
+* power law (springpot) E(t) = (t/t0)^(−alpha): Φ(x) = t0^alpha·x^(1−alpha)/(1−alpha),
+  Ψ(x) = Φ(x)·x/(2−alpha);
+* exponential branch E(t) = exp(−t/tau): Φ(x) = −tau·expm1(−x/tau),
+  Ψ(x) = tau·x + tau²·expm1(−x/tau);
+* constant (the SLS's E_inf, the elastic limit): Φ(x) = x, the block mean of u.
 
-The linear interpolation of u = d^m between samples is the one approximation, except in the
-step where the contact starts: there u rises linearly from the crossing of d = 0 (found by
-linear interpolation of d), not from the step's start (:func:`onset_correction`; without it
-a flat punch's kink would leak ~1e-3 of the peak force into the power law's singular kernel).
-Against :func:`palpbayes.contact.viscoelastic.hereditary_force` (exact per step) the columns
-agree to ~1e-4 of the peak force on irregular axes of a few hundred samples (tested).
-Ting's rule for a shrinking contact is not in the columns: the retract segment is not fitted
-this way.
+Two corrections make the piecewise-linear u follow d^m (:func:`lee_radok_columns`): on every
+step in contact u bends (d^m with d linear) by a quadratic bump through the step's midpoint
+(:func:`lee_radok_columns`), which takes the interpolation's error from O(h²) to O(h³) near
+the onset of a paraboloid or cone; and the step where the contact starts rises from the
+crossing of d = 0 (linear in d), not from the step's start (:func:`onset_correction`; without
+it a flat punch's kink would leak ~1e-3 of the peak force into the power law's singular
+kernel).  Ting's rule for a shrinking contact is not in the columns: the retract segment is
+not fitted this way.
 """
 
 from __future__ import annotations
@@ -33,72 +45,261 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["Lags", "lag_matrix", "kernel_matrix", "integrated_kernel", "onset_correction",
-           "depth_power", "hereditary_columns", "lee_radok_columns", "KERNELS"]
+__all__ = ["Windows", "kernel_matrix", "block_kernel_means", "step_kernel_means",
+           "band_corrections", "integrated_kernel", "double_integrated_kernel",
+           "triple_integrated_kernel", "window_kernel", "onset_correction",
+           "lee_radok_columns", "KERNELS", "BAND"]
 
-#: Kernels of :func:`kernel_matrix`: parameter alpha [-] or tau [s].
+#: Kernels of :func:`kernel_matrix`: parameter alpha [-] or tau [s]; ``None`` is the constant.
 KERNELS = ("power-law", "exponential")
+#: Knots before a block's window on which its response is the mean over its own samples.
+BAND = 2
 
 
-class Lags:
-    """Lags max(t_i − t_j, 0) [s] of a time axis, shape (N, N), and their logarithm (−inf at
-    zero lag): built once per time axis, used by every kernel."""
+class Windows:
+    """Knots e (K,) [s] of the piecewise-linear source and the blocks: window [e[lo], e[hi]]
+    (spanning one or more knot steps) and sample times ``samples`` (B, n) of each block; lags
+    max(e_i − e_j, 0) and their logarithm (−inf at zero lag), built once per record.
+    ``samples`` None takes every block's mean over its window (no sample-level band)."""
 
-    def __init__(self, t: np.ndarray):
-        t = np.asarray(t, dtype=float)
-        self.lags = np.clip(t[:, None] - t[None, :], 0.0, None)
+    def __init__(self, edges: np.ndarray, lo: np.ndarray | None = None,
+                 hi: np.ndarray | None = None, samples: np.ndarray | None = None):
+        e = np.asarray(edges, dtype=float)
+        if e.ndim != 1 or e.size < 2 or not np.all(np.diff(e) > 0):
+            raise InputError("window edges must be an increasing 1-D array of >= 2 times")
+        self.edges = e
+        self.lo = np.arange(e.size - 1) if lo is None else np.asarray(lo, dtype=int)
+        self.hi = self.lo + 1 if hi is None else np.asarray(hi, dtype=int)
+        if self.lo.size and (self.lo.min() < 0 or self.hi.max() > e.size - 1
+                             or np.any(self.hi <= self.lo)):
+            raise InputError("windows must run forward between knots of the edge axis")
+        self.width = e[self.hi] - e[self.lo]
+        self.samples = None if samples is None else np.asarray(samples, dtype=float)
+        if self.samples is not None and (self.samples.ndim != 2
+                                         or self.samples.shape[0] != self.lo.size):
+            raise InputError("samples must be (blocks, samples per block)")
+        self.lags = np.clip(e[:, None] - e[None, :], 0.0, None)
         with np.errstate(divide="ignore"):
             self.log = np.log(self.lags)
+        # the knots whose response a block takes from its samples: BAND before its window on
+        band = self.lo[:, None] + np.arange(-BAND, 3)[None, :]
+        self.band_ok = (band >= 0) & (band <= e.size - 1)
+        self.band = np.clip(band, 0, e.size - 1)
+        self._steps = np.diff(e)[None, :]
+        self._work: list[np.ndarray] | None = None
+        self._constant: tuple[np.ndarray, ...] | None = None
+
+    def window_means(self, R: np.ndarray) -> np.ndarray:
+        """Means over every block's window (G, B) of quantities given per knot step as step
+        means ``R`` (G, K − 1) (weighted by the steps' lengths)."""
+        S = np.zeros((R.shape[0], self.edges.size))
+        np.cumsum(R * self._steps, axis=1, out=S[:, 1:])
+        return (S[:, self.hi] - S[:, self.lo]) / self.width[None, :]
+
+    def sample_means(self, f, sources: np.ndarray, rows: np.ndarray | None = None
+                     ) -> np.ndarray:
+        """Mean over each block's samples of f(t − s) for sources ``sources`` (R, J) [s] of
+        blocks ``rows`` (R,) (default all)."""
+        t = self.samples if rows is None else self.samples[rows]
+        return f(t[:, :, None] - sources[:, None, :]).mean(axis=1)
 
 
-def lag_matrix(t: np.ndarray) -> Lags:
-    """:class:`Lags` of the time axis ``t`` [s]."""
-    return Lags(t)
-
-
-def kernel_matrix(lags: Lags, kernel: str, theta: float, t0: float = 1.0) -> np.ndarray:
-    """W (N, N − 1) with W[i, j] = Φ(t_i − t_j) − Φ(t_i − t_{j+1}) [s] per unit modulus.
-
-    Parameters
-    ----------
-    lags
-        :func:`lag_matrix` of the time axis [s].
-    kernel
-        ``"power-law"`` (``theta`` = alpha in [0, 1)) or ``"exponential"`` (``theta`` = tau
-        [s] > 0).
-    t0
-        [s] Reference time of the power law.
-    """
+def _check(kernel: str | None, theta: float) -> None:
     if kernel == "power-law":
         if not 0.0 <= theta < 1.0:
             raise InputError(f"alpha = {theta!r} must lie in [0, 1)")
-        phi = np.exp((1.0 - theta) * lags.log) * (t0**theta / (1.0 - theta))
     elif kernel == "exponential":
         if not theta > 0:
             raise InputError(f"tau = {theta!r} s must be positive")
-        phi = -theta * np.expm1(lags.lags * (-1.0 / theta))
-    else:
+    elif kernel is not None:
         raise InputError(f"unknown kernel {kernel!r}; use one of {', '.join(KERNELS)}")
-    return phi[:, :-1] - phi[:, 1:]
 
 
-def integrated_kernel(x: np.ndarray, kernel: str, theta: float, t0: float = 1.0) -> np.ndarray:
-    """Φ(x) = ∫_0^x K(y) dy [s] per unit modulus at lags ``x`` >= 0 (module docstring)."""
+def step_kernel_means(win: Windows, kernel: str | None, theta: float = 0.0, t0: float = 1.0,
+                      *, scratch: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Means (K − 1, K) over every knot step [e_j, e_{j+1}] of Φ(t − e_k) [s] and of
+    Ψ(t − e_k) [s²] per unit modulus: (Ψ(e_{j+1} − e_k) − Ψ(e_j − e_k))/h_j and the same
+    with Ψ₂, from one Ψ per knot lag (module docstring).
+
+    Parameters
+    ----------
+    win
+        :class:`Windows` of the record.
+    kernel
+        ``"power-law"`` (``theta`` = alpha in [0, 1)), ``"exponential"`` (``theta`` = tau
+        [s] > 0) or None (the constant kernel).
+    t0
+        [s] Reference time of the power law.
+    scratch
+        Write into ``win``'s work arrays (valid until its next call: a fit's inner loop
+        rebuilds these matrices hundreds of times, and fresh multi-megabyte arrays cost
+        more in page faults than the arithmetic).
+    """
+    _check(kernel, theta)
+    K = win.edges.size
+    if scratch:
+        if win._work is None:
+            win._work = [np.empty((K, K)), np.empty((K, K)), np.empty((K - 1, K)),
+                         np.empty((K - 1, K))]
+        P, Q, D1, D2 = win._work
+    else:
+        P, Q, D1, D2 = (np.empty((K, K)), np.empty((K, K)), np.empty((K - 1, K)),
+                        np.empty((K - 1, K)))
+    lags = win.lags
+    inv_h = (1.0 / np.diff(win.edges))[:, None]
+    if kernel == "power-law":  # Ψ = c·x^(2−alpha), Ψ₂ = Ψ·x/(3 − alpha): one exp per lag
+        np.multiply(win.log, 2.0 - theta, out=P)
+        np.exp(P, out=P)
+        P *= t0**theta / ((1.0 - theta) * (2.0 - theta))
+    elif kernel == "exponential":  # Ψ = tau²·(y + expm1(−y)), y = x/tau
+        np.multiply(lags, -1.0 / theta, out=Q)
+        np.expm1(Q, out=Q)
+        np.multiply(lags, 1.0 / theta, out=P)
+        P += Q
+        P *= theta**2
+    else:  # Ψ = x²/2
+        np.multiply(lags, lags, out=P)
+        P *= 0.5
+    np.subtract(P[1:], P[:-1], out=D1)
+    D1 *= inv_h
+    if kernel == "power-law":
+        P *= lags
+        P *= 1.0 / (3.0 - theta)
+    elif kernel == "exponential":  # Ψ₂ = tau³·(y²/2 − y − expm1(−y)), series for small y
+        np.multiply(lags, 1.0 / theta, out=P)
+        small = P < 1e-2
+        y = P[small]
+        np.multiply(P, 0.5 * P - 1.0, out=P)
+        P -= Q
+        P[small] = y**3 * (1.0 / 6.0 - y * (1.0 / 24.0 - y * (1.0 / 120.0 - y / 720.0)))
+        P *= theta**3
+    else:  # Ψ₂ = x³/6
+        P *= lags
+        P *= 1.0 / 3.0
+    np.subtract(P[1:], P[:-1], out=D2)
+    D2 *= inv_h
+    return D1, D2
+
+
+def band_corrections(win: Windows, kernel: str | None, theta: float = 0.0,
+                     t0: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(δ1, δ2), each (B, nb): the mean over block o's samples of Φ(t − e_k) (Ψ(t − e_k))
+    minus its window mean, for the knots k = ``win.band[o]`` near the block (0 where the band
+    runs off the knot axis, or without samples)."""
+    B, nb = win.band.shape
+    if win.samples is None:
+        return np.zeros((B, nb)), np.zeros((B, nb))
+    src = win.edges[win.band]
+    lo, hi = win.edges[win.lo][:, None], win.edges[win.hi][:, None]
+    w = win.width[:, None]
+    out = []
+    for point, integral in ((integrated_kernel, double_integrated_kernel),
+                            (double_integrated_kernel, triple_integrated_kernel)):
+        sample = win.sample_means(lambda x, f=point: f(x, kernel, theta, t0), src)
+        window = (integral(hi - src, kernel, theta, t0)
+                  - integral(lo - src, kernel, theta, t0)) / w
+        out.append(np.where(win.band_ok, sample - window, 0.0))
+    return out[0], out[1]
+
+
+def block_kernel_means(win: Windows, kernel: str | None, theta: float = 0.0,
+                       t0: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Block means (B, K) of Φ(t − e_k) [s] and Ψ(t − e_k) [s²] per unit modulus: the
+    window means of :func:`step_kernel_means` with :func:`band_corrections` (a reference
+    for tests; :func:`lee_radok_columns` applies the same pieces after its products)."""
+    D1, D2 = step_kernel_means(win, kernel, theta, t0)
+    d1, d2 = band_corrections(win, kernel, theta, t0)
+    rows = np.arange(win.lo.size)[:, None]
+    out = []
+    for D, d in ((D1, d1), (D2, d2)):
+        A = win.window_means(D.T).T
+        A[rows, win.band] += d
+        out.append(A)
+    return out[0], out[1]
+
+
+def kernel_matrix(win: Windows, kernel: str | None, theta: float = 0.0,
+                  t0: float = 1.0) -> np.ndarray:
+    """W (B, K − 1) [s] per unit modulus: block o's mean response to a unit slope of u on
+    source step k, the mean of Φ(t − e_k) − Φ(t − e_{k+1}) (module docstring)."""
+    A1 = block_kernel_means(win, kernel, theta, t0)[0]
+    return A1[:, :-1] - A1[:, 1:]
+
+
+def integrated_kernel(x: np.ndarray, kernel: str | None, theta: float = 0.0,
+                      t0: float = 1.0) -> np.ndarray:
+    """Φ(x) = ∫_0^x K(y) dy [s] per unit modulus at lags ``x`` (0 for x <= 0)."""
     x = np.clip(np.asarray(x, dtype=float), 0.0, None)
+    if kernel is None:
+        return x
     if kernel == "power-law":
         return x ** (1.0 - theta) * (t0**theta / (1.0 - theta))
     return -theta * np.expm1(-x / theta)
 
 
-def onset_correction(t: np.ndarray, depth: np.ndarray, m: float, kernel: str, theta: float,
-                     t0: float = 1.0) -> np.ndarray:
-    """Correction (G, N) [m^m·s⁰] to :func:`hereditary_columns` for the step where each row's
-    contact starts: u = d^m rises linearly from the crossing s_c of d = 0 (linear in d between
-    the two samples) to the step's end, instead of from the step's start.  ``depth`` (G, N)
-    [m]; rows that start in contact or never touch get no correction."""
-    t = np.asarray(t, dtype=float)
-    G, N = depth.shape
-    out = np.zeros((G, N))
+def double_integrated_kernel(x: np.ndarray, kernel: str | None, theta: float = 0.0,
+                             t0: float = 1.0) -> np.ndarray:
+    """Ψ(x) = ∫_0^x Φ(y) dy [s²] per unit modulus (0 for x <= 0); for the exponential,
+    tau²·(y + expm1(−y)) with y = x/tau, by its series below y = 1e-3 (no cancellation)."""
+    x = np.clip(np.asarray(x, dtype=float), 0.0, None)
+    if kernel is None:
+        return 0.5 * x * x
+    if kernel == "power-law":
+        return x ** (2.0 - theta) * (t0**theta / ((1.0 - theta) * (2.0 - theta)))
+    y = x / theta
+    small = y < 1e-3
+    series = y * y * (0.5 - y * (1.0 / 6.0 - y * (1.0 / 24.0 - y / 120.0)))
+    return theta**2 * np.where(small, series, y + np.expm1(-np.where(small, 1.0, y)))
+
+
+def triple_integrated_kernel(x: np.ndarray, kernel: str | None, theta: float = 0.0,
+                             t0: float = 1.0) -> np.ndarray:
+    """Ψ₂(x) = ∫_0^x Ψ(y) dy [s³] per unit modulus (0 for x <= 0)."""
+    x = np.clip(np.asarray(x, dtype=float), 0.0, None)
+    if kernel is None:
+        return x**3 / 6.0
+    if kernel == "power-law":
+        return x ** (3.0 - theta) * (t0**theta / ((1.0 - theta) * (2.0 - theta)
+                                                  * (3.0 - theta)))
+    y = x / theta
+    small = y < 1e-2
+    series = y**3 * (1.0 / 6.0 - y * (1.0 / 24.0 - y * (1.0 / 120.0 - y / 720.0)))
+    big = 0.5 * y * y - y - np.expm1(-np.where(small, 1.0, y))
+    return theta**3 * np.where(small, series, big)
+
+
+def window_kernel(win: Windows, s: np.ndarray, kernel: str | None, theta: float = 0.0,
+                  t0: float = 1.0, order: int = 1) -> np.ndarray:
+    """Block means (R, B) of Φ(t − s_r) (``order`` 1) or Ψ(t − s_r) (``order`` 2) for
+    source times ``s`` (R,) [s]: over each block's window, e.g.
+    (Ψ(b_o − s) − Ψ(a_o − s)) / (b_o − a_o), and over the samples of the blocks from the one
+    that holds s_r to :data:`BAND` after it."""
+    s = np.asarray(s, dtype=float)
+    lo, hi = win.edges[win.lo][None, :], win.edges[win.hi][None, :]
+    f = double_integrated_kernel if order == 1 else triple_integrated_kernel
+    out = (f(hi - s[:, None], kernel, theta, t0)
+           - f(lo - s[:, None], kernel, theta, t0)) / win.width[None, :]
+    if win.samples is not None and s.size:
+        g = integrated_kernel if order == 1 else double_integrated_kernel
+        first = np.searchsorted(win.edges[win.hi], s, side="right")
+        near = np.clip(first[:, None] + np.arange(BAND + 1)[None, :], 0, win.lo.size - 1)
+        vals = win.sample_means(lambda x: g(x, kernel, theta, t0),
+                                np.broadcast_to(s[:, None, None], near.shape + (1,))
+                                .reshape(-1, 1), near.ravel())
+        out[np.arange(s.size)[:, None], near] = vals.reshape(near.shape)
+    return out
+
+
+def onset_correction(win: Windows, depth: np.ndarray, m: float, kernel: str | None,
+                     theta: float = 0.0, t0: float = 1.0) -> np.ndarray:
+    """Correction (G, B) to the columns for the step where each row's contact starts: u = d^m
+    rises from the crossing s_c of d = 0 (linear in d between the two edges) to the step's
+    end, as a line plus a quadratic bump through the midpoint of [s_c, e_k] (as on every other
+    step), instead of the step's line from its start.  ``depth`` (G, K) [m] at the edges;
+    rows that start in contact or never touch get no correction."""
+    e = win.edges
+    G, K = depth.shape
+    out = np.zeros((G, win.lo.size))
     pos = depth > 0
     k = np.argmax(pos, axis=1)
     rows = np.flatnonzero(pos.any(axis=1) & (k >= 1))
@@ -106,42 +307,58 @@ def onset_correction(t: np.ndarray, depth: np.ndarray, m: float, kernel: str, th
         return out
     kk = k[rows]
     d0, d1 = depth[rows, kk - 1], depth[rows, kk]
-    ta, tb = t[kk - 1], t[kk]
+    ta, tb = e[kk - 1], e[kk]
     sc = ta + (tb - ta) * (-d0) / (d1 - d0)
     u1 = d1**m
-    lag = t[None, :] - np.stack([ta, sc, tb])[:, :, None]  # (3, rows, N)
-    phi_a, phi_c, phi_b = (integrated_kernel(x, kernel, theta, t0) for x in lag)
-    rise = tb - sc  # 0 when d1 is so small that the crossing rounds onto the sample
-    exact = (u1 / np.where(rise > 0, rise, 1.0) * (rise > 0))[:, None] * (phi_c - phi_b)
-    linear = (u1 / (tb - ta))[:, None] * (phi_a - phi_b)
-    after = np.arange(N)[None, :] >= kk[:, None]
-    out[rows] = np.where(after, exact - linear, 0.0)
+    fa, fc, fb = (window_kernel(win, s, kernel, theta, t0) for s in (ta, sc, tb))
+    gc, gb = (window_kernel(win, s, kernel, theta, t0, order=2) for s in (sc, tb))
+    rise = tb - sc  # 0 when d1 is so small that the crossing rounds onto the edge
+    ok = rise > 0
+    h = np.where(ok, rise, 1.0)
+    amp = np.where(ok, (0.5 * d1) ** m - 0.5 * u1, 0.0)  # the bump of d^m on [s_c, e_k]
+    exact = ((u1 * ok / h)[:, None] * (fc - fb)
+             + amp[:, None] * ((4.0 / h)[:, None] * (fc + fb)
+                               - (8.0 / h**2)[:, None] * (gc - gb)))
+    linear = (u1 / (tb - ta))[:, None] * (fa - fb)
+    out[rows] = exact - linear
     return out
 
 
-def depth_power(z_nodes: np.ndarray, z: np.ndarray, m: float) -> np.ndarray:
-    """u = max(z_s − z, 0)^m [m^m] for every trial surface (rows) and sample (columns)."""
-    return np.clip(np.asarray(z_nodes, float)[:, None] - np.asarray(z, float)[None, :], 0.0,
-                   None) ** m
-
-
-def hereditary_columns(t: np.ndarray, u: np.ndarray, W: np.ndarray | None) -> np.ndarray:
-    """∫_0^{t_i} K(t_i − s)·du/ds ds [m^m·s⁰] for each row of ``u`` (G, N): ``W`` from
-    :func:`kernel_matrix`, or None for the constant kernel K = 1 (u − u[:, :1])."""
-    if W is None:
-        return u - u[:, :1]
-    r = np.diff(u, axis=1) / np.diff(t)[None, :]
-    return r @ W.T
-
-
-def lee_radok_columns(t: np.ndarray, lags: Lags, z_nodes: np.ndarray, z: np.ndarray, m: float,
+def lee_radok_columns(win: Windows, z_nodes: np.ndarray, z_edges: np.ndarray, m: float,
                       kernel: str | None, theta: float = 0.0, t0: float = 1.0) -> np.ndarray:
-    """∫_0^{t_i} K(t_i − s)·d/ds[d(s)^m] ds (G, N) for trial surfaces ``z_nodes`` (G,) [m]
-    over heights ``z`` (N,) [m]: :func:`hereditary_columns` with :func:`onset_correction`;
-    ``kernel`` None is the constant kernel (the SLS's E_inf, exact: d^m)."""
-    u = depth_power(z_nodes, z, m)
-    if kernel is None:
-        return hereditary_columns(t, u, None)
-    depth = np.asarray(z_nodes, float)[:, None] - np.asarray(z, float)[None, :]
-    return (hereditary_columns(t, u, kernel_matrix(lags, kernel, theta, t0))
-            + onset_correction(t, depth, m, kernel, theta, t0))
+    """Block means of ∫_0^t K(t − s)·d/ds[d(s)^m] ds (G, B) for trial surfaces ``z_nodes``
+    (G,) [m], with the tip heights ``z_edges`` (K,) [m] at the knots (z linear between them);
+    ``kernel`` None is the constant kernel (the SLS's E_inf: the block mean of d^m).
+
+    On step k (length h_k) u is the line through the knots' d^m (slope r_k) plus the bump
+    c_k·b(s), b = 4·(s − e_k)·(e_{k+1} − s)/h_k², c_k = d_mid^m − (u_k + u_{k+1})/2.  The
+    response to the line is r_k·[Φ̄(e_k) − Φ̄(e_{k+1})]; to the bump (by parts)
+    c_k·{(4/h_k)·[Φ̄(e_k) + Φ̄(e_{k+1})] − (8/h_k²)·[Ψ̄(e_k) − Ψ̄(e_{k+1})]}, with Φ̄, Ψ̄ the
+    means of :func:`block_kernel_means`: coefficients a1, a2 per knot, two matrix products on
+    the knot steps (:func:`step_kernel_means`), then the window means and the band's
+    corrections.  The step where the contact starts is :func:`onset_correction`'s."""
+    depth = np.asarray(z_nodes, float)[:, None] - np.asarray(z_edges, float)[None, :]
+    d = np.clip(depth, 0.0, None)
+    u = d**m
+    h = np.diff(win.edges)[None, :]
+    r = np.diff(u, axis=1) / h
+    c = (0.5 * (d[:, 1:] + d[:, :-1])) ** m - 0.5 * (u[:, 1:] + u[:, :-1])
+    c[(depth[:, :-1] <= 0) | (depth[:, 1:] <= 0)] = 0.0  # the onset step: onset_correction's
+    G, K = u.shape
+    a1, a2 = np.zeros((G, K)), np.zeros((G, K))
+    b1, b2 = 4.0 * c / h, 8.0 * c / h**2
+    a1[:, :-1] += r + b1
+    a1[:, 1:] += b1 - r
+    a2[:, :-1] -= b2
+    a2[:, 1:] += b2
+    if kernel is None:  # the same for every theta of a fit: once per record
+        if win._constant is None:
+            win._constant = (*step_kernel_means(win, None), *band_corrections(win, None))
+        D1, D2, d1, d2 = win._constant
+    else:
+        D1, D2 = step_kernel_means(win, kernel, theta, t0, scratch=True)
+        d1, d2 = band_corrections(win, kernel, theta, t0)
+    out = win.window_means(a1 @ D1.T + a2 @ D2.T)
+    out += np.einsum("gbj,bj->gb", a1[:, win.band], d1)
+    out += np.einsum("gbj,bj->gb", a2[:, win.band], d2)
+    return out + onset_correction(win, depth, m, kernel, theta, t0)

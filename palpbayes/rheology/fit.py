@@ -32,7 +32,7 @@ from ..errors import InputError
 from ..intervals import LEVEL
 from ..trace import IndentationTrace
 from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
-from .design import lag_matrix, lee_radok_columns
+from .design import lee_radok_columns
 from .posterior import ALPHA_MAX, PHI_BOUNDS, RHEOLOGIES, GridPosterior, grid_posterior
 
 __all__ = ["RheologyFit", "fit_rheology", "PARAMETERS", "SHRINK_FLAG", "MIN_ESS"]
@@ -167,17 +167,16 @@ class RheologyFit:
 def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int) -> np.ndarray:
     k = min(n, len(draws["z_surf"]))
     idx = np.linspace(0, len(draws["z_surf"]) - 1, k).round().astype(int)
-    lags = lag_matrix(data.time)
+    win = data.windows()
     out = np.empty((k, data.n_points))
     for r, i in enumerate(idx):
         z = draws["z_surf"][i:i + 1]
         if rheology == "power-law":
-            f = draws["E0"][i] * lee_radok_columns(data.time, lags, z, data.z, data.m,
-                                                   "power-law", float(draws["alpha"][i]), t0)[0]
+            f = draws["E0"][i] * lee_radok_columns(win, z, data.z_edges, data.m, "power-law",
+                                                   float(draws["alpha"][i]), t0)[0]
         else:
-            f = (draws["E_inf"][i] * lee_radok_columns(data.time, lags, z, data.z, data.m,
-                                                       None)[0]
-                 + draws["E1"][i] * lee_radok_columns(data.time, lags, z, data.z, data.m,
+            f = (draws["E_inf"][i] * lee_radok_columns(win, z, data.z_edges, data.m, None)[0]
+                 + draws["E1"][i] * lee_radok_columns(win, z, data.z_edges, data.m,
                                                       "exponential", float(draws["tau"][i]))[0])
         out[r] = data.C * f + draws["offset"][i]
     return out

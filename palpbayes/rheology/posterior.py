@@ -36,7 +36,7 @@ from ..bayes.conjugate import Gram, NodePosterior, node_posterior
 from ..bayes.exact import cell_widths
 from ..errors import FitError, InputError
 from .cycle import CycleData
-from .design import lag_matrix, lee_radok_columns
+from .design import lee_radok_columns
 
 __all__ = ["RHEOLOGIES", "GridPosterior", "grid_posterior", "ALPHA_MAX", "KEEP", "FINE",
            "SPAN_SD", "COARSE_THETA", "COARSE_Z", "PHI_BOUNDS"]
@@ -170,7 +170,7 @@ class _Evaluator:
 
     def __init__(self, data: CycleData, rheology: str, t0: float):
         self.data, self.rheology, self.t0 = data, rheology, t0
-        self.lags = lag_matrix(data.time)
+        self.windows = data.windows()
         self.y = data.force - data.f0_center
         self.weights = np.array([1.0 / OFFSET_SD**2])
         self.centers = np.zeros(1)
@@ -181,12 +181,12 @@ class _Evaluator:
         """X (G, N, q): [modulus column, 1, (second modulus), y] for surfaces ``z``."""
         d = self.data
         kind = "power-law" if self.rheology == "power-law" else "exponential"
-        b = d.C * lee_radok_columns(d.time, self.lags, z, d.z, d.m, kind, theta, self.t0)
+        b = d.C * lee_radok_columns(self.windows, z, d.z_edges, d.m, kind, theta, self.t0)
         G, N = b.shape
         ones, y = np.ones((G, N)), np.broadcast_to(self.y, (G, N))
         if self.rheology == "power-law":
             return np.stack([b, ones, y], axis=-1)
-        inf = d.C * lee_radok_columns(d.time, self.lags, z, d.z, d.m, None)
+        inf = d.C * lee_radok_columns(self.windows, z, d.z_edges, d.m, None)
         return np.stack([inf, ones, b, y], axis=-1)
 
     def gram(self, thetas: np.ndarray, z: np.ndarray) -> Gram:
