@@ -1,0 +1,123 @@
+# ruff: noqa: E402  (BLAS threads are set before numpy is imported)
+"""Coverage of the viscoelastic fit's 90 % intervals on simulated ramp–hold palpations.
+
+Draws ``--n`` records per relaxation model (power law, standard linear solid) with known
+moduli, fits each with :func:`palpbayes.rheology.fit_rheology` and prints, per model and
+parameter: the share of 90 % intervals that hold the truth, the mean and sd of the z-score
+(truth − median)/sd, and the median relative error; then how many posterior-predictive checks
+passed and the median fit time.
+
+Records (seeded by index): paraboloid (3 mm deep) or flat punch (2 mm) of the paper, at 5, 50
+or 500 mm/min, a 5–15 s hold, AR(1) sensor noise of 8 mN with lag-one correlation 0–0.6, an
+offset of ±50 mN, the surface anywhere in ±1 mm; power law E0* 30–150 kPa, alpha 0.05–0.4;
+SLS E_inf* 20–100 kPa, E1* 10–100 kPa, tau 0.3–5 s (log-uniform).
+
+    python tools/rheology_calibration.py [--n 100] [--workers 2] [--csv out.csv]
+
+The slow suite runs this (``tests/statistical/test_rheology_calibration.py``).
+"""
+
+from __future__ import annotations
+
+import os
+
+# one BLAS thread per worker process (the workers share the cores; oversubscribed BLAS threads
+# made each fit 3-4 times slower); set before numpy is imported
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse
+import warnings
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pandas as pd
+
+from palpbayes.contact.viscoelastic import PowerLawKernel, standard_linear_solid
+from palpbayes.paper import PAPER_TIPS
+from palpbayes.rheology import fit_rheology
+from palpbayes.sim import simulate_viscoelastic
+
+#: Parameters checked per model, with the names of the draws.
+PARAMETERS = {"power-law": ("E0", "alpha", "z_surf"), "sls": ("E_inf", "E1", "tau", "z_surf")}
+SPEEDS = (5.0, 50.0, 500.0)  # [mm/min]
+
+
+def record(model: str, i: int):
+    """The ``i``-th simulated record of ``model`` and its truth (dict of parameter values)."""
+    rng = np.random.default_rng([17, i, 0 if model == "power-law" else 1])
+    if model == "power-law":
+        truth = {"E0": rng.uniform(30e3, 150e3), "alpha": rng.uniform(0.05, 0.4)}
+        kernel = PowerLawKernel(truth["E0"], truth["alpha"])
+    else:
+        truth = {"E_inf": rng.uniform(20e3, 100e3), "E1": rng.uniform(10e3, 100e3),
+                 "tau": float(np.exp(rng.uniform(np.log(0.3), np.log(5.0))))}
+        kernel = standard_linear_solid(truth["E_inf"], truth["E1"], truth["tau"])
+    tip_name = ("paraboloid", "flat")[int(rng.integers(2))]
+    truth["z_surf"] = rng.uniform(-1e-3, 1e-3)
+    trace = simulate_viscoelastic(
+        kernel, PAPER_TIPS[tip_name], depth=3e-3 if tip_name == "paraboloid" else 2e-3,
+        speed=SPEEDS[int(rng.integers(3))] / 6e4, hold_time=rng.uniform(5.0, 15.0),
+        rate=800.0, z_surf=truth["z_surf"], noise_sd=0.008, phi=rng.uniform(0.0, 0.6),
+        offset=rng.uniform(-0.05, 0.05), rng=rng, trace_id=f"{model}-{i}")
+    return trace, truth, tip_name
+
+
+def fit_one(job: tuple[str, int]) -> list[dict]:
+    """One record's rows: per parameter, the truth, median, sd and 90 % interval."""
+    model, i = job
+    trace, truth, tip_name = record(model, i)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = fit_rheology(trace, model, rng=i)
+    rows = []
+    for name in PARAMETERS[model]:
+        d = fit.draws[name]
+        lo, med, hi = np.percentile(d, [5.0, 50.0, 95.0])
+        rows.append({"model": model, "index": i, "tip": tip_name, "parameter": name,
+                     "truth": truth[name], "median": med, "sd": float(np.std(d)), "lo": lo,
+                     "hi": hi, "ppc_passed": bool(fit.ppc.passed), "block": fit.data.block,
+                     "seconds": fit.seconds})
+    return rows
+
+
+def run(n: int, workers: int, models=tuple(PARAMETERS)) -> pd.DataFrame:
+    """Fit ``n`` records of each model on ``workers`` processes; one row per parameter."""
+    jobs = [(m, i) for m in models for i in range(n)]
+    if workers > 1:
+        with ProcessPoolExecutor(workers) as pool:
+            rows = list(pool.map(fit_one, jobs, chunksize=2))
+    else:
+        rows = [fit_one(j) for j in jobs]
+    return pd.DataFrame([r for rs in rows for r in rs])
+
+
+def table(df: pd.DataFrame) -> pd.DataFrame:
+    """Per model and parameter: coverage of the 90 % interval, z-score mean and sd, median
+    |relative error| [%], share of passed model checks, median fit time [s]."""
+    z = (df["truth"] - df["median"]) / df["sd"]
+    df = df.assign(covered=(df["lo"] <= df["truth"]) & (df["truth"] <= df["hi"]), z=z,
+                   err_pct=100 * ((df["median"] - df["truth"]) / df["truth"]).abs())
+    g = df.groupby(["model", "parameter"], sort=False)
+    return pd.DataFrame({"n": g.size(), "coverage90": g["covered"].mean(),
+                         "z_mean": g["z"].mean(), "z_sd": g["z"].std(),
+                         "median_err_pct": g["err_pct"].median(),
+                         "ppc_passed": g["ppc_passed"].mean(),
+                         "median_seconds": g["seconds"].median()}).round(3)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=100, help="records per model")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--csv", help="write the per-record rows here")
+    a = ap.parse_args(argv)
+    df = run(a.n, a.workers)
+    if a.csv:
+        df.to_csv(a.csv, index=False)
+    with pd.option_context("display.width", 120):
+        print(table(df).to_string())
+
+
+if __name__ == "__main__":
+    main()
