@@ -22,6 +22,7 @@ from ..contact import (
 from ..errors import DataFileError, InputError
 from ..fitdata import BONDINGS
 from ..io.manifest import is_manifest
+from ..rheology.posterior import RHEOLOGIES
 from ..units import format_pressure
 
 __all__ = ["register", "run", "add_model_options", "add_trace_options", "options_from_args",
@@ -115,6 +116,18 @@ def register(subparsers) -> None:
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted run, keeping finished traces")
     add_model_options(p)
+    v = p.add_argument_group(
+        "viscoelastic fit (the whole loading and hold; the retract is not fitted yet)")
+    v.add_argument("--rheology", choices=("elastic", *RHEOLOGIES), default="elastic",
+                   help="relaxation modulus: elastic (the fits above, default), power-law "
+                        "E*(t) = E0*·(t/t0)^-alpha or sls E*(t) = E_inf* + E1*·exp(-t/tau); "
+                        "writes DIR/rheology.csv, one row per trace")
+    v.add_argument("--segments", default=None, metavar="NAMES",
+                   help="segments fitted by --rheology power-law|sls, comma-separated from "
+                        "approach, hold (default approach,hold; a recording without "
+                        "segments gets them from the motion)")
+    v.add_argument("--t0", type=float, default=1.0, metavar="S",
+                   help="reference time of the power law [s] (E0* is E*(t0); default 1)")
     add_trace_options(p, "single trace (ignored for a manifest)")
 
 
@@ -284,10 +297,12 @@ def _tip_from_args(args: argparse.Namespace) -> Tip:
     return Tip(args.tip, **sizes)
 
 
-def traces_from_args(args: argparse.Namespace) -> list:
+def traces_from_args(args: argparse.Namespace, segments: str | None = None) -> list:
     """Read the recording named by ``args.input`` (trace CSV, ROS 2 bag or AFM file, the
     reader chosen by :func:`palpbayes.io.recording.recording_kind`) with the tip, column,
-    sign and recording options; one trace, or one per curve of an AFM force map."""
+    sign and recording options; one trace, or one per curve of an AFM force map.
+    ``segments`` (names) are read from an AFM file instead of the approach alone (a trace
+    CSV keeps its ``segment`` column; a bag gets segments from the motion when fitted)."""
     from ..io.recording import KIND_NAMES, read_recording, recording_kind
 
     tip = _tip_from_args(args)
@@ -306,6 +321,8 @@ def traces_from_args(args: argparse.Namespace) -> list:
             raise InputError(f"{args.input} is {KIND_NAMES[kind]}: --*-column and --*-unit "
                              "apply to text tables only (the file names its own columns)")
         opts = recording_options_from_args(args)
+        if segments is not None and kind == "afm":
+            opts["segments"] = segments
     return read_recording(args.input, tip=tip, thickness=thickness_from_args(args),
                           material=args.material, **opts)
 
@@ -351,9 +368,78 @@ def _print_interval_parts(summary) -> None:
         print(f"  {r['trace_id']}: {parts}{misfit}")
 
 
+def _run_rheology(args: argparse.Namespace) -> int:
+    """``fit --rheology power-law|sls``: the viscoelastic fit of every trace, one table."""
+    from ..io.manifest import load_trace, read_manifest
+    from ..rheology.cycle import check_segments
+    from ..rheology.results import RHEOLOGY_TABLE, fit_traces
+
+    path, out = Path(args.input), Path(args.out)
+    _check_input_path(path)
+    if args.method != "bayes":
+        raise InputError(f"--rheology {args.rheology} is a Bayesian fit; --method "
+                         f"{args.method} is for the elastic fit (leave it out, or use "
+                         "--rheology elastic)")
+    if args.resume:
+        raise InputError("--resume is for elastic campaigns; a viscoelastic run writes "
+                         f"{RHEOLOGY_TABLE} at the end: run it again with --force")
+    if not (math.isfinite(args.t0) and args.t0 > 0):
+        raise InputError(f"--t0 {args.t0!r} must be a positive time in seconds")
+    nu = None if args.nu is None else check_nu(args.nu)
+    if args.nu_range is not None:
+        raise InputError("--nu-range is for the elastic fit's budget; give --nu (or leave it "
+                         "out: the table then has E* only)")
+    if (out / RHEOLOGY_TABLE).exists() and not args.force:
+        raise InputError(f"{out / RHEOLOGY_TABLE} exists; pass --force to overwrite it")
+    segments = ",".join(check_segments(args.segments or "approach,hold"))
+    if path.is_file() and is_manifest(path):
+        opts = read_options_from_args(args)
+        rows = [r for _, r in read_manifest(path).iterrows()]
+        traces = [(str(r["trace_id"]), str(r["file"]), lambda r=r: load_trace(r, **opts))
+                  for r in rows]
+        total = len(traces)
+    else:
+        traces = traces_from_args(args, segments=segments)
+        total = len(traces)
+    table = fit_traces(traces, args.rheology, out, segments=segments, t0=args.t0, nu=nu,
+                       seed=args.seed, progress=args.progress, total=total)
+    _print_rheology(table)
+    print(f"wrote {out / RHEOLOGY_TABLE}")
+    return 0
+
+
+def _print_rheology(table) -> None:
+    """One line per trace: the parameters with 90 % intervals, the model check, the flags."""
+    print("posterior medians [90 % intervals]; moduli as E* = E/(1 - nu^2) (with --nu, "
+          "rheology.csv has E too)")
+    for _, r in table.iterrows():
+        if r.get("error"):
+            print(f"  {r['trace_id']}: not fitted: {r['error']}")
+            continue
+        names = ("E0_star_pa", "alpha") if r["rheology"] == "power-law" else (
+            "E_inf_star_pa", "E1_star_pa", "tau_s")
+        parts = []
+        for c in names:
+            unit = " Pa" if c.endswith("_pa") else (" s" if c.endswith("_s") else "")
+            stem = c.removesuffix("_pa").removesuffix("_s")
+            lo, hi = (r[f"{stem}_{p}{c[len(stem):]}"] for p in ("lo", "hi"))
+            parts.append(f"{stem.replace('_star', '*')} {r[c]:.4g} [{lo:.4g}, {hi:.4g}]{unit}")
+        check = "model check passed" if r["model_ok"] else (
+            f"model check FAILED ({r['flag_codes']})")
+        print(f"  {r['trace_id']}: {'; '.join(parts)}; {check}")
+        if r["notes"]:
+            for note in str(r["notes"]).split(" | "):
+                print(f"      - {note}")
+
+
 def run(args: argparse.Namespace) -> int:
     from ..campaign.run import fit_campaign
 
+    if getattr(args, "rheology", "elastic") != "elastic":
+        return _run_rheology(args)
+    if getattr(args, "segments", None) is not None:
+        raise InputError("--segments chooses what --rheology power-law|sls fits; the elastic "
+                         "fit takes the loading part")
     options = options_from_args(args)
     path = Path(args.input)
     _check_input_path(path)

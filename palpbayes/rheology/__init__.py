@@ -1,15 +1,19 @@
 """Viscoelastic palpation: the whole recorded cycle fitted with a relaxation modulus.
 
-One module per job, imports flowing one way (``fit`` -> ``posterior`` -> ``design``,
-``cycle``):
+One module per job, imports flowing one way (``results`` -> ``fit`` -> ``posterior`` ->
+``cycle`` -> ``design``):
 
 * :mod:`~palpbayes.rheology.cycle` -- the samples a viscoelastic fit sees: the chosen
-  segments, block means, the pre-contact baseline and the surface range;
+  segments, block means, the knots of the motion, the pre-contact baseline and the surface
+  range;
 * :mod:`~palpbayes.rheology.design` -- the Lee–Radok hereditary integral as regression
-  columns for every trial surface at once (power law, exponential branch);
+  columns, block means of the force for every trial surface at once (power law,
+  exponential branch, constant);
 * :mod:`~palpbayes.rheology.posterior` -- the collapsed posterior on a (surface × alpha or
   tau) grid: moduli, offset and noise integrated in closed form, draws;
-* :mod:`~palpbayes.rheology.fit` -- :func:`fit_rheology`, its result, table and flags.
+* :mod:`~palpbayes.rheology.fit` -- :func:`fit_rheology`, its result, table and flags;
+* :mod:`~palpbayes.rheology.results` -- many traces into ``rheology.csv`` (``palpbayes fit
+  --rheology``).
 
 The hereditary integral itself (Lee–Radok and Ting on a measured time axis, the closed forms)
 is :mod:`palpbayes.contact.viscoelastic`; it checks the regression columns here.
@@ -17,15 +21,17 @@ is :mod:`palpbayes.contact.viscoelastic`; it checks the regression columns here.
 
 from __future__ import annotations
 
-from . import cycle, design, fit, posterior
+from . import cycle, design, fit, posterior, results
 from .cycle import *  # noqa: F403
 from .design import *  # noqa: F403
 from .fit import *  # noqa: F403
 from .posterior import *  # noqa: F403
+from .results import *  # noqa: F403
 
 __all__: list[str] = []
 __all__ += cycle.__all__
 __all__ += design.__all__
 __all__ += posterior.__all__
 __all__ += fit.__all__
+__all__ += results.__all__
 

@@ -1,0 +1,110 @@
+"""Viscoelastic fits of many traces into a results folder: one table a user opens in pandas.
+
+``DIR/rheology.csv`` has one row per trace: the relaxation model, the fitted segments, every
+parameter's posterior median and central 90 % interval in columns named
+``<parameter>[_lo|_hi]_<unit>`` (moduli as E* [Pa], and as E with ``nu``), whether the model
+check passed (``model_ok``), the short codes of what was flagged (``flag_codes``, ``;``
+separated) and the flags in words (``notes``), the number of block means and the fit time.
+A trace that cannot be fitted (no contact, a missing segment) keeps its row with the reason in
+``error``.  The table is written atomically, once, after the last trace.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..errors import PalpbayesError
+from ..io.atomic import write_csv_atomic
+from ..trace import IndentationTrace
+from .cycle import DEFAULT_SEGMENTS
+from .fit import RheologyFit, fit_rheology
+
+__all__ = ["RHEOLOGY_TABLE", "summary_row", "fit_traces", "flag_code"]
+
+#: File name of the per-trace table in a results folder.
+RHEOLOGY_TABLE = "rheology.csv"
+
+_UNITS = {"Pa": "pa", "s": "s", "m": "m", "N": "n", "-": ""}
+#: Short code of each flag, by the words it starts with or holds.
+_CODES = (("alpha piles up at 0", "alpha_at_zero"), ("alpha piles up", "alpha_at_bound"),
+          ("below one step", "tau_fast"), ("beyond the recorded", "tau_slow"),
+          ("phi piles up", "phi_at_bound"), ("surface posterior reaches", "surface_at_bound"),
+          ("did not settle", "grid"), ("another basin", "basin"),
+          ("effective sample", "ess"), ("contact shrinks", "shrinking_contact"),
+          ("posterior-predictive", "ppc"))
+
+
+def flag_code(text: str) -> str:
+    """The short, filterable code of one flag line (``"other"`` if none matches)."""
+    for words, code in _CODES:
+        if words in text:
+            return code
+    return "other"
+
+
+def _column(parameter: str, unit: str, part: str = "") -> str:
+    name = parameter.replace("*", "_star")
+    suffix = _UNITS.get(unit, unit.lower())
+    return "_".join(p for p in (name, part, suffix) if p)
+
+
+def summary_row(trace: IndentationTrace, fit: RheologyFit) -> dict:
+    """The table row of one fitted trace (module docstring)."""
+    row: dict = {"trace_id": trace.trace_id, "source": trace.source or "",
+                 "rheology": fit.rheology, "segments": ",".join(fit.data.segments),
+                 "t0_s": fit.t0, "nu": np.nan if fit.nu is None else fit.nu}
+    for _, r in fit.table().iterrows():
+        row[_column(r["parameter"], r["unit"])] = r["median"]
+        row[_column(r["parameter"], r["unit"], "lo")] = r["lo"]
+        row[_column(r["parameter"], r["unit"], "hi")] = r["hi"]
+    row.update(model_ok=fit.model_ok, flag_codes=";".join(flag_code(f) for f in fit.flags),
+               notes=" | ".join(fit.flags), n_points=fit.data.n_points,
+               block=fit.data.block, seconds=round(fit.seconds, 3), error="")
+    return row
+
+
+def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], IndentationTrace]]],
+               rheology: str, out: str | os.PathLike, *, segments=DEFAULT_SEGMENTS,
+               t0: float = 1.0, nu: float | None = None, seed: int = 0,
+               progress: bool | None = None, total: int | None = None) -> pd.DataFrame:
+    """Fit every trace with :func:`~palpbayes.rheology.fit_rheology` and write
+    ``out/rheology.csv`` (module docstring); returns the table.
+
+    ``traces`` holds traces, or (trace_id, source, load) with ``load()`` reading the trace
+    (a manifest's rows: a file that cannot be read keeps its row too).  ``seed`` + the
+    trace's position seeds its draws (the same table every run); ``nu`` gives way to the
+    trace's own ``metadata["nu"]`` (a manifest's ``nu`` column).  Errors of one trace
+    (:class:`~palpbayes.errors.PalpbayesError`) go into its row's ``error``.
+    """
+    from ..campaign.run import progress_bar
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = []
+    bar = progress_bar(total, progress, desc=f"{rheology} fits")
+    try:
+        for i, item in enumerate(traces):
+            if isinstance(item, IndentationTrace):
+                trace_id, source, load = item.trace_id, item.source or "", (lambda t=item: t)
+            else:
+                trace_id, source, load = item
+            try:
+                trace = load()
+                trace_nu = (trace.metadata or {}).get("nu", nu)
+                fit = fit_rheology(trace, rheology, segments=segments, t0=t0, nu=trace_nu,
+                                   rng=seed + i)
+                rows.append(summary_row(trace, fit))
+            except PalpbayesError as exc:
+                rows.append({"trace_id": trace_id, "source": source, "rheology": rheology,
+                             "model_ok": False, "error": str(exc)})
+            bar.update(1)
+    finally:
+        bar.close()
+    table = pd.DataFrame(rows)
+    write_csv_atomic(table, out / RHEOLOGY_TABLE, index=False)
+    return table

@@ -1,0 +1,112 @@
+"""``palpbayes fit --rheology power-law|sls``: the viscoelastic fit from the command line on a
+trace CSV with segments, a manifest (one trace that cannot be fitted keeps its row) and a real
+stress-relaxation AFM file; the table, the console and the one-line errors."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from palpbayes.cli import main
+from palpbayes.contact.viscoelastic import PowerLawKernel
+from palpbayes.io.manifest import write_manifest
+from palpbayes.io.trace_csv import write_trace
+from palpbayes.paper import PAPER_TIPS
+from palpbayes.sim import simulate_viscoelastic
+
+PARA = ["--tip", "paraboloid", "--radius", "0.0117", "--no-progress"]
+SR = "fmt-jpk-sr_cell1-0008.jpk-force"
+
+
+@pytest.fixture(scope="module")
+def record_csv(tmp_path_factory):
+    rec = simulate_viscoelastic(PowerLawKernel(80e3, 0.2), PAPER_TIPS["paraboloid"],
+                                depth=3e-3, speed=50 / 6e4, hold_time=6.0, rate=400.0,
+                                z_surf=2e-4, noise_sd=0.008, phi=0.2, rng=11, trace_id="pl")
+    return write_trace(rec, tmp_path_factory.mktemp("rec") / "pl.csv", float_format="%.12g")
+
+
+def test_fit_rheology_writes_one_row_with_intervals_and_says_what_it_checked(
+        record_csv, tmp_path, capsys):
+    out = tmp_path / "res"
+    assert main(["fit", str(record_csv), "--rheology", "power-law", "--nu", "0.45",
+                 "--out", str(out), *PARA]) == 0
+    text = capsys.readouterr().out
+    assert "pl: E0* " in text and "alpha " in text and "model check passed" in text
+    row = pd.read_csv(out / "rheology.csv").iloc[0]
+    assert row["rheology"] == "power-law" and row["segments"] == "approach,hold"
+    assert row["E0_star_lo_pa"] < 80e3 < row["E0_star_hi_pa"]
+    assert row["alpha_lo"] < 0.2 < row["alpha_hi"]
+    assert row["E0_pa"] == pytest.approx(row["E0_star_pa"] * (1 - 0.45**2))
+    assert bool(row["model_ok"]) and row["block"] >= 1 and row["t0_s"] == 1.0
+    # the same seed, the same table
+    assert main(["fit", str(record_csv), "--rheology", "power-law", "--nu", "0.45",
+                 "--out", str(out), "--force", *PARA]) == 0
+    again = pd.read_csv(out / "rheology.csv").iloc[0]
+    assert again["E0_star_pa"] == row["E0_star_pa"] and again["alpha_hi"] == row["alpha_hi"]
+
+
+def test_a_manifest_keeps_the_row_of_a_trace_that_cannot_be_fitted(record_csv, tmp_path,
+                                                                    capsys):
+    flat = tmp_path / "flat.csv"
+    pd.DataFrame({"time_s": np.arange(100) * 0.01, "z_m": np.zeros(100),
+                  "force_n": np.zeros(100)}).to_csv(flat, index=False)
+    manifest = write_manifest(pd.DataFrame({
+        "trace_id": ["good", "still"], "file": [str(record_csv), str(flat)],
+        "material": ["silicone"] * 2, "tip": ["paraboloid"] * 2,
+        "radius_m": [0.0117] * 2}), tmp_path / "manifest.csv")
+    assert main(["fit", str(manifest), "--rheology", "sls", "--out", str(tmp_path / "res"),
+                 "--no-progress"]) == 0
+    tab = pd.read_csv(tmp_path / "res" / "rheology.csv").set_index("trace_id")
+    assert list(tab.index) == ["good", "still"]
+    assert np.isfinite(tab.loc["good", "tau_s"]) and tab.loc["good", "E_inf_star_pa"] > 0
+    assert "never moves down" in tab.loc["still", "error"] or "segment" in tab.loc["still",
+                                                                                    "error"]
+    assert "still: not fitted:" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--method", "lsq"], "--method lsq is for the elastic fit"),
+    (["--resume"], "--resume is for elastic campaigns"),
+    (["--nu-range", "0.3", "0.4"], "--nu-range is for the elastic fit"),
+    (["--t0", "0"], "--t0 0.0 must be a positive time"),
+    (["--segments", "approach,retract"], "retract segment"),
+])
+def test_options_that_do_not_apply_are_one_line_errors(record_csv, tmp_path, capsys, extra,
+                                                       message):
+    rc = main(["fit", str(record_csv), "--rheology", "power-law", "--out",
+               str(tmp_path / "r"), *PARA, *extra])
+    err = capsys.readouterr().err
+    assert rc == 2 and message in err and "Traceback" not in err
+
+
+def test_segments_without_rheology_and_an_existing_table(record_csv, tmp_path, capsys):
+    assert main(["fit", str(record_csv), "--segments", "approach,hold", "--out",
+                 str(tmp_path / "e"), *PARA]) == 2
+    assert "--segments chooses what --rheology" in capsys.readouterr().err
+    out = tmp_path / "res"
+    (out).mkdir()
+    (out / "rheology.csv").write_text("trace_id\n")
+    assert main(["fit", str(record_csv), "--rheology", "sls", "--out", str(out), *PARA]) == 2
+    assert "exists; pass --force" in capsys.readouterr().err
+
+
+def test_a_real_stress_relaxation_file_end_to_end(shared_data, tmp_path, capsys):
+    """afmformats' JPK stress-relaxation curve (a cell; 2 µm approach, 30 s hold): read with
+    its segments, fitted, and its misfit named in the table and on the console."""
+    path = shared_data("afm-files", files=[SR]) / SR
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # afmformats' own warnings about JPK metadata
+        rc = main(["fit", str(path), "--rheology", "power-law", "--tip", "paraboloid",
+                   "--radius", "5e-6", "--nu", "0.5", "--out", str(tmp_path / "sr"),
+                   "--no-progress"])
+    assert rc == 0, capsys.readouterr().err
+    row = pd.read_csv(tmp_path / "sr" / "rheology.csv").iloc[0]
+    assert row["segments"] == "approach,hold" and not isinstance(row["error"], str)
+    assert 300 < row["E0_star_pa"] < 3000 and 0.05 < row["alpha"] < 0.5
+    text = capsys.readouterr().out
+    if not row["model_ok"]:  # what fails is said, with its code in the table
+        assert "model check FAILED" in text and row["flag_codes"]
