@@ -6,6 +6,8 @@ import argparse
 import math
 from pathlib import Path
 
+import numpy as np
+
 from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
 from ..bayes.fit import ENGINES
 from ..bayes.modelform import interval_parts
@@ -128,6 +130,10 @@ def register(subparsers) -> None:
                         "segments gets them from the motion)")
     v.add_argument("--t0", type=float, default=1.0, metavar="S",
                    help="reference time of the power law [s] (E0* is E*(t0); default 1)")
+    v.add_argument("--compression-speed", type=float, default=50.0, metavar="MM_PER_MIN",
+                   help="cross-head speed [mm/min] of the compression test the fit is set "
+                        "beside: with --nu and the thickness, rheology.csv gets the modulus "
+                        "that test would report (default 50, the paper's Instron)")
     add_trace_options(p, "single trace (ignored for a manifest)")
 
 
@@ -385,6 +391,9 @@ def _run_rheology(args: argparse.Namespace) -> int:
                          f"{RHEOLOGY_TABLE} at the end: run it again with --force")
     if not (math.isfinite(args.t0) and args.t0 > 0):
         raise InputError(f"--t0 {args.t0!r} must be a positive time in seconds")
+    if not (math.isfinite(args.compression_speed) and args.compression_speed > 0):
+        raise InputError(f"--compression-speed {args.compression_speed!r} must be a positive "
+                         "speed in mm/min")
     nu = None if args.nu is None else check_nu(args.nu)
     if args.nu_range is not None:
         raise InputError("--nu-range is for the elastic fit's budget; give --nu (or leave it "
@@ -402,7 +411,8 @@ def _run_rheology(args: argparse.Namespace) -> int:
         traces = traces_from_args(args, segments=segments)
         total = len(traces)
     table = fit_traces(traces, args.rheology, out, segments=segments, t0=args.t0, nu=nu,
-                       seed=args.seed, progress=args.progress, total=total)
+                       seed=args.seed, compression_speed=args.compression_speed / 6e4,
+                       progress=args.progress, total=total)
     _print_rheology(table)
     print(f"wrote {out / RHEOLOGY_TABLE}")
     return 0
@@ -424,6 +434,10 @@ def _print_rheology(table) -> None:
             stem = c.removesuffix("_pa").removesuffix("_s")
             lo, hi = (r[f"{stem}_{p}{c[len(stem):]}"] for p in ("lo", "hi"))
             parts.append(f"{stem.replace('_star', '*')} {r[c]:.4g} [{lo:.4g}, {hi:.4g}]{unit}")
+        if np.isfinite(r.get("E_compression_pa", np.nan)):
+            parts.append(f"a compression test at {r['compression_speed_mm_min']:g} mm/min "
+                         f"would read E {r['E_compression_pa']:.4g} "
+                         f"[{r['E_compression_lo_pa']:.4g}, {r['E_compression_hi_pa']:.4g}] Pa")
         check = "model check passed" if r["model_ok"] else (
             f"model check FAILED ({r['flag_codes']})")
         print(f"  {r['trace_id']}: {'; '.join(parts)}; {check}")

@@ -12,6 +12,8 @@ One module per job, imports flowing one way (``results`` -> ``fit`` -> ``posteri
 * :mod:`~palpbayes.rheology.posterior` -- the collapsed posterior on a (surface × alpha or
   tau) grid: moduli, offset and noise integrated in closed form, draws;
 * :mod:`~palpbayes.rheology.fit` -- :func:`fit_rheology`, its result, table and flags;
+* :mod:`~palpbayes.rheology.compression` -- the modulus a compression test at a chosen
+  speed would report for the fitted relaxation modulus (the ground truth's own rule);
 * :mod:`~palpbayes.rheology.results` -- many traces into ``rheology.csv`` (``palpbayes fit
   --rheology``).
 
@@ -21,7 +23,8 @@ is :mod:`palpbayes.contact.viscoelastic`; it checks the regression columns here.
 
 from __future__ import annotations
 
-from . import cycle, design, fit, posterior, results
+from . import compression, cycle, design, fit, posterior, results
+from .compression import *  # noqa: F403
 from .cycle import *  # noqa: F403
 from .design import *  # noqa: F403
 from .fit import *  # noqa: F403
@@ -29,6 +32,7 @@ from .posterior import *  # noqa: F403
 from .results import *  # noqa: F403
 
 __all__: list[str] = []
+__all__ += compression.__all__
 __all__ += cycle.__all__
 __all__ += design.__all__
 __all__ += posterior.__all__

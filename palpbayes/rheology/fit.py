@@ -29,8 +29,10 @@ from ..checks.core import CheckResult
 from ..contact import Tip, check_nu
 from ..contact.viscoelastic import PowerLawKernel, PronyKernel, ramp_apparent_modulus
 from ..errors import InputError
+from ..groundtruth import DEFAULT_STRAIN_WINDOW
 from ..intervals import LEVEL
 from ..trace import IndentationTrace
+from .compression import PAPER_COMPRESSION_SPEED, compression_moduli
 from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
 from .design import lee_radok_columns
 from .posterior import ALPHA_MAX, PHI_BOUNDS, RHEOLOGIES, GridPosterior, grid_posterior
@@ -46,6 +48,8 @@ _COMMON = (("z_surf", "m", False), ("offset", "N", False), ("sigma", "N", False)
            ("phi", "-", False))
 #: Largest relative loss of depth during the hold before the shrinking contact is flagged.
 SHRINK_FLAG = 0.02
+#: Depth / specimen thickness above which the half-space assumption is flagged.
+THIN_FLAG = 0.05
 #: Smallest effective importance sample before the draws are flagged.
 MIN_ESS = 400
 #: Draws used for the force band and the posterior-predictive check.
@@ -153,6 +157,22 @@ class RheologyFit:
         """[N] Model force at the block means for ``n`` draws (n, points), offset included."""
         return _force_curves(self.data, self.rheology, self.draws, self.t0, n)
 
+    def compression_modulus(self, height: float, speed: float = PAPER_COMPRESSION_SPEED,
+                            strain_window=DEFAULT_STRAIN_WINDOW, level: float = LEVEL,
+                            n: int = 400) -> tuple[float, float, float]:
+        """Young's modulus [Pa] a compression test of this material would report: a specimen
+        of ``height`` [m] at cross-head ``speed`` [m/s] (default the paper's 50 mm/min), read
+        by the ground truth's rule over ``strain_window``
+        (:func:`~palpbayes.rheology.compression.compression_moduli`); median and central
+        ``level`` interval over ``n`` draws.  Needs ``nu`` (the fit's)."""
+        if self.nu is None:
+            raise InputError("the compression modulus is a Young's modulus: fit with nu= "
+                             "(--nu) to convert E* = E/(1 - nu^2)")
+        vals = compression_moduli(self.kernels(min(n, len(self.draws["z_surf"]))), self.nu,
+                                  speed, height, strain_window)
+        med, lo, hi = np.percentile(vals, [50.0, 50.0 * (1 - level), 50.0 * (1 + level)])
+        return float(med), float(lo), float(hi)
+
     def summary_line(self) -> str:
         tab = self.table()
         parts = []
@@ -231,6 +251,14 @@ def _flags(fit: RheologyFit) -> list[str]:
             out.append(f"the contact shrinks by {100 * loss:.1f} % of the depth during the hold "
                        "(the tip backs out as the force relaxes): Lee–Radok overstates the "
                        "relaxation there; Ting's rule is not in the fit yet")
+    thickness = data.trace.thickness
+    if thickness is not None:
+        depth = float(np.median(d["z_surf"]) - data.z.min())
+        if depth > THIN_FLAG * thickness:
+            out.append(f"the specimen is {1e3 * thickness:.3g} mm thick and the tip goes "
+                       f"{1e3 * depth:.3g} mm deep ({100 * depth / thickness:.0f} %): the "
+                       "viscoelastic fit takes a half-space, so the rigid base under a thin "
+                       "layer reads as a stiffer material (not modelled here yet)")
     if not fit.ppc.passed:
         out.append(fit.ppc.flag)
     return out

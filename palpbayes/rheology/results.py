@@ -5,8 +5,11 @@ parameter's posterior median and central 90 % interval in columns named
 ``<parameter>[_lo|_hi]_<unit>`` (moduli as E* [Pa], and as E with ``nu``), whether the model
 check passed (``model_ok``), the short codes of what was flagged (``flag_codes``, ``;``
 separated) and the flags in words (``notes``), the number of block means and the fit time.
-A trace that cannot be fitted (no contact, a missing segment) keeps its row with the reason in
-``error``.  The table is written atomically, once, after the last trace.
+With ``nu`` and the specimen's thickness known, ``E_compression_pa`` (``_lo``, ``_hi``) is the
+Young's modulus a compression test of that height at ``compression_speed_mm_min`` would report
+(:func:`~palpbayes.rheology.compression.compression_moduli`: the ground truth's rule), to set
+beside the Instron.  A trace that cannot be fitted (no contact, a missing segment) keeps its row
+with the reason in ``error``.  The table is written atomically, once, after the last trace.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import pandas as pd
 from ..errors import PalpbayesError
 from ..io.atomic import write_csv_atomic
 from ..trace import IndentationTrace
+from .compression import PAPER_COMPRESSION_SPEED
 from .cycle import DEFAULT_SEGMENTS
 from .fit import RheologyFit, fit_rheology
 
@@ -36,6 +40,7 @@ _CODES = (("alpha piles up at 0", "alpha_at_zero"), ("alpha piles up", "alpha_at
           ("phi piles up", "phi_at_bound"), ("surface posterior reaches", "surface_at_bound"),
           ("did not settle", "grid"), ("another basin", "basin"),
           ("effective sample", "ess"), ("contact shrinks", "shrinking_contact"),
+          ("takes a half-space", "thickness"),
           ("posterior-predictive", "ppc"))
 
 
@@ -53,8 +58,9 @@ def _column(parameter: str, unit: str, part: str = "") -> str:
     return "_".join(p for p in (name, part, suffix) if p)
 
 
-def summary_row(trace: IndentationTrace, fit: RheologyFit) -> dict:
-    """The table row of one fitted trace (module docstring)."""
+def summary_row(trace: IndentationTrace, fit: RheologyFit,
+                compression_speed: float = PAPER_COMPRESSION_SPEED) -> dict:
+    """The table row of one fitted trace (module docstring); ``compression_speed`` [m/s]."""
     row: dict = {"trace_id": trace.trace_id, "source": trace.source or "",
                  "rheology": fit.rheology, "segments": ",".join(fit.data.segments),
                  "t0_s": fit.t0, "nu": np.nan if fit.nu is None else fit.nu}
@@ -62,6 +68,11 @@ def summary_row(trace: IndentationTrace, fit: RheologyFit) -> dict:
         row[_column(r["parameter"], r["unit"])] = r["median"]
         row[_column(r["parameter"], r["unit"], "lo")] = r["lo"]
         row[_column(r["parameter"], r["unit"], "hi")] = r["hi"]
+    if fit.nu is not None and trace.thickness is not None:
+        med, lo, hi = fit.compression_modulus(trace.thickness, compression_speed)
+        row.update(E_compression_pa=med, E_compression_lo_pa=lo, E_compression_hi_pa=hi,
+                   compression_speed_mm_min=compression_speed * 6e4,
+                   compression_height_m=trace.thickness)
     row.update(model_ok=fit.model_ok, flag_codes=";".join(flag_code(f) for f in fit.flags),
                notes=" | ".join(fit.flags), n_points=fit.data.n_points,
                block=fit.data.block, seconds=round(fit.seconds, 3), error="")
@@ -71,6 +82,7 @@ def summary_row(trace: IndentationTrace, fit: RheologyFit) -> dict:
 def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], IndentationTrace]]],
                rheology: str, out: str | os.PathLike, *, segments=DEFAULT_SEGMENTS,
                t0: float = 1.0, nu: float | None = None, seed: int = 0,
+               compression_speed: float = PAPER_COMPRESSION_SPEED,
                progress: bool | None = None, total: int | None = None) -> pd.DataFrame:
     """Fit every trace with :func:`~palpbayes.rheology.fit_rheology` and write
     ``out/rheology.csv`` (module docstring); returns the table.
@@ -80,6 +92,7 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
     trace's position seeds its draws (the same table every run); ``nu`` gives way to the
     trace's own ``metadata["nu"]`` (a manifest's ``nu`` column).  Errors of one trace
     (:class:`~palpbayes.errors.PalpbayesError`) go into its row's ``error``.
+    ``compression_speed`` [m/s] is the compression test's (module docstring).
     """
     from ..campaign.run import progress_bar
 
@@ -98,7 +111,7 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
                 trace_nu = (trace.metadata or {}).get("nu", nu)
                 fit = fit_rheology(trace, rheology, segments=segments, t0=t0, nu=trace_nu,
                                    rng=seed + i)
-                rows.append(summary_row(trace, fit))
+                rows.append(summary_row(trace, fit, compression_speed))
             except PalpbayesError as exc:
                 rows.append({"trace_id": trace_id, "source": source, "rheology": rheology,
                              "model_ok": False, "error": str(exc)})

@@ -15,6 +15,7 @@ from palpbayes.contact.viscoelastic import PowerLawKernel
 from palpbayes.io.manifest import write_manifest
 from palpbayes.io.trace_csv import write_trace
 from palpbayes.paper import PAPER_TIPS
+from palpbayes.rheology.compression import compression_moduli
 from palpbayes.sim import simulate_viscoelastic
 
 PARA = ["--tip", "paraboloid", "--radius", "0.0117", "--no-progress"]
@@ -33,18 +34,24 @@ def test_fit_rheology_writes_one_row_with_intervals_and_says_what_it_checked(
         record_csv, tmp_path, capsys):
     out = tmp_path / "res"
     assert main(["fit", str(record_csv), "--rheology", "power-law", "--nu", "0.45",
-                 "--out", str(out), *PARA]) == 0
+                 "--thickness", "0.02", "--out", str(out), *PARA]) == 0
     text = capsys.readouterr().out
     assert "pl: E0* " in text and "alpha " in text and "model check passed" in text
+    assert "a compression test at 50 mm/min would read E " in text
+    assert "takes a half-space" in text  # 3 mm into 20 mm: said, not modelled
     row = pd.read_csv(out / "rheology.csv").iloc[0]
     assert row["rheology"] == "power-law" and row["segments"] == "approach,hold"
     assert row["E0_star_lo_pa"] < 80e3 < row["E0_star_hi_pa"]
     assert row["alpha_lo"] < 0.2 < row["alpha_hi"]
     assert row["E0_pa"] == pytest.approx(row["E0_star_pa"] * (1 - 0.45**2))
     assert bool(row["model_ok"]) and row["block"] >= 1 and row["t0_s"] == 1.0
+    assert row["flag_codes"] == "thickness" and row["compression_height_m"] == 0.02
+    assert row["E_compression_lo_pa"] < row["E_compression_pa"] < row["E_compression_hi_pa"]
+    truth = compression_moduli([PowerLawKernel(80e3, 0.2)], 0.45, 50 / 60e3, 0.02)[0]
+    assert row["E_compression_lo_pa"] < truth < row["E_compression_hi_pa"]
     # the same seed, the same table
     assert main(["fit", str(record_csv), "--rheology", "power-law", "--nu", "0.45",
-                 "--out", str(out), "--force", *PARA]) == 0
+                 "--thickness", "0.02", "--out", str(out), "--force", *PARA]) == 0
     again = pd.read_csv(out / "rheology.csv").iloc[0]
     assert again["E0_star_pa"] == row["E0_star_pa"] and again["alpha_hi"] == row["alpha_hi"]
 
@@ -74,6 +81,7 @@ def test_a_manifest_keeps_the_row_of_a_trace_that_cannot_be_fitted(record_csv, t
     (["--nu-range", "0.3", "0.4"], "--nu-range is for the elastic fit"),
     (["--t0", "0"], "--t0 0.0 must be a positive time"),
     (["--segments", "approach,retract"], "retract segment"),
+    (["--compression-speed", "-5"], "--compression-speed -5.0 must be a positive"),
 ])
 def test_options_that_do_not_apply_are_one_line_errors(record_csv, tmp_path, capsys, extra,
                                                        message):

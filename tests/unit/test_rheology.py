@@ -232,3 +232,37 @@ def test_a_record_without_segments_gets_them_from_the_motion():
     a, b = prepare_cycle(bare), prepare_cycle(rec)
     assert a.segments == b.segments
     assert abs(a.n_points - b.n_points) <= 2
+
+
+def test_compression_modulus_closed_forms():
+    """The compression test's rule on the model's stress-strain curve: the elastic limit
+    reads (1 - nu^2)·E* exactly; a power law's reading scales as speed^alpha (the curve's
+    shape in strain does not change); the SLS reads E_inf or E_inf + E1 when tau is far
+    shorter or longer than the test."""
+    from palpbayes.rheology.compression import compression_moduli
+
+    nu, v, h = 0.45, 50 / 60e3, 0.02
+    elastic, power = PowerLawKernel(80e3, 0.0), PowerLawKernel(80e3, 0.2)
+    slow, fast = compression_moduli([elastic, power], nu, v, h), compression_moduli(
+        [elastic, power], nu, 10 * v, h)
+    assert slow[0] == pytest.approx(80e3 * (1 - nu**2), rel=1e-12)
+    assert fast[0] == pytest.approx(slow[0], rel=1e-12)
+    assert fast[1] / slow[1] == pytest.approx(10**0.2, rel=1e-9)
+    sls = compression_moduli([standard_linear_solid(40e3, 60e3, 1e-3),
+                              standard_linear_solid(40e3, 60e3, 1e4)], nu, v, h)
+    np.testing.assert_allclose(sls / (1 - nu**2), [40e3, 100e3], rtol=1e-3)
+    with pytest.raises(InputError, match="needs the specimen height"):
+        compression_moduli([elastic], nu, v, None)
+
+
+def test_fit_compression_modulus_brackets_the_truth(power_fit):
+    import dataclasses
+
+    from palpbayes.rheology.compression import compression_moduli
+
+    with pytest.raises(InputError, match="fit with nu="):
+        power_fit.compression_modulus(0.02)
+    f = dataclasses.replace(power_fit, nu=0.45)
+    med, lo, hi = f.compression_modulus(0.02)
+    truth = compression_moduli([PowerLawKernel(90e3, 0.2)], 0.45, 50 / 60e3, 0.02)[0]
+    assert lo < med < hi and abs(med - truth) <= 3 * (hi - lo) / 3.29
