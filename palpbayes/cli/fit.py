@@ -120,10 +120,11 @@ def register(subparsers) -> None:
     add_model_options(p)
     v = p.add_argument_group(
         "viscoelastic fit (the whole loading and hold; the retract is not fitted yet)")
-    v.add_argument("--rheology", choices=("elastic", *RHEOLOGIES), default="elastic",
+    v.add_argument("--rheology", type=_rheologies, default=("elastic",), metavar="MODEL",
                    help="relaxation modulus: elastic (the fits above, default), power-law "
                         "E*(t) = E0*·(t/t0)^-alpha or sls E*(t) = E_inf* + E1*·exp(-t/tau); "
-                        "writes DIR/rheology.csv, one row per trace")
+                        "writes DIR/rheology.csv, one row per trace; power-law,sls fits both "
+                        "and says which the record prefers (PSIS-LOO, with its error)")
     v.add_argument("--segments", default=None, metavar="NAMES",
                    help="segments fitted by --rheology power-law|sls, comma-separated from "
                         "approach, hold (default approach,hold; a recording without "
@@ -374,6 +375,19 @@ def _print_interval_parts(summary) -> None:
         print(f"  {r['trace_id']}: {parts}{misfit}")
 
 
+def _rheologies(text: str) -> tuple[str, ...]:
+    """--rheology: one model, or several viscoelastic ones separated by commas."""
+    names = tuple(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
+    known = ("elastic", *RHEOLOGIES)
+    bad = [n for n in names if n not in known]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(f"unknown model {bad[0] if bad else text!r}; use "
+                                         f"{', '.join(known)} (or power-law,sls)")
+    if "elastic" in names and len(names) > 1:
+        raise argparse.ArgumentTypeError("elastic is the other fit; compare power-law,sls")
+    return names
+
+
 def _run_rheology(args: argparse.Namespace) -> int:
     """``fit --rheology power-law|sls``: the viscoelastic fit of every trace, one table."""
     from ..io.manifest import load_trace, read_manifest
@@ -383,7 +397,7 @@ def _run_rheology(args: argparse.Namespace) -> int:
     path, out = Path(args.input), Path(args.out)
     _check_input_path(path)
     if args.method != "bayes":
-        raise InputError(f"--rheology {args.rheology} is a Bayesian fit; --method "
+        raise InputError(f"--rheology {','.join(args.rheology)} is a Bayesian fit; --method "
                          f"{args.method} is for the elastic fit (leave it out, or use "
                          "--rheology elastic)")
     if args.resume:
@@ -419,37 +433,57 @@ def _run_rheology(args: argparse.Namespace) -> int:
 
 
 def _print_rheology(table) -> None:
-    """One line per trace: the parameters with 90 % intervals, the model check, the flags."""
+    """One line per trace and model: the parameters with 90 % intervals, the model check, the
+    flags; with several models, which one the record prefers."""
     print("posterior medians [90 % intervals]; moduli as E* = E/(1 - nu^2) (with --nu, "
           "rheology.csv has E too)")
-    for _, r in table.iterrows():
-        if r.get("error"):
-            print(f"  {r['trace_id']}: not fitted: {r['error']}")
-            continue
-        names = ("E0_star_pa", "alpha") if r["rheology"] == "power-law" else (
-            "E_inf_star_pa", "E1_star_pa", "tau_s")
-        parts = []
-        for c in names:
-            unit = " Pa" if c.endswith("_pa") else (" s" if c.endswith("_s") else "")
-            stem = c.removesuffix("_pa").removesuffix("_s")
-            lo, hi = (r[f"{stem}_{p}{c[len(stem):]}"] for p in ("lo", "hi"))
-            parts.append(f"{stem.replace('_star', '*')} {r[c]:.4g} [{lo:.4g}, {hi:.4g}]{unit}")
-        if np.isfinite(r.get("E_compression_pa", np.nan)):
-            parts.append(f"a compression test at {r['compression_speed_mm_min']:g} mm/min "
-                         f"would read E {r['E_compression_pa']:.4g} "
-                         f"[{r['E_compression_lo_pa']:.4g}, {r['E_compression_hi_pa']:.4g}] Pa")
-        check = "model check passed" if r["model_ok"] else (
-            f"model check FAILED ({r['flag_codes']})")
-        print(f"  {r['trace_id']}: {'; '.join(parts)}; {check}")
-        if r["notes"]:
-            for note in str(r["notes"]).split(" | "):
-                print(f"      - {note}")
+    for trace_id, rows in table.groupby("trace_id", sort=False):
+        for _, r in rows.iterrows():
+            label = trace_id if len(rows) == 1 else f"{trace_id} ({r['rheology']})"
+            if isinstance(r.get("error"), str) and r["error"]:
+                print(f"  {label}: not fitted: {r['error']}")
+                continue
+            print(f"  {label}: {_rheology_line(r)}")
+            if isinstance(r["notes"], str) and r["notes"]:
+                for note in r["notes"].split(" | "):
+                    print(f"      - {note}")
+        if len(rows) > 1 and "elpd_diff" in rows and rows["elpd_diff"].notna().all():
+            print(f"  {trace_id}: {_choice_line(rows)}")
+
+
+def _rheology_line(r) -> str:
+    names = ("E0_star_pa", "alpha") if r["rheology"] == "power-law" else (
+        "E_inf_star_pa", "E1_star_pa", "tau_s")
+    parts = []
+    for c in names:
+        unit = " Pa" if c.endswith("_pa") else (" s" if c.endswith("_s") else "")
+        stem = c.removesuffix("_pa").removesuffix("_s")
+        lo, hi = (r[f"{stem}_{p}{c[len(stem):]}"] for p in ("lo", "hi"))
+        parts.append(f"{stem.replace('_star', '*')} {r[c]:.4g} [{lo:.4g}, {hi:.4g}]{unit}")
+    if np.isfinite(r.get("E_compression_pa", np.nan)):
+        parts.append(f"a compression test at {r['compression_speed_mm_min']:g} mm/min "
+                     f"would read E {r['E_compression_pa']:.4g} "
+                     f"[{r['E_compression_lo_pa']:.4g}, {r['E_compression_hi_pa']:.4g}] Pa")
+    check = ("model check passed" if r["model_ok"]
+             else f"model check FAILED ({r['flag_codes']})")
+    return f"{'; '.join(parts)}; {check}"
+
+
+def _choice_line(rows) -> str:
+    best = rows.loc[rows["elpd_diff"].idxmax()]
+    others = ", ".join(f"{r['rheology']} by {-r['elpd_diff']:.1f} ± {r['elpd_diff_se']:.1f}"
+                       for _, r in rows.iterrows() if r["rheology"] != best["rheology"])
+    k = rows[rows["pareto_k_max"] > 0.7]["rheology"].tolist()
+    shaky = f" (PSIS-LOO unreliable for {', '.join(k)}: Pareto k > 0.7)" if k else ""
+    if bool(best["preferred"]):
+        return f"prefers {best['rheology']}: elpd_loo higher than {others}{shaky}"
+    return f"no model preferred (elpd_loo difference within 2 se: {others}){shaky}"
 
 
 def run(args: argparse.Namespace) -> int:
     from ..campaign.run import fit_campaign
 
-    if getattr(args, "rheology", "elastic") != "elastic":
+    if getattr(args, "rheology", ("elastic",)) != ("elastic",):
         return _run_rheology(args)
     if getattr(args, "segments", None) is not None:
         raise InputError("--segments chooses what --rheology power-law|sls fits; the elastic "

@@ -37,7 +37,8 @@ from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
 from .design import lee_radok_columns
 from .posterior import ALPHA_MAX, PHI_BOUNDS, RHEOLOGIES, GridPosterior, grid_posterior
 
-__all__ = ["RheologyFit", "fit_rheology", "PARAMETERS", "SHRINK_FLAG", "MIN_ESS"]
+__all__ = ["RheologyFit", "fit_rheology", "curve_draws", "PARAMETERS", "SHRINK_FLAG", "MIN_ESS",
+           "THIN_FLAG"]
 
 #: Parameters of each rheology in table order: (name, unit, is a modulus).
 PARAMETERS = {
@@ -96,9 +97,15 @@ class RheologyFit:
         return self.grid.t0
 
     @property
+    def phi_at_bound(self) -> bool:
+        """The noise correlation piles up at its prior's upper bound (> 5 % of the draws
+        within 0.02 of it): the residuals drift, a misfit the noise model soaks up."""
+        return bool(np.mean(self.draws["phi"] > PHI_BOUNDS[1] - 0.02) > 0.05)
+
+    @property
     def model_ok(self) -> bool:
-        """The posterior-predictive check passes."""
-        return bool(self.ppc.passed)
+        """The posterior-predictive check passes and phi is not at its bound."""
+        return bool(self.ppc.passed) and not self.phi_at_bound
 
     def table(self, level: float = LEVEL) -> pd.DataFrame:
         """One row per parameter: ``parameter``, ``unit``, ``median``, ``lo``, ``hi`` (the
@@ -154,7 +161,8 @@ class RheologyFit:
         return float(med), float(lo), float(hi)
 
     def force_curves(self, n: int = _BAND_DRAWS) -> np.ndarray:
-        """[N] Model force at the block means for ``n`` draws (n, points), offset included."""
+        """[N] Model force at the block means for ``n`` draws (n, points), offset included:
+        the draws :func:`curve_draws` picks."""
         return _force_curves(self.data, self.rheology, self.draws, self.t0, n)
 
     def compression_modulus(self, height: float, speed: float = PAPER_COMPRESSION_SPEED,
@@ -184,9 +192,14 @@ class RheologyFit:
         return "; ".join(parts)
 
 
+def curve_draws(n_total: int, n: int) -> np.ndarray:
+    """Indices of the draws (of ``n_total``) behind ``n`` force curves, evenly spread."""
+    return np.linspace(0, n_total - 1, min(n, n_total)).round().astype(int)
+
+
 def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int) -> np.ndarray:
-    k = min(n, len(draws["z_surf"]))
-    idx = np.linspace(0, len(draws["z_surf"]) - 1, k).round().astype(int)
+    idx = curve_draws(len(draws["z_surf"]), n)
+    k = idx.size
     win = data.windows()
     out = np.empty((k, data.n_points))
     for r, i in enumerate(idx):
@@ -224,7 +237,7 @@ def _flags(fit: RheologyFit) -> list[str]:
         if hi > data.span:
             out.append(f"tau reaches {hi:.3g} s, beyond the recorded {data.span:.3g} s: the "
                        "slow relaxation is not resolved (hold longer)")
-    if np.mean(d["phi"] > PHI_BOUNDS[1] - 0.02) > 0.05:
+    if fit.phi_at_bound:
         out.append(f"the noise correlation phi piles up at {PHI_BOUNDS[1]}, the upper bound of "
                    "its prior: the residuals drift slowly, which is model misfit rather than "
                    "sensor noise")
@@ -311,7 +324,7 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
     grid = grid_posterior(data, rheology, t0=t0)
     draws = grid.draws(gen, int(n_draws))
     curves = _force_curves(data, rheology, draws, t0, _BAND_DRAWS)
-    sub = np.linspace(0, n_draws - 1, curves.shape[0]).round().astype(int)
+    sub = curve_draws(n_draws, _BAND_DRAWS)
     t_contact = float(np.median(_contact_times(data, draws["z_surf"][sub])))
     # residuals binned in time: -time as the "height", the contact time as the "surface"
     ppc = posterior_predictive_check(-data.time, data.force, curves, draws["sigma"][sub],

@@ -15,7 +15,7 @@ with the reason in ``error``.  The table is written atomically, once, after the 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -80,26 +80,31 @@ def summary_row(trace: IndentationTrace, fit: RheologyFit,
 
 
 def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], IndentationTrace]]],
-               rheology: str, out: str | os.PathLike, *, segments=DEFAULT_SEGMENTS,
-               t0: float = 1.0, nu: float | None = None, seed: int = 0,
-               compression_speed: float = PAPER_COMPRESSION_SPEED,
+               rheology: str | Sequence[str], out: str | os.PathLike, *,
+               segments=DEFAULT_SEGMENTS, t0: float = 1.0, nu: float | None = None,
+               seed: int = 0, compression_speed: float = PAPER_COMPRESSION_SPEED,
                progress: bool | None = None, total: int | None = None) -> pd.DataFrame:
     """Fit every trace with :func:`~palpbayes.rheology.fit_rheology` and write
     ``out/rheology.csv`` (module docstring); returns the table.
 
-    ``traces`` holds traces, or (trace_id, source, load) with ``load()`` reading the trace
-    (a manifest's rows: a file that cannot be read keeps its row too).  ``seed`` + the
-    trace's position seeds its draws (the same table every run); ``nu`` gives way to the
-    trace's own ``metadata["nu"]`` (a manifest's ``nu`` column).  Errors of one trace
-    (:class:`~palpbayes.errors.PalpbayesError`) go into its row's ``error``.
-    ``compression_speed`` [m/s] is the compression test's (module docstring).
+    ``rheology`` is one model or several (``("power-law", "sls")``): with several, every
+    trace gets a row per model and :func:`~palpbayes.rheology.choice.compare_fits`'s columns
+    (``elpd_loo``, ``elpd_loo_se``, ``p_loo``, ``pareto_k_max``, ``elpd_diff``,
+    ``elpd_diff_se``, ``preferred``).  ``traces`` holds traces, or (trace_id, source, load)
+    with ``load()`` reading the trace (a manifest's rows: a file that cannot be read keeps its
+    row too).  ``seed`` + the trace's position seeds its draws (the same table every run);
+    ``nu`` gives way to the trace's own ``metadata["nu"]`` (a manifest's ``nu`` column).
+    Errors of one trace (:class:`~palpbayes.errors.PalpbayesError`) go into its row's
+    ``error``.  ``compression_speed`` [m/s] is the compression test's (module docstring).
     """
     from ..campaign.run import progress_bar
+    from .choice import compare_fits
 
+    models = (rheology,) if isinstance(rheology, str) else tuple(rheology)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rows = []
-    bar = progress_bar(total, progress, desc=f"{rheology} fits")
+    bar = progress_bar(total, progress, desc=f"{'/'.join(models)} fits")
     try:
         for i, item in enumerate(traces):
             if isinstance(item, IndentationTrace):
@@ -109,12 +114,17 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
             try:
                 trace = load()
                 trace_nu = (trace.metadata or {}).get("nu", nu)
-                fit = fit_rheology(trace, rheology, segments=segments, t0=t0, nu=trace_nu,
-                                   rng=seed + i)
-                rows.append(summary_row(trace, fit, compression_speed))
+                fits = {m: fit_rheology(trace, m, segments=segments, t0=t0, nu=trace_nu,
+                                        rng=seed + i) for m in models}
+                new = [summary_row(trace, f, compression_speed) for f in fits.values()]
+                if len(fits) > 1:
+                    choice = compare_fits(fits).set_index("rheology")
+                    for r in new:
+                        r.update(choice.loc[r["rheology"]].to_dict())
+                rows.extend(new)
             except PalpbayesError as exc:
-                rows.append({"trace_id": trace_id, "source": source, "rheology": rheology,
-                             "model_ok": False, "error": str(exc)})
+                rows.extend({"trace_id": trace_id, "source": source, "rheology": m,
+                             "model_ok": False, "error": str(exc)} for m in models)
             bar.update(1)
     finally:
         bar.close()

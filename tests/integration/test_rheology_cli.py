@@ -56,6 +56,23 @@ def test_fit_rheology_writes_one_row_with_intervals_and_says_what_it_checked(
     assert again["E0_star_pa"] == row["E0_star_pa"] and again["alpha_hi"] == row["alpha_hi"]
 
 
+def test_two_models_and_which_one_the_record_prefers(record_csv, tmp_path, capsys):
+    """A power-law record fitted by both models: the power law is preferred by PSIS-LOO, by
+    many standard errors; both rows carry the comparison."""
+    out = tmp_path / "both"
+    assert main(["fit", str(record_csv), "--rheology", "power-law,sls", "--out", str(out),
+                 *PARA]) == 0
+    text = capsys.readouterr().out
+    assert "pl (power-law): E0* " in text and "pl (sls): E_inf* " in text
+    assert "pl: prefers power-law: elpd_loo higher than sls by " in text
+    tab = pd.read_csv(out / "rheology.csv").set_index("rheology")
+    assert list(tab.index) == ["power-law", "sls"]
+    assert bool(tab.loc["power-law", "preferred"]) and not bool(tab.loc["sls", "preferred"])
+    assert tab.loc["power-law", "elpd_diff"] == 0.0
+    assert -tab.loc["sls", "elpd_diff"] > 5 * tab.loc["sls", "elpd_diff_se"]
+    assert 4 < tab.loc["power-law", "p_loo"] < 9  # E0, alpha, z_surf, offset, sigma, phi
+
+
 def test_a_manifest_keeps_the_row_of_a_trace_that_cannot_be_fitted(record_csv, tmp_path,
                                                                     capsys):
     flat = tmp_path / "flat.csv"
@@ -82,11 +99,16 @@ def test_a_manifest_keeps_the_row_of_a_trace_that_cannot_be_fitted(record_csv, t
     (["--t0", "0"], "--t0 0.0 must be a positive time"),
     (["--segments", "approach,retract"], "retract segment"),
     (["--compression-speed", "-5"], "--compression-speed -5.0 must be a positive"),
+    (["--rheology", "maxwell"], "unknown model 'maxwell'"),
+    (["--rheology", "elastic,sls"], "elastic is the other fit"),
 ])
 def test_options_that_do_not_apply_are_one_line_errors(record_csv, tmp_path, capsys, extra,
                                                        message):
-    rc = main(["fit", str(record_csv), "--rheology", "power-law", "--out",
-               str(tmp_path / "r"), *PARA, *extra])
+    try:
+        rc = main(["fit", str(record_csv), "--rheology", "power-law", "--out",
+                   str(tmp_path / "r"), *PARA, *extra])
+    except SystemExit as exc:  # argparse's own usage errors
+        rc = exc.code
     err = capsys.readouterr().err
     assert rc == 2 and message in err and "Traceback" not in err
 

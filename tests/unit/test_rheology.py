@@ -266,3 +266,36 @@ def test_fit_compression_modulus_brackets_the_truth(power_fit):
     med, lo, hi = f.compression_modulus(0.02)
     truth = compression_moduli([PowerLawKernel(90e3, 0.2)], 0.45, 50 / 60e3, 0.02)[0]
     assert lo < med < hi and abs(med - truth) <= 3 * (hi - lo) / 3.29
+
+
+def test_pointwise_loglik_is_the_ar1_likelihood(power_fit):
+    """The pointwise terms of PSIS-LOO add up to the exact AR(1) Gaussian log-likelihood of
+    the block means (stationary, lag-one correlation phi) for each draw."""
+    from scipy.stats import multivariate_normal
+
+    from palpbayes.rheology.choice import pointwise_loglik
+    from palpbayes.rheology.fit import curve_draws
+
+    f = power_fit
+    ll = pointwise_loglik(f, 3)
+    idx = curve_draws(len(f.draws["z_surf"]), 3)
+    mu = f.force_curves(3)
+    n = f.data.n_points
+    lag = np.abs(np.subtract.outer(np.arange(n), np.arange(n)))
+    for r, i in enumerate(idx):
+        s, phi = f.draws["sigma"][i], f.draws["phi"][i]
+        exact = multivariate_normal(mu[r], s**2 * phi**lag).logpdf(f.data.force)
+        assert ll[r].sum() == pytest.approx(exact, rel=1e-9)
+
+
+def test_compare_fits_needs_two_fits_on_the_same_blocks(power_fit):
+    import dataclasses
+
+    from palpbayes.rheology.choice import compare_fits
+
+    with pytest.raises(InputError, match="at least two"):
+        compare_fits({"power-law": power_fit})
+    other = dataclasses.replace(power_fit, data=prepare_cycle(power_fit.data.trace,
+                                                              max_points=300))
+    with pytest.raises(InputError, match="same block means"):
+        compare_fits({"a": power_fit, "b": other})
