@@ -1,7 +1,7 @@
 """Viscoelastic palpation: the whole recorded cycle fitted with a relaxation modulus.
 
-One module per job, imports flowing one way (``results`` -> ``fit`` -> ``posterior`` ->
-``cycle`` -> ``design``):
+One module per job, imports flowing one way (``results`` -> ``choice`` -> ``fit`` ->
+``posterior`` -> ``cycle`` -> ``design``; ``fit`` -> ``compression``):
 
 * :mod:`~palpbayes.rheology.cycle` -- the samples a viscoelastic fit sees: the chosen
   segments, block means, the knots of the motion, the pre-contact baseline and the surface
@@ -12,6 +12,8 @@ One module per job, imports flowing one way (``results`` -> ``fit`` -> ``posteri
 * :mod:`~palpbayes.rheology.posterior` -- the collapsed posterior on a (surface × alpha or
   tau) grid: moduli, offset and noise integrated in closed form, draws;
 * :mod:`~palpbayes.rheology.fit` -- :func:`fit_rheology`, its result, table and flags;
+* :mod:`~palpbayes.rheology.choice` -- which relaxation model a record prefers (PSIS-LOO,
+  with the standard error of the difference);
 * :mod:`~palpbayes.rheology.compression` -- the modulus a compression test at a chosen
   speed would report for the fitted relaxation modulus (the ground truth's own rule);
 * :mod:`~palpbayes.rheology.results` -- many traces into ``rheology.csv`` (``palpbayes fit
@@ -23,7 +25,8 @@ is :mod:`palpbayes.contact.viscoelastic`; it checks the regression columns here.
 
 from __future__ import annotations
 
-from . import compression, cycle, design, fit, posterior, results
+from . import choice, compression, cycle, design, fit, posterior, results
+from .choice import *  # noqa: F403
 from .compression import *  # noqa: F403
 from .cycle import *  # noqa: F403
 from .design import *  # noqa: F403
@@ -32,6 +35,7 @@ from .posterior import *  # noqa: F403
 from .results import *  # noqa: F403
 
 __all__: list[str] = []
+__all__ += choice.__all__
 __all__ += compression.__all__
 __all__ += cycle.__all__
 __all__ += design.__all__
