@@ -1,0 +1,78 @@
+"""What a viscoelastic fit costs, measured in one run on this machine.
+
+For simulated ramp–hold palpations (paraboloid of the paper, 50 and 5 mm/min, an 8 s hold,
+800 Hz: 7,000 and 40,000 samples) and, when ``../shared/data`` is there, the three real AFM
+curves with a hold, prints the median time of :func:`palpbayes.rheology.fit_rheology` with
+each relaxation model, the time of PSIS-LOO on top (:func:`palpbayes.rheology.choice.loo`),
+and the ratio of the power-law fit to the elastic exact-engine fit of the same record's
+loading part (``fit_bayes(..., engine="exact")``, budget and checks included), timed in the
+same run.
+
+Run: ``python benchmarks/bench_rheology.py`` (about a minute).
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+from common import median_time
+
+from palpbayes.bayes import fit_bayes
+from palpbayes.contact import Tip
+from palpbayes.contact.viscoelastic import PowerLawKernel
+from palpbayes.fitdata import ModelSpec
+from palpbayes.paper import PAPER_TIPS
+from palpbayes.rheology import fit_rheology
+from palpbayes.rheology.choice import loo
+from palpbayes.sim import simulate_viscoelastic
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "afm-files"
+REAL = ("fmt-jpk-sr_cell1-0008.jpk-force", "fmt-jpk-cc_pr14-brain-2021.06.30.jpk-force",
+        "fmt-jpk-cc_pr14-polymergel-2021.06.30.jpk-force")
+
+
+def records() -> list[tuple[str, object, Tip]]:
+    tip = PAPER_TIPS["paraboloid"]
+    out = [(f"sim {v:g} mm/min", simulate_viscoelastic(
+        PowerLawKernel(80e3, 0.2), tip, depth=3e-3, speed=v / 6e4, hold_time=8.0,
+        rate=800.0, z_surf=2e-4, noise_sd=0.008, phi=0.3, rng=1), tip) for v in (50.0, 5.0)]
+    if SHARED.is_dir():
+        from palpbayes.io.afm import read_afm
+
+        afm_tip = Tip("paraboloid", radius=5e-6)
+        for name in REAL:
+            out.append((name[8:28], read_afm(SHARED / name, tip=afm_tip, segments="all")[0],
+                        afm_tip))
+    else:
+        print(f"(no {SHARED}: the real AFM curves are skipped)")
+    return out
+
+
+def main() -> None:
+    print(f"{'record':<22} {'samples':>8} {'power law':>10} {'sls':>8} {'loo':>7} "
+          f"{'elastic':>8} {'ratio':>6}")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for label, trace, tip in records():
+            fits = {}
+
+            def run(model, trace=trace, fits=fits):
+                fits[model] = fit_rheology(trace, model, nu=0.5)
+
+            t_pl = median_time(lambda: run("power-law"), repeat=3)
+            t_sls = median_time(lambda: run("sls"), repeat=3)
+            fitted = fits["power-law"]
+            t_loo = median_time(lambda f=fitted: loo(f), repeat=3)
+            loading = trace.segments("approach")
+            spec = ModelSpec(tip, nu=0.5)
+            t_el = median_time(lambda lt=loading, s=spec: fit_bayes(lt, s, engine="exact"),
+                               repeat=3)
+            print(f"{label:<22} {trace.n_points:>8} {t_pl:>8.2f} s {t_sls:>6.2f} s "
+                  f"{t_loo:>5.2f} s {t_el:>6.2f} s {t_pl / t_el:>6.1f}")
+
+
+if __name__ == "__main__":
+    np.seterr(all="ignore")
+    main()
