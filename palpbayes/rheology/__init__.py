@@ -1,7 +1,8 @@
 """Viscoelastic palpation: the whole recorded cycle fitted with a relaxation modulus.
 
 One module per job, imports flowing one way (``results`` -> ``choice`` -> ``fit`` ->
-``posterior`` -> ``cycle`` -> ``design``; ``fit`` -> ``compression``):
+``posterior`` -> ``cycle`` -> ``design``; ``fit`` -> ``compression``; ``pool`` -> ``fit``,
+``posterior``):
 
 * :mod:`~palpbayes.rheology.cycle` -- the samples a viscoelastic fit sees: the chosen
   segments, block means, the knots of the motion, the pre-contact baseline and the surface
@@ -16,6 +17,8 @@ One module per job, imports flowing one way (``results`` -> ``choice`` -> ``fit`
   with the standard error of the difference);
 * :mod:`~palpbayes.rheology.compression` -- the modulus a compression test at a chosen
   speed would report for the fitted relaxation modulus (the ground truth's own rule);
+* :mod:`~palpbayes.rheology.pool` -- one material at several speeds: the power law's
+  (E0*, alpha) pooled over palpations;
 * :mod:`~palpbayes.rheology.results` -- many traces into ``rheology.csv`` (``palpbayes fit
   --rheology``).
 
@@ -25,12 +28,13 @@ is :mod:`palpbayes.contact.viscoelastic`; it checks the regression columns here.
 
 from __future__ import annotations
 
-from . import choice, compression, cycle, design, fit, posterior, results
+from . import choice, compression, cycle, design, fit, pool, posterior, results
 from .choice import *  # noqa: F403
 from .compression import *  # noqa: F403
 from .cycle import *  # noqa: F403
 from .design import *  # noqa: F403
 from .fit import *  # noqa: F403
+from .pool import *  # noqa: F403
 from .posterior import *  # noqa: F403
 from .results import *  # noqa: F403
 
@@ -41,5 +45,6 @@ __all__ += cycle.__all__
 __all__ += design.__all__
 __all__ += posterior.__all__
 __all__ += fit.__all__
+__all__ += pool.__all__
 __all__ += results.__all__
 

@@ -38,8 +38,8 @@ from ..errors import FitError, InputError
 from .cycle import CycleData
 from .design import lee_radok_columns
 
-__all__ = ["RHEOLOGIES", "GridPosterior", "grid_posterior", "ALPHA_MAX", "KEEP", "FINE",
-           "SPAN_SD", "COARSE_THETA", "COARSE_Z", "PHI_BOUNDS"]
+__all__ = ["RHEOLOGIES", "GridPosterior", "grid_posterior", "NodeEvaluator", "ALPHA_MAX",
+           "KEEP", "FINE", "SPAN_SD", "COARSE_THETA", "COARSE_Z", "PHI_BOUNDS"]
 
 #: Relaxation models the grid engine fits, and the name of their grid parameter.
 RHEOLOGIES = {"power-law": "alpha", "sls": "tau"}
@@ -165,7 +165,7 @@ def _theta_bounds(rheology: str, data: CycleData) -> tuple[float, float]:
     return data.dt_min / 10.0, 100.0 * data.span
 
 
-class _Evaluator:
+class NodeEvaluator:
     """log p(z_s, θ, phi | data) on (θ nodes × z nodes × phi), β and noise integrated."""
 
     def __init__(self, data: CycleData, rheology: str, t0: float):
@@ -261,7 +261,7 @@ def _coarse_basins(lp: np.ndarray, thetas: np.ndarray, z: np.ndarray) -> list:
     return sorted(out, key=lambda b: b[2])
 
 
-def _separate_basins(ev: _Evaluator, from_c, basins: list, best: tuple[float, float],
+def _separate_basins(ev: NodeEvaluator, from_c, basins: list, best: tuple[float, float],
                      best_lp: float, step: tuple[float, float]) -> list:
     """The coarse grid's basins that a valley (a dip of more than 1 in log density below the
     lower end) separates from the final mode, as (z_s, θ, log density below the mode); a
@@ -297,7 +297,7 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
                          f"{', '.join(RHEOLOGIES)}")
     if not (math.isfinite(t0) and t0 > 0):
         raise InputError(f"t0 = {t0!r} s must be positive")
-    ev = _Evaluator(data, rheology, t0)
+    ev = NodeEvaluator(data, rheology, t0)
     lo, hi = _theta_bounds(rheology, data)
     log_theta = rheology == "sls"
     to_c = (lambda v: np.log(v)) if log_theta else (lambda v: np.asarray(v, float))  # noqa

@@ -299,3 +299,19 @@ def test_compare_fits_needs_two_fits_on_the_same_blocks(power_fit):
                                                               max_points=300))
     with pytest.raises(InputError, match="same block means"):
         compare_fits({"a": power_fit, "b": other})
+
+
+def test_pooling_a_fit_with_itself_halves_its_variance(power_fit):
+    """The pooled posterior is the product of the traces' likelihoods: a fit pooled with
+    itself keeps its centre and its sd shrinks by sqrt(2) (each trace's likelihood is its own
+    collapse, re-evaluated on the pooled grid)."""
+    from palpbayes.rheology.pool import pool_power_law
+
+    p = pool_power_law([power_fit, power_fit])
+    for name in ("E0", "alpha"):
+        own, pooled = power_fit.draws[name], p.draws[name]
+        assert abs(np.median(pooled) - np.median(own)) < 0.15 * np.std(own)
+        assert np.std(pooled) / np.std(own) == pytest.approx(2**-0.5, rel=0.08)
+    assert p.flags == [] and list(p.table()["parameter"]) == ["E0*", "alpha"]
+    with pytest.raises(InputError, match="two or more"):
+        pool_power_law([power_fit])
