@@ -21,10 +21,12 @@ from __future__ import annotations
 
 import os
 
-# one BLAS thread per worker process (the workers share the cores; oversubscribed BLAS threads
-# made each fit 3-4 times slower); set before numpy is imported
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+if __name__ == "__main__":
+    # one BLAS thread per worker process (the workers share the cores; oversubscribed BLAS
+    # threads made each fit 3-4 times slower); set before numpy is imported, and only when
+    # run as a script (importing table() must not change the importer's threads)
+    for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(_var, "1")
 
 import argparse
 import warnings
@@ -76,7 +78,8 @@ def fit_one(job: tuple[str, int]) -> list[dict]:
         lo, med, hi = np.percentile(d, [5.0, 50.0, 95.0])
         rows.append({"model": model, "index": i, "tip": tip_name, "parameter": name,
                      "truth": truth[name], "median": med, "sd": float(np.std(d)), "lo": lo,
-                     "hi": hi, "ppc_passed": bool(fit.ppc.passed), "block": fit.data.block,
+                     "hi": hi, "ppc_passed": bool(fit.ppc.passed),
+                     "model_ok": fit.model_ok, "block": fit.data.block,
                      "seconds": fit.seconds})
     return rows
 
@@ -94,7 +97,8 @@ def run(n: int, workers: int, models=tuple(PARAMETERS)) -> pd.DataFrame:
 
 def table(df: pd.DataFrame) -> pd.DataFrame:
     """Per model and parameter: coverage of the 90 % interval, z-score mean and sd, median
-    |relative error| [%], share of passed model checks, median fit time [s]."""
+    |relative error| [%], share of passed posterior-predictive checks and of model_ok (the
+    check passed and phi not at its bound), median fit time [s]."""
     z = (df["truth"] - df["median"]) / df["sd"]
     df = df.assign(covered=(df["lo"] <= df["truth"]) & (df["truth"] <= df["hi"]), z=z,
                    err_pct=100 * ((df["median"] - df["truth"]) / df["truth"]).abs())
@@ -103,6 +107,7 @@ def table(df: pd.DataFrame) -> pd.DataFrame:
                          "z_mean": g["z"].mean(), "z_sd": g["z"].std(),
                          "median_err_pct": g["err_pct"].median(),
                          "ppc_passed": g["ppc_passed"].mean(),
+                         "model_ok": g["model_ok"].mean(),
                          "median_seconds": g["seconds"].median()}).round(3)
 
 

@@ -24,6 +24,7 @@ from ..contact import (
 from ..errors import DataFileError, InputError
 from ..fitdata import BONDINGS
 from ..io.manifest import is_manifest
+from ..rheology.choice import K_WARN
 from ..rheology.posterior import RHEOLOGIES
 from ..units import format_pressure
 
@@ -136,6 +137,7 @@ def register(subparsers) -> None:
                         "beside: with --nu and the thickness, rheology.csv gets the modulus "
                         "that test would report (default 50, the paper's Instron)")
     add_trace_options(p, "single trace (ignored for a manifest)")
+    p.set_defaults(fit_defaults={d: p.get_default(d) for d in (*_ELASTIC_ONLY, *_VISCO_ONLY)})
 
 
 def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -> None:
@@ -375,6 +377,26 @@ def _print_interval_parts(summary) -> None:
         print(f"  {r['trace_id']}: {parts}{misfit}")
 
 
+#: Options of the elastic fit that --rheology power-law|sls does not use (dest -> flag).
+_ELASTIC_ONLY = {
+    "noise": "--noise", "noise_pp": "--noise-pp", "f_unc": "--f-unc", "baseline": "--baseline",
+    "tare": "--tare", "surface_prior": "--surface-prior", "fit_fraction": "--fit-fraction",
+    "max_depth": "--max-depth", "half_space": "--half-space", "bonding": "--bonding",
+    "thickness_range": "--thickness-range", "radius_tolerance": "--radius-tolerance",
+    "gain_sd": "--gain-sd", "compliance_max": "--compliance-max", "engine": "--engine",
+    "model_form": "--model-form", "strict": "--strict", "max_steps": "--max-steps",
+    "workers": "--workers"}
+#: Options only the viscoelastic fit uses.
+_VISCO_ONLY = {"segments": "--segments", "t0": "--t0", "compression_speed": "--compression-speed"}
+
+
+def _given(args: argparse.Namespace, options: dict[str, str]) -> list[str]:
+    """Flags of ``options`` whose value differs from the parser's default."""
+    defaults = getattr(args, "fit_defaults", {})
+    return [flag for dest, flag in options.items()
+            if dest in defaults and getattr(args, dest, None) != defaults[dest]]
+
+
 def _rheologies(text: str) -> tuple[str, ...]:
     """--rheology: one model, or several viscoelastic ones separated by commas."""
     names = tuple(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
@@ -396,6 +418,10 @@ def _run_rheology(args: argparse.Namespace) -> int:
 
     path, out = Path(args.input), Path(args.out)
     _check_input_path(path)
+    given = _given(args, _ELASTIC_ONLY)
+    if given:
+        raise InputError(f"{given[0]} is an option of the elastic fit; --rheology "
+                         f"{','.join(args.rheology)} does not use it (leave it out)")
     if args.method != "bayes":
         raise InputError(f"--rheology {','.join(args.rheology)} is a Bayesian fit; --method "
                          f"{args.method} is for the elastic fit (leave it out, or use "
@@ -473,8 +499,8 @@ def _choice_line(rows) -> str:
     best = rows.loc[rows["elpd_diff"].idxmax()]
     others = ", ".join(f"{r['rheology']} by {-r['elpd_diff']:.1f} ± {r['elpd_diff_se']:.1f}"
                        for _, r in rows.iterrows() if r["rheology"] != best["rheology"])
-    k = rows[rows["pareto_k_max"] > 0.7]["rheology"].tolist()
-    shaky = f" (PSIS-LOO unreliable for {', '.join(k)}: Pareto k > 0.7)" if k else ""
+    k = rows[rows["pareto_k_max"] > K_WARN]["rheology"].tolist()
+    shaky = f" (PSIS-LOO unreliable for {', '.join(k)}: Pareto k > {K_WARN})" if k else ""
     if bool(best["preferred"]):
         return f"prefers {best['rheology']}: elpd_loo higher than {others}{shaky}"
     return f"no model preferred (elpd_loo difference within 2 se: {others}){shaky}"
@@ -485,9 +511,10 @@ def run(args: argparse.Namespace) -> int:
 
     if getattr(args, "rheology", ("elastic",)) != ("elastic",):
         return _run_rheology(args)
-    if getattr(args, "segments", None) is not None:
-        raise InputError("--segments chooses what --rheology power-law|sls fits; the elastic "
-                         "fit takes the loading part")
+    given = _given(args, _VISCO_ONLY)
+    if given:
+        raise InputError(f"{given[0]} is an option of --rheology power-law|sls; the elastic "
+                         "fit takes the loading part and does not use it")
     options = options_from_args(args)
     path = Path(args.input)
     _check_input_path(path)

@@ -26,7 +26,7 @@ import pandas as pd
 from ..errors import InputError
 from .fit import RheologyFit, curve_draws
 
-__all__ = ["LooResult", "loo", "compare_fits", "LOO_DRAWS", "K_WARN"]
+__all__ = ["LooResult", "loo", "compare_fits", "pointwise_loglik", "LOO_DRAWS", "K_WARN"]
 
 #: Posterior draws behind each model's pointwise log-likelihood.
 LOO_DRAWS = 200
@@ -62,7 +62,20 @@ def pointwise_loglik(fit: RheologyFit, n: int = LOO_DRAWS) -> np.ndarray:
 
 
 def loo(fit: RheologyFit, n: int = LOO_DRAWS) -> LooResult:
-    """PSIS-LOO of one fit (module docstring)."""
+    """PSIS-LOO of one fit (module docstring).
+
+    Parameters
+    ----------
+    fit
+        A :func:`~palpbayes.rheology.fit_rheology` result.
+    n
+        Posterior draws behind the pointwise log-likelihood (evenly spread).
+
+    Returns
+    -------
+    LooResult
+        elpd_loo [nats], its se, p_loo, the largest Pareto k and the pointwise elpd.
+    """
     import arviz as az
 
     ll = pointwise_loglik(fit, n)
@@ -79,14 +92,33 @@ def loo(fit: RheologyFit, n: int = LOO_DRAWS) -> LooResult:
 
 
 def compare_fits(fits: Mapping[str, RheologyFit], n: int = LOO_DRAWS) -> pd.DataFrame:
-    """One row per model, best first: ``elpd_loo``, ``elpd_loo_se``, ``p_loo``,
-    ``pareto_k_max``, ``n_bad_k``, ``elpd_diff`` (to the best, <= 0) and ``elpd_diff_se``,
-    and ``preferred`` (the best, by more than two standard errors of the difference from
-    every other; else no model is preferred)."""
+    """Compare fits of one record by PSIS-LOO (module docstring).
+
+    Parameters
+    ----------
+    fits
+        Model name -> fit, two or more, all of the same block means.
+    n
+        Posterior draws per model behind the pointwise log-likelihoods.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per model, best first: ``rheology``, ``elpd_loo``, ``elpd_loo_se``,
+        ``p_loo``, ``pareto_k_max``, ``n_bad_k``, ``elpd_diff`` (to the best, <= 0, [nats])
+        and ``elpd_diff_se``, and ``preferred`` (the best, by more than two standard errors
+        of the difference from every other; else no model is preferred).
+
+    Raises
+    ------
+    InputError
+        Fewer than two fits, or fits of different block means.
+    """
     if len(fits) < 2:
         raise InputError("compare at least two relaxation models (e.g. power-law,sls)")
-    sizes = {f.data.n_points for f in fits.values()}
-    if len(sizes) != 1:
+    first = next(iter(fits.values())).data
+    if any(f.data.n_points != first.n_points or not np.array_equal(f.data.force, first.force)
+           or not np.array_equal(f.data.time, first.time) for f in fits.values()):
         raise InputError("the fits to compare must see the same block means (same record, "
                          "segments and max_points)")
     res = {name: loo(f, n) for name, f in fits.items()}

@@ -186,7 +186,9 @@ def _edges(t: np.ndarray, z: np.ndarray, rows: np.ndarray, seg: np.ndarray,
             continue
         tc = (zm[j] - zm[i] + slope[i] * tm[i] - slope[j] * tm[j]) / ds
         if not left[i] < tc < right[j]:
-            continue  # parallel within the blocks: no corner to place
+            continue  # the lines cross outside the two blocks: no corner to place
+        if min(tc - left[i], right[j] - tc) <= 0.01 * min(step_in[i], step_out[j]):
+            continue  # on an outer edge: a step of almost no length would magnify rounding
         if abs(tc - right[i]) > 0.01 * step_out[i]:
             # the shared edge takes the line of the block on its side of the corner
             side = 1 if tc < right[i] else 0

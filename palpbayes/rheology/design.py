@@ -51,12 +51,15 @@ from ..errors import InputError
 __all__ = ["Windows", "block_kernel_means", "step_kernel_means",
            "band_corrections", "integrated_kernel", "double_integrated_kernel",
            "triple_integrated_kernel", "window_kernel", "onset_correction",
-           "lee_radok_columns", "KERNELS", "BAND"]
+           "lee_radok_columns", "KERNELS", "BAND", "SPAN"]
 
 #: Kernels of the columns: parameter alpha [-] or tau [s]; ``None`` is the constant kernel.
 KERNELS = ("power-law", "exponential")
-#: Knots before a block's window on which its response is the mean over its own samples.
+#: Knots before a block's window (its own knots too) on which the block's response is the
+#: mean over its own samples; :func:`window_kernel` takes the same blocks after a source.
 BAND = 2
+#: Most knot steps one block's window spans (two where the hold's corner lies inside it).
+SPAN = 2
 
 
 class Windows:
@@ -85,7 +88,7 @@ class Windows:
         with np.errstate(divide="ignore"):
             self.log = np.log(self.lags)
         # the knots whose response a block takes from its samples: BAND before its window on
-        band = self.lo[:, None] + np.arange(-BAND, 3)[None, :]
+        band = self.lo[:, None] + np.arange(-BAND, SPAN + 1)[None, :]
         self.band_ok = (band >= 0) & (band <= e.size - 1)
         self.band = np.clip(band, 0, e.size - 1)
         self._steps = np.diff(e)[None, :]
@@ -216,7 +219,7 @@ def block_kernel_means(win: Windows, kernel: str | None, theta: float = 0.0,
     out = []
     for D, d in ((D1, d1), (D2, d2)):
         A = win.window_means(D.T).T
-        A[rows, win.band] += d
+        np.add.at(A, (np.broadcast_to(rows, win.band.shape), win.band), d)
         out.append(A)
     return out[0], out[1]
 
@@ -331,7 +334,27 @@ def lee_radok_columns(win: Windows, z_nodes: np.ndarray, z_edges: np.ndarray, m:
     c_k·{(4/h_k)·[Φ̄(e_k) + Φ̄(e_{k+1})] − (8/h_k²)·[Ψ̄(e_k) − Ψ̄(e_{k+1})]}, with Φ̄, Ψ̄ the
     means of :func:`block_kernel_means`: coefficients a1, a2 per knot, two matrix products on
     the knot steps (:func:`step_kernel_means`), then the window means and the band's
-    corrections.  The step where the contact starts is :func:`onset_correction`'s."""
+    corrections.  The step where the contact starts is :func:`onset_correction`'s.
+
+    Parameters
+    ----------
+    win
+        :class:`Windows` of the record.
+    z_nodes
+        [m] Trial surface heights (G,).
+    z_edges
+        [m] Tip height at the knots (K,).
+    m
+        Exponent of the tip's law F = C·E·d^m [-].
+    kernel, theta, t0
+        As :func:`block_kernel_means`.
+
+    Returns
+    -------
+    numpy.ndarray
+        (G, B) [m^m] per unit modulus and unit prefactor C: multiply by C·E0* (or E_inf*,
+        E1*) for the force [N].
+    """
     depth = np.asarray(z_nodes, float)[:, None] - np.asarray(z_edges, float)[None, :]
     d = np.clip(depth, 0.0, None)
     u = d**m

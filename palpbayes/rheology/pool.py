@@ -47,8 +47,8 @@ DISAGREE_SD = 4.0
 @dataclass
 class PooledPowerLaw:
     """The pooled posterior: grid ``alpha`` (A,), ``E0`` (E,) [Pa] and normalised ``log_mass``
-    (A, E); ``draws`` of E0 [Pa] and alpha; the traces' ids and speeds [m/s] (None where the
-    trace does not say); ``flags`` one line each."""
+    (A, E); ``draws`` of E0 [Pa] and alpha; the pooled traces' ids; ``t0`` [s]; ``flags`` one
+    line each."""
 
     alpha: np.ndarray
     E0: np.ndarray
@@ -104,10 +104,12 @@ def _pooled_log(fits: Sequence[RheologyFit], alpha: np.ndarray, e0: np.ndarray,
         w = logp + cells + np.log(cell_widths(ev.phi))[None, None, :]
         loc = post.beta[..., 0].reshape(alpha.size, FINE, H)
         scale = np.sqrt(post.scale[..., 0, 0]).reshape(alpha.size, FINE, H)
-        ok = np.isfinite(w)
-        lt = _log_t(e0[None, None, None, :], loc[..., None],
-                    np.where(ok, scale, 1.0)[..., None], post.nu)
-        total += logsumexp(np.where(ok[..., None], w[..., None] + lt, -np.inf), axis=(1, 2))
+        for a in range(alpha.size):  # one alpha node at a time: (FINE, H, E) stays small
+            ok = np.isfinite(w[a])
+            lt = _log_t(e0[None, None, :], loc[a][..., None],
+                        np.where(ok, scale[a], 1.0)[..., None], post.nu)
+            total[a] += logsumexp(np.where(ok[..., None], w[a][..., None] + lt, -np.inf),
+                                  axis=(0, 1))
     return total - np.log(e0)[None, :]  # log-uniform prior on E0*
 
 
@@ -169,7 +171,8 @@ def pool_power_law(fits: Sequence[RheologyFit], *, n_alpha: int = 41, n_e0: int 
     pick = gen.choice(p.size, size=n_draws, p=p / p.sum())
     ia, ie = np.unravel_index(pick, log_mass.shape)
     da, de = alpha[1] - alpha[0], e0[1] - e0[0]
-    draws = {"alpha": np.clip(alpha[ia] + gen.uniform(-0.5, 0.5, n_draws) * da, 0.0, None),
+    draws = {"alpha": np.clip(alpha[ia] + gen.uniform(-0.5, 0.5, n_draws) * da, 0.0,
+                              ALPHA_MAX),
              "E0": e0[ie] + gen.uniform(-0.5, 0.5, n_draws) * de}
     ids = [f.data.trace.trace_id for f in fits]
     pooled = PooledPowerLaw(alpha, e0, log_mass, draws, ids, t0)
@@ -182,9 +185,13 @@ def pool_power_law(fits: Sequence[RheologyFit], *, n_alpha: int = 41, n_e0: int 
                 f"{z.max():.1f} of its sd from the pooled values: one power law does not "
                 "describe it with the others (another material, or rate dependence beyond a "
                 "power law)")
-    edge = log_mass.max(axis=1)
-    if max(edge[0], edge[-1]) > log_mass.max() - 10.0 or (
-            log_mass.max(axis=0)[[0, -1]].max() > log_mass.max() - 10.0):
+    # mass on an edge of the grid that is not a bound of the prior: the traces pull apart
+    near = log_mass.max() - 10.0
+    by_alpha, by_e0 = log_mass.max(axis=1), log_mass.max(axis=0)
+    open_edges = [by_alpha[0] > near and alpha[0] > 0.0,
+                  by_alpha[-1] > near and alpha[-1] < ALPHA_MAX,
+                  by_e0[0] > near, by_e0[-1] > near]
+    if any(open_edges):
         pooled.flags.append("the pooled posterior reaches the edge of its grid: the traces "
                             "disagree too much to pool (see the per-trace flags)")
     return pooled

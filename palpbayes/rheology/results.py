@@ -60,7 +60,22 @@ def _column(parameter: str, unit: str, part: str = "") -> str:
 
 def summary_row(trace: IndentationTrace, fit: RheologyFit,
                 compression_speed: float = PAPER_COMPRESSION_SPEED) -> dict:
-    """The table row of one fitted trace (module docstring); ``compression_speed`` [m/s]."""
+    """The table row of one fitted trace (module docstring).
+
+    Parameters
+    ----------
+    trace
+        The fitted recording (its id, source and thickness [m]).
+    fit
+        Its :func:`~palpbayes.rheology.fit_rheology` result.
+    compression_speed
+        [m/s] Cross-head speed of the compression test the modulus is read for.
+
+    Returns
+    -------
+    dict
+        Column name -> value.
+    """
     row: dict = {"trace_id": trace.trace_id, "source": trace.source or "",
                  "rheology": fit.rheology, "segments": ",".join(fit.data.segments),
                  "t0_s": fit.t0, "nu": np.nan if fit.nu is None else fit.nu}
@@ -79,6 +94,13 @@ def summary_row(trace: IndentationTrace, fit: RheologyFit,
     return row
 
 
+def _error_row(trace_id: str, source: str, rheology: str, exc: Exception) -> dict:
+    what = str(exc) if isinstance(exc, PalpbayesError) else (
+        f"the fit failed numerically ({type(exc).__name__}: {exc}); report this record")
+    return {"trace_id": trace_id, "source": source, "rheology": rheology, "model_ok": False,
+            "error": what}
+
+
 def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], IndentationTrace]]],
                rheology: str | Sequence[str], out: str | os.PathLike, *,
                segments=DEFAULT_SEGMENTS, t0: float = 1.0, nu: float | None = None,
@@ -94,8 +116,27 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
     with ``load()`` reading the trace (a manifest's rows: a file that cannot be read keeps its
     row too).  ``seed`` + the trace's position seeds its draws (the same table every run);
     ``nu`` gives way to the trace's own ``metadata["nu"]`` (a manifest's ``nu`` column).
-    Errors of one trace (:class:`~palpbayes.errors.PalpbayesError`) go into its row's
-    ``error``.  ``compression_speed`` [m/s] is the compression test's (module docstring).
+    Errors of one trace and model (:class:`~palpbayes.errors.PalpbayesError`, or a linear
+    algebra failure) go into that row's ``error``; the other models of the trace keep theirs.
+    ``compression_speed`` [m/s] is the compression test's (module docstring).
+
+    Parameters
+    ----------
+    traces
+        Traces, or (trace_id, source, load) triples.
+    rheology
+        ``"power-law"``, ``"sls"`` or several of them.
+    out
+        Results folder (created).
+    segments, t0, nu, seed, compression_speed
+        As above; ``segments`` as :func:`~palpbayes.rheology.fit_rheology` takes them.
+    progress, total
+        A progress bar (None: only on a terminal) and its length.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The table written to ``out/rheology.csv``.
     """
     from ..campaign.run import progress_bar
     from .choice import compare_fits
@@ -113,18 +154,26 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
                 trace_id, source, load = item
             try:
                 trace = load()
-                trace_nu = (trace.metadata or {}).get("nu", nu)
-                fits = {m: fit_rheology(trace, m, segments=segments, t0=t0, nu=trace_nu,
-                                        rng=seed + i) for m in models}
-                new = [summary_row(trace, f, compression_speed) for f in fits.values()]
-                if len(fits) > 1:
-                    choice = compare_fits(fits).set_index("rheology")
-                    for r in new:
-                        r.update(choice.loc[r["rheology"]].to_dict())
-                rows.extend(new)
             except PalpbayesError as exc:
-                rows.extend({"trace_id": trace_id, "source": source, "rheology": m,
-                             "model_ok": False, "error": str(exc)} for m in models)
+                rows.extend(_error_row(trace_id, source, m, exc) for m in models)
+                bar.update(1)
+                continue
+            trace_nu = (trace.metadata or {}).get("nu", nu)
+            fits, new = {}, []
+            for m in models:  # one model failing keeps the others' rows
+                try:
+                    fits[m] = fit_rheology(trace, m, segments=segments, t0=t0, nu=trace_nu,
+                                           rng=seed + i)
+                    new.append(summary_row(trace, fits[m], compression_speed))
+                except (PalpbayesError, np.linalg.LinAlgError) as exc:
+                    fits.pop(m, None)
+                    new.append(_error_row(trace_id, source, m, exc))
+            if len(fits) > 1:
+                choice = compare_fits(fits).set_index("rheology")
+                for r in new:
+                    if r["rheology"] in choice.index:
+                        r.update(choice.loc[r["rheology"]].to_dict())
+            rows.extend(new)
             bar.update(1)
     finally:
         bar.close()

@@ -101,6 +101,8 @@ def test_a_manifest_keeps_the_row_of_a_trace_that_cannot_be_fitted(record_csv, t
     (["--compression-speed", "-5"], "--compression-speed -5.0 must be a positive"),
     (["--rheology", "maxwell"], "unknown model 'maxwell'"),
     (["--rheology", "elastic,sls"], "elastic is the other fit"),
+    (["--engine", "exact"], "--engine is an option of the elastic fit"),
+    (["--tare"], "--tare is an option of the elastic fit"),
 ])
 def test_options_that_do_not_apply_are_one_line_errors(record_csv, tmp_path, capsys, extra,
                                                        message):
@@ -116,7 +118,10 @@ def test_options_that_do_not_apply_are_one_line_errors(record_csv, tmp_path, cap
 def test_segments_without_rheology_and_an_existing_table(record_csv, tmp_path, capsys):
     assert main(["fit", str(record_csv), "--segments", "approach,hold", "--out",
                  str(tmp_path / "e"), *PARA]) == 2
-    assert "--segments chooses what --rheology" in capsys.readouterr().err
+    assert "--segments is an option of --rheology" in capsys.readouterr().err
+    assert main(["fit", str(record_csv), "--compression-speed", "10", "--out",
+                 str(tmp_path / "e"), *PARA]) == 2
+    assert "--compression-speed is an option of --rheology" in capsys.readouterr().err
     out = tmp_path / "res"
     (out).mkdir()
     (out / "rheology.csv").write_text("trace_id\n")
@@ -138,5 +143,7 @@ def test_a_real_stress_relaxation_file_end_to_end(shared_data, tmp_path, capsys)
     assert row["segments"] == "approach,hold" and not isinstance(row["error"], str)
     assert 300 < row["E0_star_pa"] < 3000 and 0.05 < row["alpha"] < 0.5
     text = capsys.readouterr().out
-    if not row["model_ok"]:  # what fails is said, with its code in the table
+    if row["model_ok"]:
+        assert "model check passed" in text
+    else:  # what fails is said, with its code in the table
         assert "model check FAILED" in text and row["flag_codes"]

@@ -6,6 +6,7 @@ with unit spread, the model check passes."""
 
 from __future__ import annotations
 
+import importlib.util
 import subprocess
 import sys
 from pathlib import Path
@@ -19,14 +20,15 @@ N = 60
 
 @pytest.fixture(scope="module")
 def calibration(tmp_path_factory) -> pd.DataFrame:
-    sys.path.insert(0, str(ROOT / "tools"))
-    from rheology_calibration import table
-
+    spec = importlib.util.spec_from_file_location("rheology_calibration",
+                                                  ROOT / "tools" / "rheology_calibration.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
     out = tmp_path_factory.mktemp("rheology") / "calibration.csv"
     subprocess.run([sys.executable, str(ROOT / "tools" / "rheology_calibration.py"),
                     "--n", str(N), "--workers", "2", "--csv", str(out)],
                    check=True, cwd=ROOT, capture_output=True, text=True)
-    return table(pd.read_csv(out))
+    return tool.table(pd.read_csv(out))
 
 
 @pytest.mark.slow
@@ -48,4 +50,7 @@ def test_intervals_cover_and_z_scores_are_centred(calibration, model, parameter)
 @pytest.mark.slow
 @pytest.mark.parametrize("model", ["power-law", "sls"])
 def test_the_model_check_passes_on_well_specified_records(calibration, model):
-    assert calibration.loc[model]["ppc_passed"].iloc[0] >= 0.9
+    """No false alarms: the posterior-predictive check and model_ok (which also fails when
+    phi piles up at its bound) pass on >= 90 % of well-specified records."""
+    row = calibration.loc[model].iloc[0]
+    assert row["ppc_passed"] >= 0.9 and row["model_ok"] >= 0.9, row

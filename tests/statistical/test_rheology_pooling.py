@@ -51,3 +51,14 @@ def test_a_trace_of_another_material_is_flagged():
     fits = _fits(TRUTH, 0)[:2] + _fits(PowerLawKernel(60e3, 0.2), 1)[2:]
     p = pool_power_law(fits)
     assert any("one power law does not describe it" in s for s in p.flags)
+
+
+@pytest.mark.slow
+def test_an_elastic_material_pools_without_a_false_flag():
+    """alpha at 0, the bound of its prior: the pooled grid's edge there is the prior's, not a
+    disagreement of the traces (a false flag the review found)."""
+    fits = _fits(PowerLawKernel(80e3, 0.0), 2)[:2]
+    p = pool_power_law(fits)
+    assert p.flags == []
+    lo, hi = np.percentile(p.draws["E0"], [5, 95])
+    assert lo < 80e3 < hi and np.percentile(p.draws["alpha"], 95) < 0.01
