@@ -109,7 +109,8 @@ def register(subparsers) -> None:
         "fit", help="fit E to a trace CSV, ROS 2 bag, AFM file or campaign manifest",
         description="Fit the elastic modulus of one trace, of every curve of an AFM force map "
         "or of every trace of a manifest. Writes DIR/summary.csv (one row per trace x method) "
-        "and DIR/posterior/<id>.nc.",
+        "and DIR/posterior/<id>.nc. With --rheology power-law|sls: the relaxation modulus of "
+        "the loading and the hold instead, into DIR/rheology.csv.",
     )
     p.add_argument("input", metavar="INPUT",
                    help="trace CSV, ROS 2 bag (folder, .mcap, .db3), AFM file (.jpk-force, "
