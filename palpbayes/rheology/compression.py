@@ -21,6 +21,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..contact import youngs_modulus
 from ..contact.viscoelastic import PowerLawKernel, PronyKernel
 from ..errors import InputError
 from ..groundtruth import DEFAULT_STRAIN_WINDOW, fit_modulus
@@ -72,7 +73,7 @@ def compression_moduli(kernels: Sequence[PowerLawKernel | PronyKernel], nu: floa
     t = eps / rate
     out = np.empty(len(kernels))
     for i, kernel in enumerate(kernels):
-        stress = rate * (1.0 - nu**2) * kernel.integral(t)
+        stress = rate * youngs_modulus(kernel.integral(t), nu)
         test = CompressionTest(time_s=t, compression_m=eps * height, load_n=stress,
                                specimen="model", material="", area_m2=1.0, height_m=height,
                                source="the fitted relaxation modulus")

@@ -26,11 +26,11 @@ import pandas as pd
 
 from ..checks import posterior_predictive_check
 from ..checks.core import CheckResult
-from ..contact import Tip, check_nu
+from ..contact import Tip, check_nu, youngs_modulus
 from ..contact.viscoelastic import PowerLawKernel, PronyKernel, ramp_apparent_modulus
 from ..errors import InputError
 from ..groundtruth import DEFAULT_STRAIN_WINDOW
-from ..intervals import LEVEL
+from ..intervals import LEVEL, central_band
 from ..trace import IndentationTrace
 from .compression import PAPER_COMPRESSION_SPEED, compression_moduli
 from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
@@ -110,16 +110,15 @@ class RheologyFit:
     def table(self, level: float = LEVEL) -> pd.DataFrame:
         """One row per parameter: ``parameter``, ``unit``, ``median``, ``lo``, ``hi`` (the
         central ``level`` interval) and, for moduli with ``nu`` given, ``E`` rows too."""
-        q = [50.0, 50.0 * (1 - level), 50.0 * (1 + level)]
         rows = []
         for name, unit, modulus in PARAMETERS[self.rheology] + _COMMON:
-            med, lo, hi = np.percentile(self.draws[name], q)
+            lo, med, hi = central_band(self.draws[name], level)
             rows.append({"parameter": name + ("*" if modulus else ""), "unit": unit,
                          "median": med, "lo": lo, "hi": hi})
             if modulus and self.nu is not None:
-                f = 1.0 - self.nu**2
-                rows.append({"parameter": name, "unit": unit, "median": med * f, "lo": lo * f,
-                             "hi": hi * f})
+                rows.append({"parameter": name, "unit": unit,
+                             **{k: youngs_modulus(v, self.nu) for k, v in
+                                (("median", med), ("lo", lo), ("hi", hi))}})
         out = pd.DataFrame(rows)
         out.attrs.update(level=level, rheology=self.rheology, t0_s=self.t0, nu=self.nu)
         return out
@@ -130,9 +129,9 @@ class RheologyFit:
         if np.any(~np.isfinite(t)) or np.any(t <= 0):
             raise InputError("relaxation times must be positive numbers of seconds")
         E = self._moduli_at(t)
-        q = np.percentile(E, [50.0, 50.0 * (1 - level), 50.0 * (1 + level)], axis=0)
-        return pd.DataFrame({"time_s": t, "E_star_pa": q[0], "E_star_lo_pa": q[1],
-                             "E_star_hi_pa": q[2]})
+        lo, med, hi = central_band(E, level, axis=0)
+        return pd.DataFrame({"time_s": t, "E_star_pa": med, "E_star_lo_pa": lo,
+                             "E_star_hi_pa": hi})
 
     def _moduli_at(self, t: np.ndarray) -> np.ndarray:
         d = self.draws
@@ -157,8 +156,7 @@ class RheologyFit:
         n = min(len(self.draws["z_surf"]), 1000)
         vals = np.array([float(ramp_apparent_modulus(k, speed, depth, self.data.m))
                          for k in self.kernels(n)])
-        med, lo, hi = np.percentile(vals, [50.0, 50.0 * (1 - level), 50.0 * (1 + level)])
-        return float(med), float(lo), float(hi)
+        return _median_interval(vals, level)
 
     def force_curves(self, n: int = _BAND_DRAWS) -> np.ndarray:
         """[N] Model force at the block means for ``n`` draws (n, points), offset included:
@@ -178,8 +176,7 @@ class RheologyFit:
                              "(--nu) to convert E* = E/(1 - nu^2)")
         vals = compression_moduli(self.kernels(min(n, len(self.draws["z_surf"]))), self.nu,
                                   speed, height, strain_window)
-        med, lo, hi = np.percentile(vals, [50.0, 50.0 * (1 - level), 50.0 * (1 + level)])
-        return float(med), float(lo), float(hi)
+        return _median_interval(vals, level)
 
     def summary_line(self) -> str:
         tab = self.table()
@@ -190,6 +187,13 @@ class RheologyFit:
             parts.append(f"{r['parameter']} {r['median']:.4g} [{r['lo']:.4g}, {r['hi']:.4g}] "
                          f"{r['unit']}")
         return "; ".join(parts)
+
+
+def _median_interval(x: np.ndarray, level: float) -> tuple[float, float, float]:
+    """Median and central ``level`` interval of draws ``x`` (:func:`~palpbayes.intervals.
+    central_band`)."""
+    lo, med, hi = central_band(x, level)
+    return float(med), float(lo), float(hi)
 
 
 def curve_draws(n_total: int, n: int) -> np.ndarray:

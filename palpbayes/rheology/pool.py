@@ -33,7 +33,7 @@ from scipy.special import gammaln, logsumexp
 
 from ..bayes.exact import cell_widths
 from ..errors import InputError
-from ..intervals import LEVEL
+from ..intervals import LEVEL, central_band
 from .fit import RheologyFit
 from .posterior import ALPHA_MAX, FINE, SPAN_SD, NodeEvaluator
 
@@ -60,10 +60,9 @@ class PooledPowerLaw:
 
     def table(self, level: float = LEVEL) -> pd.DataFrame:
         """``E0*`` [Pa] and ``alpha``: median and central ``level`` interval."""
-        q = [50.0, 50.0 * (1 - level), 50.0 * (1 + level)]
         rows = []
         for name, label, unit in (("E0", "E0*", "Pa"), ("alpha", "alpha", "-")):
-            med, lo, hi = np.percentile(self.draws[name], q)
+            lo, med, hi = central_band(self.draws[name], level)
             rows.append({"parameter": label, "unit": unit, "median": med, "lo": lo, "hi": hi})
         out = pd.DataFrame(rows)
         out.attrs.update(level=level, t0_s=self.t0, traces=len(self.trace_ids))
@@ -90,12 +89,11 @@ def _surface_rows(fit: RheologyFit, alpha: np.ndarray) -> np.ndarray:
     return np.clip(rows, fit.data.z_lo, fit.data.z_hi)
 
 
-def _pooled_log(fits: Sequence[RheologyFit], alpha: np.ndarray, e0: np.ndarray,
-                t0: float) -> np.ndarray:
+def _pooled_log(fits: Sequence[RheologyFit], evaluators: Sequence[NodeEvaluator],
+                alpha: np.ndarray, e0: np.ndarray) -> np.ndarray:
     """Σ_i log L_i(E0*, alpha) + log prior on the (alpha × E0*) grid (module docstring)."""
     total = np.zeros((alpha.size, e0.size))
-    for f in fits:
-        ev = NodeEvaluator(f.data, "power-law", t0)
+    for f, ev in zip(fits, evaluators, strict=True):
         rows = _surface_rows(f, alpha)
         _, post = ev.logp_rows(alpha, rows)
         H = ev.phi.size
@@ -156,10 +154,11 @@ def pool_power_law(fits: Sequence[RheologyFit], *, n_alpha: int = 41, n_e0: int 
     a_hi = min(ALPHA_MAX, float((med[:, 1] + SPAN_SD * sd[:, 1]).max()))
     e_lo = max(float((med[:, 0] - 2 * SPAN_SD * sd[:, 0]).min()), 1e-3 * float(med[:, 0].min()))
     e_hi = float((med[:, 0] + 2 * SPAN_SD * sd[:, 0]).max())
+    evaluators = [NodeEvaluator(f.data, "power-law", t0) for f in fits]  # once per trace
     for _ in range(3):  # zoom until the pooled sd spans >= 4 nodes on both axes
         alpha = np.linspace(a_lo, a_hi, n_alpha)
         e0 = np.linspace(e_lo, e_hi, n_e0)
-        total = _pooled_log(fits, alpha, e0, t0)
+        total = _pooled_log(fits, evaluators, alpha, e0)
         log_mass = total - logsumexp(total)
         ma, sa, me, se = _grid_moments(alpha, e0, log_mass)
         if sa >= 4 * (alpha[1] - alpha[0]) and se >= 4 * (e0[1] - e0[0]):
