@@ -1,0 +1,162 @@
+"""The options, checks and console lines of ``palpbayes fit --rheology power-law|sls``.
+
+:mod:`palpbayes.cli.fit` registers these options on ``fit``, reads the recordings and hands
+them to :func:`palpbayes.rheology.results.fit_traces`; this module says which options belong
+to which fit, checks them, and prints the table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..contact import check_nu
+from ..errors import InputError
+from ..rheology.choice import K_WARN
+from ..rheology.cycle import check_segments
+from ..rheology.posterior import RHEOLOGIES
+from ..rheology.results import RHEOLOGY_TABLE
+
+__all__ = ["ELASTIC_ONLY", "VISCO_ONLY", "add_rheology_options", "given_options",
+           "parse_rheologies", "check_rheology_args", "print_rheology"]
+
+#: Options of the elastic fit that --rheology power-law|sls does not use (dest -> flag).
+ELASTIC_ONLY = {
+    "noise": "--noise", "noise_pp": "--noise-pp", "f_unc": "--f-unc", "baseline": "--baseline",
+    "tare": "--tare", "surface_prior": "--surface-prior", "fit_fraction": "--fit-fraction",
+    "max_depth": "--max-depth", "half_space": "--half-space", "bonding": "--bonding",
+    "thickness_range": "--thickness-range", "radius_tolerance": "--radius-tolerance",
+    "gain_sd": "--gain-sd", "compliance_max": "--compliance-max", "engine": "--engine",
+    "model_form": "--model-form", "strict": "--strict", "max_steps": "--max-steps",
+    "workers": "--workers"}
+#: Options only the viscoelastic fit uses.
+VISCO_ONLY = {"segments": "--segments", "t0": "--t0", "compression_speed": "--compression-speed"}
+
+
+def given_options(args: argparse.Namespace, options: dict[str, str]) -> list[str]:
+    """Flags of ``options`` whose value differs from the parser's default."""
+    defaults = getattr(args, "fit_defaults", {})
+    return [flag for dest, flag in options.items()
+            if dest in defaults and getattr(args, dest, None) != defaults[dest]]
+
+
+def parse_rheologies(text: str) -> tuple[str, ...]:
+    """--rheology: one model, or several viscoelastic ones separated by commas."""
+    names = tuple(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
+    known = ("elastic", *RHEOLOGIES)
+    bad = [n for n in names if n not in known]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(f"unknown model {bad[0] if bad else text!r}; use "
+                                         f"{', '.join(known)} (or power-law,sls)")
+    if "elastic" in names and len(names) > 1:
+        raise argparse.ArgumentTypeError("elastic is the other fit; compare power-law,sls")
+    return names
+
+
+def add_rheology_options(p: argparse.ArgumentParser) -> None:
+    """The viscoelastic group of ``fit``'s options."""
+    v = p.add_argument_group(
+        "viscoelastic fit (the whole loading and hold; the retract is not fitted yet)")
+    v.add_argument("--rheology", type=parse_rheologies, default=("elastic",), metavar="MODEL",
+                   help="relaxation modulus: elastic (the fits above, default), power-law "
+                        "E*(t) = E0*·(t/t0)^-alpha or sls E*(t) = E_inf* + E1*·exp(-t/tau); "
+                        "writes DIR/rheology.csv, one row per trace; power-law,sls fits both "
+                        "and says which the record prefers (PSIS-LOO, with its error)")
+    v.add_argument("--segments", default=None, metavar="NAMES",
+                   help="segments fitted by --rheology power-law|sls, comma-separated from "
+                        "approach, hold (default approach,hold; a recording without "
+                        "segments gets them from the motion)")
+    v.add_argument("--t0", type=float, default=1.0, metavar="S",
+                   help="reference time of the power law [s] (E0* is E*(t0); default 1)")
+    v.add_argument("--compression-speed", type=float, default=50.0, metavar="MM_PER_MIN",
+                   help="cross-head speed [mm/min] of the compression test the fit is set "
+                        "beside: with --nu and the thickness, rheology.csv gets the modulus "
+                        "that test would report (default 50, the paper's Instron)")
+
+
+def check_rheology_args(args: argparse.Namespace) -> tuple[float | None, str]:
+    """Check the options of a ``fit --rheology`` run; returns nu (None if not given) and the
+    segments (checked names, comma-separated).
+
+    Raises
+    ------
+    InputError
+        An option of the elastic fit, a bad t0, compression speed or segment list, or an
+        existing table without ``--force`` (one line each).
+    """
+    out = Path(args.out)
+    given = given_options(args, ELASTIC_ONLY)
+    if given:
+        raise InputError(f"{given[0]} is an option of the elastic fit; --rheology "
+                         f"{','.join(args.rheology)} does not use it (leave it out)")
+    if args.method != "bayes":
+        raise InputError(f"--rheology {','.join(args.rheology)} is a Bayesian fit; --method "
+                         f"{args.method} is for the elastic fit (leave it out, or use "
+                         "--rheology elastic)")
+    if args.resume:
+        raise InputError("--resume is for elastic campaigns; a viscoelastic run writes "
+                         f"{RHEOLOGY_TABLE} at the end: run it again with --force")
+    if not (math.isfinite(args.t0) and args.t0 > 0):
+        raise InputError(f"--t0 {args.t0!r} must be a positive time in seconds")
+    if not (math.isfinite(args.compression_speed) and args.compression_speed > 0):
+        raise InputError(f"--compression-speed {args.compression_speed!r} must be a positive "
+                         "speed in mm/min")
+    nu = None if args.nu is None else check_nu(args.nu)
+    if args.nu_range is not None:
+        raise InputError("--nu-range is for the elastic fit's budget; give --nu (or leave it "
+                         "out: the table then has E* only)")
+    if (out / RHEOLOGY_TABLE).exists() and not args.force:
+        raise InputError(f"{out / RHEOLOGY_TABLE} exists; pass --force to overwrite it")
+    segments = ",".join(check_segments(args.segments or "approach,hold"))
+    return nu, segments
+
+
+def print_rheology(table) -> None:
+    """One line per trace and model: the parameters with 90 % intervals, the model check, the
+    flags; with several models, which one the record prefers."""
+    print("posterior medians [90 % intervals]; moduli as E* = E/(1 - nu^2) (with --nu, "
+          "rheology.csv has E too)")
+    for trace_id, rows in table.groupby("trace_id", sort=False):
+        for _, r in rows.iterrows():
+            label = trace_id if len(rows) == 1 else f"{trace_id} ({r['rheology']})"
+            if isinstance(r.get("error"), str) and r["error"]:
+                print(f"  {label}: not fitted: {r['error']}")
+                continue
+            print(f"  {label}: {_rheology_line(r)}")
+            if isinstance(r["notes"], str) and r["notes"]:
+                for note in r["notes"].split(" | "):
+                    print(f"      - {note}")
+        if len(rows) > 1 and "elpd_diff" in rows and rows["elpd_diff"].notna().all():
+            print(f"  {trace_id}: {_choice_line(rows)}")
+
+
+def _rheology_line(r) -> str:
+    names = ("E0_star_pa", "alpha") if r["rheology"] == "power-law" else (
+        "E_inf_star_pa", "E1_star_pa", "tau_s")
+    parts = []
+    for c in names:
+        unit = " Pa" if c.endswith("_pa") else (" s" if c.endswith("_s") else "")
+        stem = c.removesuffix("_pa").removesuffix("_s")
+        lo, hi = (r[f"{stem}_{p}{c[len(stem):]}"] for p in ("lo", "hi"))
+        parts.append(f"{stem.replace('_star', '*')} {r[c]:.4g} [{lo:.4g}, {hi:.4g}]{unit}")
+    if np.isfinite(r.get("E_compression_pa", np.nan)):
+        parts.append(f"a compression test at {r['compression_speed_mm_min']:g} mm/min "
+                     f"would read E {r['E_compression_pa']:.4g} "
+                     f"[{r['E_compression_lo_pa']:.4g}, {r['E_compression_hi_pa']:.4g}] Pa")
+    check = ("model check passed" if r["model_ok"]
+             else f"model check FAILED ({r['flag_codes']})")
+    return f"{'; '.join(parts)}; {check}"
+
+
+def _choice_line(rows) -> str:
+    best = rows.loc[rows["elpd_diff"].idxmax()]
+    others = ", ".join(f"{r['rheology']} by {-r['elpd_diff']:.1f} ± {r['elpd_diff_se']:.1f}"
+                       for _, r in rows.iterrows() if r["rheology"] != best["rheology"])
+    k = rows[rows["pareto_k_max"] > K_WARN]["rheology"].tolist()
+    shaky = f" (PSIS-LOO unreliable for {', '.join(k)}: Pareto k > {K_WARN})" if k else ""
+    if bool(best["preferred"]):
+        return f"prefers {best['rheology']}: elpd_loo higher than {others}{shaky}"
+    return f"no model preferred (elpd_loo difference within 2 se: {others}){shaky}"
