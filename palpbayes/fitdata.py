@@ -79,6 +79,9 @@ class FitData:
         Pre-contact baseline of the loading segment (before any tare).
     tare
         [N] Force subtracted from the measured force (the baseline level when tared, else 0).
+    cycle
+        The whole recording (the tare subtracted) when it goes on past the loading (a hold,
+        a retract: the rate check of :mod:`palpbayes.checks.rate`); None otherwise.
     """
 
     z: np.ndarray
@@ -92,6 +95,7 @@ class FitData:
     model: ModelSpec
     baseline: Baseline | None = None
     tare: float = 0.0
+    cycle: IndentationTrace | None = None
 
     @property
     def z_prior(self) -> tuple[float, float]:
@@ -292,4 +296,6 @@ def prepare(
         model=model,
         baseline=base,
         tare=float(offset),
+        cycle=(trace.replace(force=trace.force - offset)
+               if trace.n_points > loading.n_points else None),
     )

@@ -168,9 +168,14 @@ class IndentationTrace:
         """Approach and indentation only: samples up to the deepest point (lowest z).
 
         The hold and the retract (tip moving up again) are dropped.  If the deepest point is
-        held for several samples, the segment ends at the first of them.
+        held for several samples, the segment ends at the first of them.  A trace that records
+        its segments ends its loading within the approach (a tip that sinks on during a hold,
+        as under force control, would otherwise take the hold into the loading).
         """
-        end = int(np.argmin(self.z)) + 1
+        z = self.z
+        if self.segment is not None and np.any(self.segment == 0):
+            z = z[: int(np.flatnonzero(self.segment == 0)[-1]) + 1]
+        end = int(np.argmin(z)) + 1
         if end < 3:
             raise NoContactError(
                 f"{self.source or self.trace_id}: the tip never moves down (deepest point at "

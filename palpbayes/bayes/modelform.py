@@ -194,8 +194,9 @@ def layer_alternative(fit: Callable[..., object], data: FitData, z_surf: float, 
     ``fit`` (:func:`palpbayes.bayes.fit.fit_bayes_data`) runs the exact engine on ``data``
     with h log-uniform over :func:`~palpbayes.bayes.layers.default_thickness_range` of the
     contact depth below ``z_surf`` [m] (Gaussian noise for a Student-t fit, which the exact
-    engine lacks), with ``options`` (baseline, priors, budget, seed, ...).  Plausible when it
-    converges and its own checks ran and find no material misfit; a fit it refuses (or that
+    engine lacks), with ``options`` (baseline, priors, budget, seed, ...), on the loading
+    alone (no rate check: the layer is judged on what it is meant to explain).  Plausible
+    when it converges and its own checks ran and find no material misfit; a fit it refuses (or that
     fails numerically) is an implausible alternative with the reason.
 
     Parameters
@@ -222,7 +223,8 @@ def layer_alternative(fit: Callable[..., object], data: FitData, z_surf: float, 
             z_surf - float(np.min(data.z))))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ConvergenceWarning)
-            res = fit(replace(data, model=model), engine="exact", with_model_form=False,
+            res = fit(replace(data, model=model, cycle=None), engine="exact",
+                      with_model_form=False,
                       noise=noise if noise in ("gaussian", "ar1") else "gaussian", **options)
     except (PalpbayesError, ValueError, np.linalg.LinAlgError) as exc:
         return Alternative(LAYER, math.nan, math.nan, math.nan, False, f"not fitted: {exc}")
@@ -240,8 +242,8 @@ def points_to_stiffer_base(checks: list) -> bool:
     """True when a check finds a material misfit and the curve's apparent modulus rises with
     depth (the depth check's shallow/all ratio below 1, or a free exponent above the law's,
     whether or not those checks fail on their own): what a layer on a stiffer base does, so
-    the layer alternative is worth its fit."""
-    if not any(material(c) for c in checks):
+    the layer alternative is worth its fit.  Rate dependence alone does not count."""
+    if not any(material(c) for c in checks if c.name != "rate"):
         return False
     for c in checks:
         d = c.details
@@ -280,8 +282,8 @@ def model_form(E_total: np.ndarray, checks: list, rng: np.random.Generator,
         The alternatives and their envelope; when no interval is finite, the envelope is
         NaN.
     """
-    if not any(material(c) for c in checks):
-        return None
+    if not any(material(c) for c in checks if c.name != "rate"):
+        return None  # rate dependence: the remedy is the time-dependent fit, not a window
     fitted = _summarise("as fitted", E_total, level)
     alts = [fitted]
     depth = next((c for c in checks if c.name == "depth_consistency"), None)

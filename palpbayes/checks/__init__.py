@@ -25,6 +25,12 @@ F = E*·s(d) + F0 (+ F1·(z - z_ref)), d = z_surf - z, implies, and returns a
     all points; the standard error of the difference is the Hausman form
     sqrt(se_shallow² - se_all²) for nested efficient estimators (Hausman 1978).
 
+``rate``
+    When the recording goes on past the loading (a hold, a retract: :mod:`.rate`): the force's
+    relaxation over the hold beyond what the elastic law gives for the depth, and E* of the
+    retract against the approach, each beyond 5 standard errors.  It names rate dependence
+    and the time-dependent fit (``--rheology``) as the remedy.
+
 **Thresholds.**  Standard errors of a long trace are tiny, so every check fails only when a
 statistical test *and* a physical effect size agree (:data:`THRESHOLDS`): exponent
 |m - m_law| > 3 se and > 3 % of m_law; binned residual chi² p < 0.01 and the largest bin mean
@@ -52,7 +58,7 @@ where the approach starts.
 Pure numpy/scipy, no plotting.  Inputs are the fitted samples in time order (loading segment).
 
 Modules: :mod:`.core` (result type, thresholds, AR(1) factors, least-squares helpers),
-:mod:`.exponent`, :mod:`.residuals`, :mod:`.ppc`, :mod:`.depth` (one check each) and
+:mod:`.exponent`, :mod:`.residuals`, :mod:`.ppc`, :mod:`.depth`, :mod:`.rate` (one check each) and
 :mod:`.effect` (effect sizes, severity, the summary columns) and :mod:`.run`
 (:func:`run_checks`).
 """
@@ -64,6 +70,7 @@ from .depth import depth_consistency_check
 from .effect import EFFECT_REL, checks_summary, grade_checks, material
 from .exponent import exponent_check, free_exponent_fit, law_exponent
 from .ppc import posterior_predictive_check
+from .rate import rate_dependence_check
 from .residuals import binned_residuals, residual_structure_check
 from .run import check_fit, run_checks
 
@@ -79,6 +86,7 @@ __all__ = [
     "residual_structure_check",
     "posterior_predictive_check",
     "depth_consistency_check",
+    "rate_dependence_check",
     "run_checks",
     "check_fit",
     "EFFECT_REL",

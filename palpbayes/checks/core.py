@@ -23,6 +23,7 @@ THRESHOLDS: dict[str, float] = {
     "ppc_alpha": 0.01,           # posterior-predictive p below 1 %
     "depth_n_se": 3.0,           # |E*_shallow/E*_all - 1| > 3 standard errors ...
     "depth_rel": 0.05,           # ... and > 5 %
+    "rate_n_se": 5.0,            # hold relaxation or retract modulus beyond 5 standard errors
 }
 
 _MIN_BIN = 8  # fewest samples in a bin
@@ -40,7 +41,8 @@ class CheckResult:
     Attributes
     ----------
     name
-        ``"exponent"``, ``"residual_structure"``, ``"ppc"`` or ``"depth_consistency"``.
+        ``"exponent"``, ``"residual_structure"``, ``"ppc"``, ``"depth_consistency"`` or
+        ``"rate"``.
     statistic
         The check's number: fitted m, binned chi², posterior-predictive p-value, or
         E*_shallow/E*_all.

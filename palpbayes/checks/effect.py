@@ -13,6 +13,8 @@ a **severity**:
     to reproduce the free law's contact force at the curve's typical depth.
 ``depth_consistency``
     The window ratio E*_shallow / E*_all − 1 (the shallow half of the depth against all).
+``rate``
+    Its own (:mod:`.rate`): −(relaxation over the hold), or the retract's E* ratio − 1.
 ``residual_structure``, ``ppc``
     The larger in magnitude of the two effects above (the exponent's only when that check
     failed) (the curve's E* changes at least that
@@ -162,7 +164,8 @@ def grade_checks(checks: list[CheckResult], z, force, model: ModelSpec, *, z_sur
     limit = max(EFFECT_REL, stat_rel_halfwidth if math.isfinite(stat_rel_halfwidth) else 0.0)
     out = []
     for c in checks:
-        source, eff = effects.get(c.name, ("", float("nan")))
+        source, eff = effects.get(c.name, (c.details.get("effect_source", ""),
+                                           c.details.get("effect", float("nan"))))
         if c.passed:
             severity = ""
         elif math.isfinite(eff) and abs(eff) <= limit:

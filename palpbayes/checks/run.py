@@ -11,6 +11,7 @@ from .depth import depth_consistency_check
 from .effect import grade_checks
 from .exponent import exponent_check
 from .ppc import posterior_predictive_check
+from .rate import rate_dependence_check
 from .residuals import residual_structure_check
 
 
@@ -18,12 +19,15 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
                f1: float = 0.0, sigma: float, draws: dict | None = None,
                baseline_lag1: float | None = None, baseline: str | None = None,
                z_ref: float | None = None, stat_rel_halfwidth: float | None = None,
-               rng: np.random.Generator | int | None = None) -> list[CheckResult]:
+               rng: np.random.Generator | int | None = None,
+               cycle=None) -> list[CheckResult]:
     """Run every adequacy check on one fit.
 
     Model force: mu(z) = E*·s(z_surf - z) + F0 + F1·(z - z_ref), z_ref = highest z unless
     given.  Runs the exponent, residual-structure and depth-consistency checks, and the
-    posterior-predictive check when ``draws`` are given.
+    posterior-predictive check when ``draws`` are given, and the rate-dependence check
+    (:func:`~palpbayes.checks.rate.rate_dependence_check`) when ``cycle`` has a hold or a
+    retract.
 
     Parameters
     ----------
@@ -49,11 +53,14 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
         that of ``draws["E_star"]``, else 1.645 se of the depth check's fit.
     rng
         Generator or seed for the posterior-predictive replicates.
+    cycle
+        The whole recording (:class:`~palpbayes.trace.IndentationTrace`) when it goes on
+        past the loading (a hold, a retract); None: no rate check.
 
     Returns
     -------
     list of CheckResult
-        In the order exponent, residual_structure, depth_consistency[, ppc], each graded
+        In the order exponent, residual_structure, depth_consistency[, ppc][, rate], each graded
         (:func:`~palpbayes.checks.effect.grade_checks`: its effect on E and severity; the
         statistical interval is the draws' 90 % interval of E*, else 1.645 se).
     """
@@ -91,6 +98,11 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
         ph = np.asarray(draws["phi"], dtype=float)[keep] if "phi" in draws else None
         out.append(posterior_predictive_check(z, f, curves, sig, phi=ph, rng=rng,
                                               z_surf=z_surf))
+    if cycle is not None:
+        rate = rate_dependence_check(cycle, model, z_surf=z_surf, estar=estar, f0=f0, f1=f1,
+                                     z_ref=z_ref, sigma=sigma, noise_lag1=phi)
+        if rate is not None:
+            out.append(rate)
     half = stat_rel_halfwidth
     if half is None and draws is not None:
         lo, hi = np.quantile(np.asarray(draws["E_star"], dtype=float), [0.05, 0.95])
@@ -104,7 +116,8 @@ def check_fit(data: FitData, *, z_surf: float, estar: float, f0: float, f1: floa
               sigma: float, baseline: str = "constant", z_ref: float | None = None,
               draws: dict | None = None, stat_rel_halfwidth: float | None = None,
               seed: int = 0) -> list[CheckResult]:
-    """:func:`run_checks` on the points of a prepared fit.
+    """:func:`run_checks` on the points of a prepared fit, with the rate check when the
+    recording goes on past the loading (``data.cycle``: a hold, a retract).
 
     The noise's own lag-one correlation is read from the pre-contact baseline
     (:mod:`palpbayes.baseline`) when it is reliable, so correlated sensor noise is not taken
@@ -132,6 +145,7 @@ def check_fit(data: FitData, *, z_surf: float, estar: float, f0: float, f1: floa
         return run_checks(data.z, data.force, data.model, z_surf=z_surf, estar=estar, f0=f0,
                           f1=f1, sigma=sigma, draws=draws, baseline_lag1=lag1,
                           baseline=baseline, z_ref=z_ref,
-                          stat_rel_halfwidth=stat_rel_halfwidth, rng=seed)
+                          stat_rel_halfwidth=stat_rel_halfwidth, rng=seed,
+                          cycle=data.cycle)
     except InputError:
         return []

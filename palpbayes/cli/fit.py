@@ -411,7 +411,8 @@ def run(args: argparse.Namespace) -> int:
                              "2 bag or AFM file given as INPUT")
         source, manifest_options = path, read_options
     else:
-        source, manifest_options = traces_from_args(args), None
+        # every segment of an AFM file: the fit reads the approach, the rate check the rest
+        source, manifest_options = traces_from_args(args, segments="all"), None
     if args.progress is not None:
         options = options.with_progress(args.progress)
     summary = fit_campaign(source, args.out, options, workers=args.workers, resume=args.resume,
