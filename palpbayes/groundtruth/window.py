@@ -3,7 +3,9 @@
 A window ``(lo, hi)`` is a pair of fractions of the specimen height (0.05 = 5 %), in
 toe-compensated strain unless ``toe_compensation`` is False (:mod:`palpbayes.groundtruth.fit`).
 :func:`sensitivity_windows` gives the three nearby windows of ``E_window_spread_pa`` and
-:func:`describe_rule` the one-line rule written to the summary's ``rule`` column.
+:func:`describe_rule` the one-line rule written to the summary's ``rule`` column;
+:func:`toe_compression` is the smooth toe the rule's compensation is exact for (the
+simulator's, and the compression modulus of a fitted relaxation modulus).
 """
 
 from __future__ import annotations
@@ -11,9 +13,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numpy as np
+from numpy.typing import ArrayLike
+
 from ..errors import InputError
 
-__all__ = ["DEFAULT_STRAIN_WINDOW", "sensitivity_windows", "describe_rule"]
+__all__ = ["DEFAULT_STRAIN_WINDOW", "sensitivity_windows", "describe_rule", "toe_compression"]
 
 #: Default fit window [-] in toe-compensated engineering strain (0-5 %).
 DEFAULT_STRAIN_WINDOW: tuple[float, float] = (0.0, 0.05)
@@ -67,3 +72,15 @@ def describe_rule(strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW,
             f"{_pct_range(window)} {origin}; E_plain: the same window of measured strain, the "
             f"phantom dataset's 0-5 % convention (compare with its published table); E_sd per "
             f"test: prewhitened Newey-West HAC; window spread: range of E over {spread}")
+
+
+def toe_compression(x: ArrayLike, toe: float) -> np.ndarray:
+    """Effective compression [m] of a block with ``toe`` [m] of slack, smooth (C¹) toe.
+
+    u(x) = x²/(4·toe) for 0 <= x < 2·toe, and x - toe beyond; u and du/dx are continuous at
+    x = 2·toe, and the linear part extrapolates to zero at x = toe.  toe = 0 gives u = x.
+    """
+    x = np.clip(np.asarray(x, dtype=float), 0.0, None)
+    if toe == 0:
+        return x
+    return np.where(x < 2.0 * toe, x * x / (4.0 * toe), x - toe)

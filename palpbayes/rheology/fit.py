@@ -165,17 +165,18 @@ class RheologyFit:
 
     def compression_modulus(self, height: float, speed: float = PAPER_COMPRESSION_SPEED,
                             strain_window=DEFAULT_STRAIN_WINDOW, level: float = LEVEL,
-                            n: int = 400) -> tuple[float, float, float]:
+                            n: int = 400, toe: float = 0.0) -> tuple[float, float, float]:
         """Young's modulus [Pa] a compression test of this material would report: a specimen
         of ``height`` [m] at cross-head ``speed`` [m/s] (default the paper's 50 mm/min), read
         by the ground truth's rule over ``strain_window``
         (:func:`~palpbayes.rheology.compression.compression_moduli`); median and central
-        ``level`` interval over ``n`` draws.  Needs ``nu`` (the fit's)."""
+        ``level`` interval over ``n`` draws; ``toe`` [m] the test's slack (its strain
+        history then starts with the toe).  Needs ``nu`` (the fit's)."""
         if self.nu is None:
             raise InputError("the compression modulus is a Young's modulus: fit with nu= "
                              "(--nu) to convert E* = E/(1 - nu^2)")
         vals = compression_moduli(self.kernels(min(n, len(self.draws["z_surf"]))), self.nu,
-                                  speed, height, strain_window)
+                                  speed, height, strain_window, toe)
         return _median_interval(vals, level)
 
     def summary_line(self) -> str:

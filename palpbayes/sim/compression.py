@@ -1,7 +1,8 @@
 """A simulated Instron compression test (the ground truth) and its Instron-like export file.
 
 :func:`simulate_compression_test` compresses a foam block between flat platens at constant
-crosshead speed (linear elastic with a smooth toe, :func:`toe_compression`);
+crosshead speed (linear elastic or viscoelastic, with a smooth toe,
+:func:`~palpbayes.groundtruth.toe_compression`, re-exported here);
 :func:`write_compression_export` writes the table in the layout that
 :func:`palpbayes.io.instron.read_compression_test` reads, so the ground-truth path of the
 pipeline can be tested end to end on a known modulus.
@@ -15,30 +16,19 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from numpy.typing import ArrayLike
 
 from ..errors import InputError
+from ..groundtruth.window import toe_compression
 from ..io.atomic import write_text_atomic
 from ._checks import nonneg, positive
 
 __all__ = ["toe_compression", "simulate_compression_test", "write_compression_export"]
 
 
-def toe_compression(x: ArrayLike, toe: float) -> np.ndarray:
-    """Effective compression [m] of a block with ``toe`` [m] of slack, smooth (C¹) toe.
-
-    u(x) = x²/(4·toe) for 0 <= x < 2·toe, and x - toe beyond; u and du/dx are continuous at
-    x = 2·toe, and the linear part extrapolates to zero at x = toe.  toe = 0 gives u = x.
-    """
-    x = np.clip(np.asarray(x, dtype=float), 0.0, None)
-    if toe == 0:
-        return x
-    return np.where(x < 2.0 * toe, x * x / (4.0 * toe), x - toe)
-
-
 def simulate_compression_test(
-    E: float,
+    E: float | None = None,
     *,
+    kernel=None,
     width: float = 0.05,
     length: float = 0.05,
     height: float,
@@ -59,12 +49,23 @@ def simulate_compression_test(
 
         F(x) = E·A/h·u(x) + noise,   A = width·length,   u = toe_compression(x, toe)
 
-    so beyond x = 2·toe the curve is a line of slope E·A/h [N/m] through (toe, 0).
+    so beyond x = 2·toe the curve is a line of slope E·A/h [N/m] through (toe, 0).  A
+    viscoelastic block (``kernel``, its uniaxial relaxation modulus E(t)) carries the load of
+    the same strain history through the hereditary integral (Boltzmann),
+
+        F(t) = A·∫_0^t E(t − s)·dε(s),   ε = u(x(s))/h,
+
+    evaluated on the sample times (:func:`~palpbayes.contact.viscoelastic.hereditary_force`
+    with C = 1, m = 1): its apparent modulus depends on the crosshead speed.
 
     Parameters
     ----------
     E
-        [Pa] Young's modulus of the block.
+        [Pa] Young's modulus of an elastic block (give either ``E`` or ``kernel``).
+    kernel
+        Uniaxial relaxation modulus E(t) [Pa] of a viscoelastic block: a
+        :class:`~palpbayes.contact.PowerLawKernel` or
+        :class:`~palpbayes.contact.PronyKernel` (E(t) = (1 − nu²)·E*(t) of a palpation fit).
     width, length, height
         [m] Block dimensions (height is the loading direction).
     speed
@@ -86,11 +87,20 @@ def simulate_compression_test(
     -------
     pandas.DataFrame
         Columns ``time_s``, ``compression_m``, ``force_n`` (both positive in compression);
-        ``attrs`` holds the truth (``E_true_pa``, ``area_m2``, ``height_m``, ``width_m``,
+        ``attrs`` holds the truth (``E_true_pa``, NaN for a ``kernel``, then ``kernel``
+        its repr; ``area_m2``, ``height_m``, ``width_m``,
         ``length_m``, ``stiffness_n_per_m``, ``toe_m``, ``noise_n``, ``speed_m_per_s``,
         ``specimen``, ``material``).
     """
-    E = positive(E, "Young's modulus E [Pa]")
+    if (E is None) == (kernel is None):
+        raise InputError("give the block's Young's modulus E [Pa] or its relaxation modulus "
+                         "kernel=, one of the two")
+    if kernel is not None:
+        from ..contact.viscoelastic import PowerLawKernel, PronyKernel
+        if not isinstance(kernel, PowerLawKernel | PronyKernel):
+            raise InputError(f"kernel {kernel!r} is neither a PowerLawKernel nor a PronyKernel")
+    else:
+        E = positive(E, "Young's modulus E [Pa]")
     width = positive(width, "block width [m]")
     length = positive(length, "block length [m]")
     height = positive(height, "block height [m]")
@@ -107,9 +117,17 @@ def simulate_compression_test(
     t = np.arange(n + 1) / rate
     x = np.minimum(speed * t, max_compression)
     area = width * length
-    k = E * area / height
-    f = k * toe_compression(x, toe) + noise_n * gen.standard_normal(t.size)
+    if kernel is None:
+        k = E * area / height
+        load = k * toe_compression(x, toe)
+    else:
+        from ..contact.viscoelastic import hereditary_force
+        E, k = math.nan, math.nan
+        load = area * hereditary_force(t, toe_compression(x, toe) / height, 1.0, 1.0, kernel)
+    f = load + noise_n * gen.standard_normal(t.size)
     df = pd.DataFrame({"time_s": t, "compression_m": x, "force_n": f})
+    if kernel is not None:
+        df.attrs["kernel"] = repr(kernel)
     df.attrs.update({
         "E_true_pa": E, "area_m2": area, "height_m": height, "width_m": width,
         "length_m": length, "stiffness_n_per_m": k, "toe_m": toe, "noise_n": noise_n,
