@@ -26,19 +26,23 @@ Functions
 :func:`plot_stiffening`      modulus vs rest time with the fitted stiffening law and its band
 :func:`plot_gap`             the paper's robot-vs-Instron gap against the layer's prediction
 :func:`plot_halfspace_vs_layer` a campaign's half-space and layer estimates side by side
+:func:`plot_cycle_fit`       a viscoelastic fit: force against time with its band
+:func:`plot_relaxation`      the relaxation modulus E*(t) with its band, one or more fits
+:func:`plot_hysteresis`      force against depth per segment (approach, hold, retract)
 
 Modules, by subject: :mod:`~palpbayes.plots.style` (colours, units, shared helpers),
 :mod:`~palpbayes.plots.trace` (force-depth, residuals), :mod:`~palpbayes.plots.posterior`,
 :mod:`~palpbayes.plots.walkers`, :mod:`~palpbayes.plots.budget`,
 :mod:`~palpbayes.plots.campaign` (comparison, forest), :mod:`~palpbayes.plots.layer`
-(finite thickness) and
-:mod:`~palpbayes.plots.stiffening`; the functions are imported from here.
+(finite thickness), :mod:`~palpbayes.plots.stiffening` and :mod:`~palpbayes.plots.rheology`
+(viscoelastic fits); the functions are imported from here.
 """
 
 from .budget import plot_budget
 from .campaign import plot_comparison, plot_forest
 from .layer import plot_gap, plot_halfspace_vs_layer
 from .posterior import plot_pair, plot_posterior, plot_posterior_E, plot_posterior_zsurf
+from .rheology import plot_cycle_fit, plot_hysteresis, plot_relaxation
 from .stiffening import plot_stiffening
 from .style import INPUT_COLORS, METHOD_COLORS, METHOD_LABELS
 from .trace import plot_force_depth, plot_residuals
@@ -61,4 +65,7 @@ __all__ = [
     "plot_stiffening",
     "plot_gap",
     "plot_halfspace_vs_layer",
+    "plot_cycle_fit",
+    "plot_relaxation",
+    "plot_hysteresis",
 ]

@@ -1,0 +1,148 @@
+"""Viscoelastic fits: force against time with the fit's band, the relaxation modulus E*(t)
+with its band, and the approach/retract hysteresis of a record.
+
+The fits are :class:`~palpbayes.rheology.RheologyFit` results (:func:`palpbayes.rheology.
+fit_rheology`); the record is an :class:`~palpbayes.trace.IndentationTrace` with segments.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from ..intervals import LEVEL, central_band
+from ..trace import SEGMENTS
+from .style import _KPA, _MM, _MN, _decorate, _fig_ax, _level_label
+
+__all__ = ["plot_cycle_fit", "plot_relaxation", "plot_hysteresis", "RHEOLOGY_COLORS",
+           "SEGMENT_COLORS"]
+
+#: Colour per relaxation model (Okabe-Ito).
+RHEOLOGY_COLORS: dict[str, str] = {"power-law": "#0072B2", "sls": "#D55E00",
+                                   "pooled": "#009E73"}
+#: Colour per segment of the cycle.
+SEGMENT_COLORS: dict[str, str] = {"approach": "#56B4E9", "hold": "#E69F00",
+                                  "retract": "#CC79A7"}
+_LABELS = {"power-law": "power law", "sls": "SLS", "pooled": "pooled"}
+
+
+def plot_cycle_fit(fit: Any, ax: Axes | None = None, *, level: float = LEVEL,
+                   n_draws: int = 200, title: str | None = None) -> Figure:
+    """Force [mN] against time [s]: the fitted block means, the fit's median force and its
+    central ``level`` band over ``n_draws`` posterior draws, the segments shaded.
+
+    Parameters
+    ----------
+    fit
+        A :class:`~palpbayes.rheology.RheologyFit`.
+    ax
+        Axes to draw on (default a new figure).
+    level
+        Central probability of the band.
+    n_draws
+        Posterior draws behind the band.
+    title
+        Default: the trace id, the model and whether its check passed.
+    """
+    fig, ax = _fig_ax(ax, (7.0, 4.0))
+    d = fit.data
+    curves = fit.force_curves(n_draws)
+    lo, med, hi = central_band(curves, level, axis=0)
+    color = RHEOLOGY_COLORS.get(fit.rheology, "#0072B2")
+    for code, name in enumerate(SEGMENTS):
+        t = d.time[d.segment == code]
+        if t.size:
+            ax.axvspan(t[0], t[-1], color=SEGMENT_COLORS[name], alpha=0.12, lw=0, label=name)
+    ax.plot(d.time, d.force * _MN, ".", ms=2, color="0.35", label="data (block means)",
+            rasterized=True)
+    ax.fill_between(d.time, lo * _MN, hi * _MN, color=color, alpha=0.35, lw=0,
+                    label=f"{_LABELS.get(fit.rheology, fit.rheology)}, {_level_label(level)} band")
+    ax.plot(d.time, med * _MN, color=color, lw=1.2, label="posterior median")
+    if title is None:
+        tid = getattr(d.trace, "trace_id", "")
+        title = (f"{tid}: {_LABELS.get(fit.rheology, fit.rheology)} fit, model check "
+                 f"{'passed' if fit.model_ok else 'FAILED'}")
+    _decorate(ax, "Time from the first fitted sample, t [s]", "Force, F [mN]", title, "best")
+    return fig
+
+
+def plot_relaxation(fits: Any, ax: Axes | None = None, *, times=None, level: float = LEVEL,
+                    truth=None, title: str = "Relaxation modulus") -> Figure:
+    """E*(t) [kPa] on log-log axes: median and central ``level`` band of each fit.
+
+    Parameters
+    ----------
+    fits
+        A :class:`~palpbayes.rheology.RheologyFit`, or a mapping label -> fit.
+    ax
+        Axes to draw on (default a new figure).
+    times
+        [s] Times to draw at; default 60 log-spaced times over the recorded time scales of the
+        first fit (its shortest step to its duration).
+    level
+        Central probability of the bands.
+    truth
+        Optional callable t [s] -> E*(t) [Pa] (a simulated material's kernel), drawn dashed.
+    title
+        Axes title.
+    """
+    fig, ax = _fig_ax(ax)
+    if not isinstance(fits, Mapping):
+        fits = {_LABELS.get(fits.rheology, fits.rheology): fits}
+    first = next(iter(fits.values()))
+    if times is None:
+        times = np.geomspace(first.data.dt_min, first.data.span, 60)
+    times = np.asarray(times, dtype=float)
+    for i, (label, fit) in enumerate(fits.items()):
+        tab = fit.relaxation(times, level)
+        color = RHEOLOGY_COLORS.get(fit.rheology, None) if len(fits) <= 2 else f"C{i}"
+        ax.fill_between(times, tab["E_star_lo_pa"] * _KPA, tab["E_star_hi_pa"] * _KPA,
+                        color=color, alpha=0.3, lw=0)
+        ax.plot(times, tab["E_star_pa"] * _KPA, color=color, lw=1.2,
+                label=f"{label} ({_level_label(level)} band)")
+    if truth is not None:
+        ax.plot(times, np.asarray(truth(times), dtype=float) * _KPA, "k--", lw=1.0,
+                label="true E*(t)")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    _decorate(ax, "Time since a step strain, t [s]", "Relaxation modulus, E*(t) [kPa]",
+              title, "best")
+    return fig
+
+
+def plot_hysteresis(trace: Any, ax: Axes | None = None, *, z_surf: float | None = None,
+                    title: str | None = None) -> Figure:
+    """Force [mN] against depth [mm] (or tip height when ``z_surf`` is None), one colour per
+    segment: a retract below the approach is the hysteresis of a viscoelastic material.
+
+    Parameters
+    ----------
+    trace
+        An :class:`~palpbayes.trace.IndentationTrace`; segments from the motion when it does
+        not record them.
+    ax
+        Axes to draw on (default a new figure).
+    z_surf
+        [m] Surface height (e.g. a fit's median) for the depth axis.
+    title
+        Default the trace id.
+    """
+    from ..checks.rate import cycle_segments
+
+    fig, ax = _fig_ax(ax)
+    seg = cycle_segments(trace)
+    x = (trace.z if z_surf is None else z_surf - trace.z) * _MM
+    for code, name in enumerate(SEGMENTS):
+        sel = seg == code
+        if sel.any():
+            ax.plot(x[sel], trace.force[sel] * _MN, ".", ms=1.5, color=SEGMENT_COLORS[name],
+                    label=name, rasterized=True)
+    xlabel = ("Tip height, z [mm]" if z_surf is None
+              else "Depth below the fitted surface, d [mm]")
+    _decorate(ax, xlabel, "Force, F [mN]",
+              trace.trace_id if title is None else title, "best", markerscale=4)
+    return fig
