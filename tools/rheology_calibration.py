@@ -5,7 +5,11 @@ Draws ``--n`` records per relaxation model (power law, standard linear solid) wi
 moduli, fits each with :func:`palpbayes.rheology.fit_rheology` and prints, per model and
 parameter: the share of 90 % intervals that hold the truth, the mean and sd of the z-score
 (truth − median)/sd, and the median relative error; then how many posterior-predictive checks
-passed and the median fit time.
+passed and the median fit time.  Per record it also fits the other relaxation model and the
+elastic law (exact engine, the loading only): the share of records where PSIS-LOO
+(:func:`palpbayes.rheology.compare_fits`) prefers the true model beyond two standard errors,
+prefers the wrong one, or neither; and the share of elastic fits that the rate check
+(:mod:`palpbayes.checks.rate`) flags as materially rate dependent.
 
 Records (seeded by index): paraboloid (3 mm deep) or flat punch (2 mm) of the paper, at 5, 50
 or 500 mm/min, a 5–15 s hold, AR(1) sensor noise of 8 mN with lag-one correlation 0–0.6, an
@@ -35,9 +39,13 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 import pandas as pd
 
+from palpbayes.bayes import fit_bayes
+from palpbayes.checks import material
 from palpbayes.contact.viscoelastic import PowerLawKernel, standard_linear_solid
+from palpbayes.fitdata import ModelSpec
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.rheology import fit_rheology
+from palpbayes.rheology.choice import compare_fits
 from palpbayes.sim import simulate_viscoelastic
 
 #: Parameters checked per model, with the names of the draws.
@@ -66,12 +74,22 @@ def record(model: str, i: int):
 
 
 def fit_one(job: tuple[str, int]) -> list[dict]:
-    """One record's rows: per parameter, the truth, median, sd and 90 % interval."""
+    """One record's rows: per parameter, the truth, median, sd and 90 % interval; per record,
+    the model PSIS-LOO prefers (``"none"`` within two se) and whether the elastic fit's rate
+    check fails materially."""
     model, i = job
     trace, truth, tip_name = record(model, i)
+    other = "sls" if model == "power-law" else "power-law"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fit = fit_rheology(trace, model, rng=i)
+        rival = fit_rheology(trace, other, rng=i)
+        elastic = fit_bayes(trace, ModelSpec(trace.tip, nu=0.3), engine="exact", seed=i)
+    table = compare_fits({model: fit, other: rival})
+    preferred = table.loc[table["preferred"], "rheology"]
+    rate = next((c for c in elastic.checks if c.name == "rate"), None)
+    per_record = {"choice": preferred.iloc[0] if len(preferred) else "none",
+                  "elastic_rate_flag": rate is not None and material(rate)}
     rows = []
     for name in PARAMETERS[model]:
         d = fit.draws[name]
@@ -80,7 +98,7 @@ def fit_one(job: tuple[str, int]) -> list[dict]:
                      "truth": truth[name], "median": med, "sd": float(np.std(d)), "lo": lo,
                      "hi": hi, "ppc_passed": bool(fit.ppc.passed),
                      "model_ok": fit.model_ok, "block": fit.data.block,
-                     "seconds": fit.seconds})
+                     "seconds": fit.seconds, **per_record})
     return rows
 
 
@@ -98,16 +116,24 @@ def run(n: int, workers: int, models=tuple(PARAMETERS)) -> pd.DataFrame:
 def table(df: pd.DataFrame) -> pd.DataFrame:
     """Per model and parameter: coverage of the 90 % interval, z-score mean and sd, median
     |relative error| [%], share of passed posterior-predictive checks and of model_ok (the
-    check passed and phi not at its bound), median fit time [s]."""
+    check passed and phi not at its bound), median fit time [s]; per model (the same on each
+    of its rows): shares of records where PSIS-LOO prefers the true model
+    (``choice_true``), the other (``choice_wrong``), and of elastic fits flagged rate
+    dependent (``elastic_flagged``)."""
     z = (df["truth"] - df["median"]) / df["sd"]
     df = df.assign(covered=(df["lo"] <= df["truth"]) & (df["truth"] <= df["hi"]), z=z,
-                   err_pct=100 * ((df["median"] - df["truth"]) / df["truth"]).abs())
+                   err_pct=100 * ((df["median"] - df["truth"]) / df["truth"]).abs(),
+                   choice_true=df["choice"] == df["model"],
+                   choice_wrong=(df["choice"] != "none") & (df["choice"] != df["model"]))
     g = df.groupby(["model", "parameter"], sort=False)
     return pd.DataFrame({"n": g.size(), "coverage90": g["covered"].mean(),
                          "z_mean": g["z"].mean(), "z_sd": g["z"].std(),
                          "median_err_pct": g["err_pct"].median(),
                          "ppc_passed": g["ppc_passed"].mean(),
                          "model_ok": g["model_ok"].mean(),
+                         "choice_true": g["choice_true"].mean(),
+                         "choice_wrong": g["choice_wrong"].mean(),
+                         "elastic_flagged": g["elastic_rate_flag"].mean(),
                          "median_seconds": g["seconds"].median()}).round(3)
 
 
