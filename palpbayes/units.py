@@ -32,7 +32,7 @@ from decimal import Decimal
 from numbers import Real
 
 __all__ = ["MICRO", "FORCE_PREFIXES", "LENGTH_PREFIXES", "PRESSURE_PREFIXES", "format_si",
-           "format_force", "format_length", "format_pressure"]
+           "format_force", "format_length", "format_pressure", "si_scale"]
 
 #: The micro prefix used in messages: MICRO SIGN U+00B5.
 MICRO = "\u00b5"
@@ -156,3 +156,17 @@ def format_pressure(x_pa: float, digits: int = 3) -> str:
         E.g. ``format_pressure(1.11e5) == '111 kPa'``, ``format_pressure(2.5e9) == '2.5 GPa'``.
     """
     return format_si(x_pa, "Pa", PRESSURE_PREFIXES, digits)
+
+
+def si_scale(largest: float, unit: str, prefixes: dict[int, str]) -> tuple[float, str]:
+    """The factor and unit label an axis of values up to ``largest`` (in the base ``unit``)
+    is drawn in: the prefix of :data:`FORCE_PREFIXES` etc. that puts ``largest`` in
+    [1, 1000), e.g. ``si_scale(2e-9, "N", FORCE_PREFIXES) == (1e9, "nN")``; the base unit
+    for 0 or a value that is not finite."""
+    x = abs(float(largest))
+    power = 0
+    if math.isfinite(x) and x > 0:
+        power = 3 * math.floor(math.log10(x) / 3)
+        power = min(max(power, min(prefixes)), max(prefixes))
+    return 10.0 ** -power, prefixes[power] + unit
+

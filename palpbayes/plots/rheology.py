@@ -13,10 +13,12 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter
 
 from ..intervals import LEVEL, central_band
 from ..trace import SEGMENTS
-from .style import _KPA, _MM, _MN, _decorate, _fig_ax, _level_label
+from ..units import FORCE_PREFIXES, LENGTH_PREFIXES, PRESSURE_PREFIXES, si_scale
+from .style import _decorate, _fig_ax, _level_label
 
 __all__ = ["plot_cycle_fit", "plot_relaxation", "plot_hysteresis", "RHEOLOGY_COLORS",
            "SEGMENT_COLORS"]
@@ -32,8 +34,9 @@ _LABELS = {"power-law": "power law", "sls": "SLS", "pooled": "pooled"}
 
 def plot_cycle_fit(fit: Any, ax: Axes | None = None, *, level: float = LEVEL,
                    n_draws: int = 200, title: str | None = None) -> Figure:
-    """Force [mN] against time [s]: the fitted block means, the fit's median force and its
-    central ``level`` band over ``n_draws`` posterior draws, the segments shaded.
+    """Force against time [s]: the fitted block means, the fit's median force and its
+    central ``level`` band over ``n_draws`` posterior draws, the segments shaded; the force in
+    the SI unit that suits it (mN for a robot, nN for an AFM).
 
     Parameters
     ----------
@@ -53,26 +56,29 @@ def plot_cycle_fit(fit: Any, ax: Axes | None = None, *, level: float = LEVEL,
     curves = fit.force_curves(n_draws)
     lo, med, hi = central_band(curves, level, axis=0)
     color = RHEOLOGY_COLORS.get(fit.rheology, "#0072B2")
+    k, unit = si_scale(np.max(np.abs(d.force)), "N", FORCE_PREFIXES)
     for code, name in enumerate(SEGMENTS):
         t = d.time[d.segment == code]
         if t.size:
             ax.axvspan(t[0], t[-1], color=SEGMENT_COLORS[name], alpha=0.12, lw=0, label=name)
-    ax.plot(d.time, d.force * _MN, ".", ms=2, color="0.35", label="data (block means)",
+    ax.plot(d.time, d.force * k, ".", ms=2, color="0.35", label="data (block means)",
             rasterized=True)
-    ax.fill_between(d.time, lo * _MN, hi * _MN, color=color, alpha=0.35, lw=0,
+    ax.fill_between(d.time, lo * k, hi * k, color=color, alpha=0.35, lw=0,
                     label=f"{_LABELS.get(fit.rheology, fit.rheology)}, {_level_label(level)} band")
-    ax.plot(d.time, med * _MN, color=color, lw=1.2, label="posterior median")
+    ax.plot(d.time, med * k, color=color, lw=1.2, label="posterior median")
     if title is None:
         tid = getattr(d.trace, "trace_id", "")
         title = (f"{tid}: {_LABELS.get(fit.rheology, fit.rheology)} fit, model check "
                  f"{'passed' if fit.model_ok else 'FAILED'}")
-    _decorate(ax, "Time from the first fitted sample, t [s]", "Force, F [mN]", title, "best")
+    _decorate(ax, "Time from the first fitted sample, t [s]", f"Force, F [{unit}]", title,
+              "best")
     return fig
 
 
 def plot_relaxation(fits: Any, ax: Axes | None = None, *, times=None, level: float = LEVEL,
                     truth=None, title: str = "Relaxation modulus") -> Figure:
-    """E*(t) [kPa] on log-log axes: median and central ``level`` band of each fit.
+    """E*(t) on log-log axes (Pa, kPa or MPa as suits it): median and central ``level``
+    band of each fit.
 
     Parameters
     ----------
@@ -97,27 +103,34 @@ def plot_relaxation(fits: Any, ax: Axes | None = None, *, times=None, level: flo
     if times is None:
         times = np.geomspace(first.data.dt_min, first.data.span, 60)
     times = np.asarray(times, dtype=float)
+    tables = {label: fit.relaxation(times, level) for label, fit in fits.items()}
+    k, unit = si_scale(max(float(t["E_star_hi_pa"].max()) for t in tables.values()), "Pa",
+                       PRESSURE_PREFIXES)
     for i, (label, fit) in enumerate(fits.items()):
-        tab = fit.relaxation(times, level)
+        tab = tables[label]
         color = RHEOLOGY_COLORS.get(fit.rheology, None) if len(fits) <= 2 else f"C{i}"
-        ax.fill_between(times, tab["E_star_lo_pa"] * _KPA, tab["E_star_hi_pa"] * _KPA,
+        ax.fill_between(times, tab["E_star_lo_pa"] * k, tab["E_star_hi_pa"] * k,
                         color=color, alpha=0.3, lw=0)
-        ax.plot(times, tab["E_star_pa"] * _KPA, color=color, lw=1.2,
+        ax.plot(times, tab["E_star_pa"] * k, color=color, lw=1.2,
                 label=f"{label} ({_level_label(level)} band)")
     if truth is not None:
-        ax.plot(times, np.asarray(truth(times), dtype=float) * _KPA, "k--", lw=1.0,
+        ax.plot(times, np.asarray(truth(times), dtype=float) * k, "k--", lw=1.0,
                 label="true E*(t)")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    _decorate(ax, "Time since a step strain, t [s]", "Relaxation modulus, E*(t) [kPa]",
+    plain = FuncFormatter(lambda v, _: f"{v:g}")  # 60, 70, 100 rather than 6 × 10^1
+    ax.yaxis.set_major_formatter(plain)
+    ax.yaxis.set_minor_formatter(plain)
+    _decorate(ax, "Time since a step strain, t [s]", f"Relaxation modulus, E*(t) [{unit}]",
               title, "best")
     return fig
 
 
 def plot_hysteresis(trace: Any, ax: Axes | None = None, *, z_surf: float | None = None,
                     title: str | None = None) -> Figure:
-    """Force [mN] against depth [mm] (or tip height when ``z_surf`` is None), one colour per
-    segment: a retract below the approach is the hysteresis of a viscoelastic material.
+    """Force against depth (or tip height when ``z_surf`` is None), one colour per segment,
+    each in the SI unit that suits it: a retract below the approach is the hysteresis of a
+    viscoelastic material.
 
     Parameters
     ----------
@@ -135,14 +148,17 @@ def plot_hysteresis(trace: Any, ax: Axes | None = None, *, z_surf: float | None 
 
     fig, ax = _fig_ax(ax)
     seg = cycle_segments(trace)
-    x = (trace.z if z_surf is None else z_surf - trace.z) * _MM
+    x = trace.z if z_surf is None else z_surf - trace.z
+    kx, ux = si_scale(np.max(np.abs(x)), "m", LENGTH_PREFIXES)
+    kf, uf = si_scale(np.max(np.abs(trace.force)), "N", FORCE_PREFIXES)
+    x = x * kx
     for code, name in enumerate(SEGMENTS):
         sel = seg == code
         if sel.any():
-            ax.plot(x[sel], trace.force[sel] * _MN, ".", ms=1.5, color=SEGMENT_COLORS[name],
+            ax.plot(x[sel], trace.force[sel] * kf, ".", ms=1.5, color=SEGMENT_COLORS[name],
                     label=name, rasterized=True)
-    xlabel = ("Tip height, z [mm]" if z_surf is None
-              else "Depth below the fitted surface, d [mm]")
-    _decorate(ax, xlabel, "Force, F [mN]",
+    xlabel = (f"Tip height, z [{ux}]" if z_surf is None
+              else f"Depth below the fitted surface, d [{ux}]")
+    _decorate(ax, xlabel, f"Force, F [{uf}]",
               trace.trace_id if title is None else title, "best", markerscale=4)
     return fig

@@ -24,7 +24,8 @@ nbformat = pytest.importorskip("nbformat")
 
 ROOT = Path(__file__).resolve().parents[2]
 NB_DIR = ROOT / "notebooks"
-NOTEBOOKS = ["01_paper_tables", "02_lsq_vs_bayes", "03_stiffening", "04_robot_vs_instron"]
+NOTEBOOKS = ["01_paper_tables", "02_lsq_vs_bayes", "03_stiffening", "04_robot_vs_instron",
+             "05_viscoelastic"]
 
 
 def _on_ci() -> bool:
@@ -172,3 +173,18 @@ def test_notebook_04_decomposes_the_gap_and_covers_the_instron(tmp_path, monkeyp
     cmp_ = pd.read_csv(tmp_path / "res" / "comparison.csv")
     bayes = cmp_[cmp_["method"] == "bayes"]
     assert bayes["gt_in_interval"].all()  # 9/9: the layer model covers the Instron truth
+
+
+@pytest.mark.slow
+def test_notebook_05_flags_the_elastic_fit_and_matches_the_instron(tmp_path):
+    """Run from another folder (the real AFM file is found beside the checkout): the elastic
+    fit's rate flag, the power law preferred on the simulated foam, and the
+    compression-equivalent modulus within 0.5 % of the simulated Instron at every speed."""
+    nb, elapsed = _execute("05_viscoelastic", tmp_path)
+    assert elapsed < 600
+    text = _text(nb)
+    assert "rate dependence: over the" in text and "--rheology power-law,sls" in text
+    assert "power-law: E0* 7.99" in text or "power-law: E0* 8.00" in text
+    worst = float(text.split("largest difference from the Instron: ")[1].split(" %")[0])
+    assert worst < 0.5
+

@@ -32,12 +32,12 @@ SPEEDS = (5.0, 50.0, 500.0)  # [mm/min]
 TOE = 0.2e-3  # [m] the simulated test's slack (the simulator's default)
 
 
-def _instron(seed: int = 3):
+def _instron(seed: int = 3, noise: float = 0.02):
     """The ground truth's reading of a simulated 50 mm/min compression test of the foam
-    (toe 0.2 mm, load-cell noise 20 mN): its GroundTruthFit."""
+    (toe 0.2 mm, load-cell noise ``noise`` [N]): its GroundTruthFit."""
     kernel = PowerLawKernel(E0_STAR * (1 - NU**2), ALPHA)  # Young's E(t) = (1 - nu²)·E*(t)
     df = simulate_compression_test(kernel=kernel, height=HEIGHT, speed=PAPER_COMPRESSION_SPEED,
-                                   toe=TOE, rng=seed)
+                                   toe=TOE, noise_n=noise, rng=seed)
     test = CompressionTest(time_s=df["time_s"].to_numpy(), compression_m=df[
         "compression_m"].to_numpy(), load_n=df["force_n"].to_numpy(), specimen="foam",
         material="", area_m2=df.attrs["area_m2"], height_m=HEIGHT, source="simulated")
@@ -59,15 +59,18 @@ def palpations():
 
 
 def test_compression_modulus_at_every_palpation_speed_holds_the_instron_reading(palpations):
-    """The Instron reading lies within each fit's 90 % interval widened by two of the
-    reading's own sd (its load-cell noise: 0.1 %); the intervals are 0.2-1 % wide.  The
+    """The noise-free test's reading lies within each fit's 90 % interval (0.2-1 % wide);
+    the reading of the test with 20 mN of load-cell noise within 0.5 % of each median (the
+    noise moves it by about 0.15 %; the rule's HAC sd, 2 %, is far more conservative).  The
     test's toe matters: read as a toe-free ramp, the same material's modulus is 1.0 % higher,
     outside the intervals."""
-    gt = _instron()
+    clean, noisy = _instron(noise=0.0), _instron()
     for v, (_, fit, _) in palpations.items():
         med, lo, hi = fit.compression_modulus(HEIGHT, toe=TOE)
-        assert lo - 2 * gt.E_sd_pa <= gt.E_pa <= hi + 2 * gt.E_sd_pa, (v, lo, gt.E_pa, hi)
+        assert lo <= clean.E_pa <= hi, (v, lo, clean.E_pa, hi)
+        assert noisy.E_pa == pytest.approx(med, rel=0.005), (v, med, noisy.E_pa)
         assert (hi - lo) / med < 0.02, (v, lo, hi)
+    gt = noisy
     no_toe = palpations[50.0][1].compression_modulus(HEIGHT)
     assert no_toe[0] / gt.E_pa - 1 == pytest.approx(0.010, abs=0.003)
 

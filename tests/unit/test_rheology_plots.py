@@ -16,6 +16,7 @@ from palpbayes.plots import plot_cycle_fit, plot_hysteresis, plot_relaxation
 from palpbayes.plots.rheology import SEGMENT_COLORS
 from palpbayes.rheology import fit_rheology
 from palpbayes.sim import simulate_viscoelastic
+from palpbayes.units import FORCE_PREFIXES, LENGTH_PREFIXES, PRESSURE_PREFIXES, si_scale
 
 KERNEL = PowerLawKernel(70e3, 0.15)
 
@@ -36,7 +37,8 @@ def test_cycle_fit_draws_the_median_force_and_names_the_check(fitted):
     ax = fig.axes[0]
     median = next(ln for ln in ax.get_lines() if ln.get_label() == "posterior median")
     _, med, _ = central_band(fit.force_curves(100), axis=0)
-    np.testing.assert_allclose(median.get_ydata(), med * 1e3)
+    np.testing.assert_allclose(median.get_ydata(), med)  # up to 2 N: drawn in N
+    assert ax.get_ylabel() == "Force, F [N]"
     np.testing.assert_allclose(median.get_xdata(), fit.data.time)
     assert ax.get_title() == ("foam: power law fit, model check "
                               + ("passed" if fit.model_ok else "FAILED"))
@@ -53,6 +55,7 @@ def test_relaxation_draws_the_band_and_the_truth_on_log_axes(fitted):
     tab = fit.relaxation(times)
     line = next(ln for ln in ax.get_lines() if ln.get_label().startswith("foam"))
     np.testing.assert_allclose(line.get_ydata(), tab["E_star_pa"] * 1e-3)
+    assert ax.get_ylabel() == "Relaxation modulus, E*(t) [kPa]"
     truth = next(ln for ln in ax.get_lines() if ln.get_label() == "true E*(t)")
     np.testing.assert_allclose(truth.get_ydata(), KERNEL(times) * 1e-3)
     # the recovered E*(t) is the truth's within 3 % at 1 s
@@ -70,4 +73,19 @@ def test_hysteresis_colours_each_segment(fitted):
         assert ln.get_color() == SEGMENT_COLORS[name]
     ret = lines["retract"]
     np.testing.assert_allclose(ret.get_xdata(), (zs - tr.z[tr.segment == 2]) * 1e3)
-    assert "Depth" in ax.get_xlabel()
+    assert ax.get_xlabel() == "Depth below the fitted surface, d [mm]"
+
+
+@pytest.mark.parametrize("value, unit, prefixes, expect", [
+    (2e-9, "N", FORCE_PREFIXES, (1e9, "nN")), (2e-10, "N", FORCE_PREFIXES, (1e12, "pN")),
+    (1.9, "N", FORCE_PREFIXES, (1.0, "N")),
+    (0.048, "N", FORCE_PREFIXES, (1e3, "mN")), (7e4, "Pa", PRESSURE_PREFIXES, (1e-3, "kPa")),
+    (800.0, "Pa", PRESSURE_PREFIXES, (1.0, "Pa")), (3e-3, "m", LENGTH_PREFIXES, (1e3, "mm")),
+    (5e3, "m", LENGTH_PREFIXES, (1.0, "m")), (0.0, "N", FORCE_PREFIXES, (1.0, "N")),
+    (float("nan"), "Pa", PRESSURE_PREFIXES, (1.0, "Pa")), (1e-15, "N", FORCE_PREFIXES,
+                                                           (1e12, "pN"))])
+def test_axes_take_the_unit_that_suits_the_values(value, unit, prefixes, expect):
+    """An AFM force of 2 nN is drawn in nN, 0.2 nN in pN, a robot's in N or mN; out of range: the
+    nearest prefix."""
+    k, label = si_scale(value, unit, prefixes)
+    assert label == expect[1] and k == pytest.approx(expect[0])
