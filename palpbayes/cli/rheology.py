@@ -59,7 +59,8 @@ def parse_rheologies(text: str) -> tuple[str, ...]:
 def add_rheology_options(p: argparse.ArgumentParser) -> None:
     """The viscoelastic group of ``fit``'s options."""
     v = p.add_argument_group(
-        "viscoelastic fit (the whole loading and hold; the retract is not fitted yet)")
+        "viscoelastic fit (the loading and hold; --segments adds the retract, power law "
+        "only)")
     v.add_argument("--rheology", type=parse_rheologies, default=("elastic",), metavar="MODEL",
                    help="relaxation modulus: elastic (the fits above, default), power-law "
                         "E*(t) = E0*·(t/t0)^-alpha or sls E*(t) = E_inf* + E1*·exp(-t/tau); "
@@ -67,8 +68,9 @@ def add_rheology_options(p: argparse.ArgumentParser) -> None:
                         "and says which the record prefers (PSIS-LOO, with its error)")
     v.add_argument("--segments", default=None, metavar="NAMES",
                    help="segments fitted by --rheology power-law|sls, comma-separated from "
-                        "approach, hold (default approach,hold; a recording without "
-                        "segments gets them from the motion)")
+                        "approach, hold, retract (default approach,hold; the retract, by "
+                        "Ting's rule, with the power law only; a recording without segments "
+                        "gets them from the motion)")
     v.add_argument("--t0", type=float, default=1.0, metavar="S",
                    help="reference time of the power law [s] (E0* is E*(t0); default 1)")
     v.add_argument("--compression-speed", type=float, default=50.0, metavar="MM_PER_MIN",
@@ -110,8 +112,12 @@ def check_rheology_args(args: argparse.Namespace) -> tuple[float | None, str]:
                          "out: the table then has E* only)")
     if (out / RHEOLOGY_TABLE).exists() and not args.force:
         raise InputError(f"{out / RHEOLOGY_TABLE} exists; pass --force to overwrite it")
-    segments = ",".join(check_segments(args.segments or "approach,hold"))
-    return nu, segments
+    names = check_segments(args.segments or "approach,hold")
+    if "retract" in names and "sls" in args.rheology:
+        raise InputError("--segments with the retract is fitted with the power law only "
+                         "(Ting's rule under the SLS is not linear in its moduli); use "
+                         "--rheology power-law, or --segments approach,hold for the SLS")
+    return nu, ",".join(names)
 
 
 def print_rheology(table) -> None:

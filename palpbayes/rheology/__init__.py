@@ -1,8 +1,8 @@
 """Viscoelastic palpation: the whole recorded cycle fitted with a relaxation modulus.
 
 One module per job, imports flowing one way (``results`` -> ``choice`` -> ``fit`` ->
-``posterior`` -> ``cycle`` -> ``design``; ``fit`` -> ``compression``; ``pool`` -> ``fit``,
-``posterior``):
+``posterior`` -> ``cycle`` -> ``design``; ``posterior``, ``fit`` -> ``ting`` -> ``design``;
+``fit`` -> ``compression``; ``pool`` -> ``fit``, ``posterior``):
 
 * :mod:`~palpbayes.rheology.cycle` -- the samples a viscoelastic fit sees: the chosen
   segments, block means, the knots of the motion, the pre-contact baseline and the surface
@@ -10,6 +10,8 @@ One module per job, imports flowing one way (``results`` -> ``choice`` -> ``fit`
 * :mod:`~palpbayes.rheology.design` -- the Lee–Radok hereditary integral as regression
   columns, block means of the force for every trial surface at once (power law,
   exponential branch, constant);
+* :mod:`~palpbayes.rheology.ting` -- Ting's rule on the retract as regression columns (power
+  law: t1 depends on alpha and the motion only, so the force stays linear in E0*);
 * :mod:`~palpbayes.rheology.posterior` -- the collapsed posterior on a (surface × alpha or
   tau) grid: moduli, offset and noise integrated in closed form, draws;
 * :mod:`~palpbayes.rheology.fit` -- :func:`fit_rheology`, its result, table and flags;
@@ -28,7 +30,7 @@ is :mod:`palpbayes.contact.viscoelastic`; it checks the regression columns here.
 
 from __future__ import annotations
 
-from . import choice, compression, cycle, design, fit, pool, posterior, results
+from . import choice, compression, cycle, design, fit, pool, posterior, results, ting
 from .choice import *  # noqa: F403
 from .compression import *  # noqa: F403
 from .cycle import *  # noqa: F403
@@ -37,6 +39,7 @@ from .fit import *  # noqa: F403
 from .pool import *  # noqa: F403
 from .posterior import *  # noqa: F403
 from .results import *  # noqa: F403
+from .ting import *  # noqa: F403
 
 __all__: list[str] = []
 __all__ += choice.__all__
@@ -47,4 +50,5 @@ __all__ += posterior.__all__
 __all__ += fit.__all__
 __all__ += pool.__all__
 __all__ += results.__all__
+__all__ += ting.__all__
 

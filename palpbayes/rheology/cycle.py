@@ -112,14 +112,11 @@ class CycleData:
 
 def check_segments(segments) -> tuple[str, ...]:
     """The segment names a viscoelastic fit takes (names or a comma-separated string): known,
-    with the approach, without the retract (:class:`~palpbayes.errors.InputError` otherwise)."""
+    with the approach (:class:`~palpbayes.errors.InputError` otherwise)."""
     names = parse_segments(segments)
     if "approach" not in names:
         raise InputError("--segments must include the approach: the hereditary integral "
                          "starts from the material at rest before contact")
-    if "retract" in names:
-        raise InputError("the retract segment (Ting's rule, a shrinking contact) is not in the "
-                         "viscoelastic fit yet; fit --segments approach,hold")
     return names
 
 
@@ -217,7 +214,7 @@ def prepare_cycle(trace: IndentationTrace, tip: Tip | None = None, *,
         The indenter (default ``trace.tip``); its law must be a power law F = C·E*·d^m.
     segments
         Names or a comma-separated string of :data:`~palpbayes.trace.SEGMENTS`; must include
-        the approach; ``retract`` is refused (Ting's rule is not in the fit yet).
+        the approach.
     max_points
         Most block means kept (>= 50).
 

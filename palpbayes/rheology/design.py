@@ -38,8 +38,8 @@ which takes the interpolation's error from O(h²) to O(h³) near
 the onset of a paraboloid or cone; and the step where the contact starts rises from the
 crossing of d = 0 (linear in d), not from the step's start (:func:`onset_correction`; without
 it a flat punch's kink would leak ~1e-3 of the peak force into the power law's singular
-kernel).  Ting's rule for a shrinking contact is not in the columns: the retract segment is
-not fitted this way.
+kernel).  Ting's rule for a shrinking contact (the retract) has columns of its own, in
+:mod:`~palpbayes.rheology.ting`.
 """
 
 from __future__ import annotations

@@ -10,7 +10,8 @@
 * flags, never silent: alpha at a bound of its prior; tau outside the recorded time scales
   (step to duration) or faster than one step; a surface at its prior bound; other basins of
   the surface × theta density; a contact that shrinks during the hold (Lee–Radok overstates
-  the relaxation there; Ting's rule is not in the fit yet); a poor importance sample.
+  the relaxation there; Ting's rule is applied on the retract only); a poor importance
+  sample.
 
 Moduli are reduced moduli E* [Pa] as everywhere in palpbayes; give ``nu`` to have Young's
 moduli E = E*(1 − nu²) in the table too.
@@ -36,6 +37,7 @@ from .compression import PAPER_COMPRESSION_SPEED, compression_moduli
 from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
 from .design import lee_radok_columns
 from .posterior import ALPHA_MAX, PHI_BOUNDS, RHEOLOGIES, GridPosterior, grid_posterior
+from .ting import RETRACT, RetractDesign, with_retract
 
 __all__ = ["RheologyFit", "fit_rheology", "curve_draws", "PARAMETERS", "SHRINK_FLAG", "MIN_ESS",
            "THIN_FLAG"]
@@ -206,12 +208,16 @@ def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int
     idx = curve_draws(len(draws["z_surf"]), n)
     k = idx.size
     win = data.windows()
+    ret = data.segment == RETRACT
+    design = (RetractDesign(data.edges, data.z_edges, data.sample_time[ret], data.m, t0)
+              if rheology == "power-law" and ret.any() else None)
     out = np.empty((k, data.n_points))
     for r, i in enumerate(idx):
         z = draws["z_surf"][i:i + 1]
         if rheology == "power-law":
-            f = draws["E0"][i] * lee_radok_columns(win, z, data.z_edges, data.m, "power-law",
-                                                   float(draws["alpha"][i]), t0)[0]
+            alpha = float(draws["alpha"][i])
+            f = draws["E0"][i] * with_retract(data, lee_radok_columns(
+                win, z, data.z_edges, data.m, "power-law", alpha, t0), z, alpha, t0, design)[0]
         else:
             f = (draws["E_inf"][i] * lee_radok_columns(win, z, data.z_edges, data.m, None)[0]
                  + draws["E1"][i] * lee_radok_columns(win, z, data.z_edges, data.m,
@@ -268,7 +274,7 @@ def _flags(fit: RheologyFit) -> list[str]:
         if loss > SHRINK_FLAG:
             out.append(f"the contact shrinks by {100 * loss:.1f} % of the depth during the hold "
                        "(the tip backs out as the force relaxes): Lee–Radok overstates the "
-                       "relaxation there; Ting's rule is not in the fit yet")
+                       "relaxation there (Ting's rule is applied on the retract only)")
     thickness = data.trace.thickness
     if thickness is not None:
         depth = float(np.median(d["z_surf"]) - data.z.min())
@@ -300,7 +306,9 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
     tip
         Indenter (default ``trace.tip``), a power law F = C·E*·d^m.
     segments
-        Fitted segments (default approach and hold; retract is refused for now).
+        Fitted segments (default approach and hold).  The retract (Ting's rule,
+        :mod:`~palpbayes.rheology.ting`) is fitted with the power law only: the standard
+        linear solid's t1 depends on E1*/E_inf*, which the collapsed grid cannot integrate.
     t0
         [s] Reference time of the power law (E0* is the modulus at t0).
     nu
@@ -326,6 +334,10 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
         raise InputError(f"n_draws = {n_draws!r} must be a whole number >= 100")
     gen = np.random.default_rng(rng)
     data = prepare_cycle(trace, tip, segments=segments, max_points=max_points)
+    if rheology == "sls" and "retract" in data.segments:
+        raise InputError("the retract is fitted with the power law only (Ting's t1 depends "
+                         "on E1*/E_inf* under the SLS, which the collapsed grid cannot "
+                         "integrate); fit the SLS with --segments approach,hold")
     grid = grid_posterior(data, rheology, t0=t0)
     draws = grid.draws(gen, int(n_draws))
     curves = _force_curves(data, rheology, draws, t0, _BAND_DRAWS)

@@ -1,8 +1,9 @@
 """Collapsed posterior of a viscoelastic fit on a (surface × alpha or tau) grid.
 
 Model: block means F_i = β·X_i(z_s, θ) + F0 + e_i, with X the Lee–Radok columns of
-:mod:`~palpbayes.rheology.design` (power law: β = E0*, θ = alpha; standard linear solid:
-β = (E_inf*, E1*), θ = tau) and e stationary AR(1) Gaussian noise (lag-one correlation phi).
+:mod:`~palpbayes.rheology.design` (power law: β = E0*, θ = alpha, and Ting's columns on the
+retract, :mod:`~palpbayes.rheology.ting`; standard linear solid: β = (E_inf*, E1*),
+θ = tau) and e stationary AR(1) Gaussian noise (lag-one correlation phi).
 Given (z_s, θ, phi) the mean is linear in β and F0, so they and the noise scale integrate out
 in closed form, exactly as the elastic exact engine does (:mod:`palpbayes.bayes.exact`,
 :func:`palpbayes.bayes.conjugate.node_posterior`: Jeffreys prior on the innovation sd, the
@@ -37,6 +38,7 @@ from ..bayes.exact import cell_widths
 from ..errors import FitError, InputError
 from .cycle import CycleData
 from .design import lee_radok_columns
+from .ting import RETRACT, RetractDesign, with_retract
 
 __all__ = ["RHEOLOGIES", "GridPosterior", "grid_posterior", "NodeEvaluator", "ALPHA_MAX",
            "KEEP", "FINE", "SPAN_SD", "COARSE_THETA", "COARSE_Z", "PHI_BOUNDS"]
@@ -176,12 +178,18 @@ class NodeEvaluator:
         self.centers = np.zeros(1)
         self.phi = np.linspace(*PHI_BOUNDS, PHI_NODES)
         self.n = 0
+        ret = data.segment == RETRACT
+        self.retract = (RetractDesign(data.edges, data.z_edges, data.sample_time[ret], data.m,
+                                      t0) if rheology == "power-law" and ret.any() else None)
 
     def columns(self, theta: float, z: np.ndarray) -> np.ndarray:
         """X (G, N, q): [modulus column, 1, (second modulus), y] for surfaces ``z``."""
         d = self.data
         kind = "power-law" if self.rheology == "power-law" else "exponential"
-        b = d.C * lee_radok_columns(self.windows, z, d.z_edges, d.m, kind, theta, self.t0)
+        b = lee_radok_columns(self.windows, z, d.z_edges, d.m, kind, theta, self.t0)
+        if self.rheology == "power-law":  # Ting's rule on the retract (the SLS refuses one)
+            b = with_retract(d, b, z, theta, self.t0, self.retract)
+        b = d.C * b
         G, N = b.shape
         ones, y = np.ones((G, N)), np.broadcast_to(self.y, (G, N))
         if self.rheology == "power-law":

@@ -56,6 +56,19 @@ def test_fit_rheology_writes_one_row_with_intervals_and_says_what_it_checked(
     assert again["E0_star_pa"] == row["E0_star_pa"] and again["alpha_hi"] == row["alpha_hi"]
 
 
+def test_the_retract_by_tings_rule(record_csv, tmp_path, capsys):
+    """--segments approach,hold,retract: the whole cycle, the retract by Ting's rule; the
+    truth inside the intervals and the row names its segments."""
+    out = tmp_path / "cycle"
+    assert main(["fit", str(record_csv), "--rheology", "power-law", "--segments",
+                 "approach,hold,retract", "--out", str(out), *PARA]) == 0
+    assert "model check passed" in capsys.readouterr().out
+    row = pd.read_csv(out / "rheology.csv").iloc[0]
+    assert row["segments"] == "approach,hold,retract"
+    assert row["E0_star_lo_pa"] < 80e3 < row["E0_star_hi_pa"]
+    assert row["alpha_lo"] < 0.2 < row["alpha_hi"]
+
+
 def test_two_models_and_which_one_the_record_prefers(record_csv, tmp_path, capsys):
     """A power-law record fitted by both models: the power law is preferred by PSIS-LOO, by
     many standard errors; both rows carry the comparison."""
@@ -97,7 +110,8 @@ def test_a_manifest_keeps_the_row_of_a_trace_that_cannot_be_fitted(record_csv, t
     (["--resume"], "--resume is for elastic campaigns"),
     (["--nu-range", "0.3", "0.4"], "--nu-range is for the elastic fit"),
     (["--t0", "0"], "--t0 0.0 must be a positive time"),
-    (["--segments", "approach,retract"], "retract segment"),
+    (["--rheology", "power-law,sls", "--segments", "approach,hold,retract"],
+     "with the power law only"),
     (["--compression-speed", "-5"], "--compression-speed -5.0 must be a positive"),
     (["--rheology", "maxwell"], "unknown model 'maxwell'"),
     (["--rheology", "elastic,sls"], "elastic is the other fit"),

@@ -1,0 +1,105 @@
+"""Ting's rule on the retract (palpbayes.rheology.ting): the columns against the
+simulator's hereditary force (Lee–Radok and Ting at sample level, contact/viscoelastic.py),
+t1 against its own, and the power-law fit of the whole cycle."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from palpbayes.contact.viscoelastic import PowerLawKernel, hereditary_contact
+from palpbayes.errors import InputError
+from palpbayes.paper import PAPER_TIPS
+from palpbayes.rheology import fit_rheology
+from palpbayes.rheology.cycle import prepare_cycle
+from palpbayes.rheology.ting import RetractDesign, ting_columns, ting_cutoff
+from palpbayes.sim import simulate_viscoelastic
+
+CASES = [  # tip, depth [m], alpha, hold [s], speed [mm/min], rate [Hz], tolerance / peak
+    ("paraboloid", 3e-3, 0.2, 5.0, 50, 800, 3e-4),
+    ("paraboloid", 3e-3, 0.5, 0.0, 50, 800, 3e-4),  # no hold: the corner at the deepest point
+    ("flat", 2e-3, 0.1, 3.0, 500, 800, 1e-6),
+    ("paraboloid", 3e-3, 0.05, 10.0, 5, 200, 3e-5),
+]
+
+
+@pytest.mark.parametrize("tip, depth, alpha, hold, speed, rate, tol", CASES)
+def test_columns_are_the_block_means_of_the_hereditary_force(tip, depth, alpha, hold, speed,
+                                                             rate, tol):
+    """Noise-free records (E0* 80 kPa): C·E0*·(Ting's columns) against the block means of
+    the simulator's force on every retract block (measured worst 1.2e-4, 7e-5, 2e-8 and
+    1e-5 of the peak; a block of the retract is 0.1-0.5 noise sd of the paper's sensor at
+    1e-3), and the same blocks at zero force where the tip has left."""
+    tr = simulate_viscoelastic(PowerLawKernel(80e3, alpha), PAPER_TIPS[tip], depth=depth,
+                               speed=speed / 6e4, hold_time=hold, rate=rate, z_surf=1e-4,
+                               noise_sd=0.0, rng=1)
+    data = prepare_cycle(tr, segments=tr.segment_names)
+    ret = data.segment == 2
+    col = ting_columns(data.edges, data.z_edges, data.sample_time[ret], np.array([1e-4]),
+                       data.m, alpha)[0]
+    model, truth = data.C * 80e3 * col, data.force[ret]
+    peak = data.force.max()
+    assert np.abs(model - truth).max() < tol * peak
+    gone = truth <= 1e-9 * peak
+    assert 5 < gone.sum() < ret.sum()
+    np.testing.assert_array_equal(model <= 1e-9 * peak, gone)
+
+
+def test_cutoff_is_the_simulators_t1():
+    """On a sample-level motion (knots at the samples) t1 is the simulator's wherever the
+    tip is still in contact (to 1e-7 s; measured 1.9e-8 s, the simulator's sum of
+    exponentials); where the simulator's force is zero with the tip below the surface, t1
+    lies before the contact started (the tip has left)."""
+    tr = simulate_viscoelastic(PowerLawKernel(80e3, 0.25), PAPER_TIPS["paraboloid"],
+                               depth=3e-3, speed=50 / 6e4, hold_time=2.0, rate=200.0,
+                               z_surf=1e-4, noise_sd=0.0, rng=1)
+    depth = 1e-4 - tr.z
+    ref = hereditary_contact(tr.time, depth, 1.0, 1.5, PowerLawKernel(1.0, 0.25))
+    ret = np.flatnonzero(tr.segment == 2)
+    t1, j = ting_cutoff(tr.time[ret], tr.time, tr.z, 0.25)
+    live = ref.force[ret] > 0
+    assert live.sum() > 20 and (~live).sum() > 20
+    np.testing.assert_allclose(t1[live], ref.t1[ret][live], rtol=0, atol=1e-7)
+    onset = tr.time[np.argmax(depth > 0)]  # the first sample in contact
+    gone = ~live & (depth[ret] > 0)
+    assert gone.sum() > 5 and np.all(t1[gone] < onset)
+
+
+def test_design_is_reused_for_every_surface_and_alpha():
+    """One RetractDesign evaluates any (surfaces, alpha) as the one-off function does; a
+    surface below the whole motion (never in contact) gives zero."""
+    tr = simulate_viscoelastic(PowerLawKernel(80e3, 0.2), PAPER_TIPS["paraboloid"],
+                               depth=3e-3, speed=50 / 6e4, hold_time=3.0, rate=400.0,
+                               z_surf=1e-4, noise_sd=0.0, rng=1)
+    data = prepare_cycle(tr, segments=tr.segment_names)
+    ret = data.segment == 2
+    design = RetractDesign(data.edges, data.z_edges, data.sample_time[ret], data.m)
+    z = np.array([-1.0, 0.0, 1e-4, 3e-4])
+    for alpha in (0.0, 0.2, 0.6):
+        np.testing.assert_allclose(design.columns(z, alpha), ting_columns(
+            data.edges, data.z_edges, data.sample_time[ret], z, data.m, alpha), rtol=1e-12)
+    assert not design.columns(z, 0.2)[0].any()
+
+
+def test_power_law_fit_of_the_whole_cycle():
+    """A force-distance curve without a hold (approach and retract only): the approach alone
+    does not resolve alpha (0.15), the retract does: E0*, alpha and z_surf within their
+    90 % intervals, the model check passes; the SLS refuses the retract."""
+    tr = simulate_viscoelastic(PowerLawKernel(60e3, 0.15), PAPER_TIPS["paraboloid"],
+                               depth=3e-3, speed=50 / 6e4, hold_time=0.0, rate=400.0,
+                               z_surf=2e-4, noise_sd=0.008, phi=0.3, offset=0.02, rng=7)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        whole = fit_rheology(tr, "power-law", segments="approach,retract", rng=1)
+        ramp = fit_rheology(tr, "power-law", segments="approach", rng=1)
+    tab = whole.table().set_index("parameter")
+    for name, truth in (("E0*", 60e3), ("alpha", 0.15), ("z_surf", 2e-4)):
+        assert tab.loc[name, "lo"] <= truth <= tab.loc[name, "hi"], (name, tab.loc[name])
+    assert whole.model_ok
+    w_whole, w_ramp = (np.subtract(*np.percentile(f.draws["alpha"], [95, 5]))
+                       for f in (whole, ramp))
+    assert w_whole < 0.25 * w_ramp, (w_whole, w_ramp)
+    with pytest.raises(InputError, match="power law only"):
+        fit_rheology(tr, "sls", segments="approach,retract")
