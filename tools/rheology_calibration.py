@@ -16,7 +16,10 @@ or 500 mm/min, a 5–15 s hold, AR(1) sensor noise of 8 mN with lag-one correlat
 offset of ±50 mN, the surface anywhere in ±1 mm; power law E0* 30–150 kPa, alpha 0.05–0.4;
 SLS E_inf* 20–100 kPa, E1* 10–100 kPa, tau 0.3–5 s (log-uniform).
 
-    python tools/rheology_calibration.py [--n 100] [--workers 2] [--csv out.csv]
+    python tools/rheology_calibration.py [--n 100] [--workers 2] [--csv out.csv] [--retract]
+
+``--retract`` also fits the power-law records over the whole cycle, the retract by Ting's
+rule (rows labelled "power-law, with retract"; no model choice or elastic fit for those).
 
 The slow suite runs this (``tests/statistical/test_rheology_calibration.py``).
 """
@@ -73,11 +76,40 @@ def record(model: str, i: int):
     return trace, truth, tip_name
 
 
+#: Label of the power-law records fitted over the whole cycle (the retract by Ting's rule).
+WHOLE = "power-law, with retract"
+
+
+def fit_whole(i: int) -> list[dict]:
+    """The ``i``-th power-law record fitted over approach, hold and retract: its rows."""
+    trace, truth, tip_name = record("power-law", i)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = fit_rheology(trace, "power-law", segments="approach,hold,retract", rng=i)
+    return _rows(WHOLE, i, tip_name, truth, fit, "power-law",
+                 {"choice": "", "elastic_rate_flag": float("nan")})
+
+
+def _rows(label, i, tip_name, truth, fit, model, per_record) -> list[dict]:
+    rows = []
+    for name in PARAMETERS[model]:
+        d = fit.draws[name]
+        lo, med, hi = np.percentile(d, [5.0, 50.0, 95.0])
+        rows.append({"model": label, "index": i, "tip": tip_name, "parameter": name,
+                     "truth": truth[name], "median": med, "sd": float(np.std(d)), "lo": lo,
+                     "hi": hi, "ppc_passed": bool(fit.ppc.passed),
+                     "model_ok": fit.model_ok, "block": fit.data.block,
+                     "seconds": fit.seconds, **per_record})
+    return rows
+
+
 def fit_one(job: tuple[str, int]) -> list[dict]:
     """One record's rows: per parameter, the truth, median, sd and 90 % interval; per record,
     the model PSIS-LOO prefers (``"none"`` within two se) and whether the elastic fit's rate
     check fails materially."""
     model, i = job
+    if model == WHOLE:
+        return fit_whole(i)
     trace, truth, tip_name = record(model, i)
     other = "sls" if model == "power-law" else "power-law"
     with warnings.catch_warnings():
@@ -90,20 +122,12 @@ def fit_one(job: tuple[str, int]) -> list[dict]:
     rate = next((c for c in elastic.checks if c.name == "rate"), None)
     per_record = {"choice": preferred.iloc[0] if len(preferred) else "none",
                   "elastic_rate_flag": rate is not None and material(rate)}
-    rows = []
-    for name in PARAMETERS[model]:
-        d = fit.draws[name]
-        lo, med, hi = np.percentile(d, [5.0, 50.0, 95.0])
-        rows.append({"model": model, "index": i, "tip": tip_name, "parameter": name,
-                     "truth": truth[name], "median": med, "sd": float(np.std(d)), "lo": lo,
-                     "hi": hi, "ppc_passed": bool(fit.ppc.passed),
-                     "model_ok": fit.model_ok, "block": fit.data.block,
-                     "seconds": fit.seconds, **per_record})
-    return rows
+    return _rows(model, i, tip_name, truth, fit, model, per_record)
 
 
 def run(n: int, workers: int, models=tuple(PARAMETERS)) -> pd.DataFrame:
-    """Fit ``n`` records of each model on ``workers`` processes; one row per parameter."""
+    """Fit ``n`` records of each model on ``workers`` processes; one row per parameter
+    (``models`` may include :data:`WHOLE`)."""
     jobs = [(m, i) for m in models for i in range(n)]
     if workers > 1:
         with ProcessPoolExecutor(workers) as pool:
@@ -121,10 +145,12 @@ def table(df: pd.DataFrame) -> pd.DataFrame:
     (``choice_true``), the other (``choice_wrong``), and of elastic fits flagged rate
     dependent (``elastic_flagged``)."""
     z = (df["truth"] - df["median"]) / df["sd"]
+    df = df.assign(choice=df["choice"].fillna(""))  # "" (NaN once read back): not compared
     df = df.assign(covered=(df["lo"] <= df["truth"]) & (df["truth"] <= df["hi"]), z=z,
                    err_pct=100 * ((df["median"] - df["truth"]) / df["truth"]).abs(),
-                   choice_true=df["choice"] == df["model"],
-                   choice_wrong=(df["choice"] != "none") & (df["choice"] != df["model"]))
+                   choice_true=(df["choice"] == df["model"]).where(df["choice"] != ""),
+                   choice_wrong=((df["choice"] != "none") & (df["choice"] != df["model"])
+                                 ).where(df["choice"] != ""))
     g = df.groupby(["model", "parameter"], sort=False)
     return pd.DataFrame({"n": g.size(), "coverage90": g["covered"].mean(),
                          "z_mean": g["z"].mean(), "z_sd": g["z"].std(),
@@ -142,8 +168,10 @@ def main(argv=None) -> None:
     ap.add_argument("--n", type=int, default=100, help="records per model")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--csv", help="write the per-record rows here")
+    ap.add_argument("--retract", action="store_true",
+                    help="also fit the power-law records over the whole cycle (Ting's rule)")
     a = ap.parse_args(argv)
-    df = run(a.n, a.workers)
+    df = run(a.n, a.workers, tuple(PARAMETERS) + ((WHOLE,) if a.retract else ()))
     if a.csv:
         df.to_csv(a.csv, index=False)
     with pd.option_context("display.width", 120):

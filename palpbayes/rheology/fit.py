@@ -33,6 +33,7 @@ from ..errors import InputError
 from ..groundtruth import DEFAULT_STRAIN_WINDOW
 from ..intervals import LEVEL, central_band
 from ..trace import IndentationTrace
+from ..units import format_force
 from .compression import PAPER_COMPRESSION_SPEED, compression_moduli
 from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
 from .design import lee_radok_columns
@@ -40,7 +41,7 @@ from .posterior import ALPHA_MAX, PHI_BOUNDS, RHEOLOGIES, GridPosterior, grid_po
 from .ting import RETRACT, RetractDesign, with_retract
 
 __all__ = ["RheologyFit", "fit_rheology", "curve_draws", "PARAMETERS", "SHRINK_FLAG", "MIN_ESS",
-           "THIN_FLAG"]
+           "THIN_FLAG", "DRAG_N_SE"]
 
 #: Parameters of each rheology in table order: (name, unit, is a modulus).
 PARAMETERS = {
@@ -55,6 +56,9 @@ SHRINK_FLAG = 0.02
 THIN_FLAG = 0.05
 #: Smallest effective importance sample before the draws are flagged.
 MIN_ESS = 400
+#: Standard errors by which the approach's and the retract's out-of-contact force must differ
+#: to be flagged (viscous drag, drift).
+DRAG_N_SE = 5.0
 #: Draws used for the force band and the posterior-predictive check.
 _BAND_DRAWS = 100
 
@@ -226,9 +230,47 @@ def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int
     return out
 
 
+def _baseline_gap(fit: RheologyFit) -> tuple[float, float, float] | None:
+    """Approach minus retract force out of contact [N] at the middle of the heights both
+    cover above the surface (a line in z fitted to each), its standard error [N] (from each
+    line's residuals, with their AR(1) long-run factor) and the mean tip speed there [m/s];
+    None without enough of both."""
+    data, d = fit.data, fit.draws
+    zs = float(np.median(d["z_surf"]))
+    above = data.z > zs + 0.05 * (data.z_hi - zs)
+    a, r = above & (data.segment == 0), above & (data.segment == RETRACT)
+    if a.sum() < 5 or r.sum() < 5:
+        return None
+    lo, hi = max(data.z[a].min(), data.z[r].min()), min(data.z[a].max(), data.z[r].max())
+    a, r = a & (data.z >= lo) & (data.z <= hi), r & (data.z >= lo) & (data.z <= hi)
+    if a.sum() < 5 or r.sum() < 5 or not hi > lo:
+        return None
+    mid, var = 0.5 * (lo + hi), 0.0
+    values = []
+    for sel in (a, r):  # each side's line, its value at the middle and its variance
+        coef = np.polyfit(data.z[sel], data.force[sel], 1)
+        res = data.force[sel] - np.polyval(coef, data.z[sel])
+        phi = float(np.clip(np.corrcoef(res[1:], res[:-1])[0, 1], 0.0, 0.9))
+        values.append(float(np.polyval(coef, mid)))
+        zz = data.z[sel]
+        lever = 1.0 / zz.size + (mid - zz.mean()) ** 2 / np.sum((zz - zz.mean()) ** 2)
+        var += res.var(ddof=2) * (1 + phi) / (1 - phi) * lever
+    gap, se = values[0] - values[1], float(np.sqrt(var))
+    speed = float(np.mean(np.abs(np.diff(data.z[a])) / np.diff(data.time[a])))
+    return gap, se, speed
+
+
 def _flags(fit: RheologyFit) -> list[str]:
     d, data, grid = fit.draws, fit.data, fit.grid
     out = []
+    gap = _baseline_gap(fit) if "retract" in data.segments else None
+    if gap is not None and abs(gap[0]) > DRAG_N_SE * gap[1]:
+        g, _, v = gap
+        out.append(f"out of contact the approach's force lies {format_force(g)} "
+                   f"{'above' if g > 0 else 'below'} the retract's: viscous drag on the "
+                   f"probe (b = {g / (2 * v):.3g} N·s/m at {v * 1e6:.3g} µm/s) or a drifting "
+                   "sensor; the fit reads that gap as relaxation (drag is not modelled yet: "
+                   "fit without the retract, or subtract b·dz/dt)")
     if fit.rheology == "power-law":
         a = d["alpha"]
         if np.mean(a < 0.01) > 0.05:
