@@ -385,6 +385,7 @@ def _run_rheology(args: argparse.Namespace) -> int:
         total = len(traces)
     table = fit_traces(traces, args.rheology, out, segments=segments, t0=args.t0, nu=nu,
                        seed=args.seed, compression_speed=args.compression_speed / 6e4,
+                       drag={"auto": None, "on": True, "off": False}[args.drag],
                        progress=args.progress, total=total)
     print_rheology(table)
     print(f"wrote {out / RHEOLOGY_TABLE}")

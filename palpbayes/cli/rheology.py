@@ -33,7 +33,8 @@ ELASTIC_ONLY = {
     "model_form": "--model-form", "strict": "--strict", "max_steps": "--max-steps",
     "workers": "--workers"}
 #: Options only the viscoelastic fit uses.
-VISCO_ONLY = {"segments": "--segments", "t0": "--t0", "compression_speed": "--compression-speed"}
+VISCO_ONLY = {"segments": "--segments", "t0": "--t0", "compression_speed": "--compression-speed",
+              "drag": "--drag"}
 
 
 def given_options(args: argparse.Namespace, options: dict[str, str]) -> list[str]:
@@ -73,6 +74,11 @@ def add_rheology_options(p: argparse.ArgumentParser) -> None:
                         "gets them from the motion)")
     v.add_argument("--t0", type=float, default=1.0, metavar="S",
                    help="reference time of the power law [s] (E0* is E*(t0); default 1)")
+    v.add_argument("--drag", choices=("auto", "on", "off"), default="auto",
+                   help="fit a viscous drag on the probe, F = b·(-dz/dt) (b in N·s/m, the "
+                        "hydrodynamic force on an AFM cantilever in liquid): auto (default) "
+                        "fits it when the retract is fitted, whose out-of-contact force tells "
+                        "it from the offset")
     v.add_argument("--compression-speed", type=float, default=50.0, metavar="MM_PER_MIN",
                    help="cross-head speed [mm/min] of the compression test the fit is set "
                         "beside: with --nu and the thickness, rheology.csv gets the modulus "
@@ -139,13 +145,19 @@ def print_rheology(table) -> None:
             print(f"  {trace_id}: {_choice_line(rows)}")
 
 
+#: Column suffix -> unit printed on the console.
+_SUFFIXES = (("_n_s_per_m", " N·s/m"), ("_pa", " Pa"), ("_s", " s"))
+
+
 def _rheology_line(r) -> str:
     names = ("E0_star_pa", "alpha") if r["rheology"] == "power-law" else (
         "E_inf_star_pa", "E1_star_pa", "tau_s")
+    if np.isfinite(r.get("drag_n_s_per_m", np.nan)):
+        names += ("drag_n_s_per_m",)
     parts = []
     for c in names:
-        unit = " Pa" if c.endswith("_pa") else (" s" if c.endswith("_s") else "")
-        stem = c.removesuffix("_pa").removesuffix("_s")
+        unit, stem = next(((u, c.removesuffix(s)) for s, u in _SUFFIXES if c.endswith(s)),
+                          ("", c))
         lo, hi = (r[f"{stem}_{p}{c[len(stem):]}"] for p in ("lo", "hi"))
         parts.append(f"{stem.replace('_star', '*')} {r[c]:.4g} [{lo:.4g}, {hi:.4g}]{unit}")
     if np.isfinite(r.get("E_compression_pa", np.nan)):

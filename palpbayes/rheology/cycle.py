@@ -100,6 +100,13 @@ class CycleData:
         return Windows(self.edges, self.window[:, 0], self.window[:, 1], self.sample_time)
 
     @property
+    def speed(self) -> np.ndarray:
+        """[m/s] Downward tip speed −dz/dt averaged over every block's window (exact for the
+        model's piecewise-linear motion): the column of a viscous drag F = b·(−dz/dt)."""
+        lo, hi = self.window[:, 0], self.window[:, 1]
+        return -(self.z_edges[hi] - self.z_edges[lo]) / (self.edges[hi] - self.edges[lo])
+
+    @property
     def dt_min(self) -> float:
         """[s] Shortest step between block means."""
         return float(np.diff(self.time).min())

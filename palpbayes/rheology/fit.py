@@ -7,6 +7,9 @@
 * a posterior-predictive check of the residuals binned in *time* (contact bins from the
   surface to the end of the record; :func:`palpbayes.checks.posterior_predictive_check`,
   Gelman, Meng & Stern 1996), the same test as the elastic fit's;
+* a viscous drag on the probe, b·(−dz/dt), fitted with the retract by default (its out-of-
+  contact force then shows it; :mod:`~palpbayes.rheology.posterior`), and when it is not
+  fitted, a gap between the approach's and the retract's out-of-contact force flagged;
 * flags, never silent: alpha at a bound of its prior; tau outside the recorded time scales
   (step to duration) or faster than one step; a surface at its prior bound; other basins of
   the surface × theta density; a contact that shrinks during the hold (Lee–Radok overstates
@@ -50,6 +53,8 @@ PARAMETERS = {
 }
 _COMMON = (("z_surf", "m", False), ("offset", "N", False), ("sigma", "N", False),
            ("phi", "-", False))
+#: The drag row of a fit with a viscous drag term.
+_DRAG = (("drag", "N·s/m", False),)
 #: Largest relative loss of depth during the hold before the shrinking contact is flagged.
 SHRINK_FLAG = 0.02
 #: Depth / specimen thickness above which the half-space assumption is flagged.
@@ -78,7 +83,7 @@ class RheologyFit:
         The collapsed posterior on its grid.
     draws
         Joint posterior draws (moduli E* [Pa], alpha or tau [s], z_surf [m], offset [N], sigma
-        [N] of a block mean, phi).
+        [N] of a block mean, phi; drag [N·s/m] with a drag term).
     ppc
         Posterior-predictive check (residuals binned in time).
     flags
@@ -117,7 +122,8 @@ class RheologyFit:
         """One row per parameter: ``parameter``, ``unit``, ``median``, ``lo``, ``hi`` (the
         central ``level`` interval) and, for moduli with ``nu`` given, ``E`` rows too."""
         rows = []
-        for name, unit, modulus in PARAMETERS[self.rheology] + _COMMON:
+        for name, unit, modulus in (PARAMETERS[self.rheology] + _COMMON
+                                    + (_DRAG if "drag" in self.draws else ())):
             lo, med, hi = central_band(self.draws[name], level)
             rows.append({"parameter": name + ("*" if modulus else ""), "unit": unit,
                          "median": med, "lo": lo, "hi": hi})
@@ -227,6 +233,8 @@ def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int
                  + draws["E1"][i] * lee_radok_columns(win, z, data.z_edges, data.m,
                                                       "exponential", float(draws["tau"][i]))[0])
         out[r] = data.C * f + draws["offset"][i]
+        if "drag" in draws:
+            out[r] += draws["drag"][i] * data.speed
     return out
 
 
@@ -263,14 +271,14 @@ def _baseline_gap(fit: RheologyFit) -> tuple[float, float, float] | None:
 def _flags(fit: RheologyFit) -> list[str]:
     d, data, grid = fit.draws, fit.data, fit.grid
     out = []
-    gap = _baseline_gap(fit) if "retract" in data.segments else None
+    gap = _baseline_gap(fit) if "retract" in data.segments and not grid.drag else None
     if gap is not None and abs(gap[0]) > DRAG_N_SE * gap[1]:
         g, _, v = gap
         out.append(f"out of contact the approach's force lies {format_force(g)} "
                    f"{'above' if g > 0 else 'below'} the retract's: viscous drag on the "
                    f"probe (b = {g / (2 * v):.3g} N·s/m at {v * 1e6:.3g} µm/s) or a drifting "
-                   "sensor; the fit reads that gap as relaxation (drag is not modelled yet: "
-                   "fit without the retract, or subtract b·dz/dt)")
+                   "sensor; the fit reads that gap as relaxation (fit the drag: drag=True, "
+                   "--drag on)")
     if fit.rheology == "power-law":
         a = d["alpha"]
         if np.mean(a < 0.01) > 0.05:
@@ -332,7 +340,7 @@ def _flags(fit: RheologyFit) -> list[str]:
 
 def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
                  tip: Tip | None = None, segments=DEFAULT_SEGMENTS, t0: float = 1.0,
-                 nu: float | None = None, n_draws: int = 4000,
+                 nu: float | None = None, drag: bool | None = None, n_draws: int = 4000,
                  max_points: int = MAX_POINTS,
                  rng: np.random.Generator | int | None = 0) -> RheologyFit:
     """Posterior of a relaxation modulus, the surface, offset and noise from one cycle.
@@ -355,6 +363,10 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
         [s] Reference time of the power law (E0* is the modulus at t0).
     nu
         Poisson's ratio, only to add Young's moduli to the table.
+    drag
+        Fit a viscous drag on the probe, F = b·(−dz/dt) [N·s/m] (:mod:`~palpbayes.rheology.
+        posterior`); None (default): when the retract is fitted, whose out-of-contact force
+        tells the drag from the offset.
     n_draws
         Posterior draws kept.
     max_points
@@ -380,7 +392,9 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
         raise InputError("the retract is fitted with the power law only (Ting's t1 depends "
                          "on E1*/E_inf* under the SLS, which the collapsed grid cannot "
                          "integrate); fit the SLS with --segments approach,hold")
-    grid = grid_posterior(data, rheology, t0=t0)
+    if drag is None:
+        drag = "retract" in data.segments
+    grid = grid_posterior(data, rheology, t0=t0, drag=bool(drag))
     draws = grid.draws(gen, int(n_draws))
     curves = _force_curves(data, rheology, draws, t0, _BAND_DRAWS)
     sub = curve_draws(n_draws, _BAND_DRAWS)

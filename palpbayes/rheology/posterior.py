@@ -1,13 +1,19 @@
 """Collapsed posterior of a viscoelastic fit on a (surface × alpha or tau) grid.
 
-Model: block means F_i = β·X_i(z_s, θ) + F0 + e_i, with X the Lee–Radok columns of
+Model: block means F_i = β·X_i(z_s, θ) + F0 [+ b·v_i] + e_i, with X the Lee–Radok columns of
 :mod:`~palpbayes.rheology.design` (power law: β = E0*, θ = alpha, and Ting's columns on the
 retract, :mod:`~palpbayes.rheology.ting`; standard linear solid: β = (E_inf*, E1*),
-θ = tau) and e stationary AR(1) Gaussian noise (lag-one correlation phi).
-Given (z_s, θ, phi) the mean is linear in β and F0, so they and the noise scale integrate out
+θ = tau) and e stationary AR(1) Gaussian noise (lag-one correlation phi).  With ``drag``, b
+[N·s/m] is a viscous drag on the probe and v_i = −dz/dt the block's downward tip speed
+(:attr:`~palpbayes.rheology.cycle.CycleData.speed`): the hydrodynamic force on an AFM
+cantilever moving through liquid (Alcaraz et al. 2002, Langmuir 18:716; Janovjak et al. 2005,
+Biophys. J. 88:L37), which shifts the approach up and the retract down by b·v out of contact
+as in it.  It is told apart from the offset only where the speed changes out of contact (the
+retract, or a pause before the approach), so it is fitted with the retract by default.
+Given (z_s, θ, phi) the mean is linear in β, F0 and b, so they and the noise scale integrate out
 in closed form, exactly as the elastic exact engine does (:mod:`palpbayes.bayes.exact`,
 :func:`palpbayes.bayes.conjugate.node_posterior`: Jeffreys prior on the innovation sd, the
-offset prior N(baseline level, (100·sigma_c)²) as a pseudo-observation, flat on β).  What is
+offset prior N(baseline level, (100·sigma_c)²) as a pseudo-observation, flat on β and b).  What is
 left is a 3-D density on (z_s, θ, phi), integrated on a grid:
 
 1. a coarse grid (:data:`COARSE_THETA` × :data:`COARSE_Z`) over the whole prior finds the
@@ -41,7 +47,7 @@ from .design import lee_radok_columns
 from .ting import RETRACT, RetractDesign, with_retract
 
 __all__ = ["RHEOLOGIES", "GridPosterior", "grid_posterior", "NodeEvaluator", "ALPHA_MAX",
-           "KEEP", "FINE", "SPAN_SD", "COARSE_THETA", "COARSE_Z", "PHI_BOUNDS"]
+           "KEEP", "FINE", "SPAN_SD", "COARSE_THETA", "COARSE_Z", "PHI_BOUNDS", "NUISANCE"]
 
 #: Relaxation models the grid engine fits, and the name of their grid parameter.
 RHEOLOGIES = {"power-law": "alpha", "sls": "tau"}
@@ -64,6 +70,8 @@ PHI_NODES = 25
 OFFSET_SD = 100.0
 #: Proposals per returned draw (importance resampling of the moduli's priors).
 PROPOSALS = 8
+#: Linear coefficients that are not moduli (no positivity, no log-uniform prior).
+NUISANCE = ("offset", "drag")
 
 
 @dataclass
@@ -75,7 +83,8 @@ class GridPosterior:
     ``phi`` (H,);
     ``log_mass`` (Gt, Gz, H) normalised log mass of each node's cell; ``post`` the conditional
     posterior of β = (modulus columns…, offset) at every node (arrays (Gt·Gz, H, …));
-    ``names`` of β; ``other_basins`` [(z_s, θ, log density below the best)] of the coarse grid.
+    ``names`` of β (moduli, ``"offset"`` and, with a drag term, ``"drag"``);
+    ``other_basins`` [(z_s, θ, log density below the best)] of the coarse grid.
     """
 
     rheology: str
@@ -96,6 +105,11 @@ class GridPosterior:
     @property
     def theta_name(self) -> str:
         return RHEOLOGIES[self.rheology]
+
+    @property
+    def drag(self) -> bool:
+        """The model has a viscous drag term b·(−dz/dt)."""
+        return "drag" in self.names
 
     def marginal(self, axis: str) -> tuple[np.ndarray, np.ndarray]:
         """Nodes and normalised cell masses of ``"z"`` (all nodes, sorted), ``"theta"`` or
@@ -136,7 +150,7 @@ class GridPosterior:
         out["offset"] = out.pop("offset") + self.data.f0_center
         logw = np.zeros(k)
         for name in self.names:
-            if name == "offset":
+            if name in NUISANCE:
                 continue
             ok = out[name] > 0
             logw = np.where(ok, logw - (np.log(np.where(ok, out[name], 1.0))
@@ -168,10 +182,13 @@ def _theta_bounds(rheology: str, data: CycleData) -> tuple[float, float]:
 
 
 class NodeEvaluator:
-    """log p(z_s, θ, phi | data) on (θ nodes × z nodes × phi), β and noise integrated."""
+    """log p(z_s, θ, phi | data) on (θ nodes × z nodes × phi), β and noise integrated;
+    ``drag`` adds the column of a viscous drag (module docstring)."""
 
-    def __init__(self, data: CycleData, rheology: str, t0: float):
-        self.data, self.rheology, self.t0 = data, rheology, t0
+    def __init__(self, data: CycleData, rheology: str, t0: float, drag: bool = False):
+        self.data, self.rheology, self.t0, self.drag = data, rheology, t0, bool(drag)
+        self.names = (("E0", "offset") if rheology == "power-law" else
+                      ("E_inf", "offset", "E1")) + (("drag",) if drag else ())
         self.windows = data.windows()
         self.y = data.force - data.f0_center
         self.weights = np.array([1.0 / OFFSET_SD**2])
@@ -183,7 +200,8 @@ class NodeEvaluator:
                                       t0) if rheology == "power-law" and ret.any() else None)
 
     def columns(self, theta: float, z: np.ndarray) -> np.ndarray:
-        """X (G, N, q): [modulus column, 1, (second modulus), y] for surfaces ``z``."""
+        """X (G, N, q): one column per name of :attr:`names` (modulus, 1, second modulus,
+        speed) and y last, for surfaces ``z``."""
         d = self.data
         kind = "power-law" if self.rheology == "power-law" else "exponential"
         b = lee_radok_columns(self.windows, z, d.z_edges, d.m, kind, theta, self.t0)
@@ -192,10 +210,11 @@ class NodeEvaluator:
         b = d.C * b
         G, N = b.shape
         ones, y = np.ones((G, N)), np.broadcast_to(self.y, (G, N))
+        extra = [np.broadcast_to(d.speed, (G, N))] if self.drag else []
         if self.rheology == "power-law":
-            return np.stack([b, ones, y], axis=-1)
+            return np.stack([b, ones, *extra, y], axis=-1)
         inf = d.C * lee_radok_columns(self.windows, z, d.z_edges, d.m, None)
-        return np.stack([inf, ones, b, y], axis=-1)
+        return np.stack([inf, ones, b, *extra, y], axis=-1)
 
     def gram(self, thetas: np.ndarray, z: np.ndarray) -> Gram:
         n_contact = np.count_nonzero(self.data.z[None, :] < z[:, None], axis=1)
@@ -290,8 +309,9 @@ def _separate_basins(ev: NodeEvaluator, from_c, basins: list, best: tuple[float,
 
 
 def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 1.0,
-                   max_iterations: int = 10) -> GridPosterior:
-    """The collapsed posterior of ``data`` under ``rheology`` (module docstring).
+                   drag: bool = False, max_iterations: int = 10) -> GridPosterior:
+    """The collapsed posterior of ``data`` under ``rheology`` (module docstring); ``drag``
+    adds a viscous drag b·(−dz/dt) to the model.
 
     Raises
     ------
@@ -305,7 +325,7 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
                          f"{', '.join(RHEOLOGIES)}")
     if not (math.isfinite(t0) and t0 > 0):
         raise InputError(f"t0 = {t0!r} s must be positive")
-    ev = NodeEvaluator(data, rheology, t0)
+    ev = NodeEvaluator(data, rheology, t0, drag)
     lo, hi = _theta_bounds(rheology, data)
     log_theta = rheology == "sls"
     to_c = (lambda v: np.log(v)) if log_theta else (lambda v: np.asarray(v, float))  # noqa
@@ -351,7 +371,7 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
     log_cell = (post.logp.reshape(FINE, FINE, -1) + _log_cells(gt, gz)[:, :, None]
                 + np.log(cell_widths(ev.phi))[None, None, :])
     log_mass = log_cell - logsumexp(log_cell)
-    names = ("E0", "offset") if rheology == "power-law" else ("E_inf", "offset", "E1")
+    names = ev.names
     k, l = np.unravel_index(np.argmax(lp), lp.shape)
     others = _separate_basins(ev, from_c, basins, (float(gt[k]), float(gz[k, l])),
                               float(lp.max()), step)

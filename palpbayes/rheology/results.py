@@ -33,14 +33,14 @@ __all__ = ["RHEOLOGY_TABLE", "summary_row", "fit_traces", "flag_code"]
 #: File name of the per-trace table in a results folder.
 RHEOLOGY_TABLE = "rheology.csv"
 
-_UNITS = {"Pa": "pa", "s": "s", "m": "m", "N": "n", "-": ""}
+_UNITS = {"Pa": "pa", "s": "s", "m": "m", "N": "n", "-": "", "N·s/m": "n_s_per_m"}
 #: Short code of each flag, by the words it starts with or holds.
 _CODES = (("alpha piles up at 0", "alpha_at_zero"), ("alpha piles up", "alpha_at_bound"),
           ("below one step", "tau_fast"), ("beyond the recorded", "tau_slow"),
           ("phi piles up", "phi_at_bound"), ("surface posterior reaches", "surface_at_bound"),
           ("did not settle", "grid"), ("another basin", "basin"),
           ("effective sample", "ess"), ("contact shrinks", "shrinking_contact"),
-          ("takes a half-space", "thickness"),
+          ("takes a half-space", "thickness"), ("viscous drag", "drag"),
           ("posterior-predictive", "ppc"))
 
 
@@ -105,7 +105,8 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
                rheology: str | Sequence[str], out: str | os.PathLike, *,
                segments=DEFAULT_SEGMENTS, t0: float = 1.0, nu: float | None = None,
                seed: int = 0, compression_speed: float = PAPER_COMPRESSION_SPEED,
-               progress: bool | None = None, total: int | None = None) -> pd.DataFrame:
+               drag: bool | None = None, progress: bool | None = None,
+               total: int | None = None) -> pd.DataFrame:
     """Fit every trace with :func:`~palpbayes.rheology.fit_rheology` and write
     ``out/rheology.csv`` (module docstring); returns the table.
 
@@ -130,6 +131,9 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
         Results folder (created).
     segments, t0, nu, seed, compression_speed
         As above; ``segments`` as :func:`~palpbayes.rheology.fit_rheology` takes them.
+    drag
+        Fit a viscous drag term (None: when the retract is fitted), as
+        :func:`~palpbayes.rheology.fit_rheology` takes it.
     progress, total
         A progress bar (None: only on a terminal) and its length.
 
@@ -163,7 +167,7 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
             for m in models:  # one model failing keeps the others' rows
                 try:
                     fits[m] = fit_rheology(trace, m, segments=segments, t0=t0, nu=trace_nu,
-                                           rng=seed + i)
+                                           drag=drag, rng=seed + i)
                     new.append(summary_row(trace, fits[m], compression_speed))
                 except (PalpbayesError, np.linalg.LinAlgError) as exc:
                     fits.pop(m, None)
