@@ -25,8 +25,8 @@ __all__ = ["ELASTIC_ONLY", "VISCO_ONLY", "add_rheology_options", "given_options"
 
 #: Options of the elastic fit that --rheology power-law|sls does not use (dest -> flag).
 ELASTIC_ONLY = {
-    "noise": "--noise", "noise_pp": "--noise-pp", "f_unc": "--f-unc", "baseline": "--baseline",
-    "tare": "--tare", "surface_prior": "--surface-prior", "fit_fraction": "--fit-fraction",
+    "noise": "--noise", "noise_pp": "--noise-pp", "f_unc": "--f-unc", "tare": "--tare",
+    "surface_prior": "--surface-prior", "fit_fraction": "--fit-fraction",
     "max_depth": "--max-depth", "half_space": "--half-space", "bonding": "--bonding",
     "thickness_range": "--thickness-range", "radius_tolerance": "--radius-tolerance",
     "gain_sd": "--gain-sd", "compliance_max": "--compliance-max", "engine": "--engine",
@@ -146,14 +146,14 @@ def print_rheology(table) -> None:
 
 
 #: Column suffix -> unit printed on the console.
-_SUFFIXES = (("_n_s_per_m", " N·s/m"), ("_pa", " Pa"), ("_s", " s"))
+_SUFFIXES = (("_n_s_per_m", " N·s/m"), ("_n_per_m", " N/m"), ("_pa", " Pa"), ("_s", " s"))
 
 
 def _rheology_line(r) -> str:
     names = ("E0_star_pa", "alpha") if r["rheology"] == "power-law" else (
         "E_inf_star_pa", "E1_star_pa", "tau_s")
-    if np.isfinite(r.get("drag_n_s_per_m", np.nan)):
-        names += ("drag_n_s_per_m",)
+    names += tuple(c for c in ("drag_n_s_per_m", "tilt_n_per_m")
+                   if np.isfinite(r.get(c, np.nan)))
     parts = []
     for c in names:
         unit, stem = next(((u, c.removesuffix(s)) for s, u in _SUFFIXES if c.endswith(s)),

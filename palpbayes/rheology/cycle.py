@@ -65,6 +65,9 @@ class CycleData:
     f0_center, sigma_center
         [N] Baseline level (offset prior centre) and the noise sd of one block mean implied
         by the baseline's sample noise (sd/sqrt(block)).
+    z_ref
+        [m] Mean height of the baseline samples, where ``f0_center`` applies (the reference
+        of a linear baseline F0 + F1·(z − z_ref)).
     C, m
         Prefactor [N/(Pa·m^m)] (per unit E*) and exponent of the tip's law F = C·E*·d^m.
     trace
@@ -86,6 +89,7 @@ class CycleData:
     z_hi: float
     f0_center: float
     sigma_center: float
+    z_ref: float
     C: float
     m: float
     trace: IndentationTrace
@@ -268,4 +272,5 @@ def prepare_cycle(trace: IndentationTrace, tip: Tip | None = None, *,
                      sample_time=kept.time[rows] - t[0], block=block, z_lo=z_lo,
                      z_hi=z_hi, f0_center=float(base.level),
                      sigma_center=float(sd) / math.sqrt(block) if sd > 0 else 1e-12,
+                     z_ref=float(base.z_ref) if math.isfinite(base.z_ref) else z_hi,
                      C=float(g), m=float(m), trace=kept, segments=names)

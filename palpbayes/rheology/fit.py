@@ -10,6 +10,12 @@
 * a viscous drag on the probe, b·(−dz/dt), fitted with the retract by default (its out-of-
   contact force then shows it; :mod:`~palpbayes.rheology.posterior`), and when it is not
   fitted, a gap between the approach's and the retract's out-of-contact force flagged;
+* a baseline that tilts with the height, F1·(z − z_ref), with ``baseline="linear"`` (as the
+  elastic fit's ``--baseline linear``), and when it is not fitted, a slope of the
+  out-of-contact residuals against the height flagged;
+* adhesion: the retract's force dipping below the fitted baseline where the model's contact
+  has ended (the tip pulled by the sample before it lets go), which no relaxation law has,
+  flagged;
 * flags, never silent: alpha at a bound of its prior; tau outside the recorded time scales
   (step to duration) or faster than one step; a surface at its prior bound; other basins of
   the surface × theta density; a contact that shrinks during the hold (Lee–Radok overstates
@@ -40,11 +46,12 @@ from ..units import format_force
 from .compression import PAPER_COMPRESSION_SPEED, compression_moduli
 from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
 from .design import lee_radok_columns
+from .offcontact import N_SE, adhesion_dip, baseline_tilt, drag_gap
 from .posterior import ALPHA_MAX, PHI_BOUNDS, RHEOLOGIES, GridPosterior, grid_posterior
 from .ting import RETRACT, RetractDesign, with_retract
 
 __all__ = ["RheologyFit", "fit_rheology", "curve_draws", "PARAMETERS", "SHRINK_FLAG", "MIN_ESS",
-           "THIN_FLAG", "DRAG_N_SE"]
+           "THIN_FLAG", "DRAG_N_SE", "BASELINES"]
 
 #: Parameters of each rheology in table order: (name, unit, is a modulus).
 PARAMETERS = {
@@ -53,8 +60,10 @@ PARAMETERS = {
 }
 _COMMON = (("z_surf", "m", False), ("offset", "N", False), ("sigma", "N", False),
            ("phi", "-", False))
-#: The drag row of a fit with a viscous drag term.
-_DRAG = (("drag", "N·s/m", False),)
+#: Rows of the optional baseline terms: a viscous drag and a tilted baseline.
+_EXTRA = (("drag", "N·s/m", False), ("tilt", "N/m", False))
+#: Baseline models: a constant offset, or a line in the height (``tilt``).
+BASELINES = ("constant", "linear")
 #: Largest relative loss of depth during the hold before the shrinking contact is flagged.
 SHRINK_FLAG = 0.02
 #: Depth / specimen thickness above which the half-space assumption is flagged.
@@ -63,7 +72,7 @@ THIN_FLAG = 0.05
 MIN_ESS = 400
 #: Standard errors by which the approach's and the retract's out-of-contact force must differ
 #: to be flagged (viscous drag, drift).
-DRAG_N_SE = 5.0
+DRAG_N_SE = N_SE
 #: Draws used for the force band and the posterior-predictive check.
 _BAND_DRAWS = 100
 
@@ -83,11 +92,14 @@ class RheologyFit:
         The collapsed posterior on its grid.
     draws
         Joint posterior draws (moduli E* [Pa], alpha or tau [s], z_surf [m], offset [N], sigma
-        [N] of a block mean, phi; drag [N·s/m] with a drag term).
+        [N] of a block mean, phi; drag [N·s/m] and tilt [N/m] with those terms).
     ppc
         Posterior-predictive check (residuals binned in time).
     flags
         One line each; empty when nothing is flagged.
+    offcontact
+        The flags of the force out of contact (drag gap, tilt, adhesion:
+        :mod:`~palpbayes.rheology.offcontact`), which fail the model check.
     nu
         Poisson's ratio if given (adds Young's moduli to the table).
     seconds
@@ -100,6 +112,7 @@ class RheologyFit:
     draws: dict[str, np.ndarray]
     ppc: CheckResult
     flags: list[str] = field(default_factory=list)
+    offcontact: list[str] = field(default_factory=list)
     nu: float | None = None
     seconds: float = 0.0
 
@@ -115,15 +128,16 @@ class RheologyFit:
 
     @property
     def model_ok(self) -> bool:
-        """The posterior-predictive check passes and phi is not at its bound."""
-        return bool(self.ppc.passed) and not self.phi_at_bound
+        """The posterior-predictive check passes, phi is not at its bound and the force out of
+        contact shows no drag gap, tilt or adhesion that the model leaves out."""
+        return bool(self.ppc.passed) and not self.phi_at_bound and not self.offcontact
 
     def table(self, level: float = LEVEL) -> pd.DataFrame:
         """One row per parameter: ``parameter``, ``unit``, ``median``, ``lo``, ``hi`` (the
         central ``level`` interval) and, for moduli with ``nu`` given, ``E`` rows too."""
         rows = []
-        for name, unit, modulus in (PARAMETERS[self.rheology] + _COMMON
-                                    + (_DRAG if "drag" in self.draws else ())):
+        extra = tuple(e for e in _EXTRA if e[0] in self.draws)
+        for name, unit, modulus in PARAMETERS[self.rheology] + _COMMON + extra:
             lo, med, hi = central_band(self.draws[name], level)
             rows.append({"parameter": name + ("*" if modulus else ""), "unit": unit,
                          "median": med, "lo": lo, "hi": hi})
@@ -170,10 +184,11 @@ class RheologyFit:
                          for k in self.kernels(n)])
         return _median_interval(vals, level)
 
-    def force_curves(self, n: int = _BAND_DRAWS) -> np.ndarray:
-        """[N] Model force at the block means for ``n`` draws (n, points), offset included:
-        the draws :func:`curve_draws` picks."""
-        return _force_curves(self.data, self.rheology, self.draws, self.t0, n)
+    def force_curves(self, n: int = _BAND_DRAWS, contact_only: bool = False) -> np.ndarray:
+        """[N] Model force at the block means for ``n`` draws (n, points), offset, drag and
+        tilt included (``contact_only``: the contact force alone): the draws
+        :func:`curve_draws` picks."""
+        return _force_curves(self.data, self.rheology, self.draws, self.t0, n, contact_only)
 
     def compression_modulus(self, height: float, speed: float = PAPER_COMPRESSION_SPEED,
                             strain_window=DEFAULT_STRAIN_WINDOW, level: float = LEVEL,
@@ -214,7 +229,8 @@ def curve_draws(n_total: int, n: int) -> np.ndarray:
     return np.linspace(0, n_total - 1, min(n, n_total)).round().astype(int)
 
 
-def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int) -> np.ndarray:
+def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int,
+                  contact_only: bool = False) -> np.ndarray:
     idx = curve_draws(len(draws["z_surf"]), n)
     k = idx.size
     win = data.windows()
@@ -232,46 +248,23 @@ def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int
             f = (draws["E_inf"][i] * lee_radok_columns(win, z, data.z_edges, data.m, None)[0]
                  + draws["E1"][i] * lee_radok_columns(win, z, data.z_edges, data.m,
                                                       "exponential", float(draws["tau"][i]))[0])
-        out[r] = data.C * f + draws["offset"][i]
+        out[r] = data.C * f
+        if contact_only:
+            continue
+        out[r] += draws["offset"][i]
         if "drag" in draws:
             out[r] += draws["drag"][i] * data.speed
+        if "tilt" in draws:
+            out[r] += draws["tilt"][i] * (data.z - data.z_ref)
     return out
 
 
-def _baseline_gap(fit: RheologyFit) -> tuple[float, float, float] | None:
-    """Approach minus retract force out of contact [N] at the middle of the heights both
-    cover above the surface (a line in z fitted to each), its standard error [N] (from each
-    line's residuals, with their AR(1) long-run factor) and the mean tip speed there [m/s];
-    None without enough of both."""
-    data, d = fit.data, fit.draws
-    zs = float(np.median(d["z_surf"]))
-    above = data.z > zs + 0.05 * (data.z_hi - zs)
-    a, r = above & (data.segment == 0), above & (data.segment == RETRACT)
-    if a.sum() < 5 or r.sum() < 5:
-        return None
-    lo, hi = max(data.z[a].min(), data.z[r].min()), min(data.z[a].max(), data.z[r].max())
-    a, r = a & (data.z >= lo) & (data.z <= hi), r & (data.z >= lo) & (data.z <= hi)
-    if a.sum() < 5 or r.sum() < 5 or not hi > lo:
-        return None
-    mid, var = 0.5 * (lo + hi), 0.0
-    values = []
-    for sel in (a, r):  # each side's line, its value at the middle and its variance
-        coef = np.polyfit(data.z[sel], data.force[sel], 1)
-        res = data.force[sel] - np.polyval(coef, data.z[sel])
-        phi = float(np.clip(np.corrcoef(res[1:], res[:-1])[0, 1], 0.0, 0.9))
-        values.append(float(np.polyval(coef, mid)))
-        zz = data.z[sel]
-        lever = 1.0 / zz.size + (mid - zz.mean()) ** 2 / np.sum((zz - zz.mean()) ** 2)
-        var += res.var(ddof=2) * (1 + phi) / (1 - phi) * lever
-    gap, se = values[0] - values[1], float(np.sqrt(var))
-    speed = float(np.mean(np.abs(np.diff(data.z[a])) / np.diff(data.time[a])))
-    return gap, se, speed
-
-
-def _flags(fit: RheologyFit) -> list[str]:
-    d, data, grid = fit.draws, fit.data, fit.grid
-    out = []
-    gap = _baseline_gap(fit) if "retract" in data.segments and not grid.drag else None
+def _offcontact_flags(fit: RheologyFit, residual: np.ndarray, contact: np.ndarray
+                      ) -> list[str]:
+    """Flags of the force out of contact (:mod:`~palpbayes.rheology.offcontact`)."""
+    data, grid, out = fit.data, fit.grid, []
+    zs = float(np.median(fit.draws["z_surf"]))
+    gap = drag_gap(data, zs) if "retract" in data.segments and not grid.drag else None
     if gap is not None and abs(gap[0]) > DRAG_N_SE * gap[1]:
         g, _, v = gap
         out.append(f"out of contact the approach's force lies {format_force(g)} "
@@ -279,6 +272,29 @@ def _flags(fit: RheologyFit) -> list[str]:
                    f"probe (b = {g / (2 * v):.3g} N·s/m at {v * 1e6:.3g} µm/s) or a drifting "
                    "sensor; the fit reads that gap as relaxation (fit the drag: drag=True, "
                    "--drag on)")
+    tilt = None if grid.tilt else baseline_tilt(data, residual, zs)
+    if tilt is not None:
+        f1, se, span = tilt
+        if abs(f1) > N_SE * se and abs(f1) * span > data.sigma_center:
+            out.append(f"out of contact the residuals tilt with the height: F1 = {f1:.3g} N/m "
+                       f"({f1 / se:.1f} se; {format_force(f1 * span)} over "
+                       f"{span * 1e6:.3g} µm above the surface): a tilted or drifting "
+                       "baseline (an AFM's virtual deflection, a sensor drifting) that the fit "
+                       "reads as contact force (fit it: baseline='linear', --baseline linear)")
+    dip = adhesion_dip(data, residual, contact, zs) if "retract" in data.segments else None
+    if dip is not None and dip[0] < -N_SE * dip[1]:
+        depth, se, t = dip
+        out.append(f"after the model's contact ends the retract's force dips "
+                   f"{format_force(-depth)} below the fitted baseline ({-depth / se:.1f} se, "
+                   f"at {t:.3g} s): adhesion, the sample holding the tip before it lets go, "
+                   "which Ting's rule does not model; it biases the fit of the retract (fit "
+                   "--segments approach,hold, or cut the retract at the pull-off)")
+    return out
+
+
+def _flags(fit: RheologyFit) -> list[str]:
+    d, data, grid = fit.draws, fit.data, fit.grid
+    out = list(fit.offcontact)
     if fit.rheology == "power-law":
         a = d["alpha"]
         if np.mean(a < 0.01) > 0.05:
@@ -340,7 +356,8 @@ def _flags(fit: RheologyFit) -> list[str]:
 
 def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
                  tip: Tip | None = None, segments=DEFAULT_SEGMENTS, t0: float = 1.0,
-                 nu: float | None = None, drag: bool | None = None, n_draws: int = 4000,
+                 nu: float | None = None, drag: bool | None = None,
+                 baseline: str = "constant", n_draws: int = 4000,
                  max_points: int = MAX_POINTS,
                  rng: np.random.Generator | int | None = 0) -> RheologyFit:
     """Posterior of a relaxation modulus, the surface, offset and noise from one cycle.
@@ -367,6 +384,9 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
         Fit a viscous drag on the probe, F = b·(−dz/dt) [N·s/m] (:mod:`~palpbayes.rheology.
         posterior`); None (default): when the retract is fitted, whose out-of-contact force
         tells the drag from the offset.
+    baseline
+        ``"constant"`` (an offset F0) or ``"linear"``: F0 + F1·(z − z_ref), z_ref the mean
+        height of the baseline samples (a tilted or drifting baseline; F1 [N/m] is ``tilt``).
     n_draws
         Posterior draws kept.
     max_points
@@ -384,6 +404,8 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
                          f"{', '.join(RHEOLOGIES)} (or the elastic fit)")
     if nu is not None:
         nu = check_nu(nu)
+    if baseline not in BASELINES:
+        raise InputError(f"baseline {baseline!r}: use one of {', '.join(BASELINES)}")
     if not (isinstance(n_draws, int | np.integer) and n_draws >= 100):
         raise InputError(f"n_draws = {n_draws!r} must be a whole number >= 100")
     gen = np.random.default_rng(rng)
@@ -394,16 +416,21 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
                          "integrate); fit the SLS with --segments approach,hold")
     if drag is None:
         drag = "retract" in data.segments
-    grid = grid_posterior(data, rheology, t0=t0, drag=bool(drag))
+    grid = grid_posterior(data, rheology, t0=t0, drag=bool(drag), tilt=baseline == "linear")
     draws = grid.draws(gen, int(n_draws))
     curves = _force_curves(data, rheology, draws, t0, _BAND_DRAWS)
     sub = curve_draws(n_draws, _BAND_DRAWS)
+    base = draws["offset"][sub, None] + sum(
+        draws[k][sub, None] * col for k, col in (("drag", data.speed),
+                                                  ("tilt", data.z - data.z_ref)) if k in draws)
     t_contact = float(np.median(_contact_times(data, draws["z_surf"][sub])))
     # residuals binned in time: -time as the "height", the contact time as the "surface"
     ppc = posterior_predictive_check(-data.time, data.force, curves, draws["sigma"][sub],
                                      phi=draws["phi"][sub], rng=gen, z_surf=-t_contact,
                                      n_bins=12)
     fit = RheologyFit(rheology, data, grid, draws, ppc, nu=nu)
+    fit.offcontact = _offcontact_flags(fit, data.force - np.median(curves, axis=0),
+                                       np.median(curves - base, axis=0))
     fit.flags = _flags(fit)
     fit.seconds = _time.perf_counter() - start
     return fit

@@ -154,7 +154,7 @@ def pool_power_law(fits: Sequence[RheologyFit], *, n_alpha: int = 41, n_e0: int 
     a_hi = min(ALPHA_MAX, float((med[:, 1] + SPAN_SD * sd[:, 1]).max()))
     e_lo = max(float((med[:, 0] - 2 * SPAN_SD * sd[:, 0]).min()), 1e-3 * float(med[:, 0].min()))
     e_hi = float((med[:, 0] + 2 * SPAN_SD * sd[:, 0]).max())
-    evaluators = [NodeEvaluator(f.data, "power-law", t0, f.grid.drag)  # once per trace
+    evaluators = [NodeEvaluator(f.data, "power-law", t0, f.grid.drag, f.grid.tilt)  # once each
                   for f in fits]
     for _ in range(3):  # zoom until the pooled sd spans >= 4 nodes on both axes
         alpha = np.linspace(a_lo, a_hi, n_alpha)

@@ -1,19 +1,27 @@
 """Collapsed posterior of a viscoelastic fit on a (surface × alpha or tau) grid.
 
-Model: block means F_i = β·X_i(z_s, θ) + F0 [+ b·v_i] + e_i, with X the Lee–Radok columns of
-:mod:`~palpbayes.rheology.design` (power law: β = E0*, θ = alpha, and Ting's columns on the
-retract, :mod:`~palpbayes.rheology.ting`; standard linear solid: β = (E_inf*, E1*),
-θ = tau) and e stationary AR(1) Gaussian noise (lag-one correlation phi).  With ``drag``, b
-[N·s/m] is a viscous drag on the probe and v_i = −dz/dt the block's downward tip speed
-(:attr:`~palpbayes.rheology.cycle.CycleData.speed`): the hydrodynamic force on an AFM
-cantilever moving through liquid (Alcaraz et al. 2002, Langmuir 18:716; Janovjak et al. 2005,
-Biophys. J. 88:L37), which shifts the approach up and the retract down by b·v out of contact
-as in it.  It is told apart from the offset only where the speed changes out of contact (the
-retract, or a pause before the approach), so it is fitted with the retract by default.
-Given (z_s, θ, phi) the mean is linear in β, F0 and b, so they and the noise scale integrate out
-in closed form, exactly as the elastic exact engine does (:mod:`palpbayes.bayes.exact`,
-:func:`palpbayes.bayes.conjugate.node_posterior`: Jeffreys prior on the innovation sd, the
-offset prior N(baseline level, (100·sigma_c)²) as a pseudo-observation, flat on β and b).  What is
+Model: block means F_i = β·X_i(z_s, θ) + F0 [+ b·v_i] [+ F1·(z_i − z_ref)] + e_i, with X
+the Lee–Radok columns of :mod:`~palpbayes.rheology.design` (power law: β = E0*, θ = alpha,
+and Ting's columns on the retract, :mod:`~palpbayes.rheology.ting`; standard linear solid:
+β = (E_inf*, E1*), θ = tau) and e stationary AR(1) Gaussian noise (lag-one correlation phi).
+
+* With ``drag``, b [N·s/m] is a viscous drag on the probe and v_i = −dz/dt the block's
+  downward tip speed (:attr:`~palpbayes.rheology.cycle.CycleData.speed`): the hydrodynamic
+  force on an AFM cantilever moving through liquid (Alcaraz et al. 2002, Langmuir 18:716;
+  Janovjak et al. 2005, Biophys. J. 88:L37), which shifts the approach up and the retract
+  down by b·v, out of contact as in it.  It is told apart from the offset only where the
+  speed changes out of contact (the retract, a pause before the approach), so it is fitted
+  with the retract by default.
+* With ``tilt``, F1 [N/m] is a baseline that tilts with the height (an AFM's virtual
+  deflection, light scattered by a reflective sample, a sensor drifting during a
+  constant-speed approach), z_ref the mean height of the baseline samples: the elastic fit's
+  ``--baseline linear``.
+
+Given (z_s, θ, phi) the mean is linear in β, F0, b and F1, so they and the noise scale
+integrate out in closed form, exactly as the elastic exact engine does
+(:mod:`palpbayes.bayes.exact`, :func:`palpbayes.bayes.conjugate.node_posterior`: Jeffreys
+prior on the innovation sd, the offset prior N(baseline level, (100·sigma_c)²) as a
+pseudo-observation, flat on β, b and F1).  What is
 left is a 3-D density on (z_s, θ, phi), integrated on a grid:
 
 1. a coarse grid (:data:`COARSE_THETA` × :data:`COARSE_Z`) over the whole prior finds the
@@ -71,7 +79,7 @@ OFFSET_SD = 100.0
 #: Proposals per returned draw (importance resampling of the moduli's priors).
 PROPOSALS = 8
 #: Linear coefficients that are not moduli (no positivity, no log-uniform prior).
-NUISANCE = ("offset", "drag")
+NUISANCE = ("offset", "drag", "tilt")
 
 
 @dataclass
@@ -83,7 +91,7 @@ class GridPosterior:
     ``phi`` (H,);
     ``log_mass`` (Gt, Gz, H) normalised log mass of each node's cell; ``post`` the conditional
     posterior of β = (modulus columns…, offset) at every node (arrays (Gt·Gz, H, …));
-    ``names`` of β (moduli, ``"offset"`` and, with a drag term, ``"drag"``);
+    ``names`` of β (moduli, ``"offset"`` and, with those terms, ``"drag"``, ``"tilt"``);
     ``other_basins`` [(z_s, θ, log density below the best)] of the coarse grid.
     """
 
@@ -110,6 +118,11 @@ class GridPosterior:
     def drag(self) -> bool:
         """The model has a viscous drag term b·(−dz/dt)."""
         return "drag" in self.names
+
+    @property
+    def tilt(self) -> bool:
+        """The model's baseline tilts with the height, F0 + F1·(z − z_ref)."""
+        return "tilt" in self.names
 
     def marginal(self, axis: str) -> tuple[np.ndarray, np.ndarray]:
         """Nodes and normalised cell masses of ``"z"`` (all nodes, sorted), ``"theta"`` or
@@ -183,12 +196,16 @@ def _theta_bounds(rheology: str, data: CycleData) -> tuple[float, float]:
 
 class NodeEvaluator:
     """log p(z_s, θ, phi | data) on (θ nodes × z nodes × phi), β and noise integrated;
-    ``drag`` adds the column of a viscous drag (module docstring)."""
+    ``drag`` and ``tilt`` add the columns of a viscous drag and of a tilted baseline (module
+    docstring)."""
 
-    def __init__(self, data: CycleData, rheology: str, t0: float, drag: bool = False):
-        self.data, self.rheology, self.t0, self.drag = data, rheology, t0, bool(drag)
-        self.names = (("E0", "offset") if rheology == "power-law" else
-                      ("E_inf", "offset", "E1")) + (("drag",) if drag else ())
+    def __init__(self, data: CycleData, rheology: str, t0: float, drag: bool = False,
+                 tilt: bool = False):
+        self.data, self.rheology, self.t0 = data, rheology, t0
+        self.drag, self.tilt = bool(drag), bool(tilt)
+        self.names = ((("E0", "offset") if rheology == "power-law" else
+                       ("E_inf", "offset", "E1")) + (("drag",) if drag else ())
+                      + (("tilt",) if tilt else ()))
         self.windows = data.windows()
         self.y = data.force - data.f0_center
         self.weights = np.array([1.0 / OFFSET_SD**2])
@@ -201,7 +218,7 @@ class NodeEvaluator:
 
     def columns(self, theta: float, z: np.ndarray) -> np.ndarray:
         """X (G, N, q): one column per name of :attr:`names` (modulus, 1, second modulus,
-        speed) and y last, for surfaces ``z``."""
+        speed, height from z_ref) and y last, for surfaces ``z``."""
         d = self.data
         kind = "power-law" if self.rheology == "power-law" else "exponential"
         b = lee_radok_columns(self.windows, z, d.z_edges, d.m, kind, theta, self.t0)
@@ -210,7 +227,8 @@ class NodeEvaluator:
         b = d.C * b
         G, N = b.shape
         ones, y = np.ones((G, N)), np.broadcast_to(self.y, (G, N))
-        extra = [np.broadcast_to(d.speed, (G, N))] if self.drag else []
+        extra = ([np.broadcast_to(d.speed, (G, N))] if self.drag else []) + (
+            [np.broadcast_to(d.z - d.z_ref, (G, N))] if self.tilt else [])
         if self.rheology == "power-law":
             return np.stack([b, ones, *extra, y], axis=-1)
         inf = d.C * lee_radok_columns(self.windows, z, d.z_edges, d.m, None)
@@ -309,9 +327,10 @@ def _separate_basins(ev: NodeEvaluator, from_c, basins: list, best: tuple[float,
 
 
 def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 1.0,
-                   drag: bool = False, max_iterations: int = 10) -> GridPosterior:
+                   drag: bool = False, tilt: bool = False, max_iterations: int = 10
+                   ) -> GridPosterior:
     """The collapsed posterior of ``data`` under ``rheology`` (module docstring); ``drag``
-    adds a viscous drag b·(−dz/dt) to the model.
+    adds a viscous drag b·(−dz/dt) to the model, ``tilt`` a baseline F1·(z − z_ref).
 
     Raises
     ------
@@ -325,7 +344,7 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
                          f"{', '.join(RHEOLOGIES)}")
     if not (math.isfinite(t0) and t0 > 0):
         raise InputError(f"t0 = {t0!r} s must be positive")
-    ev = NodeEvaluator(data, rheology, t0, drag)
+    ev = NodeEvaluator(data, rheology, t0, drag, tilt)
     lo, hi = _theta_bounds(rheology, data)
     log_theta = rheology == "sls"
     to_c = (lambda v: np.log(v)) if log_theta else (lambda v: np.asarray(v, float))  # noqa
