@@ -17,6 +17,15 @@ Updates are incremental: each surface node keeps the running cross-product sums 
 :class:`palpbayes.bayes.conjugate.Gram`, so a chunk of k samples costs (nodes × k) shape
 evaluations, plus n per node the refinement adds (the posterior narrows as the tip goes deeper).
 Nodes more than :data:`PRUNE` below the best log density stop being updated.
+
+The model is elastic.  On a viscoelastic material the estimate is the apparent modulus of the
+speed and depth pressed so far (it grows with speed, ~speed^alpha for a power law), and a hold
+shows what the model leaves out: when the tip has held its deepest point (within
+:data:`HOLD_TOLERANCE` of the depth) for two windows of :data:`HOLD_WINDOW` samples and the
+force of the last window lies more than :data:`RELAX_N_SE` standard errors (AR(1) long-run
+factor of the baseline's lag-one correlation) and 1 % of the contact force below the first,
+the state carries a relaxation flag naming the viscoelastic fit
+(``palpbayes fit --rheology``).
 """
 
 from __future__ import annotations
@@ -46,10 +55,17 @@ from ..fitdata import ModelSpec
 from ..intervals import LEVEL, central
 from ..noise import sigma_from_pp
 
-__all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE"]
+__all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE", "HOLD_WINDOW",
+           "HOLD_TOLERANCE", "RELAX_N_SE"]
 
 #: Nodes whose log density falls this far below the best are no longer updated.
 PRUNE = 28.0
+#: Samples per window of the relaxation flag (the first and the last of a hold).
+HOLD_WINDOW = 20
+#: A hold: the tip within this share of the depth reached from its deepest point.
+HOLD_TOLERANCE = 0.01
+#: Standard errors by which the force must fall over a hold to be flagged.
+RELAX_N_SE = 5.0
 
 
 @dataclass(frozen=True)
@@ -328,6 +344,33 @@ class OnlineEstimator:
                               log_mass=node_log_mass(post.logp, g.z, self._phi),
                               complete=self._complete, prior=prior)
 
+    def _relaxation(self, z_surf: float) -> str:
+        """The relaxation flag of a hold (module docstring), '' when there is none."""
+        n, w = self._n, HOLD_WINDOW
+        z = self._z[self._contact:n]
+        if z.size < 2 * w:
+            return ""
+        depth = z_surf - float(z.min())
+        if not depth > 0:
+            return ""
+        near = z <= z.min() + HOLD_TOLERANCE * depth
+        first = int(np.argmax(near))
+        if n - self._contact - first < 2 * w or not near[first:].all():
+            return ""
+        f = self._f[self._contact + first:n]
+        a, b = float(f[:w].mean()), float(f[-w:].mean())
+        lag = min(max(self._base.lag1, 0.0), 0.9) if math.isfinite(self._base.lag1) else 0.0
+        se = self._base.sd * math.sqrt(2.0 / w * (1 + lag) / (1 - lag))
+        contact = a - self._base.level
+        drop = a - b
+        if not (drop > RELAX_N_SE * se and drop > 0.01 * contact):
+            return ""
+        held = float(self._t[n - 1] - self._t[self._contact + first])
+        return (f"relaxation: the force fell {100 * drop / contact:.1f} % of the contact force "
+                f"({drop / se:.0f} se) over the {held:.3g} s the tip held its depth: the "
+                "material is viscoelastic and this E is an apparent modulus of the speed "
+                "pressed (fit the recording with palpbayes fit --rheology power-law,sls)")
+
     def _make_state(self) -> OnlineState:
         n = self._n
         if n == 0:  # an empty first chunk
@@ -349,6 +392,9 @@ class OnlineEstimator:
             flags.append("z_surf posterior at the lower end of the online surface prior")
         if not post.complete:
             flags.append("surface grid refinement cut short")
+        relax = self._relaxation(zs.median)
+        if relax:
+            flags.append(relax)
         if self._phi.size > 1:
             w_phi = np.exp(post.log_mass - post.log_mass.max()).sum(axis=0)
             if w_phi[[0, -1]].max() > 0.5 * w_phi.sum():
