@@ -26,6 +26,8 @@ from palpbayes.fitdata import ModelSpec
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.rheology import fit_rheology
 from palpbayes.rheology.choice import loo
+from palpbayes.rheology.posterior import grid_posterior
+from palpbayes.rheology.sampler import sample_emcee
 from palpbayes.sim import simulate_viscoelastic
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "afm-files"
@@ -53,6 +55,7 @@ def records() -> list[tuple[str, object, Tip]]:
 def main() -> None:
     print(f"{'record':<22} {'samples':>8} {'power law':>10} {'sls':>8} {'loo':>7} "
           f"{'elastic':>8} {'ratio':>6}")
+    emcee_rows = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for label, trace, tip in records():
@@ -71,6 +74,22 @@ def main() -> None:
                                repeat=3)
             print(f"{label:<22} {trace.n_points:>8} {t_pl:>8.2f} s {t_sls:>6.2f} s "
                   f"{t_loo:>5.2f} s {t_el:>6.2f} s {t_pl / t_el:>6.1f}")
+            data, grid = fitted.data, fitted.grid
+            opts = {"t0": fitted.t0, "drag": grid.drag, "tilt": grid.tilt}
+            t_grid = median_time(lambda d=data, o=opts: grid_posterior(d, "power-law", **o),
+                                 repeat=3)
+            res = sample_emcee(data, "power-law", grid=grid, **opts)  # warm-up: arviz import
+            t_mc = median_time(lambda d=data, g=grid, o=opts: sample_emcee(
+                d, "power-law", grid=g, **o), repeat=3)
+            emcee_rows.append((label, data.n_points, t_grid, t_mc, t_el, res))
+    print(f"\nemcee engine (power law; whole = grid start + emcee):\n{'record':<22} "
+          f"{'blocks':>6} {'grid':>8} {'emcee':>8} {'whole':>8} {'/grid':>6} {'/elastic':>8} "
+          f"{'steps':>6} {'R-hat':>6} {'ESS':>6}")
+    for label, n, t_grid, t_mc, t_el, res in emcee_rows:
+        whole = t_grid + t_mc
+        print(f"{label:<22} {n:>6} {t_grid:>6.2f} s {t_mc:>6.2f} s {whole:>6.2f} s "
+              f"{whole / t_grid:>6.1f} {whole / t_el:>8.1f} {res.diagnostics.n_steps:>6} "
+              f"{max(res.rhat.values()):>6.3f} {min(res.ess.values()):>6.0f}")
 
 
 if __name__ == "__main__":

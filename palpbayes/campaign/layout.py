@@ -15,10 +15,14 @@ A results folder (``palpbayes fit MANIFEST --out DIR``) holds::
       groundtruth.csv          per compression test              (groundtruth)
       groundtruth_summary.csv  per material                      (groundtruth)
       gap.csv                  the paper's robot-vs-Instron gap   (report, paper's materials)
+      rheology.csv             one row per trace × relaxation model    (fit --rheology)
+      rheology/<trace>_<model>.nc  a viscoelastic fit's draws, bands  (fit --rheology)
+      rheology_pooled.csv      one row per specimen × tip, speeds pooled (fit --rheology power-law)
       report.pdf               the PDF report                    (report)
 
 Modules use these constants and helpers instead of literals, so that a file added here is also
-removed by ``fit --force`` (:data:`FIT_OUTPUTS`) and a renamed file cannot leave a reader behind.
+removed by ``fit --force`` (:data:`FIT_OUTPUTS`; :data:`RHEOLOGY_OUTPUTS` and the folder
+:data:`RHEOLOGY_DIR` for ``fit --rheology``) and a renamed file cannot leave a reader behind.
 """
 
 from __future__ import annotations
@@ -31,7 +35,9 @@ __all__ = [
     "BUDGET", "STIFFENING", "GROUNDTRUTH", "GROUNDTRUTH_SUMMARY", "GAP", "REPORT",
     "COMPARE_OUTPUTS",
     "FIT_OUTPUTS", "REPLAY_HISTORY", "REPLAY_SUMMARY", "REPLAY_FIGURE", "posterior_path",
-    "posterior_file", "partial_path",
+    "posterior_file", "partial_path", "RHEOLOGY_TABLE", "RHEOLOGY_DIR", "RHEOLOGY_OUTPUTS",
+    "RHEOLOGY_POOLED",
+    "rheology_fit_path",
 ]
 
 #: Fit options, seed and versions (``palpbayes fit``).
@@ -59,6 +65,14 @@ GROUNDTRUTH_SUMMARY = "groundtruth_summary.csv"
 #: The paper's robot-vs-Instron gap decomposed (:func:`palpbayes.gap.gap_table`), written by
 #: the report pipeline when the campaign has the paper's materials.
 GAP = "gap.csv"
+#: One row per trace × relaxation model (``palpbayes fit --rheology power-law|sls``).
+RHEOLOGY_TABLE = "rheology.csv"
+#: Folder of the stored viscoelastic fits ``<trace_id>_<rheology>.nc``
+#: (``palpbayes fit --rheology``; read by the report).
+RHEOLOGY_DIR = "rheology"
+#: One row per specimen × tip: the power law pooled over its traces at several speeds
+#: (``palpbayes fit MANIFEST --rheology power-law``, :mod:`palpbayes.rheology.campaign`).
+RHEOLOGY_POOLED = "rheology_pooled.csv"
 #: The PDF report (``palpbayes report``).
 REPORT = "report.pdf"
 #: One row per online update of a replayed trace (``palpbayes replay --out``).
@@ -74,6 +88,10 @@ COMPARE_OUTPUTS = (COMPARISON, POOLED, BUDGET, STIFFENING)
 #: :data:`POSTERIOR_DIR` and :data:`PARTIAL_DIR` are emptied as well).  The ground-truth tables
 #: come from the compression tests, not from the fit, and are kept.
 FIT_OUTPUTS = (SUMMARY, SETTINGS, TRACES, *COMPARE_OUTPUTS, REPORT)
+#: Files that depend on a viscoelastic fit, removed before ``fit --rheology`` writes anew (the
+#: folder :data:`RHEOLOGY_DIR` is emptied of its ``*.nc`` as well); the elastic fit's files are
+#: kept, and ``fit --force`` of the elastic fit keeps these.
+RHEOLOGY_OUTPUTS = (RHEOLOGY_TABLE, RHEOLOGY_POOLED, REPORT)
 
 
 def posterior_file(posterior_dir: str | os.PathLike, trace_id: str) -> Path:
@@ -89,3 +107,9 @@ def posterior_path(results_dir: str | os.PathLike, trace_id: str) -> Path:
 def partial_path(results_dir: str | os.PathLike, trace_id: str) -> Path:
     """``results_dir/.partial/<trace_id>.json``."""
     return Path(results_dir) / PARTIAL_DIR / f"{trace_id}.json"
+
+
+def rheology_fit_path(results_dir: str | os.PathLike, trace_id: str, rheology: str) -> Path:
+    """``results_dir/rheology/<trace_id>_<rheology>.nc``: one trace's stored viscoelastic fit
+    with one relaxation model (``power-law``, ``sls``)."""
+    return Path(results_dir) / RHEOLOGY_DIR / f"{trace_id}_{rheology}.nc"

@@ -9,10 +9,13 @@ ground-truth step (``palpbayes groundtruth``) and the compare step (``palpbayes 
     posterior/<trace_id>.nc   the Bayesian posterior of each trace (arviz netCDF)
     comparison.csv, pooled.csv, budget.csv, stiffening.csv   the compare step's tables
     groundtruth.csv, groundtruth_summary.csv                  per-test and per-material GT
+    rheology.csv, rheology/<trace_id>_<model>.nc              viscoelastic fits (fit --rheology)
 
 :func:`load_results` reads the tables into a :class:`ResultsFolder`; :func:`load_fit` rebuilds
-one trace's :class:`~palpbayes.bayes.BayesResult`, equal to the one that was saved.  Reading
-only: nothing here writes (docs/design.md §4).
+one trace's :class:`~palpbayes.bayes.BayesResult`, equal to the one that was saved;
+:func:`load_rheology_table` reads ``rheology.csv`` (its stored fits:
+:func:`palpbayes.rheology.load_rheology_fit`).  Reading only: nothing here writes
+(docs/design.md §4).
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ __all__ = [
     "ResultsFolder",
     "load_results",
     "load_fit",
+    "load_rheology_table",
 ]
 
 #: Order of tips in tables and figures: the contact registry's display order (the paper's
@@ -166,6 +170,36 @@ def load_results(path: str | os.PathLike) -> ResultsFolder:
         groundtruth_summary=_read_csv(p / layout.GROUNDTRUTH_SUMMARY),
         gap=_read_csv(p / layout.GAP),
     )
+
+
+def load_rheology_table(path: str | os.PathLike) -> pd.DataFrame | None:
+    """``rheology.csv`` of a results folder (``palpbayes fit --rheology``): one row per trace ×
+    relaxation model, ``trace_id``, ``rheology``, ``notes``, ``flag_codes`` and ``error`` as
+    strings; None when the folder has none.
+
+    Raises
+    ------
+    DataFileError
+        The table cannot be read, has no rows or lacks ``trace_id`` / ``rheology``.
+    """
+    p = Path(path) / layout.RHEOLOGY_TABLE
+    if not p.is_file():
+        return None
+    try:
+        head = pd.read_csv(p, nrows=0).columns
+        text = ("trace_id", "source", "rheology", "segments", "flag_codes", "notes", "error")
+        df = pd.read_csv(p, dtype={c: str for c in text if c in head})
+    except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise DataFileError(p, f"cannot be read as CSV ({exc})",
+                            "rerun 'palpbayes fit --rheology ... --force'") from None
+    missing = [c for c in ("trace_id", "rheology") if c not in df.columns]
+    if missing or df.empty:
+        raise DataFileError(p, f"no column {missing[0]!r}" if missing else "has no rows",
+                            "rerun 'palpbayes fit --rheology ... --force'")
+    for c in text:
+        if c in df.columns:
+            df[c] = df[c].fillna("")
+    return df
 
 
 def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> BayesResult:

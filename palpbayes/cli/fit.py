@@ -59,8 +59,9 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                    help="contact threshold and least-squares surface constraint "
                         "|F(z_surf) - baseline| <= F_unc [N] (default: --noise-pp)")
     g.add_argument("--baseline", choices=BASELINES, default="constant",
-                   help="baseline of the Bayesian model: constant offset F0, or linear "
-                        "F0 + F1*(z - z_ref) for drift or a tilted baseline (default constant)")
+                   help="baseline of the Bayesian model (and of --rheology): constant offset "
+                        "F0, or linear F0 + F1*(z - z_ref) for drift or a tilted baseline "
+                        "(default constant)")
     g.add_argument("--tare", action="store_true",
                    help="subtract the pre-contact baseline from the force before fitting "
                         "(zero an untared sensor; the paper's least squares has no offset)")
@@ -369,14 +370,18 @@ def _print_interval_parts(summary) -> None:
 def _run_rheology(args: argparse.Namespace) -> int:
     """``fit --rheology power-law|sls``: the viscoelastic fit of every trace, one table."""
     from ..io.manifest import load_trace, read_manifest
+    from ..rheology.campaign import RHEOLOGY_POOLED, SpeedPools, pooled_lines
     from ..rheology.results import RHEOLOGY_TABLE, fit_traces
 
-    path, out = Path(args.input), Path(args.out)
+    path, out, pools = Path(args.input), Path(args.out), None
     _check_input_path(path)
     nu, segments = check_rheology_args(args)
     if path.is_file() and is_manifest(path):
         opts = read_options_from_args(args)
-        rows = [r for _, r in read_manifest(path).iterrows()]
+        manifest = read_manifest(path)
+        rows = [r for _, r in manifest.iterrows()]
+        if "power-law" in args.rheology:  # one specimen x tip at several speeds: pooled
+            pools = SpeedPools(manifest, seed=args.seed)
         traces = [(str(r["trace_id"]), str(r["file"]), lambda r=r: load_trace(r, **opts))
                   for r in rows]
         total = len(traces)
@@ -386,9 +391,14 @@ def _run_rheology(args: argparse.Namespace) -> int:
     table = fit_traces(traces, args.rheology, out, segments=segments, t0=args.t0, nu=nu,
                        seed=args.seed, compression_speed=args.compression_speed / 6e4,
                        drag={"auto": None, "on": True, "off": False}[args.drag],
-                       progress=args.progress, total=total)
+                       baseline=args.baseline, engine=args.rheology_engine,
+                       progress=args.progress, total=total,
+                       on_fit=None if pools is None else pools.add)
     print_rheology(table)
     print(f"wrote {out / RHEOLOGY_TABLE}")
+    if pools is not None:
+        print("\n".join(pooled_lines(pools.finish(out))))
+        print(f"wrote {out / RHEOLOGY_POOLED}")
     return 0
 
 

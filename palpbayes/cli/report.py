@@ -2,7 +2,9 @@
 
 INPUT is one of
 
-* a results folder (it has ``summary.csv``): the report is built from it as it is;
+* a results folder (it has ``summary.csv``, or ``rheology.csv`` from ``fit --rheology``, or
+  both): the report is built from it as it is (viscoelastic fits get their own pages, read from
+  ``rheology.csv`` and ``rheology/*.nc``);
 * a campaign folder (it has ``manifest.csv``) or a campaign manifest: the campaign is fitted
   with both methods, its ground truth analysed (if it has ``groundtruth/``) and compared, into
   ``--out`` (default ``palpbayes-results/`` in the current folder; a folder fitted before from
@@ -38,9 +40,11 @@ def register(subparsers) -> argparse.ArgumentParser:
             "Write a multi-page PDF report: settings, the comparison of ground truth, least "
             "squares and Bayes per material and tip (the paper's Table III), a page per "
             "material and tip with the force-depth fit and posteriors, convergence "
-            "diagnostics, the uncertainty budget and the methods. INPUT is a results folder "
-            "(with summary.csv), a campaign folder or manifest (fitted first, into --out), or "
-            "nothing for the shipped example campaign."),
+            "diagnostics, the uncertainty budget and the methods; viscoelastic fits (fit "
+            "--rheology) get a table of their parameters and a page per trace and model. INPUT "
+            "is a results folder (with summary.csv and/or rheology.csv), a campaign folder or "
+            "manifest (fitted first, into --out), or nothing for the shipped example "
+            "campaign."),
     )
     p.add_argument("input", nargs="?", metavar="INPUT", default=None,
                    help="results folder, campaign folder or campaign manifest (default: the "
@@ -75,12 +79,13 @@ def resolve_input(value: str | None) -> tuple[str, Path]:
     if not p.exists():
         raise InputError(f"{p}: no such file or folder")
     if p.is_dir():
-        if (p / layout.SUMMARY).is_file():
+        if (p / layout.SUMMARY).is_file() or (p / layout.RHEOLOGY_TABLE).is_file():
             return "results", p
         if (p / "manifest.csv").is_file():
             return "campaign", p / "manifest.csv"
-        raise InputError(f"{p}: neither a results folder ({layout.SUMMARY}) nor a campaign folder "
-                         "(manifest.csv)")
+        raise InputError(f"{p}: neither a results folder ({layout.SUMMARY} from 'palpbayes fit', "
+                         f"{layout.RHEOLOGY_TABLE} from 'palpbayes fit --rheology') nor a "
+                         "campaign folder (manifest.csv)")
     if is_manifest(p):
         return "campaign", p
     raise InputError(f"{p}: not a campaign manifest (a CSV with 'file' and 'tip' columns); "
@@ -118,6 +123,12 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"--out is for a campaign INPUT; {path} is already a results "
                              "folder (use -o FILE.pdf to choose the report's name)")
         results = path
+        if not (path / layout.SUMMARY).is_file():  # viscoelastic fits only
+            info = build_report(path, args.output, seed=args.seed)
+            print(f"report: {info.n_pages} pages, {info.n_traces} trace(s), "
+                  f"{_rheology_line(info)}")
+            print(f"wrote {info.path} (from the results folder {info.results_shown})")
+            return 0
     res = load_results(results)
     info = build_report(res, args.output, seed=args.seed)
     table = summary_table(res)
@@ -135,6 +146,15 @@ def run(args: argparse.Namespace) -> int:
     line = f"report: {info.n_pages} pages, {info.n_traces} traces, Bayesian fits {flagged}"
     if info.n_pooled_flagged:
         line += f"; {info.n_pooled_flagged} pooled group(s) not converged (marked (!))"
+    if info.n_rheology:
+        line += f"; {_rheology_line(info)}"
     print(line)
     print(f"wrote {info.path} (from the results folder {info.results_shown})")
     return 0
+
+
+def _rheology_line(info) -> str:
+    """'3 viscoelastic fit(s), model check passed' or '…, 1 failed the model check'."""
+    failed = info.n_rheology_failed_check
+    return (f"{info.n_rheology} viscoelastic fit(s), "
+            + (f"{failed} failed the model check" if failed else "model check passed"))

@@ -34,7 +34,7 @@ ELASTIC_ONLY = {
     "workers": "--workers"}
 #: Options only the viscoelastic fit uses.
 VISCO_ONLY = {"segments": "--segments", "t0": "--t0", "compression_speed": "--compression-speed",
-              "drag": "--drag"}
+              "drag": "--drag", "rheology_engine": "--rheology-engine"}
 
 
 def given_options(args: argparse.Namespace, options: dict[str, str]) -> list[str]:
@@ -45,15 +45,15 @@ def given_options(args: argparse.Namespace, options: dict[str, str]) -> list[str
 
 
 def parse_rheologies(text: str) -> tuple[str, ...]:
-    """--rheology: one model, or several viscoelastic ones separated by commas."""
+    """--rheology: one model, or several separated by commas to compare them (``elastic``
+    alone is the elastic fit of the loading; in a list, the constant modulus fitted to the same
+    cycle as the others)."""
     names = tuple(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
-    known = ("elastic", *RHEOLOGIES)
-    bad = [n for n in names if n not in known]
+    bad = [n for n in names if n not in RHEOLOGIES]
     if bad or not names:
         raise argparse.ArgumentTypeError(f"unknown model {bad[0] if bad else text!r}; use "
-                                         f"{', '.join(known)} (or power-law,sls)")
-    if "elastic" in names and len(names) > 1:
-        raise argparse.ArgumentTypeError("elastic is the other fit; compare power-law,sls")
+                                         f"{', '.join(RHEOLOGIES)} (or several: "
+                                         "elastic,power-law,sls)")
     return names
 
 
@@ -65,8 +65,10 @@ def add_rheology_options(p: argparse.ArgumentParser) -> None:
     v.add_argument("--rheology", type=parse_rheologies, default=("elastic",), metavar="MODEL",
                    help="relaxation modulus: elastic (the fits above, default), power-law "
                         "E*(t) = E0*·(t/t0)^-alpha or sls E*(t) = E_inf* + E1*·exp(-t/tau); "
-                        "writes DIR/rheology.csv, one row per trace; power-law,sls fits both "
-                        "and says which the record prefers (PSIS-LOO, with its error)")
+                        "writes DIR/rheology.csv, one row per trace; several, e.g. "
+                        "elastic,power-law,sls, fits each to the same cycle (elastic: a "
+                        "constant E*) and says which the record prefers (PSIS-LOO, with its "
+                        "error)")
     v.add_argument("--segments", default=None, metavar="NAMES",
                    help="segments fitted by --rheology power-law|sls, comma-separated from "
                         "approach, hold, retract (default approach,hold; the retract, by "
@@ -79,6 +81,11 @@ def add_rheology_options(p: argparse.ArgumentParser) -> None:
                         "hydrodynamic force on an AFM cantilever in liquid): auto (default) "
                         "fits it when the retract is fitted, whose out-of-contact force tells "
                         "it from the offset")
+    v.add_argument("--rheology-engine", choices=("grid", "emcee"), default="grid",
+                   help="posterior engine of --rheology: grid (moduli, offset and noise "
+                        "integrated in closed form; default) or emcee (the same posterior with "
+                        "every parameter sampled, started from the grid: a cross-check, a few "
+                        "times slower)")
     v.add_argument("--compression-speed", type=float, default=50.0, metavar="MM_PER_MIN",
                    help="cross-head speed [mm/min] of the compression test the fit is set "
                         "beside: with --nu and the thickness, rheology.csv gets the modulus "
@@ -150,8 +157,8 @@ _SUFFIXES = (("_n_s_per_m", " N·s/m"), ("_n_per_m", " N/m"), ("_pa", " Pa"), ("
 
 
 def _rheology_line(r) -> str:
-    names = ("E0_star_pa", "alpha") if r["rheology"] == "power-law" else (
-        "E_inf_star_pa", "E1_star_pa", "tau_s")
+    names = {"power-law": ("E0_star_pa", "alpha"), "elastic": ("E_star_pa",),
+             "sls": ("E_inf_star_pa", "E1_star_pa", "tau_s")}[r["rheology"]]
     names += tuple(c for c in ("drag_n_s_per_m", "tilt_n_per_m")
                    if np.isfinite(r.get(c, np.nan)))
     parts = []

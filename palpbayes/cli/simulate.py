@@ -11,17 +11,35 @@ With ``--map`` it writes a stiffness-map phantom instead (:mod:`palpbayes.sim.ma
 palpations over a block hiding a stiff sphere, e.g.::
 
     palpbayes simulate phantom --map --grid 15x15 --step 3e-3 --lump-ratio 10
+
+With ``--rheology power-law|sls`` it writes a viscoelastic campaign instead
+(:mod:`palpbayes.sim.visco_campaign`): ramp–hold–retract palpations of viscoelastic foams,
+every tip at every speed, trace CSVs with their segment column, e.g.::
+
+    palpbayes simulate visco --rheology power-law --speeds 5,50,500 --hold 5
+    palpbayes fit visco/manifest.csv --rheology power-law --out visco-results
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import re
 
 from ..errors import InputError
 from ..noise import PAPER_NOISE_PP
 from ..paper import PAPER_MATERIALS, PAPER_TIPS
-from ..sim import Inclusion, default_inclusion, read_map_truth, simulate_campaign, simulate_map
+from ..sim import (
+    POWER_LAW_FOAMS,
+    SLS_FOAMS,
+    VISCO_TIPS,
+    Inclusion,
+    default_inclusion,
+    read_map_truth,
+    simulate_campaign,
+    simulate_map,
+    simulate_visco_campaign,
+)
 from ..units import format_force, format_length, format_pressure
 
 __all__ = ["register", "run"]
@@ -38,7 +56,9 @@ def register(subparsers) -> argparse.ArgumentParser:
             "paraboloid) x REPETITIONS palpations, plus Instron-like compression tests, with "
             "the true values in truth.csv.  With --map: a grid of palpations over a block "
             "hiding a stiff sphere, with the true field in truth.csv and the lump in "
-            "truth_lump.json."
+            "truth_lump.json.  With --rheology power-law|sls: ramp-hold-retract palpations "
+            "of viscoelastic foams at several speeds, with their true relaxation moduli in "
+            "truth.csv."
         ),
     )
     p.add_argument("out_dir", metavar="OUT_DIR", help="output folder (must be empty)")
@@ -50,7 +70,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="peak-to-peak force noise in newtons, sigma = pp/6 (default %(default)g)")
     c = p.add_argument_group("campaign (without --map)")
     c.add_argument("--repetitions", type=int, default=None, metavar="N",
-                   help="palpations per material and tip (default 3)")
+                   help="palpations per material and tip (default 3); with --rheology per "
+                        "material, tip and speed (default 1)")
     c.add_argument("--ar1", type=float, default=None, metavar="PHI",
                    help="AR(1) coefficient of the force noise, |PHI| < 1 (default 0: white)")
     c.add_argument("--gt-specimens", type=int, default=None, metavar="N",
@@ -59,6 +80,28 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="the specimens as layers of their thickness on a rigid plate: 'free' "
                         "(lying on it without friction, the default), 'bonded', a partial bond "
                         "in [0, 1], or 'none' (half-spaces, the paper's model)")
+    v = p.add_argument_group(
+        "viscoelastic campaign (--rheology)", "specimens x tips x speeds of ramp-hold-retract "
+        "palpations; every specimen one relaxation modulus E*(t), so that its traces at "
+        "several speeds pool (palpbayes fit MANIFEST --rheology power-law)")
+    v.add_argument("--rheology", choices=("power-law", "sls"), default=None,
+                   help="write a viscoelastic campaign: power-law foams E*(t) = "
+                        "E0*·(t/1 s)^-alpha or standard linear solids E*(t) = E_inf* + "
+                        "E1*·exp(-t/tau)")
+    v.add_argument("--speeds", type=_speeds, default=None, metavar="MM_PER_MIN",
+                   help="tip speeds in mm/min, comma-separated (default 5,50,500)")
+    v.add_argument("--hold", type=float, default=None, metavar="S",
+                   help="hold at the deepest point in seconds (default 5)")
+    v.add_argument("--depth", type=float, default=None, metavar="M",
+                   help="indentation depth in metres (default 2e-3)")
+    v.add_argument("--rate", type=float, default=None, metavar="HZ",
+                   help="sample rate in Hz (default 800)")
+    v.add_argument("--materials", default=None, metavar="NAMES",
+                   help="foams to simulate, comma-separated from Soft, Medium, Firm "
+                        "(default all)")
+    v.add_argument("--tips", default=None, metavar="NAMES",
+                   help="tips, comma-separated from flat, paraboloid (default both; the "
+                        "exact sphere has no power law)")
     m = p.add_argument_group(
         "stiffness map (--map)", "a grid of palpations over a block hiding a stiff sphere; "
         "lengths in metres, the lump centred near the middle of the grid, off its nodes")
@@ -93,6 +136,8 @@ _MAP_ONLY = ("grid", "step", "background_e", "tip", "lump_ratio", "lump_radius",
              "lump_x", "lump_y", "heterogeneity", "workers")
 _LUMP = ("lump_ratio", "lump_radius", "lump_depth", "lump_x", "lump_y")
 _CAMPAIGN_ONLY = ("repetitions", "ar1", "gt_specimens", "base")
+_VISCO_ONLY = ("speeds", "hold", "depth", "rate", "materials", "tips")
+_ELASTIC_ONLY = ("gt_specimens", "base")
 #: How the campaign's specimens rest on their plate unless --base says otherwise.
 DEFAULT_BASE = "free"
 
@@ -110,6 +155,21 @@ def _base(text: str):
     if not 0.0 <= w <= 1.0:
         raise argparse.ArgumentTypeError(f"partial bond {text!r} must lie in [0, 1]")
     return w
+
+
+def _speeds(text: str) -> tuple[float, ...]:
+    """argparse type of --speeds: positive numbers in mm/min, comma-separated, each once."""
+    try:
+        v = tuple(float(s) for s in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"speeds {text!r} are not numbers in mm/min, e.g. 5,50,500") from None
+    if not all(math.isfinite(s) and s > 0 for s in v):
+        raise argparse.ArgumentTypeError(f"speeds {text!r} must be positive numbers in mm/min")
+    if len(set(v)) < len(v):
+        raise argparse.ArgumentTypeError(
+            f"speeds {text!r} repeat a speed; give each once (--repetitions repeats them)")
+    return v
 
 
 def _grid(text: str) -> tuple[int, int]:
@@ -134,6 +194,14 @@ def run(args: argparse.Namespace) -> int:
 
     Bad options, or options of the other mode, raise InputError (exit status 2).
     """
+    if args.map and args.rheology:
+        raise InputError("--map writes a stiffness map, --rheology a viscoelastic campaign; "
+                         "choose one")
+    if not args.rheology:
+        wrong = _given(args, _VISCO_ONLY)
+        if wrong:
+            raise InputError(f"{', '.join(wrong)} only apply with --rheology (a viscoelastic "
+                             "campaign); add --rheology power-law|sls or drop them")
     if args.map:
         wrong = _given(args, _CAMPAIGN_ONLY)
         if wrong:
@@ -144,6 +212,8 @@ def run(args: argparse.Namespace) -> int:
     if wrong:
         raise InputError(f"{', '.join(wrong)} only apply with --map (a stiffness-map "
                          "phantom); add --map or drop them")
+    if args.rheology:
+        return _run_visco(args)
     for name, default in (("repetitions", 3), ("ar1", 0.0), ("gt_specimens", 5),
                           ("base", DEFAULT_BASE)):
         if getattr(args, name) is None:
@@ -173,6 +243,54 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {n_mat * args.gt_specimens} Instron-style compression exports in "
               "groundtruth/ (listed in groundtruth/manifest.csv)")
     print("  true values in truth.csv, truth_groundtruth.csv and truth_materials.csv")
+    return 0
+
+
+def _names(text: str | None, known, what: str) -> list[str]:
+    """The names of a comma-separated option, checked against ``known``; all when None."""
+    if text is None:
+        return list(known)
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    bad = [n for n in names if n not in known]
+    if bad or not names:
+        raise InputError(f"unknown {what} {bad[0] if bad else text!r}; choose from "
+                         f"{', '.join(known)}")
+    return list(dict.fromkeys(names))
+
+
+def _run_visco(args: argparse.Namespace) -> int:
+    """The ``--rheology`` branch of :func:`run`."""
+    wrong = _given(args, _ELASTIC_ONLY)
+    if wrong:
+        raise InputError(f"{', '.join(wrong)} only apply to the elastic campaign; a "
+                         "--rheology campaign has half-space specimens and no compression "
+                         "tests")
+    foams = POWER_LAW_FOAMS if args.rheology == "power-law" else SLS_FOAMS
+    materials = {k: foams[k] for k in _names(args.materials, foams, "material")}
+    tips = {k: VISCO_TIPS[k] for k in _names(args.tips, VISCO_TIPS, "tip")}
+    speeds = args.speeds or (5.0, 50.0, 500.0)
+    options = {k: getattr(args, k) for k in ("hold", "depth", "rate")
+               if getattr(args, k) is not None}
+    reps = 1 if args.repetitions is None else args.repetitions
+    out = simulate_visco_campaign(
+        args.out_dir, rheology=args.rheology, materials=materials, tips=tips,
+        speeds=[s / 6e4 for s in speeds], repetitions=reps, seed=args.seed,
+        noise_pp=args.noise_pp, noise_ar1=args.ar1 or 0.0, overwrite=args.force, **options)
+    n = len(materials) * len(tips) * len(speeds) * reps
+    print(f"wrote a viscoelastic campaign to {out} (seed {args.seed}, noise "
+          f"{format_force(args.noise_pp, 6)} p-p):")
+    counts = " x ".join(f"{k} {w}{'s' if k != 1 else ''}" for k, w in (
+        (len(materials), "material"), (len(tips), "tip"), (len(speeds), "speed"),
+        (reps, "repetition")))
+    print(f"  {n} traces ({counts}; {', '.join(f'{s:g}' for s in speeds)} mm/min) in "
+          "traces/, with their segments, listed in manifest.csv")
+    for name, mat in materials.items():
+        k = mat.kernel
+        law = (f"E0* {format_pressure(k.E0)}, alpha {k.alpha:g}" if args.rheology == "power-law"
+               else f"E_inf* {format_pressure(k.E_inf)}, E1* {format_pressure(k.E[0])}, "
+                    f"tau {k.tau[0]:g} s")
+        print(f"  {name}: {law}")
+    print("  true values in truth.csv (per trace) and truth_materials.csv")
     return 0
 
 

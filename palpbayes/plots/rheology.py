@@ -2,7 +2,12 @@
 with its band, and the approach/retract hysteresis of a record.
 
 The fits are :class:`~palpbayes.rheology.RheologyFit` results (:func:`palpbayes.rheology.
-fit_rheology`); the record is an :class:`~palpbayes.trace.IndentationTrace` with segments.
+fit_rheology`) or the same fits read back from a results folder,
+:class:`~palpbayes.rheology.StoredRheologyFit` (:func:`palpbayes.rheology.load_rheology_fit`):
+both give the block means (``data.time``, ``data.z``, ``data.force``, ``data.segment``), model
+force curves at them (``force_curves(n)``; a stored fit also its stored band) and E*(t) with its
+band (``relaxation(times, level)``; a stored fit has it on its stored times, the default here).
+The record is an :class:`~palpbayes.trace.IndentationTrace` with segments, or a fit (its record).
 """
 
 from __future__ import annotations
@@ -16,7 +21,8 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter
 
 from ..intervals import LEVEL, central_band
-from ..trace import SEGMENTS
+from ..rheology.store import StoredRheologyFit, relaxation_grid
+from ..trace import SEGMENTS, IndentationTrace
 from ..units import FORCE_PREFIXES, LENGTH_PREFIXES, PRESSURE_PREFIXES, si_scale
 from .style import _decorate, _fig_ax, _level_label
 
@@ -41,20 +47,23 @@ def plot_cycle_fit(fit: Any, ax: Axes | None = None, *, level: float = LEVEL,
     Parameters
     ----------
     fit
-        A :class:`~palpbayes.rheology.RheologyFit`.
+        A :class:`~palpbayes.rheology.RheologyFit` or a
+        :class:`~palpbayes.rheology.StoredRheologyFit`.
     ax
         Axes to draw on (default a new figure).
     level
         Central probability of the band.
     n_draws
-        Posterior draws behind the band.
+        Posterior draws behind the band (a stored fit: its stored band, whatever ``n_draws``).
     title
         Default: the trace id, the model and whether its check passed.
     """
     fig, ax = _fig_ax(ax, (7.0, 4.0))
     d = fit.data
-    curves = fit.force_curves(n_draws)
-    lo, med, hi = central_band(curves, level, axis=0)
+    if isinstance(fit, StoredRheologyFit):
+        lo, med, hi = fit.band(level)
+    else:
+        lo, med, hi = central_band(fit.force_curves(n_draws), level, axis=0)
     color = RHEOLOGY_COLORS.get(fit.rheology, "#0072B2")
     k, unit = si_scale(np.max(np.abs(d.force)), "N", FORCE_PREFIXES)
     for code, name in enumerate(SEGMENTS):
@@ -67,7 +76,7 @@ def plot_cycle_fit(fit: Any, ax: Axes | None = None, *, level: float = LEVEL,
                     label=f"{_LABELS.get(fit.rheology, fit.rheology)}, {_level_label(level)} band")
     ax.plot(d.time, med * k, color=color, lw=1.2, label="posterior median")
     if title is None:
-        tid = getattr(d.trace, "trace_id", "")
+        tid = _trace_id(fit)
         title = (f"{tid}: {_LABELS.get(fit.rheology, fit.rheology)} fit, model check "
                  f"{'passed' if fit.model_ok else 'FAILED'}")
     _decorate(ax, "Time from the first fitted sample, t [s]", f"Force, F [{unit}]", title,
@@ -83,12 +92,15 @@ def plot_relaxation(fits: Any, ax: Axes | None = None, *, times=None, level: flo
     Parameters
     ----------
     fits
-        A :class:`~palpbayes.rheology.RheologyFit`, or a mapping label -> fit.
+        A :class:`~palpbayes.rheology.RheologyFit` or
+        :class:`~palpbayes.rheology.StoredRheologyFit`, or a mapping label -> fit.
     ax
         Axes to draw on (default a new figure).
     times
         [s] Times to draw at; default 60 log-spaced times over the recorded time scales of the
-        first fit (its shortest step to its duration).
+        first fit (its shortest step to its duration: :func:`~palpbayes.rheology.
+        relaxation_grid`, the times a stored fit keeps its band at; a stored fit is
+        interpolated between its stored times at others, and not drawn outside them).
     level
         Central probability of the bands.
     truth
@@ -101,7 +113,7 @@ def plot_relaxation(fits: Any, ax: Axes | None = None, *, times=None, level: flo
         fits = {_LABELS.get(fits.rheology, fits.rheology): fits}
     first = next(iter(fits.values()))
     if times is None:
-        times = np.geomspace(first.data.dt_min, first.data.span, 60)
+        times = relaxation_grid(first.data)
     times = np.asarray(times, dtype=float)
     tables = {label: fit.relaxation(times, level) for label, fit in fits.items()}
     k, unit = si_scale(max(float(t["E_star_hi_pa"].max()) for t in tables.values()), "Pa",
@@ -135,19 +147,30 @@ def plot_hysteresis(trace: Any, ax: Axes | None = None, *, z_surf: float | None 
     Parameters
     ----------
     trace
-        An :class:`~palpbayes.trace.IndentationTrace`; segments from the motion when it does
-        not record them.
+        An :class:`~palpbayes.trace.IndentationTrace` (segments from the motion when it does
+        not record them); or a fit: a :class:`~palpbayes.rheology.StoredRheologyFit` draws its
+        stored record (every segment), a :class:`~palpbayes.rheology.RheologyFit` the samples
+        of its fitted segments, both against the depth below the fit's median surface.
     ax
         Axes to draw on (default a new figure).
     z_surf
-        [m] Surface height (e.g. a fit's median) for the depth axis.
+        [m] Surface height (e.g. a fit's median) for the depth axis; default for a fit its
+        posterior median, for a trace None (the tip height is drawn).
     title
         Default the trace id.
     """
     from ..checks.rate import cycle_segments
 
     fig, ax = _fig_ax(ax)
-    seg = cycle_segments(trace)
+    if isinstance(trace, StoredRheologyFit):
+        z_surf = trace.z_surf if z_surf is None else z_surf
+        trace = trace.record
+        seg = np.asarray(trace.segment)
+    else:
+        if not isinstance(trace, IndentationTrace) and hasattr(trace, "data"):  # a RheologyFit
+            z_surf = float(np.median(trace.draws["z_surf"])) if z_surf is None else z_surf
+            trace = trace.data.trace
+        seg = cycle_segments(trace)
     x = trace.z if z_surf is None else z_surf - trace.z
     kx, ux = si_scale(np.max(np.abs(x)), "m", LENGTH_PREFIXES)
     kf, uf = si_scale(np.max(np.abs(trace.force)), "N", FORCE_PREFIXES)
@@ -162,3 +185,10 @@ def plot_hysteresis(trace: Any, ax: Axes | None = None, *, z_surf: float | None 
     _decorate(ax, xlabel, f"Force, F [{uf}]",
               trace.trace_id if title is None else title, "best", markerscale=4)
     return fig
+
+
+def _trace_id(fit: Any) -> str:
+    """The trace id of a stored fit, or of the record behind a fit."""
+    if isinstance(fit, StoredRheologyFit):
+        return fit.trace_id
+    return getattr(getattr(fit.data, "trace", None), "trace_id", "")

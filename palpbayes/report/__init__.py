@@ -29,9 +29,17 @@
 8. "How much indentation did we need?": every trace whose file can be read, replayed through
    the online estimator (:mod:`palpbayes.online`) with a ±2 % precision target; the median
    depth and peak force at the stop per material × tip, against the recorded indentation;
-9. methods: models, priors, noise model, least squares, the sampler's stopping rule (numbers
-   from ``settings.json``), pooling (:data:`palpbayes.pooling.POOLING_SETTINGS`, tau prior from
-   ``pooled.csv``), ground-truth window.
+9. viscoelastic fits, when the folder has ``rheology.csv`` (``palpbayes fit --rheology``;
+   :mod:`~palpbayes.report.pages_rheology`): a table of every trace × relaxation model (the
+   parameters with 90 % intervals, the model check, flag codes and, with several models,
+   PSIS-LOO's ``elpd_diff`` ± se and the preferred model), then per trace and model force against
+   time with the fit's band and the segments, E*(t) with its band (every model of the trace),
+   force against depth per segment (the hysteresis), the parameters and the flags in words, all
+   read from ``rheology.csv`` and the stored fits ``rheology/*.nc``; a folder with only
+   ``rheology.csv`` gets a title page and these pages;
+10. methods: models, priors, noise model, least squares, the sampler's stopping rule (numbers
+    from ``settings.json``), pooling (:data:`palpbayes.pooling.POOLING_SETTINGS`, tau prior
+    from ``pooled.csv``), ground-truth window.
 
 Tables continue on further pages beyond :data:`TABLE_ROWS_PER_PAGE` rows ('… (continued, 2/3)'),
 comparison charts beyond :data:`CHART_GROUPS_PER_PAGE` material × tip groups (whole materials
@@ -49,7 +57,7 @@ Modules: :mod:`~palpbayes.report.build` (:func:`build_report`, page order),
 :mod:`~palpbayes.report.format` (numbers and cells), :mod:`~palpbayes.report.tables` (the
 summary table, drawn tables, pagination), :mod:`~palpbayes.report.layout` (page geometry),
 :mod:`~palpbayes.report.methods` (the methods text) and one ``pages_*`` module per page kind
-(title, summary, layer, group, diagnostics, budget, stiffening, methods).
+(title, summary, layer, group, diagnostics, budget, stiffening, online, rheology, methods).
 """
 
 from __future__ import annotations

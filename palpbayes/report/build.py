@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .. import __version__
-from ..campaign.layout import REPORT
-from ..campaign.results import ResultsFolder, load_results
+from ..campaign.layout import REPORT, RHEOLOGY_TABLE, SUMMARY
+from ..campaign.results import ResultsFolder, load_results, load_rheology_table
 from ..errors import InputError
 from ..io.tabular import parse_bool
 from .format import _shown
@@ -20,6 +20,7 @@ from .pages_group import _page_group
 from .pages_layer import _pages_layer
 from .pages_methods import _pages_methods
 from .pages_online import _pages_online
+from .pages_rheology import _failed, _page_rheology_title, _pages_rheology
 from .pages_stiffening import _page_stiffening, _pages_stiffening_table, _stiffening_groups
 from .pages_summary import _pages_comparison, _pages_summary
 from .pages_title import _page_title
@@ -42,7 +43,7 @@ class ReportInfo:
     titles
         Page titles in order.
     n_traces
-        Traces in the results folder.
+        Traces in the results folder (``summary.csv``'s, else ``rheology.csv``'s).
     n_flagged
         Bayesian fits not converged or flagged.
     n_pooled_flagged
@@ -52,6 +53,9 @@ class ReportInfo:
         pages without one.  Tables are split at :data:`TABLE_ROWS_PER_PAGE` rows.
     results_shown
         The results folder as printed on the title page and in the footer.
+    n_rheology, n_rheology_failed_check
+        Viscoelastic fits (fitted rows of ``rheology.csv``) and those whose model check
+        failed.
     """
 
     path: Path
@@ -61,6 +65,8 @@ class ReportInfo:
     n_pooled_flagged: int = 0
     table_rows: list[int] = field(default_factory=list)
     results_shown: str = ""
+    n_rheology: int = 0
+    n_rheology_failed_check: int = 0
 
     @property
     def n_pages(self) -> int:
@@ -70,6 +76,10 @@ class ReportInfo:
 def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathLike | None = None,
                  *, seed: int = 0, created: str | None = None) -> ReportInfo:
     """Write the PDF report of a results folder (pages listed in :mod:`palpbayes.report`).
+
+    A folder with viscoelastic fits (``rheology.csv``, ``palpbayes fit --rheology``) gets their
+    pages (:mod:`~palpbayes.report.pages_rheology`) before the methods; one with only those is
+    reported with a title page and those pages.
 
     Parameters
     ----------
@@ -85,12 +95,27 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     Returns
     -------
     ReportInfo
+
+    Raises
+    ------
+    InputError
+        The folder has neither ``summary.csv`` nor ``rheology.csv``; the output is no PDF.
     """
-    res = results if isinstance(results, ResultsFolder) else load_results(results)
-    out = Path(pdf) if pdf is not None else res.path / REPORT_NAME
+    folder = results.path if isinstance(results, ResultsFolder) else Path(results)
+    out = Path(pdf) if pdf is not None else folder / REPORT_NAME
     if out.suffix.lower() != ".pdf":
         raise InputError(f"{out}: the report is a PDF; give a file name ending in .pdf")
+    if not isinstance(results, ResultsFolder) and not folder.is_dir():
+        raise InputError(f"{folder}: no such results folder")
+    rheo = load_rheology_table(folder)
     created = created or _dt.date.today().isoformat()
+    if not isinstance(results, ResultsFolder) and not (folder / SUMMARY).is_file():
+        if rheo is None:
+            raise InputError(f"{folder}: neither {SUMMARY} ('palpbayes fit') nor "
+                             f"{RHEOLOGY_TABLE} ('palpbayes fit --rheology power-law|sls'); "
+                             "fit first, or give a campaign folder or manifest to fit it")
+        return _rheology_report(folder, rheo, out, created)
+    res = results if isinstance(results, ResultsFolder) else load_results(results)
     contents: list[str] = []
     pages: list[_Page] = [_page_title(res, created, contents), *_pages_summary(res)]
     if res.comparison is not None and not res.comparison.empty:
@@ -102,6 +127,7 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     pages += [_page_stiffening(res, m, t, seed) for m, t in _stiffening_groups(res)]
     pages += _pages_stiffening_table(res)
     pages += _pages_online(res)
+    pages += _pages_rheology(res.path, rheo)
     pages += _pages_methods(res)
     footer = (f"palpbayes {__version__} · campaign {res.name} · {created} · results "
               f"{_shown(res.path)}")
@@ -119,4 +145,31 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     return ReportInfo(path=out, titles=titles, n_traces=int(res.summary["trace_id"].nunique()),
                       n_flagged=int(len(_flagged(res))) if len(b) else 0,
                       n_pooled_flagged=n_pool, table_rows=[p.rows for p in pages],
-                      results_shown=_shown(res.path))
+                      results_shown=_shown(res.path), **_rheology_counts(rheo))
+
+
+def _rheology_counts(rheo) -> dict:
+    """Viscoelastic fits of ``rheology.csv`` and those whose model check failed."""
+    if rheo is None:
+        return {}
+    fitted = rheo[~rheo.apply(_failed, axis=1)]
+    failed = int((~fitted["model_ok"].map(parse_bool)).sum()) if "model_ok" in fitted else 0
+    return {"n_rheology": int(len(fitted)), "n_rheology_failed_check": failed}
+
+
+def _rheology_report(folder: Path, rheo, out: Path, created: str) -> ReportInfo:
+    """The report of a folder with viscoelastic fits only: a title page and their pages."""
+    contents: list[str] = []
+    pages = [_page_rheology_title(folder, rheo, created, contents),
+             *_pages_rheology(folder, rheo)]
+    titles = [p.title or "palpbayes report" for p in pages]
+    contents.extend(titles)
+    footer = (f"palpbayes {__version__} · viscoelastic fits {folder.resolve().name} · "
+              f"{created} · results {_shown(folder)}")
+    write_pages(pages, out, footer=footer,
+                meta={"Title": f"palpbayes report: {folder.resolve().name}",
+                      "Creator": f"palpbayes {__version__}",
+                      "Subject": "Relaxation modulus from palpation"})
+    return ReportInfo(path=out, titles=titles, n_traces=int(rheo["trace_id"].nunique()),
+                      n_flagged=0, table_rows=[p.rows for p in pages],
+                      results_shown=_shown(folder), **_rheology_counts(rheo))

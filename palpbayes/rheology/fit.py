@@ -8,19 +8,15 @@
   surface to the end of the record; :func:`palpbayes.checks.posterior_predictive_check`,
   Gelman, Meng & Stern 1996), the same test as the elastic fit's;
 * a viscous drag on the probe, b·(−dz/dt), fitted with the retract by default (its out-of-
-  contact force then shows it; :mod:`~palpbayes.rheology.posterior`), and when it is not
-  fitted, a gap between the approach's and the retract's out-of-contact force flagged;
-* a baseline that tilts with the height, F1·(z − z_ref), with ``baseline="linear"`` (as the
-  elastic fit's ``--baseline linear``), and when it is not fitted, a slope of the
-  out-of-contact residuals against the height flagged;
-* adhesion: the retract's force dipping below the fitted baseline where the model's contact
-  has ended (the tip pulled by the sample before it lets go), which no relaxation law has,
-  flagged;
-* flags, never silent: alpha at a bound of its prior; tau outside the recorded time scales
-  (step to duration) or faster than one step; a surface at its prior bound; other basins of
-  the surface × theta density; a contact that shrinks during the hold (Lee–Radok overstates
-  the relaxation there; Ting's rule is applied on the retract only); a poor importance
-  sample.
+  contact force then shows it; :mod:`~palpbayes.rheology.posterior`), and a baseline that
+  tilts with the height, F1·(z − z_ref), with ``baseline="linear"`` (as the elastic fit's
+  ``--baseline linear``);
+* flags, never silent (:mod:`~palpbayes.rheology.flags`): what the force out of contact
+  shows and the model leaves out (a drag gap, a tilt, adhesion at pull-off:
+  :mod:`~palpbayes.rheology.offcontact`; these fail the model check), alpha or tau at the
+  edge of what the record resolves, a surface at its prior bound, other basins, a contact
+  that shrinks during the hold, a thin specimen, a poor importance sample or an emcee chain
+  that did not converge.
 
 Moduli are reduced moduli E* [Pa] as everywhere in palpbayes; give ``nu`` to have Young's
 moduli E = E*(1 − nu²) in the table too.
@@ -42,21 +38,21 @@ from ..errors import InputError
 from ..groundtruth import DEFAULT_STRAIN_WINDOW
 from ..intervals import LEVEL, central_band
 from ..trace import IndentationTrace
-from ..units import format_force
 from .compression import PAPER_COMPRESSION_SPEED, compression_moduli
 from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
 from .design import lee_radok_columns
-from .offcontact import N_SE, adhesion_dip, baseline_tilt, drag_gap
-from .posterior import ALPHA_MAX, PHI_BOUNDS, RHEOLOGIES, GridPosterior, grid_posterior
+from .flags import fit_flags, offcontact_flags
+from .posterior import PHI_BOUNDS, RHEOLOGIES, GridPosterior, grid_posterior
+from .sampler import EmceeRheology, sample_emcee
 from .ting import RETRACT, RetractDesign, with_retract
 
-__all__ = ["RheologyFit", "fit_rheology", "curve_draws", "PARAMETERS", "SHRINK_FLAG", "MIN_ESS",
-           "THIN_FLAG", "DRAG_N_SE", "BASELINES"]
+__all__ = ["RheologyFit", "fit_rheology", "curve_draws", "PARAMETERS", "BASELINES", "ENGINES"]
 
 #: Parameters of each rheology in table order: (name, unit, is a modulus).
 PARAMETERS = {
     "power-law": (("E0", "Pa", True), ("alpha", "-", False)),
     "sls": (("E_inf", "Pa", True), ("E1", "Pa", True), ("tau", "s", False)),
+    "elastic": (("E", "Pa", True),),
 }
 _COMMON = (("z_surf", "m", False), ("offset", "N", False), ("sigma", "N", False),
            ("phi", "-", False))
@@ -64,15 +60,8 @@ _COMMON = (("z_surf", "m", False), ("offset", "N", False), ("sigma", "N", False)
 _EXTRA = (("drag", "N·s/m", False), ("tilt", "N/m", False))
 #: Baseline models: a constant offset, or a line in the height (``tilt``).
 BASELINES = ("constant", "linear")
-#: Largest relative loss of depth during the hold before the shrinking contact is flagged.
-SHRINK_FLAG = 0.02
-#: Depth / specimen thickness above which the half-space assumption is flagged.
-THIN_FLAG = 0.05
-#: Smallest effective importance sample before the draws are flagged.
-MIN_ESS = 400
-#: Standard errors by which the approach's and the retract's out-of-contact force must differ
-#: to be flagged (viscous drag, drift).
-DRAG_N_SE = N_SE
+#: Posterior engines: the collapsed grid, or emcee started from it.
+ENGINES = ("grid", "emcee")
 #: Draws used for the force band and the posterior-predictive check.
 _BAND_DRAWS = 100
 
@@ -84,8 +73,8 @@ class RheologyFit:
     Attributes
     ----------
     rheology
-        ``"power-law"`` (E*(t) = E0*·(t/t0)^(−alpha)) or ``"sls"``
-        (E*(t) = E_inf* + E1*·exp(−t/tau)).
+        ``"power-law"`` (E*(t) = E0*·(t/t0)^(−alpha)), ``"sls"``
+        (E*(t) = E_inf* + E1*·exp(−t/tau)) or ``"elastic"`` (E*(t) = E*).
     data
         The block means that were fitted.
     grid
@@ -100,6 +89,8 @@ class RheologyFit:
     offcontact
         The flags of the force out of contact (drag gap, tilt, adhesion:
         :mod:`~palpbayes.rheology.offcontact`), which fail the model check.
+    sampler
+        The emcee run behind the draws (``engine="emcee"``; None for the grid engine).
     nu
         Poisson's ratio if given (adds Young's moduli to the table).
     seconds
@@ -113,6 +104,7 @@ class RheologyFit:
     ppc: CheckResult
     flags: list[str] = field(default_factory=list)
     offcontact: list[str] = field(default_factory=list)
+    sampler: EmceeRheology | None = None
     nu: float | None = None
     seconds: float = 0.0
 
@@ -161,6 +153,8 @@ class RheologyFit:
 
     def _moduli_at(self, t: np.ndarray) -> np.ndarray:
         d = self.draws
+        if self.rheology == "elastic":
+            return np.broadcast_to(d["E"][:, None], (d["E"].size, t.size)).copy()
         if self.rheology == "power-law":
             return d["E0"][:, None] * (t[None, :] / self.t0) ** (-d["alpha"][:, None])
         return d["E_inf"][:, None] + d["E1"][:, None] * np.exp(-t[None, :] / d["tau"][:, None])
@@ -168,6 +162,8 @@ class RheologyFit:
     def kernels(self, n: int | None = None) -> list[PowerLawKernel | PronyKernel]:
         """The relaxation kernels of the first ``n`` draws (all by default)."""
         d, k = self.draws, len(self.draws["z_surf"]) if n is None else n
+        if self.rheology == "elastic":  # the constant kernel: a power law of alpha 0
+            return [PowerLawKernel(d["E"][i], 0.0, self.t0) for i in range(k)]
         if self.rheology == "power-law":
             return [PowerLawKernel(d["E0"][i], d["alpha"][i], self.t0) for i in range(k)]
         return [PronyKernel(d["E_inf"][i], (d["E1"][i],), (d["tau"][i],)) for i in range(k)]
@@ -184,11 +180,10 @@ class RheologyFit:
                          for k in self.kernels(n)])
         return _median_interval(vals, level)
 
-    def force_curves(self, n: int = _BAND_DRAWS, contact_only: bool = False) -> np.ndarray:
+    def force_curves(self, n: int = _BAND_DRAWS) -> np.ndarray:
         """[N] Model force at the block means for ``n`` draws (n, points), offset, drag and
-        tilt included (``contact_only``: the contact force alone): the draws
-        :func:`curve_draws` picks."""
-        return _force_curves(self.data, self.rheology, self.draws, self.t0, n, contact_only)
+        tilt included: the draws :func:`curve_draws` picks."""
+        return _force_curves(self.data, self.rheology, self.draws, self.t0, n)
 
     def compression_modulus(self, height: float, speed: float = PAPER_COMPRESSION_SPEED,
                             strain_window=DEFAULT_STRAIN_WINDOW, level: float = LEVEL,
@@ -229,8 +224,8 @@ def curve_draws(n_total: int, n: int) -> np.ndarray:
     return np.linspace(0, n_total - 1, min(n, n_total)).round().astype(int)
 
 
-def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int,
-                  contact_only: bool = False) -> np.ndarray:
+def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int
+                  ) -> np.ndarray:
     idx = curve_draws(len(draws["z_surf"]), n)
     k = idx.size
     win = data.windows()
@@ -240,7 +235,9 @@ def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int
     out = np.empty((k, data.n_points))
     for r, i in enumerate(idx):
         z = draws["z_surf"][i:i + 1]
-        if rheology == "power-law":
+        if rheology == "elastic":
+            f = draws["E"][i] * lee_radok_columns(win, z, data.z_edges, data.m, None)[0]
+        elif rheology == "power-law":
             alpha = float(draws["alpha"][i])
             f = draws["E0"][i] * with_retract(data, lee_radok_columns(
                 win, z, data.z_edges, data.m, "power-law", alpha, t0), z, alpha, t0, design)[0]
@@ -248,10 +245,7 @@ def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int
             f = (draws["E_inf"][i] * lee_radok_columns(win, z, data.z_edges, data.m, None)[0]
                  + draws["E1"][i] * lee_radok_columns(win, z, data.z_edges, data.m,
                                                       "exponential", float(draws["tau"][i]))[0])
-        out[r] = data.C * f
-        if contact_only:
-            continue
-        out[r] += draws["offset"][i]
+        out[r] = data.C * f + draws["offset"][i]
         if "drag" in draws:
             out[r] += draws["drag"][i] * data.speed
         if "tilt" in draws:
@@ -259,105 +253,10 @@ def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int
     return out
 
 
-def _offcontact_flags(fit: RheologyFit, residual: np.ndarray, contact: np.ndarray
-                      ) -> list[str]:
-    """Flags of the force out of contact (:mod:`~palpbayes.rheology.offcontact`)."""
-    data, grid, out = fit.data, fit.grid, []
-    zs = float(np.median(fit.draws["z_surf"]))
-    gap = drag_gap(data, zs) if "retract" in data.segments and not grid.drag else None
-    if gap is not None and abs(gap[0]) > DRAG_N_SE * gap[1]:
-        g, _, v = gap
-        out.append(f"out of contact the approach's force lies {format_force(g)} "
-                   f"{'above' if g > 0 else 'below'} the retract's: viscous drag on the "
-                   f"probe (b = {g / (2 * v):.3g} N·s/m at {v * 1e6:.3g} µm/s) or a drifting "
-                   "sensor; the fit reads that gap as relaxation (fit the drag: drag=True, "
-                   "--drag on)")
-    tilt = None if grid.tilt else baseline_tilt(data, residual, zs)
-    if tilt is not None:
-        f1, se, span = tilt
-        if abs(f1) > N_SE * se and abs(f1) * span > data.sigma_center:
-            out.append(f"out of contact the residuals tilt with the height: F1 = {f1:.3g} N/m "
-                       f"({f1 / se:.1f} se; {format_force(f1 * span)} over "
-                       f"{span * 1e6:.3g} µm above the surface): a tilted or drifting "
-                       "baseline (an AFM's virtual deflection, a sensor drifting) that the fit "
-                       "reads as contact force (fit it: baseline='linear', --baseline linear)")
-    dip = adhesion_dip(data, residual, contact, zs) if "retract" in data.segments else None
-    if dip is not None and dip[0] < -N_SE * dip[1]:
-        depth, se, t = dip
-        out.append(f"after the model's contact ends the retract's force dips "
-                   f"{format_force(-depth)} below the fitted baseline ({-depth / se:.1f} se, "
-                   f"at {t:.3g} s): adhesion, the sample holding the tip before it lets go, "
-                   "which Ting's rule does not model; it biases the fit of the retract (fit "
-                   "--segments approach,hold, or cut the retract at the pull-off)")
-    return out
-
-
-def _flags(fit: RheologyFit) -> list[str]:
-    d, data, grid = fit.draws, fit.data, fit.grid
-    out = list(fit.offcontact)
-    if fit.rheology == "power-law":
-        a = d["alpha"]
-        if np.mean(a < 0.01) > 0.05:
-            out.append(f"alpha piles up at 0, the lower bound of its prior (P(alpha < 0.01) = "
-                       f"{np.mean(a < 0.01):.2f}): no relaxation resolved; the elastic model "
-                       "may do")
-        if np.mean(a > ALPHA_MAX - 0.01) > 0.05:
-            out.append(f"alpha piles up at {ALPHA_MAX}, the upper bound of its prior: the "
-                       "material flows almost like a liquid, or the segments are wrong")
-    else:
-        tau = d["tau"]
-        lo, hi = np.percentile(tau, [5.0, 95.0])
-        if lo < data.dt_min:
-            out.append(f"tau reaches {lo:.3g} s, below one step of the fitted record "
-                       f"({data.dt_min:.3g} s): a relaxation faster than the sampling is not "
-                       "resolved (fit fewer blocks: max_points, or sample faster)")
-        if hi > data.span:
-            out.append(f"tau reaches {hi:.3g} s, beyond the recorded {data.span:.3g} s: the "
-                       "slow relaxation is not resolved (hold longer)")
-    if fit.phi_at_bound:
-        out.append(f"the noise correlation phi piles up at {PHI_BOUNDS[1]}, the upper bound of "
-                   "its prior: the residuals drift slowly, which is model misfit rather than "
-                   "sensor noise")
-    zlo, zhi = np.percentile(d["z_surf"], [5.0, 95.0])
-    if zlo <= grid.z.min() <= data.z_lo or zhi >= grid.z.max() >= data.z_hi:
-        out.append("the surface posterior reaches a bound of its prior (the deepest or the first "
-                   "height): the contact point is not resolved")
-    if not grid.converged:
-        out.append("the posterior grid did not settle in its iterations: the intervals may be "
-                   "too narrow or too wide (report this record)")
-    for z, th, drop in grid.other_basins:
-        out.append(f"another basin of the posterior at z_surf = {z:.6g} m, "
-                   f"{grid.theta_name} = {th:.3g}, {drop:.1f} below the best in log density")
-    ess = float(d["ess"])
-    if ess < MIN_ESS:
-        out.append(f"the moduli's priors leave an effective sample of {ess:.0f} draws: the "
-                   "intervals are rough")
-    hold = data.segment == 1
-    if hold.any():
-        dep = np.median(d["z_surf"]) - data.z
-        peak = float(dep[~hold].max()) if (~hold).any() else float(dep.max())
-        loss = (peak - float(dep[hold].min())) / peak if peak > 0 else 0.0
-        if loss > SHRINK_FLAG:
-            out.append(f"the contact shrinks by {100 * loss:.1f} % of the depth during the hold "
-                       "(the tip backs out as the force relaxes): Lee–Radok overstates the "
-                       "relaxation there (Ting's rule is applied on the retract only)")
-    thickness = data.trace.thickness
-    if thickness is not None:
-        depth = float(np.median(d["z_surf"]) - data.z.min())
-        if depth > THIN_FLAG * thickness:
-            out.append(f"the specimen is {1e3 * thickness:.3g} mm thick and the tip goes "
-                       f"{1e3 * depth:.3g} mm deep ({100 * depth / thickness:.0f} %): the "
-                       "viscoelastic fit takes a half-space, so the rigid base under a thin "
-                       "layer reads as a stiffer material (not modelled here yet)")
-    if not fit.ppc.passed:
-        out.append(fit.ppc.flag)
-    return out
-
-
 def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
                  tip: Tip | None = None, segments=DEFAULT_SEGMENTS, t0: float = 1.0,
                  nu: float | None = None, drag: bool | None = None,
-                 baseline: str = "constant", n_draws: int = 4000,
+                 baseline: str = "constant", engine: str = "grid", n_draws: int = 4000,
                  max_points: int = MAX_POINTS,
                  rng: np.random.Generator | int | None = 0) -> RheologyFit:
     """Posterior of a relaxation modulus, the surface, offset and noise from one cycle.
@@ -369,7 +268,10 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
         motion.
     rheology
         ``"power-law"``: E*(t) = E0*·(t/t0)^(−alpha) (Lee & Radok 1960); ``"sls"``: the
-        standard linear solid E*(t) = E_inf* + E1*·exp(−t/tau).
+        standard linear solid E*(t) = E_inf* + E1*·exp(−t/tau); ``"elastic"``: E*(t) = E*,
+        the rate-independent law fitted to the same block means (the force then follows the
+        depth, F = C·E*·d^m, on the retract as on the approach), to compare with the others
+        (:func:`~palpbayes.rheology.choice.compare_fits`).
     tip
         Indenter (default ``trace.tip``), a power law F = C·E*·d^m.
     segments
@@ -387,6 +289,11 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
     baseline
         ``"constant"`` (an offset F0) or ``"linear"``: F0 + F1·(z − z_ref), z_ref the mean
         height of the baseline samples (a tilted or drifting baseline; F1 [N/m] is ``tilt``).
+    engine
+        ``"grid"``: the collapsed posterior on its grid (:mod:`~palpbayes.rheology.posterior`);
+        ``"emcee"``: the same posterior sampled with every parameter explicit, started from
+        the grid's draws (:func:`~palpbayes.rheology.sampler.sample_emcee`; a cross-check, a
+        few times slower; a chain that does not converge is flagged).
     n_draws
         Posterior draws kept.
     max_points
@@ -404,6 +311,8 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
                          f"{', '.join(RHEOLOGIES)} (or the elastic fit)")
     if nu is not None:
         nu = check_nu(nu)
+    if engine not in ENGINES:
+        raise InputError(f"engine {engine!r}: use one of {', '.join(ENGINES)}")
     if baseline not in BASELINES:
         raise InputError(f"baseline {baseline!r}: use one of {', '.join(BASELINES)}")
     if not (isinstance(n_draws, int | np.integer) and n_draws >= 100):
@@ -417,21 +326,23 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
     if drag is None:
         drag = "retract" in data.segments
     grid = grid_posterior(data, rheology, t0=t0, drag=bool(drag), tilt=baseline == "linear")
-    draws = grid.draws(gen, int(n_draws))
+    sampler = None
+    if engine == "emcee":
+        sampler = sample_emcee(data, rheology, t0=t0, drag=grid.drag, tilt=grid.tilt,
+                               n_draws=int(n_draws), rng=gen, grid=grid)
+        draws = {**sampler.draws, "ess": np.array(np.inf)}  # no importance resampling
+    else:
+        draws = grid.draws(gen, int(n_draws))
     curves = _force_curves(data, rheology, draws, t0, _BAND_DRAWS)
     sub = curve_draws(n_draws, _BAND_DRAWS)
-    base = draws["offset"][sub, None] + sum(
-        draws[k][sub, None] * col for k, col in (("drag", data.speed),
-                                                  ("tilt", data.z - data.z_ref)) if k in draws)
     t_contact = float(np.median(_contact_times(data, draws["z_surf"][sub])))
     # residuals binned in time: -time as the "height", the contact time as the "surface"
     ppc = posterior_predictive_check(-data.time, data.force, curves, draws["sigma"][sub],
                                      phi=draws["phi"][sub], rng=gen, z_surf=-t_contact,
                                      n_bins=12)
-    fit = RheologyFit(rheology, data, grid, draws, ppc, nu=nu)
-    fit.offcontact = _offcontact_flags(fit, data.force - np.median(curves, axis=0),
-                                       np.median(curves - base, axis=0))
-    fit.flags = _flags(fit)
+    fit = RheologyFit(rheology, data, grid, draws, ppc, sampler=sampler, nu=nu)
+    fit.offcontact = offcontact_flags(fit, data.force - np.median(curves, axis=0))
+    fit.flags = fit_flags(fit)
     fit.seconds = _time.perf_counter() - start
     return fit
 

@@ -13,14 +13,18 @@ block means with its own standard error, so that a fit never passes them over in
   z − z_ref on the out-of-contact blocks, one intercept per segment (so a drag's shift is not
   read as a tilt): an AFM's virtual deflection (light scattered by the sample), or a sensor
   drifting while the tip moves at constant speed;
-* **adhesion**: where the model's contact force has fallen below :data:`CONTACT_END` of its
-  peak on the retract, the lowest mean residual over :data:`ADHESION_WINDOW` consecutive
-  blocks: a sample that holds the tip before it lets go (pull-off) pulls the force below the
+* **adhesion**: on the retract, the force against the retract's own out-of-contact baseline
+  (the fit's drag and tilt, at a level read from the retract's blocks in the upper half of
+  the heights above the surface, so that no fit of the contact can absorb a dip); from where
+  the force first comes down to it, the lowest mean over :data:`ADHESION_WINDOW` consecutive
+  blocks among the windows that start within :data:`ADHESION_SEARCH` windows (a pull-off
+  comes as the tip leaves; searching the whole retract would flag the lowest of many noise
+  windows): a sample that holds the tip before it lets go pulls the force below the
   baseline, which Ting's rule (a contact that only shrinks, no adhesion) cannot give.
 
 Standard errors: least squares, inflated by the AR(1) long-run factor (1 + φ)/(1 − φ) of the
-residuals' lag-one correlation φ (clipped to [0, 0.9]); for the adhesion window, the spread of
-window means of the approach's out-of-contact residuals when there are enough of them.  A
+residuals' lag-one correlation φ (clipped to [0, 0.9]); for the adhesion window, the sd of
+the retract baseline's residuals with that factor.  A
 departure is flagged beyond :data:`N_SE` standard errors (and, for a tilt, when it moves the
 baseline by more than one block-mean noise sd over the out-of-contact range).
 """
@@ -33,15 +37,15 @@ import numpy as np
 
 from .cycle import CycleData
 
-__all__ = ["drag_gap", "baseline_tilt", "adhesion_dip", "N_SE", "CONTACT_END",
-           "ADHESION_WINDOW", "ABOVE"]
+__all__ = ["drag_gap", "baseline_tilt", "adhesion_dip", "N_SE", "ADHESION_WINDOW",
+           "ADHESION_SEARCH", "ABOVE"]
 
 #: Standard errors beyond which a departure is flagged.
 N_SE = 5.0
-#: Share of the model's peak contact force below which the contact counts as ended.
-CONTACT_END = 0.05
 #: Consecutive blocks whose mean residual measures an adhesion dip.
 ADHESION_WINDOW = 5
+#: Windows after the contact's end among which the adhesion dip is sought.
+ADHESION_SEARCH = 4
 #: Blocks count as out of contact this share of the height range above the surface.
 ABOVE = 0.05
 #: Clip of the residuals' lag-one correlation in the long-run factor.
@@ -110,29 +114,43 @@ def baseline_tilt(data: CycleData, residual: np.ndarray, z_surf: float
     return float(coef[0]), float(math.sqrt(max(cov[0, 0], 0.0))), span
 
 
-def adhesion_dip(data: CycleData, residual: np.ndarray, contact: np.ndarray, z_surf: float
+def adhesion_dip(data: CycleData, z_surf: float, trend: np.ndarray | None = None
                  ) -> tuple[float, float, float] | None:
-    """The lowest mean of ``residual`` [N] over :data:`ADHESION_WINDOW` consecutive retract
-    blocks where the model's ``contact`` force [N] is below :data:`CONTACT_END` of its peak,
-    its standard error [N] and the time [s] of that window's middle; None without a retract
-    or without such a window."""
+    """The adhesion dip of the retract (module docstring): the lowest mean, over
+    :data:`ADHESION_WINDOW` consecutive blocks starting within :data:`ADHESION_SEARCH`
+    windows of where the retract's force first falls to its own baseline, of the force minus
+    that baseline [N]; its standard error [N] and the time [s] of that window's middle.
+
+    The baseline is ``trend`` [N] per block (the fit's drag and tilt terms, without the
+    offset; zero by default) plus a level: the median of force − trend over the retract's
+    blocks in the upper half of the heights it reaches above the surface, where a pull-off is
+    over.  The level comes from those blocks alone (no fit of the contact can absorb a dip
+    into it).  None without a retract, without ten such blocks or without a crossing."""
     w = ADHESION_WINDOW
-    ended = (data.segment == 2) & (contact < CONTACT_END * max(float(contact.max()), 0.0))
-    idx = np.flatnonzero(ended)
-    if idx.size < w or not contact.max() > 0:
+    ret = np.flatnonzero(data.segment == 2)
+    if ret.size < 4 * w:
         return None
-    # windows of w consecutive blocks, all of them past the contact's end
-    start = idx[:-w + 1][idx[w - 1:] - idx[:-w + 1] == w - 1]
-    if start.size == 0:
+    z = data.z[ret]
+    f = data.force[ret] - (0.0 if trend is None else np.asarray(trend)[ret])
+    top = float(z.max())
+    if not top > z_surf:
         return None
-    means = np.array([residual[s:s + w].mean() for s in start])
+    far = z > z_surf + 0.5 * (top - z_surf)
+    if far.sum() < 10:
+        return None
+    level = float(np.median(f[far]))
+    resid = f - level
+    peak = int(np.argmax(f))
+    below = np.flatnonzero(resid[peak:] <= 0.0)
+    if below.size == 0:
+        return None
+    cross = peak + int(below[0])
+    starts = np.arange(cross, min(cross + ADHESION_SEARCH * w, resid.size - w + 1))
+    if starts.size == 0:
+        return None
+    means = np.array([resid[s:s + w].mean() for s in starts])
     k = int(np.argmin(means))
-    approach = _outside(data, z_surf) & (data.segment == 0)
-    ra = residual[approach]
-    if ra.size >= 4 * w:  # the spread of window means of the approach's own residuals
-        n = ra.size // w
-        se = float(np.std(ra[:n * w].reshape(n, w).mean(axis=1), ddof=1))
-    else:
-        se = data.sigma_center * math.sqrt(_long_run(ra) / w)
-    mid = start[k] + w // 2
-    return float(means[k]), se, float(data.time[mid])
+    g = _long_run(resid[far])
+    sd = float(np.std(resid[far], ddof=1))
+    se = sd * math.sqrt(g / w + 1.5708 * g / far.sum())  # window + level (median: π/2)
+    return float(means[k]), se, float(data.time[ret[starts[k] + w // 2]])

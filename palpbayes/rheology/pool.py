@@ -69,6 +69,10 @@ class PooledPowerLaw:
         return out
 
 
+#: Nodes per pooled standard deviation at which the grid stops zooming.
+ZOOM_NODES = 3.0
+
+
 def _log_t(x: np.ndarray, loc: np.ndarray, scale: np.ndarray, nu: int) -> np.ndarray:
     """log Student-t density of ``x`` with location, scale and ``nu`` degrees of freedom."""
     z = (x - loc) / scale
@@ -156,16 +160,17 @@ def pool_power_law(fits: Sequence[RheologyFit], *, n_alpha: int = 41, n_e0: int 
     e_hi = float((med[:, 0] + 2 * SPAN_SD * sd[:, 0]).max())
     evaluators = [NodeEvaluator(f.data, "power-law", t0, f.grid.drag, f.grid.tilt)  # once each
                   for f in fits]
-    for _ in range(3):  # zoom until the pooled sd spans >= 4 nodes on both axes
+    for _ in range(3):  # zoom until the pooled sd spans >= ZOOM_NODES nodes on both axes
         alpha = np.linspace(a_lo, a_hi, n_alpha)
         e0 = np.linspace(e_lo, e_hi, n_e0)
         total = _pooled_log(fits, evaluators, alpha, e0)
         log_mass = total - logsumexp(total)
         ma, sa, me, se = _grid_moments(alpha, e0, log_mass)
-        if sa >= 4 * (alpha[1] - alpha[0]) and se >= 4 * (e0[1] - e0[0]):
+        if sa >= ZOOM_NODES * (alpha[1] - alpha[0]) and se >= ZOOM_NODES * (e0[1] - e0[0]):
             break
-        a_lo, a_hi = max(0.0, ma - 2 * SPAN_SD * sa), min(ALPHA_MAX, ma + 2 * SPAN_SD * sa)
-        e_lo, e_hi = max(me - 2 * SPAN_SD * se, 1e-3 * me), me + 2 * SPAN_SD * se
+        # ±SPAN_SD sd: 41 alpha nodes put 3.3 of them in one sd, so one zoom settles
+        a_lo, a_hi = max(0.0, ma - SPAN_SD * sa), min(ALPHA_MAX, ma + SPAN_SD * sa)
+        e_lo, e_hi = max(me - SPAN_SD * se, 1e-3 * me), me + SPAN_SD * se
     gen = np.random.default_rng(rng)
     p = np.exp(log_mass.ravel())
     pick = gen.choice(p.size, size=n_draws, p=p / p.sum())

@@ -3,7 +3,9 @@
 Model: block means F_i = β·X_i(z_s, θ) + F0 [+ b·v_i] [+ F1·(z_i − z_ref)] + e_i, with X
 the Lee–Radok columns of :mod:`~palpbayes.rheology.design` (power law: β = E0*, θ = alpha,
 and Ting's columns on the retract, :mod:`~palpbayes.rheology.ting`; standard linear solid:
-β = (E_inf*, E1*), θ = tau) and e stationary AR(1) Gaussian noise (lag-one correlation phi).
+β = (E_inf*, E1*), θ = tau; the elastic law: β = E*, the constant kernel, no θ, so that the
+same block means compare all three) and e stationary AR(1) Gaussian noise (lag-one
+correlation phi).
 
 * With ``drag``, b [N·s/m] is a viscous drag on the probe and v_i = −dz/dt the block's
   downward tip speed (:attr:`~palpbayes.rheology.cycle.CycleData.speed`): the hydrodynamic
@@ -57,8 +59,9 @@ from .ting import RETRACT, RetractDesign, with_retract
 __all__ = ["RHEOLOGIES", "GridPosterior", "grid_posterior", "NodeEvaluator", "ALPHA_MAX",
            "KEEP", "FINE", "SPAN_SD", "COARSE_THETA", "COARSE_Z", "PHI_BOUNDS", "NUISANCE"]
 
-#: Relaxation models the grid engine fits, and the name of their grid parameter.
-RHEOLOGIES = {"power-law": "alpha", "sls": "tau"}
+#: Relaxation models the grid engine fits, and the name of their grid parameter (the elastic
+#: law E*(t) = E* has none: its grid is the surface alone).
+RHEOLOGIES = {"power-law": "alpha", "sls": "tau", "elastic": None}
 #: Upper end of the uniform alpha prior (1 is a dashpot).
 ALPHA_MAX = 0.95
 #: Coarse grid: theta nodes and surface nodes.
@@ -111,7 +114,7 @@ class GridPosterior:
     converged: bool = True
 
     @property
-    def theta_name(self) -> str:
+    def theta_name(self) -> str | None:
         return RHEOLOGIES[self.rheology]
 
     @property
@@ -175,8 +178,9 @@ class GridPosterior:
         w /= w.sum()
         ess = 1.0 / float(w @ w)
         keep = rng.choice(k, size=n, p=w)
-        out.update({self.theta_name: th, "z_surf": zs,
-                    "sigma": np.sqrt(tau2 / (1.0 - phi**2)), "phi": phi})
+        out.update({"z_surf": zs, "sigma": np.sqrt(tau2 / (1.0 - phi**2)), "phi": phi})
+        if self.theta_name is not None:
+            out[self.theta_name] = th
         res = {key: np.asarray(v)[keep] for key, v in out.items()}
         res["ess"] = np.array(ess)
         return res
@@ -189,6 +193,8 @@ class GridPosterior:
 
 
 def _theta_bounds(rheology: str, data: CycleData) -> tuple[float, float]:
+    if rheology == "elastic":
+        return 0.0, 0.0
     if rheology == "power-law":
         return 0.0, ALPHA_MAX
     return data.dt_min / 10.0, 100.0 * data.span
@@ -203,9 +209,9 @@ class NodeEvaluator:
                  tilt: bool = False):
         self.data, self.rheology, self.t0 = data, rheology, t0
         self.drag, self.tilt = bool(drag), bool(tilt)
-        self.names = ((("E0", "offset") if rheology == "power-law" else
-                       ("E_inf", "offset", "E1")) + (("drag",) if drag else ())
-                      + (("tilt",) if tilt else ()))
+        moduli = {"power-law": ("E0", "offset"), "sls": ("E_inf", "offset", "E1"),
+                  "elastic": ("E", "offset")}[rheology]
+        self.names = moduli + (("drag",) if drag else ()) + (("tilt",) if tilt else ())
         self.windows = data.windows()
         self.y = data.force - data.f0_center
         self.weights = np.array([1.0 / OFFSET_SD**2])
@@ -220,7 +226,7 @@ class NodeEvaluator:
         """X (G, N, q): one column per name of :attr:`names` (modulus, 1, second modulus,
         speed, height from z_ref) and y last, for surfaces ``z``."""
         d = self.data
-        kind = "power-law" if self.rheology == "power-law" else "exponential"
+        kind = {"power-law": "power-law", "sls": "exponential", "elastic": None}[self.rheology]
         b = lee_radok_columns(self.windows, z, d.z_edges, d.m, kind, theta, self.t0)
         if self.rheology == "power-law":  # Ting's rule on the retract (the SLS refuses one)
             b = with_retract(d, b, z, theta, self.t0, self.retract)
@@ -229,7 +235,7 @@ class NodeEvaluator:
         ones, y = np.ones((G, N)), np.broadcast_to(self.y, (G, N))
         extra = ([np.broadcast_to(d.speed, (G, N))] if self.drag else []) + (
             [np.broadcast_to(d.z - d.z_ref, (G, N))] if self.tilt else [])
-        if self.rheology == "power-law":
+        if self.rheology != "sls":
             return np.stack([b, ones, *extra, y], axis=-1)
         inf = d.C * lee_radok_columns(self.windows, z, d.z_edges, d.m, None)
         return np.stack([inf, ones, b, *extra, y], axis=-1)
@@ -284,7 +290,8 @@ def _log_cells(ct: np.ndarray, z: np.ndarray) -> np.ndarray:
 def _sheared(centre, sd, slope, bounds) -> tuple[np.ndarray, np.ndarray]:
     (tlo, thi), (zlo, zhi) = bounds
     (mt, mz), (st, sz) = (min(max(centre[0], tlo), thi), centre[1]), sd
-    ct = np.linspace(max(tlo, mt - SPAN_SD * st), min(thi, mt + SPAN_SD * st), FINE)
+    ct = np.linspace(max(tlo, mt - SPAN_SD * st), min(thi, mt + SPAN_SD * st),
+                     FINE if thi > tlo else 1)  # the elastic law: one theta node
     mid = mz + slope * (ct - mt)
     mid = np.clip(mid, zlo, zhi)  # a ridge may leave the prior: keep every row inside it
     z = np.stack([np.linspace(max(zlo, c - SPAN_SD * sz), min(zhi, c + SPAN_SD * sz), FINE)
@@ -350,7 +357,7 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
     to_c = (lambda v: np.log(v)) if log_theta else (lambda v: np.asarray(v, float))  # noqa
     from_c = (lambda c: np.exp(c)) if log_theta else (lambda c: c)  # noqa: E731
     c_lo, c_hi = float(to_c(lo)), float(to_c(hi))
-    ct = np.linspace(c_lo, c_hi, COARSE_THETA)
+    ct = np.linspace(c_lo, c_hi, COARSE_THETA if c_hi > c_lo else 1)
     cz = np.linspace(data.z_lo, data.z_hi, COARSE_Z)
     lp, _ = ev.logp(from_c(ct), cz)
     if not np.isfinite(lp).any():
@@ -358,7 +365,7 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
                        "enough block means in contact; the record has (almost) no contact")
     i, j = np.unravel_index(np.argmax(lp), lp.shape)
     basins = _coarse_basins(lp, ct, cz)
-    step = (ct[1] - ct[0], cz[1] - cz[0])
+    step = (ct[1] - ct[0] if ct.size > 1 else 0.0, cz[1] - cz[0])
     centre, sd, slope = (float(ct[i]), float(cz[j])), step, 0.0
     bounds = ((c_lo, c_hi), (data.z_lo, data.z_hi))
     converged = False
@@ -369,7 +376,8 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
             raise FitError("the fine grid holds no finite density; report this record")
         a, b = np.unravel_index(np.argmax(lp), lp.shape)
         mt, st, new_slope, mz, sz = _moments(gt, gz, lp + _log_cells(gt, gz))
-        spacing = (max(np.diff(gt).min(), 0.0), float(np.diff(gz, axis=1).min()))
+        spacing = (max(np.diff(gt).min(), 0.0) if gt.size > 1 else 0.0,
+                   float(np.diff(gz, axis=1).min()))
         edge = (a in (0, FINE - 1) and gt[a] not in bounds[0],
                 b in (0, FINE - 1) and gz[a, b] not in bounds[1])
         resolved = all(s_ >= RESOLVE * h or s_ == 0.0 and h == 0.0
@@ -387,7 +395,7 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
         floor = (spacing[0] / 4, spacing[1] / 4)  # all mass on one node: shrink, do not stop
         centre, slope = (mt, mz), new_slope
         sd = (max(st, floor[0], (c_hi - c_lo) * 1e-9), max(sz, floor[1], 1e-15))
-    log_cell = (post.logp.reshape(FINE, FINE, -1) + _log_cells(gt, gz)[:, :, None]
+    log_cell = (post.logp.reshape(gt.size, FINE, -1) + _log_cells(gt, gz)[:, :, None]
                 + np.log(cell_widths(ev.phi))[None, None, :])
     log_mass = log_cell - logsumexp(log_cell)
     names = ev.names

@@ -4,12 +4,17 @@
 parameter's posterior median and central 90 % interval in columns named
 ``<parameter>[_lo|_hi]_<unit>`` (moduli as E* [Pa], and as E with ``nu``), whether the model
 check passed (``model_ok``), the short codes of what was flagged (``flag_codes``, ``;``
-separated) and the flags in words (``notes``), the number of block means and the fit time.
+separated) and the flags in words (``notes``), the number of block means and the fit time,
+the posterior ``engine`` (``grid``, or ``emcee`` with its ``rhat_max``, ``ess_min`` and
+``converged``).
 With ``nu`` and the specimen's thickness known, ``E_compression_pa`` (``_lo``, ``_hi``) is the
 Young's modulus a compression test of that height at ``compression_speed_mm_min`` would report
 (:func:`~palpbayes.rheology.compression.compression_moduli`: the ground truth's rule), to set
 beside the Instron.  A trace that cannot be fitted (no contact, a missing segment) keeps its row
-with the reason in ``error``.  The table is written atomically, once, after the last trace.
+with the reason in ``error``.  The table is written atomically, once, after the last trace;
+every fit is also stored as ``rheology/<trace_id>_<rheology>.nc`` (:mod:`~palpbayes.rheology.
+store`: its draws and bands, what the report draws), and a previous run's table and stored fits
+are removed first.
 """
 
 from __future__ import annotations
@@ -21,19 +26,19 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..campaign.layout import RHEOLOGY_TABLE, rheology_fit_path
 from ..errors import PalpbayesError
 from ..io.atomic import write_csv_atomic
 from ..trace import IndentationTrace
 from .compression import PAPER_COMPRESSION_SPEED
 from .cycle import DEFAULT_SEGMENTS
 from .fit import RheologyFit, fit_rheology
+from .store import clear_rheology_outputs, save_rheology_fit
 
 __all__ = ["RHEOLOGY_TABLE", "summary_row", "fit_traces", "flag_code"]
 
-#: File name of the per-trace table in a results folder.
-RHEOLOGY_TABLE = "rheology.csv"
-
-_UNITS = {"Pa": "pa", "s": "s", "m": "m", "N": "n", "-": "", "N·s/m": "n_s_per_m"}
+_UNITS = {"Pa": "pa", "s": "s", "m": "m", "N": "n", "-": "", "N·s/m": "n_s_per_m",
+          "N/m": "n_per_m"}
 #: Short code of each flag, by the words it starts with or holds.
 _CODES = (("alpha piles up at 0", "alpha_at_zero"), ("alpha piles up", "alpha_at_bound"),
           ("below one step", "tau_fast"), ("beyond the recorded", "tau_slow"),
@@ -41,6 +46,8 @@ _CODES = (("alpha piles up at 0", "alpha_at_zero"), ("alpha piles up", "alpha_at
           ("did not settle", "grid"), ("another basin", "basin"),
           ("effective sample", "ess"), ("contact shrinks", "shrinking_contact"),
           ("takes a half-space", "thickness"), ("viscous drag", "drag"),
+          ("tilt with the height", "tilt"), ("adhesion", "adhesion"),
+          ("did not converge", "not_converged"),
           ("posterior-predictive", "ppc"))
 
 
@@ -88,6 +95,10 @@ def summary_row(trace: IndentationTrace, fit: RheologyFit,
         row.update(E_compression_pa=med, E_compression_lo_pa=lo, E_compression_hi_pa=hi,
                    compression_speed_mm_min=compression_speed * 6e4,
                    compression_height_m=trace.thickness)
+    row["engine"] = "grid" if fit.sampler is None else "emcee"
+    if fit.sampler is not None:
+        row.update(rhat_max=max(fit.sampler.rhat.values()),
+                   ess_min=min(fit.sampler.ess.values()), converged=fit.sampler.converged)
     row.update(model_ok=fit.model_ok, flag_codes=";".join(flag_code(f) for f in fit.flags),
                notes=" | ".join(fit.flags), n_points=fit.data.n_points,
                block=fit.data.block, seconds=round(fit.seconds, 3), error="")
@@ -105,8 +116,11 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
                rheology: str | Sequence[str], out: str | os.PathLike, *,
                segments=DEFAULT_SEGMENTS, t0: float = 1.0, nu: float | None = None,
                seed: int = 0, compression_speed: float = PAPER_COMPRESSION_SPEED,
-               drag: bool | None = None, progress: bool | None = None,
-               total: int | None = None) -> pd.DataFrame:
+               drag: bool | None = None, baseline: str = "constant", engine: str = "grid",
+               progress: bool | None = None,
+               total: int | None = None,
+               on_fit: Callable[[IndentationTrace, RheologyFit], None] | None = None
+               ) -> pd.DataFrame:
     """Fit every trace with :func:`~palpbayes.rheology.fit_rheology` and write
     ``out/rheology.csv`` (module docstring); returns the table.
 
@@ -131,11 +145,15 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
         Results folder (created).
     segments, t0, nu, seed, compression_speed
         As above; ``segments`` as :func:`~palpbayes.rheology.fit_rheology` takes them.
-    drag
-        Fit a viscous drag term (None: when the retract is fitted), as
-        :func:`~palpbayes.rheology.fit_rheology` takes it.
+    drag, baseline, engine
+        A viscous drag term (None: when the retract is fitted), the baseline model
+        (``"constant"`` or ``"linear"``) and the posterior engine (``"grid"`` or ``"emcee"``),
+        as :func:`~palpbayes.rheology.fit_rheology` takes them.
     progress, total
         A progress bar (None: only on a terminal) and its length.
+    on_fit
+        Called with (trace, fit) for every successful fit, after its row (e.g.
+        :meth:`palpbayes.rheology.campaign.SpeedPools.add`: pooling without keeping the fits).
 
     Returns
     -------
@@ -148,6 +166,7 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
     models = (rheology,) if isinstance(rheology, str) else tuple(rheology)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    clear_rheology_outputs(out)  # the table and stored fits of a previous run (--force)
     rows = []
     bar = progress_bar(total, progress, desc=f"{'/'.join(models)} fits")
     try:
@@ -167,8 +186,12 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
             for m in models:  # one model failing keeps the others' rows
                 try:
                     fits[m] = fit_rheology(trace, m, segments=segments, t0=t0, nu=trace_nu,
-                                           drag=drag, rng=seed + i)
-                    new.append(summary_row(trace, fits[m], compression_speed))
+                                           drag=drag, baseline=baseline, engine=engine,
+                                           rng=seed + i)
+                    row = summary_row(trace, fits[m], compression_speed)
+                    save_rheology_fit(fits[m], rheology_fit_path(out, trace.trace_id, m),
+                                      trace=trace)  # the report's draws and bands
+                    new.append(row)
                 except (PalpbayesError, np.linalg.LinAlgError) as exc:
                     fits.pop(m, None)
                     new.append(_error_row(trace_id, source, m, exc))
@@ -178,6 +201,9 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
                     if r["rheology"] in choice.index:
                         r.update(choice.loc[r["rheology"]].to_dict())
             rows.extend(new)
+            if on_fit is not None:
+                for fit in fits.values():
+                    on_fit(trace, fit)
             bar.update(1)
     finally:
         bar.close()

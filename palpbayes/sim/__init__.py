@@ -1,7 +1,8 @@
 """The simulator: synthetic palpation traces, compression tests and campaigns from a known truth.
 
 One module per job, imports flowing one way (``map`` -> ``campaign``/``inclusion``;
-``campaign`` -> ``series``/``compression`` -> ``trace`` -> ``force``):
+``campaign`` -> ``series``/``compression`` -> ``trace`` -> ``force``; ``visco_campaign`` ->
+``campaign``/``viscoelastic``):
 
 * :mod:`~palpbayes.sim.force` -- the noise-free contact force and its physics knobs (strain
   stiffening, gradual onset, finite thickness, a blunted apex, series compliance);
@@ -17,7 +18,9 @@ One module per job, imports flowing one way (``map`` -> ``campaign``/``inclusion
 * :mod:`~palpbayes.sim.misfit` -- palpations with a misfit the user did not model (an unknown
   layer, stiffening, a gradual onset, a blunted apex), the model-form calibration's traces;
 * :mod:`~palpbayes.sim.viscoelastic` -- a ramp–hold–retract on a viscoelastic half-space
-  (power-law or Prony relaxation, Lee–Radok/Ting), one trace or one per speed.
+  (power-law or Prony relaxation, Lee–Radok/Ting), one trace or one per speed;
+* :mod:`~palpbayes.sim.visco_campaign` -- a campaign folder of such palpations: specimens x
+  tips x speeds, with the segment column and the truth tables.
 
 The paper's numbers the simulator reproduces live in :mod:`palpbayes.paper`, the peak-to-peak
 noise convention in :mod:`palpbayes.noise` (both are shared with the fitting side).
@@ -40,6 +43,7 @@ from . import (
     sensitivity_table,
     series,
     trace,
+    visco_campaign,
     viscoelastic,
 )
 from .campaign import *  # noqa: F403
@@ -51,6 +55,7 @@ from .misfit import *  # noqa: F403
 from .sensitivity_table import *  # noqa: F403
 from .series import *  # noqa: F403
 from .trace import *  # noqa: F403
+from .visco_campaign import *  # noqa: F403
 from .viscoelastic import *  # noqa: F403
 
 # built from the submodules' own lists (the form static checkers follow), never re-typed
@@ -65,3 +70,4 @@ __all__ += map.__all__
 __all__ += misfit.__all__
 __all__ += sensitivity_table.__all__
 __all__ += viscoelastic.__all__
+__all__ += visco_campaign.__all__

@@ -178,8 +178,9 @@ def test_notebook_04_decomposes_the_gap_and_covers_the_instron(tmp_path, monkeyp
 @pytest.mark.slow
 def test_notebook_05_flags_the_elastic_fit_and_matches_the_instron(tmp_path):
     """Run from another folder (the real AFM file is found beside the checkout): the elastic
-    fit's rate flag, the power law preferred on the simulated foam, and the
-    compression-equivalent modulus within 0.5 % of the simulated Instron at every speed."""
+    fit's rate flag, the power law preferred on the simulated foam, the
+    compression-equivalent modulus within 0.5 % of the simulated Instron at every speed, and
+    on spot3 the drag gap flagged without the drag term and fitted with it."""
     nb, elapsed = _execute("05_viscoelastic", tmp_path)
     assert elapsed < 600
     text = _text(nb)
@@ -187,4 +188,11 @@ def test_notebook_05_flags_the_elastic_fit_and_matches_the_instron(tmp_path):
     assert "power-law: E0* 7.99" in text or "power-law: E0* 8.00" in text
     worst = float(text.split("largest difference from the Instron: ")[1].split(" %")[0])
     assert worst < 0.5
+    without, with_drag = text.split("drag fitted: False: ")[1].split("drag fitted: True: ")
+    assert "viscous drag on the probe" in without
+    b = float(with_drag.split("; drag ")[1].split(" ")[0])
+    lines = with_drag.splitlines()
+    flags = [x for x in lines[1:next((i for i, x in enumerate(lines[1:], 1)
+                                      if not x.startswith("   flag:")), len(lines))]]
+    assert 1e-6 < b < 6e-6 and not any("viscous drag" in x for x in flags), flags
 

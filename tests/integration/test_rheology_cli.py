@@ -69,21 +69,39 @@ def test_the_retract_by_tings_rule(record_csv, tmp_path, capsys):
     assert row["alpha_lo"] < 0.2 < row["alpha_hi"]
 
 
-def test_two_models_and_which_one_the_record_prefers(record_csv, tmp_path, capsys):
-    """A power-law record fitted by both models: the power law is preferred by PSIS-LOO, by
-    many standard errors; both rows carry the comparison."""
-    out = tmp_path / "both"
-    assert main(["fit", str(record_csv), "--rheology", "power-law,sls", "--out", str(out),
-                 *PARA]) == 0
+def test_three_models_and_which_one_the_record_prefers(record_csv, tmp_path, capsys):
+    """A power-law record fitted by the elastic law, the power law and the SLS on the same
+    block means: the power law is preferred by PSIS-LOO, by many standard errors over each;
+    every row carries the comparison; the elastic row has E* and fails its model check."""
+    out = tmp_path / "all"
+    assert main(["fit", str(record_csv), "--rheology", "elastic,power-law,sls", "--out",
+                 str(out), *PARA]) == 0
     text = capsys.readouterr().out
     assert "pl (power-law): E0* " in text and "pl (sls): E_inf* " in text
-    assert "pl: prefers power-law: elpd_loo higher than sls by " in text
+    assert "pl (elastic): E* " in text
+    assert "pl: prefers power-law: elpd_loo higher than elastic by " in text
     tab = pd.read_csv(out / "rheology.csv").set_index("rheology")
-    assert list(tab.index) == ["power-law", "sls"]
-    assert bool(tab.loc["power-law", "preferred"]) and not bool(tab.loc["sls", "preferred"])
+    assert list(tab.index) == ["elastic", "power-law", "sls"]
+    assert bool(tab.loc["power-law", "preferred"]) and not tab.loc[["elastic", "sls"],
+                                                                  "preferred"].any()
     assert tab.loc["power-law", "elpd_diff"] == 0.0
-    assert -tab.loc["sls", "elpd_diff"] > 5 * tab.loc["sls", "elpd_diff_se"]
+    for other in ("elastic", "sls"):
+        assert -tab.loc[other, "elpd_diff"] > 5 * tab.loc[other, "elpd_diff_se"]
+    assert tab.loc["elastic", "E_star_pa"] > 0 and not tab.loc["elastic", "model_ok"]
     assert 4 < tab.loc["power-law", "p_loo"] < 9  # E0, alpha, z_surf, offset, sigma, phi
+
+
+def test_the_emcee_engine_from_the_command_line(record_csv, tmp_path):
+    """--rheology-engine emcee: the row says so, with converged chains (R-hat <= 1.01, ESS >=
+    400) and the truth inside the intervals, as the grid engine's."""
+    out = tmp_path / "emcee"
+    assert main(["fit", str(record_csv), "--rheology", "power-law", "--rheology-engine",
+                 "emcee", "--out", str(out), *PARA]) == 0
+    row = pd.read_csv(out / "rheology.csv").iloc[0]
+    assert row["engine"] == "emcee" and bool(row["converged"]) and bool(row["model_ok"])
+    assert row["rhat_max"] <= 1.01 and row["ess_min"] >= 400
+    assert row["E0_star_lo_pa"] < 80e3 < row["E0_star_hi_pa"]
+    assert row["alpha_lo"] < 0.2 < row["alpha_hi"]
 
 
 def test_a_manifest_keeps_the_row_of_a_trace_that_cannot_be_fitted(record_csv, tmp_path,
@@ -114,7 +132,6 @@ def test_a_manifest_keeps_the_row_of_a_trace_that_cannot_be_fitted(record_csv, t
      "with the power law only"),
     (["--compression-speed", "-5"], "--compression-speed -5.0 must be a positive"),
     (["--rheology", "maxwell"], "unknown model 'maxwell'"),
-    (["--rheology", "elastic,sls"], "elastic is the other fit"),
     (["--engine", "exact"], "--engine is an option of the elastic fit"),
     (["--tare"], "--tare is an option of the elastic fit"),
 ])

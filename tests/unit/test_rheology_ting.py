@@ -113,19 +113,33 @@ def _within_3_sd(fit, truth: dict) -> None:
         assert abs(np.median(d) - value) < 3 * np.std(d), (name, np.median(d), np.std(d))
 
 
-def test_a_viscous_drag_is_fitted_with_the_retract_and_flagged_without_it():
+def _record(noise_sd: float = 0.008):
+    """The record of the drag, tilt and adhesion tests: a power law (E0* 60 kPa, alpha 0.15)
+    pressed 3 mm at 50 mm/min with a 2-s hold and a retract, 400 Hz, 8 mN AR(1) noise."""
+    return simulate_viscoelastic(PowerLawKernel(60e3, 0.15), PAPER_TIPS["paraboloid"],
+                                 depth=3e-3, speed=50 / 6e4, hold_time=2.0, rate=400.0,
+                                 z_surf=2e-4, noise_sd=noise_sd, phi=0.3, rng=21)
+
+
+@pytest.fixture(scope="module")
+def clean_fit():
+    """The record and its power-law fit over the whole cycle (drag fitted: the default)."""
+    tr = _record()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return tr, fit_rheology(tr, "power-law", segments="approach,hold,retract", rng=1)
+
+
+def test_a_viscous_drag_is_fitted_with_the_retract_and_flagged_without_it(clean_fit):
     """A viscous drag F = b·(−dz/dt) on the probe (b = 6 N·s/m: ±5 mN at 50 mm/min, 0.6
     noise sd of one sample, over 0.4 mm out of contact) puts the approach above the retract.
     Fitted with the retract (the default), b is within 3 sd of 6 and so are E0*, alpha and
     z_surf of theirs; a clean record's b is within 3 sd of 0 and its table has the drag row;
     without the drag term the gap is flagged with b within 25 % and fails the model check."""
-    tr = simulate_viscoelastic(PowerLawKernel(60e3, 0.15), PAPER_TIPS["paraboloid"],
-                               depth=3e-3, speed=50 / 6e4, hold_time=2.0, rate=400.0,
-                               z_surf=2e-4, noise_sd=0.008, phi=0.3, rng=21)
+    tr, clean = clean_fit
     dragged = tr.replace(force=tr.force - 6.0 * np.gradient(tr.z, tr.time))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        clean = fit_rheology(tr, "power-law", segments="approach,hold,retract", rng=1)
         fit = fit_rheology(dragged, "power-law", segments="approach,hold,retract", rng=1)
         off = fit_rheology(dragged, "power-law", segments="approach,hold,retract", drag=False,
                            rng=1)
@@ -140,18 +154,12 @@ def test_a_viscous_drag_is_fitted_with_the_retract_and_flagged_without_it():
     assert flag in off.offcontact and not off.model_ok
 
 
-def _record(rng: int = 21):
-    return simulate_viscoelastic(PowerLawKernel(60e3, 0.15), PAPER_TIPS["paraboloid"],
-                                 depth=3e-3, speed=50 / 6e4, hold_time=2.0, rate=400.0,
-                                 z_surf=2e-4, noise_sd=0.008, phi=0.3, rng=rng)
-
-
-def test_a_tilted_baseline_is_flagged_and_fitted_with_baseline_linear():
+def test_a_tilted_baseline_is_flagged_and_fitted_with_baseline_linear(clean_fit):
     """A baseline that tilts with the height (F1 = 40 N/m: 16 mN, 2 noise sd, over the 0.4 mm
     above the surface) is flagged by a constant-baseline fit and fails its model check; with
     baseline="linear" F1, E0*, alpha and z_surf lie within 3 sd of their truths and the check
     passes."""
-    tr = _record()
+    tr = clean_fit[0]
     tilted = tr.replace(force=tr.force + 40.0 * (tr.z - tr.z[0]))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -168,19 +176,20 @@ def test_a_tilted_baseline_is_flagged_and_fitted_with_baseline_linear():
         fit_rheology(tr, "power-law", baseline="quadratic")
 
 
-def test_adhesion_at_pull_off_is_flagged():
+def test_adhesion_at_pull_off_is_flagged(clean_fit):
     """A pull-off dip after the contact ends on the retract (−30 mN, 4 noise sd, decaying
     over 0.3 s: the sample holding the tip) is flagged as adhesion and fails the model
     check; the same record without it is not flagged."""
-    tr = _record()
+    tr, clean = clean_fit
+    ret = tr.segment == 2
+    # the tip lets go where the noise-free force of the retract has fallen to zero (Ting's
+    # contact ends before the tip is back at the surface)
+    free = _record(noise_sd=0.0).force
+    t_off = tr.time[ret][np.argmax(free[ret] <= 1e-9)]
+    dt = tr.time - t_off
+    dip = np.where(ret & (dt >= 0), -0.03 * np.exp(-np.clip(dt, 0, None) / 0.3), 0.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        clean = fit_rheology(tr, "power-law", segments="approach,hold,retract", rng=1)
-        ret = tr.segment == 2
-        z_s = 2e-4
-        t_off = tr.time[ret][np.argmax(tr.z[ret] > z_s)]  # the tip rises past the surface
-        dt = tr.time - t_off
-        dip = np.where(ret & (dt >= 0), -0.03 * np.exp(-np.clip(dt, 0, None) / 0.3), 0.0)
         fit = fit_rheology(tr.replace(force=tr.force + dip), "power-law",
                            segments="approach,hold,retract", rng=1)
     assert not any("adhesion" in f for f in clean.flags), clean.flags
