@@ -93,8 +93,8 @@ def baseline_tilt(data: CycleData, residual: np.ndarray, z_surf: float
                   ) -> tuple[float, float, float] | None:
     """Slope F1 [N/m] of ``residual`` [N] (data minus the fit's median force) against the
     height on the out-of-contact blocks, one intercept per segment; its standard error
-    [N/m] and the height range it spans [m].  None with fewer than ten such blocks or no
-    height range."""
+    [N/m] and the height range it spans [m].  None with fewer than ten such blocks, no height
+    range, or heights that do not vary within a segment."""
     out = _outside(data, z_surf)
     if out.sum() < 10:
         return None
@@ -103,15 +103,19 @@ def baseline_tilt(data: CycleData, residual: np.ndarray, z_surf: float
     if not span > 0:
         return None
     codes = np.unique(seg)
-    X = np.column_stack([z - data.z_ref] + [(seg == c).astype(float) for c in codes])
-    coef, *_ = np.linalg.lstsq(X, r, rcond=None)
-    res = r - X @ coef
+    # the height centred and scaled to its span: a pseudo-inverse of the raw design would drop
+    # the slope's direction when the heights span a nanometre, and report a standard error of
+    # zero (a tilt of 10^15 se on a real cell whose surface sits at the first height)
+    X = np.column_stack([(z - z.mean()) / span] + [(seg == c).astype(float) for c in codes])
     dof = r.size - X.shape[1]
-    if dof < 3:
+    xtx = X.T @ X
+    if dof < 3 or np.linalg.cond(xtx) > 1e8:  # heights constant within each segment
         return None
+    coef = np.linalg.solve(xtx, X.T @ r)
+    res = r - X @ coef
     factor = np.mean([_long_run(res[seg == c]) for c in codes])
-    cov = np.linalg.pinv(X.T @ X) * (res @ res / dof) * factor
-    return float(coef[0]), float(math.sqrt(max(cov[0, 0], 0.0))), span
+    var = np.linalg.inv(xtx)[0, 0] * (res @ res / dof) * factor
+    return float(coef[0] / span), float(math.sqrt(max(var, 0.0)) / span), span
 
 
 def adhesion_dip(data: CycleData, z_surf: float, trend: np.ndarray | None = None
