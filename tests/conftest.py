@@ -31,8 +31,13 @@ import os
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
-import pytest
-from hypothesis import settings
+# One BLAS/OpenMP thread per test process, set before anything imports numpy: the suite runs
+# one worker per core (pytest-xdist), and BLAS threads on top of that only contend.
+for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
+import pytest  # noqa: E402
+from hypothesis import settings  # noqa: E402
 
 #: Name of the Hypothesis profile used unless HYPOTHESIS_PROFILE names another one.
 DEFAULT_HYPOTHESIS_PROFILE = "deterministic"

@@ -84,6 +84,7 @@ def test_settings_json_records_the_run(fitted, camp):
     assert s["options_fields"]["budget"]["nu_half_width"] == 0.05
 
 
+@pytest.mark.slow
 def test_one_and_two_workers_give_identical_summaries(traces, tmp_path):
     subset = traces[:4]
     campaign.fit_campaign(subset, tmp_path / "w1", OPTS, workers=1)
@@ -425,6 +426,7 @@ def test_format_handles_missing_ground_truth(compared):
     assert "none found" in text and "error (GT" not in text
 
 
+@pytest.mark.slow
 def test_compare_fits_the_stiffening_law_when_rest_times_vary(tmp_path, monkeypatch):
     import palpbayes.stiffening.fit as stiffening
 

@@ -50,6 +50,7 @@ def test_bimodal_detector_on_a_synthetic_posterior(clean):
     assert any(f.startswith(BIMODAL) for f in flags), flags
 
 
+@pytest.mark.slow
 def test_bimodal_flag_reaches_summary_csv(clean, tmp_path, monkeypatch):
     """A real fit whose z_surf draws are split in two before the flags are computed."""
     opts = FitOptions(method="bayes", seed=1)

@@ -113,6 +113,7 @@ def test_a_flagged_fit_with_failed_checks_and_a_budget_comes_back_equal(layer, t
     assert back.summary_row()["flags"] == summary["flags"].iloc[0]
 
 
+@pytest.mark.slow
 def test_a_fit_at_a_prior_bound_comes_back_flagged(tmp_path, monkeypatch):
     """13 samples, the surface above the recorded range: the z_surf posterior sits at its prior
     bound, a warning that alone makes the fit not converged (checks skipped: too few points).

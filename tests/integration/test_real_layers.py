@@ -27,6 +27,9 @@ from palpbayes.campaign.fitjob import FitOptions, fit_trace
 from palpbayes.contact import Tip
 from palpbayes.io.trace_csv import read_trace
 
+#: slow: layer fits of two real AFM curves (~50 s)
+pytestmark = pytest.mark.slow
+
 TIP = Tip("paraboloid", radius=10e-6)
 CURVES = ["force-save-example", "map1d-curve7"]
 

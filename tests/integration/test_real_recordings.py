@@ -146,6 +146,7 @@ def test_profile_scan_finds_the_surface_over_the_whole_loading_range():
     assert modes[0].beta[1] == pytest.approx(-0.1, abs=0.003)
 
 
+@pytest.mark.slow
 def test_paraboloid_in_a_30_mm_layer_is_modelled_where_the_thickness_is_known():
     """3 mm into a 30 mm bonded layer (nu 0.49), the issue's case.  With the thickness known
     the Bayesian row models the layer by default (base unknown): E within 2 %, the interval

@@ -150,6 +150,7 @@ def test_report_from_results_folder_cli(fitted, tmp_path, capsys):
     assert info.results_shown == _shown(out)
 
 
+@pytest.mark.slow
 def test_rerun_on_the_same_campaign_reuses_the_fits(fitted, campaign, tmp_path):
     out, _, _ = fitted
     before = {p.name: p.stat().st_mtime_ns for p in (out / "posterior").glob("*.nc")}
@@ -357,6 +358,7 @@ def _replicated(res: ResultsFolder, path: Path, materials: list[str], tips: list
                          budget=rep(res.budget))
 
 
+@pytest.mark.slow
 def test_many_groups_paginate_tables_and_split_charts(fitted, tmp_path):
     out, _, _ = fitted
     res = load_results(out)

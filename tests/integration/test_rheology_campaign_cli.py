@@ -15,6 +15,9 @@ import pytest
 from palpbayes.cli import main
 from palpbayes.rheology.campaign import POOLED_COLUMNS
 
+#: slow: a simulated three-speed campaign fitted and pooled (~15 s per module fixture)
+pytestmark = pytest.mark.slow
+
 SPEEDS = "100,300,900"
 
 

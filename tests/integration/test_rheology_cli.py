@@ -69,6 +69,7 @@ def test_the_retract_by_tings_rule(record_csv, tmp_path, capsys):
     assert row["alpha_lo"] < 0.2 < row["alpha_hi"]
 
 
+@pytest.mark.slow
 def test_three_models_and_which_one_the_record_prefers(record_csv, tmp_path, capsys):
     """A power-law record fitted by the elastic law, the power law and the SLS on the same
     block means: the power law is preferred by PSIS-LOO, by many standard errors over each;
@@ -91,6 +92,7 @@ def test_three_models_and_which_one_the_record_prefers(record_csv, tmp_path, cap
     assert 4 < tab.loc["power-law", "p_loo"] < 9  # E0, alpha, z_surf, offset, sigma, phi
 
 
+@pytest.mark.slow
 def test_the_emcee_engine_from_the_command_line(record_csv, tmp_path):
     """--rheology-engine emcee: the row says so, with converged chains (R-hat <= 1.01, ESS >=
     400) and the truth inside the intervals, as the grid engine's."""
@@ -104,6 +106,7 @@ def test_the_emcee_engine_from_the_command_line(record_csv, tmp_path):
     assert row["alpha_lo"] < 0.2 < row["alpha_hi"]
 
 
+@pytest.mark.slow
 def test_a_manifest_keeps_the_row_of_a_trace_that_cannot_be_fitted(record_csv, tmp_path,
                                                                     capsys):
     flat = tmp_path / "flat.csv"

@@ -70,6 +70,7 @@ def _run(fn, items):
         return list(pool.map(partial(_quiet, fn), items))
 
 
+@pytest.mark.long
 def test_coverage_and_sbc_ranks():
     results = _run(_sbc_one, range(N_SBC))
     figures = {}

@@ -44,6 +44,7 @@ def test_exact_engine_agrees_with_emcee_within_monte_carlo_error(case):
     assert ex.idata.posterior.attrs["engine"] == "exact"
 
 
+@pytest.mark.slow
 def test_exact_intervals_cover_the_truth_at_the_nominal_rate():
     """200 traces (random tip, modulus, offset, surface): the 90 % intervals of E* and z_surf
     cover the truth 84-96 % of the time (binomial 99 % range at n = 200)."""

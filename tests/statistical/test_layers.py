@@ -35,6 +35,7 @@ def _fit(tr, model, **kw):
         return fit_bayes(tr, model, seed=kw.pop("seed", 0), **kw)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", list(CASES))
 def test_known_thickness_recovers_a_bonded_layer(case):
     """10 traces each: with the thickness known, E (statistical median) within 2 % in every
@@ -129,6 +130,7 @@ def test_unknown_thickness_under_a_flat_punch_is_flagged_not_guessed():
     assert row["E_hi_pa"] / row["E_lo_pa"] > 1.5
 
 
+@pytest.mark.slow
 def test_layer_likelihood_equals_each_concrete_model():
     """Walkers of each base (known h) and of any thickness (unknown h) get the log-likelihood
     of the concrete model they stand for; the half-space segment that of the half-space."""
@@ -191,6 +193,7 @@ def test_model_spec_layer_validation():
         m.shape(np.array([1e-3]))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["flat 20 mm", "sphere 20 mm"])
 def test_emcee_samples_the_same_mixture_as_the_exact_engine(case):
     """Base unknown, thickness known: emcee with the base swap against the exact mixture —

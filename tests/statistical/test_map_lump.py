@@ -63,6 +63,7 @@ def _covers(est: tuple[float, float, float], truth: float) -> bool:
     return est[1] <= truth <= est[2]
 
 
+@pytest.mark.slow
 def test_a_visible_lump_is_found_and_its_numbers_cover_the_truth():
     inc = Inclusion(x=19.6e-3, y=16.9e-3, depth=6e-3, radius=5e-3, ratio=10.0)
     r = _run(11, inc)
@@ -76,6 +77,7 @@ def test_a_visible_lump_is_found_and_its_numbers_cover_the_truth():
     assert any("not identified" in f or "upper end" in f for f in r["flags"]), r["flags"]
 
 
+@pytest.mark.slow
 def test_no_lump_is_found_in_a_homogeneous_block():
     r = _run(5, None)
     assert not r["found"] and r["p_lump"] < 0.5 and r["detection"] < 0.5
@@ -91,6 +93,7 @@ def _draw_inclusion(rng: np.random.Generator, n: int = 13) -> Inclusion:
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_lump_coverage_over_simulated_phantoms():
     """20 phantoms with a lump drawn at random, the lump model fitted whether or not the map
     detects it (coverage conditional on detection would be biased by the selection): the 90 %

@@ -32,6 +32,7 @@ def calibration(tmp_path_factory) -> pd.DataFrame:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("scenario", MISFITS)
+@pytest.mark.long
 def test_full_interval_covers_under_unmodelled_misfit(calibration, scenario):
     df = calibration[calibration["scenario"] == scenario]
     assert len(df) == 50
@@ -43,6 +44,7 @@ def test_full_interval_covers_under_unmodelled_misfit(calibration, scenario):
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_well_specified_coverage_and_width(calibration):
     df = calibration[calibration["scenario"] == "well"]
     assert len(df) == 200

@@ -90,6 +90,7 @@ def _coverage(n_groups, n, settings, seed):
     return hit_mu / n_groups, hit_tau / n_groups
 
 
+@pytest.mark.slow
 def test_interval_coverage_over_simulated_groups_fast():
     """20 groups of 6 traces (tau = 0.1): 90 % intervals of mu and tau cover ~90 %.
 
@@ -103,6 +104,7 @@ def test_interval_coverage_over_simulated_groups_fast():
 
 
 @pytest.mark.slow
+@pytest.mark.long
 def test_interval_coverage_over_simulated_groups():
     """200 groups of 5 traces with the default sampler: coverage 90 % ± 4 % (2 sd)."""
     cov_mu, cov_tau = _coverage(200, 5, None, seed=11)

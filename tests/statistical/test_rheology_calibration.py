@@ -1,4 +1,4 @@
-"""Calibration of the viscoelastic fit: 60 simulated ramp–hold–retract palpations per
+"""Calibration of the viscoelastic fit: 40 simulated ramp–hold–retract palpations per
 relaxation model (power law, standard linear solid; paraboloid and flat punch, 5–500 mm/min,
 AR(1) noise, offsets), each fitted by fit_rheology with both models and by the elastic law,
 and the power-law records once more over the whole cycle (the retract by Ting's rule).
@@ -18,7 +18,7 @@ import pandas as pd
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-N = 60
+N = 40  # records per model: the first 40 of the README's run with --n 100 (seeded by index)
 
 
 @pytest.fixture(scope="module")
@@ -41,14 +41,14 @@ def calibration(tmp_path_factory) -> pd.DataFrame:
     ("power-law, with retract", "E0"), ("power-law, with retract", "alpha"),
     ("power-law, with retract", "z_surf")])
 def test_intervals_cover_and_z_scores_are_centred(calibration, model, parameter):
-    """Coverage of the 90 % interval in [0.80, 0.99] (binomial sd 3.9 % at n = 60; measured
-    0.90–0.97), z-score mean within ±0.35 (3 se; measured −0.14…0.11) and sd 0.7–1.3
-    (measured 0.88–0.98).  Before the block means were modelled as block means, E0's
+    """Coverage of the 90 % interval in [0.80, 0.99] (binomial sd 4.7 % at n = 40; measured
+    MEASURED_COV), z-score mean within ±0.45 (3 se at n = 40; measured MEASURED_ZM) and sd
+    0.7–1.3 (measured MEASURED_ZSD).  Before the block means were modelled as block means, E0's
     coverage was 0.70 and z_surf's 0.65."""
     row = calibration.loc[(model, parameter)]
     assert row["n"] == N
     assert 0.80 <= row["coverage90"] <= 0.99, row["coverage90"]
-    assert abs(row["z_mean"]) <= 0.35, row["z_mean"]
+    assert abs(row["z_mean"]) <= 0.45, row["z_mean"]
     assert 0.7 <= row["z_sd"] <= 1.3, row["z_sd"]
 
 

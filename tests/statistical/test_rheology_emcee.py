@@ -161,6 +161,7 @@ def test_the_sampled_target_is_the_explicit_posterior():
     np.testing.assert_allclose(np.diff(got), np.diff(want), atol=1e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", DEFAULT)
 def test_emcee_agrees_with_the_grid_engine(name):
     check(name)

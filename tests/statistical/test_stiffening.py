@@ -13,6 +13,9 @@ from palpbayes.paper import PAPER_TIPS
 from palpbayes.sim import simulate_palpation_series
 from palpbayes.stiffening import double_exponential, fit_stiffening, fit_stiffening_summary
 
+#: slow: the stiffening law's identification over simulated series (~70 s)
+pytestmark = pytest.mark.slow
+
 REST = np.geomspace(1.0, 600.0, 25)
 
 

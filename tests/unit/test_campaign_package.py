@@ -7,6 +7,8 @@ import importlib
 import subprocess
 import sys
 
+import pytest
+
 import palpbayes.campaign as campaign
 import palpbayes.pooling as pooling
 
@@ -43,6 +45,7 @@ def test_layout_and_reference_import_alone_without_the_fitting_code():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
+@pytest.mark.slow
 def test_every_campaign_and_pooling_module_imports_first_in_a_fresh_interpreter():
     mods = [f"palpbayes.campaign.{m}" for m in (*campaign.API_MODULES, "layout", "partial")]
     mods += ["palpbayes.pooling.model", "palpbayes.pooling.inputs",

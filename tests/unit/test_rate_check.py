@@ -171,7 +171,9 @@ REAL = {"fmt-jpk-sr_cell1-0008.jpk-force": ("hold", 0.45, 0.60),
         "fmt-jpk-fd_spot3-0192.jpk-force": ("retract", 0.08, 0.20)}
 
 
-@pytest.mark.parametrize("name", sorted(REAL))
+@pytest.mark.parametrize("name", [
+    # the two creep curves take ~10 s each: in the slow suite
+    pytest.param(n, marks=pytest.mark.slow) if "cc_pr14" in n else n for n in sorted(REAL)])
 def test_real_afm_cycles_are_flagged_rate_dependent(shared_data, name):
     """Real AFM cycles (afmformats' test files, MIT; paraboloid R = 5 µm, nu 0.5), read with
     every segment: the stress-relaxation cell loses about half its force over the 30 s hold

@@ -188,6 +188,7 @@ def test_an_elastic_record_flags_alpha_at_zero():
     assert _near(f, "E0", 90e3)
 
 
+@pytest.mark.slow
 def test_flat_punch_record():
     f = fit_rheology(_record(PowerLawKernel(60e3, 0.3), tip=FLAT, seed=6, depth=2e-3),
                      "power-law", rng=4)
@@ -301,6 +302,7 @@ def test_compare_fits_needs_two_fits_on_the_same_blocks(power_fit):
         compare_fits({"a": power_fit, "b": other})
 
 
+@pytest.mark.slow
 def test_pooling_a_fit_with_itself_halves_its_variance(power_fit):
     """The pooled posterior is the product of the traces' likelihoods: a fit pooled with
     itself keeps its centre and its sd shrinks by sqrt(2) (each trace's likelihood is its own

@@ -58,6 +58,7 @@ def palpations():
     return out
 
 
+@pytest.mark.slow
 def test_compression_modulus_at_every_palpation_speed_holds_the_instron_reading(palpations):
     """The noise-free test's reading lies within each fit's 90 % interval (0.2-1 % wide);
     the reading of the test with 20 mN of load-cell noise within 0.5 % of each median (the
@@ -75,6 +76,7 @@ def test_compression_modulus_at_every_palpation_speed_holds_the_instron_reading(
     assert no_toe[0] / gt.E_pa - 1 == pytest.approx(0.010, abs=0.003)
 
 
+@pytest.mark.slow
 def test_elastic_fits_read_a_speed_dependent_modulus_and_are_flagged(palpations):
     """E_app ∝ speed^alpha: a decade of speed moves the elastic E by 10^0.12 − 1 ≈ 32 %
     (to 5 %); every elastic fit carries the rate flag and model_ok False."""

@@ -130,6 +130,7 @@ def clean_fit():
         return tr, fit_rheology(tr, "power-law", segments="approach,hold,retract", rng=1)
 
 
+@pytest.mark.slow
 def test_a_viscous_drag_is_fitted_with_the_retract_and_flagged_without_it(clean_fit):
     """A viscous drag F = b·(−dz/dt) on the probe (b = 6 N·s/m: ±5 mN at 50 mm/min, 0.6
     noise sd of one sample, over 0.4 mm out of contact) puts the approach above the retract.
@@ -154,6 +155,7 @@ def test_a_viscous_drag_is_fitted_with_the_retract_and_flagged_without_it(clean_
     assert flag in off.offcontact and not off.model_ok
 
 
+@pytest.mark.slow
 def test_a_tilted_baseline_is_flagged_and_fitted_with_baseline_linear(clean_fit):
     """A baseline that tilts with the height (F1 = 40 N/m: 16 mN, 2 noise sd, over the 0.4 mm
     above the surface) is flagged by a constant-baseline fit and fails its model check; with
@@ -176,6 +178,7 @@ def test_a_tilted_baseline_is_flagged_and_fitted_with_baseline_linear(clean_fit)
         fit_rheology(tr, "power-law", baseline="quadratic")
 
 
+@pytest.mark.slow
 def test_adhesion_at_pull_off_is_flagged(clean_fit):
     """A pull-off dip after the contact ends on the retract (−30 mN, 4 noise sd, decaying
     over 0.3 s: the sample holding the tip) is flagged as adhesion and fails the model
