@@ -123,6 +123,16 @@ def _grid_moments(alpha, e0, log_mass) -> tuple[float, float, float, float]:
             math.sqrt(max(float(pe @ (e0 - me) ** 2), 0.0)))
 
 
+#: Log mass below the peak that the zoomed grid keeps inside (edge flag: 10 below the peak).
+CONTOUR = 12.0
+
+
+def _within(nodes: np.ndarray, profile: np.ndarray) -> tuple[float, float]:
+    """First and last node whose profile log mass is within :data:`CONTOUR` of the peak."""
+    idx = np.flatnonzero(profile > profile.max() - CONTOUR)
+    return float(nodes[idx[0]]), float(nodes[idx[-1]])
+
+
 def pool_power_law(fits: Sequence[RheologyFit], *, n_alpha: int = 41, n_e0: int = 401,
                    n_draws: int = 4000, rng: np.random.Generator | int | None = 0
                    ) -> PooledPowerLaw:
@@ -168,9 +178,16 @@ def pool_power_law(fits: Sequence[RheologyFit], *, n_alpha: int = 41, n_e0: int 
         ma, sa, me, se = _grid_moments(alpha, e0, log_mass)
         if sa >= ZOOM_NODES * (alpha[1] - alpha[0]) and se >= ZOOM_NODES * (e0[1] - e0[0]):
             break
-        # ±SPAN_SD sd: 41 alpha nodes put 3.3 of them in one sd, so one zoom settles
-        a_lo, a_hi = max(0.0, ma - SPAN_SD * sa), min(ALPHA_MAX, ma + SPAN_SD * sa)
-        e_lo, e_hi = max(me - SPAN_SD * se, 1e-3 * me), me + SPAN_SD * se
+        # ±SPAN_SD sd: 41 alpha nodes put 3.3 of them in one sd, so one zoom settles; a
+        # skewed posterior (alpha piled against its bound 0) keeps its tail: the zoom also
+        # spans every node within CONTOUR of the peak, so the new grid's edges are the
+        # prior's or carry no mass, and the edge flag below is not raised by the zoom
+        a_in, e_in = _within(alpha, log_mass.max(axis=1)), _within(e0, log_mass.max(axis=0))
+        da, de = alpha[1] - alpha[0], e0[1] - e0[0]
+        a_lo = max(0.0, min(ma - SPAN_SD * sa, a_in[0] - 2 * da))
+        a_hi = min(ALPHA_MAX, max(ma + SPAN_SD * sa, a_in[1] + 2 * da))
+        e_lo = max(min(me - SPAN_SD * se, e_in[0] - 2 * de), 1e-3 * me)
+        e_hi = max(me + SPAN_SD * se, e_in[1] + 2 * de)
     gen = np.random.default_rng(rng)
     p = np.exp(log_mass.ravel())
     pick = gen.choice(p.size, size=n_draws, p=p / p.sum())
