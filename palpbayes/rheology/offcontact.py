@@ -111,10 +111,11 @@ def baseline_tilt(data: CycleData, residual: np.ndarray, z_surf: float
     xtx = X.T @ X
     if dof < 3 or np.linalg.cond(xtx) > 1e8:  # heights constant within each segment
         return None
-    coef = np.linalg.solve(xtx, X.T @ r)
+    xtx_inv = np.linalg.inv(xtx)
+    coef = xtx_inv @ (X.T @ r)
     res = r - X @ coef
     factor = np.mean([_long_run(res[seg == c]) for c in codes])
-    var = np.linalg.inv(xtx)[0, 0] * (res @ res / dof) * factor
+    var = xtx_inv[0, 0] * (res @ res / dof) * factor
     return float(coef[0] / span), float(math.sqrt(max(var, 0.0)) / span), span
 
 

@@ -176,14 +176,14 @@ def pool_power_law(fits: Sequence[RheologyFit], *, n_alpha: int = 41, n_e0: int 
         total = _pooled_log(fits, evaluators, alpha, e0)
         log_mass = total - logsumexp(total)
         ma, sa, me, se = _grid_moments(alpha, e0, log_mass)
-        if sa >= ZOOM_NODES * (alpha[1] - alpha[0]) and se >= ZOOM_NODES * (e0[1] - e0[0]):
+        da, de = alpha[1] - alpha[0], e0[1] - e0[0]
+        if sa >= ZOOM_NODES * da and se >= ZOOM_NODES * de:
             break
         # ±SPAN_SD sd: 41 alpha nodes put 3.3 of them in one sd, so one zoom settles; a
         # skewed posterior (alpha piled against its bound 0) keeps its tail: the zoom also
         # spans every node within CONTOUR of the peak, so the new grid's edges are the
         # prior's or carry no mass, and the edge flag below is not raised by the zoom
         a_in, e_in = _within(alpha, log_mass.max(axis=1)), _within(e0, log_mass.max(axis=0))
-        da, de = alpha[1] - alpha[0], e0[1] - e0[0]
         a_lo = max(0.0, min(ma - SPAN_SD * sa, a_in[0] - 2 * da))
         a_hi = min(ALPHA_MAX, max(ma + SPAN_SD * sa, a_in[1] + 2 * da))
         e_lo = max(min(me - SPAN_SD * se, e_in[0] - 2 * de), 1e-3 * me)
