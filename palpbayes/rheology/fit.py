@@ -95,6 +95,10 @@ class RheologyFit:
         Poisson's ratio if given (adds Young's moduli to the table).
     seconds
         Wall time of the fit [s].
+    nodes
+        Grid draws only: the grid node behind every draw, ``{"_theta_node", "_z_node"}``
+        (:meth:`~palpbayes.rheology.posterior.GridPosterior.draws`), where the force curves
+        are taken; empty for emcee's draws.
     """
 
     rheology: str
@@ -107,6 +111,7 @@ class RheologyFit:
     sampler: EmceeRheology | None = None
     nu: float | None = None
     seconds: float = 0.0
+    nodes: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
 
     @property
     def t0(self) -> float:
@@ -183,7 +188,7 @@ class RheologyFit:
     def force_curves(self, n: int = _BAND_DRAWS) -> np.ndarray:
         """[N] Model force at the block means for ``n`` draws (n, points), offset, drag and
         tilt included: the draws :func:`curve_draws` picks."""
-        return _force_curves(self.data, self.rheology, self.draws, self.t0, n)
+        return _force_curves(self.data, self.rheology, self.draws, self.t0, n, self.nodes)
 
     def compression_modulus(self, height: float, speed: float = PAPER_COMPRESSION_SPEED,
                             strain_window=DEFAULT_STRAIN_WINDOW, level: float = LEVEL,
@@ -224,32 +229,46 @@ def curve_draws(n_total: int, n: int) -> np.ndarray:
     return np.linspace(0, n_total - 1, min(n, n_total)).round().astype(int)
 
 
-def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int
-                  ) -> np.ndarray:
+def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int,
+                  nodes: dict | None = None) -> np.ndarray:
+    """[N] Model force at the block means for the ``n`` draws :func:`curve_draws` picks.
+
+    The columns cost one hereditary matrix per distinct theta, so the draws are grouped by
+    theta: a grid draw's moduli are conditional on its node (:meth:`~palpbayes.rheology.
+    posterior.GridPosterior.draws`), and its curve is taken at the node's (theta, z_surf)
+    (``nodes``: ``_theta_node``, ``_z_node``) — at most one matrix per theta node; emcee's
+    draws (and a fit read back from disk) use each draw's own values."""
     idx = curve_draws(len(draws["z_surf"]), n)
-    k = idx.size
     win = data.windows()
     ret = data.segment == RETRACT
     design = (RetractDesign(data.edges, data.z_edges, data.sample_time[ret], data.m, t0)
               if rheology == "power-law" and ret.any() else None)
-    out = np.empty((k, data.n_points))
-    for r, i in enumerate(idx):
-        z = draws["z_surf"][i:i + 1]
-        if rheology == "elastic":
-            f = draws["E"][i] * lee_radok_columns(win, z, data.z_edges, data.m, None)[0]
-        elif rheology == "power-law":
-            alpha = float(draws["alpha"][i])
-            f = draws["E0"][i] * with_retract(data, lee_radok_columns(
-                win, z, data.z_edges, data.m, "power-law", alpha, t0), z, alpha, t0, design)[0]
-        else:
-            f = (draws["E_inf"][i] * lee_radok_columns(win, z, data.z_edges, data.m, None)[0]
-                 + draws["E1"][i] * lee_radok_columns(win, z, data.z_edges, data.m,
-                                                      "exponential", float(draws["tau"][i]))[0])
-        out[r] = data.C * f + draws["offset"][i]
-        if "drag" in draws:
-            out[r] += draws["drag"][i] * data.speed
-        if "tilt" in draws:
-            out[r] += draws["tilt"][i] * (data.z - data.z_ref)
+    nodes = nodes or {}
+    z = np.asarray(nodes.get("_z_node", draws["z_surf"]))[idx]
+    out = np.empty((idx.size, data.n_points))
+    if rheology == "elastic":
+        out[:] = draws["E"][idx, None] * lee_radok_columns(win, z, data.z_edges, data.m, None)
+    else:
+        name, kind = ("alpha", "power-law") if rheology == "power-law" else ("tau",
+                                                                             "exponential")
+        theta = np.asarray(nodes.get("_theta_node", draws[name]))[idx]
+        modulus = draws["E0" if rheology == "power-law" else "E1"][idx]
+        for value in np.unique(theta):
+            rows = np.flatnonzero(theta == value)
+            cols = lee_radok_columns(win, z[rows], data.z_edges, data.m, kind, float(value),
+                                     t0)
+            if design is not None:
+                cols = with_retract(data, cols, z[rows], float(value), t0, design)
+            out[rows] = modulus[rows, None] * cols
+        if rheology == "sls":
+            out += draws["E_inf"][idx, None] * lee_radok_columns(win, z, data.z_edges, data.m,
+                                                                 None)
+    out *= data.C
+    out += draws["offset"][idx, None]
+    if "drag" in draws:
+        out += draws["drag"][idx, None] * data.speed[None, :]
+    if "tilt" in draws:
+        out += draws["tilt"][idx, None] * (data.z - data.z_ref)[None, :]
     return out
 
 
@@ -333,14 +352,15 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
         draws = {**sampler.draws, "ess": np.array(np.inf)}  # no importance resampling
     else:
         draws = grid.draws(gen, int(n_draws))
-    curves = _force_curves(data, rheology, draws, t0, _BAND_DRAWS)
+    nodes = {k: draws.pop(k) for k in ("_theta_node", "_z_node") if k in draws}
+    curves = _force_curves(data, rheology, draws, t0, _BAND_DRAWS, nodes)
     sub = curve_draws(n_draws, _BAND_DRAWS)
     t_contact = float(np.median(_contact_times(data, draws["z_surf"][sub])))
     # residuals binned in time: -time as the "height", the contact time as the "surface"
     ppc = posterior_predictive_check(-data.time, data.force, curves, draws["sigma"][sub],
                                      phi=draws["phi"][sub], rng=gen, z_surf=-t_contact,
                                      n_bins=12)
-    fit = RheologyFit(rheology, data, grid, draws, ppc, sampler=sampler, nu=nu)
+    fit = RheologyFit(rheology, data, grid, draws, ppc, sampler=sampler, nu=nu, nodes=nodes)
     fit.offcontact = offcontact_flags(fit, data.force - np.median(curves, axis=0))
     fit.flags = fit_flags(fit)
     fit.seconds = _time.perf_counter() - start

@@ -33,7 +33,9 @@ left is a 3-D density on (z_s, θ, phi), integrated on a grid:
    *conditional* sd of z_s around its conditional mean (the regression line of z_s on θ), so
    a narrow, tilted ridge (surface and alpha trade off) is resolved as well as a round basin;
    the grid's moments are recomputed and the grid rebuilt until they are steady and every sd
-   is at least :data:`RESOLVE` node steps (clipped at the prior bounds);
+   is at least :data:`RESOLVE` node steps (clipped at the prior bounds); while the box still
+   moves it has :data:`SEARCH_THETA` theta nodes (each costs one hereditary matrix), and the
+   settled box is computed once more with FINE and must give the same moments;
 3. the moduli's priors are applied to draws by importance resampling: log-uniform (1/E) on
    E0* and E1*, flat on E_inf* >= 0, each modulus positive.
 
@@ -57,7 +59,8 @@ from .design import lee_radok_columns
 from .ting import RETRACT, RetractDesign, with_retract
 
 __all__ = ["RHEOLOGIES", "GridPosterior", "grid_posterior", "NodeEvaluator", "ALPHA_MAX",
-           "KEEP", "FINE", "SPAN_SD", "COARSE_THETA", "COARSE_Z", "PHI_BOUNDS", "NUISANCE"]
+           "KEEP", "FINE", "SEARCH_THETA", "SPAN_SD", "COARSE_THETA", "COARSE_Z", "PHI_BOUNDS",
+           "NUISANCE"]
 
 #: Relaxation models the grid engine fits, and the name of their grid parameter (the elastic
 #: law E*(t) = E* has none: its grid is the surface alone).
@@ -68,6 +71,8 @@ ALPHA_MAX = 0.95
 COARSE_THETA, COARSE_Z = 13, 97
 #: Nodes per axis of the fine box.
 FINE = 25
+#: Theta nodes of the fine box while it is still moving (the last box has :data:`FINE`).
+SEARCH_THETA = 13
 #: Half-width of the fine grid in (marginal, conditional) standard deviations.
 SPAN_SD = 6.0
 #: Smallest sd of the final grid, in node steps.
@@ -141,7 +146,10 @@ class GridPosterior:
     def draws(self, rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         """``n`` joint draws: moduli [Pa] (E*), theta, z_surf [m], offset [N], sigma [N] (block
         mean noise sd), phi; the moduli's priors by importance resampling (module docstring).
-        ``ess`` is the importance sample's effective size."""
+        ``ess`` is the importance sample's effective size.  The linear coefficients are drawn
+        given the node (theta, z_surf), and theta and z_surf are then spread over the node's
+        cell; ``_theta_node`` and ``_z_node`` keep the node's values (the force curve that
+        goes with the coefficients)."""
         Gt, Gz, H = self.log_mass.shape
         k = PROPOSALS * n
         p = np.exp(self.log_mass.ravel() - logsumexp(self.log_mass.ravel()))
@@ -178,9 +186,11 @@ class GridPosterior:
         w /= w.sum()
         ess = 1.0 / float(w @ w)
         keep = rng.choice(k, size=n, p=w)
-        out.update({"z_surf": zs, "sigma": np.sqrt(tau2 / (1.0 - phi**2)), "phi": phi})
+        out.update({"z_surf": zs, "sigma": np.sqrt(tau2 / (1.0 - phi**2)), "phi": phi,
+                    "_z_node": self.z[it, iz]})
         if self.theta_name is not None:
             out[self.theta_name] = th
+            out["_theta_node"] = self.theta[it]
         res = {key: np.asarray(v)[keep] for key, v in out.items()}
         res["ess"] = np.array(ess)
         return res
@@ -287,11 +297,12 @@ def _log_cells(ct: np.ndarray, z: np.ndarray) -> np.ndarray:
     return np.log(cell_widths(ct))[:, None] + np.log(np.stack([cell_widths(r) for r in z]))
 
 
-def _sheared(centre, sd, slope, bounds) -> tuple[np.ndarray, np.ndarray]:
+def _sheared(centre, sd, slope, bounds, n_theta: int = FINE
+             ) -> tuple[np.ndarray, np.ndarray]:
     (tlo, thi), (zlo, zhi) = bounds
     (mt, mz), (st, sz) = (min(max(centre[0], tlo), thi), centre[1]), sd
     ct = np.linspace(max(tlo, mt - SPAN_SD * st), min(thi, mt + SPAN_SD * st),
-                     FINE if thi > tlo else 1)  # the elastic law: one theta node
+                     n_theta if thi > tlo else 1)  # the elastic law: one theta node
     mid = mz + slope * (ct - mt)
     mid = np.clip(mid, zlo, zhi)  # a ridge may leave the prior: keep every row inside it
     z = np.stack([np.linspace(max(zlo, c - SPAN_SD * sz), min(zhi, c + SPAN_SD * sz), FINE)
@@ -369,17 +380,18 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
     centre, sd, slope = (float(ct[i]), float(cz[j])), step, 0.0
     bounds = ((c_lo, c_hi), (data.z_lo, data.z_hi))
     converged = False
+    n_theta = SEARCH_THETA  # theta nodes cost one hereditary matrix each: search on fewer
     for _ in range(max_iterations):
-        gt, gz = _sheared(centre, sd, slope, bounds)
+        gt, gz = _sheared(centre, sd, slope, bounds, n_theta)
         lp, post = ev.logp_rows(from_c(gt), gz)
         if not np.isfinite(lp).any():
             raise FitError("the fine grid holds no finite density; report this record")
         a, b = np.unravel_index(np.argmax(lp), lp.shape)
         mt, st, new_slope, mz, sz = _moments(gt, gz, lp + _log_cells(gt, gz))
-        spacing = (max(np.diff(gt).min(), 0.0) if gt.size > 1 else 0.0,
-                   float(np.diff(gz, axis=1).min()))
-        edge = (a in (0, FINE - 1) and gt[a] not in bounds[0],
-                b in (0, FINE - 1) and gz[a, b] not in bounds[1])
+        spacing = (max(np.diff(gt).min(), 0.0) * (n_theta - 1) / (FINE - 1)
+                   if gt.size > 1 else 0.0, float(np.diff(gz, axis=1).min()))
+        edge = (a in (0, gt.size - 1) and gt[a] not in bounds[0],
+                b in (0, gz.shape[1] - 1) and gz[a, b] not in bounds[1])
         resolved = all(s_ >= RESOLVE * h or s_ == 0.0 and h == 0.0
                        for s_, h in zip((st, sz), spacing, strict=True))
         steady = (abs(st - sd[0]) <= 0.3 * sd[0] and abs(sz - sd[1]) <= 0.3 * sd[1]
@@ -390,8 +402,12 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
             sd = (sd[0] * (2 if edge[0] else 1), sd[1] * (2 if edge[1] else 1))
             continue
         if steady and resolved:
-            converged = True
-            break
+            if gt.size == 1 or n_theta == FINE:
+                converged = True
+                break
+            n_theta = FINE  # the search has settled: the same box at full resolution
+            centre, slope, sd = (mt, mz), new_slope, (st, sz)
+            continue
         floor = (spacing[0] / 4, spacing[1] / 4)  # all mass on one node: shrink, do not stop
         centre, slope = (mt, mz), new_slope
         sd = (max(st, floor[0], (c_hi - c_lo) * 1e-9), max(sz, floor[1], 1e-15))
