@@ -16,7 +16,7 @@ import numpy as np
 from ..bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
 from ..bayes.layers import default_thickness_range
 from ..checks import CheckResult, check_fit, checks_summary
-from ..contact import check_tip_plausible, get_law
+from ..contact import DEFAULT_NU, check_tip_plausible, get_law
 from ..errors import ConvergenceWarning, FitError, GeometryError, InputError
 from ..fitdata import BONDINGS, FitData, ModelSpec, prepare
 from ..lsq import LSQResult, fit_lsq_data
@@ -24,7 +24,7 @@ from ..refit import layer_alternatives
 from ..trace import IndentationTrace
 from .layout import posterior_file
 
-__all__ = ["FitOptions", "FitOutcome", "fit_trace", "check_fittable", "trace_model",
+__all__ = ["FitOptions", "FitOutcome", "fit_trace", "check_fittable", "trace_model", "nu_source",
            "SUMMARY_COLUMNS", "METHODS", "LAYER_MODES"]
 
 METHODS = ("bayes", "lsq", "both")
@@ -33,7 +33,7 @@ METHODS = ("bayes", "lsq", "both")
 SUMMARY_COLUMNS = [
     "trace_id", "method", "tip", "n_points", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa",
     "Estar_pa", "z_surf_m", "z_surf_sd_m", "sigma_n", "converged", "rhat_max", "ess_min",
-    "material", "specimen", "repetition", "rest_time_s", "nu", "noise_model",
+    "material", "specimen", "repetition", "rest_time_s", "nu", "nu_source", "noise_model",
     "E_stat_pa", "E_stat_sd_pa", "E_stat_lo_pa", "E_stat_hi_pa", "k", "m", "rss_n2",
     "constraint_active", "tau_max", "acceptance", "n_steps", "flags",
     # the pre-contact baseline and the noise spec used (F_unc), read from the data unless given
@@ -79,7 +79,9 @@ class FitOptions:
     method
         ``"bayes"``, ``"lsq"`` or ``"both"``.
     nu
-        Poisson ratio used for E = E*·(1 − nu²).
+        Poisson ratio used for E = E*·(1 − nu²); None: a manifest row's own ``nu``, else
+        :data:`~palpbayes.contact.DEFAULT_NU` (0.3, a foam value), and summary.csv says so
+        (``nu_source``: ``option``, ``manifest`` or ``default``).
     layer
         How the specimen's thickness enters the Bayesian model (:data:`LAYER_MODES`):
         ``"auto"`` (default) a layer on a rigid base wherever the trace's thickness is known,
@@ -122,7 +124,7 @@ class FitOptions:
     """
 
     method: str = "bayes"
-    nu: float = 0.3
+    nu: float | None = None
     layer: str = "auto"
     bonding: str = "unknown"
     thickness_range: tuple[float, float] | None = None
@@ -167,6 +169,14 @@ class FitOutcome:
     posterior_path: Path | None = None
 
 
+def nu_source(trace: IndentationTrace, options: FitOptions) -> str:
+    """Where a trace's Poisson ratio came from: ``"manifest"`` (its row's ``nu``),
+    ``"option"`` (the run's ``nu``) or ``"default"`` (:data:`~palpbayes.contact.DEFAULT_NU`)."""
+    if "nu" in (trace.metadata or {}):
+        return "manifest"
+    return "default" if options.nu is None else "option"
+
+
 def trace_seed(base: int, trace_id: str) -> int:
     """A per-trace seed from the base seed and the trace id (independent of trace order)."""
     words = np.frombuffer(trace_id.encode("utf-8"), dtype=np.uint8).astype(np.uint32)
@@ -202,7 +212,7 @@ def trace_model(trace: IndentationTrace, options: FitOptions,
     except GeometryError as exc:
         raise GeometryError(f"{src}: {exc}") from None
     # a manifest's per-row nu (trace.metadata["nu"]) overrides the run's option
-    nu = trace.metadata.get("nu", options.nu)
+    nu = trace.metadata.get("nu", DEFAULT_NU if options.nu is None else options.nu)
     if options.layer == "off" or (options.layer == "auto" and trace.thickness is None):
         return ModelSpec(tip, nu=nu, bonding=options.bonding)
     if options.layer == "auto":
@@ -357,6 +367,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
 
     meta = {"material": trace.material, "specimen": trace.specimen,
             "repetition": trace.repetition, "rest_time_s": trace.rest_time,
+            "nu_source": nu_source(trace, options),
             "baseline_n": data.baseline.level if data.baseline is not None else float("nan"),
             "f_unc_n": data.f_unc}
     rows = []

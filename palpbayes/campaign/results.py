@@ -62,7 +62,7 @@ def ordered(values: Iterable[str], preferred: Sequence[str]) -> list[str]:
 
 
 _STR_COLUMNS = ("trace_id", "material", "tip", "method", "flags", "specimen", "file", "input",
-                "distribution", "representative_trace")
+                "distribution", "representative_trace", "nu_source")
 
 
 def _read_csv(path: Path) -> pd.DataFrame | None:

@@ -13,6 +13,7 @@ from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
 from ..campaign import layout
 from ..campaign.fitjob import METHODS, FitOptions
 from ..contact import (
+    DEFAULT_NU_NOTE,
     TIP_PARAMETERS,
     Tip,
     check_nu,
@@ -35,7 +36,7 @@ from .rheology import (
 __all__ = ["register", "run", "add_model_options", "add_trace_options", "options_from_args",
            "thickness_from_args",
            "trace_from_args", "traces_from_args", "read_options_from_args",
-           "recording_options_from_args"]
+           "recording_options_from_args", "console_lines", "flag_headlines"]
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:
@@ -47,7 +48,10 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
     nu = g.add_mutually_exclusive_group()
     nu.add_argument("--nu", type=float, default=None,
-                    help="Poisson ratio (default 0.3; the budget varies it by ±0.05)")
+                    help="Poisson ratio (foams 0.1-0.3, silicone, gels and tissue "
+                    "0.45-0.5; default: a manifest's nu column, else 0.3 with a note on "
+                    "screen and nu_source = default in summary.csv; the budget varies it "
+                    "by ±0.05)")
     nu.add_argument("--nu-range", type=float, nargs=2, metavar=("LO", "HI"),
                     help="uniform Poisson-ratio range for the budget (fit at its midpoint)")
     g.add_argument("--noise", choices=NOISE_MODELS, default="gaussian",
@@ -177,7 +181,7 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
             raise InputError(f"--nu-range {lo} {hi}: LO must not exceed HI")
         nu, budget_nu = 0.5 * (lo + hi), (lo, hi)
     else:
-        nu, budget_nu = check_nu(0.3 if args.nu is None else args.nu), None
+        nu, budget_nu = (None if args.nu is None else check_nu(args.nu)), None
     for name in ("radius_tolerance", "gain_sd", "compliance_max"):
         v = getattr(args, name)
         if not (math.isfinite(v) and v >= 0):
@@ -350,21 +354,22 @@ def _check_input_path(path: Path) -> None:
         raise DataFileError(path, "file not found", "check the path")
 
 
-def _print_interval_parts(summary) -> None:
+def _interval_part_lines(summary) -> list[str]:
     """Under the table: what E_lo..E_hi of each Bayesian row is made of (90 %: statistical,
     + budget, + model form where a model check found a material misfit)."""
     rows = summary[summary["method"] == "bayes"]
     if rows.empty or "E_budget_lo_pa" not in rows:
-        return
-    print("bayes E_lo..E_hi: 90 % interval, statistical + budget (+ model form: with a "
-          "material misfit, the envelope of the alternatives' 90 % intervals); its parts (% of "
-          "E):")
+        return []
+    lines = ["bayes E_lo..E_hi: 90 % interval, statistical + budget (+ model form: with a "
+             "material misfit, the envelope of the alternatives' 90 % intervals); its parts "
+             "(% of E):"]
     for _, r in rows.iterrows():
         parts = interval_parts(r["E_pa"], (r["E_stat_lo_pa"], r["E_stat_hi_pa"]),
                                (r["E_budget_lo_pa"], r["E_budget_hi_pa"]),
                                (r["E_lo_pa"], r["E_hi_pa"]))
         misfit = "" if r["model_ok"] else f"; material misfit: {r['misfit_checks']}"
-        print(f"  {r['trace_id']}: {parts}{misfit}")
+        lines.append(f"  {r['trace_id']}: {parts}{misfit}")
+    return lines
 
 
 def _run_rheology(args: argparse.Namespace) -> int:
@@ -429,17 +434,62 @@ def run(args: argparse.Namespace) -> int:
     summary = fit_campaign(source, args.out, options, workers=args.workers, resume=args.resume,
                            force=args.force, progress=args.progress,
                            read_options=manifest_options)
-    cols = ["trace_id", "method", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa", "converged"]
-    show = summary[cols].copy()
-    for c in ("E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa"):
-        show[c.removesuffix("_pa")] = show.pop(c).map(format_pressure)
-    print(show.to_string(index=False))
-    _print_interval_parts(summary)
-    flagged = summary[(summary["method"] == "bayes") & (summary["converged"] == False)]  # noqa: E712
-    if len(flagged):
-        print(f"warning: {len(flagged)} Bayesian fit(s) not converged or flagged; see the "
-              "'flags' column of summary.csv")
+    for line in console_lines(summary):
+        print(line)
     print(f"wrote {Path(args.out) / layout.SUMMARY}")
     return 0
+
+
+def flag_headlines(text: str, width: int = 110) -> list[str]:
+    """The flags of a summary row (messages joined by "; ") as one short line each: a message
+    up to its first parenthesis or bracket (the explanation and the effect on E stay in
+    summary.csv), at most ``width`` characters."""
+    parts, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        if ch in "([":
+            depth += 1
+        elif ch in ")]":
+            depth -= 1
+        if depth == 0 and text.startswith("; ", i):
+            parts.append(text[start:i])
+            start = i + 2
+    parts.append(text[start:])
+    out = []
+    for p in (p.strip() for p in parts):
+        cut = min((i for i in (p.find(" ("), p.find(" [")) if i > 0), default=len(p))
+        head = p[:cut].rstrip(" :;,")
+        if head:
+            out.append(head if len(head) <= width else head[:width - 3].rstrip() + "...")
+    return out
+
+
+def console_lines(summary) -> list[str]:
+    """What ``fit`` prints under a run: the table (E with its 90 % interval, convergence and
+    the model check), what each Bayesian interval is made of, one line per flag of a fit that
+    failed a model check or did not converge, and the Poisson ratio when it was assumed."""
+    cols = ["trace_id", "method", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa", "converged",
+            "model_ok"]
+    show = summary[[c for c in cols if c in summary]].copy()
+    for c in ("E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa"):
+        show[c.removesuffix("_pa")] = show.pop(c).map(format_pressure)
+    lines = [show.to_string(index=False),
+             "E: the Bayesian posterior median or the least-squares estimate; E_sd its sd; "
+             "E_lo..E_hi its 90 % interval"]
+    lines += _interval_part_lines(summary)
+    bad = summary[(summary["converged"] == False)  # noqa: E712
+                  | (summary.get("model_ok", True) == False)]  # noqa: E712
+    for _, r in bad.iterrows():
+        what = ("did not converge" if not r["converged"] else "failed a model check")
+        lines.append(f"{r['trace_id']} ({r['method']}): {what}; E may be biased by what the "
+                     "model leaves out:")
+        flags = r.get("flags")
+        lines += [f"  - {h}" for h in flag_headlines(flags if isinstance(flags, str) else "")]
+    if len(bad):
+        lines.append(f"warning: {len(bad)} fit(s) above failed a check; the full text and "
+                     "the effect on E are in summary.csv (columns flags, misfit_checks, "
+                     "misfit_effect)")
+    if "nu_source" in summary and (summary["nu_source"] == "default").any():
+        lines.append(f"note: {DEFAULT_NU_NOTE}")
+    return lines
 
 

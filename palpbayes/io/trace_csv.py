@@ -76,16 +76,23 @@ def _segment_column(df: pd.DataFrame, source: str) -> np.ndarray | None:
     return text.map(lambda v: codes.get(v, v)).to_numpy(dtype=object)
 
 
-def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: str | None,
-                 source: str) -> tuple[str, str]:
-    """Return (column name, unit) for ``quantity`` ('time', 'z' or 'force')."""
+#: Column names of common robot logs, per quantity (lower case): a file that has one of them
+#: instead of the canonical name gets the option that maps it in its error message (the
+#: mapping is not silent: sign and unit conventions differ between loggers).
+ROBOT_LOG_NAMES = {
+    "time": ("timestamp", "t", "time", "stamp", "header.stamp", "elapsed_s"),
+    "z": ("actual_tcp_pose_2", "tcp_z", "pose_z", "z_tcp", "position_z", "tool_z"),
+    "force": ("fz", "force_z", "actual_tcp_force_2", "ft_fz", "wrench.force.z", "tcp_fz"),
+}
+
+
+def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: str | None
+                 ) -> tuple[str, str] | str:
+    """(column name, unit) for ``quantity`` ('time', 'z' or 'force'), or the problem as text
+    (:func:`_find_columns` reports every problem of a file at once)."""
     if explicit is not None:
         if explicit not in df.columns:
-            raise DataFileError(
-                source, f"column {explicit!r} (given for {quantity}) is missing; "
-                f"the file has {', '.join(map(str, df.columns))}",
-                "fix the column mapping",
-            )
+            return f"column {explicit!r} (given for {quantity}) is missing"
         return explicit, unit or ("s" if quantity == "time" else "m" if quantity == "z" else "N")
     lower = {str(c).strip().lower(): c for c in df.columns}
     for u in _QUANTITIES[quantity]:
@@ -96,12 +103,27 @@ def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: st
         return lower[quantity], unit or ("s" if quantity == "time" else
                                          "m" if quantity == "z" else "N")
     canon = {"time": "time_s", "z": "z_m", "force": "force_n"}[quantity]
-    raise DataFileError(
-        source,
-        f"missing column '{canon}' (for {quantity}); the file has "
-        f"{', '.join(map(str, df.columns)) or 'no columns'}",
-        f"rename the column or map it, e.g. --{quantity}-column NAME",
-    )
+    known = next((lower[n] for n in ROBOT_LOG_NAMES[quantity] if n in lower), None)
+    hint = (f" (a robot log's {known!r}? map it with --{quantity}-column {known}, and check "
+            f"its unit and sign)" if known is not None else "")
+    return f"missing column '{canon}' (for {quantity}){hint}"
+
+
+def _find_columns(df: pd.DataFrame, columns: dict[str, str], units: dict[str, str],
+                  source: str) -> dict[str, tuple[str, str]]:
+    """(column, unit) of time, z and force; every missing one named in one error."""
+    found = {q: _find_column(df, q, columns.get(q), units.get(q)) for q in ("time", "z", "force")}
+    problems = [v for v in found.values() if isinstance(v, str)]
+    if problems:
+        raise DataFileError(
+            source,
+            f"{'; '.join(problems)}; the file has "
+            f"{', '.join(map(str, df.columns)) or 'no columns'}",
+            "rename the columns to time_s, z_m, force_n or map them with --time-column, "
+            "--z-column, --force-column (and --time-unit, --z-unit, --force-unit, "
+            "--force-sign, --z-sign)",
+        )
+    return found
 
 
 def trace_from_frame(
@@ -144,8 +166,7 @@ def trace_from_frame(
                                       units=joint_units or None, force_sign=force_sign,
                                       check=check, **metadata)
     arrays = {}
-    for q in ("time", "z", "force"):
-        col, unit = _find_column(df, q, columns.get(q), units.get(q), source)
+    for q, (col, unit) in _find_columns(df, columns, units, source).items():
         try:
             factor = _FACTORS[q](unit)
         except InputError as exc:

@@ -35,7 +35,7 @@ def indentation_study(res: ResultsFolder, target: float = REPLAY_TARGET) -> pd.D
         try:  # the model the fit used (tip, the row's or the run's nu, layer)
             trace = load_trace(row, **res.settings.get("read_options", {}))
             model = trace_model(trace, FitOptions(
-                nu=float(opts.get("nu", 0.3)), layer=opts.get("layer", "off"),
+                nu=opts.get("nu"), layer=opts.get("layer", "off"),
                 bonding=opts.get("bonding", "unknown")), depth=np.nan)
             if not model.is_concrete:  # the online estimator takes one shape function
                 model = (model.variant(base="bonded") if model.thickness is not None

@@ -9,6 +9,7 @@ from matplotlib.figure import Figure
 
 from .. import __version__
 from ..campaign.results import ResultsFolder
+from ..contact import DEFAULT_NU
 from ..noise import PAPER_NOISE_PP
 from ..units import format_length
 from .format import _fmt, _force_setting, _range, _shown, _wrap
@@ -38,7 +39,9 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     return [
         ("t", f"Methods fitted: {s.get('method', '?')};  base seed: {s.get('seed', '?')};  "
               f"traces: {n_tr}"),
-        ("t", f"Contact model: Poisson ratio nu = {o.get('nu')}; {thick}"),
+        ("t", "Contact model: Poisson ratio nu = " + (
+            f"{o['nu']}" if o.get("nu") is not None
+            else f"{DEFAULT_NU} (not given: the default, a foam value)") + f"; {thick}"),
         ("t", f"Fit window: F_unc = {_force_setting(o.get('f_unc', PAPER_NOISE_PP))}; fit "
               f"fraction {frac}; max depth {depth}"),
         ("t", f"Noise model: {o.get('noise', 'gaussian')}; baseline "

@@ -393,3 +393,34 @@ def test_manifest_traces_take_the_read_options(tmp_path):
                           units={"z": "mm"}, force_sign=-1)
     np.testing.assert_allclose(back.z, tr.z, rtol=1e-14)
     np.testing.assert_allclose(back.force, tr.force, rtol=1e-13, atol=1e-15)
+
+
+def test_every_missing_column_is_named_in_one_error(tmp_path):
+    """Three wrong column names: one error that names all three, not the first only."""
+    path = tmp_path / "three.csv"
+    path.write_text("t_ms,height,load\n0,0.1,0\n1,0.09,0.1\n2,0.08,0.2\n")
+    with pytest.raises(DataFileError) as info:
+        read_trace(path)
+    msg = str(info.value)
+    for canon in ("'time_s'", "'z_m'", "'force_n'"):
+        assert f"missing column {canon}" in msg, msg
+    assert "three.csv" in msg and "t_ms, height, load" in msg
+    assert "--time-column" in msg and "--force-sign" in msg
+
+
+def test_a_robot_log_gets_the_options_that_map_its_columns(tmp_path):
+    """A UR RTDE-style log (timestamp, actual_TCP_pose_2, fz): the error says which option
+    maps each column (not a silent mapping: loggers differ in units and sign), and the mapping
+    it suggests reads the file."""
+    path = tmp_path / "ur3e.csv"
+    path.write_text("timestamp,actual_TCP_pose_2,fz\n0,0.100,0.0\n0.00125,0.0999,0.01\n"
+                    "0.0025,0.0998,0.02\n")
+    with pytest.raises(DataFileError) as info:
+        read_trace(path)
+    msg = str(info.value)
+    assert "--time-column timestamp" in msg
+    assert "--z-column actual_TCP_pose_2" in msg
+    assert "--force-column fz" in msg
+    trace = read_trace(path, columns={"time": "timestamp", "z": "actual_TCP_pose_2",
+                                      "force": "fz"}, check=False)
+    assert trace.n_points == 3
