@@ -330,10 +330,14 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     For tip ``sphere`` (the exact Sneddon law, docs/design.md §1; any tip whose law has a
     ``hertz_approximation``) the paper's choice is also fitted:
     least squares with the paraboloid (Hertz) law at the sphere's radius on the same points
-    (same window, constraint, Poisson ratio and thickness model).  Every row of the trace gets
-    ``E_hertz_pa`` and ``E_hertz_rel_diff`` = (E_hertz − E)/E with the row's own E; Hertz
-    overestimates the force at a given E, so E_hertz is a few per cent *below* E at the paper's
-    depths (about −3 % at d/R ≈ 0.3).  Other tips: NaN.
+    (same window, constraint, Poisson ratio and thickness model).  The two least-squares fits
+    share the points and the paper's model, both on the force tared by the pre-contact
+    baseline (the paper's model has no offset: an untared one would pose as the Hertz gap), so
+    their ratio is the Hertz approximation's effect alone: ``E_hertz_rel_diff`` =
+    E_hertz,lsq/E_lsq − 1, and every row gets ``E_hertz_pa`` = its own E times that ratio
+    (the Bayesian row: the modulus its fit would give with the Hertz law).  Hertz
+    overestimates the force at a given E, so E_hertz is a few per cent *below* E at the
+    paper's depths (about −3 % at d/R ≈ 0.3).  Other tips, or a failed fit: NaN.
     """
     data = check_fittable(trace, options)
     paper = replace(data, model=data.model.half_space())  # the least-squares baseline's
@@ -350,20 +354,26 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
         lsq_row = {"trace_id": trace.trace_id, "method": "lsq", "tip": data.model.tip.kind,
                    "n_points": data.n_points, "E_pa": float("nan"), "nu": data.model.nu,
                    "flags": f"least squares failed: {exc}"}
-    e_hertz = float("nan")
+    ratio = float("nan")  # E_hertz / E of the paper's least squares on the tared force
     approximation = get_law(data.model.tip).hertz_approximation
     if approximation is not None:
-        hertz = replace(paper, model=replace(paper.model, tip=approximation(paper.model.tip)))
+        tared = paper
+        if not options.tare:  # the paper's model has no offset: an untared one biases E
+            tared = replace(prepare(trace, paper.model, f_unc=options.f_unc,
+                                    fit_fraction=options.fit_fraction,
+                                    max_depth=options.max_depth, tare=True),
+                            model=paper.model)
+        hertz = replace(tared, model=replace(tared.model, tip=approximation(tared.model.tip)))
         try:
-            e_hertz = float(fit_lsq_data(hertz, trace_id=trace.trace_id).E)
-        except FitError:
-            e_hertz = float("nan")
+            ratio = float(fit_lsq_data(hertz, trace_id=trace.trace_id).E
+                          / fit_lsq_data(tared, trace_id=trace.trace_id).E)
+        except (FitError, ZeroDivisionError):
+            ratio = float("nan")
 
     def with_hertz(row: dict) -> dict:
         e = row.get("E_pa")
-        ok = e is not None and np.isfinite(e) and e != 0 and np.isfinite(e_hertz)
-        return {**row, "E_hertz_pa": e_hertz,
-                "E_hertz_rel_diff": (e_hertz - e) / e if ok else float("nan")}
+        e = float("nan") if e is None else float(e)
+        return {**row, "E_hertz_pa": e * ratio, "E_hertz_rel_diff": ratio - 1.0}
 
     meta = {"material": trace.material, "specimen": trace.specimen,
             "repetition": trace.repetition, "rest_time_s": trace.rest_time,

@@ -50,3 +50,25 @@ def test_deeper_indentation_widens_the_gap():
 def test_other_tips_get_nan():
     row = _lsq_row(2e-3, tip=Tip("paraboloid", radius=0.0117))
     assert math.isnan(row["E_hertz_pa"]) and math.isnan(row["E_hertz_rel_diff"])
+
+
+def test_an_untared_offset_does_not_pose_as_the_hertz_gap():
+    """The paper's least squares has no offset: on an untared trace (+0.3 N) its E moves, but
+    the Hertz gap is taken on the tared force and stays that of the tared trace (before: the
+    untared ratio read -5.1 % for -3.6 %, and the Bayesian row compared its own E with the
+    biased least-squares Hertz E); the Bayesian row gets its own E times the ratio."""
+    def rows(offset):
+        tr = simulate_trace(E_TRUE, SPHERE, thickness=0.03, depth=3e-3, rng=3, trace_id="t",
+                            base=None, force_offset=offset)
+        return {r["method"]: r for r in fit_trace(
+            tr, FitOptions(method="both", engine="exact", seed=1)).rows}
+
+    tared, untared = rows(0.0), rows(0.3)
+    gap = tared["lsq"]["E_hertz_rel_diff"]
+    assert -0.06 < gap < -0.01
+    # the offset moves the least-squares E itself, not the gap
+    assert abs(untared["lsq"]["E_pa"] / tared["lsq"]["E_pa"] - 1) > 0.02
+    assert untared["lsq"]["E_hertz_rel_diff"] == pytest.approx(gap, abs=0.01)
+    b = untared["bayes"]
+    assert b["E_hertz_rel_diff"] == untared["lsq"]["E_hertz_rel_diff"]
+    assert b["E_hertz_pa"] == pytest.approx(b["E_pa"] * (1 + b["E_hertz_rel_diff"]), rel=1e-12)
