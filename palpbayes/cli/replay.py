@@ -8,7 +8,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..campaign import layout
-from ..contact import check_nu
+from ..contact import DEFAULT_NU, DEFAULT_NU_NOTE, check_nu
 from ..errors import InputError
 from ..fitdata import ModelSpec
 from ..io.atomic import write_csv_atomic, write_with
@@ -41,7 +41,10 @@ def register(subparsers) -> None:
     )
     p.add_argument("input", metavar="TRACE", help="trace CSV")
     p.add_argument("--target", type=parse_fraction, default=None, metavar="FRACTION",
-                   help="stop when the 90 %% interval of E is within ± this (e.g. 2%%)")
+                   help="target statistical precision: stop when the 90 %% interval of E "
+                   "from the data (noise and surface; not the budget's nu, tip radius, gain "
+                   "and compliance) is within ± this of E (e.g. 2%%); the budget interval is "
+                   "printed beside it")
     p.add_argument("--max-force", type=float, default=None, metavar="N",
                    help="stop at this force above the baseline [N]")
     p.add_argument("--max-depth", type=float, default=None, metavar="M",
@@ -52,7 +55,9 @@ def register(subparsers) -> None:
                    help="noise model (default gaussian)")
     p.add_argument("--noise-pp", type=float, default=None, metavar="N",
                    help="sensor peak-to-peak noise [N] (default: 6 sd of the baseline)")
-    p.add_argument("--nu", type=float, default=0.3, help="Poisson ratio (default 0.3)")
+    p.add_argument("--nu", type=float, default=None,
+                   help="Poisson ratio (foams 0.1-0.3, silicone, gels and tissue 0.45-0.5; "
+                   "default 0.3, said on screen)")
     p.add_argument("--truth", type=float, default=None, metavar="PA",
                    help="true modulus [Pa] of a simulated trace, drawn on the figure")
     p.add_argument("--out", metavar="DIR", default=None,
@@ -61,11 +66,17 @@ def register(subparsers) -> None:
     add_trace_options(p)
 
 
-def _show(label: str, s) -> str:
+def _show(label: str, s, budget) -> str:
+    """Two lines: where (time, depth, peak force), E with its statistical 90 % interval and
+    half-width (what --target tests), then the budget's 90 % interval and its half-width."""
+    med = s.E.median
+    rel = 100 * max(med - budget.lo, budget.hi - med) / med
     return (f"{label:<14} t = {s.t:7.3f} s  depth {format_length(s.depth):>9}  peak force "
-            f"{format_force(s.peak_force):>9}  E = {format_pressure(s.E.median)} "
+            f"{format_force(s.peak_force):>9}  E = {format_pressure(med)} "
             f"[{format_pressure(s.E.lo)}, {format_pressure(s.E.hi)}]  "
-            f"(±{100 * s.E.rel_half_width:.2g} %)")
+            f"(statistical ±{100 * s.E.rel_half_width:.2g} %)\n"
+            f"{'':<14} with the budget: [{format_pressure(budget.lo)}, "
+            f"{format_pressure(budget.hi)}]  (±{rel:.2g} %)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -75,23 +86,25 @@ def run(args: argparse.Namespace) -> int:
     rule = StoppingRule(target=args.target, max_force=args.max_force,
                         max_depth=args.max_depth)
     trace = trace_from_args(args)
-    model = ModelSpec(trace.tip, nu=check_nu(args.nu))
+    model = ModelSpec(trace.tip, nu=DEFAULT_NU if args.nu is None else check_nu(args.nu))
     res = replay(trace, model, rule=rule, chunk=args.chunk, noise=args.noise,
                  noise_pp=args.noise_pp)
     s, f = res.at_stop, res.final
+    print("E: median [90 % interval]; statistical: from the data alone (what --target tests); "
+          "with the budget: also nu, tip radius, gain and compliance")
     if s is None:
         print("the stopping rule never fired: the whole trace was needed")
     else:
-        print(_show(f"stop ({s.stop})", s))
-        print(f"{'':<14} with the budget: [{format_pressure(res.budget_at_stop.lo)}, "
-              f"{format_pressure(res.budget_at_stop.hi)}]")
-    print(_show("whole trace", f))
+        print(_show(f"stop ({s.stop})", s, res.budget_at_stop))
+    print(_show("whole trace", f, res.budget_final))
     summary = res.summary()
     if s is not None:
         print(f"saved against the recorded protocol: {summary['depth_saved_pct']:.0f} % of the "
               f"depth, {summary['force_saved_pct']:.0f} % of the peak force")
     for flag in f.flags:
         print(f"warning: {flag}")
+    if args.nu is None:
+        print(f"note: {DEFAULT_NU_NOTE.replace(', or a nu column in the manifest', '')}")
     if args.out:
         from ..plots.online import plot_replay
 

@@ -51,6 +51,14 @@ def test_replay_reports_the_stop_and_writes_its_files(trace_csv, tmp_path, capsy
     text = capsys.readouterr().out
     assert rc == 0
     assert "stop (target precision)" in text and "whole trace" in text and "saved" in text
+    # the target is the statistical precision; the budget interval is on every line, stop
+    # and whole trace, with its own half-width; the assumed Poisson ratio is said
+    lines = text.splitlines()
+    stat = [ln for ln in lines if "(statistical ±" in ln]
+    budget = [ln for ln in lines if "with the budget: [" in ln]
+    assert len(stat) == 2 and len(budget) == 2, text
+    assert all(ln.rstrip().endswith("%)") for ln in budget)
+    assert "what --target tests" in text and "nu = 0.3 assumed" in text
     hist = pd.read_csv(out / layout.REPLAY_HISTORY)
     summary = pd.read_csv(out / layout.REPLAY_SUMMARY).iloc[0]
     assert (out / layout.REPLAY_FIGURE).stat().st_size > 10_000
