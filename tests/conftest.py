@@ -108,3 +108,10 @@ def shared_data() -> Callable[..., Path]:
             return shared_data("phantom-compression", files=["published_moduli.csv"])
     """
     return find_shared_data
+
+
+@pytest.fixture(scope="session")
+def spot3(shared_data) -> Path:
+    """afmformats' real JPK force-distance curve ``fmt-jpk-fd_spot3-0192.jpk-force`` (approach
+    and retract, 2000 points each; MIT), read from ``../shared/data/afm-files``."""
+    return shared_data("afm-files/fmt-jpk-fd_spot3-0192.jpk-force")

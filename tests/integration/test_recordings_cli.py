@@ -19,7 +19,6 @@ from palpbayes.io.rosbag_write import write_bag, write_trace_bag
 from palpbayes.io.trace_csv import read_trace, write_trace
 from palpbayes.sim import simulate_trace
 
-JPK = Path(__file__).resolve().parents[1] / "data" / "spot3-0192.jpk-force"
 PARA = Tip("paraboloid", radius=0.0117)
 FT = "/force_torque_sensor_broadcaster/wrench"
 AFM = ["--tip", "paraboloid", "--radius", "10e-6", "--nu", "0.5", "--no-progress"]
@@ -53,15 +52,16 @@ def test_fit_a_bag_from_the_command_line_recovers_E(sim, tmp_path, capsys):
     assert row["E_pa"] == pytest.approx(ref["E_pa"], rel=1e-9)
 
 
-def test_fit_the_real_jpk_curve_with_no_conversion(tmp_path, capsys):
-    """The committed JPK curve fits from the CLI; E* and contact point agree with the
-    unconstrained least-squares optimum of the same model (Hertz paraboloid + constant
-    baseline, R = 10 µm, nu = 0.5), computed here with scipy, as for the shared AFM curves."""
-    rc = main(["fit", str(JPK), "--out", str(tmp_path / "res"), "--method", "both",
+def test_fit_the_real_jpk_curve_with_no_conversion(tmp_path, capsys, spot3):
+    """afmformats' real spot3 JPK curve (shared data) fits from the CLI; E* and contact point
+    agree with the unconstrained least-squares optimum of the same model (Hertz paraboloid +
+    constant baseline, R = 10 µm, nu = 0.5), computed here with scipy, as for the shared AFM
+    curves."""
+    rc = main(["fit", str(spot3), "--out", str(tmp_path / "res"), "--method", "both",
                "--workers", "1", *AFM])
     assert rc == 0, capsys.readouterr().err
     bayes = _summary(tmp_path / "res").set_index("method").loc["bayes"]
-    (trace,) = read_afm(JPK)
+    (trace,) = read_afm(spot3)
     z, f, k = trace.z, trace.force, 4 / 3 / (1 - 0.25) * np.sqrt(10e-6)
 
     def resid(p):
@@ -109,7 +109,7 @@ def test_a_force_map_is_fitted_as_a_campaign_with_positions(tmp_path, capsys):
     assert rc == 0 and list(_summary(tmp_path / "one")["trace_id"]) == ["line-1"]
 
 
-def test_inspect_lists_bag_topics_and_afm_curves(sim, tmp_path, capsys):
+def test_inspect_lists_bag_topics_and_afm_curves(sim, tmp_path, capsys, spot3):
     bag = write_trace_bag(sim, tmp_path / "b", extra_topics={"/rosout": 2})
     assert main(["inspect", str(bag)]) == 0
     out = capsys.readouterr().out
@@ -117,13 +117,13 @@ def test_inspect_lists_bag_topics_and_afm_curves(sim, tmp_path, capsys):
     assert f"{FT}  geometry_msgs/msg/WrenchStamped" in out and "250 Hz" in out
     assert "/tcp_pose" in out and "std_msgs/msg/String" in out
     assert f"fit reads force from {FT}" in out
-    assert main(["inspect", str(JPK)]) == 0
+    assert main(["inspect", str(spot3)]) == 0
     out = capsys.readouterr().out
     assert "AFM file, 1 curve(s) (force-distance)" in out
     assert "curve 0: approach 2000, retract 2000 points" in out and "x = -16.667 µm" in out
 
 
-def test_bag_errors_are_one_line_with_exit_status_2(sim, tmp_path, capsys):
+def test_bag_errors_are_one_line_with_exit_status_2(sim, tmp_path, capsys, spot3):
     bag = write_trace_bag(sim, tmp_path / "b")
     args = ["--out", str(tmp_path / "res"), "--tip", "paraboloid", "--radius", "0.0117"]
     assert main(["fit", str(bag), "--pose-topic", "/tool_pose", *args]) == 2
@@ -138,14 +138,14 @@ def test_bag_errors_are_one_line_with_exit_status_2(sim, tmp_path, capsys):
     csv = write_trace(sim, tmp_path / "t.csv")
     assert main(["fit", str(csv), "--force-topic", FT, *args]) == 2
     assert "--force-topic applies to ROS 2 bags and AFM files only" in capsys.readouterr().err
-    assert main(["fit", str(JPK), "--z-unit", "mm", *args]) == 2
+    assert main(["fit", str(spot3), "--z-unit", "mm", *args]) == 2
     assert "--*-column and --*-unit apply to text tables only" in capsys.readouterr().err
     assert not (tmp_path / "res").exists()
 
 
-def test_a_missing_extra_is_a_one_line_error(monkeypatch, capsys, tmp_path):
+def test_a_missing_extra_is_a_one_line_error(monkeypatch, capsys, tmp_path, spot3):
     monkeypatch.setitem(sys.modules, "afmformats", None)
-    assert main(["fit", str(JPK), "--out", str(tmp_path / "r"), *AFM]) == 2
+    assert main(["fit", str(spot3), "--out", str(tmp_path / "r"), *AFM]) == 2
     err = capsys.readouterr().err
     assert "reading .jpk-force files needs the optional extra: pip install 'palpbayes[afm]'" \
         in err

@@ -20,8 +20,6 @@ from palpbayes.io.recording import read_recording, recording_kind
 from palpbayes.io.trace_csv import read_trace
 from palpbayes.sim import simulate_trace
 
-DATA = Path(__file__).resolve().parents[1] / "data"
-JPK = DATA / "spot3-0192.jpk-force"  # real JPK curve from afmformats' test data (MIT)
 AFM_TIP = Tip("paraboloid", radius=10e-6)
 GRID = [(0.0, 0.0), (20e-6, 0.0), (0.0, 20e-6), (20e-6, 20e-6)]
 
@@ -32,11 +30,11 @@ def afm_sim(E: float = 1000.0, rng: int = 1):
                           speed=10e-6, rate=1000.0, noise_pp=6 * 20e-12, rng=rng)
 
 
-def test_a_real_jpk_force_file_gives_its_approach_segment():
+def test_a_real_jpk_force_file_gives_its_approach_segment(spot3):
     import afmformats
 
-    (trace,) = read_afm(JPK, tip=AFM_TIP)
-    (raw,) = afmformats.load_data(JPK)
+    (trace,) = read_afm(spot3, tip=AFM_TIP)
+    (raw,) = afmformats.load_data(spot3)
     appr = raw["segment"] == 0
     k = raw.metadata["spring constant"]
     assert trace.n_points == int(appr.sum()) == 2000
@@ -45,13 +43,13 @@ def test_a_real_jpk_force_file_gives_its_approach_segment():
                                rtol=0, atol=1e-15)
     assert trace.z[0] > trace.z[-1] and trace.force[-1] > trace.force[0]  # z up, pressing +
     assert trace.time[0] == 0.0 and trace.sample_rate == pytest.approx(2000.0, rel=1e-6)
-    assert trace.trace_id == "spot3-0192" and trace.tip == AFM_TIP
+    assert trace.trace_id == "fmt-jpk-fd_spot3-0192" and trace.tip == AFM_TIP
     assert trace.metadata["x_m"] == pytest.approx(-16.67e-6, rel=1e-3)
     assert trace.metadata["spring_constant_n_per_m"] == pytest.approx(k)
-    assert recording_kind(JPK) == "afm"
+    assert recording_kind(spot3) == "afm"
     assert trace.segment_names == ("approach",) and trace.metadata["afm_modality"] == \
         "force-distance" and trace.metadata["afm_segments"] == "0 approach, 1 retract"
-    (both,) = read_afm(JPK, tip=AFM_TIP, segments="approach,retract")
+    (both,) = read_afm(spot3, tip=AFM_TIP, segments="approach,retract")
     assert both.n_points == 4000 and both.segment_names == ("approach", "retract")
     np.testing.assert_array_equal(both.segments("approach").z, trace.z)
 
@@ -147,10 +145,10 @@ def test_a_curve_without_spring_constant_cannot_give_the_tip_position(tmp_path):
         read_afm(path)
 
 
-def test_the_missing_extra_is_named(monkeypatch):
+def test_the_missing_extra_is_named(monkeypatch, spot3):
     monkeypatch.setitem(sys.modules, "afmformats", None)
     with pytest.raises(MissingExtraError) as err:
-        read_afm(JPK)
+        read_afm(spot3)
     assert str(err.value).startswith("reading .jpk-force files needs the optional extra: "
                                      "pip install 'palpbayes[afm]'")
     with pytest.raises(MissingExtraError, match=r"reading .jpk-force-map files needs"):
