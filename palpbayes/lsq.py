@@ -33,6 +33,7 @@ from scipy import optimize, stats
 
 from .errors import FitError
 from .fitdata import FitData, ModelSpec, prepare_trace
+from .flagcodes import flag_columns
 from .intervals import LEVEL
 from .trace import IndentationTrace
 from .units import format_force
@@ -120,7 +121,7 @@ class LSQResult:
             "m": np.nan if self.m is None else self.m,
             "rss_n2": self.rss,
             "constraint_active": self.constraint_active,
-            "flags": "; ".join(self.notes),
+            **flag_columns("; ".join(self.notes)),
         }
 
 

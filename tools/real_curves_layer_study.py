@@ -59,6 +59,7 @@ from palpbayes.bayes.modelform import SEPARATOR
 from palpbayes.campaign.fitjob import FitOptions, fit_trace
 from palpbayes.contact import Tip
 from palpbayes.errors import ConvergenceWarning, PalpbayesError
+from palpbayes.flagcodes import split_flags
 from palpbayes.io.afm import describe_afm, is_afm_file
 from palpbayes.io.recording import read_recording
 
@@ -168,7 +169,7 @@ def fit_one(curve: Curve, layer: str, args: argparse.Namespace) -> dict:
     ex = checks.get("exponent")
     model = res.data.model
     h_prior = model.thickness_range or (np.nan, np.nan)
-    flags = [f.strip() for f in str(r.get("flags") or "").split("; ") if f.strip()]
+    flags = split_flags(str(r.get("notes") or ""))
     row.update(
         status="ok", message="",
         E_pa=r["E_pa"], E_lo_pa=r["E_lo_pa"], E_hi_pa=r["E_hi_pa"], E_stat_pa=r["E_stat_pa"],

@@ -23,6 +23,7 @@ from ..checks import CheckResult, checks_summary
 from ..contact import Tip
 from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
+from ..flagcodes import flag_columns
 from ..intervals import LEVEL, central, central_band
 from ..io.atomic import write_netcdf_atomic
 from ..refit import layer_alternatives
@@ -189,8 +190,8 @@ class BayesResult:
             "n_steps": d.n_steps,
             "baseline_model": self.baseline,
             "F0_n": float(np.median(self.draws("F0"))),
-            "flags": "; ".join(self.warnings + d.problems() + checks["flags"]
-                               + [f"info: {n}" for n in self.notes]),
+            **flag_columns("; ".join(self.warnings + d.problems() + checks["flags"]
+                                     + [f"info: {n}" for n in self.notes])),
             "model_ok": checks["model_ok"],
             "m_free": checks["m_free"],
             "misfit_effect": checks["misfit_effect"],

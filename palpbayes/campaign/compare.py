@@ -68,6 +68,7 @@ from ..bayes.result import saved_fitted_model, saved_model
 from ..contact import registered_kinds
 from ..errors import DataFileError, FitError, InputError
 from ..fitdata import ModelSpec
+from ..flagcodes import flag_columns
 from ..intervals import LEVEL, central
 from ..io.atomic import write_csv_atomic
 from ..io.manifest import tip_from_row
@@ -96,7 +97,8 @@ COMPARISON_COLUMNS = [
     "gt_in_interval", "z_score", "residual_n2", "converged_all", "paper_E_pa", "paper_sd_pa",
     "paper_err_pct", "z_surf_err_mean_m",
     # extras
-    "E_new_sd_pa", "tau", "gt_n", "n_failed", "flags", "E_new_sd_eq_pa", "tau_prior_sd",
+    "E_new_sd_pa", "tau", "gt_n", "n_failed", "notes", "flag_codes", "flag_level",
+    "E_new_sd_eq_pa", "tau_prior_sd",
     # the layer: group means of the rows' E read as a half-space, a bonded and a free layer
     # (for lsq: what the layer would do to the paper's estimate), and for bayes the group's
     # posterior probability of a bonded base (every trace lies on the same plate)
@@ -114,7 +116,8 @@ POOLED_COLUMNS = (
                                              ("factor", ""))
        for q in ("", "_sd", "_lo", "_hi")]
     + ["m_spread", "s_max", "tau_prior_sd", "rhat_max", "ess_min", "tau_max", "n_steps",
-       "n_draws", "converged", "flags", "representative_trace", "budget_applied", "p_bonded",
+       "n_draws", "converged", "notes", "flag_codes", "flag_level", "representative_trace",
+       "budget_applied", "p_bonded",
        "base_ratio"]
 )
 
@@ -153,12 +156,12 @@ def _read_summary(res: Path) -> pd.DataFrame:
         raise DataFileError(res, f"no {layout.SUMMARY} in this folder",
                             "give the --out folder of 'palpbayes fit' on a campaign manifest")
     df = pd.read_csv(path, dtype={"trace_id": str, "material": str, "tip": str,
-                                  "method": str, "flags": str})
+                                  "method": str, "notes": str})
     missing = {"trace_id", "method", "tip", "material", "E_pa"} - set(df.columns)
     if missing:
         raise DataFileError(path, f"lacks column(s) {', '.join(sorted(missing))}")
     df["material"] = df["material"].fillna("")
-    df["flags"] = df["flags"].fillna("") if "flags" in df.columns else ""
+    df["notes"] = df["notes"].fillna("") if "notes" in df.columns else ""
     return df
 
 
@@ -251,7 +254,7 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None,
     conv = g["converged"].map(parse_bool) if "converged" in g else pd.Series(False, index=g.index)
     row = {"n_traces": len(ids), "n_failed": len(g) - len(ids)}
     if not ids:
-        row.update({"converged_all": False, "flags": "no Bayesian posterior to pool"})
+        row.update({"converged_all": False, **flag_columns("no Bayesian posterior to pool")})
         return row, None, None
     i_rep = int(np.argmin(np.abs(np.asarray(ms) - np.median(ms))))
     idata = read_posterior(layout.posterior_path(res, ids[i_rep]))
@@ -298,7 +301,7 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None,
         "E_new_hi_pa": nhi, "tau": float(np.median(pooled.posterior.tau)),
         "tau_prior_sd": pooled.posterior.tau_prior_sd,
         "converged_all": bool(n_conv == len(g) and pooled.posterior.converged),
-        "flags": "; ".join(flags), "p_bonded": np.nan if p_bonded is None else p_bonded,
+        **flag_columns("; ".join(flags)), "p_bonded": np.nan if p_bonded is None else p_bonded,
     })
     prow = {**pooled.row(level), "representative_trace": ids[i_rep],
             "budget_applied": spec is not None,

@@ -118,5 +118,6 @@ def format_comparison(df: pd.DataFrame, groundtruth_source: str | None = None,
     bad = df[~df["converged_all"].map(parse_bool)]
     for _, r in bad.iterrows():
         out.append(f"warning: {r['material']} {r['tip']} {r['method']}: not every fit converged"
-                   + (f" ({r['flags']})" if isinstance(r["flags"], str) and r["flags"] else ""))
+                   + (f" ({r['notes']})" if isinstance(r.get("notes"), str) and r["notes"]
+                      else ""))
     return "\n".join(out)

@@ -19,6 +19,7 @@ from ..checks import CheckResult, check_fit, checks_summary
 from ..contact import DEFAULT_NU, check_tip_plausible, get_law
 from ..errors import ConvergenceWarning, FitError, GeometryError, InputError
 from ..fitdata import BONDINGS, FitData, ModelSpec, prepare
+from ..flagcodes import flag_columns
 from ..lsq import LSQResult, fit_lsq_data
 from ..refit import layer_alternatives
 from ..trace import IndentationTrace
@@ -35,12 +36,14 @@ SUMMARY_COLUMNS = [
     "Estar_pa", "z_surf_m", "z_surf_sd_m", "sigma_n", "converged", "rhat_max", "ess_min",
     "material", "specimen", "repetition", "rest_time_s", "nu", "nu_source", "noise_model",
     "E_stat_pa", "E_stat_sd_pa", "E_stat_lo_pa", "E_stat_hi_pa", "k", "m", "rss_n2",
-    "constraint_active", "tau_max", "acceptance", "n_steps", "flags",
+    "constraint_active", "tau_max", "acceptance", "n_steps",
+    # the flags in words, their codes and the highest level (palpbayes.flagcodes)
+    "notes", "flag_codes", "flag_level",
     # the pre-contact baseline and the noise spec used (F_unc), read from the data unless given
     "baseline_n", "f_unc_n", "baseline_model", "F0_n",
     # model-adequacy checks (palpbayes.checks): no material misfit, and the free exponent m of
     # F = k·d^m + baseline (compare with the tip law's); the largest effect on E of a
-    # material check [-] and the names of those checks; failed checks are named in flags
+    # material check [-] and the names of those checks; failed checks are named in notes
     # (negligible ones as info: lines with their effect)
     "model_ok", "m_free", "misfit_effect", "misfit_checks",
     # E's interval in three parts (bayes; palpbayes.bayes.modelform): E_stat_lo/hi the
@@ -53,7 +56,8 @@ SUMMARY_COLUMNS = [
     "engine",
     # tip "sphere" only (a law with a hertz_approximation; else NaN): the paper's choice for a
     # sphere, least squares with the paraboloid (Hertz) law at the sphere's radius on the same
-    # points, and (E_hertz − E)/E
+    # (tared) points, as the ratio to the Sneddon least squares: the row's E times it, and the
+    # ratio − 1 (fit_trace)
     "E_hertz_pa", "E_hertz_rel_diff",
     # the specimen's layer (finite thickness): the model of the row (lsq: always the paper's
     # half-space; bayes: a layer on a rigid base wherever the thickness is known), the concrete
@@ -310,11 +314,12 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     return data
 
 
-def check_columns(checks: list[CheckResult], flags: str) -> dict:
+def check_columns(checks: list[CheckResult], notes: str) -> dict:
     """``model_ok``, ``m_free``, ``misfit_effect``, ``misfit_checks`` and the failed checks'
-    flags appended to ``flags`` (:func:`palpbayes.checks.checks_summary`)."""
+    flags appended to ``notes`` (:func:`palpbayes.checks.checks_summary`), as ``notes``,
+    ``flag_codes`` and ``flag_level`` (:func:`palpbayes.flagcodes.flag_columns`)."""
     out = checks_summary(checks)
-    out["flags"] = "; ".join([f for f in [flags] if f] + out["flags"])
+    out.update(flag_columns("; ".join([f for f in [notes] if f] + out.pop("flags"))))
     return out
 
 
@@ -353,7 +358,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
         lsq = None
         lsq_row = {"trace_id": trace.trace_id, "method": "lsq", "tip": data.model.tip.kind,
                    "n_points": data.n_points, "E_pa": float("nan"), "nu": data.model.nu,
-                   "flags": f"least squares failed: {exc}"}
+                   **flag_columns(f"least squares failed: {exc}")}
     ratio = float("nan")  # E_hertz / E of the paper's least squares on the tared force
     approximation = get_law(data.model.tip).hertz_approximation
     if approximation is not None:
@@ -386,7 +391,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
         if lsq is not None:  # the paper's model: no offset term
             lsq_row.update(check_columns(check_fit(
                 paper, z_surf=lsq.z_surf, estar=lsq.Estar, f0=0.0, sigma=lsq.rms, seed=seed),
-                lsq_row.get("flags", "")))
+                lsq_row.get("notes", "")))
         rows.append(with_hertz({**lsq_row, **meta}))
     bayes = None
     path = None

@@ -20,6 +20,7 @@ import numpy as np
 
 from .. import errors as _errors
 from ..errors import FitError, InputError
+from ..flagcodes import flag_columns
 from ..io.atomic import write_text_atomic
 from ..trace import IndentationTrace
 from . import layout
@@ -42,7 +43,7 @@ def _jsonable(v):
 def _failed_rows(trace: IndentationTrace, methods: list[str], exc: Exception) -> list[dict]:
     return [{
         "trace_id": trace.trace_id, "method": m, "tip": trace.tip.kind,
-        "converged": False, "flags": f"fit failed: {exc}", "material": trace.material,
+        "converged": False, **flag_columns(f"fit failed: {exc}"), "material": trace.material,
         "specimen": trace.specimen, "repetition": trace.repetition,
         "rest_time_s": trace.rest_time,
     } for m in methods]

@@ -32,6 +32,7 @@ import pandas as pd
 
 from ..contact import registered_kinds
 from ..errors import DataFileError, InputError
+from ..flagcodes import flag_columns
 from . import layout
 
 if TYPE_CHECKING:
@@ -61,8 +62,9 @@ def ordered(values: Iterable[str], preferred: Sequence[str]) -> list[str]:
     return first + [v for v in vals if v not in first]
 
 
-_STR_COLUMNS = ("trace_id", "material", "tip", "method", "flags", "specimen", "file", "input",
-                "distribution", "representative_trace", "nu_source")
+_STR_COLUMNS = ("trace_id", "material", "tip", "method", "notes", "flag_codes", "flag_level",
+                "flags", "specimen", "file", "input", "distribution", "representative_trace",
+                "nu_source")
 
 
 def _read_csv(path: Path) -> pd.DataFrame | None:
@@ -72,9 +74,12 @@ def _read_csv(path: Path) -> pd.DataFrame | None:
     try:
         head = pd.read_csv(path, nrows=0).columns
         df = pd.read_csv(path, dtype={c: str for c in _STR_COLUMNS if c in head})
-        for c in ("material", "flags", "specimen"):
+        for c in ("material", "notes", "flag_codes", "flag_level", "flags", "specimen"):
             if c in df.columns:
                 df[c] = df[c].fillna("")
+        if "flags" in df.columns and "notes" not in df.columns:  # written before the rename
+            cols = pd.DataFrame([flag_columns(t) for t in df.pop("flags")], index=df.index)
+            df = pd.concat([df, cols], axis=1)
         return df
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as exc:
         raise DataFileError(path, f"cannot be read as CSV ({exc})",

@@ -245,7 +245,7 @@ def fit_campaign(
     write_csv_atomic(summary, out / layout.SUMMARY)
     if options.strict:
         failed = sorted({r["trace_id"] for r in rows
-                         if str(r.get("flags") or "").startswith("fit failed")})
+                         if "fit_failed" in str(r.get("flag_codes") or "").split(";")})
         if failed:
             raise FitError(f"{len(failed)} trace(s) failed in strict mode: {', '.join(failed)} "
                            f"(see {out / layout.SUMMARY})")

@@ -22,6 +22,7 @@ from ..contact import (
 )
 from ..errors import DataFileError, InputError
 from ..fitdata import BONDINGS
+from ..flagcodes import split_flags
 from ..io.manifest import is_manifest
 from ..units import format_pressure
 from .rheology import (
@@ -441,21 +442,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def flag_headlines(text: str, width: int = 110) -> list[str]:
-    """The flags of a summary row (messages joined by "; ") as one short line each: a message
-    up to its first parenthesis or bracket (the explanation and the effect on E stay in
-    summary.csv), at most ``width`` characters."""
-    parts, depth, start = [], 0, 0
-    for i, ch in enumerate(text):
-        if ch in "([":
-            depth += 1
-        elif ch in ")]":
-            depth -= 1
-        if depth == 0 and text.startswith("; ", i):
-            parts.append(text[start:i])
-            start = i + 2
-    parts.append(text[start:])
+    """The flags of a summary row (``notes``: messages joined by "; ") as one short line each:
+    a message up to its first parenthesis or bracket (the explanation and the effect on E stay
+    in summary.csv), at most ``width`` characters."""
     out = []
-    for p in (p.strip() for p in parts):
+    for p in split_flags(text):
         cut = min((i for i in (p.find(" ("), p.find(" [")) if i > 0), default=len(p))
         head = p[:cut].rstrip(" :;,")
         if head:
@@ -482,12 +473,12 @@ def console_lines(summary) -> list[str]:
         what = ("did not converge" if not r["converged"] else "failed a model check")
         lines.append(f"{r['trace_id']} ({r['method']}): {what}; E may be biased by what the "
                      "model leaves out:")
-        flags = r.get("flags")
-        lines += [f"  - {h}" for h in flag_headlines(flags if isinstance(flags, str) else "")]
+        notes = r.get("notes")
+        lines += [f"  - {h}" for h in flag_headlines(notes if isinstance(notes, str) else "")]
     if len(bad):
         lines.append(f"warning: {len(bad)} fit(s) above failed a check; the full text and "
-                     "the effect on E are in summary.csv (columns flags, misfit_checks, "
-                     "misfit_effect)")
+                     "the effect on E are in summary.csv (columns notes, flag_codes, "
+                     "misfit_checks, misfit_effect)")
     if "nu_source" in summary and (summary["nu_source"] == "default").any():
         lines.append(f"note: {DEFAULT_NU_NOTE}")
     return lines

@@ -34,6 +34,7 @@ from ..bayes.flags import bound_flags
 from ..campaign.fitjob import FitOptions, check_fittable
 from ..campaign.run import progress_bar
 from ..errors import FitError, InputError, PalpbayesError
+from ..flagcodes import flag_columns
 from ..intervals import LEVEL, central
 from ..io.manifest import load_trace
 from ..lsq import fit_lsq_data
@@ -47,7 +48,7 @@ CONNECT_TIMEOUT = "20s"
 #: Columns of the per-point table (``points.csv``), in order.
 POINT_COLUMNS = [
     "trace_id", "x_m", "y_m", "logE_mean", "logE_sd", "E_median_pa", "E_lo_pa", "E_hi_pa",
-    "E_lsq_pa", "z_surf_m", "depth_m", "n_nodes", "flags", "error",
+    "E_lsq_pa", "z_surf_m", "depth_m", "n_nodes", "notes", "flag_codes", "flag_level", "error",
 ]
 
 
@@ -87,7 +88,7 @@ class PointOptions:
 def _empty_row(row: pd.Series) -> dict:
     out = {c: np.nan for c in POINT_COLUMNS}
     out.update(trace_id=str(row["trace_id"]), x_m=float(row["x_m"]), y_m=float(row["y_m"]),
-               flags="", error="")
+               notes="", flag_codes="", flag_level="", error="")
     return out
 
 
@@ -136,7 +137,7 @@ def fit_point(row: pd.Series, options: PointOptions, index: int = 0) -> dict:
                E_median_pa=float(np.median(E)), E_lo_pa=float(lo), E_hi_pa=float(hi),
                E_lsq_pa=e_lsq, z_surf_m=float(np.median(d["z_surf"])),
                depth_m=float(np.median(d["z_surf"])) - data.z_min,
-               n_nodes=post.n_nodes, flags="; ".join(flags))
+               n_nodes=post.n_nodes, **flag_columns("; ".join(flags)))
     return out
 
 

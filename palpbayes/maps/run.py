@@ -207,9 +207,10 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
     if (~ok).any():
         flags.append(f"{int((~ok).sum())} of {len(points)} traces could not be fitted (see "
                      "points.csv, column error); their nodes have no data")
-    n_flag = int((good["flags"].fillna("") != "").sum())
+    n_flag = int((good["notes"].fillna("") != "").sum())
     if n_flag:
-        flags.append(f"{n_flag} fitted points carry a flag (see points.csv, column flags)")
+        flags.append(f"{n_flag} fitted points carry a flag (see points.csv, columns notes and "
+                     "flag_codes)")
     if len(good) < 10:
         raise InputError(f"a map needs at least 10 fitted points, got {len(good)}")
     # the lattice of every palpation, fitted or not: a point without a fit enters with an sd

@@ -95,6 +95,7 @@ from ..bayes.diagnostics import Diagnostics, chain_passes, compute_diagnostics, 
 from ..bayes.sampler import SamplerSettings, run_emcee
 from ..errors import FitError, InputError
 from ..fitdata import FitData
+from ..flagcodes import flag_columns
 from ..intervals import LEVEL, central
 from .inputs import systematic_factor
 
@@ -325,7 +326,7 @@ class PooledEstimate:
             "rhat_max": d.rhat_max, "ess_min": d.ess_min,
             "tau_max": float(max(d.tau.values())), "n_steps": d.n_steps,
             "n_draws": int(p.mu.size), "converged": p.converged,
-            "flags": "; ".join(d.problems()),
+            **flag_columns("; ".join(d.problems())),
         })
         return out
 

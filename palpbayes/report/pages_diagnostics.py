@@ -131,7 +131,7 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
         "Trace": r["trace_id"], "converged": _yesno(r["converged"]),
         "R-hat": _fmt(r["rhat_max"], 4), "ESS": _fmt(r["ess_min"], 0),
         "steps": _fmt(r["n_steps"], 0),
-        "flags": textwrap.shorten(str(r["flags"]) if pd.notna(r["flags"]) else "", 95),
+        "notes": textwrap.shorten(str(r["notes"]) if pd.notna(r.get("notes")) else "", 95),
     } for _, r in flagged.iterrows()])
     # pages: the group table in chunks, then the flagged fits in chunks; the first flagged
     # chunk shares the last group page when both fit in TABLE_ROWS_PER_PAGE rows

@@ -143,10 +143,10 @@ def _pooled_of(res: ResultsFolder, mat: str, tip: str) -> pd.Series | None:
 
 def _flagged(res: ResultsFolder) -> pd.DataFrame:
     b = res.bayes_rows().copy()
-    flags = b["flags"].fillna("").astype(str) if "flags" in b else pd.Series("", index=b.index)
-    # notes ('info: ...', e.g. a base the data cannot tell) are no failure
-    real = flags.map(lambda f: any(p.strip() and not p.strip().startswith("info:")
-                                   for p in f.split("; ")))
+    level = (b["flag_level"].fillna("").astype(str) if "flag_level" in b
+             else pd.Series("", index=b.index))
+    # information ('info: ...', e.g. a base the data cannot tell) is no failure
+    real = level == "warning"
     bad = ~b["converged"].map(parse_bool) | real
     return b[bad]
 

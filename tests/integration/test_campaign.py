@@ -218,7 +218,7 @@ def test_fit_error_is_recorded_and_does_not_stop_the_campaign(traces, tmp_path, 
     summary = campaign.fit_campaign(traces[:3], tmp_path / "res", OPTS, workers=1)
     bad = summary[summary["trace_id"] == bad_id].set_index("method")
     assert np.isnan(bad.loc["bayes", "E_pa"]) and not bad.loc["bayes", "converged"]
-    assert bad.loc["bayes", "flags"].startswith("fit failed:")
+    assert bad.loc["bayes", "notes"].startswith("fit failed:")
     assert np.isfinite(bad.loc["lsq", "E_pa"])  # the least-squares row is kept
     assert summary["E_pa"].notna().sum() == 5
 

@@ -111,7 +111,7 @@ def _results_folder(root, rng):
                          float(np.median(z)), float(np.median(E / 0.91)))
             for method, e in (("bayes", float(np.median(E))), ("lsq", float(np.median(E)))):
                 rows.append({"trace_id": tid, "method": method, "tip": "sphere",
-                             "material": material, "E_pa": e, "converged": True, "flags": ""})
+                             "material": material, "E_pa": e, "converged": True, "notes": ""})
             geometry.append({"trace_id": tid, "material": material, "tip": "sphere",
                              "specimen": f"{material}_S{k}", "radius_m": 0.01,
                              "thickness_m": 0.03})
@@ -178,13 +178,13 @@ def test_text_shows_the_bayesian_interval_and_the_tau_prior():
         {"material": "White", "tip": "flat", "method": "lsq", "E_pa": 115e3, "E_sd_pa": 12.9e3,
          "E_new_pa": 115e3, "E_new_sd_pa": 14.4e3, "E_new_lo_pa": 81e3, "E_new_hi_pa": 149e3,
          "gt_E_pa": 100e3, "gt_sd_pa": 10e3, "rel_err_pct": -15.0, "gt_in_interval": True,
-         "paper_E_pa": 119.6e3, "paper_sd_pa": 10.8e3, "converged_all": True, "flags": "",
+         "paper_E_pa": 119.6e3, "paper_sd_pa": 10.8e3, "converged_all": True, "notes": "",
          "tau_prior_sd": np.nan},
         {"material": "White", "tip": "flat", "method": "bayes", "E_pa": 116e3, "E_sd_pa": 6e3,
          "E_new_pa": 115.5e3, "E_new_sd_pa": 48e3, "E_new_lo_pa": 88.2e3,
          "E_new_hi_pa": 152.7e3, "gt_E_pa": 100e3, "gt_sd_pa": 10e3, "rel_err_pct": -16.0,
          "gt_in_interval": True, "paper_E_pa": 119.6e3, "paper_sd_pa": 10.8e3,
-         "converged_all": True, "flags": "", "tau_prior_sd": 0.5},
+         "converged_all": True, "notes": "", "tau_prior_sd": 0.5},
     ])
     text = format_comparison(df, "gt.csv")
     assert "115.5 [88.2, 152.7]" in text and "48.0" not in text  # interval, not ± the tail sd

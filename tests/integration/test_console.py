@@ -34,13 +34,13 @@ def test_flag_headlines_split_only_between_messages_and_drop_the_explanations():
 
 def _row(**kw):
     base = {"trace_id": "t1", "method": "bayes", "E_pa": 5e4, "E_sd_pa": 1e3, "E_lo_pa": 4.8e4,
-            "E_hi_pa": 5.2e4, "converged": True, "model_ok": True, "flags": "",
+            "E_hi_pa": 5.2e4, "converged": True, "model_ok": True, "notes": "",
             "nu_source": "option", "misfit_checks": ""}
     return {**base, **kw}
 
 
 def test_console_names_each_failed_check_and_the_assumed_nu():
-    summary = pd.DataFrame([_row(), _row(trace_id="t2", model_ok=False, flags=FLAGS,
+    summary = pd.DataFrame([_row(), _row(trace_id="t2", model_ok=False, notes=FLAGS,
                                          misfit_checks="exponent;ppc", nu_source="default")])
     text = "\n".join(console_lines(summary))
     table = text.splitlines()[0]
@@ -55,7 +55,7 @@ def test_console_names_each_failed_check_and_the_assumed_nu():
 
 
 def test_a_fit_that_did_not_converge_is_said_so():
-    summary = pd.DataFrame([_row(converged=False, flags="z_surf posterior at its upper prior "
+    summary = pd.DataFrame([_row(converged=False, notes="z_surf posterior at its upper prior "
                                  "bound (widen the prior)")])
     text = "\n".join(console_lines(summary))
     assert "t1 (bayes): did not converge" in text

@@ -3,8 +3,9 @@
 The Bayesian fit flags failure modes that R-hat and ESS cannot see
 (``bayes.flags.posterior_flags``): a bimodal surface posterior, a prior-dominated surface and
 a posterior at a prior bound.  These tests check that each flag is raised on inputs that show
-it and that it ends up in the ``flags`` column of ``summary.csv`` with ``converged = False``,
-although the chains themselves pass their diagnostics.
+it and that it ends up in the ``notes`` column of ``summary.csv`` with its code in
+``flag_codes`` and ``converged = False``, although the chains themselves pass their
+diagnostics.
 """
 
 from __future__ import annotations
@@ -55,7 +56,7 @@ def test_bimodal_flag_reaches_summary_csv(clean, tmp_path, monkeypatch):
     """A real fit whose z_surf draws are split in two before the flags are computed."""
     opts = FitOptions(method="bayes", seed=1)
     control = campaign.fit_campaign([clean], tmp_path / "control", opts, workers=1)
-    assert bool(control["converged"].iloc[0]) and not control["flags"].iloc[0]
+    assert bool(control["converged"].iloc[0]) and not control["notes"].iloc[0]
 
     real = bayes_fit.posterior_flags
 
@@ -69,7 +70,8 @@ def test_bimodal_flag_reaches_summary_csv(clean, tmp_path, monkeypatch):
     out = tmp_path / "res"
     campaign.fit_campaign([clean], out, opts, workers=1)
     row = pd.read_csv(out / "summary.csv").iloc[0]
-    assert BIMODAL in row["flags"], row["flags"]
+    assert BIMODAL in row["notes"], row["notes"]
+    assert "bimodal_surface" in row["flag_codes"].split(";") and row["flag_level"] == "warning"
     assert not bool(row["converged"])
     assert row["rhat_max"] < 1.05  # the chains pass: only the flag makes it "not converged"
 
@@ -95,9 +97,11 @@ def test_bound_flag_end_to_end_through_the_cli(tmp_path, capsys):
     stdout = capsys.readouterr().out
     assert rc == 0
     row = pd.read_csv(out / "summary.csv").iloc[0]
-    assert AT_UPPER in row["flags"] and "start in contact" in row["flags"], row["flags"]
+    assert AT_UPPER in row["notes"] and "start in contact" in row["notes"], row["notes"]
     assert not bool(row["converged"])
-    assert "1 Bayesian fit(s) not converged or flagged" in stdout
+    # on screen: the fit is named as not converged, with the flag's headline
+    assert "sparse (bayes): did not converge" in stdout
+    assert f"  - {AT_UPPER}" in stdout and "warning: 1 fit(s) above failed a check" in stdout
 
 
 def test_prior_dominated_detector():
@@ -142,4 +146,4 @@ def test_a_reloaded_fit_keeps_its_model_checks(tmp_path):
     assert [c.name for c in back.checks] == ["exponent", "residual_structure",
                                              "depth_consistency", "ppc"]
     assert back.summary_row()["model_ok"] == summary["model_ok"].iloc[0] == False  # noqa: E712
-    assert back.summary_row()["flags"] == summary["flags"].iloc[0]
+    assert back.summary_row()["notes"] == summary["notes"].iloc[0]

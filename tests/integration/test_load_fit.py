@@ -110,7 +110,7 @@ def test_a_flagged_fit_with_failed_checks_and_a_budget_comes_back_equal(layer, t
 
     back = load_fit(tmp_path / "res", "layer")
     assert_same_fit(back, saved)
-    assert back.summary_row()["flags"] == summary["flags"].iloc[0]
+    assert back.summary_row()["notes"] == summary["notes"].iloc[0]
 
 
 @pytest.mark.slow

@@ -69,8 +69,8 @@ def test_the_half_space_is_rejected_and_h_sits_on_the_prior_edge(fits, name):
     assert lo_prior <= row["thickness_lo_m"] <= row["thickness_m"] <= row["thickness_hi_m"]
     assert row["thickness_hi_m"] < 1.05 * lo_prior, (row["thickness_m"], lo_prior)
     # and the row says so: a thickness at its prior's lower end is a failure, not an answer
-    assert "thickness posterior at its lower prior bound" in row["flags"], row["flags"]
-    assert "the layer model does not explain" in row["flags"] and not row["converged"]
+    assert "thickness posterior at its lower prior bound" in row["notes"], row["notes"]
+    assert "the layer model does not explain" in row["notes"] and not row["converged"]
 
 
 def test_moving_the_prior_edge_moves_the_thickness_and_the_modulus(fits):
@@ -94,8 +94,8 @@ def test_the_modulus_falls_far_below_the_half_space_one(fits, name):
     e_half, row = half.rows[0]["E_pa"], layer.rows[0]
     assert row["E_lo_pa"] < row["E_pa"] < row["E_hi_pa"] < e_half / 3
     assert np.isfinite([row["E_lo_pa"], row["E_hi_pa"], row["E_stat_pa"]]).all()
-    strain = re.search(r"info: indentation (\d+) % of the layer thickness", row["flags"])
-    assert strain and int(strain.group(1)) > 50, row["flags"]
+    strain = re.search(r"info: indentation (\d+) % of the layer thickness", row["notes"])
+    assert strain and int(strain.group(1)) > 50, row["notes"]
 
 
 @pytest.mark.parametrize("name", CURVES)
@@ -143,9 +143,9 @@ def test_the_failed_checks_still_name_their_cause(fits, name):
     assert row["model_ok"] is False
     for check in ("residual_structure", "depth_consistency", "ppc"):
         c = checks[check]
-        assert not c.passed and c.flag and c.flag in row["flags"], check
+        assert not c.passed and c.flag and c.flag in row["notes"], check
     assert "apparent modulus rises with depth" in checks["depth_consistency"].flag
     assert "thickness under-corrected" in checks["depth_consistency"].flag
     assert "cannot reproduce the data's residual structure" in checks["ppc"].flag
-    assert "--thickness unknown" in half.rows[0]["flags"]
-    assert "--thickness unknown" not in row["flags"]
+    assert "--thickness unknown" in half.rows[0]["notes"]
+    assert "--thickness unknown" not in row["notes"]

@@ -50,13 +50,13 @@ def test_real_afm_curve_matches_its_reference(afm, name, tmp_path, capsys):
     estar_ref = ref["E_pa"] / (1 - 0.5**2)
     close = (abs(bayes["Estar_pa"] / estar_ref - 1) < 0.02
              and abs(bayes["z_surf_m"] - ref["contact_point_m"]) < 20e-9)
-    assert close or isinstance(bayes["flags"], str) and bayes["flags"], bayes
+    assert close or isinstance(bayes["notes"], str) and bayes["notes"], bayes
     assert close  # measured: |ΔE*| < 1e-3, |Δz| < 1 nm
     # the untared baseline (hundreds of pN) was read, and the paper's method says it is biased
     assert abs(bayes["baseline_n"]) > 10 * bayes["sigma_n"] or name == "map1d-curve7"
     lsq = rows.loc["lsq"]
     if abs(lsq["baseline_n"]) > lsq["f_unc_n"]:
-        assert "untared sensor" in lsq["flags"]
+        assert "untared sensor" in lsq["notes"]
 
 
 def test_real_no_contact_curve_is_refused(afm, tmp_path, capsys):
@@ -76,9 +76,9 @@ def test_untared_sensor_fits_and_least_squares_says_why_it_is_off():
                                    budget=BudgetSpec.none()))
     rows = {r["method"]: r for r in out.rows}
     assert rows["bayes"]["E_pa"] == pytest.approx(111e3, rel=0.01)
-    assert rows["bayes"]["converged"] and not rows["bayes"]["flags"]
+    assert rows["bayes"]["converged"] and not rows["bayes"]["notes"]
     assert rows["bayes"]["F0_n"] == pytest.approx(0.2, abs=0.005)
-    assert "untared sensor" in rows["lsq"]["flags"] and "--tare" in rows["lsq"]["flags"]
+    assert "untared sensor" in rows["lsq"]["notes"] and "--tare" in rows["lsq"]["notes"]
     tared = fit_lsq(tr, tare=True)
     assert tared.E == pytest.approx(111e3, rel=0.01) and not tared.notes
     assert abs(rows["lsq"]["E_pa"] / 111e3 - 1) > abs(tared.E / 111e3 - 1)
@@ -160,22 +160,22 @@ def test_paraboloid_in_a_30_mm_layer_is_modelled_where_the_thickness_is_known():
                                                             engine="exact")).rows}
     lsq, bayes = rows["lsq"], rows["bayes"]
     assert lsq["E_pa"] > 1.3 * 111e3 and lsq["layer"] == "half-space (the paper's)"
-    assert not lsq["model_ok"] and "finite thickness" in lsq["flags"]
+    assert not lsq["model_ok"] and "finite thickness" in lsq["notes"]
     # the correction's effect on the paper's fit (its surface stays the half-space one):
     # 148 kPa read as a bonded layer is 119 kPa
     assert lsq["E_bonded_pa"] < 0.85 * lsq["E_pa"] and lsq["E_bonded_pa"] < 1.1 * 111e3
     assert bayes["E_stat_pa"] == pytest.approx(111e3, rel=0.02)
     assert bayes["E_lo_pa"] <= 111e3 <= bayes["E_hi_pa"]
     assert bayes["p_bonded"] > 0.99 and bayes["layer"] == "h=30 mm, base unknown"
-    assert bayes["model_ok"] and "finite thickness" not in bayes["flags"], bayes["flags"]
+    assert bayes["model_ok"] and "finite thickness" not in bayes["notes"], bayes["notes"]
     assert bayes["E_halfspace_pa"] > 1.25 * 111e3
     for change in ({"layer": "off"}, {}):
         trace = tr if change else tr.replace(thickness=None)
         row = fit_trace(trace, FitOptions(method="bayes", seed=1, nu=0.49, engine="exact",
                                           **change)).rows[0]
         assert not row["model_ok"] and row["E_pa"] > 1.25 * 111e3
-        assert "finite thickness -> give the specimen's thickness" in row["flags"], row
-        assert "--thickness unknown" in row["flags"]
+        assert "finite thickness -> give the specimen's thickness" in row["notes"], row
+        assert "--thickness unknown" in row["notes"]
 
 
 def test_real_curves_carry_named_misfit_flags(afm, tmp_path):
@@ -187,7 +187,7 @@ def test_real_curves_carry_named_misfit_flags(afm, tmp_path):
                  "--radius", "10e-6", "--nu", "0.5", "--out", str(out)]) == 0
     row = pd.read_csv(out / "summary.csv").iloc[0]
     assert not row["model_ok"]
-    assert "onset" in row["flags"], row["flags"]
+    assert "onset" in row["notes"], row["notes"]
 
 
 def test_fit_bayes_itself_carries_the_model_checks():
@@ -210,19 +210,19 @@ def test_a_small_offset_is_named_in_the_least_squares_row():
     rows = {r["method"]: r
             for r in fit_trace(tr, FitOptions(layer="off", method="both", seed=1)).rows}
     lsq = rows["lsq"]
-    assert lsq["model_ok"] and lsq["misfit_effect"] == 0.0, lsq["flags"]
+    assert lsq["model_ok"] and lsq["misfit_effect"] == 0.0, lsq["notes"]
     assert "info: residual_structure (offset pattern) check fails statistically but is " \
-           "negligible" in lsq["flags"]
+           "negligible" in lsq["notes"]
     assert abs(lsq["E_pa"] / rows["bayes"]["E_pa"] - 1) < 0.02  # what "negligible" claims
     big = simulate_trace(111e3, PARA, thickness=0.03, rng=2, force_offset=0.06, base=None)
     lsq60 = next(r for r in fit_trace(big, FitOptions(layer="off", method="lsq")).rows)
     assert not lsq60["model_ok"] and "residual_structure" in lsq60["misfit_checks"]
-    assert "constant offset" in lsq60["flags"] and "[material: moves E by +" in lsq60["flags"]
+    assert "constant offset" in lsq60["notes"] and "[material: moves E by +" in lsq60["notes"]
     # the effect is what fitting the offset does: E of the offset-fitting Bayesian row
     bayes60 = next(r for r in fit_trace(big, FitOptions(layer="off", method="bayes",
                                                         engine="exact")).rows)
     assert lsq60["misfit_effect"] == pytest.approx(bayes60["E_pa"] / lsq60["E_pa"] - 1,
                                                    abs=0.01)
     assert lsq60["misfit_effect"] > 0.02
-    assert "untared sensor: the pre-contact force" not in rows["lsq"]["flags"]
-    assert rows["bayes"]["model_ok"] and not rows["bayes"]["flags"], rows["bayes"]["flags"]
+    assert "untared sensor: the pre-contact force" not in rows["lsq"]["notes"]
+    assert rows["bayes"]["model_ok"] and not rows["bayes"]["notes"], rows["bayes"]["notes"]

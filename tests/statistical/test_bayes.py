@@ -146,7 +146,7 @@ def test_seed_reproducible_and_step_cap_is_flagged():
         b = fit_bayes(tr, **kw)
     np.testing.assert_array_equal(a.draws("E_star"), b.draws("E_star"))
     row = a.summary_row()
-    assert row["converged"] is False and "step cap" in row["flags"]
+    assert row["converged"] is False and "step cap" in row["notes"]
     with pytest.raises(ConvergenceError, match="not converged"):
         fit_bayes(tr, strict=True, **kw)
     # even the short chain locates the AR(1) coefficient

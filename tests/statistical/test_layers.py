@@ -60,13 +60,13 @@ def test_known_thickness_recovers_a_bonded_layer(case):
                 E = E[r.draws("bonded") == 1.0]
             errs.append(np.median(E) / E_TRUE - 1)
             p_b.append(row["p_bonded"])
-            assert row["model_ok"], row["flags"]
-            assert "finite thickness" not in row["flags"]
+            assert row["model_ok"], row["notes"]
+            assert "finite thickness" not in row["notes"]
         assert cover >= 9, (case, bonding, cover)
         assert np.max(np.abs(errs)) < 0.02, (case, bonding, errs)
         if bonding == "unknown" and case.startswith("flat"):
             assert np.allclose(p_b, 0.5, atol=0.02)
-            assert "base not identified" in row["flags"]
+            assert "base not identified" in row["notes"]
             E, b = r.draws("E"), r.draws("bonded")
             assert np.median(E[b == 0]) / np.median(E[b == 1]) == pytest.approx(1.26, abs=0.02)
             assert row["E_free_pa"] > 1.2 * row["E_bonded_pa"]
@@ -80,7 +80,7 @@ def test_half_space_model_on_the_same_data_is_biased_and_flagged():
     row = _fit(tr, ModelSpec(tip, nu=NU), engine="exact").summary_row()
     assert row["E_stat_pa"] > 1.3 * E_TRUE
     assert not row["E_budget_lo_pa"] <= E_TRUE <= row["E_budget_hi_pa"]
-    assert not row["model_ok"] and "finite thickness" in row["flags"]
+    assert not row["model_ok"] and "finite thickness" in row["notes"]
     # the model form (its layer alternative) carries the misfit into the full interval
     assert row["E_lo_pa"] <= E_TRUE <= row["E_hi_pa"]
     assert "layer, thickness unknown" in row["modelform_models"]
@@ -112,7 +112,7 @@ def test_unknown_thickness_recovered_where_the_depth_dependence_identifies_it(ca
         assert row["thickness_hi_m"] / row["thickness_lo_m"] < 1.05
         assert row["p_halfspace"] < 1e-3 and row["model_ok"]
     else:
-        assert row["p_halfspace"] > 0.8 and "no layer needed" in row["flags"]
+        assert row["p_halfspace"] > 0.8 and "no layer needed" in row["notes"]
         assert row["thickness_lo_m"] > 0.5  # only bounded below: h > 0.5 m
 
 
@@ -123,8 +123,8 @@ def test_unknown_thickness_under_a_flat_punch_is_flagged_not_guessed():
     tr = simulate_trace(E_TRUE, tip, nu=NU, thickness=h, depth=depth, base="bonded", rng=5)
     model = ModelSpec(tip, nu=NU, thickness_range=(3e-3, 2.0))
     row = _fit(tr, model, engine="exact", budget=BudgetSpec.none()).summary_row()
-    assert "thickness not identified" in row["flags"]
-    assert "no layer needed" not in row["flags"] and "lower prior bound" not in row["flags"]
+    assert "thickness not identified" in row["notes"]
+    assert "no layer needed" not in row["notes"] and "lower prior bound" not in row["notes"]
     assert 0.3 < row["p_halfspace"] < 0.7  # the prior's 0.5: the data say nothing
     assert row["E_lo_pa"] <= E_TRUE <= row["E_hi_pa"]
     assert row["E_hi_pa"] / row["E_lo_pa"] > 1.5

@@ -39,7 +39,7 @@ def phantom_points(seed: int, inc: Inclusion | None, n: int = 13, het: float = 0
     pts = pts.assign(trace_id=[f"p{k}" for k in range(x.size)], x_m=x, y_m=y, logE_mean=logE,
                      logE_sd=s, E_median_pa=np.exp(logE), E_lo_pa=np.exp(logE - 1.645 * s),
                      E_hi_pa=np.exp(logE + 1.645 * s), E_lsq_pa=np.exp(logE), depth_m=DEPTH,
-                     flags="", error="")
+                     notes="", flag_codes="", flag_level="", error="")
     peak = 1.0 if inc is None else float(apparent_modulus(
         np.array([inc.x]), np.array([inc.y]), E_background=E_B, inclusion=inc,
         contact_radius=a, thickness=H)[0] / E_B)

@@ -87,7 +87,7 @@ def test_rate_alone_does_not_widen_the_interval_by_depth_windows():
     assert res.model_form is None
     row = res.summary_row()
     assert row["model_ok"] is False or row["model_ok"] == 0
-    assert "rate dependence" in row["flags"]
+    assert "rate dependence" in row["notes"]
 
 
 def test_sls_and_creep_are_flagged():
@@ -162,7 +162,7 @@ def test_cli_fit_of_a_viscoelastic_cycle_says_rate(tmp_path, capsys):
     row = pd.read_csv(tmp_path / "out" / "summary.csv").iloc[0]
     assert not bool(row["model_ok"])
     assert "rate" in str(row["misfit_checks"]).split(";")
-    assert "--rheology power-law,sls" in str(row["flags"])
+    assert "--rheology power-law,sls" in str(row["notes"])
 
 
 REAL = {"fmt-jpk-sr_cell1-0008.jpk-force": ("hold", 0.45, 0.60),
