@@ -207,7 +207,9 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
     if (~ok).any():
         flags.append(f"{int((~ok).sum())} of {len(points)} traces could not be fitted (see "
                      "points.csv, column error); their nodes have no data")
-    n_flag = int((good["notes"].fillna("") != "").sum())
+    notes = good.get("notes", good.get("flags"))  # "flags": a points.csv written before
+    n_flag = 0 if notes is None else int(notes.map(lambda v: isinstance(v, str) and v != "")
+                                         .sum())
     if n_flag:
         flags.append(f"{n_flag} fitted points carry a flag (see points.csv, columns notes and "
                      "flag_codes)")

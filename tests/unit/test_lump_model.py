@@ -60,7 +60,7 @@ def _points(n=12, seed=0):
     return pts.assign(trace_id=[f"p{k}" for k in range(x.size)], x_m=x, y_m=y, logE_mean=logE,
                       logE_sd=0.002, E_median_pa=np.exp(logE), E_lo_pa=np.exp(logE) * 0.99,
                       E_hi_pa=np.exp(logE) * 1.01, E_lsq_pa=np.exp(logE), depth_m=2e-3,
-                      flags="", error="")
+                      notes="", flag_codes="", flag_level="", error="")
 
 
 def test_failed_traces_keep_their_nodes_on_the_map():
