@@ -451,7 +451,7 @@ def test_compare_fits_the_stiffening_law_when_rest_times_vary(tmp_path, monkeypa
 
 
 @pytest.mark.slow
-@pytest.mark.long  # ~5 min on 2 cores; run by hand (README)
+@pytest.mark.long  # ~5 min on 2 cores; run by hand (docs/reference.md)
 def test_pooled_interval_covers_the_true_material_modulus(tmp_path):
     """Default sampler and budget on a simulated paper campaign (3 repetitions, seed 2026).
 

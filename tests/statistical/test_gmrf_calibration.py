@@ -119,7 +119,7 @@ def test_field_intervals_are_calibrated_over_prior_draws():
 
 
 @pytest.mark.slow
-@pytest.mark.long  # ~5 min on 2 cores; run by hand (README)
+@pytest.mark.long  # ~5 min on 2 cores; run by hand (docs/reference.md)
 def test_a_100_by_100_map_is_calibrated():
     """At n = 10,000 the field's 90 % intervals still cover the truth (wall time, theta grid
     size, time per factorisation and peak memory are printed; bench_map.py measures them)."""

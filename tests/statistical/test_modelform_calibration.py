@@ -2,7 +2,7 @@
 did not model: 50 traces of each of an unmodelled bonded and free layer of 20-30 mm, strain
 stiffening, a gradual onset and a blunted paraboloid apex, and 200 well-specified traces, all
 with the budget's inputs drawn (palpbayes.sim.misfit), fitted as a half-space by the exact
-engine.  Runs tools/modelform_calibration.py (the same numbers the README quotes)."""
+engine.  Runs tools/modelform_calibration.py (the same numbers docs/reference.md quotes)."""
 
 from __future__ import annotations
 

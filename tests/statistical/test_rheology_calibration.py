@@ -2,7 +2,7 @@
 relaxation model (power law, standard linear solid; paraboloid and flat punch, 5–500 mm/min,
 AR(1) noise, offsets), each fitted by fit_rheology with both models and by the elastic law,
 and the power-law records once more over the whole cycle (the retract by Ting's rule).
-Runs tools/rheology_calibration.py --n 40 --retract (the run the README quotes): the
+Runs tools/rheology_calibration.py --n 40 --retract (the run docs/reference.md quotes): the
 90 % intervals cover the truth at their rate, the z-scores are centred with unit spread, the
 model check passes, PSIS-LOO prefers the true model, and the elastic fit is flagged rate
 dependent."""

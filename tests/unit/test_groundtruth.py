@@ -258,8 +258,8 @@ def test_real_phantoms_match_published_moduli(phantom_tables):
 
 
 def test_real_phantoms_authors_convention(phantom_tables, shared_data):
-    """README: a plain linear fit over 0-5 % of measured strain lands within a few percent;
-    the default analysis reports exactly that fit as E_plain."""
+    """docs/reference.md: a plain linear fit over 0-5 % of measured strain lands within a few
+    percent; the default analysis reports exactly that fit as E_plain."""
     root = need_phantoms(shared_data)
     (per_file, summary), published = phantom_tables
     for _, pub in published.iterrows():
