@@ -50,7 +50,7 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="LocalCluster worker processes (default: one per core)")
     g = p.add_argument_group("map")
     g.add_argument("--threshold", type=float, default=1.1, metavar="K",
-                   help="report P(E > K x background) per point (default 1.1)")
+                   help="report P(E > K x the map's median E) per point (default 1.1)")
     g.add_argument("--detect", type=float, default=0.5, metavar="P",
                    help="report a lump as found when P(its apparent peak ratio > K) >= P "
                         "(default 0.5; 0: always)")
@@ -109,10 +109,14 @@ def run(args: argparse.Namespace) -> int:
           f"(step {format_length(lat.step)}) in {elapsed:.1f} s "
           f"({len(res.points) / elapsed:.1f} traces/s) -> {out}")
     med, lo, hi = res.background_interval()
-    print(f"  background E {format_pressure(med, 4)} [{format_pressure(lo, 4)}, "
-          f"{format_pressure(hi, 4)}] (90 %)")
-    print(f"  largest P(E > {args.threshold:g} x background) over the map: {res.detection:.3f}")
+    print(f"  map median E {format_pressure(med, 4)} [{format_pressure(lo, 4)}, "
+          f"{format_pressure(hi, 4)}] (90 %; the field's median over every node, a lump's "
+          "included: what P(E > k x median) compares with)")
+    print(f"  largest P(E > {args.threshold:g} x map median) over the map: {res.detection:.3f}")
     if res.lump is not None:
+        b = res.lump.summary().set_index("quantity").loc["E_background_pa"]
+        print(f"  background E outside the lump (lump model) {format_pressure(b['median'], 4)} "
+              f"[{format_pressure(b['lo'], 4)}, {format_pressure(b['hi'], 4)}] (90 %)")
         print(f"  P(lump with apparent peak ratio > {args.threshold:g}): {res.p_lump:.3f}"
               + ("" if res.lump_found else " -> no lump found"))
     if res.lump_found:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 
 import numpy as np
@@ -11,6 +13,7 @@ import pytest
 from palpbayes.cli import main
 from palpbayes.maps.run import NODE_COLUMNS
 from palpbayes.sim.map import read_map_truth
+from palpbayes.units import format_pressure
 
 
 @pytest.fixture(scope="module")
@@ -25,12 +28,35 @@ def phantom(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def mapped(phantom, tmp_path_factory):
+def mapped_run(phantom, tmp_path_factory):
+    """The map folder and what the command printed."""
     out = tmp_path_factory.mktemp("map") / "out"
-    rc = main(["map", str(phantom / "manifest.csv"), "--out", str(out), "--workers", "2",
-               "--no-progress"])
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rc = main(["map", str(phantom / "manifest.csv"), "--out", str(out), "--workers", "2",
+                   "--no-progress"])
     assert rc == 0
-    return out
+    return out, buf.getvalue()
+
+
+@pytest.fixture(scope="module")
+def mapped(mapped_run):
+    return mapped_run[0]
+
+
+def test_the_console_tells_the_map_median_from_the_lump_models_background(mapped_run,
+                                                                          phantom):
+    """Two numbers once printed under one name ("background E"): the field's median over every
+    node (a lump's included: higher than the block's modulus) and the lump model's background
+    outside the lump, whose interval covers the simulated block's modulus."""
+    text = mapped_run[1]
+    truth = read_map_truth(phantom)["E_background_pa"]
+    assert "map median E" in text and "a lump's included" in text
+    line = next(ln for ln in text.splitlines() if "background E outside the lump" in ln)
+    lump = pd.read_csv(mapped_run[0] / "lump.csv").set_index("quantity").loc["E_background_pa"]
+    assert lump["lo"] <= truth <= lump["hi"], (lump, truth)
+    assert format_pressure(lump["median"], 4) in line
+    assert "background E " not in text.replace("background E outside", "")
 
 
 def test_map_writes_every_file_a_user_opens(mapped):
