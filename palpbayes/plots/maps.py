@@ -20,9 +20,11 @@ __all__ = ["plot_map", "plot_map_panel", "plot_profile", "map_grid"]
 
 #: What each map panel shows: (node column, title, colour-bar label, colormap, scale).
 PANELS: dict[str, tuple[str, str, str, str, float]] = {
-    "mean": ("E_mean_pa", "posterior mean of E", "E [kPa]", "viridis", _KPA),
-    "uncertainty": ("E_rel_sd", "posterior sd / mean of E", "sd / mean [%]", "magma", 100.0),
-    "probability": ("p_stiffer", "P(E > k × background)", "probability", "RdPu", 1.0),
+    "mean": ("E_mean_pa", "stiffness: E, posterior mean", "E [kPa]", "viridis", _KPA),
+    "uncertainty": ("E_rel_sd", "uncertainty: sd of E, % of E", "sd / mean [%]", "magma",
+                    100.0),
+    "probability": ("p_stiffer", "chance that E > k × the map median", "probability", "RdPu",
+                    1.0),
     "lsq": ("E_lsq_pa", "naive per-point least squares", "E [kPa]", "viridis", _KPA),
 }
 
@@ -47,10 +49,13 @@ def _mark_lump(ax: Axes, lump: Mapping[str, tuple[float, float, float]] | None) 
     if not lump:
         return
     (cx, xlo, xhi), (cy, ylo, yhi) = lump["x_m"], lump["y_m"]
-    ax.errorbar([cx * _MM], [cy * _MM], xerr=[[(cx - xlo) * _MM], [(xhi - cx) * _MM]],
-                yerr=[[(cy - ylo) * _MM], [(yhi - cy) * _MM]], fmt="+", color="w", ms=10,
-                mew=2, capsize=4, lw=1.5, label="lump centre (90 % interval)")
-    ax.errorbar([cx * _MM], [cy * _MM], fmt="+", color="k", ms=7, mew=1)
+    err = {"xerr": [[(cx - xlo) * _MM], [(xhi - cx) * _MM]],
+           "yerr": [[(cy - ylo) * _MM], [(yhi - cy) * _MM]], "fmt": "+"}
+    # black under white: seen on a dark map and on a white one (and in the legend)
+    ax.errorbar([cx * _MM], [cy * _MM], color="k", ms=12, mew=3.5, capsize=5, capthick=3.5,
+                lw=3.0, label="lump centre (90 % interval)", **err)
+    ax.errorbar([cx * _MM], [cy * _MM], color="w", ms=10, mew=1.5, capsize=4, capthick=1.5,
+                lw=1.2, **err)
 
 
 def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None = None,
@@ -95,15 +100,17 @@ def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None =
         ys = np.unique(nodes["y_m"]) * _MM
         if xs.size > 1 and ys.size > 1:
             ax.contour(xs, ys, z, levels=[0.5, 0.9], colors=["0.3", "k"], linewidths=[0.8, 1.2])
+            for colour, width, text in (("0.3", 0.8, "chance 0.5"), ("k", 1.2, "chance 0.9")):
+                ax.plot([], [], color=colour, lw=width, label=f"contour: {text}")
     _mark_lump(ax, lump)
     if truth is not None:
         ax.plot([truth[0] * _MM], [truth[1] * _MM], "o", mfc="none", mec=METHOD_COLORS["truth"],
                 ms=12, mew=2, label="true centre")
-    if lump or truth is not None:
+    if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
     t = title or default_title
     if kind == "probability" and threshold is not None:
-        t = f"P(E > {threshold:g} × background)"
+        t = f"chance that E > {threshold:g} × the map median"
     ax.set(xlabel="x [mm]", ylabel="y [mm]", title=t)
     return fig
 
@@ -123,7 +130,7 @@ def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None
     row
         Lattice row index iy.
     background
-        [Pa] (median, lo, hi) of the background modulus.
+        [Pa] (median, lo, hi) of the map median (the reference of the probability panel).
     truth
         [Pa] True apparent modulus at each node of the row (simulated phantoms).
     """
@@ -148,7 +155,7 @@ def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None
     if background is not None:
         med, lo, hi = background
         ax.axhspan(lo * _KPA, hi * _KPA, color="0.6", alpha=0.2, lw=0)
-        ax.axhline(med * _KPA, color="0.4", lw=1, ls="--", label="background (90 %)")
+        ax.axhline(med * _KPA, color="0.4", lw=1, ls="--", label="map median (90 %)")
     if truth is not None:
         ax.plot(x, np.asarray(truth) * _KPA, color=METHOD_COLORS["truth"], lw=1.2,
                 label="true apparent E")

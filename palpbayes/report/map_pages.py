@@ -56,7 +56,7 @@ def lump_lines(res: MapResult, truth: dict | None = None) -> list[tuple[str, str
                    f"lattice, step {format_length(lat.step, 3)}; tip {res.settings.get('tip')}, "
                    f"indentation {format_length(res.settings.get('depth_m', np.nan), 3)}, "
                    f"contact radius {format_length(res.contact_radius, 3)}."),
-             ("t", f"Largest P(E > {res.options.threshold:g} × background) over the map: "
+             ("t", f"Largest P(E > {res.options.threshold:g} × map median) over the map: "
                    f"{res.detection:.3f}." + ("" if res.lump is None else
                    f"  P(a lump with apparent peak ratio > {res.options.threshold:g}): "
                    f"{res.p_lump:.3f}" + ("." if res.lump_found else
@@ -116,8 +116,8 @@ _METHODS = (
     "beyond the map against edge effects, plus a nugget for point-to-point heterogeneity.  Its "
     "sd, range and nugget have penalised-complexity priors and are integrated over a grid "
     "around their posterior mode; the field's draws are exact Gaussian draws for each grid "
-    "point (sparse LU, no dense matrix).  The background is the median of the field over the "
-    "map, per draw; P(E > k × background) is the share of draws above it.",
+    "point (sparse LU, no dense matrix).  The map median is the median of the field over the "
+    "map, per draw; P(E > k × map median) is the share of draws above it.",
     "The lump model explains the per-point values by one spherical inclusion seen through a "
     "Boussinesq-weighted Reuss average (palpbayes.sim.inclusion), sampled with emcee.  It is a "
     "model: a real lump that is not spherical, or mechanics beyond the Reuss average, biases "
@@ -165,7 +165,8 @@ def _pages(res: MapResult, truth: dict | None) -> list[_Page]:
         _page_text("Stiffness map: summary", lump_lines(res, truth)),
         _Page("Heat map: posterior mean of E (left) and the naive least-squares map", heat),
         _Page("Uncertainty map: posterior sd of E relative to its mean", one("uncertainty")),
-        _Page(f"Probability map: P(E > {k:g} × background)", one("probability")),
+        _Page(f"Probability map: chance that E > {k:g} × the map median",
+              one("probability")),
         _Page("Profile through the lump", profile),
         _page_text("Methods", methods),
     ]
