@@ -30,13 +30,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .noise import pp_from_sigma
+from .noise import MAD_TO_SIGMA, mad_sd, pp_from_sigma
 
 __all__ = ["Baseline", "estimate_baseline", "sign_flipped", "MIN_BASELINE_POINTS"]
 
 #: Fewest pre-contact samples for a reliable baseline.
 MIN_BASELINE_POINTS = 10
-_MAD = 1.4826
+_MAD = MAD_TO_SIGMA
 
 
 @dataclass(frozen=True)
@@ -128,7 +128,7 @@ def estimate_baseline(z: np.ndarray, force: np.ndarray) -> Baseline:
     slope = float(dz @ (fb - fb.mean()) / (dz @ dz)) if n_base >= 3 and dz @ dz > 0 else 0.0
     resid = fb - fb.mean() - slope * dz
     level = float(np.median(fb - slope * dz))
-    sd = float(_MAD * np.median(np.abs(resid - np.median(resid)))) if n_base >= 3 else s0
+    sd = mad_sd(resid) if n_base >= 3 else s0
     if resid.size >= 3 and resid.std() > 0:
         r = resid - resid.mean()
         lag1 = float(r[1:] @ r[:-1] / (r @ r))

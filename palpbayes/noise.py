@@ -11,9 +11,15 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .errors import InputError
 
-__all__ = ["PP_TO_SIGMA", "PAPER_NOISE_PP", "sigma_from_pp", "pp_from_sigma"]
+__all__ = ["PP_TO_SIGMA", "PAPER_NOISE_PP", "MAD_TO_SIGMA", "sigma_from_pp", "pp_from_sigma",
+           "mad_sd"]
+
+#: 1/Phi^-1(3/4): the median absolute deviation of normal values times this is their sd.
+MAD_TO_SIGMA = 1.4826
 
 #: Peak-to-peak = PP_TO_SIGMA · sigma (±3 sigma).
 PP_TO_SIGMA = 6.0
@@ -46,3 +52,10 @@ def sigma_from_pp(pp: float) -> float:
 def pp_from_sigma(sigma: float) -> float:
     """Peak-to-peak spec [N] of a Gaussian noise with standard deviation ``sigma`` [N]."""
     return float(sigma) * PP_TO_SIGMA
+
+
+def mad_sd(x) -> float:
+    """Robust sd [same unit as ``x``]: :data:`MAD_TO_SIGMA` · median|x − median(x)| (the sd of
+    normal values, insensitive to a minority of outliers: a lump, a step, an onset)."""
+    x = np.asarray(x, dtype=float)
+    return float(MAD_TO_SIGMA * np.median(np.abs(x - np.median(x))))

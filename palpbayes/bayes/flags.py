@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from ..noise import mad_sd
 from ..units import format_length, format_pressure
 from .priors import TracePrior
 
@@ -31,7 +32,7 @@ def is_bimodal(x: np.ndarray, gap: float = 6.0, min_mass: float = 0.05) -> bool:
     i = lo_i + int(np.argmax(d))
     left, right = x[: i + 1], x[i + 1:]
     big = left if left.size >= right.size else right
-    scale = 1.4826 * np.median(np.abs(big - np.median(big)))
+    scale = mad_sd(big)
     return bool(scale > 0 and x[i + 1] - x[i] > gap * scale)
 
 

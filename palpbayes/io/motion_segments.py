@@ -16,6 +16,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from ..errors import InputError
+from ..noise import mad_sd
 from ..trace import SEGMENTS
 
 __all__ = ["segments_from_motion", "default_hold_tolerance", "SMOOTH_WINDOW",
@@ -64,7 +65,7 @@ def default_hold_tolerance(z: np.ndarray) -> float:
     d2 = np.diff(z, 2)
     sigma = 0.0
     if d2.size:
-        sigma = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / np.sqrt(6.0)
+        sigma = mad_sd(d2) / np.sqrt(6.0)
     return max(NOISE_MULTIPLE * sigma, RANGE_FRACTION * float(np.ptp(z)))
 
 

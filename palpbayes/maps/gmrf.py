@@ -45,6 +45,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import FitError, InputError
+from ..noise import mad_sd
 from .hyper import HYPER_NAMES, explore, log_pc_prior, weighted_summary
 from .lattice import Lattice, lattice_from_positions, pad
 from .spde import SpdeModel
@@ -68,7 +69,7 @@ def default_margin(lattice: Lattice) -> int:
 
 def robust_spread(y: np.ndarray) -> float:
     """1.4826·median|y − median(y)|: the sd of normal values, robust to a lump's outliers."""
-    return float(1.4826 * np.median(np.abs(y - np.median(y))))
+    return mad_sd(y)
 
 
 @dataclass(frozen=True)

@@ -8,15 +8,13 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
+from ..campaign.compare import STIFFENING_MIN_REST_TIMES
 from ..campaign.results import ResultsFolder
 from .format import _wrap
 from .layout import _Page, _text_lines
 from .tables import _chunks, _continued, _draw_table
 
 __all__ = ["STIFFENING_MIN_REST_TIMES"]
-
-#: A material × tip group gets a stiffening page when it has this many distinct rest times.
-STIFFENING_MIN_REST_TIMES = 3
 
 
 def _stiffening_groups(res: ResultsFolder) -> list[tuple[str, str]]:

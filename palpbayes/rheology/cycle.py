@@ -30,6 +30,7 @@ import numpy as np
 from ..baseline import estimate_baseline
 from ..contact import Tip, exponent, prefactor
 from ..errors import FitError, InputError, NoContactError
+from ..noise import mad_sd
 from ..trace import IndentationTrace, parse_segments
 from .design import Windows
 
@@ -262,7 +263,7 @@ def prepare_cycle(trace: IndentationTrace, tip: Tip | None = None, *,
     sd = base.sd
     if not sd > 0:  # a flat, quantised baseline: the sample-to-sample scatter of the approach
         step = np.diff(kept.force[kept.segment == 0])
-        sd = 1.4826 * float(np.median(np.abs(step - np.median(step)))) / math.sqrt(2)
+        sd = mad_sd(step) / math.sqrt(2)
     z_lo, z_hi = float(z.min()), float(z[0])
     if not z_hi > z_lo:
         raise NoContactError(f"{trace.source or trace.trace_id}: the tip never moves down in "
