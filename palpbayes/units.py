@@ -1,4 +1,4 @@
-"""Forces, lengths and moduli written with an SI prefix for messages (issue 12).
+"""Forces, lengths and moduli written with an SI prefix for messages.
 
 Messages must be readable for a 48 mN palpation sensor and for a 500 pN AFM cantilever alike,
 so a value in SI base units is printed with the prefix that puts its mantissa in [1, 1000)::

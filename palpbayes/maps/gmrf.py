@@ -1,4 +1,4 @@
-"""Spatial posterior of the log-modulus field from a grid of palpations (issue 15).
+"""Spatial posterior of the log-modulus field from a grid of palpations.
 
 Each palpation i gives a posterior of log E_i [log(E/Pa)], summarised as Normal(y_i, s_i²).
 The map is the latent Gaussian model of :mod:`palpbayes.maps.spde`: a mean level beta plus a

@@ -1,4 +1,4 @@
-"""Stiffness-map phantoms: a grid of palpations over a block that hides a stiff sphere (issue 15).
+"""Stiffness-map phantoms: a grid of palpations over a block that hides a stiff sphere.
 
 :func:`simulate_map` writes::
 

@@ -16,7 +16,7 @@ are sampled over (log T, log sigma_x) with the amplitudes integrated out and dra
 from their Gaussian conditional.  With all four parameters sampled, the single law's
 log-posterior autocorrelation time was ~30 steps and R-hat <= 1.01 at 3,000 steps a matter of
 luck: on least-squares estimates of a simulated series (0.03 % sd) 3 of 30 seeds hit the step
-cap and the outcome fell to "constant" (issue 13).
+cap and the outcome fell to "constant".
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """What ``palpbayes fit`` says on screen: the model check beside E, one line per flag of a fit
-that failed it, and the Poisson ratio when it was assumed rather than given (issue 24)."""
+that failed it, and the Poisson ratio when it was assumed rather than given."""
 
 from __future__ import annotations
 
