@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from ..campaign.fitjob import FitOptions
+from ..contact import DEFAULT_NU_NOTE, check_nu
 from ..errors import InputError
 from ..io.manifest import read_manifest
 from ..units import format_length, format_pressure
@@ -39,7 +40,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.add_argument("--force", action="store_true", help="replace the map files in DIR")
     g = p.add_argument_group("per-point fits")
-    g.add_argument("--nu", type=float, default=0.3, help="Poisson ratio (default 0.3)")
+    g.add_argument("--nu", type=float, default=None,
+                   help="Poisson ratio (foams 0.1-0.3, silicone, gels and tissue 0.45-0.5; "
+                   "default: a manifest's nu column, else 0.3, said on screen)")
     g.add_argument("--noise", choices=("gaussian", "ar1"), default="gaussian",
                    help="noise model of the exact engine (default gaussian)")
     g.add_argument("--tare", action="store_true", help="subtract the pre-contact force level")
@@ -78,7 +81,8 @@ def run(args: argparse.Namespace) -> int:
     manifest = read_manifest(args.manifest)
     # each point a half-space: the lump's forward model (palpbayes.sim.inclusion) reads the
     # block's thickness itself, and the map's per-point fits compare points with each other
-    point_opts = PointOptions(fit=FitOptions(nu=args.nu, noise=args.noise, tare=args.tare,
+    nu = None if args.nu is None else check_nu(args.nu)
+    point_opts = PointOptions(fit=FitOptions(nu=nu, noise=args.noise, tare=args.tare,
                                              engine="exact", seed=args.seed, layer="off"),
                               seed=args.seed)
     map_opts = MapOptions(threshold=args.threshold, detect=args.detect, seed=args.seed,
@@ -130,6 +134,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"  lump {label}: {fmt(r['median'])} [{fmt(r['lo'])}, {fmt(r['hi'])}] (90 %)")
     for f in res.flags:
         print(f"  flag: {f}")
+    if nu is None and "nu" not in manifest.columns:
+        print(f"note: {DEFAULT_NU_NOTE}")
     return 0
 
 

@@ -25,7 +25,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..contact import Tip
+from ..contact import DEFAULT_NU, Tip
 from ..errors import InputError
 from ..intervals import LEVEL, central, central_band
 from ..io.manifest import tip_from_row
@@ -315,7 +315,9 @@ def make_map(manifest: pd.DataFrame, *, point_options: PointOptions | None = Non
                         progress=progress)
     result = map_from_points(points, tip=tip, thickness=thickness, options=options,
                              progress=bool(progress))
-    result.settings["points"] = {"noise": point_options.fit.noise, "nu": point_options.fit.nu,
+    nu = point_options.fit.nu
+    result.settings["points"] = {"noise": point_options.fit.noise,
+                                 "nu": DEFAULT_NU if nu is None else nu,
                                  "draws": point_options.draws, "seed": point_options.seed,
                                  "scheduler": scheduler or "local", "workers": workers}
     return result

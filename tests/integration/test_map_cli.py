@@ -57,6 +57,9 @@ def test_the_console_tells_the_map_median_from_the_lump_models_background(mapped
     assert lump["lo"] <= truth <= lump["hi"], (lump, truth)
     assert format_pressure(lump["median"], 4) in line
     assert "background E " not in text.replace("background E outside", "")
+    # --nu was not given: the note says nu was assumed only when the manifest has no nu column
+    has_nu = "nu" in pd.read_csv(phantom / "manifest.csv", nrows=0).columns
+    assert ("Poisson ratio not given" in text) is not has_nu
 
 
 def test_map_writes_every_file_a_user_opens(mapped):
