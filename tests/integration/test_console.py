@@ -9,7 +9,7 @@ import pytest
 
 from palpbayes.campaign.fitjob import FitOptions, nu_source
 from palpbayes.cli import main
-from palpbayes.cli.fit import console_lines, flag_headlines
+from palpbayes.cli.console import console_lines, flag_headlines
 from palpbayes.contact import DEFAULT_NU, Tip
 from palpbayes.io.trace_csv import write_trace
 from palpbayes.sim import simulate_trace
