@@ -147,8 +147,11 @@ def explore(log_post: Callable[[np.ndarray], float], t0: np.ndarray, bounds: np.
     workers
         Threads evaluating ``log_post`` (sparse factorisations release the GIL).
     bound_notes
-        ``{(parameter index, 0 lower | 1 upper): sentence}`` added to the flag when the
-        posterior piles up at that end of the search box.
+        ``{(parameter index, 0 lower | 1 upper): sentence}``: the plain-word meaning of an
+        end of the search box that is expected (no spatial variation, a field smooth across
+        the map).  When the posterior piles up at such an end its flag is information
+        (``"info: <sentence> (<the technical detail>)"``); at an end without a note it is a
+        warning.
     progress
         Called with a one-line message after each stage.
 
@@ -254,10 +257,11 @@ def explore(log_post: Callable[[np.ndarray], float], t0: np.ndarray, bounds: np.
     for i, side in sorted({why for j, why in heavy if why != ("cap",)}):
         end = ("lower", "upper")[side]
         note = (bound_notes or {}).get((i, side))
-        flags.append(f"the theta posterior piles up at the {end} end of the search interval of "
-                     f"{HYPER_NAMES[i]} ({np.exp(bounds[i, side]):.3g}): the data do not bound "
-                     f"{HYPER_NAMES[i]} and its posterior follows the prior there, truncated"
-                     + (f" ({note})" if note else ""))
+        detail = (f"the theta posterior piles up at the {end} end of the search interval of "
+                  f"{HYPER_NAMES[i]} ({np.exp(bounds[i, side]):.3g}): the data do not bound "
+                  f"{HYPER_NAMES[i]} and its posterior follows the prior there, truncated")
+        # an end with a note is an expected one (a flat map, a smooth field): information
+        flags.append(f"info: {note} ({detail})" if note else detail)
     if lp.max() > f_star + 1.0:
         flags.append(f"a grid point beats the optimiser's mode by {lp.max() - f_star:.2f} in "
                      "log posterior: the mode search stopped early")

@@ -39,7 +39,7 @@ from .pertrace import PointOptions, check_positions, fit_points
 _NO_DATA_SD = 1e3
 
 __all__ = ["MapOptions", "MapResult", "NODE_COLUMNS", "check_map_manifest", "make_map",
-           "map_from_points"]
+           "map_from_points", "scoped"]
 
 #: Columns of the node table (``map.csv``), one row per lattice node.
 NODE_COLUMNS = [
@@ -98,7 +98,7 @@ class MapResult:
     hyper_draws: dict  # (n,) draws of sigma_f, range_m, tau, beta with the field's
     lump: LumpPosterior | None
     detection: float  # largest P(E > k × background) over the nodes
-    flags: list[str]
+    flags: list[str]  # "info: ..." is information, any other flag a warning
     contact_radius: float
     thickness: float | None
     options: MapOptions
@@ -211,8 +211,11 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
     n_flag = 0 if notes is None else int(notes.map(lambda v: isinstance(v, str) and v != "")
                                          .sum())
     if n_flag:
-        flags.append(f"{n_flag} fitted points carry a flag (see points.csv, columns notes and "
-                     "flag_codes)")
+        levels = good.get("flag_level", pd.Series(["warning"] * len(good), index=good.index))
+        n_warn = int((levels.fillna("") == "warning").sum())
+        flags.append(("" if n_warn else "info: ")
+                     + f"{n_flag} fitted points carry a flag ({n_warn} a warning; see "
+                     "points.csv, columns notes, flag_codes and flag_level)")
     if len(good) < 10:
         raise InputError(f"a map needs at least 10 fitted points, got {len(good)}")
     # the lattice of every palpation, fitted or not: a point without a fit enters with an sd
@@ -224,9 +227,9 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
     depth = float(np.nanmedian(good["depth_m"]))
     a, lump, k = float("nan"), None, options.threshold
     if not options.lump:
-        flags.append("lump model not requested (--no-lump)")
+        flags.append("info: lump model not requested (--no-lump)")
     elif thickness is None:
-        flags.append("lump model skipped: it needs the block thickness (manifest column "
+        flags.append("info: lump model skipped: it needs the block thickness (manifest column "
                      "thickness_m, metres)")
     else:  # the lump first: a local bump a stationary field alone would shrink away
         a = tip_contact_radius(tip, depth)
@@ -237,12 +240,12 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
                         contact_radius=a, thickness=thickness, step=lat.step, guess=guess,
                         seed=options.seed, max_steps=options.lump_max_steps,
                         min_steps=min(2000, options.lump_max_steps), progress=progress)
-        flags += [f"lump: {f}" for f in lump.flags]
+        flags += [scoped("lump", f) for f in lump.flags]
         # the field is fitted to what the lump leaves (its posterior-mean log excess)
         mean = mean - lump.excess(x, y).mean(axis=0)
     prior = FieldPrior().resolved(lat.step, mean[ok])
     fp = fit_field(x, y, mean, sd, prior=prior, step=lat.step, progress=progress)
-    flags += [f"field: {f}" for f in fp.flags]
+    flags += [scoped("field", f) for f in fp.flags]
     rng = np.random.default_rng(options.seed)
     joint = fp.draws(rng, options.field_draws)
     draws = joint["field"]
@@ -258,7 +261,7 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
     if lump is not None:
         p_lump = lump.p_apparent_above(k)
         if options.detect > 0 and p_lump < options.detect:
-            flags.append(f"no lump: P(apparent peak ratio > {k:g}) = {p_lump:.2f} is below "
+            flags.append(f"info: no lump: P(apparent peak ratio > {k:g}) = {p_lump:.2f} is below "
                          f"{options.detect:g}; the lump model's numbers describe the largest "
                          "bump the data allow, not a detected lump")
     return MapResult(points=points, nodes=nodes, field=fp, draws=draws, background=bg,
@@ -266,6 +269,13 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
                      contact_radius=a, thickness=thickness, options=options,
                      settings={"map": asdict(options), "tip": tip.kind, "depth_m": depth},
                      p_lump=p_lump)
+
+
+def scoped(scope: str, flag: str) -> str:
+    """``"scope: flag"``, with an ``info:`` prefix kept in front (the level is read there)."""
+    if flag.lower().startswith("info:"):
+        return f"info: {scope}: {flag[5:].strip()}"
+    return f"{scope}: {flag}"
 
 
 def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True

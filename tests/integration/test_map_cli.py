@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import math
 
 import numpy as np
@@ -60,6 +61,17 @@ def test_the_console_tells_the_map_median_from_the_lump_models_background(mapped
     # --nu was not given: the note says nu was assumed only when the manifest has no nu column
     has_nu = "nu" in pd.read_csv(phantom / "manifest.csv", nrows=0).columns
     assert ("Poisson ratio not given" in text) is not has_nu
+
+
+def test_every_map_flag_on_the_console_says_its_level(mapped_run):
+    """A map's flags print as "info: ..." or "warning: ...", as settings.json stores them."""
+    text = mapped_run[1]
+    stored = json.loads((mapped_run[0] / "settings.json").read_text())["flags"]
+    lines = [ln.strip() for ln in text.splitlines() if ln.startswith("  info: ")
+             or ln.startswith("  warning: ")]
+    assert "flag: " not in text and len(lines) == len(stored)
+    for ln, f in zip(lines, stored, strict=True):
+        assert ln == (f if f.startswith("info: ") else f"warning: {f}")
 
 
 def test_map_writes_every_file_a_user_opens(mapped):

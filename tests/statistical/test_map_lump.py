@@ -81,7 +81,7 @@ def test_a_visible_lump_is_found_and_its_numbers_cover_the_truth():
 def test_no_lump_is_found_in_a_homogeneous_block():
     r = _run(5, None)
     assert not r["found"] and r["p_lump"] < 0.5 and r["detection"] < 0.5
-    assert any(f.startswith("no lump") for f in r["flags"])
+    assert any(f.startswith("info: no lump") for f in r["flags"])
     assert r["apparent_ratio"][1] < 1.05  # the largest bump the data allow includes none
 
 
