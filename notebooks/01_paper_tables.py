@@ -161,7 +161,7 @@ print(format_comparison(res.comparison, groundtruth_source=gt_source))
 
 # %%
 cmp = res.comparison
-cover = (cmp.assign(covered=cmp["gt_in_interval"].astype(str).str.lower() == "true")
+cover = (cmp.assign(covered=cmp["gt_in_new_interval"].astype(str).str.lower() == "true")
             .groupby("method")["covered"].agg(["sum", "count"]))
 cover["coverage"] = (cover["sum"] / cover["count"]).round(2)
 display(cover)

@@ -161,13 +161,13 @@ run_pipeline(example_campaign_dir() / "manifest.csv", out, options,
 res = load_results(out)
 cmp_ = res.comparison
 show = cmp_[["material", "tip", "method", "E_pa", "E_new_lo_pa", "E_new_hi_pa", "gt_E_pa",
-             "gt_in_interval", "E_free_pa", "E_bonded_pa", "p_bonded"]].copy()
+             "gt_in_new_interval", "E_free_pa", "E_bonded_pa", "p_bonded"]].copy()
 for c in ("E_pa", "E_new_lo_pa", "E_new_hi_pa", "gt_E_pa", "E_free_pa", "E_bonded_pa"):
     show[c] = show[c] / 1e3
 show.columns = [c.replace("_pa", " [kPa]") for c in show.columns]
 display(show.round(3))
 print("Instron inside the new-specimen interval:",
-      {m: f"{int(g['gt_in_interval'].sum())}/{len(g)}" for m, g in cmp_.groupby("method")})
+      {m: f"{int(g['gt_in_new_interval'].sum())}/{len(g)}" for m, g in cmp_.groupby("method")})
 
 # %%
 plots.plot_halfspace_vs_layer(cmp_)

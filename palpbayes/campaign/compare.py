@@ -26,23 +26,28 @@ pooling input of trace i is the *statistical* posterior of E (netCDF variable ``
 budgeted ``E_total``: the budget is shared by the traces of a group and applied once, to the
 pooled draws.  ``tau_prior_sd`` is the scale of tau's half-normal prior.  ``E_new_sd_pa`` is
 the sd of the predictive draws; with few traces it is dominated by tau's heavy right tail, so
-the text table and ``z_score`` use the 90 % interval instead.
+the text table and ``gt_z_new`` use the 90 % interval instead.
 
 Against the ground truth (Instron mean GT ± sd over specimens):
 
 * ``rel_err_pct`` = 100·(GT − E)/GT (the paper's convention);
-* ``gt_in_interval``: GT inside the 90 % interval *for a new specimen* (``E_new_lo_pa`` …
+* ``gt_in_new_interval``: GT inside the 90 % interval *for a new specimen* (``E_new_lo_pa`` …
   ``E_new_hi_pa``) — the posterior predictive for Bayes and the t prediction interval for least
   squares, so both methods are judged by the same kind of interval: each Instron specimen and
   each palpated location is one draw from the material's population;
-* ``z_score`` = (E − GT)/sqrt(sd_new² + GT_sd²), one definition for both methods: sd_new
+* ``gt_z_new`` = (E − GT)/sqrt(sd_new² + GT_sd²), one definition for both methods: sd_new
   (column ``E_new_sd_eq_pa``) = (``E_new_hi_pa`` − ``E_new_lo_pa``)/(2·1.645), the
-  normal-equivalent sd of the same 90 % new-specimen interval that ``gt_in_interval`` uses,
-  i.e. the spread a user would quote for a new specimen with that method.  It is neither the
+  normal-equivalent sd of the same 90 % new-specimen interval that ``gt_in_new_interval``
+  uses, i.e. the spread a user would quote for a new specimen with that method.  It is neither the
   sd over traces (which ignores that the mean of n traces is itself uncertain) nor the sd of
   the Bayesian predictive draws ``E_new_sd_pa`` (inflated by the heavy right tail of tau when
   a group has few traces).  With GT_sd = 0 and a symmetric interval, |z| > 1.645 exactly
-  when GT is outside the interval.
+  when GT is outside the interval.  The GT sd in the denominator is why a small z can sit
+  next to ``gt_in_new_interval = False`` when the Instron specimens themselves scatter;
+* ``gt_in_E_interval``: GT inside the row's own interval ``E_lo_pa`` … ``E_hi_pa`` (the
+  material's median for Bayes, the mean of the traces for least squares): a narrower claim,
+  which a material whose specimens differ from the palpated one can fail while
+  ``gt_in_new_interval`` holds.
 
 ``paper_*`` are the paper's published robot (least-squares) estimates for White/Pink/Grey ×
 flat/sphere/paraboloid (:data:`palpbayes.paper.PAPER_ROBOT_ESTIMATES`); ``paper_err_pct`` is
@@ -94,8 +99,8 @@ __all__ = ["COMPARISON_COLUMNS", "POOLED_COLUMNS", "STIFFENING_MIN_REST_TIMES", 
 COMPARISON_COLUMNS = [
     "material", "tip", "method", "n_traces", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa",
     "E_new_pa", "E_new_lo_pa", "E_new_hi_pa", "gt_E_pa", "gt_sd_pa", "rel_err_pct",
-    "gt_in_interval", "z_score", "residual_n2", "converged_all", "paper_E_pa", "paper_sd_pa",
-    "paper_err_pct", "z_surf_err_mean_m",
+    "gt_in_new_interval", "gt_in_E_interval", "gt_z_new", "residual_n2", "converged_all",
+    "paper_E_pa", "paper_sd_pa", "paper_err_pct", "z_surf_err_mean_m",
     # extras
     "E_new_sd_pa", "tau", "gt_n", "n_failed", "notes", "flag_codes", "flag_level",
     "E_new_sd_eq_pa", "tau_prior_sd",

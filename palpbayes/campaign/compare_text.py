@@ -77,7 +77,8 @@ def format_comparison(df: pd.DataFrame, groundtruth_source: str | None = None,
         if kind == "err":
             if not np.isfinite(r["rel_err_pct"]):
                 return "-"
-            miss = "*" if r["gt_in_interval"] is False or r["gt_in_interval"] == 0 else " "
+            covered = r["gt_in_new_interval"]
+            miss = "*" if covered is False or covered == 0 else " "
             return f"{r['rel_err_pct']:+.1f}{miss}"
         return _pm(r["paper_E_pa"], r["paper_sd_pa"]) if method == "lsq" else ""
 

@@ -105,8 +105,10 @@ def gt_columns(row: dict, gt: pd.DataFrame | None, material: str, level: float =
     ``row`` needs ``method``, ``E_pa`` and the method's central ``level`` interval for a new
     specimen, ``E_new_lo_pa`` / ``E_new_hi_pa``.  Both methods are treated alike:
 
-    * ``gt_in_interval``: E_new_lo <= GT mean <= E_new_hi;
-    * ``z_score`` = (E - GT mean)/sqrt(sd_new² + GT sd²) with sd_new = (E_new_hi - E_new_lo)/
+    * ``gt_in_new_interval``: E_new_lo <= GT mean <= E_new_hi (the new-specimen interval);
+    * ``gt_in_E_interval``: E_lo <= GT mean <= E_hi (the row's own interval: the material's
+      median for Bayes, the mean of the traces for least squares);
+    * ``gt_z_new`` = (E - GT mean)/sqrt(sd_new² + GT sd²) with sd_new = (E_new_hi - E_new_lo)/
       (2·1.645) (:func:`new_specimen_sd`), the normal-equivalent sd of the new-specimen
       interval -- not the sd over traces (least squares) or the sd of the posterior-predictive
       draws (Bayes, inflated by the heavy right tail of tau).  A missing GT sd counts as 0.
@@ -128,18 +130,27 @@ def gt_columns(row: dict, gt: pd.DataFrame | None, material: str, level: float =
     E = row.get("E_pa", np.nan)
     if not np.isfinite(E):
         return out
-    lo, hi = row.get("E_new_lo_pa", np.nan), row.get("E_new_hi_pa", np.nan)
-    lo = np.nan if lo is None else float(lo)
-    hi = np.nan if hi is None else float(hi)
+    lo, hi = _finite_or_nan(row, "E_new_lo_pa"), _finite_or_nan(row, "E_new_hi_pa")
+    e_lo, e_hi = _finite_or_nan(row, "E_lo_pa"), _finite_or_nan(row, "E_hi_pa")
     spread = new_specimen_sd(lo, hi, level)
     out.update({
         "rel_err_pct": 100.0 * (g_mean - E) / g_mean,
-        "gt_in_interval": bool(lo <= g_mean <= hi) if np.isfinite(lo) and np.isfinite(hi)
-        else np.nan,
-        "z_score": (E - g_mean) / np.sqrt(spread**2 + g_sd**2)
+        "gt_in_new_interval": _inside(g_mean, lo, hi),
+        "gt_in_E_interval": _inside(g_mean, e_lo, e_hi),
+        "gt_z_new": (E - g_mean) / np.sqrt(spread**2 + g_sd**2)
         if np.isfinite(spread) and spread**2 + g_sd**2 > 0 else np.nan,
     })
     return out
+
+
+def _finite_or_nan(row: dict, key: str) -> float:
+    v = row.get(key, np.nan)
+    return np.nan if v is None else float(v)
+
+
+def _inside(x: float, lo: float, hi: float) -> bool | float:
+    """lo <= x <= hi, or NaN when the interval is not finite (no verdict)."""
+    return bool(lo <= x <= hi) if np.isfinite(lo) and np.isfinite(hi) else np.nan
 
 
 def paper_columns(paper: pd.DataFrame, material: str, tip: str) -> dict:

@@ -62,6 +62,9 @@ def ordered(values: Iterable[str], preferred: Sequence[str]) -> list[str]:
     return first + [v for v in vals if v not in first]
 
 
+#: Columns renamed since a results folder may have been written (old name -> new name).
+RENAMED_COLUMNS = {"gt_in_interval": "gt_in_new_interval", "z_score": "gt_z_new"}
+
 _STR_COLUMNS = ("trace_id", "material", "tip", "method", "notes", "flag_codes", "flag_level",
                 "flags", "specimen", "file", "input", "distribution", "representative_trace",
                 "nu_source")
@@ -80,7 +83,7 @@ def _read_csv(path: Path) -> pd.DataFrame | None:
         if "flags" in df.columns and "notes" not in df.columns:  # written before the rename
             cols = pd.DataFrame([flag_columns(t) for t in df.pop("flags")], index=df.index)
             df = pd.concat([df, cols], axis=1)
-        return df
+        return df.rename(columns={k: v for k, v in RENAMED_COLUMNS.items() if v not in df})
     except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as exc:
         raise DataFileError(path, f"cannot be read as CSV ({exc})",
                             "rerun the step that writes it") from None

@@ -85,7 +85,8 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
                 row[new_col] = "–" if r is None else _interval(
                     r.get("E_new_lo_pa"), r.get("E_new_hi_pa"))
                 row[f"{label} err [%]"] = "–" if r is None else _fmt(r.get("rel_err_pct"))
-                row[f"{label} covers GT"] = "–" if r is None else _yesno(r.get("gt_in_interval"))
+                row[f"{label} covers GT"] = ("–" if r is None
+                                             else _yesno(r.get("gt_in_new_interval")))
             row["Paper E ± sd [kPa]"] = _pm(any_row.get("paper_E_pa"),
                                             any_row.get("paper_sd_pa"))
             row["Paper err [%] (vs paper's GT)"] = _fmt(any_row.get("paper_err_pct"))
@@ -115,14 +116,14 @@ def coverage_counts(results: ResultsFolder) -> dict[str, tuple[int, int]]:
     ground truth), from ``comparison.csv`` ({} without it)."""
     comp = results.comparison
     out: dict[str, tuple[int, int]] = {}
-    if comp is None or comp.empty or "gt_in_interval" not in comp:
+    if comp is None or comp.empty or "gt_in_new_interval" not in comp:
         return out
     for method in ("bayes", "lsq"):
         sub = comp[(comp["method"] == method)]
         if "gt_E_pa" in sub:
             sub = sub[pd.to_numeric(sub["gt_E_pa"], errors="coerce").notna()]
         if len(sub):
-            out[method] = (int(sub["gt_in_interval"].map(parse_bool).sum()), int(len(sub)))
+            out[method] = (int(sub["gt_in_new_interval"].map(parse_bool).sum()), int(len(sub)))
     return out
 
 

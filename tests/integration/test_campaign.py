@@ -474,7 +474,7 @@ def test_pooled_interval_covers_the_true_material_modulus(tmp_path):
     assert len(bayes) == 9 and bayes["converged_all"].astype(bool).all()
     covered = [(r.E_lo_pa <= truth[r.material] <= r.E_hi_pa) for r in bayes.itertuples()]
     assert sum(covered) >= 7, bayes[["material", "tip", "E_lo_pa", "E_pa", "E_hi_pa"]]
-    assert bayes["gt_in_interval"].astype(bool).sum() >= 7
+    assert bayes["gt_in_new_interval"].astype(bool).sum() >= 7
     assert bayes["paper_E_pa"].notna().all()
 
 

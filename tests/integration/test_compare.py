@@ -33,7 +33,7 @@ def test_new_specimen_sd():
     assert math.isnan(new_specimen_sd(np.nan, 150e3))
 
 
-def test_lsq_row_and_its_z_score_by_hand():
+def test_lsq_row_and_its_z_by_hand():
     """Four traces 100, 110, 120, 130 kPa against GT 100 ± 10 kPa."""
     g = pd.DataFrame({"E_pa": [100e3, 110e3, 120e3, 130e3], "rss_n2": 1.0})
     row = {"method": "lsq", **_lsq_row(g, 0.9)}
@@ -45,9 +45,9 @@ def test_lsq_row_and_its_z_score_by_hand():
     assert row["E_new_hi_pa"] == pytest.approx(115e3 + half_new)
     out = gt_columns(row, GT, "White")
     sd_new = half_new / Z90  # 20.65 kPa
-    assert out["z_score"] == pytest.approx(15e3 / math.sqrt(sd_new**2 + 10e3**2), rel=1e-9)
-    assert out["z_score"] == pytest.approx(0.654, abs=1e-3)
-    assert out["gt_in_interval"] is True  # 100 in [81.0, 149.0]
+    assert out["gt_z_new"] == pytest.approx(15e3 / math.sqrt(sd_new**2 + 10e3**2), rel=1e-9)
+    assert out["gt_z_new"] == pytest.approx(0.654, abs=1e-3)
+    assert out["gt_in_new_interval"] is True  # 100 in [81.0, 149.0]
     assert out["rel_err_pct"] == pytest.approx(-15.0)
     assert (out["gt_E_pa"], out["gt_sd_pa"], out["gt_n"]) == (100e3, 10e3, 5)
 
@@ -58,8 +58,8 @@ def test_one_z_definition_for_both_methods():
     common = {"E_pa": 115e3, "E_new_pa": 114e3, "E_new_lo_pa": 90e3, "E_new_hi_pa": 150e3}
     lsq = {"method": "lsq", "E_sd_pa": 8e3, "E_new_sd_pa": 9e3, **common}
     bayes = {"method": "bayes", "E_sd_pa": 3e3, "E_new_sd_pa": 40e3, **common}
-    z_lsq = gt_columns(lsq, GT, "White")["z_score"]
-    z_bayes = gt_columns(bayes, GT, "White")["z_score"]
+    z_lsq = gt_columns(lsq, GT, "White")["gt_z_new"]
+    z_bayes = gt_columns(bayes, GT, "White")["gt_z_new"]
     sd_new = 60e3 / (2 * Z90)  # 18.24 kPa
     expected = 15e3 / math.sqrt(sd_new**2 + 10e3**2)
     assert z_lsq == pytest.approx(expected, rel=1e-12)
@@ -68,22 +68,29 @@ def test_one_z_definition_for_both_methods():
     # the old definitions would have given 15/sqrt(8² + 10²) = 1.17 and 15/sqrt(40² + 10²) = 0.36
 
 
-def test_gt_in_interval_and_edge_cases():
+def test_gt_in_new_interval_and_edge_cases():
     row = {"method": "bayes", "E_pa": 150e3, "E_new_lo_pa": 120e3, "E_new_hi_pa": 180e3}
     out = gt_columns(row, GT, "White")
-    assert out["gt_in_interval"] is False  # 100 < 120
-    assert out["z_score"] == pytest.approx(
+    assert out["gt_in_new_interval"] is False  # 100 < 120
+    assert np.isnan(out["gt_in_E_interval"])  # the row has no E_lo/E_hi: no verdict
+    # the material's own interval is tested by its own column, apart from the new-specimen one
+    both = gt_columns({**row, "E_new_lo_pa": 95e3, "E_lo_pa": 130e3, "E_hi_pa": 170e3}, GT,
+                      "White")
+    assert both["gt_in_new_interval"] is True and both["gt_in_E_interval"] is False
+    assert gt_columns({**row, "E_lo_pa": 90e3, "E_hi_pa": 170e3}, GT,
+                      "White")["gt_in_E_interval"] is True
+    assert out["gt_z_new"] == pytest.approx(
         50e3 / math.sqrt((60e3 / (2 * Z90)) ** 2 + 10e3**2), rel=1e-12)
-    assert gt_columns({**row, "E_new_lo_pa": 100e3}, GT, "White")["gt_in_interval"] is True
+    assert gt_columns({**row, "E_new_lo_pa": 100e3}, GT, "White")["gt_in_new_interval"] is True
     # case-insensitive material match; a missing GT sd counts as zero
     grey = gt_columns({**row, "E_pa": 200e3, "E_new_lo_pa": 150e3, "E_new_hi_pa": 250e3}, GT,
                       "grey")
-    assert grey["gt_sd_pa"] == 0.0 and grey["gt_in_interval"] is True
-    assert grey["z_score"] == pytest.approx(6e3 / (100e3 / (2 * Z90)), rel=1e-12)
+    assert grey["gt_sd_pa"] == 0.0 and grey["gt_in_new_interval"] is True
+    assert grey["gt_z_new"] == pytest.approx(6e3 / (100e3 / (2 * Z90)), rel=1e-12)
     # no interval: GT columns and the error, but no z and no coverage verdict
     bare = gt_columns({"method": "lsq", "E_pa": 110e3, "E_new_lo_pa": np.nan,
                        "E_new_hi_pa": np.nan}, GT, "White")
-    assert np.isnan(bare["z_score"]) and np.isnan(bare["gt_in_interval"])
+    assert np.isnan(bare["gt_z_new"]) and np.isnan(bare["gt_in_new_interval"])
     assert bare["rel_err_pct"] == pytest.approx(-10.0)
     assert gt_columns(row, GT, "Pink") == {} and gt_columns(row, None, "White") == {}
     assert set(gt_columns({"method": "lsq", "E_pa": np.nan}, GT, "White")) == {
@@ -157,12 +164,12 @@ def test_compare_pools_the_statistical_E_and_applies_the_budget_once(tmp_path, m
     assert bayes.loc["White", "E_pa"] == pytest.approx(111e3, rel=0.05)  # not 3 × 111 kPa
     assert (bayes["tau_prior_sd"] == 0.3).all()
     assert df.loc[df["method"] == "lsq", "tau_prior_sd"].isna().all()
-    # z_score uses the normal-equivalent sd of the new-specimen interval for both methods
+    # gt_z_new uses the normal-equivalent sd of the new-specimen interval for both methods
     for _, r in df.iterrows():
         sd_new = (r["E_new_hi_pa"] - r["E_new_lo_pa"]) / (2 * Z90)
         assert r["E_new_sd_eq_pa"] == pytest.approx(sd_new, rel=1e-12)
         gt_sd = 10e3 if r["material"] == "White" else 0.0
-        assert r["z_score"] == pytest.approx(
+        assert r["gt_z_new"] == pytest.approx(
             (r["E_pa"] - r["gt_E_pa"]) / math.sqrt(sd_new**2 + gt_sd**2), rel=1e-12)
     text = cmp.format()
     assert "tau ~ HalfNormal(0.3) on the log-E scale" in text
@@ -177,13 +184,13 @@ def test_text_shows_the_bayesian_interval_and_the_tau_prior():
     df = pd.DataFrame([
         {"material": "White", "tip": "flat", "method": "lsq", "E_pa": 115e3, "E_sd_pa": 12.9e3,
          "E_new_pa": 115e3, "E_new_sd_pa": 14.4e3, "E_new_lo_pa": 81e3, "E_new_hi_pa": 149e3,
-         "gt_E_pa": 100e3, "gt_sd_pa": 10e3, "rel_err_pct": -15.0, "gt_in_interval": True,
+         "gt_E_pa": 100e3, "gt_sd_pa": 10e3, "rel_err_pct": -15.0, "gt_in_new_interval": True,
          "paper_E_pa": 119.6e3, "paper_sd_pa": 10.8e3, "converged_all": True, "notes": "",
          "tau_prior_sd": np.nan},
         {"material": "White", "tip": "flat", "method": "bayes", "E_pa": 116e3, "E_sd_pa": 6e3,
          "E_new_pa": 115.5e3, "E_new_sd_pa": 48e3, "E_new_lo_pa": 88.2e3,
          "E_new_hi_pa": 152.7e3, "gt_E_pa": 100e3, "gt_sd_pa": 10e3, "rel_err_pct": -16.0,
-         "gt_in_interval": True, "paper_E_pa": 119.6e3, "paper_sd_pa": 10.8e3,
+         "gt_in_new_interval": True, "paper_E_pa": 119.6e3, "paper_sd_pa": 10.8e3,
          "converged_all": True, "notes": "", "tau_prior_sd": 0.5},
     ])
     text = format_comparison(df, "gt.csv")

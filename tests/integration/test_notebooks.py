@@ -172,7 +172,7 @@ def test_notebook_04_decomposes_the_gap_and_covers_the_instron(tmp_path, monkeyp
     assert "wrong sign" in text and "over-predicts" in text
     cmp_ = pd.read_csv(tmp_path / "res" / "comparison.csv")
     bayes = cmp_[cmp_["method"] == "bayes"]
-    assert bayes["gt_in_interval"].all()  # 9/9: the layer model covers the Instron truth
+    assert bayes["gt_in_new_interval"].all()  # 9/9: the layer model covers the Instron truth
 
 
 @pytest.mark.slow

@@ -238,7 +238,7 @@ def test_summary_page_states_coverage_and_paper_error_basis(fitted):
     if not any(pages):
         pytest.skip("pypdf not installed")
     comp = pd.read_csv(fitted[0] / "comparison.csv")
-    k = int(comp[comp["method"] == "bayes"]["gt_in_interval"].sum())
+    k = int(comp[comp["method"] == "bayes"]["gt_in_new_interval"].sum())
     summary = " ".join(pages[1].split())
     assert f"Bayes: {k}/2" in summary and "LS: " in summary
     assert "relative to the PAPER's own Instron ground truth" in summary

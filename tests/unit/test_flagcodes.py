@@ -66,3 +66,14 @@ def test_a_folder_written_before_the_rename_reads_with_the_new_columns(tmp_path)
     assert list(s["flag_codes"]) == ["", "ess;layer"]
     assert list(s["flag_level"]) == ["", "warning"]
     assert s.loc[1, "notes"].startswith("ESS 210")
+
+
+def test_old_comparison_columns_read_with_the_names_of_the_interval_they_test(tmp_path):
+    """comparison.csv of an older run has ``gt_in_interval`` and ``z_score``."""
+    old = pd.DataFrame({"material": ["White"], "tip": ["flat"], "method": ["bayes"],
+                        "E_pa": [1e5], "gt_in_interval": [False], "z_score": [-0.37]})
+    (tmp_path / "summary.csv").write_text("trace_id,method,E_pa\na,bayes,1e5\n")
+    old.to_csv(tmp_path / "comparison.csv", index=False)
+    c = load_results(tmp_path).comparison
+    assert {"gt_in_interval", "z_score"}.isdisjoint(c.columns)
+    assert not c.loc[0, "gt_in_new_interval"] and c.loc[0, "gt_z_new"] == pytest.approx(-0.37)
