@@ -20,9 +20,13 @@ block, where Φ bends within it, the mean is taken over the samples themselves. 
     F̄_o = C·Σ_k r_k·W[o, k] = C·(W·r)_o,
 
 one lower-triangular matrix W on the knot axis that does not depend on the surface height
-z_s: every trial surface's column is one matrix product (BLAS), and the modulus enters
-linearly.  (The products run on the knot steps, :func:`step_kernel_means`, and the blocks'
-windows and band corrections are applied to their results.)  Irregular sampling costs first
+z_s: every trial surface's column is one matrix product, and the modulus enters linearly.
+(The products run on the knot steps, :func:`knot_products`, and the blocks' windows and band
+corrections are applied to their results.)  When the knots lie on a regular lattice (equal
+blocks of regularly sampled segments; a hold's corner and a few other knots may lie off it,
+:class:`KnotLattice`) the lags are multiples of the step, the products are causal
+convolutions and run by FFT in O(N log N) per surface; otherwise they are dense BLAS products
+of the K × K step means (:func:`step_kernel_means`).  Irregular sampling costs first
 order in the offset between a block's mean sample time and its window's centre (~1e-3 of the
 peak at steps ± 50 %, ~3e-5 at ± 2 %).  Kernels (per unit modulus):
 
@@ -45,10 +49,12 @@ kernel).  Ting's rule for a shrinking contact (the retract) has columns of its o
 from __future__ import annotations
 
 import numpy as np
+from scipy import fft as sp_fft
 
 from ..errors import InputError
+from .lattice import KnotLattice, knot_lattice
 
-__all__ = ["Windows", "block_kernel_means", "step_kernel_means",
+__all__ = ["Windows", "block_kernel_means", "step_kernel_means", "knot_products",
            "band_corrections", "integrated_kernel", "double_integrated_kernel",
            "triple_integrated_kernel", "window_kernel", "onset_correction",
            "lee_radok_columns", "KERNELS", "BAND", "SPAN"]
@@ -94,6 +100,7 @@ class Windows:
         self._steps = np.diff(e)[None, :]
         self._work: list[np.ndarray] | None = None
         self._constant: tuple[np.ndarray, ...] | None = None
+        self.lattice: KnotLattice | None = knot_lattice(e)
 
     def window_means(self, R: np.ndarray) -> np.ndarray:
         """Means over every block's window (G, B) of quantities given per knot step as step
@@ -187,6 +194,54 @@ def step_kernel_means(win: Windows, kernel: str | None, theta: float = 0.0, t0: 
     return D1, D2
 
 
+def knot_products(win: Windows, a1: np.ndarray, a2: np.ndarray, kernel: str | None,
+                  theta: float = 0.0, t0: float = 1.0) -> np.ndarray:
+    """a1·D1ᵀ + a2·D2ᵀ (G, K − 1) for the step means D1, D2 of :func:`step_kernel_means`,
+    for coefficients per knot ``a1``, ``a2`` (G, K).
+
+    Entry (g, j) is Σ_k a1_gk·[Ψ(e_{j+1} − e_k) − Ψ(e_j − e_k)]/h_j plus the same with a2
+    and Ψ₂.  On a :class:`KnotLattice`, for a step between two lattice knots and a lattice
+    knot k, the bracket is a sum of the lattice differences ΔΨ(p) = Ψ((p + 1)·h) − Ψ(p·h)
+    over the lattice points p of the step, shifted by n_k: the sums over k are causal
+    convolutions (FFT), and each step adds its points' values (one, on a regular stretch).
+    The kernel is differenced before the sum, as in the dense products, so no precision is
+    lost to cancellation.  The off-lattice knots' columns, and the steps that touch one, are
+    taken directly.  Without a lattice: two dense products.
+    """
+    lat = win.lattice
+    if lat is None:
+        D1, D2 = step_kernel_means(win, kernel, theta, t0, scratch=True)
+        return a1 @ D1.T + a2 @ D2.T
+    _check(kernel, theta)
+    e, h = win.edges, lat.step
+    G, K = a1.shape
+    grid = np.arange(lat.size + 1) * h
+    direct, steps = lat.direct_steps, lat.lattice_steps
+    spec = 0.0
+    for a, f in ((a1, double_integrated_kernel), (a2, triple_integrated_kernel)):
+        A = np.zeros((G, lat.size))
+        A[:, lat.index] = a[:, lat.on]
+        spec = spec + (sp_fft.rfft(A, lat.fft_size, axis=1)
+                       * sp_fft.rfft(np.diff(f(grid, kernel, theta, t0)), lat.fft_size))
+    Z = sp_fft.irfft(spec, lat.fft_size, axis=1)[:, :lat.size]
+    out = np.zeros((G, K - 1))
+    start = lat.index[lat.lattice_pos]
+    if lat.wide:  # the sum over each step's lattice points [n_j, n_{j+1})
+        bounds = np.c_[start, lat.index[lat.lattice_pos + 1]].ravel()
+        out[:, steps] = np.add.reduceat(np.c_[Z, np.zeros(G)], bounds, axis=1)[:, ::2]
+    else:
+        out[:, steps] = Z[:, start]
+    for a, f in ((a1, double_integrated_kernel), (a2, triple_integrated_kernel)):
+        if lat.off.size:  # the off-lattice columns into the lattice steps
+            F = f(e[:, None] - e[None, lat.off], kernel, theta, t0)  # (K, n_off)
+            out[:, steps] += a[:, lat.off] @ (F[1:] - F[:-1])[steps].T
+        if direct.size:  # every column into the steps that touch an off-lattice knot
+            F = f(e[np.r_[direct, direct + 1]][:, None] - e[None, :], kernel, theta, t0)
+            out[:, direct] += a @ (F[direct.size:] - F[:direct.size]).T
+    out /= np.diff(e)[None, :]
+    return out
+
+
 def band_corrections(win: Windows, kernel: str | None, theta: float = 0.0,
                      t0: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """(δ1, δ2), each (B, nb): the mean over block o's samples of Φ(t − e_k) (Ψ(t − e_k))
@@ -273,10 +328,9 @@ def window_kernel(win: Windows, s: np.ndarray, kernel: str | None, theta: float 
     (Ψ(b_o − s) − Ψ(a_o − s)) / (b_o − a_o), and over the samples of the blocks from the one
     that holds s_r to :data:`BAND` after it."""
     s = np.asarray(s, dtype=float)
-    lo, hi = win.edges[win.lo][None, :], win.edges[win.hi][None, :]
     f = double_integrated_kernel if order == 1 else triple_integrated_kernel
-    out = (f(hi - s[:, None], kernel, theta, t0)
-           - f(lo - s[:, None], kernel, theta, t0)) / win.width[None, :]
+    at_knots = f(win.edges[None, :] - s[:, None], kernel, theta, t0)  # windows share edges
+    out = (at_knots[:, win.hi] - at_knots[:, win.lo]) / win.width[None, :]
     if win.samples is not None and s.size:
         g = integrated_kernel if order == 1 else double_integrated_kernel
         first = np.searchsorted(win.edges[win.hi], s, side="right")
@@ -373,10 +427,11 @@ def lee_radok_columns(win: Windows, z_nodes: np.ndarray, z_edges: np.ndarray, m:
         if win._constant is None:
             win._constant = (*step_kernel_means(win, None), *band_corrections(win, None))
         D1, D2, d1, d2 = win._constant
+        prod = a1 @ D1.T + a2 @ D2.T
     else:
-        D1, D2 = step_kernel_means(win, kernel, theta, t0, scratch=True)
+        prod = knot_products(win, a1, a2, kernel, theta, t0)
         d1, d2 = band_corrections(win, kernel, theta, t0)
-    out = win.window_means(a1 @ D1.T + a2 @ D2.T)
-    out += np.einsum("gbj,bj->gb", a1[:, win.band], d1)
-    out += np.einsum("gbj,bj->gb", a2[:, win.band], d2)
+    out = win.window_means(prod)
+    for j in range(win.band.shape[1]):  # the band's corrections, one knot offset at a time
+        out += a1[:, win.band[:, j]] * d1[:, j] + a2[:, win.band[:, j]] * d2[:, j]
     return out + onset_correction(win, depth, m, kernel, theta, t0)
