@@ -18,12 +18,18 @@ Codes (:data:`CODES`): the model checks by their names (``exponent``, ``residual
 the paper's model); a fit that did not run (``fit_failed``); the layer (``layer``: base or
 thickness not identified, outside the layer solution's range); ``other`` for anything else.
 A flag that starts with ``info:`` is information, every other one a warning.
+
+The viscoelastic tables (``rheology.csv``, ``rheology_pooled.csv``) keep their flags as a list,
+joined by :data:`RHEOLOGY_SEPARATOR` (their sentences hold ``"; "``), and code them by words
+anywhere in the flag (:data:`RHEOLOGY_CODES`, :data:`POOLED_RHEOLOGY_CODES`) with
+:func:`listed_flag_columns`: the same three columns, the same levels.
 """
 
 from __future__ import annotations
 
 __all__ = ["CODES", "CONTAINS", "CHECKS", "LEVELS", "flag_code", "flag_level", "flag_columns",
-           "split_flags", "FLAG_COLUMNS"]
+           "split_flags", "FLAG_COLUMNS", "RHEOLOGY_CODES", "POOLED_RHEOLOGY_CODES",
+           "RHEOLOGY_SEPARATOR", "listed_flag_columns"]
 
 #: (how the flag opens, code): a flag's first words say what it is (its explanation may name
 #: other checks), after an ``info:`` prefix.
@@ -107,3 +113,34 @@ def flag_columns(text: object) -> dict[str, str]:
     codes = list(dict.fromkeys(flag_code(f) for f in flags))
     level = max((flag_level(f) for f in flags), key=LEVELS.index, default="")
     return {"notes": "; ".join(flags), "flag_codes": ";".join(codes), "flag_level": level}
+
+
+#: Codes of a viscoelastic fit's flags (rheology.csv): (words anywhere in the flag, code).
+RHEOLOGY_CODES = (
+    ("alpha piles up at 0", "alpha_at_zero"), ("alpha piles up", "alpha_at_bound"),
+    ("below one step", "tau_fast"), ("beyond the recorded", "tau_slow"),
+    ("phi piles up", "phi_at_bound"), ("surface posterior reaches", "surface_at_bound"),
+    ("did not settle", "grid"), ("another basin", "basin"),
+    ("effective sample", "ess"), ("contact shrinks", "shrinking_contact"),
+    ("takes a half-space", "thickness"), ("viscous drag", "drag"),
+    ("tilt with the height", "tilt"), ("adhesion", "adhesion"),
+    ("did not converge", "not_converged"), ("posterior-predictive", "ppc"),
+)
+#: Codes of a pooled power law's flags (rheology_pooled.csv).
+POOLED_RHEOLOGY_CODES = (
+    ("from the pooled values", "trace_disagrees"), ("edge of its grid", "pool_at_edge"),
+    ("own model check failed", "trace_model_check"), ("were not fitted", "missing"),
+    ("one speed", "one_speed"),
+)
+#: How the viscoelastic tables join a row's flags.
+RHEOLOGY_SEPARATOR = " | "
+
+
+def listed_flag_columns(flags: list[str], codes: tuple[tuple[str, str], ...],
+                        separator: str = RHEOLOGY_SEPARATOR) -> dict[str, str]:
+    """``notes``, ``flag_codes`` and ``flag_level`` of a list of flags coded by ``codes``
+    (words anywhere in the flag, first match; ``"other"`` if none)."""
+    found = [next((c for words, c in codes if words in f), "other") for f in flags]
+    level = max((flag_level(f) for f in flags), key=LEVELS.index, default="")
+    return {"notes": separator.join(flags), "flag_codes": ";".join(dict.fromkeys(found)),
+            "flag_level": level}

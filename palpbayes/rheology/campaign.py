@@ -28,11 +28,12 @@ Columns of ``DIR/rheology_pooled.csv`` (:data:`POOLED_COLUMNS`): the group keys,
 separated, in manifest order), ``t0_s``, ``E0_star_pa`` with ``E0_star_lo_pa`` and
 ``E0_star_hi_pa`` (the central 90 % interval), ``alpha`` with ``alpha_lo`` and ``alpha_hi``,
 ``nu`` and ``E0_pa`` (``_lo``, ``_hi``: Young's, when the group's traces share nu),
-``flag_codes`` (``;``) and ``notes`` (the flags in words, `` | ``), ``seconds`` [s] of the
-pooling, ``error`` (why a group could not be pooled).  The codes: ``trace_disagrees`` (a trace's
-own E0*, alpha far from the pooled ones), ``pool_at_edge`` (the traces pull the pooled grid
-apart), ``trace_model_check`` (a pooled trace failed its own model check), ``missing`` (a
-trace of the group was not fitted), ``one_speed`` (alpha from the holds alone).
+``flag_codes`` (``;``), ``flag_level`` and ``notes`` (the flags in words, `` | ``),
+``seconds`` [s] of the pooling, ``error`` (why a group could not be pooled).  The codes:
+``trace_disagrees`` (a trace's own E0*, alpha far from the pooled ones), ``pool_at_edge`` (the
+traces pull the pooled grid apart), ``trace_model_check`` (a pooled trace failed its own model
+check), ``missing`` (a trace of the group was not fitted), ``one_speed`` (alpha from the holds
+alone).
 
 In Python::
 
@@ -55,6 +56,7 @@ from ..bayes.conjugate import NodePosterior
 from ..campaign.layout import RHEOLOGY_POOLED
 from ..contact import TIP_PARAMETERS, youngs_modulus
 from ..errors import PalpbayesError
+from ..flagcodes import POOLED_RHEOLOGY_CODES, listed_flag_columns
 from ..io.atomic import write_csv_atomic
 from ..trace import IndentationTrace
 from .cycle import CycleData
@@ -72,18 +74,9 @@ SPEED_TOLERANCE = 0.05
 POOLED_COLUMNS = [
     *GROUP_COLUMNS, "n_traces", "n_speeds", "trace_ids", "speeds_mm_min", "t0_s",
     "E0_star_pa", "E0_star_lo_pa", "E0_star_hi_pa", "alpha", "alpha_lo", "alpha_hi",
-    "nu", "E0_pa", "E0_lo_pa", "E0_hi_pa", "flag_codes", "notes", "seconds", "error",
+    "nu", "E0_pa", "E0_lo_pa", "E0_hi_pa", "flag_codes", "flag_level", "notes", "seconds",
+    "error",
 ]
-#: Short code of each pooled flag, by the words it holds.
-_CODES = (("from the pooled values", "trace_disagrees"), ("edge of its grid", "pool_at_edge"),
-          ("own model check failed", "trace_model_check"), ("were not fitted", "missing"),
-          ("one speed", "one_speed"))
-
-
-def _code(text: str) -> str:
-    return next((code for words, code in _CODES if words in text), "other")
-
-
 def _cell(v):
     """A manifest cell as a hashable key part: None when empty, float or stripped text."""
     if v is None or (isinstance(v, float) and np.isnan(v)):
@@ -190,7 +183,7 @@ class SpeedPools:
             pooled = pool_power_law([m.fit for m in members],
                                     rng=self.seed + list(self.groups).index(key))
         except (PalpbayesError, np.linalg.LinAlgError) as exc:
-            row.update(flag_codes="", notes="", error=f"not pooled: {exc}")
+            row.update(flag_codes="", flag_level="", notes="", error=f"not pooled: {exc}")
             self._rows[key] = row
             return
         table = pooled.table().set_index("parameter")
@@ -213,7 +206,7 @@ class SpeedPools:
         if row["n_speeds"] == 1:
             flags.append("every trace at one speed: alpha rests on the holds' relaxation "
                          "alone")
-        row.update(flag_codes=";".join(_code(f) for f in flags), notes=" | ".join(flags),
+        row.update(**listed_flag_columns(flags, POOLED_RHEOLOGY_CODES),
                    seconds=round(_time.perf_counter() - start, 3))
         self._rows[key] = row
 

@@ -4,7 +4,8 @@
 parameter's posterior median and central 90 % interval in columns named
 ``<parameter>[_lo|_hi]_<unit>`` (moduli as E* [Pa], and as E with ``nu``), whether the model
 check passed (``model_ok``), the short codes of what was flagged (``flag_codes``, ``;``
-separated) and the flags in words (``notes``), the number of block means and the fit time,
+separated; :data:`palpbayes.flagcodes.RHEOLOGY_CODES`), ``flag_level`` and the flags in words
+(``notes``), the number of block means and the fit time,
 the posterior ``engine`` (``grid``, or ``emcee`` with its ``rhat_max``, ``ess_min`` and
 ``converged``).
 With ``nu`` and the specimen's thickness known, ``E_compression_pa`` (``_lo``, ``_hi``) is the
@@ -28,6 +29,7 @@ import pandas as pd
 
 from ..campaign.layout import RHEOLOGY_TABLE, rheology_fit_path
 from ..errors import PalpbayesError
+from ..flagcodes import RHEOLOGY_CODES, listed_flag_columns
 from ..io.atomic import write_csv_atomic
 from ..trace import IndentationTrace
 from .compression import PAPER_COMPRESSION_SPEED
@@ -35,30 +37,10 @@ from .cycle import DEFAULT_SEGMENTS
 from .fit import RheologyFit, fit_rheology
 from .store import clear_rheology_outputs, save_rheology_fit
 
-__all__ = ["RHEOLOGY_TABLE", "summary_row", "fit_traces", "flag_code"]
+__all__ = ["RHEOLOGY_TABLE", "summary_row", "fit_traces"]
 
 _UNITS = {"Pa": "pa", "s": "s", "m": "m", "N": "n", "-": "", "N·s/m": "n_s_per_m",
           "N/m": "n_per_m"}
-#: Short code of each flag, by the words it starts with or holds.
-_CODES = (("alpha piles up at 0", "alpha_at_zero"), ("alpha piles up", "alpha_at_bound"),
-          ("below one step", "tau_fast"), ("beyond the recorded", "tau_slow"),
-          ("phi piles up", "phi_at_bound"), ("surface posterior reaches", "surface_at_bound"),
-          ("did not settle", "grid"), ("another basin", "basin"),
-          ("effective sample", "ess"), ("contact shrinks", "shrinking_contact"),
-          ("takes a half-space", "thickness"), ("viscous drag", "drag"),
-          ("tilt with the height", "tilt"), ("adhesion", "adhesion"),
-          ("did not converge", "not_converged"),
-          ("posterior-predictive", "ppc"))
-
-
-def flag_code(text: str) -> str:
-    """The short, filterable code of one flag line (``"other"`` if none matches)."""
-    for words, code in _CODES:
-        if words in text:
-            return code
-    return "other"
-
-
 def _column(parameter: str, unit: str, part: str = "") -> str:
     name = parameter.replace("*", "_star")
     suffix = _UNITS.get(unit, unit.lower())
@@ -99,8 +81,8 @@ def summary_row(trace: IndentationTrace, fit: RheologyFit,
     if fit.sampler is not None:
         row.update(rhat_max=max(fit.sampler.rhat.values()),
                    ess_min=min(fit.sampler.ess.values()), converged=fit.sampler.converged)
-    row.update(model_ok=fit.model_ok, flag_codes=";".join(flag_code(f) for f in fit.flags),
-               notes=" | ".join(fit.flags), n_points=fit.data.n_points,
+    row.update(model_ok=fit.model_ok, **listed_flag_columns(list(fit.flags), RHEOLOGY_CODES),
+               n_points=fit.data.n_points,
                block=fit.data.block, seconds=round(fit.seconds, 3), error="")
     return row
 

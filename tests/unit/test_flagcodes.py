@@ -7,7 +7,14 @@ import pandas as pd
 import pytest
 
 from palpbayes.campaign.results import load_results
-from palpbayes.flagcodes import flag_code, flag_columns, split_flags
+from palpbayes.flagcodes import (
+    POOLED_RHEOLOGY_CODES,
+    RHEOLOGY_CODES,
+    flag_code,
+    flag_columns,
+    listed_flag_columns,
+    split_flags,
+)
 
 # flags as the fits write them (checks, sampler, posterior, least squares, layer notes)
 REAL = {
@@ -77,3 +84,18 @@ def test_old_comparison_columns_read_with_the_names_of_the_interval_they_test(tm
     c = load_results(tmp_path).comparison
     assert {"gt_in_interval", "z_score"}.isdisjoint(c.columns)
     assert not c.loc[0, "gt_in_new_interval"] and c.loc[0, "gt_z_new"] == pytest.approx(-0.37)
+
+
+def test_the_viscoelastic_tables_code_their_flags_through_the_same_module():
+    """rheology.csv and rheology_pooled.csv: codes by words anywhere, each code once, a level
+    as in summary.csv, the flags joined by " | " (their sentences hold "; ")."""
+    flags = ["alpha piles up at 0, the lower bound of its prior (P(alpha < 0.01) = 0.4); "
+             "the record shows no relaxation", "the grid did not settle in 40 steps",
+             "a second grid did not settle", "something new"]
+    cols = listed_flag_columns(flags, RHEOLOGY_CODES)
+    assert cols["flag_codes"] == "alpha_at_zero;grid;other"
+    assert cols["flag_level"] == "warning" and cols["notes"].split(" | ") == flags
+    assert listed_flag_columns([], RHEOLOGY_CODES) == {"notes": "", "flag_codes": "",
+                                                       "flag_level": ""}
+    info = listed_flag_columns(["info: every trace at one speed"], POOLED_RHEOLOGY_CODES)
+    assert info["flag_level"] == "info" and info["flag_codes"] == "one_speed"
