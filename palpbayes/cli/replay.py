@@ -14,7 +14,7 @@ from ..fitdata import ModelSpec
 from ..io.atomic import write_csv_atomic, write_with
 from ..online import StoppingRule, replay
 from ..units import format_force, format_length, format_pressure
-from .fit import add_trace_options, trace_from_args
+from .fit import add_trace_options, thickness_from_args, trace_from_args
 
 __all__ = ["register", "run", "parse_fraction"]
 
@@ -58,6 +58,10 @@ def register(subparsers) -> None:
     p.add_argument("--nu", type=float, default=None,
                    help="Poisson ratio (foams 0.1-0.3, silicone, gels and tissue 0.45-0.5; "
                    "default 0.3, said on screen)")
+    p.add_argument("--bonding", choices=("bonded", "free"), default=None,
+                   help="base of a layer of known --thickness: bonded to it or free (lying "
+                        "on it without friction); required with --thickness, because the "
+                        "online estimator takes one base (the offline fit weighs both)")
     p.add_argument("--truth", type=float, default=None, metavar="PA",
                    help="true modulus [Pa] of a simulated trace, drawn on the figure")
     p.add_argument("--out", metavar="DIR", default=None,
@@ -79,6 +83,25 @@ def _show(label: str, s, budget) -> str:
             f"{format_pressure(budget.hi)}]  (±{rel:.2g} %)")
 
 
+def _layer(args: argparse.Namespace) -> dict:
+    """``thickness`` and ``bonding`` of the online model from --thickness and --bonding (a
+    thickness is never dropped: the half-space would read a thin block as stiffer)."""
+    if str(getattr(args, "thickness", None) or "").strip().lower() == "unknown":
+        raise InputError("--thickness unknown: online estimation needs a known thickness "
+                         "(or none, for a half-space); fit the whole trace with "
+                         "'palpbayes fit ... --thickness unknown' to infer it")
+    h = thickness_from_args(args)
+    if h is None:
+        if args.bonding is not None:
+            raise InputError("--bonding is the base of a layer: give --thickness M too")
+        return {}
+    if args.bonding is None:
+        raise InputError(f"--thickness {h:g} m: give the layer's base, --bonding bonded "
+                         "(glued, or on a plate it cannot slide on) or --bonding free "
+                         "(lubricated); the online estimator takes one base")
+    return {"thickness": h, "bonding": args.bonding}
+
+
 def run(args: argparse.Namespace) -> int:
     if args.target is None and args.max_force is None and args.max_depth is None:
         raise InputError("give a stopping rule: --target 2% (precision), --max-force N or "
@@ -86,12 +109,15 @@ def run(args: argparse.Namespace) -> int:
     rule = StoppingRule(target=args.target, max_force=args.max_force,
                         max_depth=args.max_depth)
     trace = trace_from_args(args)
-    model = ModelSpec(trace.tip, nu=DEFAULT_NU if args.nu is None else check_nu(args.nu))
+    model = ModelSpec(trace.tip, nu=DEFAULT_NU if args.nu is None else check_nu(args.nu),
+                      **_layer(args))
     res = replay(trace, model, rule=rule, chunk=args.chunk, noise=args.noise,
                  noise_pp=args.noise_pp)
     s, f = res.at_stop, res.final
     print("E: median [90 % interval]; statistical: from the data alone (what --target tests); "
           "with the budget: also nu, tip radius, gain and compliance")
+    if model.has_layer:
+        print(f"layer: {format_length(model.thickness)} thick on a {model.bonding} base")
     if s is None:
         print("the stopping rule never fired: the whole trace was needed")
     else:

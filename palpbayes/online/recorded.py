@@ -43,6 +43,8 @@ class ReplayResult:
         E [Pa] with the uncertainty budget at those two points.
     rule
         The stopping rule.
+    model
+        The contact model replayed (its nu and layer go into :meth:`summary`).
     """
 
     history: pd.DataFrame
@@ -51,13 +53,20 @@ class ReplayResult:
     budget_at_stop: MixtureSummary | None
     budget_final: MixtureSummary
     rule: StoppingRule
+    model: ModelSpec | None = None
 
     def summary(self) -> dict:
         """Stop time, depth, peak force, E then and from the whole trace, savings [%]."""
         f, s = self.final, self.at_stop
         row = {"stopped": s is not None, "reason": s.stop if s else "",
                "E_final_pa": f.E.median, "E_final_lo_pa": f.E.lo, "E_final_hi_pa": f.E.hi,
+               "E_total_final_lo_pa": self.budget_final.lo,
+               "E_total_final_hi_pa": self.budget_final.hi,
                "depth_final_m": f.depth, "peak_force_final_n": f.peak_force, "t_final_s": f.t}
+        if self.model is not None:
+            row.update(nu=self.model.nu, thickness_m=(np.nan if self.model.thickness is None
+                                                      else self.model.thickness),
+                       bonding=self.model.bonding if self.model.has_layer else "")
         if s is not None:
             row.update({
                 "t_stop_s": s.t, "depth_stop_m": s.depth, "peak_force_stop_n": s.peak_force,
@@ -187,4 +196,5 @@ def replay(trace: IndentationTrace, model: ModelSpec | None = None, *,
     history = pd.DataFrame(rows, columns=list(HISTORY_COLUMNS))
     return ReplayResult(history=history, at_stop=at_stop, final=est.state,
                         budget_at_stop=budget_at_stop,
-                        budget_final=est.budget_interval(budget, seed=seed), rule=rule)
+                        budget_final=est.budget_interval(budget, seed=seed), rule=rule,
+                        model=model)

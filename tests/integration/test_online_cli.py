@@ -8,6 +8,7 @@ import pytest
 
 from palpbayes.campaign import layout
 from palpbayes.cli import main
+from palpbayes.contact import Tip
 from palpbayes.io.trace_csv import write_trace
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.sim import simulate_trace
@@ -83,3 +84,36 @@ def test_replay_bad_rules_are_refused(trace_csv, capsys, args, message):
         rc = exc.code
     assert rc == 2
     assert message in capsys.readouterr().err
+
+
+@pytest.fixture(scope="module")
+def layer_csv(tmp_path_factory):
+    """A 10 mm sphere 2 mm into a 60 kPa, 20 mm silicone block bonded to its plate: the
+    half-space reads it 20-50 % stiffer as the tip goes deeper."""
+    tr = simulate_trace(60e3, Tip("sphere", radius=0.01), nu=0.45, z_surf=0.022,
+                        thickness=0.02, depth=2e-3, approach=1e-3, rate=250.0,
+                        force_offset=0.21, base="bonded", rng=7)
+    return write_trace(tr, tmp_path_factory.mktemp("layer") / "press.csv")
+
+
+def test_replay_uses_the_thickness_it_is_given(layer_csv, tmp_path, capsys):
+    """--thickness was once accepted and dropped by replay (a half-space E of 84-92 kPa for a
+    60 kPa block); now the layer enters the online model, with the base it must be told."""
+    argv = ["replay", str(layer_csv), "--tip", "sphere", "--radius", "0.01", "--nu", "0.45",
+            "--target", "2%", "--thickness", "0.02"]
+    assert main(argv) == 2
+    assert "--bonding bonded" in capsys.readouterr().err
+    assert main([*argv, "--bonding", "bonded", "--out", str(tmp_path / "r")]) == 0
+    text = capsys.readouterr().out
+    assert "layer: 20 mm thick on a bonded base" in text
+    s = pd.read_csv(tmp_path / "r" / layout.REPLAY_SUMMARY).iloc[0]
+    # with the budget at the stop and for the whole trace; the model is in the summary
+    assert s["E_total_stop_lo_pa"] <= 60e3 <= s["E_total_stop_hi_pa"], s
+    assert s["E_total_final_lo_pa"] <= 60e3 <= s["E_total_final_hi_pa"], s
+    assert abs(s["E_final_pa"] / 60e3 - 1) < 0.03
+    assert (s["nu"], s["thickness_m"], s["bonding"]) == (0.45, 0.02, "bonded")
+    for bad, message in ((["--thickness", "unknown", "--bonding", "free"], "known thickness"),
+                         (["--bonding", "free"], "give --thickness M too")):
+        base = [a for a in argv if a not in ("--thickness", "0.02")]
+        assert main([*base, *bad]) == 2
+        assert message in capsys.readouterr().err
