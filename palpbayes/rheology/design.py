@@ -200,42 +200,50 @@ def knot_products(win: Windows, a1: np.ndarray, a2: np.ndarray, kernel: str | No
     for coefficients per knot ``a1``, ``a2`` (G, K).
 
     Entry (g, j) is Σ_k a1_gk·[Ψ(e_{j+1} − e_k) − Ψ(e_j − e_k)]/h_j plus the same with a2
-    and Ψ₂.  On a :class:`KnotLattice`, for a step between two lattice knots and a lattice
-    knot k, the bracket is a sum of the lattice differences ΔΨ(p) = Ψ((p + 1)·h) − Ψ(p·h)
-    over the lattice points p of the step, shifted by n_k: the sums over k are causal
-    convolutions (FFT), and each step adds its points' values (one, on a regular stretch).
-    The kernel is differenced before the sum, as in the dense products, so no precision is
-    lost to cancellation.  The off-lattice knots' columns, and the steps that touch one, are
-    taken directly.  Without a lattice: two dense products.
+    and Ψ₂.  On a lattice group (:class:`~palpbayes.rheology.lattice.KnotLattice`), for a
+    step between two of its knots and a source k of the group, the bracket is a sum of the
+    lattice differences ΔΨ(p) = Ψ((p + 1)·h) − Ψ(p·h) over the lattice points p of the step,
+    shifted by n_k: the sums over k are causal convolutions (FFT), and each step adds its
+    points' values (one, on a regular stretch).  The kernel is differenced before the sum,
+    as in the dense products, so no precision is lost to cancellation.  Sources outside the
+    group, and the steps that join two groups or touch a knot on no lattice, are taken
+    directly.  Without a lattice: two dense products.
     """
     lat = win.lattice
     if lat is None:
         D1, D2 = step_kernel_means(win, kernel, theta, t0, scratch=True)
         return a1 @ D1.T + a2 @ D2.T
     _check(kernel, theta)
-    e, h = win.edges, lat.step
+    e = win.edges
     G, K = a1.shape
-    grid = np.arange(lat.size + 1) * h
-    direct, steps = lat.direct_steps, lat.lattice_steps
-    spec = 0.0
-    for a, f in ((a1, double_integrated_kernel), (a2, triple_integrated_kernel)):
-        A = np.zeros((G, lat.size))
-        A[:, lat.index] = a[:, lat.on]
-        spec = spec + (sp_fft.rfft(A, lat.fft_size, axis=1)
-                       * sp_fft.rfft(np.diff(f(grid, kernel, theta, t0)), lat.fft_size))
-    Z = sp_fft.irfft(spec, lat.fft_size, axis=1)[:, :lat.size]
     out = np.zeros((G, K - 1))
-    start = lat.index[lat.lattice_pos]
-    if lat.wide:  # the sum over each step's lattice points [n_j, n_{j+1})
-        bounds = np.c_[start, lat.index[lat.lattice_pos + 1]].ravel()
-        out[:, steps] = np.add.reduceat(np.c_[Z, np.zeros(G)], bounds, axis=1)[:, ::2]
-    else:
-        out[:, steps] = Z[:, start]
-    for a, f in ((a1, double_integrated_kernel), (a2, triple_integrated_kernel)):
-        if lat.off.size:  # the off-lattice columns into the lattice steps
-            F = f(e[:, None] - e[None, lat.off], kernel, theta, t0)  # (K, n_off)
-            out[:, steps] += a[:, lat.off] @ (F[1:] - F[:-1])[steps].T
-        if direct.size:  # every column into the steps that touch an off-lattice knot
+    pairs = ((a1, double_integrated_kernel), (a2, triple_integrated_kernel))
+    for g in lat.groups:
+        grid = np.arange(g.size + 1) * g.step
+        spec = 0.0
+        for a, f in pairs:
+            A = np.zeros((G, g.size))
+            A[:, g.index] = a[:, g.members]
+            spec = spec + (sp_fft.rfft(A, g.fft_size, axis=1)
+                           * sp_fft.rfft(np.diff(f(grid, kernel, theta, t0)), g.fft_size))
+        Z = sp_fft.irfft(spec, g.fft_size, axis=1)[:, :g.size]
+        start = g.index[g.pos]
+        if g.wide:  # the sum over each step's lattice points [n_j, n_{j+1})
+            bounds = np.c_[start, g.index[g.pos + 1]].ravel()
+            out[:, g.steps] = np.add.reduceat(np.c_[Z, np.zeros(G)], bounds, axis=1)[:, ::2]
+        else:
+            out[:, g.steps] = Z[:, start]
+        # sources of other groups or none (only those before the group's end act on it)
+        others = np.setdiff1d(np.flatnonzero(e < e[g.members[-1]]), g.members,
+                              assume_unique=True)
+        if others.size:
+            for a, f in pairs:
+                F = (f(e[g.steps + 1][:, None] - e[None, others], kernel, theta, t0)
+                     - f(e[g.steps][:, None] - e[None, others], kernel, theta, t0))
+                out[:, g.steps] += a[:, others] @ F.T
+    direct = lat.direct_steps
+    if direct.size:  # every source into the steps that join two groups or touch no lattice
+        for a, f in pairs:
             F = f(e[np.r_[direct, direct + 1]][:, None] - e[None, :], kernel, theta, t0)
             out[:, direct] += a @ (F[direct.size:] - F[:direct.size]).T
     out /= np.diff(e)[None, :]

@@ -6,7 +6,7 @@ between two knots is a multiple of h, so the products Σ_k a_k·Ψ(e_i − e_k) 
 :func:`~palpbayes.rheology.design.knot_products` are causal convolutions (FFT).  A hold's
 corner inside a block, or a few knots where segments meet, lie off the lattice and are taken
 directly; a second segment sampled at another rate whose windows share the lattice (at a
-finer step) is on it too.
+finer step) is on it too, and one whose windows do not is a second lattice group.
 """
 
 from __future__ import annotations
@@ -14,80 +14,147 @@ from __future__ import annotations
 import numpy as np
 from scipy import fft as sp_fft
 
-__all__ = ["KnotLattice", "knot_lattice", "LATTICE_MIN_KNOTS", "LATTICE_MAX_OFF",
-           "LATTICE_MAX_SPAN", "LATTICE_TOL"]
+__all__ = ["KnotLattice", "LatticeGroup", "knot_lattice", "LATTICE_MIN_KNOTS",
+           "LATTICE_MAX_OFF", "LATTICE_MAX_SPAN", "LATTICE_MAX_GROUPS", "LATTICE_TOL",
+           "LATTICE_MIN_RUN"]
 
 
-class KnotLattice:
-    """Knots on a regular lattice e_0 + n·h (n integer) and the few that are not (a hold's
-    corner inside a block, a segment sampled at another rate).
-
-    On the lattice the lag between two knots is a multiple of h, so Σ_k a_k·Ψ(e_i − e_k) is a
-    causal convolution in n, done by FFT in O(N log N) per row instead of O(K²) (N: lattice
-    points spanned, K: knots); the off-lattice knots' rows and columns are taken directly.
+class LatticeGroup:
+    """Knots on one regular lattice o + n·h (n integer).
 
     Attributes
     ----------
     step
-        [s] Lattice step h (the median knot step).
+        [s] Lattice step h.
+    members
+        Knot indices on this lattice (increasing).
     index
-        Lattice index n of every on-lattice knot (increasing).
-    on, off
-        Knot indices on and off the lattice.
+        Lattice index n of every member, from the first (0).
     size
         N = index[-1] + 1.
+    steps
+        Knot steps j (knot j to j + 1) whose two knots are both members.
+    pos
+        Place in ``members`` of each step's first knot.
+    wide
+        Some step spans more than one lattice point (a coarser stretch, a gap).
     """
 
-    def __init__(self, step: float, index: np.ndarray, on: np.ndarray, off: np.ndarray,
-                 knots: int):
-        self.step, self.index, self.on, self.off = step, index, on, off
+    def __init__(self, step: float, members: np.ndarray, index: np.ndarray):
+        self.step, self.members, self.index = step, members, index
         self.size = int(index[-1]) + 1
         self.fft_size = int(sp_fft.next_fast_len(2 * self.size, real=True))
-        is_on = np.zeros(knots, dtype=bool)
-        is_on[on] = True
-        both = is_on[:-1] & is_on[1:]
-        #: steps between two lattice knots (their start's place in ``index``: ``lattice_pos``)
-        self.lattice_steps = np.flatnonzero(both)
-        #: steps that touch an off-lattice knot
-        self.direct_steps = np.flatnonzero(~both)
-        pos = np.cumsum(is_on) - 1  # place in ``index`` of every on-lattice knot
-        self.lattice_pos = pos[self.lattice_steps]
-        #: some step spans more than one lattice point (a coarser segment, a gap)
-        self.wide = bool(np.any(np.diff(index) > 1))
+        consecutive = np.flatnonzero(np.diff(members) == 1)
+        self.steps = members[consecutive]
+        self.pos = consecutive
+        self.wide = bool(np.any(index[consecutive + 1] - index[consecutive] > 1))
+
+
+class KnotLattice:
+    """The knots of a record as groups on regular lattices, and the few on none.
+
+    On one lattice the lag between two knots is a multiple of its step h, so
+    Σ_k a_k·Ψ(e_i − e_k) over its members is a causal convolution in n, done by FFT in
+    O(N log N) per row instead of O(K²) (N: lattice points spanned, K: knots).  A record
+    usually has one group (equal blocks of regularly sampled segments); a segment sampled at
+    another rate, whose windows sit off the first lattice, is a second.  Sources in another
+    group or on none, and the steps that join two groups or touch a knot on none, are taken
+    directly (dense).
+
+    Attributes
+    ----------
+    groups
+        The :class:`LatticeGroup` s, the largest first.
+    off
+        Knot indices on no lattice.
+    direct_steps
+        Steps whose two knots are not members of one group.
+    """
+
+    def __init__(self, groups: list[LatticeGroup], knots: int):
+        self.groups = groups
+        member = np.zeros(knots, dtype=bool)
+        on_step = np.zeros(knots - 1, dtype=bool)
+        for g in groups:
+            member[g.members] = True
+            on_step[g.steps] = True
+        self.off = np.flatnonzero(~member)
+        self.direct_steps = np.flatnonzero(~on_step)
 
 
 #: Fewest knots for which the lattice path pays (below it one dense product is as fast).
 LATTICE_MIN_KNOTS = 64
-#: Most share of knots off the lattice, and most lattice points per knot, for the lattice path
-#: (measured: at N = K the FFTs cost a quarter of one dense product; a segment sampled at
-#: another rate whose windows sit half a fine step off the others' needs N ~ 13·K).
+#: Most share of knots on no lattice, and most lattice points per member of a group, for the
+#: lattice path.
 LATTICE_MAX_OFF, LATTICE_MAX_SPAN = 0.05, 4.0
-#: A knot is on the lattice when within this fraction of h of a lattice point.
+#: Most lattice groups (each adds an FFT and a dense block of cross terms).
+LATTICE_MAX_GROUPS = 4
+#: A knot is on a lattice when within this fraction of h of a lattice point.
 LATTICE_TOL = 1e-9
+#: Fewest knots of a stretch of equal steps that starts a group of its own.
+LATTICE_MIN_RUN = 8
+
+
+def _on(e: np.ndarray, origin: float, h: float) -> np.ndarray:
+    x = (e - origin) / h  # in steps: the tolerance is relative to h
+    return np.abs(x - np.rint(x)) <= LATTICE_TOL
 
 
 def knot_lattice(e: np.ndarray) -> KnotLattice | None:
-    """The knots' :class:`KnotLattice`, or None when too few lie on one (the dense path).
+    """The knots' :class:`KnotLattice`, or None when too few lie on lattices (dense path).
 
-    The step is one of the knot steps that recur (a segment sampled at another rate has its
-    own): the candidate that leaves at most :data:`LATTICE_MAX_OFF` of the knots off the
-    lattice with the fewest lattice points N, if N <= :data:`LATTICE_MAX_SPAN`·K."""
+    Stretches of at least :data:`LATTICE_MIN_RUN` knots with one recurring step (>= 2 % of
+    the steps) are placed, longest first, on the lattice of an earlier group they lie on, or
+    start a group of their own; a knot outside every stretch joins a group whose lattice it
+    lies on, within that group's span.  The path is taken when at most
+    :data:`LATTICE_MAX_OFF` of the knots are left on no lattice, with at most
+    :data:`LATTICE_MAX_GROUPS` groups, each spanning at most :data:`LATTICE_MAX_SPAN` lattice
+    points per member."""
     K = e.size
     if K < LATTICE_MIN_KNOTS:
         return None
     steps = np.diff(e)
-    values, counts = np.unique(np.round(steps / steps.max(), 9), return_counts=True)
-    best = None
-    for h in values[counts >= max(2, 0.02 * K)] * steps.max():
-        x = (e - e[0]) / h
-        n = np.rint(x)
-        # x is in steps: the tolerance is relative to h (and keeps one knot per point)
-        on = np.abs(x - n) <= LATTICE_TOL
-        size = n[-1] + 1
-        if (not on[0] or (~on).sum() > LATTICE_MAX_OFF * K
-                or size > LATTICE_MAX_SPAN * K):
-            continue
-        if best is None or size < best.size:
-            best = KnotLattice(float(h), n[on].astype(int), np.flatnonzero(on),
-                               np.flatnonzero(~on), K)
-    return best
+    scale = steps.max()
+    values, counts = np.unique(np.round(steps / scale, 9), return_counts=True)
+    cands = values[counts >= max(2, 0.02 * K)] * scale
+    if not cands.size:
+        return None
+    near = np.abs(steps[:, None] / cands[None, :] - 1.0) <= 1e-6
+    which = np.where(near.any(axis=1), np.argmax(near, axis=1), -1)
+    runs = []  # (first knot, last knot, step)
+    j = 0
+    while j < steps.size:
+        k = j
+        while k < steps.size and which[k] == which[j]:
+            k += 1
+        if which[j] >= 0 and k - j + 1 >= LATTICE_MIN_RUN:
+            runs.append((j, k, float(cands[which[j]])))
+        j = k
+    runs.sort(key=lambda r: r[0] - r[1])
+    lattices: list[tuple[float, float]] = []  # (origin, step)
+    group = np.full(K, -1)
+    for a, b, h in runs:
+        knots = e[a:b + 1]
+        for gi, (o, hg) in enumerate(lattices):
+            if _on(knots, o, hg).all():
+                group[a:b + 1] = gi
+                break
+        else:
+            lattices.append((float(knots[0]), h))
+            group[a:b + 1] = len(lattices) - 1
+    if not lattices or len(lattices) > LATTICE_MAX_GROUPS:
+        return None
+    for gi, (o, hg) in enumerate(lattices):  # knots outside the stretches
+        span = np.flatnonzero(group == gi)
+        lone = np.flatnonzero((group == -1) & (e >= e[span[0]]) & (e <= e[span[-1]] + hg))
+        group[lone[_on(e[lone], o, hg)]] = gi
+    if np.count_nonzero(group == -1) > LATTICE_MAX_OFF * K:
+        return None
+    groups = []
+    for gi, (_o, hg) in enumerate(lattices):
+        members = np.flatnonzero(group == gi)
+        index = np.rint((e[members] - e[members[0]]) / hg).astype(int)
+        if index[-1] + 1 > LATTICE_MAX_SPAN * members.size:
+            return None
+        groups.append(LatticeGroup(hg, members, index))
+    return KnotLattice(groups, K)

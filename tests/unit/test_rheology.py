@@ -102,7 +102,8 @@ def test_lattice_products_equal_the_dense_ones(kind, theta, max_points):
     win = d.windows()
     # off the lattice: the hold's corner, or the approach's knots when the hold's blocks
     # start on it
-    assert win.lattice is not None and 1 <= win.lattice.off.size <= 2
+    assert win.lattice is not None and len(win.lattice.groups) == 1
+    assert 1 <= win.lattice.off.size <= 2
     nodes = np.array([-1e-3, 0.05e-3, zs, 0.45e-3])
     fast = lee_radok_columns(win, nodes, d.z_edges, m, kind, theta)
     win.lattice = None
@@ -116,38 +117,51 @@ def test_lattice_products_equal_the_dense_ones(kind, theta, max_points):
 
 
 def test_knot_lattice_or_the_dense_path():
-    """A regular axis with a corner has a lattice; jittered steps and too few knots have none;
-    a second rate on the same lattice (a hold sampled 4 × faster, windows aligned) shares it;
-    more than 5 % of the knots off every lattice fall back to the dense products."""
+    """A regular axis with a corner has one lattice; jittered steps and too few knots have
+    none; a second rate on the same lattice (a hold sampled 4 × faster, windows aligned)
+    shares it; one whose windows sit half a fine step off is a second group."""
     e = np.r_[np.arange(200) * 0.01, 1.995]
-    e.sort()
     lat = knot_lattice(e)
-    assert lat is not None and lat.step == pytest.approx(0.01) and list(lat.off) == [200]
+    assert lat is not None and len(lat.groups) == 1 and list(lat.off) == [200]
+    assert lat.groups[0].step == pytest.approx(0.01) and list(lat.direct_steps) == [199]
     rng = np.random.default_rng(0)
     assert knot_lattice(np.cumsum(rng.uniform(0.98, 1.02, 200))) is None
     assert knot_lattice(np.arange(40) * 0.01) is None
     two = np.r_[np.arange(100) * 0.01, 0.99 + np.arange(1, 101) * 0.0025]
     lat2 = knot_lattice(two)
-    assert lat2 is not None and lat2.step == pytest.approx(0.0025)
-    assert lat2.off.size == 0 and lat2.wide
-    assert lat2.size == 397 + 100
+    assert lat2 is not None and len(lat2.groups) == 1 and lat2.off.size == 0
+    g = lat2.groups[0]
+    assert g.step == pytest.approx(0.0025) and g.wide and g.size == 397 + 100
     shifted = np.r_[np.arange(100) * 0.01, 0.99 + 0.00125 + np.arange(100) * 0.0025]
-    assert knot_lattice(shifted) is None
+    lat3 = knot_lattice(shifted)
+    assert lat3 is not None and [x.members.size for x in lat3.groups] == [100, 100]
+    assert list(lat3.direct_steps) == [99]  # the step that joins the two
 
 
 @pytest.mark.parametrize("kind, theta", [("power-law", 0.3), ("exponential", 0.05)])
 def test_knot_products_on_two_rates_and_off_lattice_knots(kind, theta):
-    """Steps that span several lattice points (a segment at a quarter of the rate) and knots
-    off the lattice: the lattice path's products equal the dense ones."""
+    """Steps that span several lattice points (a segment at a quarter of the rate), knots
+    off the lattice, and two lattice groups (the second's windows half a step off the
+    first's): the lattice path's products equal the dense ones."""
     e = np.r_[np.arange(100) * 0.01, 0.99 + np.arange(1, 101) * 0.0025, 0.5037, 1.1013]
     e.sort()
     win = Windows(e)
-    assert win.lattice is not None and win.lattice.wide and win.lattice.off.size == 2
+    assert win.lattice is not None and win.lattice.groups[0].wide
+    assert win.lattice.off.size == 2
     rng = np.random.default_rng(5)
     a1, a2 = rng.normal(size=(3, e.size)), rng.normal(size=(3, e.size)) * 1e2
     fast = knot_products(win, a1, a2, kind, theta)
     win.lattice = None
     dense = knot_products(win, a1, a2, kind, theta)
+    assert np.abs(fast - dense).max() < 1e-10 * np.abs(dense).max()
+    e2 = np.r_[np.arange(100) * 0.01, 0.99 + 0.00125 + np.arange(100) * 0.0025, 0.3037]
+    e2.sort()
+    win2 = Windows(e2)
+    assert len(win2.lattice.groups) == 2 and win2.lattice.off.size == 1
+    a1, a2 = rng.normal(size=(3, e2.size)), rng.normal(size=(3, e2.size)) * 1e2
+    fast = knot_products(win2, a1, a2, kind, theta)
+    win2.lattice = None
+    dense = knot_products(win2, a1, a2, kind, theta)
     assert np.abs(fast - dense).max() < 1e-10 * np.abs(dense).max()
 
 
