@@ -105,9 +105,11 @@ def knot_lattice(e: np.ndarray) -> KnotLattice | None:
 
     Stretches of at least :data:`LATTICE_MIN_RUN` knots with one recurring step (>= 2 % of
     the steps) are placed, longest first, on the lattice of an earlier group they lie on, or
-    start a group of their own; a knot outside every stretch joins a group whose lattice it
-    lies on, within that group's span.  The path is taken when at most
-    :data:`LATTICE_MAX_OFF` of the knots are left on no lattice, with at most
+    start a group of their own (step: the stretch's mean step; members: its knots within
+    :data:`LATTICE_TOL` of that lattice, so a drifting clock leaves knots off it); a knot
+    outside every stretch joins a group whose lattice it lies on, within that group's span.
+    The path is taken when at most :data:`LATTICE_MAX_OFF` of the knots are left on no
+    lattice, with at most
     :data:`LATTICE_MAX_GROUPS` groups, each spanning at most :data:`LATTICE_MAX_SPAN` lattice
     points per member."""
     K = e.size
@@ -133,15 +135,16 @@ def knot_lattice(e: np.ndarray) -> KnotLattice | None:
     runs.sort(key=lambda r: r[0] - r[1])
     lattices: list[tuple[float, float]] = []  # (origin, step)
     group = np.full(K, -1)
-    for a, b, h in runs:
+    for a, b, _h in runs:
         knots = e[a:b + 1]
         for gi, (o, hg) in enumerate(lattices):
             if _on(knots, o, hg).all():
                 group[a:b + 1] = gi
                 break
-        else:
+        else:  # a lattice of its own: the run's mean step, and only the knots that lie on it
+            h = float((knots[-1] - knots[0]) / (b - a))
             lattices.append((float(knots[0]), h))
-            group[a:b + 1] = len(lattices) - 1
+            group[np.arange(a, b + 1)[_on(knots, knots[0], h)]] = len(lattices) - 1
     if not lattices or len(lattices) > LATTICE_MAX_GROUPS:
         return None
     for gi, (o, hg) in enumerate(lattices):  # knots outside the stretches

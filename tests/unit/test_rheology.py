@@ -136,6 +136,9 @@ def test_knot_lattice_or_the_dense_path():
     lat3 = knot_lattice(shifted)
     assert lat3 is not None and [x.members.size for x in lat3.groups] == [100, 100]
     assert list(lat3.direct_steps) == [99]  # the step that joins the two
+    # a clock whose step drifts by 1e-7 per step is on no lattice at 1e-9: the dense path
+    drift = np.cumsum(0.01 * (1 + 1e-7 * np.arange(300)))
+    assert knot_lattice(drift) is None
 
 
 @pytest.mark.parametrize("kind, theta", [("power-law", 0.3), ("exponential", 0.05)])
