@@ -233,14 +233,11 @@ def knot_products(win: Windows, a1: np.ndarray, a2: np.ndarray, kernel: str | No
             out[:, g.steps] = np.add.reduceat(np.c_[Z, np.zeros(G)], bounds, axis=1)[:, ::2]
         else:
             out[:, g.steps] = Z[:, start]
-        # sources of other groups or none (only those before the group's end act on it)
-        others = np.setdiff1d(np.flatnonzero(e < e[g.members[-1]]), g.members,
-                              assume_unique=True)
-        if others.size:
+        if g.others.size:  # sources of other groups or none, before the group's end
             for a, f in pairs:
-                F = (f(e[g.steps + 1][:, None] - e[None, others], kernel, theta, t0)
-                     - f(e[g.steps][:, None] - e[None, others], kernel, theta, t0))
-                out[:, g.steps] += a[:, others] @ F.T
+                F = (f(e[g.steps + 1][:, None] - e[None, g.others], kernel, theta, t0)
+                     - f(e[g.steps][:, None] - e[None, g.others], kernel, theta, t0))
+                out[:, g.steps] += a[:, g.others] @ F.T
     direct = lat.direct_steps
     if direct.size:  # every source into the steps that join two groups or touch no lattice
         for a, f in pairs:

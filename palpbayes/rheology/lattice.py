@@ -38,6 +38,9 @@ class LatticeGroup:
         Place in ``members`` of each step's first knot.
     wide
         Some step spans more than one lattice point (a coarser stretch, a gap).
+    others
+        Knots of other groups or on none that lie before the group's last member: the
+        sources outside the group that act on its steps (set by :class:`KnotLattice`).
     """
 
     def __init__(self, step: float, members: np.ndarray, index: np.ndarray):
@@ -48,6 +51,7 @@ class LatticeGroup:
         self.steps = members[consecutive]
         self.pos = consecutive
         self.wide = bool(np.any(index[consecutive + 1] - index[consecutive] > 1))
+        self.others = np.empty(0, dtype=int)
 
 
 class KnotLattice:
@@ -73,6 +77,8 @@ class KnotLattice:
 
     def __init__(self, groups: list[LatticeGroup], knots: int):
         self.groups = groups
+        for g in groups:  # knots are in time order: those before the last member
+            g.others = np.setdiff1d(np.arange(g.members[-1]), g.members, assume_unique=True)
         member = np.zeros(knots, dtype=bool)
         on_step = np.zeros(knots - 1, dtype=bool)
         for g in groups:
