@@ -28,8 +28,8 @@ anywhere in the flag (:data:`RHEOLOGY_CODES`, :data:`POOLED_RHEOLOGY_CODES`) wit
 from __future__ import annotations
 
 __all__ = ["CODES", "CONTAINS", "CHECKS", "LEVELS", "flag_code", "flag_level", "flag_columns",
-           "split_flags", "FLAG_COLUMNS", "RHEOLOGY_CODES", "POOLED_RHEOLOGY_CODES",
-           "RHEOLOGY_SEPARATOR", "listed_flag_columns"]
+           "split_flags", "level_and_text", "scoped", "FLAG_COLUMNS", "RHEOLOGY_CODES",
+           "POOLED_RHEOLOGY_CODES", "RHEOLOGY_SEPARATOR", "listed_flag_columns"]
 
 #: (how the flag opens, code): a flag's first words say what it is (its explanation may name
 #: other checks), after an ``info:`` prefix.
@@ -104,6 +104,19 @@ def flag_code(flag: str) -> str:
 def flag_level(flag: str) -> str:
     """``"info"`` for a flag that starts with ``info:``, else ``"warning"``."""
     return "info" if flag.lstrip().lower().startswith("info:") else "warning"
+
+
+def level_and_text(flag: str) -> tuple[str, str]:
+    """(:func:`flag_level`, the flag without its ``info:`` prefix)."""
+    level = flag_level(flag)
+    return level, flag.lstrip()[5:].strip() if level == "info" else flag
+
+
+def scoped(scope: str, flag: str) -> str:
+    """``"scope: flag"`` (where a flag comes from: a map's ``field`` or ``lump``), with an
+    ``info:`` prefix kept in front, where :func:`flag_level` reads it."""
+    level, text = level_and_text(flag)
+    return f"info: {scope}: {text}" if level == "info" else f"{scope}: {flag}"
 
 
 def flag_columns(text: object) -> dict[str, str]:

@@ -130,8 +130,8 @@ def gt_columns(row: dict, gt: pd.DataFrame | None, material: str, level: float =
     E = row.get("E_pa", np.nan)
     if not np.isfinite(E):
         return out
-    lo, hi = _finite_or_nan(row, "E_new_lo_pa"), _finite_or_nan(row, "E_new_hi_pa")
-    e_lo, e_hi = _finite_or_nan(row, "E_lo_pa"), _finite_or_nan(row, "E_hi_pa")
+    lo, hi = _float_or_nan(row, "E_new_lo_pa"), _float_or_nan(row, "E_new_hi_pa")
+    e_lo, e_hi = _float_or_nan(row, "E_lo_pa"), _float_or_nan(row, "E_hi_pa")
     spread = new_specimen_sd(lo, hi, level)
     out.update({
         "rel_err_pct": 100.0 * (g_mean - E) / g_mean,
@@ -143,7 +143,7 @@ def gt_columns(row: dict, gt: pd.DataFrame | None, material: str, level: float =
     return out
 
 
-def _finite_or_nan(row: dict, key: str) -> float:
+def _float_or_nan(row: dict, key: str) -> float:
     v = row.get(key, np.nan)
     return np.nan if v is None else float(v)
 

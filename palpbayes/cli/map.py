@@ -18,7 +18,7 @@ from pathlib import Path
 from ..campaign.fitjob import FitOptions
 from ..contact import DEFAULT_NU_NOTE, check_nu
 from ..errors import InputError
-from ..flagcodes import flag_level
+from ..flagcodes import level_and_text
 from ..io.manifest import read_manifest
 from ..units import format_length, format_pressure
 
@@ -134,8 +134,7 @@ def run(args: argparse.Namespace) -> int:
             r = s.loc[q]
             print(f"  lump {label}: {fmt(r['median'])} [{fmt(r['lo'])}, {fmt(r['hi'])}] (90 %)")
     for f in res.flags:
-        level = flag_level(f)
-        text = f[5:].strip() if level == "info" else f
+        level, text = level_and_text(f)
         print(f"  {level}: {text}")
     if nu is None and "nu" not in manifest.columns:
         print(f"note: {DEFAULT_NU_NOTE}")

@@ -27,6 +27,7 @@ import pandas as pd
 
 from ..contact import DEFAULT_NU, Tip
 from ..errors import InputError
+from ..flagcodes import scoped
 from ..intervals import LEVEL, central, central_band
 from ..io.manifest import tip_from_row
 from ..sim.inclusion import contact_radius as tip_contact_radius
@@ -39,7 +40,7 @@ from .pertrace import PointOptions, check_positions, fit_points
 _NO_DATA_SD = 1e3
 
 __all__ = ["MapOptions", "MapResult", "NODE_COLUMNS", "check_map_manifest", "make_map",
-           "map_from_points", "scoped"]
+           "map_from_points"]
 
 #: Columns of the node table (``map.csv``), one row per lattice node.
 NODE_COLUMNS = [
@@ -269,13 +270,6 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
                      contact_radius=a, thickness=thickness, options=options,
                      settings={"map": asdict(options), "tip": tip.kind, "depth_m": depth},
                      p_lump=p_lump)
-
-
-def scoped(scope: str, flag: str) -> str:
-    """``"scope: flag"``, with an ``info:`` prefix kept in front (the level is read there)."""
-    if flag.lower().startswith("info:"):
-        return f"info: {scope}: {flag[5:].strip()}"
-    return f"{scope}: {flag}"
 
 
 def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True

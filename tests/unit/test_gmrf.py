@@ -9,7 +9,7 @@ from scipy.sparse.linalg import splu
 from scipy.special import k1
 
 from palpbayes.errors import InputError
-from palpbayes.flagcodes import flag_level
+from palpbayes.flagcodes import flag_level, scoped
 from palpbayes.maps import (
     HYPER_NAMES,
     FieldPrior,
@@ -22,7 +22,6 @@ from palpbayes.maps import (
     spde_scales,
     weighted_summary,
 )
-from palpbayes.maps.run import scoped
 
 H = 0.005  # 5 mm
 
