@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Gram", "gram", "fixed_columns", "NodePosterior", "node_posterior"]
+__all__ = ["Gram", "gram", "touching", "fixed_columns", "NodePosterior", "node_posterior"]
 
 
 @dataclass
@@ -45,7 +45,9 @@ class Gram:
         """Add samples (heights ``z`` [m] and fixed columns ``C`` (k, q − 1), in time order,
         following those already summed) to every node's sums, in place; returns self.
 
-        Cost: (nodes × k) shape evaluations — an online update does not revisit old samples.
+        ``shape`` maps depth [m] to F/E* and is 0 at non-positive depth (every contact law
+        is), so it is evaluated only on the span of samples below a node.  Cost: at most
+        (nodes × k) shape evaluations — an online update does not revisit old samples.
         """
         k = z.size
         if k == 0:
@@ -59,22 +61,34 @@ class Gram:
         step = max(1, max_elements // k)
         for a in range(0, G, step):
             r = slice(a, min(a + step, G))
-            s = shape(self.z[r, None] - z[None, :])
+            # s = 0 wherever z >= the chunk's highest node (no depth): the shape is evaluated
+            # on the span of samples some node touches, widened by one sample on each side so
+            # that the lag-one pairs across its ends (where s = 0) are summed as well
+            inside = np.flatnonzero(z < self.z[r].max())
+            if inside.size == 0:
+                span = slice(0, 0)
+            else:
+                span = slice(max(int(inside[0]) - 1, 0), min(int(inside[-1]) + 2, k))
+            s = touching(shape, self.z[r, None] - z[None, span])
+            Cs = C[span]
             self.m0[r, 0, 0] += np.einsum("ij,ij->i", s, s)
-            sc = s @ C
+            sc = s @ Cs
             self.m0[r, 0, 1:] += sc
             self.m0[r, 1:, 0] += sc
+            none = np.zeros(s.shape[0])
+            s_first = s[:, 0] if span.start == 0 and s.shape[1] else none
+            s_last = s[:, -1] if span.stop == k and s.shape[1] else none
             if self.m1 is not None:
                 self.m1[r, 0, 0] += np.einsum("ij,ij->i", s[:, 1:], s[:, :-1])
-                self.m1[r, 0, 1:] += s[:, 1:] @ C[:-1]
-                self.m1[r, 1:, 0] += s[:, :-1] @ C[1:]
+                self.m1[r, 0, 1:] += s[:, 1:] @ Cs[:-1]
+                self.m1[r, 1:, 0] += s[:, :-1] @ Cs[1:]
                 if self.n:  # the pair (first new sample, last old one)
-                    self.m1[r, 0, 0] += s[:, 0] * self.last[r, 0]
-                    self.m1[r, 0, 1:] += s[:, :1] * self.last[r, 1:]
+                    self.m1[r, 0, 0] += s_first * self.last[r, 0]
+                    self.m1[r, 0, 1:] += s_first[:, None] * self.last[r, 1:]
                     self.m1[r, 1:, 0] += C[0][None, :] * self.last[r, :1]
             if self.n == 0:
-                self.first[r, 0] = s[:, 0]
-            self.last[r, 0] = s[:, -1]
+                self.first[r, 0] = s_first
+            self.last[r, 0] = s_last
             self.n_contact[r] += np.count_nonzero(s > 0, axis=1)
         if self.n == 0:
             self.first[:, 1:] = C[0]
@@ -96,6 +110,19 @@ class Gram:
         """The nodes selected by ``keep`` (mask or indices)."""
         return Gram(self.z[keep], self.m0[keep], None if self.m1 is None else self.m1[keep],
                     self.first[keep], self.last[keep], self.n_contact[keep], self.n)
+
+
+def touching(shape, depth: np.ndarray) -> np.ndarray:
+    """``shape(depth)`` [m²] evaluated only where ``depth`` [m] is positive: 0 elsewhere, as
+    every contact law gives (a grid of surface nodes leaves half its depths or more out of
+    contact)."""
+    inside = depth > 0
+    if inside.all():
+        return shape(depth)
+    out = np.zeros(depth.shape)
+    if inside.any():
+        out[inside] = shape(depth[inside])
+    return out
 
 
 def fixed_columns(y: np.ndarray, u: np.ndarray | None) -> np.ndarray:

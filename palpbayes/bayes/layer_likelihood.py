@@ -142,11 +142,12 @@ class LayerLikelihood:
         """F/E* [m²] of each walker (rows) at heights ``z`` (default: the fitted samples)."""
         z = self.data.z if z is None else np.asarray(z, dtype=float)
         depth = np.asarray(z_surf, dtype=float)[:, None] - z[None, :]
-        out = np.empty(depth.shape)
-        h = np.asarray(thickness, dtype=float)
+        out = np.zeros(depth.shape)
+        h = np.broadcast_to(np.asarray(thickness, dtype=float)[:, None], depth.shape)
+        # the shape is 0 out of contact: evaluated where the depth is positive only
         for b in np.unique(bases):
-            rows = bases == b
-            out[rows] = self.model.shape_at(depth[rows], thickness=h[rows, None], base=str(b))
+            cells = (depth > 0) & (bases == b)[:, None]
+            out[cells] = self.model.shape_at(depth[cells], thickness=h[cells], base=str(b))
         return out
 
     def __call__(self, theta: np.ndarray) -> np.ndarray:

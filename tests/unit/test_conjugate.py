@@ -44,6 +44,35 @@ def test_sums_added_in_chunks_equal_the_sums_over_all_samples(ar1, linear):
         np.testing.assert_allclose(whole.m1[5], X[1:].T @ X[:-1], rtol=1e-12)
 
 
+@pytest.mark.parametrize("path", ["approach-retract", "starts-in-contact", "ends-in-contact"])
+def test_sums_over_the_contact_span_equal_the_sums_over_every_sample(path):
+    """The shape is evaluated only on the samples below a node (it is 0 above): the sums, the
+    lag-one pairs across the span's ends and the first/last rows equal a direct computation
+    over every sample, at every node, added whole or in chunks that start or end out of
+    contact."""
+    rng = np.random.default_rng(3)
+    n = 300
+    t = np.linspace(0.0, 1.0, n)
+    z = {"approach-retract": 0.1005 - 1e-3 * np.sin(np.pi * t),
+         "starts-in-contact": 0.0995 + 1e-3 * t,
+         "ends-in-contact": 0.1005 - 1e-3 * t}[path] + 2e-7 * rng.standard_normal(n)
+    F = 1.2e5 * MODEL.shape(0.1 - z) + 0.01 * rng.standard_normal(n)
+    u = z - z.max()
+    C = fixed_columns(F, u)
+    nodes = np.linspace(0.0992, 0.1008, 17)
+    for chunks in ([(0, n)], [(0, 10), (10, 150), (150, 151), (151, n)]):
+        g = Gram.empty(nodes, C.shape[1], True)
+        for a, b in chunks:
+            g.extend(z[a:b], C[a:b], MODEL.shape, max_elements=2000)  # several node chunks
+        for i, zs in enumerate(nodes):
+            X = np.column_stack([MODEL.shape(zs - z), C])
+            np.testing.assert_allclose(g.m0[i], X.T @ X, rtol=1e-12, atol=1e-300)
+            np.testing.assert_allclose(g.m1[i], X[1:].T @ X[:-1], rtol=1e-12, atol=1e-300)
+            np.testing.assert_array_equal(g.first[i], X[0])
+            np.testing.assert_array_equal(g.last[i], X[-1])
+            assert g.n_contact[i] == np.count_nonzero(X[:, 0] > 0)
+
+
 def test_conditional_posterior_is_the_textbook_regression():
     """At fixed z_s (iid noise): centre = penalised least squares, scale = s²(XᵀX + W)⁻¹ with
     s² = S/nu, S the penalised residual sum of squares (Gelman et al. BDA3 §14.2)."""
