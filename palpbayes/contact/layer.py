@@ -210,13 +210,13 @@ class _LogTable:
 
     def factor(self, x: np.ndarray) -> np.ndarray:
         """f(x) [-] (1 at x <= 0)."""
-        c = np.clip(np.asarray(x, dtype=float), 0.0, None)
-        lf = np.interp(c, self.x, self.log_factor)
+        x = np.asarray(x, dtype=float)
+        c = x.ravel()
+        lf = np.interp(c, self.x, self.log_factor, left=0.0)  # ln f = 0 at x <= 0
         beyond = c > self.x[-1]
-        if np.any(beyond):
-            lf = np.where(beyond, self.log_factor[-1] + self.tail_slope * np.log(
-                np.where(beyond, c, 1.0) / self.x[-1]), lf)
-        return np.exp(lf)
+        if beyond.any():  # the power-law tail, on those points only
+            lf[beyond] = self.log_factor[-1] + self.tail_slope * np.log(c[beyond] / self.x[-1])
+        return np.exp(lf, out=lf).reshape(x.shape)[()]
 
 
 def _log_table(x: np.ndarray, logf: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
