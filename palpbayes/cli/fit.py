@@ -1,27 +1,23 @@
-"""``palpbayes fit INPUT --out DIR``: least squares and/or Bayes on a trace or a manifest."""
+"""``palpbayes fit INPUT --out DIR``: least squares and/or Bayes on a trace or a manifest
+(its options: :mod:`palpbayes.cli.options`, :mod:`palpbayes.cli.rheology`)."""
 
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
-from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
-from ..bayes.fit import ENGINES
-from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
 from ..campaign import layout
-from ..campaign.fitjob import METHODS, FitOptions
-from ..contact import (
-    TIP_PARAMETERS,
-    Tip,
-    check_nu,
-    default_fit_fraction_text,
-    registered_kinds,
-)
 from ..errors import DataFileError, InputError
-from ..fitdata import BONDINGS
 from ..io.manifest import is_manifest
 from .console import console_lines
+from .options import (
+    RECORDING_FLAGS,
+    add_model_options,
+    add_trace_options,
+    options_from_args,
+    read_options_from_args,
+    traces_from_args,
+)
 from .rheology import (
     ELASTIC_ONLY,
     VISCO_ONLY,
@@ -31,84 +27,7 @@ from .rheology import (
     print_rheology,
 )
 
-__all__ = ["register", "run", "add_model_options", "add_trace_options", "options_from_args",
-           "thickness_from_args",
-           "trace_from_args", "traces_from_args", "read_options_from_args",
-           "recording_options_from_args"]
-
-
-def add_model_options(p: argparse.ArgumentParser) -> None:
-    """Options shared by ``fit`` and ``report``: model, priors, budget, sampler."""
-    g = p.add_argument_group("model")
-    g.add_argument("--method", choices=METHODS, default="bayes",
-                   help="bayes, lsq (the paper's baseline) or both "
-                   "(default: bayes for fit, both for report)")
-    g.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
-    nu = g.add_mutually_exclusive_group()
-    nu.add_argument("--nu", type=float, default=None,
-                    help="Poisson ratio (foams 0.1-0.3, silicone, gels and tissue "
-                    "0.45-0.5; default: a manifest's nu column, else 0.3 with a note on "
-                    "screen and nu_source = default in summary.csv; the budget varies it "
-                    "by ±0.05)")
-    nu.add_argument("--nu-range", type=float, nargs=2, metavar=("LO", "HI"),
-                    help="uniform Poisson-ratio range for the budget (fit at its midpoint)")
-    g.add_argument("--noise", choices=NOISE_MODELS, default="gaussian",
-                   help="noise model of the Bayesian fit (default gaussian)")
-    g.add_argument("--noise-pp", type=float, default=None, metavar="N",
-                   help="sensor peak-to-peak noise [N] (the paper's sensor: 0.048; default: "
-                        "read from the pre-contact baseline as 6 sd; sigma prior = pp/6)")
-    g.add_argument("--f-unc", type=float, default=None, metavar="N",
-                   help="contact threshold and least-squares surface constraint "
-                        "|F(z_surf) - baseline| <= F_unc [N] (default: --noise-pp)")
-    g.add_argument("--baseline", choices=BASELINES, default="constant",
-                   help="baseline of the Bayesian model (and of --rheology): constant offset "
-                        "F0, or linear F0 + F1*(z - z_ref) for drift or a tilted baseline "
-                        "(default constant)")
-    g.add_argument("--tare", action="store_true",
-                   help="subtract the pre-contact baseline from the force before fitting "
-                        "(zero an untared sensor; the paper's least squares has no offset)")
-    g.add_argument("--surface-prior", choices=SURFACE_PRIORS, default="loading",
-                   help="Bayesian surface prior: uniform over the loading range, or 'soft' "
-                        "(plus the paper's |F(z_surf)| <= F_unc as a soft penalty)")
-    g.add_argument("--fit-fraction", type=float, default=None,
-                   help="fraction of the penetration skipped (default "
-                   f"{default_fit_fraction_text()})")
-    g.add_argument("--max-depth", type=float, default=None, metavar="M",
-                   help="fit only down to this depth below the contact onset [m]")
-    g.add_argument("--half-space", action="store_true",
-                   help="fit the specimen as a half-space even where its thickness is known "
-                        "(the paper's model; default: a layer on a rigid base wherever "
-                        "--thickness or the manifest's thickness_m gives the thickness)")
-    g.add_argument("--bonding", choices=BONDINGS, default="unknown",
-                   help="base of the layer: bonded to it, free (lying on it without "
-                        "friction) or unknown (default: both, weighted by the data)")
-    g.add_argument("--thickness-range", type=float, nargs=2, metavar=("LO", "HI"),
-                   help="log-uniform prior range of an unknown thickness [m] (with "
-                        "--thickness unknown; default 1.5 to 1000 times the indentation "
-                        "depth)")
-    g.add_argument("--finite-thickness", action="store_true", help=argparse.SUPPRESS)
-    g.add_argument("--non-bonded", action="store_true", help=argparse.SUPPRESS)
-    g.add_argument("--radius-tolerance", type=float, default=0.01,
-                   help="relative tip-radius tolerance of the budget (default 0.01)")
-    g.add_argument("--gain-sd", type=float, default=0.01,
-                   help="relative force-gain sd of the budget (default 0.01)")
-    g.add_argument("--compliance-max", type=float, default=2e-6, metavar="M_PER_N",
-                   help="upper bound of the series compliance of the budget [m/N]")
-    g.add_argument("--engine", choices=ENGINES, default="emcee",
-                   help="posterior engine: emcee (every noise model and prior) or exact "
-                        "(quadrature over the surface height with the linear parameters and "
-                        "the noise integrated out; gaussian or ar1 noise; 10-100x faster)")
-    g.add_argument("--model-form", action=argparse.BooleanOptionalAction, default=True,
-                   help="widen E's interval to the envelope of the alternatives a material "
-                        "misfit points to: shallow half, deep half, a layer of unknown "
-                        "thickness (default on; --no-model-form: statistical + budget only)")
-    g.add_argument("--strict", action="store_true",
-                   help="make non-converged or flagged Bayesian fits an error")
-    g.add_argument("--max-steps", type=int, default=20000, help="emcee step cap")
-    g.add_argument("--workers", type=int, default=None,
-                   help="worker processes (default: all cores)")
-    g.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                   help="progress bars (default: only on a terminal)")
+__all__ = ["register", "run"]
 
 
 def register(subparsers) -> None:
@@ -130,212 +49,6 @@ def register(subparsers) -> None:
     add_rheology_options(p)
     add_trace_options(p, "single trace (ignored for a manifest)")
     p.set_defaults(fit_defaults={d: p.get_default(d) for d in (*ELASTIC_ONLY, *VISCO_ONLY)})
-
-
-def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -> None:
-    """Tip, specimen, columns, units and signs of a trace file (``fit``, ``replay``)."""
-    t = p.add_argument_group(title)
-    t.add_argument("--tip", choices=registered_kinds(), help="tip kind")
-    for par in TIP_PARAMETERS.values():  # the tip's size, in the option's unit
-        t.add_argument(par.option, type=float, metavar=par.metavar, dest=_dest(par.option),
-                       help=par.help)
-    t.add_argument("--thickness", metavar="M|unknown",
-                   help="specimen thickness [m] (the Bayesian model then treats it as a layer "
-                        "on a rigid base), or 'unknown' to sample it")
-    t.add_argument("--material", default="", help="material label")
-    c = p.add_argument_group("columns, units and signs (every trace, also of a manifest)")
-    for q, unit in (("time", "s"), ("z", "m"), ("force", "N")):
-        c.add_argument(f"--{q}-column", metavar="NAME", help=f"column holding {q}")
-        c.add_argument(f"--{q}-unit", metavar="UNIT", help=f"unit of {q} (default {unit})")
-    c.add_argument("--force-sign", type=float, choices=(1.0, -1.0), default=None,
-                   help="-1 if pressing gives negative force (default +1; for a ROS 2 bag the "
-                        "sign that makes the force grow as the tip goes down)")
-    c.add_argument("--z-sign", type=float, choices=(1.0, -1.0), default=1.0,
-                   help="-1 if z is down-positive")
-    r = p.add_argument_group("ROS 2 bags and AFM files (palpbayes inspect FILE lists what is in "
-                             "one)")
-    r.add_argument("--force-topic", metavar="TOPIC",
-                   help="geometry_msgs/WrenchStamped topic (default: the bag's only one)")
-    r.add_argument("--pose-topic", metavar="TOPIC",
-                   help="geometry_msgs/PoseStamped tip pose or sensor_msgs/JointState topic "
-                        "(UR3e kinematics; default: the bag's only one)")
-    r.add_argument("--force-axis", choices=("x", "y", "z"), default=None,
-                   help="wrench force component along the indentation (default z)")
-    r.add_argument("--time-offset", type=float, metavar="S", default=None,
-                   help="seconds added to the pose stamps (clocks that differ; default 0)")
-    r.add_argument("--tool-offset", type=float, metavar="M", default=None,
-                   help="sensor + tip length along the flange z axis for a JointState "
-                        "topic, or an extra offset of a PoseStamped tip [m] (default 0)")
-    r.add_argument("--curve", type=int, action="append", metavar="I", dest="curves",
-                   help="fit only curve I of an AFM force map (repeatable; default all)")
-
-
-def options_from_args(args: argparse.Namespace) -> FitOptions:
-    """Build :class:`FitOptions` from parsed arguments (validated)."""
-    if args.nu_range is not None:
-        lo, hi = args.nu_range
-        check_nu(lo), check_nu(hi)
-        if hi < lo:
-            raise InputError(f"--nu-range {lo} {hi}: LO must not exceed HI")
-        nu, budget_nu = 0.5 * (lo + hi), (lo, hi)
-    else:
-        nu, budget_nu = (None if args.nu is None else check_nu(args.nu)), None
-    for name in ("radius_tolerance", "gain_sd", "compliance_max"):
-        v = getattr(args, name)
-        if not (math.isfinite(v) and v >= 0):
-            raise InputError(f"--{name.replace('_', '-')} {v!r} must be a non-negative number")
-    for name in ("noise_pp", "f_unc"):
-        v = getattr(args, name)
-        if v is not None and not (math.isfinite(v) and v > 0):
-            raise InputError(f"--{name.replace('_', '-')} {v!r} must be a positive force in "
-                             "newtons (the sensor's peak-to-peak noise)")
-    if args.engine == "exact" and (args.noise == "student" or args.surface_prior == "soft"):
-        what = ("--noise student" if args.noise == "student" else "--surface-prior soft")
-        raise InputError(f"--engine exact takes --noise gaussian or ar1 and --surface-prior "
-                         f"loading, not {what}: use --engine emcee for it")
-    if args.workers is not None and args.workers < 1:
-        raise InputError(f"--workers {args.workers} must be at least 1")
-    budget = BudgetSpec(nu_range=budget_nu, radius_tolerance=args.radius_tolerance,
-                        gain_sd=args.gain_sd, compliance_max=args.compliance_max)
-    settings = SamplerSettings(max_steps=args.max_steps, progress=args.progress)
-    layer, bonding = _layer_from_args(args)
-    return FitOptions(
-        method=args.method, nu=nu, layer=layer, bonding=bonding,
-        thickness_range=(None if args.thickness_range is None
-                         else tuple(args.thickness_range)),
-        f_unc=args.f_unc if args.f_unc is not None else args.noise_pp,
-        fit_fraction=args.fit_fraction, max_depth=args.max_depth, noise=args.noise,
-        baseline=args.baseline, tare=args.tare,
-        priors=PriorSpec(noise_pp=args.noise_pp, surface=args.surface_prior), budget=budget,
-        settings=settings,
-        seed=args.seed, strict=args.strict, engine=args.engine,
-        model_form=getattr(args, "model_form", True),
-    )
-
-
-def thickness_from_args(args: argparse.Namespace) -> float | None:
-    """The known thickness [m] of ``--thickness`` (None when absent or 'unknown')."""
-    value = getattr(args, "thickness", None)
-    if value is None or str(value).strip().lower() == "unknown":
-        return None
-    try:
-        h = float(value)
-    except ValueError:
-        raise InputError(f"--thickness {value!r} is neither a thickness in metres nor "
-                         "'unknown'") from None
-    if not (math.isfinite(h) and h > 0):
-        raise InputError(f"--thickness {value!r} must be a positive thickness in metres")
-    return h
-
-
-def _layer_from_args(args: argparse.Namespace) -> tuple[str, str]:
-    """(FitOptions.layer, .bonding) from --half-space, --thickness, --bonding and the old
-    --finite-thickness (now the default) / --non-bonded (= --bonding free)."""
-    unknown = str(getattr(args, "thickness", None) or "").strip().lower() == "unknown"
-    thickness_from_args(args)  # validates a number
-    if args.half_space and unknown:
-        raise InputError("--half-space and --thickness unknown contradict each other; "
-                         "give one")
-    if args.thickness_range is not None and not unknown:
-        raise InputError("--thickness-range is the prior of an unknown thickness: give it "
-                         "with --thickness unknown")
-    bonding = "free" if args.non_bonded and args.bonding == "unknown" else args.bonding
-    return ("off" if args.half_space else "unknown" if unknown else "auto"), bonding
-
-
-def read_options_from_args(args: argparse.Namespace) -> dict:
-    """Reader options (``columns``, ``units``, ``force_sign``, ``z_sign``) from the column,
-    unit and sign arguments; only those the user gave (empty dict: the canonical file)."""
-    opts: dict = {}
-    columns = {q: getattr(args, f"{q}_column") for q in ("time", "z", "force")
-               if getattr(args, f"{q}_column")}
-    units = {q: getattr(args, f"{q}_unit") for q in ("time", "z", "force")
-             if getattr(args, f"{q}_unit")}
-    if columns:
-        opts["columns"] = columns
-    if units:
-        opts["units"] = units
-    if args.force_sign not in (None, 1.0):
-        opts["force_sign"] = args.force_sign
-    if args.z_sign != 1.0:
-        opts["z_sign"] = args.z_sign
-    return opts
-
-
-def _dest(option: str) -> str:
-    """The argparse attribute of a ``--long-option``."""
-    return option.lstrip("-").replace("-", "_")
-
-
-#: Reader option (= argparse attribute) -> its flag, of the options for bags and AFM files.
-_RECORDING_FLAGS = {"force_topic": "--force-topic", "pose_topic": "--pose-topic",
-                    "force_axis": "--force-axis", "time_offset": "--time-offset",
-                    "tool_offset": "--tool-offset", "curves": "--curve"}
-
-
-def recording_options_from_args(args: argparse.Namespace) -> dict:
-    """Reader options of a ROS 2 bag or AFM file from the arguments (only those given)."""
-    opts = {key: getattr(args, key) for key in _RECORDING_FLAGS
-            if getattr(args, key, None) is not None}
-    if args.force_sign is not None:
-        opts["force_sign"] = args.force_sign
-    if args.z_sign != 1.0:
-        opts["z_sign"] = args.z_sign
-    return opts
-
-
-def _tip_from_args(args: argparse.Namespace) -> Tip:
-    if args.tip is None:
-        sizes = ", ".join(f"{p.option} {p.metavar}" if p.metavar else p.option
-                          for p in TIP_PARAMETERS.values())
-        raise InputError(f"{args.input}: a single trace needs --tip "
-                         f"({', '.join(registered_kinds())}) and its size ({sizes}, as the "
-                         "tip needs)")
-    sizes = {}
-    for p in TIP_PARAMETERS.values():  # in the option's unit (degrees for the half-angle)
-        value = getattr(args, _dest(p.option))
-        sizes[p.name] = None if value is None else p.from_user(value)
-    return Tip(args.tip, **sizes)
-
-
-def traces_from_args(args: argparse.Namespace, segments: str | None = None) -> list:
-    """Read the recording named by ``args.input`` (trace CSV, ROS 2 bag or AFM file, the
-    reader chosen by :func:`palpbayes.io.recording.recording_kind`) with the tip, column,
-    sign and recording options; one trace, or one per curve of an AFM force map.
-    ``segments`` (names) are read from an AFM file instead of the approach alone (a trace
-    CSV keeps its ``segment`` column; a bag gets segments from the motion when fitted)."""
-    from ..io.recording import KIND_NAMES, read_recording, recording_kind
-
-    tip = _tip_from_args(args)
-    kind = recording_kind(args.input)
-    if kind == "table":
-        bag_or_afm = recording_options_from_args(args)
-        extra = sorted(set(bag_or_afm) - {"force_sign", "z_sign"})
-        if extra:
-            raise InputError(f"{args.input} is {KIND_NAMES[kind]}: "
-                             f"{_RECORDING_FLAGS[extra[0]]} applies to ROS 2 bags and AFM "
-                             "files only")
-        opts = read_options_from_args(args)
-    else:
-        if any(getattr(args, f"{q}_{w}") for q in ("time", "z", "force")
-               for w in ("column", "unit")):
-            raise InputError(f"{args.input} is {KIND_NAMES[kind]}: --*-column and --*-unit "
-                             "apply to text tables only (the file names its own columns)")
-        opts = recording_options_from_args(args)
-        if segments is not None and kind == "afm":
-            opts["segments"] = segments
-    return read_recording(args.input, tip=tip, thickness=thickness_from_args(args),
-                          material=args.material, **opts)
-
-
-def trace_from_args(args: argparse.Namespace):
-    """The single trace named by ``args.input`` (:func:`traces_from_args`); an AFM force map
-    must be narrowed to one curve with ``--curve I``."""
-    traces = traces_from_args(args)
-    if len(traces) != 1:
-        raise InputError(f"{args.input} holds {len(traces)} curves; pick one with --curve I "
-                         f"(0 to {len(traces) - 1})")
-    return traces[0]
 
 
 def _check_input_path(path: Path) -> None:
@@ -401,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
     _check_input_path(path)
     read_options = read_options_from_args(args)
     if path.is_file() and is_manifest(path):  # column/unit/sign options apply to every trace
-        given = [f for k, f in _RECORDING_FLAGS.items() if getattr(args, k) is not None]
+        given = [f for k, f in RECORDING_FLAGS.items() if getattr(args, k) is not None]
         if given:
             raise InputError(f"{path} is a manifest of trace CSVs: {given[0]} applies to a ROS "
                              "2 bag or AFM file given as INPUT")

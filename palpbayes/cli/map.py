@@ -21,6 +21,7 @@ from ..errors import InputError
 from ..flagcodes import level_and_text
 from ..io.manifest import read_manifest
 from ..units import format_length, format_pressure
+from .options import add_nu_option
 
 __all__ = ["register", "run"]
 
@@ -41,9 +42,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.add_argument("--force", action="store_true", help="replace the map files in DIR")
     g = p.add_argument_group("per-point fits")
-    g.add_argument("--nu", type=float, default=None,
-                   help="Poisson ratio (foams 0.1-0.3, silicone, gels and tissue 0.45-0.5; "
-                   "default: a manifest's nu column, else 0.3, said on screen)")
+    add_nu_option(g, summary=False)
     g.add_argument("--noise", choices=("gaussian", "ar1"), default="gaussian",
                    help="noise model of the exact engine (default gaussian)")
     g.add_argument("--tare", action="store_true", help="subtract the pre-contact force level")

@@ -14,7 +14,7 @@ from ..fitdata import ModelSpec
 from ..io.atomic import write_csv_atomic, write_with
 from ..online import StoppingRule, replay
 from ..units import format_force, format_length, format_pressure
-from .fit import add_trace_options, thickness_from_args, trace_from_args
+from .options import add_nu_option, add_trace_options, thickness_from_args, trace_from_args
 
 __all__ = ["register", "run", "parse_fraction"]
 
@@ -55,9 +55,7 @@ def register(subparsers) -> None:
                    help="noise model (default gaussian)")
     p.add_argument("--noise-pp", type=float, default=None, metavar="N",
                    help="sensor peak-to-peak noise [N] (default: 6 sd of the baseline)")
-    p.add_argument("--nu", type=float, default=None,
-                   help="Poisson ratio (foams 0.1-0.3, silicone, gels and tissue 0.45-0.5; "
-                   "default 0.3, said on screen)")
+    add_nu_option(p, manifest=False, summary=False)
     p.add_argument("--bonding", choices=("bonded", "free"), default=None,
                    help="base of a layer of known --thickness: bonded to it or free (lying "
                         "on it without friction); required with --thickness, because the "

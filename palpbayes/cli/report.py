@@ -23,7 +23,7 @@ from pathlib import Path
 
 from ..campaign import layout
 from ..errors import InputError
-from .fit import add_model_options, options_from_args
+from .options import add_model_options, options_from_args
 
 __all__ = ["register", "run", "resolve_input", "DEFAULT_OUT"]
 
