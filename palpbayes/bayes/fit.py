@@ -10,6 +10,7 @@ import numpy as np
 
 from .. import __version__
 from ..checks import check_fit
+from ..contact import youngs_modulus
 from ..errors import ConvergenceError, ConvergenceWarning, FitError, InputError, PalpbayesError
 from ..fitdata import FitData, ModelSpec, prepare_trace
 from ..lsq import LSQResult, fit_lsq_data
@@ -53,7 +54,7 @@ def _posterior_dict(samples: np.ndarray, prior: TracePrior, nu: float, like=None
             x = like.log_estar(samples.reshape(-1, samples.shape[-1])).reshape(x.shape)
         if name == "log_Estar":
             post["E_star"] = np.exp(x)
-            post["E"] = np.exp(x) * (1 - nu**2)
+            post["E"] = youngs_modulus(np.exp(x), nu)
         elif name == "log_sigma":
             post["sigma"] = np.exp(x)
         elif name == "log_nu_t":

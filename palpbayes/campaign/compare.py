@@ -70,7 +70,7 @@ from scipy import stats
 
 from ..bayes.budget import BudgetSpec
 from ..bayes.result import saved_fitted_model, saved_model
-from ..contact import registered_kinds
+from ..contact import DEFAULT_NU, registered_kinds
 from ..errors import DataFileError, FitError, InputError
 from ..fitdata import ModelSpec
 from ..flagcodes import flag_columns
@@ -270,7 +270,7 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None,
     except InputError:  # no saved state: the geometry of traces.csv, as a half-space
         fitted = None
         if geometry is not None and ids[i_rep] in geometry.index:
-            nu = float(posterior_attrs(idata).get("nu", 0.3))
+            nu = float(posterior_attrs(idata).get("nu", DEFAULT_NU))
             fitted = ModelSpec(tip_from_row(geometry.loc[ids[i_rep]]), nu=nu)
     if fitted is None:
         spec = None

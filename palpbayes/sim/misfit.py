@@ -28,7 +28,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..contact import Tip
+from ..contact import Tip, effective_modulus
 from ..errors import InputError
 from ..trace import IndentationTrace
 from .trace import simulate_trace
@@ -95,7 +95,7 @@ def misfit_trace(scenario: str, index: int, *, rate: float = 200.0
     # a force-sensor gain g scales the contact force as E*·g would
     trace = simulate_trace(MISFIT_E * gain, tip, nu=nu, rate=rate, compliance=compliance,
                            rng=rng, trace_id=f"{scenario}-{index:03d}", **kw)
-    meta = dict(trace.metadata, E_true=MISFIT_E, Estar_true=MISFIT_E / (1 - nu**2),
+    meta = dict(trace.metadata, E_true=MISFIT_E, Estar_true=effective_modulus(MISFIT_E, nu),
                 nu_true=nu, radius_factor=radius_factor,
                 gain=gain, scenario=scenario)
     return replace(trace, thickness=None, metadata=meta), nominal
