@@ -188,7 +188,8 @@ def _edges(t: np.ndarray, z: np.ndarray, rows: np.ndarray, seg: np.ndarray,
     at = [left, right]
     height = [zm + slope * (left - tm), zm + slope * (right - tm)]
     weight = [np.ones(B), np.ones(B)]
-    for i in np.flatnonzero((first[1:] == last[:-1] + 1) & (seg[1:] != seg[:-1])):
+    change = seg[1:] != seg[:-1]
+    for i in np.flatnonzero(change & (first[1:] == last[:-1] + 1)):
         j = i + 1
         ds = slope[i] - slope[j]
         if ds == 0:
@@ -208,6 +209,19 @@ def _edges(t: np.ndarray, z: np.ndarray, rows: np.ndarray, seg: np.ndarray,
         at.append(np.array([tc]))
         height.append(np.array([zm[i] + slope[i] * (tc - tm[i])]))
         weight.append(np.ones(1))
+    # two segments with unblocked samples between them (the hold's leftover, which is not a
+    # whole block): the crossing of their lines inside that gap is the corner, so that the
+    # tip holds until it and then moves (not a line across the gap)
+    for i in np.flatnonzero(change & (first[1:] > last[:-1] + 1)):
+        j = i + 1
+        ds = slope[i] - slope[j]
+        if ds == 0:
+            continue
+        tc = (zm[j] - zm[i] + slope[i] * tm[i] - slope[j] * tm[j]) / ds
+        if right[i] + 0.01 * step_out[i] < tc < left[j] - 0.01 * step_in[j]:
+            at.append(np.array([tc]))
+            height.append(np.array([zm[i] + slope[i] * (tc - tm[i])]))
+            weight.append(np.ones(1))
     at, height, weight = (np.concatenate(a) for a in (at, height, weight))
     knots, inverse = np.unique(at, return_inverse=True)
     z_knots = np.bincount(inverse, height * weight) / np.bincount(inverse, weight)

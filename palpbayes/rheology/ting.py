@@ -25,8 +25,9 @@ x = e_{k+1} for a whole step and x = t1 for the step that holds it: two matrices
 evaluation times × steps per alpha, and the columns r·Aᵀ + c·Bᵀ for every trial surface.  t1
 comes from the same integrals of the piecewise-constant d': the knot where
 ∫_{e_k}^{t} K·d' ds changes sign, then the step's closed-form inverse of Φ.  A block's
-value is the mean over at most :data:`SAMPLES` of its samples (:data:`CORNER_SAMPLES` on
-the first :data:`CORNER_BLOCKS` retract blocks, where the force bends at the corner).  On the
+value is the mean over :data:`SAMPLES` of its samples, symmetric about its middle
+(:func:`symmetric_picks`; :data:`CORNER_SAMPLES` on the first :data:`CORNER_BLOCKS` retract
+blocks, where the force bends at the corner).  On the
 step where the contact starts u rises linearly from the crossing s_c (not from the step's
 start), as in :func:`~palpbayes.rheology.design.onset_correction`, without its bump.  A tip
 above the surface at t (d(t) <= 0) has F = 0.
@@ -39,7 +40,8 @@ import numpy as np
 from .design import double_integrated_kernel, integrated_kernel
 
 __all__ = ["RetractDesign", "ting_columns", "ting_cutoff", "source_coefficients",
-           "with_retract", "SAMPLES", "CORNER_BLOCKS", "CORNER_SAMPLES", "RETRACT"]
+           "with_retract", "symmetric_picks", "SAMPLES", "CORNER_BLOCKS", "CORNER_SAMPLES",
+           "RETRACT"]
 
 #: Segment code of the retract (:data:`~palpbayes.trace.SEGMENTS`).
 RETRACT = 2
@@ -50,6 +52,20 @@ SAMPLES = 5
 #: :data:`CORNER_SAMPLES`.
 CORNER_BLOCKS = 2
 CORNER_SAMPLES = 25
+
+
+def symmetric_picks(n: int, k: int) -> np.ndarray:
+    """Indices of ``k`` of ``n`` samples (all of them when k >= n; k + 1 when k is odd and n
+    even), evenly spread and symmetric about the block's
+    middle (index i picked with n − 1 − i), so that their mean is the block mean of any force
+    that is linear in time (rounding the even spread alone can pick 0, 3, 6, 10, 13 of 14:
+    a bias of a tenth of a sample's change, a noise sd on a steep retract)."""
+    if k >= n:
+        return np.arange(n)
+    half = np.floor(np.linspace(0, n - 1, k)[: (k + 1) // 2] + 0.5).astype(int)
+    if k % 2 and (n - 1) % 2:  # no middle sample: the two around the middle instead
+        half = np.r_[half[:-1], (n - 2) // 2]
+    return np.unique(np.r_[half, n - 1 - half])
 
 
 def source_coefficients(z_nodes: np.ndarray, z_edges: np.ndarray, edges: np.ndarray,
@@ -94,8 +110,7 @@ class RetractDesign:
         self.R, n = S.shape
         self.m, self.t0 = float(m), float(t0)
         first = min(self.R, CORNER_BLOCKS)  # the corner where the retract starts
-        picks = [np.unique(np.linspace(0, n - 1, min(n, k)).round().astype(int))
-                 for k in (CORNER_SAMPLES, SAMPLES)]
+        picks = [symmetric_picks(n, k) for k in (CORNER_SAMPLES, SAMPLES)]
         self.groups = [(0, first, picks[0].size), (first, self.R, picks[1].size)]
         self.t = np.concatenate([S[:first, picks[0]].ravel(), S[first:, picks[1]].ravel()])
         lag = self.t[:, None] - self.e[None, :]
