@@ -21,7 +21,7 @@ from ..errors import InputError
 from ..intervals import LEVEL
 from ..io.tabular import parse_bool
 from ..rheology.fit import PARAMETERS
-from ..rheology.results import _UNITS
+from ..rheology.results import UNIT_SUFFIXES
 from ..rheology.store import StoredRheologyFit, load_rheology_fit
 from ..units import FORCE_PREFIXES, LENGTH_PREFIXES, PRESSURE_PREFIXES, si_scale
 from .format import isnum, shown_path, wrap, yesno
@@ -37,7 +37,7 @@ TABLE_TITLE = "Viscoelastic fits (rheology.csv)"
 #: Printed name of each relaxation model.
 RHEOLOGY_LABELS = {"power-law": "power law", "sls": "SLS"}
 #: Table column suffix -> unit (the inverse of :mod:`palpbayes.rheology.results`' naming).
-_SUFFIX_UNIT = {suffix: unit for unit, suffix in _UNITS.items()}
+_SUFFIX_UNIT = {suffix: unit for unit, suffix in UNIT_SUFFIXES.items()}
 _PREFIXES = {"Pa": PRESSURE_PREFIXES, "N": FORCE_PREFIXES, "m": LENGTH_PREFIXES}
 #: Parameters of the overview table: each model's own, a drag and the compression modulus.
 _OVERVIEW = tuple(dict.fromkeys(
