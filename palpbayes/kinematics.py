@@ -46,6 +46,7 @@ __all__ = [
     "forward_kinematics",
     "tip_position",
     "tip_z",
+    "as_offset",
 ]
 
 
@@ -138,7 +139,7 @@ def _as_joint_array(q: np.ndarray | Sequence) -> np.ndarray:
     return arr
 
 
-def _as_offset(tool_offset: float | Sequence[float] | np.ndarray) -> np.ndarray:
+def as_offset(tool_offset: float | Sequence[float] | np.ndarray) -> np.ndarray:
     """Return the tool offset as a length-3 vector in the flange frame [m]."""
     off = np.asarray(tool_offset, dtype=float)
     if off.ndim == 0:
@@ -224,7 +225,7 @@ def forward_kinematics(
     parameters for calculations of kinematics and dynamics".
     """
     q = _as_joint_array(q)
-    off = _as_offset(tool_offset)
+    off = as_offset(tool_offset)
     T = dh_transform(q[:, 0], dh.d[0], dh.a[0], dh.alpha[0])
     for i in range(1, 6):
         T = T @ dh_transform(q[:, i], dh.d[i], dh.a[i], dh.alpha[i])

@@ -26,7 +26,8 @@ THRESHOLDS: dict[str, float] = {
     "rate_n_se": 5.0,            # hold relaxation or retract modulus beyond 5 standard errors
 }
 
-_MIN_BIN = 8  # fewest samples in a bin
+#: Fewest samples in a bin of the binned-residual check.
+MIN_BIN = 8
 
 #: What a check says when a half-space fit stiffens with depth as a layer on a base would.
 FINITE_THICKNESS = ("finite thickness -> give the specimen's thickness (--thickness H, the "
@@ -64,7 +65,9 @@ class CheckResult:
 # ----------------------------------------------------------------------------- helpers
 
 
-def _arrays(z, force) -> tuple[np.ndarray, np.ndarray]:
+def validated_arrays(z, force) -> tuple[np.ndarray, np.ndarray]:
+    """``z`` and ``force`` as flat float arrays; :class:`InputError` unless they have the same
+    length, at least 20 samples and only finite values."""
     z = np.asarray(z, dtype=float).ravel()
     f = np.asarray(force, dtype=float).ravel()
     if z.shape != f.shape:
@@ -76,13 +79,15 @@ def _arrays(z, force) -> tuple[np.ndarray, np.ndarray]:
     return z, f
 
 
-def _acf1(x: np.ndarray) -> float:
+def acf1(x: np.ndarray) -> float:
+    """Lag-1 sample autocorrelation of ``x`` about its mean (0 for a constant series)."""
     x = np.asarray(x, dtype=float) - np.mean(x)
     den = float(np.dot(x, x))
     return float(np.dot(x[1:], x[:-1]) / den) if den > 0 else 0.0
 
 
-def _clip_phi(phi: float) -> float:
+def clip_phi(phi: float) -> float:
+    """An AR(1) coefficient clipped to [-0.99, 0.999], where the AR(1) factors stay finite."""
     return float(np.clip(phi, -0.99, 0.999))
 
 
@@ -100,18 +105,18 @@ def ar1_mean_variance_factor(n, phi: float) -> np.ndarray:
         Lag-1 autocorrelation, |phi| < 1.
     """
     n = np.asarray(n, dtype=float)
-    phi = _clip_phi(phi)
+    phi = clip_phi(phi)
     if phi == 0:
         return np.ones_like(n)
     return (1 + phi) / (1 - phi) - 2 * phi * (1 - phi**n) / (n * (1 - phi) ** 2)
 
 
-def _phi_from_differences(r: np.ndarray) -> float:
+def phi_from_differences(r: np.ndarray) -> float:
     """AR(1) coefficient from the lag-1 correlation of first differences: phi = 1 + 2·rho_Δ."""
     dr = np.diff(r)
     if dr.size < 3:
         return 0.0
-    return _clip_phi(1.0 + 2.0 * _acf1(dr))
+    return clip_phi(1.0 + 2.0 * acf1(dr))
 
 
 def noise_lag1(z, force, z_surf: float, *, margin: float = 0.05) -> float | None:
@@ -129,7 +134,7 @@ def noise_lag1(z, force, z_surf: float, *, margin: float = 0.05) -> float | None
     margin
         Fraction of the contact depth kept clear above the surface.
     """
-    z, f = _arrays(z, force)
+    z, f = validated_arrays(z, force)
     dmax = max(z_surf - float(z.min()), 0.0)
     sel = z > z_surf + margin * dmax
     if sel.sum() < 32:
@@ -137,10 +142,12 @@ def noise_lag1(z, force, z_surf: float, *, margin: float = 0.05) -> float | None
     y = f[sel]
     t = np.arange(y.size, dtype=float)
     y = y - np.polyval(np.polyfit(t, y, 1), t)
-    return _clip_phi(_acf1(y))
+    return clip_phi(acf1(y))
 
 
-def _design(z, dp_term, baseline: str, z_ref: float) -> np.ndarray:
+def design_matrix(z, dp_term, baseline: str, z_ref: float) -> np.ndarray:
+    """Columns of a linear contact fit: the contact term ``dp_term``, a constant and, for a
+    ``'linear'`` baseline, z - z_ref."""
     cols = [dp_term, np.ones_like(z)]
     if baseline == "linear":
         cols.append(z - z_ref)
@@ -159,7 +166,7 @@ def _tdot(J: np.ndarray, r: np.ndarray) -> np.ndarray:
     return np.einsum("ij,i->j", J, r)
 
 
-def _lstsq(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def lstsq(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Linear least squares (scaled normal equations; few columns); (coefficients, residuals)."""
     scale = np.sqrt(np.einsum("ij,ij->j", X, X))
     scale[scale == 0] = 1.0
@@ -168,14 +175,14 @@ def _lstsq(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return beta, y - np.einsum("ij,j->i", X, beta)
 
 
-def _contact_inputs(z, force, z_surf: float, z_ref: float | None, no_contact: str
+def contact_inputs(z, force, z_surf: float, z_ref: float | None, no_contact: str
                     ) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Samples of a contact fit: validated ``z``, ``force``, the baseline's reference height
     (default the highest z) and the contact depth d_max = z_surf - min z [m].
 
     Raises :class:`FitError` with the message ``no_contact`` when d_max is not positive.
     """
-    z, f = _arrays(z, force)
+    z, f = validated_arrays(z, force)
     z_ref = float(z.max()) if z_ref is None else float(z_ref)
     dmax = z_surf - float(z.min())
     if not dmax > 0:
@@ -183,7 +190,7 @@ def _contact_inputs(z, force, z_surf: float, z_ref: float | None, no_contact: st
     return z, f, z_ref, dmax
 
 
-def _residual_cov(J: np.ndarray, r: np.ndarray, phi: float | None
+def residual_cov(J: np.ndarray, r: np.ndarray, phi: float | None
                   ) -> tuple[np.ndarray, float, float]:
     """Covariance of least-squares parameters from their Jacobian ``J`` and residuals ``r``.
 
@@ -204,7 +211,7 @@ def _cov(J: np.ndarray, s2: float, infl: float) -> np.ndarray:
     return cov * s2 * infl
 
 
-class _ShapeTable:
+class ShapeTable:
     """s(d) and ds/dd of a model tabulated on d_i = d_top·(i/N)², linearly interpolated.
 
     The exact shape function (e.g. Sneddon's sphere, solved by Halley iterations) is too slow
@@ -238,5 +245,5 @@ class _ShapeTable:
 
 
 def _long_run(phi: float | None) -> float:
-    phi = 0.0 if phi is None else _clip_phi(phi)
+    phi = 0.0 if phi is None else clip_phi(phi)
     return (1 + phi) / (1 - phi)

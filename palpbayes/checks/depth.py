@@ -14,21 +14,21 @@ from .core import (
     FINITE_THICKNESS,
     THRESHOLDS,
     CheckResult,
-    _contact_inputs,
-    _design,
-    _lstsq,
-    _residual_cov,
-    _ShapeTable,
+    ShapeTable,
+    contact_inputs,
+    design_matrix,
+    lstsq,
+    residual_cov,
 )
 
 
-def _profile_law_fit(z, f, model, z_surf0: float, half_width: float,
+def profile_law_fit(z, f, model, z_surf0: float, half_width: float,
                      baseline: str, z_ref: float, phi: float | None) -> dict:
     """F = E*·s(z_surf - z) + F0 (+F1·(z - z_ref)): Brent over z_surf, E*/F0/F1 linear."""
     def fit_at(zs):
         s = model.shape(zs - z)
-        X = _design(z, s, baseline, z_ref)
-        beta, r = _lstsq(X, f)
+        X = design_matrix(z, s, baseline, z_ref)
+        beta, r = lstsq(X, f)
         return beta, r, X
 
     def rss(zs):
@@ -41,7 +41,7 @@ def _profile_law_fit(z, f, model, z_surf0: float, half_width: float,
     beta, r, X = fit_at(zs)
     dsdz = model.shape_derivative(zs - z)
     J = np.column_stack([beta[0] * dsdz, X])
-    cov, rs, _ = _residual_cov(J, r, phi)
+    cov, rs, _ = residual_cov(J, r, phi)
     return {"z_surf": zs, "estar": float(beta[0]), "estar_se": math.sqrt(max(cov[1, 1], 0.0)),
             "F0": float(beta[1]), "F1": float(beta[2]) if beta.size > 2 else 0.0, "rss": rs,
             "n": int(f.size)}
@@ -61,7 +61,7 @@ def _deep_window(z, f, table, full: dict, d_half: float, baseline: str, z_ref: f
     fd = f[sel] - (full["F1"] * (z[sel] - z_ref) if baseline == "linear" else 0.0)
     hw = 0.5 * d_half
     try:
-        deep = _profile_law_fit(z[sel], fd, table, full["z_surf"], hw, "constant", z_ref, phi)
+        deep = profile_law_fit(z[sel], fd, table, full["z_surf"], hw, "constant", z_ref, phi)
     except (FitError, np.linalg.LinAlgError):
         return float("nan"), float("nan")
     if abs(deep["z_surf"] - full["z_surf"]) > 0.99 * hw:  # at its search bound: no optimum
@@ -112,16 +112,16 @@ def depth_consistency_check(z, force, model: ModelSpec, z_surf: float, *,
         :mod:`palpbayes.bayes.modelform`), ``ratio``, ``ratio_se``, ``z_surf_all``,
         ``z_surf_shallow``, ``d_half`` [m].
     """
-    z, f, z_ref, dmax = _contact_inputs(z, force, z_surf, z_ref,
+    z, f, z_ref, dmax = contact_inputs(z, force, z_surf, z_ref,
                                         "the surface lies below every sample: no contact to check")
     hw = 0.25 * dmax
-    table = _ShapeTable(model, 1.5 * dmax)
-    full = _profile_law_fit(z, f, table, z_surf, hw, baseline, z_ref, noise_lag1)
+    table = ShapeTable(model, 1.5 * dmax)
+    full = profile_law_fit(z, f, table, z_surf, hw, baseline, z_ref, noise_lag1)
     d_half = 0.5 * (full["z_surf"] - float(z.min()))
     sel = z >= full["z_surf"] - d_half
     if np.count_nonzero(sel & (z < full["z_surf"])) < 10:
         raise FitError("too few samples in the shallow half of the contact")
-    shallow = _profile_law_fit(z[sel], f[sel], table, full["z_surf"], 0.5 * d_half, baseline,
+    shallow = profile_law_fit(z[sel], f[sel], table, full["z_surf"], 0.5 * d_half, baseline,
                                z_ref, noise_lag1)
     estar_deep, estar_deep_se = _deep_window(z, f, table, full, d_half, baseline, z_ref,
                                              noise_lag1)

@@ -38,8 +38,8 @@ import numpy as np
 
 from ..errors import FitError
 from ..fitdata import ModelSpec
-from .core import CheckResult, _ShapeTable
-from .depth import _profile_law_fit
+from .core import CheckResult, ShapeTable
+from .depth import profile_law_fit
 
 __all__ = ["EFFECT_REL", "SEVERITIES", "grade_checks", "free_exponent_effect", "material",
            "checks_summary"]
@@ -71,7 +71,7 @@ def free_exponent_effect(check: CheckResult, z, model: ModelSpec, z_surf: float,
     d_mean = float(np.mean(depth))
     z_bar = z_surf - d_mean
     d_free = max(float(d["z_surf_free"]) - z_bar, 0.0)
-    s = float(_ShapeTable(model, 1.5 * float(depth.max())).shape(np.array([d_mean]))[0])
+    s = float(ShapeTable(model, 1.5 * float(depth.max())).shape(np.array([d_mean]))[0])
     if not s > 0:
         return float("nan")
     contact = (float(d["k"]) * d_free ** float(d["m"]) + float(d["F0"])
@@ -86,9 +86,9 @@ def _baseline_effect(z, f, model: ModelSpec, z_surf: float, z_ref: float,
     dmax = z_surf - float(z.min())
     if not dmax > 0:
         return float("nan")
-    table = _ShapeTable(model, 1.5 * dmax)
-    const = _profile_law_fit(z, f, table, z_surf, 0.25 * dmax, "constant", z_ref, phi)
-    line = _profile_law_fit(z, f, table, z_surf, 0.25 * dmax, "linear", z_ref, phi)
+    table = ShapeTable(model, 1.5 * dmax)
+    const = profile_law_fit(z, f, table, z_surf, 0.25 * dmax, "constant", z_ref, phi)
+    line = profile_law_fit(z, f, table, z_surf, 0.25 * dmax, "linear", z_ref, phi)
     return line["estar"] / const["estar"] - 1.0 if const["estar"] > 0 else float("nan")
 
 

@@ -15,11 +15,11 @@ from .core import (
     FINITE_THICKNESS,
     THRESHOLDS,
     CheckResult,
-    _arrays,
-    _contact_inputs,
-    _design,
-    _lstsq,
-    _residual_cov,
+    contact_inputs,
+    design_matrix,
+    lstsq,
+    residual_cov,
+    validated_arrays,
 )
 
 #: scipy.optimize.least_squares settings of the free-exponent fit: tight enough to recover a
@@ -100,7 +100,7 @@ def free_exponent_fit(z, force, z_surf0: float, *, baseline: str = "constant",
         [N/m] (0 for a constant baseline), ``rss`` [N²], ``s`` [N] residual sd, ``n``,
         ``residuals`` [N], ``success``.
     """
-    z, f, z_ref, dmax = _contact_inputs(
+    z, f, z_ref, dmax = contact_inputs(
         z, force, z_surf0, z_ref, "the starting surface lies below every sample: no contact to fit")
     linear = baseline == "linear"
     zn = (z - z_ref) / dmax  # scaled baseline regressor
@@ -130,7 +130,7 @@ def free_exponent_fit(z, force, z_surf0: float, *, baseline: str = "constant",
 
     m_start = float(np.clip(m0, m_bounds[0] + 1e-6, m_bounds[1] - 1e-6))
     _, pw0 = parts([0.0, m_start])
-    beta0 = _lstsq(_design(zn, pw0, baseline, 0.0), y)[0]
+    beta0 = lstsq(design_matrix(zn, pw0, baseline, 0.0), y)[0]
     p0 = [0.0, m_start, beta0[0], beta0[1]] + ([beta0[2]] if linear else [])
 
     def resid_fn(q):
@@ -149,7 +149,7 @@ def free_exponent_fit(z, force, z_surf0: float, *, baseline: str = "constant",
     p = np.append(x, 0.0) if not linear else x
     r = -resid(p) * fscale
     J = jac_fn(x) * fscale
-    cov, rss, s2 = _residual_cov(J, r, noise_lag1)
+    cov, rss, s2 = residual_cov(J, r, noise_lag1)
     m = float(p[1])
     return {
         "m": m, "m_se": float(math.sqrt(max(cov[1, 1], 0.0))),
@@ -202,7 +202,7 @@ def exponent_check(z, force, model: ModelSpec, z_surf: float, *, baseline: str =
         ``statistic`` = free m; ``details``: ``m``, ``m_se``, ``m_law``, ``delta_m``,
         ``z_surf_free`` [m], ``k``, ``F0`` [N], ``rel_tol``, ``n_se``.
     """
-    z, f = _arrays(z, force)
+    z, f = validated_arrays(z, force)
     m_nom = model.exponent
     fit = free_exponent_fit(z, f, z_surf, baseline=baseline, z_ref=z_ref,
                             m0=m_nom if m_nom is not None else 1.5, noise_lag1=noise_lag1)

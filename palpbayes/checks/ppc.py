@@ -9,7 +9,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from ..errors import InputError
-from .core import THRESHOLDS, CheckResult, _arrays, _clip_phi
+from .core import THRESHOLDS, CheckResult, clip_phi, validated_arrays
 from .residuals import binned_residuals
 
 
@@ -53,7 +53,7 @@ def posterior_predictive_check(z, force, mean_curves, sigmas, *, phi=None,
         ``statistic`` = p; ``details``: ``p``, ``T_obs_median``, ``T_rep_median``,
         ``n_draws``, ``dof``.
     """
-    z, y = _arrays(z, force)
+    z, y = validated_arrays(z, force)
     mu = np.atleast_2d(np.asarray(mean_curves, dtype=float))
     if mu.shape[1] != y.size:
         raise InputError(f"mean_curves has {mu.shape[1]} columns for {y.size} samples")
@@ -68,7 +68,7 @@ def posterior_predictive_check(z, force, mean_curves, sigmas, *, phi=None,
     w = gen.standard_normal((nd, n))
     e = np.empty_like(w)
     for i in range(nd):
-        p_i = _clip_phi(ph[i])
+        p_i = clip_phi(ph[i])
         if p_i == 0:
             e[i] = sig[i] * w[i]
         else:

@@ -10,14 +10,14 @@ from scipy import stats
 
 from ..errors import FitError, InputError
 from .core import (
-    _MIN_BIN,
+    MIN_BIN,
     THRESHOLDS,
     CheckResult,
-    _acf1,
-    _arrays,
-    _clip_phi,
-    _phi_from_differences,
+    acf1,
     ar1_mean_variance_factor,
+    clip_phi,
+    phi_from_differences,
+    validated_arrays,
 )
 
 
@@ -32,10 +32,10 @@ def _bin_labels(z: np.ndarray, z_surf: float | None, n_bins: int,
     labels = np.empty(n, dtype=np.intp)
     idx_c = np.flatnonzero(contact)
     idx_p = np.flatnonzero(~contact)
-    nb_c = int(min(n_bins, idx_c.size // _MIN_BIN))
+    nb_c = int(min(n_bins, idx_c.size // MIN_BIN))
     if n_pre_bins is None:
         n_pre_bins = max(2, n_bins // 2)
-    nb_p = int(min(n_pre_bins, idx_p.size // _MIN_BIN))
+    nb_p = int(min(n_pre_bins, idx_p.size // MIN_BIN))
     if nb_c < 1:
         raise FitError("too few contact samples for binned residuals")
     off = 0
@@ -218,16 +218,16 @@ def residual_structure_check(z, residuals, z_surf: float, sigma: float, *,
         ``phi``, ``phi_source``, ``durbin_watson``, ``lag1``, ``chi2_pre``, ``chi2_contact``,
         ``pattern``, ``bin_depth`` [m], ``bin_mean`` [N], ``bin_sd`` [N], ``bin_count``.
     """
-    z, r = _arrays(z, residuals)
+    z, r = validated_arrays(z, residuals)
     sigma = float(sigma)
     if not sigma > 0:
         raise InputError(f"sigma must be positive, got {sigma!r}")
     order = np.argsort(z_surf - z, kind="stable")
     rd = r[order]
     if baseline_lag1 is None:
-        phi, source = _phi_from_differences(r), "residual differences"
+        phi, source = phi_from_differences(r), "residual differences"
     else:
-        phi, source = _clip_phi(float(baseline_lag1)), "given"
+        phi, source = clip_phi(float(baseline_lag1)), "given"
     b = binned_residuals(z, r, z_surf, sigma, phi=phi, n_bins=n_bins, n_pre_bins=n_pre_bins)
     chi2, dof = float(b["chi2"]), int(b["dof"])
     p = float(stats.chi2.sf(chi2, dof))
@@ -238,7 +238,7 @@ def residual_structure_check(z, residuals, z_surf: float, sigma: float, *,
     pre = ~b["contact"]
     zb2 = (b["means"] / b["sd"]) ** 2
     details = {"chi2": chi2, "dof": dof, "p": p, "max_abs_bin_sigma": amp, "phi": phi,
-               "phi_source": source, "durbin_watson": dw, "lag1": _acf1(rd),
+               "phi_source": source, "durbin_watson": dw, "lag1": acf1(rd),
                "chi2_pre": float(np.sum(zb2[pre])), "chi2_contact": float(np.sum(zb2[~pre])),
                "pattern": pattern, "pattern_scores": scores, "bin_depth": b["depth"],
                "bin_mean": b["means"],

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
-from .core import CheckResult, _arrays, _ShapeTable, noise_lag1
+from .core import CheckResult, ShapeTable, noise_lag1, validated_arrays
 from .depth import depth_consistency_check
 from .effect import grade_checks
 from .exponent import exponent_check
@@ -64,7 +64,7 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
         (:func:`~palpbayes.checks.effect.grade_checks`: its effect on E and severity; the
         statistical interval is the draws' 90 % interval of E*, else 1.645 se).
     """
-    z, f = _arrays(z, force)
+    z, f = validated_arrays(z, force)
     z_ref = float(z.max()) if z_ref is None else float(z_ref)
     if baseline is None:
         baseline = "linear" if (f1 != 0 or (draws is not None and "F1" in draws)) else "constant"
@@ -92,7 +92,7 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
                      for k in ("thickness", "bonded")}
             s = model.shape_of_draws(depth, **layer)
         else:
-            s = _ShapeTable(model, 1.5 * (float(np.max(zs[keep])) - float(z.min()))).shape(depth)
+            s = ShapeTable(model, 1.5 * (float(np.max(zs[keep])) - float(z.min()))).shape(depth)
         curves = (es[keep, None] * s + f0s[keep, None] + f1s[keep, None] * (z - z_ref)[None, :])
         sig = np.asarray(draws["sigma"], dtype=float)[keep]
         ph = np.asarray(draws["phi"], dtype=float)[keep] if "phi" in draws else None

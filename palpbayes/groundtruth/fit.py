@@ -49,8 +49,8 @@ import numpy as np
 from ..errors import DataFileError, FitError
 from ..io.instron import CompressionTest
 from ..units import format_pressure
-from .hac import _acf1, _linfit, hac_slope_se
-from .window import DEFAULT_STRAIN_WINDOW, _check_window
+from .hac import acf1, hac_slope_se, linfit
+from .window import DEFAULT_STRAIN_WINDOW, check_strain_window
 
 __all__ = ["MIN_POINTS", "PER_FILE_COLUMNS", "GroundTruthFit", "fit_modulus"]
 
@@ -159,7 +159,7 @@ def fit_modulus(
     InputError
         An invalid window.
     """
-    lo, hi = _check_window(strain_window)
+    lo, hi = check_strain_window(strain_window)
     where = test.source or f"compression test {test.specimen!r}"
     eps_all, sig_all = test.strain, test.stress_pa
     k = int(np.argmax(eps_all))  # loading branch only
@@ -182,7 +182,7 @@ def fit_modulus(
                 f"{_pct(lo)}-{_pct(hi)}, toe offset {_pct(eps0)}); at least {MIN_POINTS} "
                 "are needed", "use a wider strain window or check the units and the geometry",
             )
-        slope, intercept, se, r2, resid = _linfit(eps[mask], sig[mask])
+        slope, intercept, se, r2, resid = linfit(eps[mask], sig[mask])
         if not (math.isfinite(slope) and slope > 0):
             raise DataFileError(
                 where, f"the load does not rise with compression between {_pct(shift + start)} "
@@ -212,7 +212,7 @@ def fit_modulus(
         strain_toe=float(eps0), r2=float(r2), n_points=n,
         file=test.source, specimen=test.specimen, material=test.material,
         window_lo=lo, window_hi=hi, toe_compensation=bool(toe_compensation),
-        skip_toe=bool(skip_toe), E_ols_sd_pa=float(se), resid_acf1=_acf1(resid),
+        skip_toe=bool(skip_toe), E_ols_sd_pa=float(se), resid_acf1=acf1(resid),
         hac_lags=int(lags),
     )
 

@@ -1,6 +1,6 @@
 """The straight line of a ground-truth fit and the standard error of its slope.
 
-:func:`_linfit` is ordinary least squares (slope, intercept, OLS standard error, R²);
+:func:`linfit` is ordinary least squares (slope, intercept, OLS standard error, R²);
 :func:`hac_slope_se` the heteroskedasticity- and autocorrelation-consistent (HAC) standard error
 that :mod:`palpbayes.groundtruth.fit` reports as ``E_sd_pa``.
 
@@ -53,7 +53,7 @@ import math
 
 import numpy as np
 
-__all__ = ["hac_slope_se"]
+__all__ = ["hac_slope_se", "acf1", "linfit"]
 
 #: Bound on the AR(1) prewhitening coefficient and the bandwidth's autocorrelation.
 _RHO_MAX = 0.97
@@ -69,7 +69,7 @@ def _lag1(a: np.ndarray) -> float:
     return float(a[1:] @ a[:-1]) / den if den > 0 else 0.0
 
 
-def _acf1(u: np.ndarray) -> float:
+def acf1(u: np.ndarray) -> float:
     """Lag-1 sample autocorrelation sum u_t u_(t-1) / sum u_t² of a mean-zero series."""
     u = u - u.mean()
     den = float(u @ u)
@@ -118,7 +118,7 @@ def hac_slope_se(x: np.ndarray, resid: np.ndarray) -> tuple[float, int]:
     return math.sqrt(s * n / (n - 2)) / sxx, lags
 
 
-def _linfit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float, np.ndarray]:
+def linfit(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float, np.ndarray]:
     """Slope, intercept, OLS slope standard error, R² and residuals of a least-squares line."""
     n = x.size
     xm, ym = x.mean(), y.mean()

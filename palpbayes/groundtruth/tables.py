@@ -60,7 +60,7 @@ from ..errors import FitError, InputError
 from ..io.groundtruth_inputs import collect_tests
 from ..io.instron import CompressionTest
 from .fit import PER_FILE_COLUMNS, GroundTruthFit, fit_modulus
-from .window import DEFAULT_STRAIN_WINDOW, _check_window, describe_rule, sensitivity_windows
+from .window import DEFAULT_STRAIN_WINDOW, check_strain_window, describe_rule, sensitivity_windows
 
 __all__ = ["SUMMARY_COLUMNS", "analyse", "summarise"]
 
@@ -108,7 +108,7 @@ def summarise(per_file: pd.DataFrame,
         of each test's window spread [Pa]; ``rule`` (:func:`describe_rule`).  Groups are in
         order of first appearance.
     """
-    lo, hi = _check_window(strain_window)
+    lo, hi = check_strain_window(strain_window)
     per_file = per_file.copy()
     for col in _EXTRA_COLUMNS:
         if col not in per_file:
@@ -201,7 +201,7 @@ def analyse(
     summary : pandas.DataFrame
         One row per material, :data:`SUMMARY_COLUMNS` (see :func:`summarise`).
     """
-    window = _check_window(strain_window)
+    window = check_strain_window(strain_window)
     tests = collect_tests(paths_or_tests, area_m2=area_m2, height_m=height_m)
     rows = []
     for test in tests:

@@ -18,13 +18,16 @@ from numpy.typing import ArrayLike
 
 from ..errors import InputError
 
-__all__ = ["DEFAULT_STRAIN_WINDOW", "sensitivity_windows", "describe_rule", "toe_compression"]
+__all__ = ["DEFAULT_STRAIN_WINDOW", "sensitivity_windows", "describe_rule", "toe_compression",
+           "check_strain_window"]
 
 #: Default fit window [-] in toe-compensated engineering strain (0-5 %).
 DEFAULT_STRAIN_WINDOW: tuple[float, float] = (0.0, 0.05)
 
 
-def _check_window(strain_window: Sequence[float]) -> tuple[float, float]:
+def check_strain_window(strain_window: Sequence[float]) -> tuple[float, float]:
+    """``strain_window`` as (lo, hi) fractions of the height; :class:`InputError` unless
+    0 <= lo < hi <= 1 (a window above 1 was probably given in percent)."""
     try:
         lo, hi = (float(v) for v in strain_window)
     except (TypeError, ValueError):
@@ -46,7 +49,7 @@ def sensitivity_windows(
     For a window [lo, hi] of width w: [lo, lo + 0.6·w] (shorter), [lo, hi] (the window) and
     [lo + 0.2·w, hi + 0.2·w] (shifted up); 0-3 %, 0-5 % and 1-6 % for the default 0-5 %.
     """
-    lo, hi = _check_window(strain_window)
+    lo, hi = check_strain_window(strain_window)
     w = hi - lo
     return ((lo, round(lo + 0.6 * w, 12)), (lo, hi),
             (round(lo + 0.2 * w, 12), round(hi + 0.2 * w, 12)))
@@ -59,7 +62,7 @@ def _pct_range(window: Sequence[float]) -> str:
 def describe_rule(strain_window: Sequence[float] = DEFAULT_STRAIN_WINDOW,
                   toe_compensation: bool = True, skip_toe: bool = False) -> str:
     """One line naming the rule behind the ``E_*`` columns (written to the summary's ``rule``)."""
-    window = _check_window(strain_window)
+    window = check_strain_window(strain_window)
     if toe_compensation:
         origin = ("strain measured from the toe offset (zero-point construction of ASTM D638 "
                   "Annex A1)")

@@ -17,7 +17,7 @@ import pandas as pd
 
 from ..contact import Tip
 from ..errors import DataFileError, InputError
-from ..kinematics import UR3E, DHParameters, _as_offset, tip_z
+from ..kinematics import UR3E, DHParameters, as_offset, tip_z
 from ..trace import IndentationTrace
 from .tabular import (
     check_plausible,
@@ -103,7 +103,7 @@ def trace_from_joint_frame(
     if unknown:
         raise InputError(f"unknown quantity {sorted(unknown)} in units; use time, q and force")
     sign = validate_force_sign(force_sign, allow_auto=False)
-    offset = _as_offset(tool_offset)
+    offset = as_offset(tool_offset)
     if df.shape[0] == 0:
         raise DataFileError(source, "no data rows (header only or empty)",
                             "check that the recording was saved")

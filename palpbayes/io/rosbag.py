@@ -53,7 +53,7 @@ import numpy as np
 
 from ..contact import Tip
 from ..errors import DataFileError, InputError
-from ..kinematics import UR3E, DHParameters, _as_offset, tip_z
+from ..kinematics import UR3E, DHParameters, as_offset, tip_z
 from ..trace import IndentationTrace
 from .bagfile import (
     FORCE_TYPE,
@@ -336,7 +336,7 @@ def read_bag(
     if not (np.isfinite(time_offset) and np.isfinite(max_gap) and max_gap > 1):
         raise InputError(f"time_offset {time_offset!r} must be finite and max_gap "
                          f"{max_gap!r} a number above 1")
-    offset = _as_offset(tool_offset)
+    offset = as_offset(tool_offset)
     path = Path(path)
     source = str(path)
     with open_bag(path) as reader:

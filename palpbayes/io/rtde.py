@@ -44,7 +44,7 @@ import pandas as pd
 
 from ..contact import Tip
 from ..errors import DataFileError, InputError
-from ..kinematics import UR3E, DHParameters, _as_offset, tip_z
+from ..kinematics import UR3E, DHParameters, as_offset, tip_z
 from ..trace import IndentationTrace
 from .tabular import (
     auto_force_sign,
@@ -190,7 +190,7 @@ def read_rtde(
     sign = validate_force_sign(force_sign, allow_auto=True)
     if force_axis not in (0, 1, 2):
         raise InputError(f"force_axis must be 0, 1 or 2 (Fx, Fy, Fz), got {force_axis!r}")
-    offset = _as_offset(tool_offset)
+    offset = as_offset(tool_offset)
 
     df, source = read_table(path, delimiter)
     force_col = RTDE_TCP_FORCE_COLUMNS[force_axis]

@@ -9,13 +9,13 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .style import _EXTRA_COLORS, INPUT_COLORS, _fig_ax
+from .style import EXTRA_COLORS, INPUT_COLORS, fig_ax
 
 __all__ = ["plot_budget"]
 
 
 def _input_color(name: str, i: int) -> str:
-    return INPUT_COLORS.get(name, _EXTRA_COLORS[i % len(_EXTRA_COLORS)])
+    return INPUT_COLORS.get(name, EXTRA_COLORS[i % len(EXTRA_COLORS)])
 
 
 def plot_budget(table: pd.DataFrame, *, ax: Axes | None = None,
@@ -44,7 +44,7 @@ def plot_budget(table: pd.DataFrame, *, ax: Axes | None = None,
         group = [group]
     inputs = list(dict.fromkeys(table["input"]))
     if not group:
-        fig, ax = _fig_ax(ax, (6.0, 0.45 * len(inputs) + 1.2))
+        fig, ax = fig_ax(ax, (6.0, 0.45 * len(inputs) + 1.2))
         t = table.set_index("input").loc[inputs]
         y = np.arange(len(inputs))[::-1]
         colors = [_input_color(n, i) for i, n in enumerate(inputs)]
@@ -61,7 +61,7 @@ def plot_budget(table: pd.DataFrame, *, ax: Axes | None = None,
         tab = table.groupby([*group, "input"], sort=False)["share_pct"].mean().unstack("input")
         tab = tab.reindex(columns=inputs).fillna(0.0)
         labels = [" / ".join(map(str, k if isinstance(k, tuple) else (k,))) for k in tab.index]
-        fig, ax = _fig_ax(ax, (8.0, 0.35 * len(labels) + 1.6))
+        fig, ax = fig_ax(ax, (8.0, 0.35 * len(labels) + 1.6))
         y = np.arange(len(labels))[::-1]
         left = np.zeros(len(labels))
         for i, name in enumerate(inputs):

@@ -13,7 +13,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from ..campaign.results import MATERIAL_ORDER, TIP_ORDER, ordered
-from .style import _KPA, METHOD_COLORS, METHOD_LABELS, _fig_ax
+from .style import KPA, METHOD_COLORS, METHOD_LABELS, fig_ax
 
 __all__ = ["plot_comparison", "plot_forest"]
 
@@ -51,7 +51,7 @@ def plot_comparison(
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = _fig_ax(ax, (10.0, 4.5))
+    fig, ax = fig_ax(ax, (10.0, 4.5))
     df = comparison.copy()
     materials = ordered(df["material"], MATERIAL_ORDER)
     tips = ordered(df["tip"], TIP_ORDER)
@@ -64,8 +64,8 @@ def plot_comparison(
         group_tips = [t for t in tips if t in set(sub["tip"])]
         lo_x, hi_x = x0 - 0.5, x0 + len(group_tips) - 0.5
         if "gt_E_pa" in sub and sub["gt_E_pa"].notna().any():
-            gt = float(sub["gt_E_pa"].dropna().iloc[0]) * _KPA
-            sd = float(sub["gt_sd_pa"].dropna().iloc[0]) * _KPA if "gt_sd_pa" in sub and \
+            gt = float(sub["gt_E_pa"].dropna().iloc[0]) * KPA
+            sd = float(sub["gt_sd_pa"].dropna().iloc[0]) * KPA if "gt_sd_pa" in sub and \
                 sub["gt_sd_pa"].notna().any() else 0.0
             ax.fill_between([lo_x, hi_x], gt - sd, gt + sd, color="0.88", lw=0, zorder=0)
             ax.hlines(gt, lo_x, hi_x, color=METHOD_COLORS["gt"], lw=1.2, zorder=1)
@@ -82,8 +82,8 @@ def plot_comparison(
                     row = sub[sub["tip"] == tip]
                     if row.empty or not np.isfinite(row["paper_E_pa"].astype(float)).any():
                         continue
-                    pe = float(row["paper_E_pa"].dropna().iloc[0]) * _KPA
-                    ps = float(row["paper_sd_pa"].dropna().iloc[0]) * _KPA \
+                    pe = float(row["paper_E_pa"].dropna().iloc[0]) * KPA
+                    ps = float(row["paper_sd_pa"].dropna().iloc[0]) * KPA \
                         if "paper_sd_pa" in row and row["paper_sd_pa"].notna().any() else 0.0
                     ax.errorbar([xm], [pe], yerr=[ps], fmt="D", ms=4, color=color,
                                 capsize=2, lw=1.0, mfc="white")
@@ -94,13 +94,13 @@ def plot_comparison(
                 if row.empty:
                     continue
                 r = row.iloc[0]
-                e = r["E_pa"] * _KPA
+                e = r["E_pa"] * KPA
                 if show_new and "E_new_lo_pa" in r and np.isfinite(r["E_new_lo_pa"]):
-                    ax.vlines(xm, r["E_new_lo_pa"] * _KPA, r["E_new_hi_pa"] * _KPA,
+                    ax.vlines(xm, r["E_new_lo_pa"] * KPA, r["E_new_hi_pa"] * KPA,
                               color=color, lw=1.0, zorder=2)
                     handles["new"] = (Line2D([], [], color="0.3", lw=1.0),
                                       "thin: 90 % interval for a new specimen")
-                ax.vlines(xm, r["E_lo_pa"] * _KPA, r["E_hi_pa"] * _KPA, color=color, lw=3.0,
+                ax.vlines(xm, r["E_lo_pa"] * KPA, r["E_hi_pa"] * KPA, color=color, lw=3.0,
                           zorder=3)
                 ax.plot([xm], [e], "o", ms=4.5, color=color, mec="white", mew=0.6, zorder=4)
                 handles[m] = (Line2D([], [], color=color, lw=3.0, marker="o", ms=4.5,
@@ -153,13 +153,13 @@ def plot_forest(
     matplotlib.figure.Figure
     """
     ids = list(dict.fromkeys(summary["trace_id"]))
-    fig, ax = _fig_ax(ax, (5.0, 0.4 * len(ids) + 1.8))
+    fig, ax = fig_ax(ax, (5.0, 0.4 * len(ids) + 1.8))
     n = len(ids)
     ypos = {tid: n + 1 - i for i, tid in enumerate(ids)}  # pooled rows at the bottom
     off = {m: (k - (len(methods) - 1) / 2) * 0.22 for k, m in enumerate(methods)}
     seen = set()
     if gt is not None and np.isfinite(gt[0]):
-        g, s = gt[0] * _KPA, (gt[1] if np.isfinite(gt[1]) else 0.0) * _KPA
+        g, s = gt[0] * KPA, (gt[1] if np.isfinite(gt[1]) else 0.0) * KPA
         ax.axvspan(g - s, g + s, color="0.88", lw=0, zorder=0)
         ax.axvline(g, color=METHOD_COLORS["gt"], lw=1.2, zorder=1,
                    label="Instron GT, mean ± sd")
@@ -169,22 +169,22 @@ def plot_forest(
             continue
         y = ypos[r["trace_id"]] + off[m]
         c = METHOD_COLORS.get(m, "k")
-        ax.hlines(y, r["E_lo_pa"] * _KPA, r["E_hi_pa"] * _KPA, color=c, lw=2.0)
+        ax.hlines(y, r["E_lo_pa"] * KPA, r["E_hi_pa"] * KPA, color=c, lw=2.0)
         lab = None if m in seen else f"{METHOD_LABELS.get(m, m)}, per trace"
         seen.add(m)
-        ax.plot([r["E_pa"] * _KPA], [y], "o", ms=4, color=c, mec="white", mew=0.5, label=lab)
+        ax.plot([r["E_pa"] * KPA], [y], "o", ms=4, color=c, mec="white", mew=0.5, label=lab)
     labels = {v: k for k, v in ypos.items()}
     if pooled is not None:
         p = pd.Series(pooled)
         c = METHOD_COLORS["bayes"]
-        ax.hlines(0.9, p["E_lo_pa"] * _KPA, p["E_hi_pa"] * _KPA, color=c, lw=3.0)
-        ax.plot([p["E_pa"] * _KPA], [0.9], "D", ms=6, color=c, mec="white",
+        ax.hlines(0.9, p["E_lo_pa"] * KPA, p["E_hi_pa"] * KPA, color=c, lw=3.0)
+        ax.plot([p["E_pa"] * KPA], [0.9], "D", ms=6, color=c, mec="white",
                 label="pooled: material")
         labels[0.9] = "pooled mean"
         if "E_new_lo_pa" in p and np.isfinite(p["E_new_lo_pa"]):
             cn = METHOD_COLORS["pooled"]
-            ax.hlines(0.2, p["E_new_lo_pa"] * _KPA, p["E_new_hi_pa"] * _KPA, color=cn, lw=3.0)
-            ax.plot([p.get("E_new_pa", p["E_pa"]) * _KPA], [0.2], "D", ms=6, color=cn,
+            ax.hlines(0.2, p["E_new_lo_pa"] * KPA, p["E_new_hi_pa"] * KPA, color=cn, lw=3.0)
+            ax.plot([p.get("E_new_pa", p["E_pa"]) * KPA], [0.2], "D", ms=6, color=cn,
                     mec="white", label="pooled: new spec.")
             labels[0.2] = "new specimen"
         ax.axhline(1.5, color="0.7", lw=0.6)

@@ -11,7 +11,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from ..campaign.results import MATERIAL_ORDER, TIP_ORDER, ordered
-from .style import _KPA, METHOD_COLORS, METHOD_LABELS, _fig_ax
+from .style import KPA, METHOD_COLORS, METHOD_LABELS, fig_ax
 
 __all__ = ["plot_gap", "plot_halfspace_vs_layer"]
 
@@ -33,7 +33,7 @@ def plot_gap(gap: pd.DataFrame, *, ax: Axes | None = None) -> Figure:
     ax
         Axes to draw on (default: a new 9 × 4 in figure).
     """
-    fig, ax = _fig_ax(ax, (9.0, 4.0))
+    fig, ax = fig_ax(ax, (9.0, 4.0))
     tips = ordered(gap["tip"], TIP_ORDER)
     mats = ordered(gap["material"], MATERIAL_ORDER)
     xt, xl = [], []
@@ -84,7 +84,7 @@ def plot_halfspace_vs_layer(comparison: pd.DataFrame, *, ax: Axes | None = None)
     ax
         Axes to draw on (default: a new 10 × 4.5 in figure).
     """
-    fig, ax = _fig_ax(ax, (10.0, 4.5))
+    fig, ax = fig_ax(ax, (10.0, 4.5))
     mats = ordered(comparison["material"], MATERIAL_ORDER)
     tips = ordered(comparison["tip"], TIP_ORDER)
     xt, xl = [], []
@@ -93,8 +93,8 @@ def plot_halfspace_vs_layer(comparison: pd.DataFrame, *, ax: Axes | None = None)
         sub = comparison[comparison["material"] == mat]
         group = [t for t in tips if t in set(sub["tip"])]
         if "gt_E_pa" in sub and sub["gt_E_pa"].notna().any():
-            gt = float(sub["gt_E_pa"].dropna().iloc[0]) * _KPA
-            sd = float(sub["gt_sd_pa"].fillna(0).iloc[0]) * _KPA if "gt_sd_pa" in sub else 0.0
+            gt = float(sub["gt_E_pa"].dropna().iloc[0]) * KPA
+            sd = float(sub["gt_sd_pa"].fillna(0).iloc[0]) * KPA if "gt_sd_pa" in sub else 0.0
             ax.fill_between([x - 0.5, x + len(group) - 0.5], gt - sd, gt + sd, color="0.88",
                             lw=0, zorder=0)
             ax.hlines(gt, x - 0.5, x + len(group) - 0.5, color=METHOD_COLORS["gt"], lw=1.2)
@@ -102,15 +102,15 @@ def plot_halfspace_vs_layer(comparison: pd.DataFrame, *, ax: Axes | None = None)
             g = sub[sub["tip"] == tip].set_index("method")
             if "lsq" in g.index:
                 r = g.loc["lsq"]
-                ax.plot([x - 0.2], [r["E_pa"] * _KPA], "s", ms=5, color=METHOD_COLORS["lsq"])
+                ax.plot([x - 0.2], [r["E_pa"] * KPA], "s", ms=5, color=METHOD_COLORS["lsq"])
                 alt = [r.get(c, np.nan) for c in ("E_free_pa", "E_bonded_pa")]
                 if np.all(np.isfinite(alt)):
-                    ax.vlines(x - 0.05, min(alt) * _KPA, max(alt) * _KPA, color=_LAYER, lw=4)
+                    ax.vlines(x - 0.05, min(alt) * KPA, max(alt) * KPA, color=_LAYER, lw=4)
             if "bayes" in g.index:
                 r = g.loc["bayes"]
-                ax.errorbar([x + 0.15], [r["E_new_pa"] * _KPA],
-                            yerr=[[(r["E_new_pa"] - r["E_new_lo_pa"]) * _KPA],
-                                  [(r["E_new_hi_pa"] - r["E_new_pa"]) * _KPA]],
+                ax.errorbar([x + 0.15], [r["E_new_pa"] * KPA],
+                            yerr=[[(r["E_new_pa"] - r["E_new_lo_pa"]) * KPA],
+                                  [(r["E_new_hi_pa"] - r["E_new_pa"]) * KPA]],
                             fmt="o", ms=5, color=METHOD_COLORS["bayes"], capsize=3)
             xt.append(x)
             xl.append(f"{mat}\n{tip}")

@@ -14,18 +14,18 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .style import _KPA, _MM, METHOD_COLORS, _fig_ax
+from .style import KPA, METHOD_COLORS, MM, fig_ax
 
 __all__ = ["plot_map", "plot_map_panel", "plot_profile", "map_grid"]
 
 #: What each map panel shows: (node column, title, colour-bar label, colormap, scale).
 PANELS: dict[str, tuple[str, str, str, str, float]] = {
-    "mean": ("E_mean_pa", "stiffness: E, posterior mean", "E [kPa]", "viridis", _KPA),
+    "mean": ("E_mean_pa", "stiffness: E, posterior mean", "E [kPa]", "viridis", KPA),
     "uncertainty": ("E_rel_sd", "uncertainty: sd of E, % of E", "sd / mean [%]", "magma",
                     100.0),
     "probability": ("p_stiffer", "chance that E > k × the map median", "probability", "RdPu",
                     1.0),
-    "lsq": ("E_lsq_pa", "naive per-point least squares", "E [kPa]", "viridis", _KPA),
+    "lsq": ("E_lsq_pa", "naive per-point least squares", "E [kPa]", "viridis", KPA),
 }
 
 
@@ -38,7 +38,7 @@ def map_grid(nodes: pd.DataFrame, column: str) -> np.ndarray:
 
 
 def _extent(nodes: pd.DataFrame) -> tuple[float, float, float, float]:
-    x, y = nodes["x_m"].to_numpy() * _MM, nodes["y_m"].to_numpy() * _MM
+    x, y = nodes["x_m"].to_numpy() * MM, nodes["y_m"].to_numpy() * MM
     hx = 0.5 * (np.ptp(x) / max(int(nodes["ix"].max()), 1)) if np.ptp(x) > 0 else 0.5
     hy = 0.5 * (np.ptp(y) / max(int(nodes["iy"].max()), 1)) if np.ptp(y) > 0 else 0.5
     return (x.min() - hx, x.max() + hx, y.min() - hy, y.max() + hy)
@@ -49,12 +49,12 @@ def _mark_lump(ax: Axes, lump: Mapping[str, tuple[float, float, float]] | None) 
     if not lump:
         return
     (cx, xlo, xhi), (cy, ylo, yhi) = lump["x_m"], lump["y_m"]
-    err = {"xerr": [[(cx - xlo) * _MM], [(xhi - cx) * _MM]],
-           "yerr": [[(cy - ylo) * _MM], [(yhi - cy) * _MM]], "fmt": "+"}
+    err = {"xerr": [[(cx - xlo) * MM], [(xhi - cx) * MM]],
+           "yerr": [[(cy - ylo) * MM], [(yhi - cy) * MM]], "fmt": "+"}
     # black under white: seen on a dark map and on a white one (and in the legend)
-    ax.errorbar([cx * _MM], [cy * _MM], color="k", ms=12, mew=3.5, capsize=5, capthick=3.5,
+    ax.errorbar([cx * MM], [cy * MM], color="k", ms=12, mew=3.5, capsize=5, capthick=3.5,
                 lw=3.0, label="lump centre (90 % interval)", **err)
-    ax.errorbar([cx * _MM], [cy * _MM], color="w", ms=10, mew=1.5, capsize=4, capthick=1.5,
+    ax.errorbar([cx * MM], [cy * MM], color="w", ms=10, mew=1.5, capsize=4, capthick=1.5,
                 lw=1.2, **err)
 
 
@@ -87,7 +87,7 @@ def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None =
     if kind not in PANELS:
         raise ValueError(f"unknown map panel {kind!r}; use one of {', '.join(PANELS)}")
     col, default_title, label, cmap, scale = PANELS[kind]
-    fig, ax = _fig_ax(ax, (5.6, 4.6))
+    fig, ax = fig_ax(ax, (5.6, 4.6))
     z = map_grid(nodes, col) * scale
     kw = {"vmin": 0.0, "vmax": 1.0} if kind == "probability" else {}
     if limits is not None:
@@ -96,15 +96,15 @@ def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None =
                    aspect="equal", **kw)
     fig.colorbar(im, ax=ax, label=label, shrink=0.9)
     if kind == "probability" and np.isfinite(z).any() and np.nanmax(z) >= 0.5:
-        xs = np.unique(nodes["x_m"]) * _MM
-        ys = np.unique(nodes["y_m"]) * _MM
+        xs = np.unique(nodes["x_m"]) * MM
+        ys = np.unique(nodes["y_m"]) * MM
         if xs.size > 1 and ys.size > 1:
             ax.contour(xs, ys, z, levels=[0.5, 0.9], colors=["0.3", "k"], linewidths=[0.8, 1.2])
             for colour, width, text in (("0.3", 0.8, "chance 0.5"), ("k", 1.2, "chance 0.9")):
                 ax.plot([], [], color=colour, lw=width, label=f"contour: {text}")
     _mark_lump(ax, lump)
     if truth is not None:
-        ax.plot([truth[0] * _MM], [truth[1] * _MM], "o", mfc="none", mec=METHOD_COLORS["truth"],
+        ax.plot([truth[0] * MM], [truth[1] * MM], "o", mfc="none", mec=METHOD_COLORS["truth"],
                 ms=12, mew=2, label="true centre")
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
@@ -137,29 +137,29 @@ def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None
     if row is None:
         row = int(nodes.loc[nodes["E_mean_pa"].idxmax(), "iy"])
     r = nodes[nodes["iy"] == row].sort_values("ix")
-    fig, ax = _fig_ax(ax, (7.0, 4.0))
-    x = r["x_m"].to_numpy() * _MM
+    fig, ax = fig_ax(ax, (7.0, 4.0))
+    x = r["x_m"].to_numpy() * MM
     c = METHOD_COLORS["bayes"]
-    ax.fill_between(x, r["E_lo_pa"] * _KPA, r["E_hi_pa"] * _KPA, color=c, alpha=0.25, lw=0,
+    ax.fill_between(x, r["E_lo_pa"] * KPA, r["E_hi_pa"] * KPA, color=c, alpha=0.25, lw=0,
                     label="map: 90 % band")
-    ax.plot(x, r["E_mean_pa"] * _KPA, color=c, lw=1.8, label="map: posterior mean")
+    ax.plot(x, r["E_mean_pa"] * KPA, color=c, lw=1.8, label="map: posterior mean")
     pts = r[np.isfinite(r["E_point_pa"])]
     if len(pts):
-        ax.errorbar(pts["x_m"] * _MM, pts["E_point_pa"] * _KPA,
-                    yerr=[(pts["E_point_pa"] - pts["E_point_lo_pa"]) * _KPA,
-                          (pts["E_point_hi_pa"] - pts["E_point_pa"]) * _KPA],
+        ax.errorbar(pts["x_m"] * MM, pts["E_point_pa"] * KPA,
+                    yerr=[(pts["E_point_pa"] - pts["E_point_lo_pa"]) * KPA,
+                          (pts["E_point_hi_pa"] - pts["E_point_pa"]) * KPA],
                     fmt="o", ms=3, color="0.25", capsize=2, lw=0.8,
                     label="each point's own posterior")
-    ax.plot(r["x_m"] * _MM, r["E_lsq_pa"] * _KPA, "x", color=METHOD_COLORS["lsq"], ms=5,
+    ax.plot(r["x_m"] * MM, r["E_lsq_pa"] * KPA, "x", color=METHOD_COLORS["lsq"], ms=5,
             label="naive least squares")
     if background is not None:
         med, lo, hi = background
-        ax.axhspan(lo * _KPA, hi * _KPA, color="0.6", alpha=0.2, lw=0)
-        ax.axhline(med * _KPA, color="0.4", lw=1, ls="--", label="map median (90 %)")
+        ax.axhspan(lo * KPA, hi * KPA, color="0.6", alpha=0.2, lw=0)
+        ax.axhline(med * KPA, color="0.4", lw=1, ls="--", label="map median (90 %)")
     if truth is not None:
-        ax.plot(x, np.asarray(truth) * _KPA, color=METHOD_COLORS["truth"], lw=1.2,
+        ax.plot(x, np.asarray(truth) * KPA, color=METHOD_COLORS["truth"], lw=1.2,
                 label="true apparent E")
-    y_mm = float(r["y_m"].iloc[0]) * _MM
+    y_mm = float(r["y_m"].iloc[0]) * MM
     ax.set(xlabel="x [mm]", ylabel="E [kPa]",
            title=title or f"profile through the lump (row y = {y_mm:.3g} mm)")
     ax.legend(fontsize=7, loc="upper left")

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from .style import _KPA, _MM, _MN, METHOD_COLORS
+from .style import KPA, METHOD_COLORS, MM, MN
 
 __all__ = ["plot_replay"]
 
@@ -41,24 +41,24 @@ def plot_replay(history: pd.DataFrame, *, stop_n: int | None = None,
     fig = Figure(figsize=(6.4, 5.2), layout="constrained")
     top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(3, 2))
     h = history[history["depth_m"] > 0]
-    d = h["depth_m"].to_numpy() * _MM
+    d = h["depth_m"].to_numpy() * MM
     color = METHOD_COLORS["bayes"]
-    top.fill_between(d, h["E_lo_pa"] * _KPA, h["E_hi_pa"] * _KPA, color=color, alpha=0.25,
+    top.fill_between(d, h["E_lo_pa"] * KPA, h["E_hi_pa"] * KPA, color=color, alpha=0.25,
                      lw=0, label=f"{100 * level:g} % interval")
-    top.plot(d, h["E_pa"] * _KPA, color=color, lw=1.5, label="posterior median")
+    top.plot(d, h["E_pa"] * KPA, color=color, lw=1.5, label="posterior median")
     if truth is not None:
-        top.axhline(truth * _KPA, color=METHOD_COLORS["truth"], ls="--", lw=1, label="true E")
+        top.axhline(truth * KPA, color=METHOD_COLORS["truth"], ls="--", lw=1, label="true E")
     top.set_ylabel("E [kPa]")
     bottom.semilogy(d, 100 * h["rel_half_width"], color=color, lw=1.5,
                     label="relative half-width")
     if target is not None:
         bottom.axhline(100 * target, color="k", ls=":", lw=1, label=f"target ±{100 * target:g} %")
     force_ax = bottom.twinx()
-    force_ax.plot(d, h["peak_force_n"] * _MN, color=METHOD_COLORS["data"], lw=1,
+    force_ax.plot(d, h["peak_force_n"] * MN, color=METHOD_COLORS["data"], lw=1,
                   label="peak force")
     force_ax.set_ylabel("peak force [mN]")
     if stop_n is not None and (h["n"] == stop_n).any():
-        ds = float(h.loc[h["n"] == stop_n, "depth_m"].iloc[0]) * _MM
+        ds = float(h.loc[h["n"] == stop_n, "depth_m"].iloc[0]) * MM
         for ax in (top, bottom):
             ax.axvline(ds, color="k", lw=1, alpha=0.6)
         top.annotate("stop", (ds, 1.0), xycoords=("data", "axes fraction"), ha="left",

@@ -11,18 +11,18 @@ from matplotlib.figure import Figure
 
 from ..intervals import LEVEL, central
 from .style import (
-    _KPA,
-    _MM,
-    _UM,
+    KPA,
     METHOD_COLORS,
-    _decorate,
-    _draws,
-    _fig_ax,
-    _level_label,
-    _lsq_errorbar,
-    _lsq_of,
-    _mark_interval,
-    _truth_line,
+    MM,
+    UM,
+    decorate,
+    draws,
+    fig_ax,
+    level_label,
+    lsq_errorbar,
+    lsq_of,
+    mark_interval,
+    truth_line,
 )
 
 __all__ = ["plot_posterior_E", "plot_posterior_zsurf", "plot_pair", "plot_posterior"]
@@ -42,14 +42,14 @@ def _hist(ax: Axes, x: np.ndarray, color: str, label: str, filled: bool, bins: i
 
 def _zsurf_relative(result: Any) -> tuple[float, np.ndarray]:
     """Posterior median of z_surf [m] and the draws relative to it [µm]."""
-    z = _draws(result, "z_surf")
+    z = draws(result, "z_surf")
     zm = float(np.median(z))
-    return zm, (z - zm) * _UM
+    return zm, (z - zm) * UM
 
 
 def _zsurf_label(zm: float) -> str:
     """Axis label of surface heights relative to their posterior median ``zm`` [m]."""
-    return f"z_surf − {zm * _MM:.3f} mm (posterior median) [µm]"
+    return f"z_surf − {zm * MM:.3f} mm (posterior median) [µm]"
 
 
 def plot_posterior_E(
@@ -90,31 +90,31 @@ def plot_posterior_E(
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = _fig_ax(ax, (5.0, 3.6))
-    lsq = _lsq_of(result, lsq)
+    fig, ax = fig_ax(ax, (5.0, 3.6))
+    lsq = lsq_of(result, lsq)
     c = METHOD_COLORS["bayes"]
-    e_tot = _draws(result, "E_total") * _KPA
-    e_stat = _draws(result, "E") * _KPA
+    e_tot = draws(result, "E_total") * KPA
+    e_stat = draws(result, "E") * KPA
     _hist(ax, e_tot, c, "E with budget", True, bins, peak=True)
     # the trace-only posterior is often 100x narrower: its own bins, scaled to the same peak
     _hist(ax, e_stat, c, "E, trace only (fixed nu)", False, bins, peak=True)
     lo, hi = central(e_tot, level)
     med = float(np.median(e_tot))
-    _mark_interval(ax, med, lo, hi, c)
+    mark_interval(ax, med, lo, hi, c)
     if lsq is not None:
-        _lsq_errorbar(ax, lsq.E * _KPA, 1.1, (lsq.E - lsq.E_lo) * _KPA, (lsq.E_hi - lsq.E) * _KPA,
-                      f"least squares ± {_level_label(getattr(lsq, 'level', level))}")
+        lsq_errorbar(ax, lsq.E * KPA, 1.1, (lsq.E - lsq.E_lo) * KPA, (lsq.E_hi - lsq.E) * KPA,
+                      f"least squares ± {level_label(getattr(lsq, 'level', level))}")
     if truth is not None:
-        _truth_line(ax, truth * _KPA)
-    title = f"E = {med:.1f} kPa, {_level_label(level)} interval [{lo:.1f}, {hi:.1f}]"
+        truth_line(ax, truth * KPA)
+    title = f"E = {med:.1f} kPa, {level_label(level)} interval [{lo:.1f}, {hi:.1f}]"
     form = getattr(result, "model_form", None)
     if form is not None and np.isfinite(form.lo_pa) and np.isfinite(form.hi_pa):
-        f_lo, f_hi = form.lo_pa * _KPA, form.hi_pa * _KPA
+        f_lo, f_hi = form.lo_pa * KPA, form.hi_pa * KPA
         ax.axvspan(f_lo, f_hi, color="0.88", zorder=0, lw=0,
                    label="with the model form (material misfit)")
         title += f",\nwith the model form [{f_lo:.1f}, {f_hi:.1f}]"
     ax.set_ylim(0, 1.45)
-    _decorate(ax, "Young's modulus, E [kPa]", "Posterior density (peak = 1)", title,
+    decorate(ax, "Young's modulus, E [kPa]", "Posterior density (peak = 1)", title,
               "upper left")
     return fig
 
@@ -149,27 +149,27 @@ def plot_posterior_zsurf(
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = _fig_ax(ax, (5.0, 3.6))
-    lsq = _lsq_of(result, lsq)
+    fig, ax = fig_ax(ax, (5.0, 3.6))
+    lsq = lsq_of(result, lsq)
     zm, rel = _zsurf_relative(result)
     c = METHOD_COLORS["bayes"]
     _hist(ax, rel, c, "Bayes posterior", True, bins)
     lo, hi = central(rel, level)
-    _mark_interval(ax, 0.0, lo, hi, c)
+    mark_interval(ax, 0.0, lo, hi, c)
     top = ax.get_ylim()[1]
     if lsq is not None:
         from scipy import stats
 
         n = getattr(lsq, "n_points", 1000)
         t = stats.t.ppf(0.5 + level / 2, max(n - 2, 1))
-        half = t * lsq.z_surf_sd * _UM
-        _lsq_errorbar(ax, (lsq.z_surf - zm) * _UM, 1.12 * top, half, half,
-                      f"least squares ± {_level_label(level)}")
+        half = t * lsq.z_surf_sd * UM
+        lsq_errorbar(ax, (lsq.z_surf - zm) * UM, 1.12 * top, half, half,
+                      f"least squares ± {level_label(level)}")
     if truth is not None:
-        _truth_line(ax, (truth - zm) * _UM)
+        truth_line(ax, (truth - zm) * UM)
     ax.set_ylim(0, top * 1.4)
-    _decorate(ax, _zsurf_label(zm), "Posterior density [1/µm]",
-              f"z_surf: {_level_label(level)} interval [{lo:+.1f}, {hi:+.1f}] µm", "upper left")
+    decorate(ax, _zsurf_label(zm), "Posterior density [1/µm]",
+              f"z_surf: {level_label(level)} interval [{lo:+.1f}, {hi:+.1f}] µm", "upper left")
     return fig
 
 
@@ -208,9 +208,9 @@ def plot_pair(
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = _fig_ax(ax, (5.0, 3.6))
-    lsq = _lsq_of(result, lsq)
-    e = _draws(result, "E") * _KPA
+    fig, ax = fig_ax(ax, (5.0, 3.6))
+    lsq = lsq_of(result, lsq)
+    e = draws(result, "E") * KPA
     zm, rel = _zsurf_relative(result)
     rng = np.random.default_rng(seed)
     idx = rng.choice(e.size, size=min(max_points, e.size), replace=False)
@@ -223,7 +223,7 @@ def plot_pair(
 
         scale = 1.0 - lsq.model.nu ** 2
         # cov of (E* [Pa], z_s [m]) -> (E [kPa], z [µm])
-        J = np.diag([scale * _KPA, _UM])
+        J = np.diag([scale * KPA, UM])
         cov = J @ np.asarray(lsq.cov) @ J
         k = np.sqrt(stats.chi2.ppf(level, 2))
         # ellipse in (x = z, y = E): mean + k·L·(cos, sin) with L the Cholesky factor
@@ -232,13 +232,13 @@ def plot_pair(
         L = v @ np.diag(np.sqrt(np.clip(w, 0.0, None)))
         th = np.linspace(0.0, 2.0 * np.pi, 181)
         pts = k * L @ np.vstack([np.cos(th), np.sin(th)])
-        ax.plot((lsq.z_surf - zm) * _UM + pts[0], lsq.E * _KPA + pts[1],
+        ax.plot((lsq.z_surf - zm) * UM + pts[0], lsq.E * KPA + pts[1],
                 color=METHOD_COLORS["lsq"], lw=1.2)
-        ax.plot([(lsq.z_surf - zm) * _UM], [lsq.E * _KPA], "s", ms=4,
+        ax.plot([(lsq.z_surf - zm) * UM], [lsq.E * KPA], "s", ms=4,
                 color=METHOD_COLORS["lsq"],
-                label=f"least squares, {_level_label(level)} ellipse")
+                label=f"least squares, {level_label(level)} ellipse")
     ax.ticklabel_format(axis="y", useOffset=False)
-    _decorate(ax, _zsurf_label(zm), "E, trace only (fixed nu) [kPa]",
+    decorate(ax, _zsurf_label(zm), "E, trace only (fixed nu) [kPa]",
               f"Joint posterior (correlation {r:+.2f})", "best")
     return fig
 

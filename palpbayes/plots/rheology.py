@@ -24,7 +24,7 @@ from ..intervals import LEVEL, central_band
 from ..rheology.store import StoredRheologyFit, relaxation_grid
 from ..trace import SEGMENTS, IndentationTrace
 from ..units import FORCE_PREFIXES, LENGTH_PREFIXES, PRESSURE_PREFIXES, si_scale
-from .style import _decorate, _fig_ax, _level_label
+from .style import decorate, fig_ax, level_label
 
 __all__ = ["plot_cycle_fit", "plot_relaxation", "plot_hysteresis", "RHEOLOGY_COLORS",
            "SEGMENT_COLORS"]
@@ -58,7 +58,7 @@ def plot_cycle_fit(fit: Any, ax: Axes | None = None, *, level: float = LEVEL,
     title
         Default: the trace id, the model and whether its check passed.
     """
-    fig, ax = _fig_ax(ax, (7.0, 4.0))
+    fig, ax = fig_ax(ax, (7.0, 4.0))
     d = fit.data
     if isinstance(fit, StoredRheologyFit):
         lo, med, hi = fit.band(level)
@@ -73,13 +73,13 @@ def plot_cycle_fit(fit: Any, ax: Axes | None = None, *, level: float = LEVEL,
     ax.plot(d.time, d.force * k, ".", ms=2, color="0.35", label="data (block means)",
             rasterized=True)
     ax.fill_between(d.time, lo * k, hi * k, color=color, alpha=0.35, lw=0,
-                    label=f"{_LABELS.get(fit.rheology, fit.rheology)}, {_level_label(level)} band")
+                    label=f"{_LABELS.get(fit.rheology, fit.rheology)}, {level_label(level)} band")
     ax.plot(d.time, med * k, color=color, lw=1.2, label="posterior median")
     if title is None:
         tid = _trace_id(fit)
         title = (f"{tid}: {_LABELS.get(fit.rheology, fit.rheology)} fit, model check "
                  f"{'passed' if fit.model_ok else 'FAILED'}")
-    _decorate(ax, "Time from the first fitted sample, t [s]", f"Force, F [{unit}]", title,
+    decorate(ax, "Time from the first fitted sample, t [s]", f"Force, F [{unit}]", title,
               "best")
     return fig
 
@@ -108,7 +108,7 @@ def plot_relaxation(fits: Any, ax: Axes | None = None, *, times=None, level: flo
     title
         Axes title.
     """
-    fig, ax = _fig_ax(ax)
+    fig, ax = fig_ax(ax)
     if not isinstance(fits, Mapping):
         fits = {_LABELS.get(fits.rheology, fits.rheology): fits}
     first = next(iter(fits.values()))
@@ -124,7 +124,7 @@ def plot_relaxation(fits: Any, ax: Axes | None = None, *, times=None, level: flo
         ax.fill_between(times, tab["E_star_lo_pa"] * k, tab["E_star_hi_pa"] * k,
                         color=color, alpha=0.3, lw=0)
         ax.plot(times, tab["E_star_pa"] * k, color=color, lw=1.2,
-                label=f"{label} ({_level_label(level)} band)")
+                label=f"{label} ({level_label(level)} band)")
     if truth is not None:
         ax.plot(times, np.asarray(truth(times), dtype=float) * k, "k--", lw=1.0,
                 label="true E*(t)")
@@ -133,7 +133,7 @@ def plot_relaxation(fits: Any, ax: Axes | None = None, *, times=None, level: flo
     plain = FuncFormatter(lambda v, _: f"{v:g}")  # 60, 70, 100 rather than 6 × 10^1
     ax.yaxis.set_major_formatter(plain)
     ax.yaxis.set_minor_formatter(plain)
-    _decorate(ax, "Time since a step strain, t [s]", f"Relaxation modulus, E*(t) [{unit}]",
+    decorate(ax, "Time since a step strain, t [s]", f"Relaxation modulus, E*(t) [{unit}]",
               title, "best")
     return fig
 
@@ -161,7 +161,7 @@ def plot_hysteresis(trace: Any, ax: Axes | None = None, *, z_surf: float | None 
     """
     from ..checks.rate import cycle_segments
 
-    fig, ax = _fig_ax(ax)
+    fig, ax = fig_ax(ax)
     if isinstance(trace, StoredRheologyFit):
         z_surf = trace.z_surf if z_surf is None else z_surf
         trace = trace.record
@@ -182,7 +182,7 @@ def plot_hysteresis(trace: Any, ax: Axes | None = None, *, z_surf: float | None 
                     label=name, rasterized=True)
     xlabel = (f"Tip height, z [{ux}]" if z_surf is None
               else f"Depth below the fitted surface, d [{ux}]")
-    _decorate(ax, xlabel, f"Force, F [{uf}]",
+    decorate(ax, xlabel, f"Force, F [{uf}]",
               trace.trace_id if title is None else title, "best", markerscale=4)
     return fig
 

@@ -9,7 +9,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..intervals import LEVEL
-from .style import _KPA, METHOD_COLORS, METHOD_LABELS, _fig_ax, _level_label
+from .style import KPA, METHOD_COLORS, METHOD_LABELS, fig_ax, level_label
 
 __all__ = ["plot_stiffening"]
 
@@ -60,9 +60,9 @@ def plot_stiffening(
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = _fig_ax(ax, (6.0, 4.0))
+    fig, ax = fig_ax(ax, (6.0, 4.0))
     t = np.asarray(rest_time, dtype=float)
-    e = np.asarray(E, dtype=float) * _KPA
+    e = np.asarray(E, dtype=float) * KPA
     c = METHOD_COLORS["bayes"]
     law = "fitted law"
     if fit is not None and curve_median is None:
@@ -72,24 +72,24 @@ def plot_stiffening(
         curve_lo, curve_hi = pred["lo_pa"].to_numpy(), pred["hi_pa"].to_numpy()
         law = f"fitted {fit.law}"
     if rested is not None:
-        ax.axhspan(rested[1] * _KPA, rested[2] * _KPA, color="0.88", lw=0)
-        ax.axhline(rested[0] * _KPA, color=METHOD_COLORS["gt"], lw=1.0,
+        ax.axhspan(rested[1] * KPA, rested[2] * KPA, color="0.88", lw=0)
+        ax.axhline(rested[0] * KPA, color=METHOD_COLORS["gt"], lw=1.0,
                    label="rested specimen")
     if curve_t is not None and curve_median is not None:
         ct = np.asarray(curve_t, dtype=float)
         if curve_lo is not None and curve_hi is not None:
-            ax.fill_between(ct, np.asarray(curve_lo) * _KPA, np.asarray(curve_hi) * _KPA,
+            ax.fill_between(ct, np.asarray(curve_lo) * KPA, np.asarray(curve_hi) * KPA,
                             color=c, alpha=0.25, lw=0,
-                            label=f"{_level_label(level)} credible band of the law")
-        ax.plot(ct, np.asarray(curve_median) * _KPA, color=c, lw=1.4, label=law)
+                            label=f"{level_label(level)} credible band of the law")
+        ax.plot(ct, np.asarray(curve_median) * KPA, color=c, lw=1.4, label=law)
     if truth is not None:
-        ax.plot(np.asarray(truth[0]), np.asarray(truth[1]) * _KPA, "--",
+        ax.plot(np.asarray(truth[0]), np.asarray(truth[1]) * KPA, "--",
                 color=METHOD_COLORS["truth"], lw=1.2, label=METHOD_LABELS["truth"])
     if E_lo is not None and E_hi is not None:
-        lo = e - np.asarray(E_lo, dtype=float) * _KPA
-        hi = np.asarray(E_hi, dtype=float) * _KPA - e
+        lo = e - np.asarray(E_lo, dtype=float) * KPA
+        hi = np.asarray(E_hi, dtype=float) * KPA - e
         ax.errorbar(t, e, yerr=[lo, hi], fmt="o", ms=4, color=c, mfc="white", capsize=2,
-                    label=f"{label} ({_level_label(level)})")
+                    label=f"{label} ({level_label(level)})")
     else:
         ax.plot(t, e, "o", ms=4, color=c, mfc="white", label=label)
     ax.set_xlabel("Rest time since the previous palpation, t [s]")

@@ -9,7 +9,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..intervals import LEVEL
-from .style import _MM, _MN, METHOD_COLORS, _decorate, _fig_ax, _level_label, _lsq_of, _median
+from .style import METHOD_COLORS, MM, MN, decorate, fig_ax, level_label, lsq_of, median
 
 __all__ = ["plot_force_depth", "plot_residuals"]
 
@@ -94,10 +94,10 @@ def plot_force_depth(
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = _fig_ax(ax)
+    fig, ax = fig_ax(ax)
     data = result.data
-    lsq = _lsq_of(result, lsq)
-    zs = _median(result, "z_surf")
+    lsq = lsq_of(result, lsq)
+    zs = median(result, "z_surf")
     zsrc = data.loading.z if getattr(data, "loading", None) is not None else data.z
     zg = np.linspace(float(zsrc.min()), float(zsrc.max()), n_grid)
     obs = result.predictive(zg, n_draws=n_draws, noise=True, level=level, seed=seed)
@@ -119,32 +119,32 @@ def plot_force_depth(
     for k, a in enumerate(axes):
         ms = 1.5 if k == 0 else 2.5
         if excluded is not None:
-            a.plot((zs - excluded[0]) * _MM, excluded[1], "o", ms=ms + 0.5, mfc="none",
+            a.plot((zs - excluded[0]) * MM, excluded[1], "o", ms=ms + 0.5, mfc="none",
                    mew=0.4, color=METHOD_COLORS["data"], alpha=0.5, rasterized=True,
                    label="not fitted (outside window)")
-        a.plot((zs - data.z) * _MM, data.force, ".", ms=ms, color=METHOD_COLORS["data"],
+        a.plot((zs - data.z) * MM, data.force, ".", ms=ms, color=METHOD_COLORS["data"],
                alpha=0.5, rasterized=True, label=f"data (n = {data.n_points})")
-        dg = (zs - zg) * _MM
+        dg = (zs - zg) * MM
         c = METHOD_COLORS["bayes"]
         a.fill_between(dg, obs["lo_n"], obs["hi_n"], color=c, alpha=0.15, lw=0,
-                       label=f"Bayes {_level_label(level)} predictive (new data)")
+                       label=f"Bayes {level_label(level)} predictive (new data)")
         a.fill_between(dg, mean["lo_n"], mean["hi_n"], color=c, alpha=0.45, lw=0,
-                       label=f"Bayes {_level_label(level)} credible band (mean)")
+                       label=f"Bayes {level_label(level)} credible band (mean)")
         a.plot(dg, mean["median_n"], color=c, lw=1.2, label="Bayes posterior median")
         if lsq_f is not None:
             a.plot(dg, lsq_f, "--", color=METHOD_COLORS["lsq"], lw=1.2, label="least squares")
         a.axvline(0.0, color="0.5", lw=0.6, ls=":")
     if inset:
         lo_d, hi_d = -0.04 * dmax, 0.12 * dmax
-        ins.set_xlim(lo_d * _MM, hi_d * _MM)
-        sel = (dg >= lo_d * _MM) & (dg <= hi_d * _MM)
+        ins.set_xlim(lo_d * MM, hi_d * MM)
+        sel = (dg >= lo_d * MM) & (dg <= hi_d * MM)
         ylo = min(float(obs["lo_n"][sel].min()), -2 * data.f_unc)
         yhi = max(float(obs["hi_n"][sel].max()), 2 * data.f_unc)
         ins.set_ylim(ylo, yhi)
         ins.tick_params(labelsize="x-small")
         ins.set_title("near the surface", fontsize="x-small")
         ax.indicate_inset_zoom(ins, edgecolor="0.4")
-    _decorate(ax, _DEPTH_LABEL, "Force, F [N]", _title(result), "lower right")
+    decorate(ax, _DEPTH_LABEL, "Force, F [N]", _title(result), "lower right")
     return fig
 
 
@@ -177,30 +177,30 @@ def plot_residuals(
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = _fig_ax(ax)
+    fig, ax = fig_ax(ax)
     data = result.data
-    lsq = _lsq_of(result, lsq)
-    zs = _median(result, "z_surf")
-    depth = (zs - data.z) * _MM
-    sigma = _median(result, "sigma")
-    rb = (data.force - _posterior_median_curve(result, data.z)) * _MN
-    ax.axhspan(-2 * sigma * _MN, 2 * sigma * _MN, color="0.85", lw=0,
-               label=f"±2 sigma (sigma = {sigma * _MN:.3g} mN)")
+    lsq = lsq_of(result, lsq)
+    zs = median(result, "z_surf")
+    depth = (zs - data.z) * MM
+    sigma = median(result, "sigma")
+    rb = (data.force - _posterior_median_curve(result, data.z)) * MN
+    ax.axhspan(-2 * sigma * MN, 2 * sigma * MN, color="0.85", lw=0,
+               label=f"±2 sigma (sigma = {sigma * MN:.3g} mN)")
     ax.plot(depth, rb, ".", ms=1.5, color=METHOD_COLORS["bayes"], alpha=0.3, rasterized=True,
             label="Bayes residuals")
     x, m = _binned_mean(depth, rb, bins)
     ax.plot(x, m, color=METHOD_COLORS["bayes"], lw=1.4, label="Bayes, binned mean")
     if lsq is not None:
-        rl = (data.force - _lsq_curve(lsq, lsq.model, data.z)) * _MN
+        rl = (data.force - _lsq_curve(lsq, lsq.model, data.z)) * MN
         x, m = _binned_mean(depth, rl, bins)
         ax.plot(x, m, "--", color=METHOD_COLORS["lsq"], lw=1.4,
                 label="least squares, binned mean")
     ax.axhline(0.0, color="0.3", lw=0.6)
     # room for the legend below the points: it must not hide residuals
-    lo = min(float(np.min(rb)), -2 * sigma * _MN)
-    hi = max(float(np.max(rb)), 2 * sigma * _MN)
+    lo = min(float(np.min(rb)), -2 * sigma * MN)
+    hi = max(float(np.max(rb)), 2 * sigma * MN)
     span = hi - lo if hi > lo else 1.0
     ax.set_ylim(lo - 0.42 * span, hi + 0.05 * span)
-    _decorate(ax, _DEPTH_LABEL, "Residual, F − F_fit [mN]", "Residuals", "lower left", ncol=2,
+    decorate(ax, _DEPTH_LABEL, "Residual, F − F_fit [mN]", "Residuals", "lower left", ncol=2,
               borderaxespad=0.3)
     return fig

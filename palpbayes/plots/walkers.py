@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from .style import _KPA, _MN, _UM, METHOD_COLORS
+from .style import KPA, METHOD_COLORS, MN, UM
 
 __all__ = ["plot_walkers"]
 
@@ -32,10 +32,10 @@ def _attrs(result: Any) -> dict:
 
 _WALKER_VARS: dict[str, tuple[str, float, str]] = {
     # name -> (label, scale, unit)
-    "E_star": ("E*", _KPA, "kPa"),
-    "z_surf": ("z_surf − median", _UM, "µm"),
-    "sigma": ("sigma", _MN, "mN"),
-    "F0": ("F0", _MN, "mN"),
+    "E_star": ("E*", KPA, "kPa"),
+    "z_surf": ("z_surf − median", UM, "µm"),
+    "sigma": ("sigma", MN, "mN"),
+    "F0": ("F0", MN, "mN"),
     "phi": ("phi (AR(1))", 1.0, "-"),
     "nu_t": ("nu_t (Student-t)", 1.0, "-"),
 }

@@ -65,11 +65,8 @@ from __future__ import annotations
 from ..campaign.pipeline import example_campaign_dir, run_pipeline
 from ..campaign.results import ResultsFolder, load_fit, load_results
 from .build import RASTER_DPI, REPORT_NAME, ReportInfo, build_report
-from .format import _range as _range
-from .format import _shown as _shown
 from .layout import BUDGET_GROUPS_PER_PAGE, CHART_GROUPS_PER_PAGE, PAGE_SIZE, TABLE_ROWS_PER_PAGE
 from .methods import MOVES_TEXT
-from .methods import _methods_lines as _methods_lines
 from .pages_stiffening import STIFFENING_MIN_REST_TIMES
 from .tables import (
     BAYES_E_COL,

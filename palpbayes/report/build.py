@@ -12,19 +12,19 @@ from ..campaign.layout import REPORT, RHEOLOGY_TABLE, SUMMARY
 from ..campaign.results import ResultsFolder, load_results, load_rheology_table
 from ..errors import InputError
 from ..io.tabular import parse_bool
-from .format import _shown
-from .layout import RASTER_DPI, _Page, write_pages
-from .pages_budget import _pages_budget
-from .pages_diagnostics import _page_diagnostics
-from .pages_group import _page_group
-from .pages_layer import _pages_layer
-from .pages_methods import _pages_methods
-from .pages_online import _pages_online
-from .pages_rheology import _failed, _page_rheology_title, _pages_rheology
-from .pages_stiffening import _page_stiffening, _pages_stiffening_table, _stiffening_groups
-from .pages_summary import _pages_comparison, _pages_summary
-from .pages_title import _page_title
-from .tables import _flagged
+from .format import shown_path
+from .layout import RASTER_DPI, Page, write_pages
+from .pages_budget import budget_pages
+from .pages_diagnostics import diagnostics_page
+from .pages_group import group_page
+from .pages_layer import layer_pages
+from .pages_methods import methods_pages
+from .pages_online import online_pages
+from .pages_rheology import rheology_pages, rheology_title_page, row_failed
+from .pages_stiffening import stiffening_groups, stiffening_page, stiffening_table_pages
+from .pages_summary import comparison_pages, summary_pages
+from .pages_title import title_page
+from .tables import flagged_rows
 
 __all__ = ["REPORT_NAME", "RASTER_DPI", "ReportInfo", "build_report"]
 
@@ -117,20 +117,20 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
         return _rheology_report(folder, rheo, out, created)
     res = results if isinstance(results, ResultsFolder) else load_results(results)
     contents: list[str] = []
-    pages: list[_Page] = [_page_title(res, created, contents), *_pages_summary(res)]
+    pages: list[Page] = [title_page(res, created, contents), *summary_pages(res)]
     if res.comparison is not None and not res.comparison.empty:
-        pages += _pages_comparison(res)
-    pages += _pages_layer(res)
-    pages += [_page_group(res, m, t, seed) for m, t in res.groups()]
-    pages += _page_diagnostics(res)
-    pages += _pages_budget(res)
-    pages += [_page_stiffening(res, m, t, seed) for m, t in _stiffening_groups(res)]
-    pages += _pages_stiffening_table(res)
-    pages += _pages_online(res)
-    pages += _pages_rheology(res.path, rheo)
-    pages += _pages_methods(res)
+        pages += comparison_pages(res)
+    pages += layer_pages(res)
+    pages += [group_page(res, m, t, seed) for m, t in res.groups()]
+    pages += diagnostics_page(res)
+    pages += budget_pages(res)
+    pages += [stiffening_page(res, m, t, seed) for m, t in stiffening_groups(res)]
+    pages += stiffening_table_pages(res)
+    pages += online_pages(res)
+    pages += rheology_pages(res.path, rheo)
+    pages += methods_pages(res)
     footer = (f"palpbayes {__version__} · campaign {res.name} · {created} · results "
-              f"{_shown(res.path)}")
+              f"{shown_path(res.path)}")
     titles = [p.title or "palpbayes report" for p in pages]
     contents.extend(titles)
 
@@ -143,16 +143,16 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     if res.pooled is not None and "converged" in res.pooled:
         n_pool = int((~res.pooled["converged"].map(parse_bool)).sum())
     return ReportInfo(path=out, titles=titles, n_traces=int(res.summary["trace_id"].nunique()),
-                      n_flagged=int(len(_flagged(res))) if len(b) else 0,
+                      n_flagged=int(len(flagged_rows(res))) if len(b) else 0,
                       n_pooled_flagged=n_pool, table_rows=[p.rows for p in pages],
-                      results_shown=_shown(res.path), **_rheology_counts(rheo))
+                      results_shown=shown_path(res.path), **_rheology_counts(rheo))
 
 
 def _rheology_counts(rheo) -> dict:
     """Viscoelastic fits of ``rheology.csv`` and those whose model check failed."""
     if rheo is None:
         return {}
-    fitted = rheo[~rheo.apply(_failed, axis=1)]
+    fitted = rheo[~rheo.apply(row_failed, axis=1)]
     failed = int((~fitted["model_ok"].map(parse_bool)).sum()) if "model_ok" in fitted else 0
     return {"n_rheology": int(len(fitted)), "n_rheology_failed_check": failed}
 
@@ -160,16 +160,16 @@ def _rheology_counts(rheo) -> dict:
 def _rheology_report(folder: Path, rheo, out: Path, created: str) -> ReportInfo:
     """The report of a folder with viscoelastic fits only: a title page and their pages."""
     contents: list[str] = []
-    pages = [_page_rheology_title(folder, rheo, created, contents),
-             *_pages_rheology(folder, rheo)]
+    pages = [rheology_title_page(folder, rheo, created, contents),
+             *rheology_pages(folder, rheo)]
     titles = [p.title or "palpbayes report" for p in pages]
     contents.extend(titles)
     footer = (f"palpbayes {__version__} · viscoelastic fits {folder.resolve().name} · "
-              f"{created} · results {_shown(folder)}")
+              f"{created} · results {shown_path(folder)}")
     write_pages(pages, out, footer=footer,
                 meta={"Title": f"palpbayes report: {folder.resolve().name}",
                       "Creator": f"palpbayes {__version__}",
                       "Subject": "Relaxation modulus from palpation"})
     return ReportInfo(path=out, titles=titles, n_traces=int(rheo["trace_id"].nunique()),
                       n_flagged=0, table_rows=[p.rows for p in pages],
-                      results_shown=_shown(folder), **_rheology_counts(rheo))
+                      results_shown=shown_path(folder), **_rheology_counts(rheo))

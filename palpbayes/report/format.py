@@ -9,10 +9,10 @@ from pathlib import Path
 from typing import Any
 
 #: Pa -> kPa.
-_KPA = 1e-3
+KPA = 1e-3
 
 
-def _fmt(v: Any, digits: int = 1) -> str:
+def fmt(v: Any, digits: int = 1) -> str:
     try:
         x = float(v)
     except (TypeError, ValueError):
@@ -20,22 +20,22 @@ def _fmt(v: Any, digits: int = 1) -> str:
     return "–" if not math.isfinite(x) else f"{x:.{digits}f}"
 
 
-def _pm(e: Any, sd: Any, digits: int = 1) -> str:
-    a, b = _fmt(float(e) * _KPA if _isnum(e) else e, digits), \
-        _fmt(float(sd) * _KPA if _isnum(sd) else sd, digits)
+def pm(e: Any, sd: Any, digits: int = 1) -> str:
+    a, b = fmt(float(e) * KPA if isnum(e) else e, digits), \
+        fmt(float(sd) * KPA if isnum(sd) else sd, digits)
     if a == "–":
         return "–"
     return a if b == "–" else f"{a} ± {b}"
 
 
-def _isnum(v: Any) -> bool:
+def isnum(v: Any) -> bool:
     try:
         return math.isfinite(float(v))
     except (TypeError, ValueError):
         return False
 
 
-def _yesno(v: Any) -> str:
+def yesno(v: Any) -> str:
     if isinstance(v, str):
         v = {"true": True, "false": False}.get(v.strip().lower(), v)
     if v is None or (isinstance(v, float) and math.isnan(v)):
@@ -43,19 +43,19 @@ def _yesno(v: Any) -> str:
     return "yes" if bool(v) else "NO"
 
 
-def _interval(lo: Any, hi: Any, digits: int = 0) -> str:
-    if not (_isnum(lo) and _isnum(hi)):
+def interval(lo: Any, hi: Any, digits: int = 0) -> str:
+    if not (isnum(lo) and isnum(hi)):
         return "–"
-    return f"[{float(lo) * _KPA:.{digits}f}, {float(hi) * _KPA:.{digits}f}]"
+    return f"[{float(lo) * KPA:.{digits}f}, {float(hi) * KPA:.{digits}f}]"
 
 
-def _range(lo: Any, hi: Any, digits: int = 0) -> str:
+def fmt_range(lo: Any, hi: Any, digits: int = 0) -> str:
     """'lo–hi', or a single number when both are equal ('1500', not '1500–1500')."""
-    a, b = _fmt(lo, digits), _fmt(hi, digits)
+    a, b = fmt(lo, digits), fmt(hi, digits)
     return a if a == b else f"{a}–{b}"
 
 
-def _shown(path: str | os.PathLike | None) -> str:
+def shown_path(path: str | os.PathLike | None) -> str:
     """A path as shown in the report: relative to the working folder when it is inside it or
     beside it (at most one '..'), else absolute."""
     if not path:
@@ -70,7 +70,7 @@ def _shown(path: str | os.PathLike | None) -> str:
     return str(rel)
 
 
-def _force_setting(v: Any) -> str:
+def force_setting(v: Any) -> str:
     """A force option of the run [N] with an SI prefix, or what None means (read per trace)."""
     from ..units import format_force
 
@@ -79,7 +79,7 @@ def _force_setting(v: Any) -> str:
     return format_force(float(v))
 
 
-def _wrap(text: str, width: int) -> list[str]:
+def wrap(text: str, width: int) -> list[str]:
     out: list[str] = []
     for para in text.split("\n"):
         # no breaks inside 'R-hat', 'post-burn-in', 'de-snooker'

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from matplotlib.figure import Figure
 
 __all__ = ["PAGE_SIZE", "TABLE_ROWS_PER_PAGE", "CHART_GROUPS_PER_PAGE", "BUDGET_GROUPS_PER_PAGE",
-           "RASTER_DPI", "write_pages"]
+           "RASTER_DPI", "write_pages", "Page", "text_lines", "paginate"]
 
 #: Resolution [dpi] of the rasterized parts (dense scatter, walker traces); text, axes,
 #: curves and bands stay vector graphics.
@@ -26,7 +26,7 @@ BUDGET_GROUPS_PER_PAGE = 10
 
 
 @dataclass
-class _Page:
+class Page:
     title: str
     build: Callable[[Figure], None]
     #: Most rows of any table (or groups of a chart) drawn on the page (0: none).
@@ -43,7 +43,7 @@ def _decorate(fig: Figure, title: str, footer: str, number: int, total: int) -> 
     fig.text(0.96, 0.02, f"page {number} / {total}", fontsize=7, color="0.4", ha="right")
 
 
-def _text_lines(fig: Figure, lines: Sequence[tuple[str, str]], *, top: float = 0.9,
+def text_lines(fig: Figure, lines: Sequence[tuple[str, str]], *, top: float = 0.9,
                 left: float = 0.05, size: float = 9.0) -> None:
     """Lines of (style, text); style 'h' heading, 'm' monospace, 't' text, '' blank."""
     y = top
@@ -61,7 +61,7 @@ def _text_lines(fig: Figure, lines: Sequence[tuple[str, str]], *, top: float = 0
             y -= step
 
 
-def _paginate(lines: list[tuple[str, str]], per_page: float) -> list[list[tuple[str, str]]]:
+def paginate(lines: list[tuple[str, str]], per_page: float) -> list[list[tuple[str, str]]]:
     """Split lines into pages of at most ``per_page`` line heights, keeping each heading with
     its paragraph unless the paragraph alone is longer than a page."""
     def cost(item: tuple[str, str]) -> float:
@@ -91,7 +91,7 @@ def _paginate(lines: list[tuple[str, str]], per_page: float) -> list[list[tuple[
     return pages
 
 
-def write_pages(pages: Sequence[_Page], path, *, footer: str, meta: dict[str, str]):
+def write_pages(pages: Sequence[Page], path, *, footer: str, meta: dict[str, str]):
     """Draw ``pages`` into the PDF ``path``, written atomically: each titled page with its
     title, ``footer`` and "page i / n"; an untitled page (a title page) with its number only."""
     from matplotlib.backends.backend_pdf import PdfPages

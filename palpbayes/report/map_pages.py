@@ -20,8 +20,8 @@ from ..io.atomic import write_with
 from ..maps.run import MapResult
 from ..plots.maps import plot_map, plot_map_panel, plot_profile
 from ..units import format_length, format_pressure
-from .format import _wrap
-from .layout import _Page, _text_lines, write_pages
+from .format import wrap
+from .layout import Page, text_lines, write_pages
 
 __all__ = ["write_map_figure", "write_map_report", "lump_lines"]
 
@@ -89,7 +89,7 @@ def lump_lines(res: MapResult, truth: dict | None = None) -> list[tuple[str, str
                            f"5–95 % [{r['q05']:.4g}, {r['q95']:.4g}]"))
     lines.append(("h", "Flags"))
     for f in res.flags or ["none: every stage ran without a warning"]:
-        lines += [("t", w) for w in _wrap("• " + f, 150)]
+        lines += [("t", w) for w in wrap("• " + f, 150)]
     return lines
 
 
@@ -126,11 +126,11 @@ _METHODS = (
 )
 
 
-def _page_text(title: str, lines: list[tuple[str, str]]) -> _Page:
-    return _Page(title, lambda fig: _text_lines(fig, lines, top=0.9, size=9))
+def _page_text(title: str, lines: list[tuple[str, str]]) -> Page:
+    return Page(title, lambda fig: text_lines(fig, lines, top=0.9, size=9))
 
 
-def _pages(res: MapResult, truth: dict | None) -> list[_Page]:
+def _pages(res: MapResult, truth: dict | None) -> list[Page]:
     lump = res.lump_centre()
     centre = None if not truth or not truth.get("has_lump") else (truth["x_m"], truth["y_m"])
     k = res.options.threshold
@@ -160,14 +160,14 @@ def _pages(res: MapResult, truth: dict | None) -> list[_Page]:
 
     methods = [("h", "How the map was made")]
     for para in _METHODS:
-        methods += [("t", w) for w in _wrap(para, 150)] + [("", "")]
+        methods += [("t", w) for w in wrap(para, 150)] + [("", "")]
     return [
         _page_text("Stiffness map: summary", lump_lines(res, truth)),
-        _Page("Heat map: posterior mean of E (left) and the naive least-squares map", heat),
-        _Page("Uncertainty map: posterior sd of E relative to its mean", one("uncertainty")),
-        _Page(f"Probability map: chance that E > {k:g} × the map median",
+        Page("Heat map: posterior mean of E (left) and the naive least-squares map", heat),
+        Page("Uncertainty map: posterior sd of E relative to its mean", one("uncertainty")),
+        Page(f"Probability map: chance that E > {k:g} × the map median",
               one("probability")),
-        _Page("Profile through the lump", profile),
+        Page("Profile through the lump", profile),
         _page_text("Methods", methods),
     ]
 

@@ -14,9 +14,9 @@ from ..bayes.sampler import MOVES
 from ..campaign.results import ResultsFolder
 from ..noise import PAPER_NOISE_PP
 from ..units import format_length
-from .format import _force_setting, _wrap
+from .format import force_setting, wrap
 
-__all__ = ["MOVES_TEXT", "PRIORS_TABLE"]
+__all__ = ["MOVES_TEXT", "PRIORS_TABLE", "sampler_settings", "methods_lines"]
 
 #: What each ``SamplerSettings.moves`` value means (emcee moves).
 MOVES_TEXT = MOVES  # description of each move schedule, defined beside the sampler
@@ -58,7 +58,7 @@ def layer_setting_text(o: dict) -> str:
             "squares: the paper's half-space, with the layer's effect in E_bonded/E_free)")
 
 
-def _sampler_settings(recorded: dict | None) -> tuple[dict, bool]:
+def sampler_settings(recorded: dict | None) -> tuple[dict, bool]:
     """Sampler settings as a dict: the recorded ones (``settings.json``) completed by the
     package defaults; the flag says whether anything came from the defaults."""
     from dataclasses import asdict
@@ -113,13 +113,13 @@ def _pooling_text(res: ResultsFolder) -> str:
         "with the Instron mean ± sd.")
 
 
-def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
+def methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     from ..contact import registered_laws
     from ..lsq import GRID_POINTS
 
     o = res.options
     W = 150
-    smp, from_defaults = _sampler_settings(o.get("settings"))
+    smp, from_defaults = sampler_settings(o.get("settings"))
     frac = o.get("fit_fraction")
     skipped = [f"{100 * law.default_fit_fraction:g} % of a {law.label}'s"
                for law in registered_laws() if law.default_fit_fraction > 0]
@@ -136,22 +136,22 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         window += (f" Only samples shallower than {format_length(float(o['max_depth']), 6)} "
                    "are fitted.")
     lines: list[tuple[str, str]] = [("h", "Contact models (docs/design.md §1)")]
-    lines += [("t", ln) for ln in _wrap(
+    lines += [("t", ln) for ln in wrap(
         "Rigid axisymmetric tip on an elastic half-space, F = E*·s(d) with E* = E/(1 − nu²) and "
         "depth d = z_surf − z_tip (F = 0 for d ≤ 0). "
         + " ".join(law.summary for law in registered_laws())
         + " Finite thickness: " + layer_setting_text(o) + ".", W)]
     lines += [("h", "Least-squares baseline (the paper's eqs. 12–13)")]
-    lines += [("t", ln) for ln in _wrap(
+    lines += [("t", ln) for ln in wrap(
         "Minimise L = Σ (F_j − k·d_j^m)² over k and z_surf subject to |F(z_surf)| ≤ F_unc "
-        f"(F_unc = {_force_setting(o.get('f_unc', PAPER_NOISE_PP))}; measured from the pre-contact "
+        f"(F_unc = {force_setting(o.get('f_unc', PAPER_NOISE_PP))}; measured from the pre-contact "
         "level when the sensor was not tared, with a note in the row): for fixed z_surf E* has "
         f"a closed form; z_surf by a {GRID_POINTS}-point grid and bounded Brent search over the "
         "admissible range. Interval: Gauss-Newton covariance of (E*, z_surf) from the "
         "residuals, E ± t(0.95, n − 2)·sd — the textbook interval, assuming iid residuals and "
         f"ignoring the constraint. {window}", W)]
     lines += [("h", "Bayesian model per trace")]
-    lines += [("t", ln) for ln in _wrap(
+    lines += [("t", ln) for ln in wrap(
         f"F_j = E*·s(z_surf − z_j) + F0 + e_j, noise model '{o.get('noise', 'gaussian')}' "
         "(gaussian: iid Normal(0, sigma); ar1: stationary AR(1) with marginal sd sigma; "
         f"student: Student-t). Sampled with {_stopping_rule(smp)}"
@@ -162,13 +162,13 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         "(palpbayes.bayes.priors):", W)]
     lines += [("m", ln) for ln in PRIORS_TABLE]
     lines += [("h", "Uncertainty budget (GUM Supplement 1)")]
-    lines += [("t", ln) for ln in _wrap(
+    lines += [("t", ln) for ln in wrap(
         "Inputs a trace cannot identify are propagated by Monte Carlo, one input draw per "
         "posterior draw: E = E*·(1 − nu²)·f_R/g_F·f_C with the Poisson ratio nu, the tip-radius "
         "tolerance f_R, the force-sensor gain g_F and a series compliance f_C (distributions on "
         "the budget page). Shares are each input's part of the variance of ln E.", W)]
     lines += [("h", "Pooling of repeated indentations")]
-    lines += [("t", ln) for ln in _wrap(_pooling_text(res), W)]
+    lines += [("t", ln) for ln in wrap(_pooling_text(res), W)]
     gt = res.groundtruth_summary
     if gt is not None and "window_lo" in gt:
         win = (f"{100 * float(gt['window_lo'].iloc[0]):g}–"
@@ -179,7 +179,7 @@ def _methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         win = (f"{100 * DEFAULT_STRAIN_WINDOW[0]:g}–{100 * DEFAULT_STRAIN_WINDOW[1]:g} % "
                "(default)")
     lines += [("h", "Ground truth")]
-    lines += [("t", ln) for ln in _wrap(
+    lines += [("t", ln) for ln in wrap(
         "Uniaxial compression (Instron exports): engineering stress vs strain, straight line "
         f"sigma = E·(eps − eps0) fitted over the toe-compensated strain window {win}; the "
         "material's ground truth is the mean ± sd (ddof 1) over its specimens.", W)]

@@ -7,11 +7,11 @@ from matplotlib.figure import Figure
 
 from .. import plots
 from ..campaign.results import ResultsFolder
-from .layout import BUDGET_GROUPS_PER_PAGE, _Page
-from .tables import _chunks, _continued, _draw_table
+from .layout import BUDGET_GROUPS_PER_PAGE, Page
+from .tables import continued, draw_table, page_chunks
 
 
-def _pages_budget(res: ResultsFolder) -> list[_Page]:
+def budget_pages(res: ResultsFolder) -> list[Page]:
     bud = res.budget
     if bud is None or bud.empty:
         return []
@@ -33,7 +33,7 @@ def _pages_budget(res: ResultsFolder) -> list[_Page]:
         members.append(g.index)
     tab = pd.DataFrame(rows)
     dtab = pd.DataFrame({"Input": inputs, "Distribution": [dist.get(i, "") for i in inputs]})
-    chunks = _chunks(len(tab), BUDGET_GROUPS_PER_PAGE)  # table and chart share the page
+    chunks = page_chunks(len(tab), BUDGET_GROUPS_PER_PAGE)  # table and chart share the page
     per = max(c.stop - c.start for c in chunks)
     row_h = 0.036
     hgt = row_h * (per + 1)  # the same table height on every page: charts line up
@@ -46,10 +46,10 @@ def _pages_budget(res: ResultsFolder) -> list[_Page]:
         def build(fig: Figure, part: pd.DataFrame = part, bpart: pd.DataFrame = bpart) -> None:
             h = row_h * (len(part) + 1)
             ax = fig.add_axes((0.03, 0.88 - h, 0.58, h))
-            _draw_table(ax, part, fontsize=7.5, row_height=1.0 / (len(part) + 1))
+            draw_table(ax, part, fontsize=7.5, row_height=1.0 / (len(part) + 1))
             ax2 = fig.add_axes((0.64, 0.88 - row_h * (len(dtab) + 1), 0.34,
                                 row_h * (len(dtab) + 1)))
-            _draw_table(ax2, dtab, fontsize=7.5, row_height=1.0 / (len(dtab) + 1),
+            draw_table(ax2, dtab, fontsize=7.5, row_height=1.0 / (len(dtab) + 1),
                         col_weights=[1.0, 1.6])
             fig.text(0.03, 0.885 - hgt - 0.035, "Cells: share of the variance of ln E "
                      "(relative sd of E from that input, %). Systematic inputs are shared by "
@@ -57,6 +57,6 @@ def _pages_budget(res: ResultsFolder) -> list[_Page]:
                      fontsize=8, color="0.25")
             ax3 = fig.add_axes((0.15, 0.1, 0.62, 0.88 - hgt - 0.22))
             plots.plot_budget(bpart, ax=ax3)
-        pages.append(_Page(_continued("Uncertainty budget", k, len(chunks)), build,
+        pages.append(Page(continued("Uncertainty budget", k, len(chunks)), build,
                            rows=len(part)))
     return pages

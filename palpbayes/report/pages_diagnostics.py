@@ -12,9 +12,9 @@ from .. import plots
 from ..campaign.layout import posterior_path
 from ..campaign.results import ResultsFolder, load_fit
 from ..io.tabular import parse_bool
-from .format import _fmt, _range, _wrap, _yesno
-from .layout import TABLE_ROWS_PER_PAGE, _Page, _text_lines
-from .tables import _chunks, _continued, _draw_table, _flagged, _pooled_of
+from .format import fmt, fmt_range, wrap, yesno
+from .layout import TABLE_ROWS_PER_PAGE, Page, text_lines
+from .tables import continued, draw_table, flagged_rows, page_chunks, pooled_of
 
 
 def _diag_highlight(gtab: pd.DataFrame) -> Callable[[int, str, str], str | None]:
@@ -80,11 +80,11 @@ def _model_form_sentence(b: pd.DataFrame, n_material: int) -> str:
             "modelform_models).")
 
 
-def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
+def diagnostics_page(res: ResultsFolder) -> list[Page]:
     from ..bayes.diagnostics import ESS_MIN, RHAT_MAX
 
     b = res.bayes_rows()
-    flagged = _flagged(res)
+    flagged = flagged_rows(res)
     rmax = float(b["rhat_max"].max()) if len(b) else float("nan")
     emin = float(b["ess_min"].min()) if len(b) else float("nan")
     crit = (f"criteria: R-hat ≤ {RHAT_MAX}, bulk and tail ESS ≥ {ESS_MIN:.0f}, autocorrelation "
@@ -114,30 +114,30 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
         g = b[(b["material"].fillna("").astype(str) == mat) & (b["tip"].astype(str) == tip)]
         if g.empty:
             continue
-        pooled = _pooled_of(res, mat, tip)
+        pooled = pooled_of(res, mat, tip)
         groups.append({
             "Material": mat, "Tip": tip, "fits": str(len(g)),
             "converged": str(int(g["converged"].map(parse_bool).sum())),
-            "max R-hat": _fmt(g["rhat_max"].max(), 4), "min ESS": _fmt(g["ess_min"].min(), 0),
-            "max tau [steps]": _fmt(g["tau_max"].max(), 1),
-            "steps": _range(g["n_steps"].min(), g["n_steps"].max()),
-            "acceptance": _fmt(g["acceptance"].mean(), 2),
-            "pooled R-hat": "–" if pooled is None else _fmt(pooled.get("rhat_max"), 4),
-            "pooled ESS": "–" if pooled is None else _fmt(pooled.get("ess_min"), 0),
-            "pooled conv.": "–" if pooled is None else _yesno(pooled.get("converged")),
+            "max R-hat": fmt(g["rhat_max"].max(), 4), "min ESS": fmt(g["ess_min"].min(), 0),
+            "max tau [steps]": fmt(g["tau_max"].max(), 1),
+            "steps": fmt_range(g["n_steps"].min(), g["n_steps"].max()),
+            "acceptance": fmt(g["acceptance"].mean(), 2),
+            "pooled R-hat": "–" if pooled is None else fmt(pooled.get("rhat_max"), 4),
+            "pooled ESS": "–" if pooled is None else fmt(pooled.get("ess_min"), 0),
+            "pooled conv.": "–" if pooled is None else yesno(pooled.get("converged")),
         })
     gtab = pd.DataFrame(groups)
     ftab = pd.DataFrame([{
-        "Trace": r["trace_id"], "converged": _yesno(r["converged"]),
-        "R-hat": _fmt(r["rhat_max"], 4), "ESS": _fmt(r["ess_min"], 0),
-        "steps": _fmt(r["n_steps"], 0),
+        "Trace": r["trace_id"], "converged": yesno(r["converged"]),
+        "R-hat": fmt(r["rhat_max"], 4), "ESS": fmt(r["ess_min"], 0),
+        "steps": fmt(r["n_steps"], 0),
         "notes": textwrap.shorten(str(r["notes"]) if pd.notna(r.get("notes")) else "", 95),
     } for _, r in flagged.iterrows()])
     # pages: the group table in chunks, then the flagged fits in chunks; the first flagged
     # chunk shares the last group page when both fit in TABLE_ROWS_PER_PAGE rows
     layout: list[tuple[pd.DataFrame | None, pd.DataFrame | None]] = \
-        [(gtab.iloc[sl], None) for sl in _chunks(len(gtab))] if len(gtab) else [(None, None)]
-    fchunks = [ftab.iloc[sl] for sl in _chunks(len(ftab))] if len(ftab) else []
+        [(gtab.iloc[sl], None) for sl in page_chunks(len(gtab))] if len(gtab) else [(None, None)]
+    fchunks = [ftab.iloc[sl] for sl in page_chunks(len(ftab))] if len(ftab) else []
     if fchunks:
         last_g = layout[-1][0]
         if last_g is None or len(last_g) + len(fchunks[0]) <= TABLE_ROWS_PER_PAGE:
@@ -147,14 +147,14 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
     pages = []
     for k, (gpart, fpart) in enumerate(layout):
         def build(fig: Figure, gpart=gpart, fpart=fpart, first=(k == 0)) -> None:
-            lines = [("t", ln) for ln in _wrap(head, 150)]
+            lines = [("t", ln) for ln in wrap(head, 150)]
             lines += [("t", crit)] if first else []
-            _text_lines(fig, lines, top=0.9, left=0.04, size=10)
+            text_lines(fig, lines, top=0.9, left=0.04, size=10)
             top = 0.8
             if gpart is not None and len(gpart):
                 hgt = row_h * (len(gpart) + 1)
                 ax = fig.add_axes((0.04, top - hgt, 0.92, hgt))
-                _draw_table(ax, gpart, fontsize=8, row_height=1.0 / (len(gpart) + 1),
+                draw_table(ax, gpart, fontsize=8, row_height=1.0 / (len(gpart) + 1),
                             highlight=_diag_highlight(gpart))
                 top -= hgt + 0.05
             if fpart is not None and len(fpart):
@@ -163,11 +163,11 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
                 top -= 0.02
                 hgt = min(top - 0.06, row_h * (len(fpart) + 1))
                 ax = fig.add_axes((0.04, top - hgt, 0.92, hgt))
-                _draw_table(ax, fpart, fontsize=7.5, row_height=1.0 / (len(fpart) + 1),
+                draw_table(ax, fpart, fontsize=7.5, row_height=1.0 / (len(fpart) + 1),
                             highlight=lambda _r, c, t: "#fde0dc" if c == "converged" and
                             t == "NO" else None)
         rows = max(0 if gpart is None else len(gpart), 0 if fpart is None else len(fpart))
-        pages.append(_Page(_continued("Convergence diagnostics", k, len(layout)), build,
+        pages.append(Page(continued("Convergence diagnostics", k, len(layout)), build,
                            rows=rows))
     worst = None
     if len(b) and b["rhat_max"].notna().any():
@@ -180,5 +180,5 @@ def _page_diagnostics(res: ResultsFolder) -> list[_Page]:
             sub = fig.add_subfigure(fig.add_gridspec(1, 1, left=0.05, right=0.97, top=0.92,
                                                      bottom=0.05)[0, 0])
             plots.plot_walkers(fit, fig=sub, title=False)
-        pages.append(_Page(f"Walkers of the least converged fit ({worst})", build_w))
+        pages.append(Page(f"Walkers of the least converged fit ({worst})", build_w))
     return pages

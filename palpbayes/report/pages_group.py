@@ -12,15 +12,15 @@ from matplotlib.figure import Figure
 from .. import plots
 from ..campaign.layout import posterior_path
 from ..campaign.results import ResultsFolder, load_fit
-from .format import _KPA, _fmt, _interval
-from .layout import _Page
-from .tables import _hertz_of_group, _pooled_of
+from .format import KPA, fmt, interval
+from .layout import Page
+from .tables import hertz_of_group, pooled_of
 
 
 def _representative(res: ResultsFolder, mat: str, tip: str) -> str | None:
     """The trace shown for a group: the pooling's representative (posterior median of log E
     closest to the group median) if recorded, else the Bayes estimate closest to the median."""
-    pooled = _pooled_of(res, mat, tip)
+    pooled = pooled_of(res, mat, tip)
     if pooled is not None and isinstance(pooled.get("representative_trace"), str):
         tid = pooled["representative_trace"]
         if posterior_path(res.path, tid).is_file():
@@ -52,13 +52,13 @@ def _gt_of(res: ResultsFolder, mat: str) -> tuple[float, float] | None:
     return None
 
 
-def _page_group(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page:
+def group_page(res: ResultsFolder, mat: str, tip: str, seed: int) -> Page:
     def build(fig: Figure) -> None:
         tid = _representative(res, mat, tip)
         s = res.summary
         sub = s[(s["material"].fillna("").astype(str) == mat) & (s["tip"].astype(str) == tip)]
         gt = _gt_of(res, mat)
-        pooled = _pooled_of(res, mat, tip)
+        pooled = pooled_of(res, mat, tip)
         gs = fig.add_gridspec(2, 3, left=0.06, right=0.98, top=0.84, bottom=0.1, wspace=0.32,
                               hspace=0.42)
         ax_fd = fig.add_subplot(gs[0, 0:2])
@@ -86,31 +86,31 @@ def _page_group(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page:
         txt = []
         if pooled is not None:
             txt.append(f"Pooled ({int(pooled['n_traces'])} traces): E = "
-                       f"{_fmt(pooled['E_pa'] * _KPA)} kPa, 90 % "
-                       f"{_interval(pooled['E_lo_pa'], pooled['E_hi_pa'], 1)}; new specimen "
-                       f"{_interval(pooled['E_new_lo_pa'], pooled['E_new_hi_pa'], 1)} kPa; "
-                       f"between-trace sd of log E tau = {_fmt(pooled.get('tau'), 3)}")
+                       f"{fmt(pooled['E_pa'] * KPA)} kPa, 90 % "
+                       f"{interval(pooled['E_lo_pa'], pooled['E_hi_pa'], 1)}; new specimen "
+                       f"{interval(pooled['E_new_lo_pa'], pooled['E_new_hi_pa'], 1)} kPa; "
+                       f"between-trace sd of log E tau = {fmt(pooled.get('tau'), 3)}")
         if gt is not None:
-            txt.append(f"Ground truth: {_fmt(gt[0] * _KPA)} ± {_fmt(gt[1] * _KPA)} kPa")
+            txt.append(f"Ground truth: {fmt(gt[0] * KPA)} ± {fmt(gt[1] * KPA)} kPa")
         fig.text(0.06, 0.905, "    ".join(txt), fontsize=8.5, color="0.2")
         hz = _hertz_line(res, mat, tip)
         if hz:
             fig.text(0.06, 0.882, hz, fontsize=8.5, color="#8a3b00")
-    return _Page(f"{mat} · {tip}" if mat else tip, build)
+    return Page(f"{mat} · {tip}" if mat else tip, build)
 
 
 def _hertz_line(res: ResultsFolder, mat: str, tip: str) -> str:
     """Sphere pages: the paper's Hertz fit of the same traces against the exact Sneddon law."""
-    h = _hertz_of_group(res, mat, tip)
+    h = hertz_of_group(res, mat, tip)
     if h is None:
         return ""
     s = res.summary
     ls = s[(s["material"].fillna("").astype(str) == mat) & (s["tip"].astype(str) == tip)
            & (s["method"] == "lsq")]
     e = pd.to_numeric(ls["E_pa"], errors="coerce").dropna()
-    sd = f" ± {_fmt(h[1] * _KPA)}" if math.isfinite(h[1]) else ""
-    ref = (f"least squares with the exact Sneddon law ({_fmt(e.mean() * _KPA)} kPa)"
+    sd = f" ± {fmt(h[1] * KPA)}" if math.isfinite(h[1]) else ""
+    ref = (f"least squares with the exact Sneddon law ({fmt(e.mean() * KPA)} kPa)"
            if len(e) else "the exact Sneddon law")
     return (f"Paper's Hertz fit of the same {h[3]} trace(s) (least squares, paraboloid law at "
-            f"the sphere's radius): E = {_fmt(h[0] * _KPA)}{sd} kPa, Δ = {100 * h[2]:+.1f} % "
+            f"the sphere's radius): E = {fmt(h[0] * KPA)}{sd} kPa, Δ = {100 * h[2]:+.1f} % "
             f"vs {ref}.")

@@ -8,14 +8,14 @@ from matplotlib.figure import Figure
 from .. import plots
 from ..campaign.results import ResultsFolder
 from ..gap import gap_verdicts
-from .format import _wrap
-from .layout import _Page, _text_lines
+from .format import wrap
+from .layout import Page, text_lines
 
 _W = 150  # characters per line of the page text at 9 pt
 _W_SMALL = 185  # at 8 pt
 
 
-def _pages_layer(res: ResultsFolder) -> list[_Page]:
+def layer_pages(res: ResultsFolder) -> list[Page]:
     """The campaign's estimates with and without the layer (when its comparison has the
     layer's columns), then the paper's gap decomposed (when ``gap.csv`` is there)."""
     pages = []
@@ -38,14 +38,14 @@ def _pages_layer(res: ResultsFolder) -> list[_Page]:
                      "tell the bases apart: 0.5).")
 
         def build(fig: Figure, text: str = text) -> None:
-            _text_lines(fig, [("t", ln) for ln in _wrap(text, _W)], top=0.9, left=0.04,
+            text_lines(fig, [("t", ln) for ln in wrap(text, _W)], top=0.9, left=0.04,
                         size=9.0)
             ax = fig.add_axes((0.08, 0.1, 0.86, 0.62))
             plots.plot_halfspace_vs_layer(cmp_, ax=ax)
-        pages.append(_Page("Finite thickness: half-space and layer", build))
+        pages.append(Page("Finite thickness: half-space and layer", build))
     if res.gap is not None and not res.gap.empty:
         verdicts = gap_verdicts(res.gap)
-        lines = [("t", ln) for ln in _wrap(
+        lines = [("t", ln) for ln in wrap(
             "The paper's robot estimates against its Instron (the published numbers), beside "
             "what palpbayes' models predict its half-space least squares reads on elastic "
             "blocks of the paper's geometry with the Instron's E: the block as a layer on its "
@@ -53,11 +53,11 @@ def _pages_layer(res: ResultsFolder) -> list[_Page]:
             "against the 0.3 assumed), series compliance (0-2 µm/N), Hertz for the sphere. "
             "Not modelled: the blocks' finite width, foam nonlinearity and rate.", _W_SMALL)]
         for v in verdicts.values():
-            lines += [("", "")] + [("t", ln) for ln in _wrap(v, _W_SMALL)]
+            lines += [("", "")] + [("t", ln) for ln in wrap(v, _W_SMALL)]
 
         def build_gap(fig: Figure, lines=lines) -> None:
             ax = fig.add_axes((0.08, 0.56, 0.86, 0.35))
             plots.plot_gap(res.gap, ax=ax)
-            _text_lines(fig, lines, top=0.45, left=0.04, size=8.0)
-        pages.append(_Page("Why does the robot read stiffer than the Instron?", build_gap))
+            text_lines(fig, lines, top=0.45, left=0.04, size=8.0)
+        pages.append(Page("Why does the robot read stiffer than the Instron?", build_gap))
     return pages

@@ -13,11 +13,11 @@ from ..errors import PalpbayesError
 from ..io.manifest import load_trace
 from ..online import StoppingRule, needed_indentation
 from ..units import format_force, format_length
-from .format import _wrap
-from .layout import _Page, _text_lines
-from .tables import _chunks, _continued, _draw_table
+from .format import wrap
+from .layout import Page, text_lines
+from .tables import continued, draw_table, page_chunks
 
-__all__ = ["REPLAY_TARGET", "indentation_study", "online_noise"]
+__all__ = ["REPLAY_TARGET", "indentation_study", "online_noise", "online_pages"]
 
 #: Relative half-width of the 90 % interval of E at which the replay stops (±2 %).
 REPLAY_TARGET = 0.02
@@ -77,7 +77,7 @@ def _group_table(study: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _pages_online(res: ResultsFolder, target: float = REPLAY_TARGET) -> list[_Page]:
+def online_pages(res: ResultsFolder, target: float = REPLAY_TARGET) -> list[Page]:
     """The study's table (split over pages like the other tables), or no page at all."""
     study = indentation_study(res, target)
     if study.empty:
@@ -91,14 +91,14 @@ def _pages_online(res: ResultsFolder, target: float = REPLAY_TARGET) -> list[_Pa
             "material and tip: the depth below the estimated surface and the peak force above "
             "the baseline at the stop, and their fractions of the recorded indentation. "
             "One trace: palpbayes replay TRACE --tip ... --target 2% --out DIR.")
-    intro = [("t", line) for line in _wrap(text, 150)]
+    intro = [("t", line) for line in wrap(text, 150)]
     pages = []
-    parts = _chunks(len(table))
+    parts = page_chunks(len(table))
     for k, part in enumerate(parts):
         def build(fig: Figure, part=part) -> None:
-            _text_lines(fig, intro, top=0.9, left=0.05, size=9.0)
+            text_lines(fig, intro, top=0.9, left=0.05, size=9.0)
             ax = fig.add_axes((0.05, 0.08, 0.9, 0.7))
-            _draw_table(ax, table.iloc[part].reset_index(drop=True))
-        pages.append(_Page(_continued("How much indentation did we need?", k, len(parts)),
+            draw_table(ax, table.iloc[part].reset_index(drop=True))
+        pages.append(Page(continued("How much indentation did we need?", k, len(parts)),
                            build, rows=part.stop - part.start))
     return pages

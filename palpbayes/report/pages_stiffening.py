@@ -10,14 +10,15 @@ from matplotlib.figure import Figure
 from .. import plots
 from ..campaign.compare import STIFFENING_MIN_REST_TIMES
 from ..campaign.results import ResultsFolder
-from .format import _wrap
-from .layout import _Page, _text_lines
-from .tables import _chunks, _continued, _draw_table
+from .format import wrap
+from .layout import Page, text_lines
+from .tables import continued, draw_table, page_chunks
 
-__all__ = ["STIFFENING_MIN_REST_TIMES"]
+__all__ = ["STIFFENING_MIN_REST_TIMES", "stiffening_groups", "stiffening_page",
+           "stiffening_table_pages"]
 
 
-def _stiffening_groups(res: ResultsFolder) -> list[tuple[str, str]]:
+def stiffening_groups(res: ResultsFolder) -> list[tuple[str, str]]:
     """Groups whose Bayesian fits span enough distinct positive rest times for the law."""
     b = res.bayes_rows()
     if "rest_time_s" not in b:
@@ -32,7 +33,7 @@ def _stiffening_groups(res: ResultsFolder) -> list[tuple[str, str]]:
     return out
 
 
-def _page_stiffening(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page:
+def stiffening_page(res: ResultsFolder, mat: str, tip: str, seed: int) -> Page:
     def build(fig: Figure) -> None:
         from ..stiffening import fit_stiffening_summary
 
@@ -57,18 +58,18 @@ def _page_stiffening(res: ResultsFolder, mat: str, tip: str, seed: int) -> _Page
                                                for a, b in zip(tab["lo"], tab["hi"],
                                                                strict=True)]})
         ax2 = fig.add_axes((0.62, 0.62, 0.35, 0.24))
-        _draw_table(ax2, show, fontsize=8, row_height=1.0 / (len(show) + 1))
+        draw_table(ax2, show, fontsize=8, row_height=1.0 / (len(show) + 1))
         lines = [("t", f"Preferred law: {fit.law}"), ("", "")]
-        lines += [("t", ln) for ln in _wrap(fit.message, 62)]
+        lines += [("t", ln) for ln in wrap(fit.message, 62)]
         lines += [("", ""), ("t", "Statistical E of each palpation (the budget's systematic "),
                   ("t", "inputs scale the whole curve, not its shape).")]
-        _text_lines(fig, lines, top=0.56, left=0.62, size=8.5)
+        text_lines(fig, lines, top=0.56, left=0.62, size=8.5)
     title = f"Stiffening after repeated palpation: {mat} · {tip}" if mat else \
         f"Stiffening after repeated palpation: {tip}"
-    return _Page(title, build)
+    return Page(title, build)
 
 
-def _pages_stiffening_table(res: ResultsFolder) -> list[_Page]:
+def stiffening_table_pages(res: ResultsFolder) -> list[Page]:
     st = res.stiffening
     if st is None or st.empty:
         return []
@@ -77,7 +78,7 @@ def _pages_stiffening_table(res: ResultsFolder) -> list[_Page]:
     for c in show.columns:
         if pd.api.types.is_float_dtype(show[c]):
             show[c] = show[c].map(lambda v: f"{v:.4g}")
-    chunks = _chunks(len(show))
+    chunks = page_chunks(len(show))
     per = max(c.stop - c.start for c in chunks)
     pages = []
     for k, sl in enumerate(chunks):
@@ -85,7 +86,7 @@ def _pages_stiffening_table(res: ResultsFolder) -> list[_Page]:
 
         def build(fig: Figure, part: pd.DataFrame = part) -> None:
             ax = fig.add_axes((0.03, 0.2, 0.94, 0.68))
-            _draw_table(ax, part, fontsize=7, row_height=min(0.06, 1.0 / (per + 1)))
-        pages.append(_Page(_continued("Stiffening (stiffening.csv)", k, len(chunks)), build,
+            draw_table(ax, part, fontsize=7, row_height=min(0.06, 1.0 / (per + 1)))
+        pages.append(Page(continued("Stiffening (stiffening.csv)", k, len(chunks)), build,
                            rows=len(part)))
     return pages

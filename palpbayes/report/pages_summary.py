@@ -10,16 +10,16 @@ from matplotlib.figure import Figure
 from .. import plots
 from ..campaign.results import ResultsFolder
 from ..contact import registered_laws
-from .format import _KPA, _wrap
-from .layout import CHART_GROUPS_PER_PAGE, _Page, _text_lines
+from .format import KPA, wrap
+from .layout import CHART_GROUPS_PER_PAGE, Page, text_lines
 from .tables import (
     HERTZ_COL,
-    _chunks,
-    _comparison_groups,
-    _continued,
-    _draw_table,
-    _material_pages,
+    comparison_groups,
+    continued,
     coverage_counts,
+    draw_table,
+    material_pages,
+    page_chunks,
     summary_table,
 )
 
@@ -37,12 +37,12 @@ def _paper_gt_text(materials: Sequence[str]) -> str:
     """The paper's own Instron ground truth of the given materials, e.g. 'White 111 kPa'."""
     from ..paper import PAPER_MATERIALS
 
-    known = [f"{m} {PAPER_MATERIALS[m].E_pa * _KPA:g} kPa" for m in materials
+    known = [f"{m} {PAPER_MATERIALS[m].E_pa * KPA:g} kPa" for m in materials
              if m in PAPER_MATERIALS]
     return ", ".join(known)
 
 
-def _pages_summary(res: ResultsFolder) -> list[_Page]:
+def summary_pages(res: ResultsFolder) -> list[Page]:
     table = summary_table(res)
     title = "Summary: ground truth vs least squares vs Bayes"
 
@@ -73,7 +73,7 @@ def _pages_summary(res: ResultsFolder) -> list[_Page]:
         note = ("No comparison.csv in this folder (run 'palpbayes compare'): per-group means "
                 "± sd of the per-trace estimates.")
     cover = _coverage_line(res)
-    chunks = _chunks(len(table))
+    chunks = page_chunks(len(table))
     per = max(c.stop - c.start for c in chunks)
     h = min(0.065, 1.0 / (per + 2.5))
     pages = []
@@ -85,18 +85,18 @@ def _pages_summary(res: ResultsFolder) -> list[_Page]:
             if cover:
                 fig.text(0.03, 0.905, cover, fontsize=10, fontweight="bold", va="bottom")
             ax = fig.add_axes((0.03, 0.2, 0.94, top - 0.2))
-            _draw_table(ax, part, fontsize=7.5 if part.shape[1] > 10 else 9.0, highlight=hl,
+            draw_table(ax, part, fontsize=7.5 if part.shape[1] > 10 else 9.0, highlight=hl,
                         row_height=h, wrap_header=12)
-            _text_lines(fig, [("t", ln) for ln in _wrap(note, 185)], top=0.175, left=0.03,
+            text_lines(fig, [("t", ln) for ln in wrap(note, 185)], top=0.175, left=0.03,
                         size=8)
-        pages.append(_Page(_continued(title, k, len(chunks)), build, rows=len(part)))
+        pages.append(Page(continued(title, k, len(chunks)), build, rows=len(part)))
     return pages
 
 
-def _pages_comparison(res: ResultsFolder) -> list[_Page]:
+def comparison_pages(res: ResultsFolder) -> list[Page]:
     comp = res.comparison
-    groups = _comparison_groups(comp)
-    split = _material_pages(groups, CHART_GROUPS_PER_PAGE)
+    groups = comparison_groups(comp)
+    split = material_pages(groups, CHART_GROUPS_PER_PAGE)
     cap = ("Thick bars: each method's 90 % interval of the material's modulus (least "
            "squares: t interval of the mean over traces; Bayes: pooled posterior with the "
            "budget). Thin bars: 90 % interval for a new specimen (least squares: t "
@@ -116,8 +116,8 @@ def _pages_comparison(res: ResultsFolder) -> list[_Page]:
         def build(fig: Figure, sub: pd.DataFrame = sub) -> None:
             ax = fig.add_axes((0.07, 0.17, 0.9, 0.69))
             plots.plot_comparison(sub, ax=ax)
-            _text_lines(fig, [("t", ln) for ln in _wrap(cap, 175)], top=0.11, left=0.07,
+            text_lines(fig, [("t", ln) for ln in wrap(cap, 175)], top=0.11, left=0.07,
                         size=8)
-        pages.append(_Page(_continued("Comparison per material and tip", k, len(split)),
+        pages.append(Page(continued("Comparison per material and tip", k, len(split)),
                            build, rows=len(part)))
     return pages

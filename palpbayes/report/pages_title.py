@@ -12,9 +12,9 @@ from ..campaign.results import ResultsFolder
 from ..contact import DEFAULT_NU
 from ..noise import PAPER_NOISE_PP
 from ..units import format_length
-from .format import _fmt, _force_setting, _range, _shown, _wrap
-from .layout import PAGE_SIZE, _Page, _text_lines
-from .methods import MOVES_TEXT, _sampler_settings, layer_setting_text
+from .format import fmt, fmt_range, force_setting, shown_path, wrap
+from .layout import PAGE_SIZE, Page, text_lines
+from .methods import MOVES_TEXT, layer_setting_text, sampler_settings
 
 
 def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
@@ -23,7 +23,7 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
     s = res.settings
     pri = o.get("priors") or {}
     bud = o.get("budget") or {}
-    smp, _ = _sampler_settings(o.get("settings"))
+    smp, _ = sampler_settings(o.get("settings"))
     thick = layer_setting_text(o)
     frac = o.get("fit_fraction")
     if frac is None:
@@ -42,32 +42,32 @@ def _settings_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         ("t", "Contact model: Poisson ratio nu = " + (
             f"{o['nu']}" if o.get("nu") is not None
             else f"{DEFAULT_NU} (not given: the default, a foam value)") + f"; {thick}"),
-        ("t", f"Fit window: F_unc = {_force_setting(o.get('f_unc', PAPER_NOISE_PP))}; fit "
+        ("t", f"Fit window: F_unc = {force_setting(o.get('f_unc', PAPER_NOISE_PP))}; fit "
               f"fraction {frac}; max depth {depth}"),
         ("t", f"Noise model: {o.get('noise', 'gaussian')}; baseline "
               f"{o.get('baseline', 'constant')}{'; tared' if o.get('tare') else ''}; sensor "
-              f"noise {_force_setting(pri.get('noise_pp', PAPER_NOISE_PP))} peak-to-peak (sigma "
+              f"noise {force_setting(pri.get('noise_pp', PAPER_NOISE_PP))} peak-to-peak (sigma "
               "prior centred on pp/6)"),
         ("t", f"Budget: Poisson ratio {nu_b}; tip radius "
-              f"±{_fmt(100 * float(bud.get('radius_tolerance', 0)), 1)} %; force gain sd "
-              f"{_fmt(100 * float(bud.get('gain_sd', 0)), 1)} %; compliance "
+              f"±{fmt(100 * float(bud.get('radius_tolerance', 0)), 1)} %; force gain sd "
+              f"{fmt(100 * float(bud.get('gain_sd', 0)), 1)} %; compliance "
               f"0–{bud.get('compliance_max')} m/N"),
         ("t", f"Sampler: emcee, {smp.get('n_walkers')} walkers, moves '{smp.get('moves')}' "
               f"({MOVES_TEXT.get(str(smp.get('moves')), 'see emcee')}), "
-              f"{_range(smp.get('min_steps'), smp.get('max_steps'))} steps, chain longer than "
+              f"{fmt_range(smp.get('min_steps'), smp.get('max_steps'))} steps, chain longer than "
               f"{float(smp.get('tau_factor')):g}·tau, R-hat and ESS checked before stopping "
               "(the stopping rule in full on the Methods page)"),
     ]
 
 
-def _page_title(res: ResultsFolder, created: str, contents: list[str]) -> _Page:
+def title_page(res: ResultsFolder, created: str, contents: list[str]) -> Page:
     def build(fig: Figure) -> None:
         fig.text(0.5, 0.78, "palpbayes report", ha="center", fontsize=30, fontweight="bold")
         fig.text(0.5, 0.71, f"Campaign: {res.name}", ha="center", fontsize=18)
         fig.text(0.5, 0.66, "Elastic modulus from robotic palpation: least squares vs Bayes, "
                  "compared with compression ground truth", ha="center", fontsize=11,
                  color="0.3")
-        fig.text(0.5, 0.62, f"Built from the results folder {_shown(res.path)}", ha="center",
+        fig.text(0.5, 0.62, f"Built from the results folder {shown_path(res.path)}", ha="center",
                  fontsize=11, fontweight="bold", color="0.2")
         s = res.settings
         n_tr = res.summary["trace_id"].nunique()
@@ -76,24 +76,24 @@ def _page_title(res: ResultsFolder, created: str, contents: list[str]) -> _Page:
             ("t", f"Date: {created}"),
             ("t", f"palpbayes version: {__version__} (results written by "
                   f"{s.get('palpbayes_version', '?')})"),
-            ("t", f"Results folder: {_shown(res.path)}"),
-            ("t", "Campaign source: " + (_shown(s["source"]) if s.get("source")
+            ("t", f"Results folder: {shown_path(res.path)}"),
+            ("t", "Campaign source: " + (shown_path(s["source"]) if s.get("source")
                                          else "(traces given in code)")),
             ("t", f"{n_tr} traces, {len(groups)} material × tip groups; ground truth: "
                   f"{'yes' if _has_gt(res) else 'none'}"),
             ("", ""),
             ("h", "Settings"),
-            *[("t", ln) for _, txt in _settings_lines(res) for ln in _wrap(txt, 92)],
+            *[("t", ln) for _, txt in _settings_lines(res) for ln in wrap(txt, 92)],
         ]
-        _text_lines(fig, info, top=0.56, left=0.06, size=10)
+        text_lines(fig, info, top=0.56, left=0.06, size=10)
         size = 8.5
         fits = int((0.56 - 0.06) * PAGE_SIZE[1] * 72 / (size * 1.45)) - 2
-        toc = [("h", "Contents")] + _toc_lines(contents, fits)
-        _text_lines(fig, toc, top=0.56, left=0.66, size=size)
-    return _Page("", build)
+        toc = [("h", "Contents")] + toc_lines(contents, fits)
+        text_lines(fig, toc, top=0.56, left=0.66, size=size)
+    return Page("", build)
 
 
-def _toc_lines(contents: Sequence[str], max_lines: int) -> list[tuple[str, str]]:
+def toc_lines(contents: Sequence[str], max_lines: int) -> list[tuple[str, str]]:
     """Contents lines: page number and title (wrapped, never cut), the title page left out.
 
     When they do not fit in ``max_lines``, each run of material × tip pages is given as one

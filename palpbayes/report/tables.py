@@ -14,11 +14,12 @@ from matplotlib.axes import Axes
 
 from ..campaign.results import MATERIAL_ORDER, TIP_ORDER, ResultsFolder, ordered
 from ..io.tabular import parse_bool
-from .format import _KPA, _fmt, _interval, _isnum, _pm, _yesno
+from .format import KPA, fmt, interval, isnum, pm, yesno
 from .layout import PAGE_SIZE, TABLE_ROWS_PER_PAGE
 
-__all__ = ["summary_table", "coverage_counts", "GT_COL", "LS_E_COL", "BAYES_E_COL",
-           "BAYES_NEW_COL", "HERTZ_COL"]
+__all__ = ["summary_table", "coverage_counts", "GT_COL", "LS_E_COL", "BAYES_E_COL", "BAYES_NEW_COL",
+           "HERTZ_COL", "hertz_of_group", "comparison_groups", "pooled_of", "flagged_rows",
+           "draw_table", "page_chunks", "continued", "material_pages"]
 
 #: Column headers of the comparison-based summary table (units in the headers).
 GT_COL = "GT E ± sd [kPa]"
@@ -28,7 +29,7 @@ BAYES_NEW_COL = "Bayes new specimen 90 % [kPa]"
 HERTZ_COL = "Hertz LS E [kPa] (Δ vs LS)"
 
 
-def _hertz_of_group(results: ResultsFolder, mat: str, tip: str
+def hertz_of_group(results: ResultsFolder, mat: str, tip: str
                     ) -> tuple[float, float, float, int] | None:
     """The paper's Hertz fit of a sphere group from ``summary.csv``'s least-squares rows.
 
@@ -66,8 +67,8 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
     comp = results.comparison
     rows = []
     if comp is not None and not comp.empty:
-        groups = _comparison_groups(comp)
-        hertz = {g: _hertz_of_group(results, *g) for g in groups}
+        groups = comparison_groups(comp)
+        hertz = {g: hertz_of_group(results, *g) for g in groups}
         for mat, tip in groups:
             sub = comp[(comp["material"].astype(str) == mat) & (comp["tip"].astype(str) == tip)]
             by = {str(r["method"]): r for _, r in sub.iterrows()}
@@ -75,26 +76,26 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
             lsq, bay = by.get("lsq"), by.get("bayes")
             row = {
                 "Material": mat, "Tip": tip,
-                "n": str(int(any_row["n_traces"])) if _isnum(any_row.get("n_traces")) else "–",
-                GT_COL: _pm(any_row.get("gt_E_pa"), any_row.get("gt_sd_pa")),
+                "n": str(int(any_row["n_traces"])) if isnum(any_row.get("n_traces")) else "–",
+                GT_COL: pm(any_row.get("gt_E_pa"), any_row.get("gt_sd_pa")),
             }
             for label, r, e_col, new_col in (
                     ("LS", lsq, LS_E_COL, "LS new specimen 90 % [kPa]"),
                     ("Bayes", bay, BAYES_E_COL, BAYES_NEW_COL)):
-                row[e_col] = "–" if r is None else _pm(r["E_pa"], r["E_sd_pa"])
-                row[new_col] = "–" if r is None else _interval(
+                row[e_col] = "–" if r is None else pm(r["E_pa"], r["E_sd_pa"])
+                row[new_col] = "–" if r is None else interval(
                     r.get("E_new_lo_pa"), r.get("E_new_hi_pa"))
-                row[f"{label} err [%]"] = "–" if r is None else _fmt(r.get("rel_err_pct"))
+                row[f"{label} err [%]"] = "–" if r is None else fmt(r.get("rel_err_pct"))
                 row[f"{label} covers GT"] = ("–" if r is None
-                                             else _yesno(r.get("gt_in_new_interval")))
-            row["Paper E ± sd [kPa]"] = _pm(any_row.get("paper_E_pa"),
+                                             else yesno(r.get("gt_in_new_interval")))
+            row["Paper E ± sd [kPa]"] = pm(any_row.get("paper_E_pa"),
                                             any_row.get("paper_sd_pa"))
-            row["Paper err [%] (vs paper's GT)"] = _fmt(any_row.get("paper_err_pct"))
+            row["Paper err [%] (vs paper's GT)"] = fmt(any_row.get("paper_err_pct"))
             if any(h is not None for h in hertz.values()):
                 h = hertz[(mat, tip)]
                 row[HERTZ_COL] = "–"
                 if h is not None:  # Δ: mean per-trace (E_hertz − E)/E, as on the group page
-                    row[HERTZ_COL] = f"{_fmt(h[0] * _KPA)} ({100 * h[2]:+.1f} %)"
+                    row[HERTZ_COL] = f"{fmt(h[0] * KPA)} ({100 * h[2]:+.1f} %)"
             if bay is not None and not parse_bool(bay.get("converged_all")):
                 row[BAYES_E_COL] += " (!)"
             rows.append(row)
@@ -105,7 +106,7 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
         row = {"Material": mat, "Tip": tip, "n": str(sub["trace_id"].nunique())}
         for label, m in (("LS", "lsq"), ("Bayes", "bayes")):
             e = sub.loc[sub["method"] == m, "E_pa"].astype(float)
-            row[f"{label} mean E ± sd over traces [kPa]"] = _pm(e.mean(), e.std(ddof=1)) \
+            row[f"{label} mean E ± sd over traces [kPa]"] = pm(e.mean(), e.std(ddof=1)) \
                 if len(e) else "–"
         rows.append(row)
     return pd.DataFrame(rows)
@@ -127,14 +128,14 @@ def coverage_counts(results: ResultsFolder) -> dict[str, tuple[int, int]]:
     return out
 
 
-def _comparison_groups(comp: pd.DataFrame) -> list[tuple[str, str]]:
+def comparison_groups(comp: pd.DataFrame) -> list[tuple[str, str]]:
     mats = ordered(comp["material"].astype(str), MATERIAL_ORDER)
     tips = ordered(comp["tip"].astype(str), TIP_ORDER)
     have = set(zip(comp["material"].astype(str), comp["tip"].astype(str), strict=True))
     return [(m, t) for m in mats for t in tips if (m, t) in have]
 
 
-def _pooled_of(res: ResultsFolder, mat: str, tip: str) -> pd.Series | None:
+def pooled_of(res: ResultsFolder, mat: str, tip: str) -> pd.Series | None:
     p = res.pooled
     if p is None:
         return None
@@ -142,7 +143,7 @@ def _pooled_of(res: ResultsFolder, mat: str, tip: str) -> pd.Series | None:
     return None if sub.empty else sub.iloc[0]
 
 
-def _flagged(res: ResultsFolder) -> pd.DataFrame:
+def flagged_rows(res: ResultsFolder) -> pd.DataFrame:
     b = res.bayes_rows().copy()
     level = (b["flag_level"].fillna("").astype(str) if "flag_level" in b
              else pd.Series("", index=b.index))
@@ -155,7 +156,7 @@ def _flagged(res: ResultsFolder) -> pd.DataFrame:
 # ----------------------------------------------------------------------------- drawing, pages
 
 
-def _draw_table(ax: Axes, df: pd.DataFrame, *, fontsize: float = 8.0,
+def draw_table(ax: Axes, df: pd.DataFrame, *, fontsize: float = 8.0,
                 highlight: Callable[[int, str, str], str | None] | None = None,
                 col_weights: Sequence[float] | None = None, row_height: float | None = None,
                 wrap_header: int | None = None) -> None:
@@ -204,7 +205,7 @@ def _draw_table(ax: Axes, df: pd.DataFrame, *, fontsize: float = 8.0,
                 cell.set_facecolor(color)
 
 
-def _chunks(n: int, per_page: int = 0) -> list[slice]:
+def page_chunks(n: int, per_page: int = 0) -> list[slice]:
     """Slices of ``n`` rows into pages of at most ``per_page`` (default
     :data:`TABLE_ROWS_PER_PAGE`) rows, balanced (27 rows at 15 → 14 + 13); [slice(0, 0)] for
     none."""
@@ -214,12 +215,12 @@ def _chunks(n: int, per_page: int = 0) -> list[slice]:
     return [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
-def _continued(title: str, k: int, n: int) -> str:
+def continued(title: str, k: int, n: int) -> str:
     """Title of page ``k`` (0-based) of ``n``: the first as is, then 'title (continued, 2/3)'."""
     return title if k == 0 or n <= 1 else f"{title} (continued, {k + 1}/{n})"
 
 
-def _material_pages(groups: Sequence[tuple[str, str]], per_page: int
+def material_pages(groups: Sequence[tuple[str, str]], per_page: int
                     ) -> list[list[tuple[str, str]]]:
     """(material, tip) groups split into pages of at most ``per_page`` groups, keeping a
     material's tips together (a material with more tips than ``per_page`` is split), with as

@@ -37,13 +37,17 @@ from .cycle import DEFAULT_SEGMENTS
 from .fit import RheologyFit, fit_rheology
 from .store import clear_rheology_outputs, save_rheology_fit
 
-__all__ = ["RHEOLOGY_TABLE", "summary_row", "fit_traces"]
+__all__ = ["RHEOLOGY_TABLE", "summary_row", "fit_traces", "UNIT_SUFFIXES"]
 
-_UNITS = {"Pa": "pa", "s": "s", "m": "m", "N": "n", "-": "", "N·s/m": "n_s_per_m",
-          "N/m": "n_per_m"}
+#: Column-name suffix of each parameter unit in ``rheology.csv`` (a parameter in Pa ends in
+#: ``_pa``; other units fall back to their lower-case spelling).
+UNIT_SUFFIXES = {"Pa": "pa", "s": "s", "m": "m", "N": "n", "-": "", "N·s/m": "n_s_per_m",
+                 "N/m": "n_per_m"}
+
+
 def _column(parameter: str, unit: str, part: str = "") -> str:
     name = parameter.replace("*", "_star")
-    suffix = _UNITS.get(unit, unit.lower())
+    suffix = UNIT_SUFFIXES.get(unit, unit.lower())
     return "_".join(p for p in (name, part, suffix) if p)
 
 

@@ -38,7 +38,8 @@ from ..units import format_pressure
 from .compression import simulate_compression_test, write_compression_export
 from .trace import simulate_trace
 
-__all__ = ["simulate_campaign", "child_seed"]
+__all__ = ["simulate_campaign", "child_seed", "check_seed", "check_count", "check_file_name",
+           "prepare_out_dir", "manifest_row"]
 
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*$")
 
@@ -61,26 +62,31 @@ def child_seed(seed: int, *keys: str | int) -> np.random.SeedSequence:
     return np.random.SeedSequence(seed, spawn_key=key)
 
 
-def _check_seed(seed) -> int:
+def check_seed(seed) -> int:
+    """``seed`` as an int; :class:`InputError` unless it is a non-negative integer."""
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise InputError(f"seed {seed!r} must be a non-negative integer")
     return int(seed)
 
 
-def _check_count(value, what: str, minimum: int) -> int:
+def check_count(value, what: str, minimum: int) -> int:
+    """``value`` as an int; :class:`InputError` (naming ``what``) unless it is an integer
+    >= ``minimum``."""
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
         raise InputError(f"{what} {value!r} must be an integer >= {minimum}")
     return int(value)
 
 
-def _check_name(name: str, what: str) -> str:
+def check_file_name(name: str, what: str) -> str:
+    """``name`` as a string; :class:`InputError` unless it is usable in a file name (letters,
+    digits, '_' and '-', not starting with either of the last two)."""
     if not _NAME.match(str(name)):
         raise InputError(f"{what} name {name!r} is not usable in a file name; use letters, "
                          "digits, '_' and '-'")
     return str(name)
 
 
-def _prepare_out_dir(out: Path, overwrite: bool) -> None:
+def prepare_out_dir(out: Path, overwrite: bool) -> None:
     """Refuse a non-empty folder unless ``overwrite``; then drop a previous campaign's files."""
     if out.exists() and not out.is_dir():
         raise OutputExistsError(f"{out} exists and is not a folder; choose another OUT_DIR")
@@ -95,8 +101,9 @@ def _prepare_out_dir(out: Path, overwrite: bool) -> None:
                     f.unlink()
 
 
-def _manifest_row(trace_id: str, file: str, specimen: str, material: str, tip: Tip,
-                  thickness: float, repetition: int, rest_time: float | None) -> dict:
+def manifest_row(trace_id: str, file: str, specimen: str, material: str, tip: Tip,
+                 thickness: float, repetition: int, rest_time: float | None) -> dict:
+    """One row of a simulated campaign's ``manifest.csv`` (tip geometry columns included)."""
     return {
         "trace_id": trace_id,
         "file": file,
@@ -230,9 +237,9 @@ def simulate_campaign(
     InputError
         Bad seed, counts, names or options.
     """
-    seed = _check_seed(seed)
-    repetitions = _check_count(repetitions, "repetitions", 1)
-    gt_specimens = _check_count(gt_specimens, "gt_specimens", 0)
+    seed = check_seed(seed)
+    repetitions = check_count(repetitions, "repetitions", 1)
+    gt_specimens = check_count(gt_specimens, "gt_specimens", 0)
     nu = check_nu(nu)
     unknown = set(trace_options) - _PASS_THROUGH
     if unknown:
@@ -241,9 +248,9 @@ def simulate_campaign(
     if not materials or not tips:
         raise InputError("a campaign needs at least one material and one tip")
     for name in materials:
-        _check_name(name, "material")
+        check_file_name(name, "material")
     for name in tips:
-        _check_name(name, "tip")
+        check_file_name(name, "tip")
     if force_offset_sd < 0 or z_surf_halfwidth < 0:
         raise InputError("force_offset_sd and z_surf_halfwidth must be non-negative")
 
@@ -263,11 +270,11 @@ def simulate_campaign(
                     specimen=mname, material=mname, repetition=rep, rest_time=rest_time,
                     **trace_options)
                 traces.append(trace)
-                manifest.append(_manifest_row(tid, f"traces/{tid}.csv", mname, mname, tip,
+                manifest.append(manifest_row(tid, f"traces/{tid}.csv", mname, mname, tip,
                                               mat.thickness_m, rep, rest_time))
                 truth.append(_truth_row(trace, tname))
     tests = _simulate_groundtruth(seed, materials, gt_specimens)
-    _prepare_out_dir(out, overwrite)
+    prepare_out_dir(out, overwrite)
     for trace in traces:
         write_trace(trace, out / "traces" / f"{trace.trace_id}.csv", float_format=float_format)
     write_manifest(pd.DataFrame(manifest), out / "manifest.csv")

@@ -41,7 +41,7 @@ from ..io.trace_csv import write_trace
 from ..noise import PAPER_NOISE_PP, sigma_from_pp
 from ..paper import PAPER_TIPS
 from ._checks import finite, nonneg, positive
-from .campaign import _check_count, _check_seed, _prepare_out_dir, child_seed
+from .campaign import check_count, check_seed, child_seed, prepare_out_dir
 from .inclusion import Inclusion, apparent_ratio, contact_radius, sensitivity
 from .trace import simulate_trace
 
@@ -196,11 +196,11 @@ def simulate_map(
     OutputExistsError
         ``out_dir`` is not empty and ``overwrite`` is False.
     """
-    seed = _check_seed(seed)
-    nx, ny = (_check_count(n, what, 1) for n, what in ((nx, "nx"), (ny, "ny")))
+    seed = check_seed(seed)
+    nx, ny = (check_count(n, what, 1) for n, what in ((nx, "nx"), (ny, "ny")))
     if nx > 10000 or ny > 10000:
         raise InputError(f"grid {nx}x{ny} is too large; use at most 10000 points per side")
-    workers = _check_count(workers, "workers", 1)
+    workers = check_count(workers, "workers", 1)
     step = positive(step, "grid step [m]")
     E_b = positive(E_background, "background modulus E_background [Pa]")
     nu = check_nu(nu)
@@ -251,7 +251,7 @@ def simulate_map(
     _write_rows({**job, "rows": [0], "E_app": E_app[:1], "dry_run": True})  # validate
 
     out = Path(out_dir)
-    _prepare_out_dir(out, overwrite)
+    prepare_out_dir(out, overwrite)
     size = max(1, min(8, ny // (4 * workers)))  # rows per job: several jobs per worker
     chunks = [list(range(j, min(ny, j + size))) for j in range(0, ny, size)]
     jobs = [{**job, "rows": c, "E_app": E_app[c], "dry_run": False} for c in chunks]

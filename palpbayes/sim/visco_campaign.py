@@ -49,12 +49,12 @@ from ..rheology.compression import PAPER_COMPRESSION_SPEED, compression_moduli
 from ..trace import IndentationTrace
 from ._checks import ar1_phi, finite, nonneg, positive
 from .campaign import (
-    _check_count,
-    _check_name,
-    _check_seed,
-    _manifest_row,
-    _prepare_out_dir,
+    check_count,
+    check_file_name,
+    check_seed,
     child_seed,
+    manifest_row,
+    prepare_out_dir,
 )
 from .viscoelastic import simulate_viscoelastic
 
@@ -117,7 +117,7 @@ def _kernel_columns(kernel: PowerLawKernel | PronyKernel) -> dict:
 
 
 def _check_material(name: str, mat) -> ViscoMaterial:
-    _check_name(name, "material")
+    check_file_name(name, "material")
     if not isinstance(mat, ViscoMaterial):
         raise InputError(f"material {name!r} must be a palpbayes.sim.ViscoMaterial, got "
                          f"{type(mat).__name__}")
@@ -237,8 +237,8 @@ def simulate_visco_campaign(
     InputError, GeometryError
         Bad seed, counts, names, speeds, motion or noise; a tip without a power law.
     """
-    seed = _check_seed(seed)
-    repetitions = _check_count(repetitions, "repetitions", 1)
+    seed = check_seed(seed)
+    repetitions = check_count(repetitions, "repetitions", 1)
     nu = check_nu(nu)
     if materials is None:
         defaults = {"power-law": POWER_LAW_FOAMS, "sls": SLS_FOAMS}
@@ -249,7 +249,7 @@ def simulate_visco_campaign(
         raise InputError("a campaign needs at least one material and one tip")
     materials = {k: _check_material(k, m) for k, m in materials.items()}
     for name in tips:
-        _check_name(name, "tip")
+        check_file_name(name, "tip")
     speeds = _speeds(speeds)
     sigma = sigma_from_pp(nonneg(noise_pp, "peak-to-peak noise noise_pp [N]"))
     noise_ar1 = ar1_phi(noise_ar1)
@@ -282,11 +282,11 @@ def simulate_visco_campaign(
                     tr = tr.replace(specimen=mname, material=mname, repetition=rep,
                                     thickness=mat.thickness_m)
                     traces.append(tr)
-                    manifest.append({**_manifest_row(tid, f"traces/{tid}.csv", mname, mname,
+                    manifest.append({**manifest_row(tid, f"traces/{tid}.csv", mname, mname,
                                                      tip, mat.thickness_m, rep, None),
                                      "nu": nu})
                     truth.append(_truth_row(tr, mat, tname, nu, e_comp, compression_speed))
-    _prepare_out_dir(out, overwrite)
+    prepare_out_dir(out, overwrite)
     (out / "truth_groundtruth.csv").unlink(missing_ok=True)  # an elastic campaign's, if any
     for tr in traces:
         write_trace(tr, out / "traces" / f"{tr.trace_id}.csv", float_format=float_format)

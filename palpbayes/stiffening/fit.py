@@ -16,10 +16,10 @@ from numpy.typing import ArrayLike
 from ..bayes.sampler import SamplerSettings
 from ..errors import InputError
 from ..intervals import LEVEL
-from .model import _N_PARAMS, _UNITS, _physical
-from .result import StiffeningResult, _table
-from .sampler import _mle, _sample
-from .selection import _double_reasons, _message, _single_reasons
+from .model import N_PARAMS, PARAM_UNITS, physical_draws
+from .result import StiffeningResult, parameter_table
+from .sampler import mle, sample_law
+from .selection import double_law_reasons, selection_message, single_law_reasons
 
 __all__ = ["STIFFENING_SETTINGS", "fit_stiffening", "fit_stiffening_summary"]
 
@@ -81,33 +81,34 @@ def fit_stiffening(rest_time: ArrayLike, E: ArrayLike, E_sd: ArrayLike | None = 
 
     fits = {}
     for model, seed_k in zip(("double", "single", "constant"), seeds, strict=True):
-        ll, theta = _mle(model, t, ys, ss, bounds)
-        raw, diag = _sample(model, theta, t, ys, ss, bounds, settings, seed_k)
-        fits[model] = (_N_PARAMS[model] * np.log(n) - 2 * ll, raw, diag)
+        ll, theta = mle(model, t, ys, ss, bounds)
+        raw, diag = sample_law(model, theta, t, ys, ss, bounds, settings, seed_k)
+        fits[model] = (N_PARAMS[model] * np.log(n) - 2 * ll, raw, diag)
     bic_d, raw_d, diag_d = fits["double"]
     bic_s, raw_s, diag_s = fits["single"]
     bic_c, raw_c, diag_c = fits["constant"]
 
-    draws, single, constant = (_physical(raw, scale) for raw in (raw_d, raw_s, raw_c))
+    draws, single, constant = (physical_draws(raw, scale) for raw in (raw_d, raw_s, raw_c))
 
-    reasons = _double_reasons(draws, bic_d, bic_s, n_distinct, t_max, diag_d, level)
-    single_reasons = _single_reasons(single, bic_s, bic_c, n_distinct, t_min, t_max, diag_s,
+    reasons = double_law_reasons(draws, bic_d, bic_s, n_distinct, t_max, diag_d, level)
+    single_reasons = single_law_reasons(single, bic_s, bic_c, n_distinct, t_min, t_max, diag_s,
                                      level)
     identifiable = not reasons
     single_ok = not single_reasons
     preferred = "double" if identifiable else ("single" if single_ok else "constant")
     mean, sd = float(y.mean()), float(y.std(ddof=1))
-    message = _message(n, draws, single, constant, bic_d, bic_s, bic_c, reasons, single_reasons,
-                       mean, sd, level)
+    message = selection_message(n, draws, single, constant, bic_d, bic_s, bic_c, reasons,
+                                single_reasons, mean, sd, level)
     converged_laws = {"double": bool(diag_d.converged), "single": bool(diag_s.converged),
                       "constant": bool(diag_c.converged)}
     return StiffeningResult(
         identifiable=identifiable, message=message, preferred=preferred,
-        double=_table(draws, _UNITS, level), single=_table(single, _UNITS, level),
+        double=parameter_table(draws, PARAM_UNITS, level),
+        single=parameter_table(single, PARAM_UNITS, level),
         draws=draws, single_draws=single, bic_double=float(bic_d), bic_single=float(bic_s),
         converged=converged_laws[preferred], n_points=n, n_distinct=n_distinct,
         reasons=reasons, single_identifiable=single_ok, single_reasons=single_reasons,
-        constant=_table(constant, _UNITS, level), constant_draws=constant,
+        constant=parameter_table(constant, PARAM_UNITS, level), constant_draws=constant,
         bic_constant=float(bic_c), converged_laws=converged_laws, E_mean_pa=mean, E_sd_pa=sd,
     )
 

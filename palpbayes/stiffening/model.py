@@ -27,9 +27,12 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["double_exponential", "LAW_TEXT"]
+__all__ = ["double_exponential", "LAW_TEXT", "AMP_BOUND", "N_PARAMS", "PARAM_NAMES", "AMP_IDX",
+           "T_IDX", "PARAM_UNITS", "law_basis", "split_theta", "log_like", "log_post", "linear_fit",
+           "log_post_collapsed", "physical_draws"]
 
-_AMP = 10.0  # amplitude bound in units of median(E)
+#: Bound of the amplitudes' flat prior (and of sigma_x) in units of median(E).
+AMP_BOUND = 10.0
 _SX = 0.1    # half-normal scale of sigma_x in units of median(E)
 _LOG2PI = np.log(2 * np.pi)
 
@@ -52,7 +55,7 @@ LAW_TEXT = {
 # θ in scaled units: amplitudes and sigma_x / E_s, time scales as log T [log s].
 
 
-def _basis(model: str, logT: np.ndarray, t: np.ndarray) -> np.ndarray:
+def law_basis(model: str, logT: np.ndarray, t: np.ndarray) -> np.ndarray:
     """(W, n, k) basis functions; amplitudes multiply them linearly."""
     ex = np.exp(-t[None, None, :] / np.exp(logT)[:, :, None])  # (W, nT, n)
     if model in ("single", "constant"):
@@ -61,7 +64,8 @@ def _basis(model: str, logT: np.ndarray, t: np.ndarray) -> np.ndarray:
     return np.swapaxes(ex, 1, 2)
 
 
-def _split(model: str, theta: np.ndarray):
+def split_theta(model: str, theta: np.ndarray):
+    """Rows of θ split into (amplitudes, log time scales, sigma_x) of law ``model``."""
     if model == "double":
         return theta[:, [0, 2]], theta[:, [1, 3]], theta[:, 4]
     if model == "constant":
@@ -70,21 +74,25 @@ def _split(model: str, theta: np.ndarray):
 
 
 #: Number of parameters (amplitudes, time scales, sigma_x) of each law.
-_N_PARAMS = {"double": 5, "single": 4, "constant": 2}
-_NAMES = {"double": ["c1", "logT2", "c3", "logT4", "sigma_x"],
-          "single": ["c0", "c1", "logT", "sigma_x"], "constant": ["c0", "sigma_x"]}
-_AMP_IDX = {"double": [0, 2], "single": [0, 1], "constant": [0]}
-_T_IDX = {"double": [1, 3], "single": [2], "constant": []}
+N_PARAMS = {"double": 5, "single": 4, "constant": 2}
+#: Sampled coordinates of each law, in θ's order (scaled amplitudes, log T, sigma_x).
+PARAM_NAMES = {"double": ["c1", "logT2", "c3", "logT4", "sigma_x"],
+               "single": ["c0", "c1", "logT", "sigma_x"], "constant": ["c0", "sigma_x"]}
+#: Positions of the amplitudes and of the log time scales in θ.
+AMP_IDX = {"double": [0, 2], "single": [0, 1], "constant": [0]}
+T_IDX = {"double": [1, 3], "single": [2], "constant": []}
 
 
-def _log_like(model, theta, t, y, s):
-    amp, logT, sx = _split(model, theta)
-    f = np.einsum("wnk,wk->wn", _basis(model, logT, t), amp)
+def log_like(model, theta, t, y, s):
+    """Gaussian log likelihood of estimates ``y`` with sds ``s`` at rest times ``t`` for each
+    row of θ (scaled units, sigma_x linear)."""
+    amp, logT, sx = split_theta(model, theta)
+    f = np.einsum("wnk,wk->wn", law_basis(model, logT, t), amp)
     v = s[None, :] ** 2 + sx[:, None] ** 2
     return -0.5 * np.sum(_LOG2PI + np.log(v) + (y[None, :] - f) ** 2 / v, axis=1)
 
 
-def _log_post(model, theta, t, y, s, bounds):
+def log_post(model, theta, t, y, s, bounds):
     """Log posterior in the *sampled* coordinates: θ with its last entry log sigma_x.
 
     sigma_x is sampled on the log scale (half-normal prior plus the Jacobian log sigma_x): the
@@ -92,10 +100,10 @@ def _log_post(model, theta, t, y, s, bounds):
     0.03 %) pile it up and a linear sigma_x mixes slowest of all parameters.
     """
     theta = np.atleast_2d(theta)
-    amp, logT, log_sx = _split(model, theta)
+    amp, logT, log_sx = split_theta(model, theta)
     lo, hi = bounds
-    ok = np.all(np.abs(amp) < _AMP, axis=1) & np.all((logT > lo) & (logT < hi), axis=1)
-    ok &= np.isfinite(log_sx) & (log_sx < np.log(_AMP))
+    ok = np.all(np.abs(amp) < AMP_BOUND, axis=1) & np.all((logT > lo) & (logT < hi), axis=1)
+    ok &= np.isfinite(log_sx) & (log_sx < np.log(AMP_BOUND))
     if model == "double":
         ok &= logT[:, 0] < logT[:, 1]
     lp = np.full(theta.shape[0], -np.inf)
@@ -103,11 +111,11 @@ def _log_post(model, theta, t, y, s, bounds):
         th = theta[ok].copy()
         th[:, -1] = np.exp(th[:, -1])
         sx = th[:, -1]
-        lp[ok] = _log_like(model, th, t, y, s) - 0.5 * (sx / _SX) ** 2 + np.log(sx)
+        lp[ok] = log_like(model, th, t, y, s) - 0.5 * (sx / _SX) ** 2 + np.log(sx)
     return lp
 
 
-def _linear_fit(model, x, t, y, s):
+def linear_fit(model, x, t, y, s):
     """Amplitudes' conditional posterior at sampled (log T, log sigma_x) rows ``x``.
 
     For fixed time scales and sigma_x the amplitudes enter linearly, so with their flat prior
@@ -115,7 +123,7 @@ def _linear_fit(model, x, t, y, s):
     (â, G, log L(â)), vectorised over rows.
     """
     sx = np.exp(x[:, -1])
-    B = _basis(model, x[:, :-1], t)                                   # (W, n, k)
+    B = law_basis(model, x[:, :-1], t)                                # (W, n, k)
     v = s[None, :] ** 2 + sx[:, None] ** 2                            # (W, n)
     G = np.einsum("wnk,wn,wnj->wkj", B, 1.0 / v, B)
     h = np.einsum("wnk,wn,n->wk", B, 1.0 / v, y)
@@ -125,7 +133,7 @@ def _linear_fit(model, x, t, y, s):
     return a, G, ll
 
 
-def _log_post_collapsed(model, x, t, y, s, bounds):
+def log_post_collapsed(model, x, t, y, s, bounds):
     """Log posterior of (log T, log sigma_x) with the amplitudes integrated out (single and
     constant laws): log L(â) + (k/2)·log 2π − ½·log det G, plus the sigma_x prior and its
     Jacobian.  The amplitudes' flat prior is treated as unbounded here; draws outside ±10·median
@@ -135,11 +143,11 @@ def _log_post_collapsed(model, x, t, y, s, bounds):
     lo, hi = bounds
     logT, log_sx = x[:, :-1], x[:, -1]
     ok = np.all((logT > lo) & (logT < hi), axis=1) & np.isfinite(log_sx)
-    ok &= log_sx < np.log(_AMP)
+    ok &= log_sx < np.log(AMP_BOUND)
     lp = np.full(x.shape[0], -np.inf)
     if ok.any():
         xo = x[ok]
-        _, G, ll = _linear_fit(model, xo, t, y, s)
+        _, G, ll = linear_fit(model, xo, t, y, s)
         k = G.shape[-1]
         sign, logdet = np.linalg.slogdet(G)
         sx = np.exp(xo[:, -1])
@@ -151,10 +159,10 @@ def _log_post_collapsed(model, x, t, y, s, bounds):
 #: Sampled time-scale coordinate -> the rate it is reported as (c = -1/T [1/s]).
 _RATES = {"logT2": "c2", "logT4": "c4", "logT": "c2"}
 #: Unit of each reported parameter.
-_UNITS = {"c0": "Pa", "c1": "Pa", "c2": "1/s", "c3": "Pa", "c4": "1/s", "sigma_x": "Pa"}
+PARAM_UNITS = {"c0": "Pa", "c1": "Pa", "c2": "1/s", "c3": "Pa", "c4": "1/s", "sigma_x": "Pa"}
 
 
-def _physical(raw: dict[str, np.ndarray], scale: float) -> dict[str, np.ndarray]:
+def physical_draws(raw: dict[str, np.ndarray], scale: float) -> dict[str, np.ndarray]:
     """Draws of one law in SI: amplitudes and sigma_x times ``scale`` [Pa], log time scales as
     rates c = -1/T [1/s]; keys in the law's order (c1, c2, c3, c4, sigma_x for the double law)."""
     return {_RATES.get(k, k): (-1.0 / np.exp(v) if k in _RATES else v * scale)

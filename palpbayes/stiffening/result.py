@@ -15,10 +15,11 @@ from numpy.typing import ArrayLike
 from ..intervals import LEVEL, central, central_band
 from .model import LAW_TEXT
 
-__all__ = ["StiffeningResult"]
+__all__ = ["StiffeningResult", "draw_summary", "parameter_table"]
 
 
-def _q(x, level):
+def draw_summary(x, level):
+    """Median, sd and the central ``level`` interval (lo, hi) of draws ``x``."""
     lo, hi = central(x, level)
     return float(np.median(x)), float(np.std(x, ddof=1)), float(lo), float(hi)
 
@@ -128,10 +129,11 @@ class StiffeningResult:
         return pd.DataFrame({"t_s": t, "median_pa": med, "lo_pa": lo, "hi_pa": hi})
 
 
-def _table(draws: dict, units: dict, level: float) -> pd.DataFrame:
+def parameter_table(draws: dict, units: dict, level: float) -> pd.DataFrame:
+    """One row per parameter of ``draws``: unit, median, sd and the ``level`` interval."""
     rows = []
     for k, x in draws.items():
-        med, sd, lo, hi = _q(x, level)
+        med, sd, lo, hi = draw_summary(x, level)
         rows.append({"parameter": k, "unit": units[k], "median": med, "sd": sd, "lo": lo,
                      "hi": hi})
     return pd.DataFrame(rows)

@@ -1,8 +1,8 @@
 """Fitting one stiffening law: maximum likelihood, then emcee from a Laplace-scaled start.
 
-:func:`_mle` maximises the likelihood (amplitudes profiled; a grid over log T, then
-Nelder-Mead), :func:`_sample` runs the ensemble from there until R-hat and ESS pass and returns
-the draws with their diagnostics (:mod:`palpbayes.bayes.diagnostics`).  The laws and their
+:func:`mle` maximises the likelihood (amplitudes profiled; a grid over log T, then
+Nelder-Mead), :func:`sample_law` runs the ensemble from there until R-hat and ESS pass and
+returns the draws with their diagnostics (:mod:`palpbayes.bayes.diagnostics`).  The laws and their
 posterior are :mod:`palpbayes.stiffening.model`.
 
 Sampling
@@ -30,33 +30,33 @@ from ..bayes.diagnostics import chain_passes, compute_diagnostics, import_arviz
 from ..bayes.sampler import run_emcee
 from ..errors import InputError
 from .model import (
-    _AMP,
-    _AMP_IDX,
-    _NAMES,
-    _T_IDX,
-    _basis,
-    _linear_fit,
-    _log_like,
-    _log_post,
-    _log_post_collapsed,
-    _split,
+    AMP_BOUND,
+    AMP_IDX,
+    PARAM_NAMES,
+    T_IDX,
+    law_basis,
+    linear_fit,
+    log_like,
+    log_post,
+    log_post_collapsed,
+    split_theta,
 )
 
-__all__: list[str] = []
+__all__ = ["mle", "sample_law"]
 
 
 def _draw_amplitudes(model, x, t, y, s, rng) -> np.ndarray:
     """One draw of the amplitudes from their conditional posterior at each row of ``x``."""
-    a, G, _ = _linear_fit(model, x, t, y, s)
+    a, G, _ = linear_fit(model, x, t, y, s)
     L = np.linalg.cholesky(np.linalg.inv(G))
     out = a + np.einsum("wkj,wj->wk", L, rng.standard_normal(a.shape))
     for _ in range(20):  # the flat prior's bounds
-        bad = np.any(np.abs(out) >= _AMP, axis=1)
+        bad = np.any(np.abs(out) >= AMP_BOUND, axis=1)
         if not bad.any():
             break
         out[bad] = a[bad] + np.einsum("wkj,wj->wk", L[bad],
                                       rng.standard_normal((int(bad.sum()), a.shape[1])))
-    return np.clip(out, -0.999 * _AMP, 0.999 * _AMP)
+    return np.clip(out, -0.999 * AMP_BOUND, 0.999 * AMP_BOUND)
 
 
 def _start(model, theta0, t, y, s, bounds, n_walkers, rng) -> np.ndarray:
@@ -70,9 +70,9 @@ def _start(model, theta0, t, y, s, bounds, n_walkers, rng) -> np.ndarray:
     forget it).  Draws outside the support are redrawn closer to ``theta0``.
     """
     th = np.asarray(theta0, dtype=float)
-    amp, logT, log_sx = _split(model, th[None, :])
+    amp, logT, log_sx = split_theta(model, th[None, :])
     amp, logT, sx = amp[0], logT[0], float(np.exp(log_sx[0]))
-    B = _basis(model, logT[None, :], t)[0]                      # (n, k)
+    B = law_basis(model, logT[None, :], t)[0]                   # (n, k)
     v = s**2 + sx**2
     n_amp = amp.size
     # d f / d amplitude = basis; d f / d logT_j = amp_j·e^(-t/T_j)·t/T_j
@@ -80,7 +80,7 @@ def _start(model, theta0, t, y, s, bounds, n_walkers, rng) -> np.ndarray:
     ex = np.exp(-t[:, None] / np.exp(logT)[None, :])
     off = n_amp - logT.size  # the single law's constant has no time scale
     dT = [amp[off + j] * ex[:, j] * t / np.exp(logT[j]) for j in range(logT.size)]
-    amp_i, T_i = _AMP_IDX[model], _T_IDX[model]
+    amp_i, T_i = AMP_IDX[model], T_IDX[model]
     cols = np.zeros((t.size, th.size))
     for k, col in zip(amp_i, J, strict=True):
         cols[:, k] = col
@@ -95,7 +95,7 @@ def _start(model, theta0, t, y, s, bounds, n_walkers, rng) -> np.ndarray:
     chol = np.linalg.cholesky(cov + 1e-14 * np.eye(th.size))
     p0 = th + rng.standard_normal((n_walkers, th.size)) @ chol.T
     for _ in range(30):
-        bad = ~np.isfinite(_log_post(model, p0, t, y, s, bounds))
+        bad = ~np.isfinite(log_post(model, p0, t, y, s, bounds))
         if not bad.any():
             break
         p0[bad] = th + 0.5 * (p0[bad] - th)  # shrink toward the maximum
@@ -105,15 +105,15 @@ def _start(model, theta0, t, y, s, bounds, n_walkers, rng) -> np.ndarray:
 def _profile(model, logT, log_sx, t, y, s):
     """Max over amplitudes (weighted least squares) at fixed time scales and sigma_x."""
     sx = np.exp(log_sx)
-    B = _basis(model, np.asarray(logT, dtype=float).reshape(1, -1), t)[0]
+    B = law_basis(model, np.asarray(logT, dtype=float).reshape(1, -1), t)[0]
     w = 1.0 / np.sqrt(s**2 + sx**2)
     amp, *_ = np.linalg.lstsq(B * w[:, None], y * w, rcond=None)
     theta = np.concatenate([amp, logT, [sx]]) if model != "double" else \
         np.array([amp[0], logT[0], amp[1], logT[1], sx])
-    return float(_log_like(model, theta[None, :], t, y, s)[0]), theta
+    return float(log_like(model, theta[None, :], t, y, s)[0]), theta
 
 
-def _mle(model, t, y, s, bounds) -> tuple[float, np.ndarray]:
+def mle(model, t, y, s, bounds) -> tuple[float, np.ndarray]:
     """Maximum likelihood (amplitudes profiled): grid over log T, then Nelder-Mead."""
     lo, hi = bounds
     grid = np.linspace(lo, hi, 25)
@@ -142,20 +142,22 @@ def _mle(model, t, y, s, bounds) -> tuple[float, np.ndarray]:
     return ll, theta
 
 
-def _sample(model, theta0, t, y, s, bounds, settings, seed):
+def sample_law(model, theta0, t, y, s, bounds, settings, seed):
+    """Posterior draws of law ``model`` by emcee from the maximum ``theta0``, run until R-hat
+    and ESS pass (or the step cap): (draws by parameter, sigma_x linear; diagnostics)."""
     rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
     nw = max(settings.n_walkers, 2 * theta0.size + 2)
     th = np.array(theta0, dtype=float)
-    amp, logT, _ = _split(model, th[None, :])
-    th[_AMP_IDX[model]] = np.clip(amp[0], -0.9 * _AMP, 0.9 * _AMP)
+    amp, logT, _ = split_theta(model, th[None, :])
+    th[AMP_IDX[model]] = np.clip(amp[0], -0.9 * AMP_BOUND, 0.9 * AMP_BOUND)
     lo, hi = bounds
-    idx_T = _T_IDX[model]
+    idx_T = T_IDX[model]
     th[idx_T] = np.clip(logT[0], lo + 0.05, hi - 0.05)
     if model == "double" and th[idx_T[0]] >= th[idx_T[1]]:
         th[idx_T[1]] = th[idx_T[0]] + 1e-3
-    th[-1] = np.log(np.clip(th[-1], 1e-8, 0.9 * _AMP))  # sampled as log sigma_x
+    th[-1] = np.log(np.clip(th[-1], 1e-8, 0.9 * AMP_BOUND))  # sampled as log sigma_x
     p0 = _start(model, th, t, y, s, bounds, nw, rng)
-    names = _NAMES[model][:-1] + ["log_sigma_x"]  # the sampled coordinates
+    names = PARAM_NAMES[model][:-1] + ["log_sigma_x"]  # the sampled coordinates
     # The single and constant laws are linear in their amplitudes: sample (log T, log sigma_x)
     # with the amplitudes integrated out and draw the amplitudes afterwards (2 and 1 sampled
     # dimensions instead of 4 and 2: an ensemble's autocorrelation time grows with the
@@ -164,14 +166,14 @@ def _sample(model, theta0, t, y, s, bounds, settings, seed):
     # degenerate posteriors.
     collapsed = model in ("single", "constant")
     if collapsed:
-        keep = [i for i in range(th.size) if i not in _AMP_IDX[model]]
+        keep = [i for i in range(th.size) if i not in AMP_IDX[model]]
         p0 = p0[:, keep]
 
         def lp(x):
-            return _log_post_collapsed(model, x, t, y, s, bounds)
+            return log_post_collapsed(model, x, t, y, s, bounds)
     else:
         def lp(x):
-            return _log_post(model, x, t, y, s, bounds)
+            return log_post(model, x, t, y, s, bounds)
 
     bad = ~np.isfinite(lp(p0))
     if bad.any():  # pragma: no cover - the start is inside the support by construction
@@ -186,7 +188,7 @@ def _sample(model, theta0, t, y, s, bounds, settings, seed):
         amp = _draw_amplitudes(model, flat, t, y, s, rng).reshape(W, D, -1)
         full = np.empty((W, D, th.size))
         full[..., keep] = samples
-        full[..., _AMP_IDX[model]] = amp
+        full[..., AMP_IDX[model]] = amp
         samples = full
         # amplitudes are drawn afresh at each draw: no slower than the sampled coordinates
         tau_full = np.full(th.size, float(np.max(tau)))

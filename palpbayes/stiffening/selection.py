@@ -43,15 +43,16 @@ import numpy as np
 
 from ..intervals import central
 from ..units import format_pressure
-from .result import _q
+from .result import draw_summary
 
-__all__ = ["MIN_RATIO"]
+__all__ = ["MIN_RATIO", "double_law_reasons", "single_law_reasons", "selection_message"]
 
 #: Minimum ratio T4/T2 (5 % quantile) for the two time scales to count as distinct.
 MIN_RATIO = 1.5
 
 
-def _double_reasons(draws, bic_d, bic_s, n_distinct, t_max, diag, level) -> list[str]:
+def double_law_reasons(draws, bic_d, bic_s, n_distinct, t_max, diag, level) -> list[str]:
+    """Why the double exponential is not identifiable (empty when it is), one reason each."""
     reasons = []
     if n_distinct < 6:
         reasons.append(f"only {n_distinct} distinct rest times; five parameters need six or more")
@@ -60,7 +61,7 @@ def _double_reasons(draws, bic_d, bic_s, n_distinct, t_max, diag, level) -> list
         reasons.append(f"BIC does not prefer two exponentials over one plus a constant "
                        f"(BIC_single - BIC_double = {d_bic:.1f} <= 2)")
     for name in ("c1", "c3"):
-        _, _, lo, hi = _q(draws[name], level)
+        _, _, lo, hi = draw_summary(draws[name], level)
         if lo <= 0 <= hi:
             reasons.append(f"the {int(level * 100)} % interval of amplitude {name} includes 0")
     T2, T4 = -1.0 / draws["c2"], -1.0 / draws["c4"]
@@ -78,7 +79,9 @@ def _double_reasons(draws, bic_d, bic_s, n_distinct, t_max, diag, level) -> list
     return reasons
 
 
-def _single_reasons(draws, bic_s, bic_c, n_distinct, t_min, t_max, diag, level) -> list[str]:
+def single_law_reasons(draws, bic_s, bic_c, n_distinct, t_min, t_max, diag, level
+                       ) -> list[str]:
+    """Why the single exponential is not identifiable (empty when it is), one reason each."""
     reasons = []
     if n_distinct < 4:
         reasons.append(f"only {n_distinct} distinct rest times; four parameters need four or "
@@ -87,7 +90,7 @@ def _single_reasons(draws, bic_s, bic_c, n_distinct, t_min, t_max, diag, level) 
     if d_bic <= 2:
         reasons.append(f"BIC does not prefer one exponential over a constant "
                        f"(BIC_constant - BIC_single = {d_bic:.1f} <= 2)")
-    _, _, lo, hi = _q(draws["c1"], level)
+    _, _, lo, hi = draw_summary(draws["c1"], level)
     if lo <= 0 <= hi:
         reasons.append(f"the {int(level * 100)} % interval of amplitude c1 includes 0")
     T_lo, T_hi = central(-1.0 / draws["c2"], level)
@@ -99,7 +102,7 @@ def _single_reasons(draws, bic_s, bic_c, n_distinct, t_min, t_max, diag, level) 
     return reasons
 
 
-def _message(n: int, draws: dict, single: dict, constant: dict, bic_d: float, bic_s: float,
+def selection_message(n: int, draws: dict, single: dict, constant: dict, bic_d: float, bic_s: float,
              bic_c: float, reasons: list[str], single_reasons: list[str], mean: float, sd: float,
              level: float) -> str:
     """One paragraph: what was found and, for a simpler law, why the richer ones failed."""
@@ -114,7 +117,7 @@ def _message(n: int, draws: dict, single: dict, constant: dict, bic_d: float, bi
     message = ("E(t) = c1·e^(c2·t) + c3·e^(c4·t) is not identifiable from these data: "
                + "; ".join(reasons) + ".")
     if not single_reasons:
-        q = {k: _q(v, level) for k, v in single.items()}
+        q = {k: draw_summary(v, level) for k, v in single.items()}
         T = -1.0 / single["c2"]
         T_lo, T_hi = central(T, level)
         message += (f" Use the single exponential E = c0 + c1·e^(c2·t): c0 = "
@@ -124,7 +127,7 @@ def _message(n: int, draws: dict, single: dict, constant: dict, bic_d: float, bi
                     f"{float(np.median(T)):.3g} s ({pct} interval {T_lo:.3g}-{T_hi:.3g} s); "
                     f"BIC favours it over a constant by {float(bic_c - bic_s):.1f}.")
     else:
-        _, _, c_lo, c_hi = _q(constant["c0"], level)
+        _, _, c_lo, c_hi = draw_summary(constant["c0"], level)
         message += (" A single exponential E = c0 + c1·e^(c2·t) is not supported either: "
                     + "; ".join(single_reasons) + f". No stiffening detected: E = "
                     f"{format_pressure(mean, 4)} ± {format_pressure(sd)} (mean ± sd of {n} "

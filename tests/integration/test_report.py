@@ -29,14 +29,13 @@ from palpbayes.report import (
     CHART_GROUPS_PER_PAGE,
     REPORT_NAME,
     TABLE_ROWS_PER_PAGE,
-    _methods_lines,
-    _range,
-    _shown,
     build_report,
     load_fit,
     load_results,
     summary_table,
 )
+from palpbayes.report.format import fmt_range, shown_path
+from palpbayes.report.methods import methods_lines
 from palpbayes.report.pages_title import _settings_lines
 from palpbayes.sim import simulate_campaign
 
@@ -147,7 +146,7 @@ def test_report_from_results_folder_cli(fitted, tmp_path, capsys):
     assert methods[0] == "Methods" and len(methods) >= 2
     assert methods[1:] == [f"Methods (continued, {k}/{len(methods)})"
                            for k in range(2, len(methods) + 1)]
-    assert info.results_shown == _shown(out)
+    assert info.results_shown == shown_path(out)
 
 
 @pytest.mark.slow
@@ -257,7 +256,7 @@ def test_methods_text_is_built_from_the_settings(fitted):
     res = load_results(out)
 
     def text(r) -> str:
-        return " ".join(t for _, t in _methods_lines(r))
+        return " ".join(t for _, t in methods_lines(r))
 
     base = text(res)
     smp = res.settings["options_fields"]["settings"]
@@ -287,7 +286,8 @@ def test_methods_text_is_built_from_the_settings(fitted):
 
 
 def test_settings_and_methods_print_forces_and_depths_with_a_prefix(fitted):
-    """AFM-scale settings read as pN and µm, not as '0 mN' (issue 12)."""
+    """Force and depth settings are printed with an SI prefix chosen from their size, so
+    AFM-scale settings read as pN and µm, not as '0 mN'."""
     import copy
 
     out, _, _ = fitted
@@ -298,7 +298,7 @@ def test_settings_and_methods_print_forces_and_depths_with_a_prefix(fitted):
 
     # the fixture gives no noise spec: it is read from each trace's baseline, and said so
     auto = "read from each trace's pre-contact baseline (6 sd)"
-    assert f"(F_unc = {auto};" in text(_methods_lines(res))
+    assert f"(F_unc = {auto};" in text(methods_lines(res))
     base = text(_settings_lines(res))
     assert f"F_unc = {auto};" in base and f"sensor noise {auto} peak-to-peak" in base
     changed = copy.deepcopy(res.settings)
@@ -306,7 +306,7 @@ def test_settings_and_methods_print_forces_and_depths_with_a_prefix(fitted):
     opts.update(f_unc=3e-10, max_depth=2e-6)
     opts["priors"] = {**(opts.get("priors") or {}), "noise_pp": 2.5e-10}
     res.settings = changed
-    methods, settings = text(_methods_lines(res)), text(_settings_lines(res))
+    methods, settings = text(methods_lines(res)), text(_settings_lines(res))
     assert "(F_unc = 300 pN;" in methods
     assert "Only samples shallower than 2 µm are fitted." in methods
     assert "F_unc = 300 pN; fit fraction" in settings and "max depth 2 µm" in settings
@@ -389,12 +389,12 @@ def test_many_groups_paginate_tables_and_split_charts(fitted, tmp_path):
 
 
 def test_small_formatting_helpers(tmp_path, monkeypatch):
-    assert _range(1500, 1500) == "1500" and _range(1250, 2000) == "1250–2000"
+    assert fmt_range(1500, 1500) == "1500" and fmt_range(1250, 2000) == "1250–2000"
     (tmp_path / "work").mkdir()
     monkeypatch.chdir(tmp_path / "work")
-    assert _shown(tmp_path / "work" / "res") == "res"
-    assert _shown(tmp_path / "rep") == str(Path("..") / "rep")
-    assert _shown("/") == "/"
+    assert shown_path(tmp_path / "work" / "res") == "res"
+    assert shown_path(tmp_path / "rep") == str(Path("..") / "rep")
+    assert shown_path("/") == "/"
 
 
 def test_plotting_modules_do_not_use_pyplot():
@@ -568,7 +568,7 @@ def test_stiffening_plot_with_a_fit_object():
 
 
 def test_diagnostics_page_counts_failed_model_checks(fitted):
-    """Failed model checks reach the report (issue 12), per method."""
+    """The diagnostics page counts failed model checks per method (Bayesian, least squares)."""
     from palpbayes.report.pages_diagnostics import _model_check_line
 
     out, _, _ = fitted
@@ -588,7 +588,7 @@ def test_indentation_page_replays_every_trace_file(fitted, tmp_path):
     """"How much indentation did we need?": each trace of the campaign replayed with a ±2 %
     target stops well before the end of its recording, and the page is in the report; a
     results folder whose trace files are gone gets no such page (and no error)."""
-    from palpbayes.report.pages_online import _pages_online, indentation_study
+    from palpbayes.report.pages_online import indentation_study, online_pages
 
     out, _, _ = fitted
     res = load_results(out)
@@ -604,4 +604,4 @@ def test_indentation_page_replays_every_trace_file(fitted, tmp_path):
     assert "How much indentation did we need?" in info.titles
     moved = res.traces.assign(file=str(tmp_path / "gone.csv"))
     gone = ResultsFolder(**{**res.__dict__, "traces": moved})
-    assert _pages_online(gone) == []
+    assert online_pages(gone) == []

@@ -133,17 +133,17 @@ def test_a_cone_read_as_a_paraboloid_is_material(seed):
 def test_drift_effect_is_the_linear_baseline_refit(drift):
     """A drifting baseline fitted as constant: the residual check's effect is at least the
     change of E* when the baseline is made linear (recomputed here)."""
-    from palpbayes.checks.core import _ShapeTable
-    from palpbayes.checks.depth import _profile_law_fit
+    from palpbayes.checks.core import ShapeTable
+    from palpbayes.checks.depth import profile_law_fit
     res, _, tr = _graded(PARA, 3, drift=drift)
     rs = res["residual_structure"]
     assert not rs.passed and rs.details["pattern"] == "drift"
     lo = tr.loading_segment()
     zs = res["depth_consistency"].details["z_surf_all"]
     dmax = zs - lo.z.min()
-    table = _ShapeTable(MODEL, 1.5 * dmax)
-    const = _profile_law_fit(lo.z, lo.force, table, zs, 0.25 * dmax, "constant",
+    table = ShapeTable(MODEL, 1.5 * dmax)
+    const = profile_law_fit(lo.z, lo.force, table, zs, 0.25 * dmax, "constant",
                              float(lo.z.max()), None)
-    line = _profile_law_fit(lo.z, lo.force, table, zs, 0.25 * dmax, "linear",
+    line = profile_law_fit(lo.z, lo.force, table, zs, 0.25 * dmax, "linear",
                             float(lo.z.max()), None)
     assert abs(rs.details["effect"]) >= abs(line["estar"] / const["estar"] - 1) - 1e-9

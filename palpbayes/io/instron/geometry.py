@@ -14,9 +14,9 @@ from pathlib import Path
 
 from ...errors import DataFileError, InputError
 from ..units import length_factor
-from .columns import _BRACKET_UNIT, _UNIT_ALIASES
+from .columns import BRACKET_UNIT, UNIT_ALIASES
 
-__all__: list[str] = []
+__all__ = ["specimen_geometry"]
 
 _AREA_UNITS = {"m2": 1.0, "m²": 1.0, "m^2": 1.0, "cm2": 1e-4, "cm²": 1e-4, "cm^2": 1e-4,
                "mm2": 1e-6, "mm²": 1e-6, "mm^2": 1e-6}
@@ -28,7 +28,7 @@ def _length_unit(unit: str) -> float | None:
     if not unit:
         return None
     try:
-        return length_factor(_UNIT_ALIASES.get(unit, unit))
+        return length_factor(UNIT_ALIASES.get(unit, unit))
     except InputError:
         return None
 
@@ -52,7 +52,7 @@ def _header_value(source: Path, key: str, value: str, kind: str) -> float:
     """
     to_si, what, example = _HEADER_QUANTITIES[kind]
     m = _NUMBER.match(value)
-    key_unit = _BRACKET_UNIT.match(key)
+    key_unit = BRACKET_UNIT.match(key)
     if m:
         number, unit = float(m.group(1)), m.group(2).strip().rstrip(";").strip()
         if not unit and key_unit:
@@ -66,7 +66,7 @@ def _header_value(source: Path, key: str, value: str, kind: str) -> float:
 
 def _header_key(header: Mapping[str, str], *endings: str) -> str | None:
     for key in header:
-        name = _BRACKET_UNIT.match(key)
+        name = BRACKET_UNIT.match(key)
         base = (name.group("name") if name else key).strip().lower()
         if "gauge" in base or "speed" in base or "rate" in base:
             continue
@@ -81,8 +81,8 @@ _GEOMETRY_HELP_HEIGHT = ("add a header line 'Cylinder Height: 30mm;' (or 'Block 
                          "or pass height_m= (command line: --height-m)")
 
 
-def _geometry(source: Path, header: Mapping[str, str], area_m2: float | None,
-              height_m: float | None) -> tuple[float, float]:
+def specimen_geometry(source: Path, header: Mapping[str, str], area_m2: float | None,
+                      height_m: float | None) -> tuple[float, float]:
     """([m²], [m]) cross-section and height: the arguments when given, else the header's."""
     if area_m2 is None:
         key = _header_key(header, "area")

@@ -47,24 +47,24 @@ import pandas as pd
 
 from ...errors import DataFileError
 from .columns import (
-    _QUANTITIES,
-    _match_column,
-    _numeric_column,
-    _sign,
-    _split_name,
-    _unit_factor,
-    _words,
+    QUANTITY_NAMES,
+    column_sign,
+    match_column,
+    name_words,
+    numeric_column,
+    split_column_name,
+    unit_factor,
 )
-from .geometry import _geometry
+from .geometry import specimen_geometry
 from .record import CompressionTest, material_from_label
 from .text import (
-    _DELIMITERS,
-    _cells,
-    _find_column_row,
-    _is_number,
-    _is_numeric_row,
-    _parse_header,
-    _read_lines,
+    DELIMITERS,
+    find_column_row,
+    is_number,
+    is_numeric_row,
+    parse_header,
+    read_lines,
+    split_cells,
 )
 
 __all__ = ["read_compression_test", "looks_like_compression_test"]
@@ -77,16 +77,16 @@ def looks_like_compression_test(path: str | os.PathLike) -> bool:
     the file but never raises.
     """
     try:
-        lines, _ = _read_lines(Path(path))
+        lines, _ = read_lines(Path(path))
     except DataFileError:
         return False
-    found = _find_column_row(lines)
+    found = find_column_row(lines)
     if found is None:
         return False
     i, delimiter = found
-    columns = _cells(lines[i], delimiter)
-    return (_match_column(columns, "displacement") is not None
-            and _match_column(columns, "load") is not None)
+    columns = split_cells(lines[i], delimiter)
+    return (match_column(columns, "displacement") is not None
+            and match_column(columns, "load") is not None)
 
 
 def read_compression_test(
@@ -136,14 +136,14 @@ def read_compression_test(
         geometry (naming the header line or option needed).
     """
     source = Path(path)
-    lines, encoding = _read_lines(source)
+    lines, encoding = read_lines(source)
     if not any(line.strip() for line in lines):
         raise DataFileError(source, "the file is empty", "export the test again")
-    found = _find_column_row(lines)
+    found = find_column_row(lines)
     if found is None:
         table = [i for i, line in enumerate(lines)
-                 if any(sum(1 for c in _cells(line, d) if c) >= 2 for d in _DELIMITERS)]
-        if any(_is_numeric_row(_cells(line, d)) for line in lines for d in _DELIMITERS):
+                 if any(sum(1 for c in split_cells(line, d) if c) >= 2 for d in DELIMITERS)]
+        if any(is_numeric_row(split_cells(line, d)) for line in lines for d in DELIMITERS):
             problem = "no column-name row (e.g. 'Time (s),Compression (mm),Load (N)') above " \
                       "the numbers"
         elif table and any(line.strip() for line in lines[table[0] + 1:]):
@@ -153,13 +153,13 @@ def read_compression_test(
             problem = "the file holds only a header, no data rows"
         raise DataFileError(source, problem, "export the test with its column names and data")
     col_row, delimiter = found
-    header = _parse_header(lines[:col_row])
+    header = parse_header(lines[:col_row])
 
     # the data block ends at the last line whose first cell is a number: a footer is dropped
     end = len(lines)
     while end > col_row + 1:
-        cells = _cells(lines[end - 1], delimiter)
-        if cells and _is_number(cells[0]):
+        cells = split_cells(lines[end - 1], delimiter)
+        if cells and is_number(cells[0]):
             break
         end -= 1
     n_rows = end - col_row - 1
@@ -176,7 +176,7 @@ def read_compression_test(
     names = list(df.columns)
 
     chosen: dict[str, str] = {}
-    for quantity in _QUANTITIES:
+    for quantity in QUANTITY_NAMES:
         explicit = (columns or {}).get(quantity)
         if explicit is not None:
             if explicit not in names:
@@ -185,9 +185,9 @@ def read_compression_test(
                                     "fix the column mapping")
             chosen[quantity] = explicit
             continue
-        col = _match_column(names, quantity)
+        col = match_column(names, quantity)
         if col is None:
-            wanted = " / ".join(n.capitalize() for n in _QUANTITIES[quantity])
+            wanted = " / ".join(n.capitalize() for n in QUANTITY_NAMES[quantity])
             raise DataFileError(source, f"no {quantity} column ({wanted}); the file has "
                                 f"{', '.join(names)}",
                                 f"add the column, or pass columns={{'{quantity}': ...}}")
@@ -196,18 +196,18 @@ def read_compression_test(
     first_line = col_row + 2  # 1-based line number of the first data row
     values: dict[str, np.ndarray] = {}
     for quantity, col in chosen.items():
-        unit = (units or {}).get(quantity) or _split_name(col)[1]
-        factor = _unit_factor(source, col, quantity, unit)
-        values[quantity] = _numeric_column(df, col, source, first_line) * factor
+        unit = (units or {}).get(quantity) or split_column_name(col)[1]
+        factor = unit_factor(source, col, quantity, unit)
+        values[quantity] = numeric_column(df, col, source, first_line) * factor
 
     disp = values["displacement"]
-    if "position" in _words(_split_name(chosen["displacement"])[0]):
+    if "position" in name_words(split_column_name(chosen["displacement"])[0]):
         disp = disp - disp[0]  # an absolute coordinate: travel since the first sample
-    disp = disp * _sign(disp, compression_sign, "compression", chosen["displacement"], source)
+    disp = disp * column_sign(disp, compression_sign, "compression", chosen["displacement"], source)
     load = values["load"]
-    load = load * _sign(load, load_sign, "load", chosen["load"], source)
+    load = load * column_sign(load, load_sign, "load", chosen["load"], source)
 
-    area, height = _geometry(source, header, area_m2, height_m)
+    area, height = specimen_geometry(source, header, area_m2, height_m)
     label = specimen if specimen is not None else source.stem
     return CompressionTest(
         time_s=values["time"],

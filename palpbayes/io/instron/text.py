@@ -13,13 +13,16 @@ from pathlib import Path
 
 from ...errors import DataFileError
 
-__all__: list[str] = []
+__all__ = ["DELIMITERS", "read_lines", "split_cells", "is_number", "is_numeric_row",
+           "find_column_row", "parse_header"]
 
 #: Cell separators tried, in order.
-_DELIMITERS = (",", "\t", ";")
+DELIMITERS = (",", "\t", ";")
 
 
-def _read_lines(path: Path) -> tuple[list[str], str]:
+def read_lines(path: Path) -> tuple[list[str], str]:
+    """The file's lines and the encoding that decoded it (UTF-8, else latin-1);
+    :class:`DataFileError` when it cannot be read."""
     try:
         raw = path.read_bytes()
     except FileNotFoundError:
@@ -36,7 +39,8 @@ def _read_lines(path: Path) -> tuple[list[str], str]:
     raise AssertionError("latin-1 decodes every byte string")  # pragma: no cover
 
 
-def _cells(line: str, delimiter: str) -> list[str]:
+def split_cells(line: str, delimiter: str) -> list[str]:
+    """The stripped cells of one CSV line (the whole line as one cell if it does not parse)."""
     try:
         row = next(csv.reader([line], delimiter=delimiter, skipinitialspace=True), [])
     except csv.Error:
@@ -44,32 +48,36 @@ def _cells(line: str, delimiter: str) -> list[str]:
     return [c.strip() for c in row]
 
 
-def _is_number(cell: str) -> bool:
+def is_number(cell: str) -> bool:
+    """Whether ``cell`` reads as a finite number."""
     try:
         return math.isfinite(float(cell))
     except ValueError:
         return False
 
 
-def _is_numeric_row(cells: list[str]) -> bool:
+def is_numeric_row(cells: list[str]) -> bool:
+    """A data row: at least two filled cells, all of them finite numbers."""
     filled = [c for c in cells if c != ""]
-    return len(filled) >= 2 and all(_is_number(c) for c in filled)
+    return len(filled) >= 2 and all(is_number(c) for c in filled)
 
 
-def _find_column_row(lines: list[str]) -> tuple[int, str] | None:
+def find_column_row(lines: list[str]) -> tuple[int, str] | None:
     """Index of the column row and the delimiter, or None if there is none."""
     for i, line in enumerate(lines[:-1]):
         nxt = lines[i + 1]
-        for delimiter in _DELIMITERS:
-            names = [c for c in _cells(line, delimiter) if c]
-            if len(names) < 2 or _is_numeric_row(names):
+        for delimiter in DELIMITERS:
+            names = [c for c in split_cells(line, delimiter) if c]
+            if len(names) < 2 or is_numeric_row(names):
                 continue
-            if _is_numeric_row(_cells(nxt, delimiter)):
+            if is_numeric_row(split_cells(nxt, delimiter)):
                 return i, delimiter
     return None
 
 
-def _parse_header(lines: list[str]) -> dict[str, str]:
+def parse_header(lines: list[str]) -> dict[str, str]:
+    """The free header above the column row: 'key: value' lines by key; a first line without
+    a colon is the sample name, any other such line is kept as 'Line n'."""
     header: dict[str, str] = {}
     for n, line in enumerate(lines, start=1):
         text = line.strip().rstrip(";").strip().strip('"').strip()
