@@ -19,7 +19,7 @@ from ..units import force_factor, length_factor, time_factor
 
 __all__ = ["DISPLACEMENT_NAMES", "LOAD_NAMES", "TIME_NAMES", "QUANTITY_NAMES", "UNIT_ALIASES",
            "BRACKET_UNIT", "split_column_name", "name_words", "match_column", "unit_factor",
-           "numeric_column", "column_sign"]
+           "export_column_values", "column_sign"]
 
 #: Column-name synonyms, in order of preference (lower case).
 TIME_NAMES = ("time",)
@@ -85,7 +85,8 @@ def unit_factor(source: Path, column: str, quantity: str, unit: str | None) -> f
         raise DataFileError(source, f"column {column!r}: {exc}") from None
 
 
-def numeric_column(df: pd.DataFrame, column: str, source: Path, first_line: int) -> np.ndarray:
+def export_column_values(df: pd.DataFrame, column: str, source: Path, first_line: int
+                         ) -> np.ndarray:
     """The column as floats; :class:`DataFileError` naming the first empty or non-numeric cell
     (``first_line`` is the file line of the first row)."""
     raw = df[column]

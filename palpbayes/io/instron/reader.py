@@ -49,9 +49,9 @@ from ...errors import DataFileError
 from .columns import (
     QUANTITY_NAMES,
     column_sign,
+    export_column_values,
     match_column,
     name_words,
-    numeric_column,
     split_column_name,
     unit_factor,
 )
@@ -198,7 +198,7 @@ def read_compression_test(
     for quantity, col in chosen.items():
         unit = (units or {}).get(quantity) or split_column_name(col)[1]
         factor = unit_factor(source, col, quantity, unit)
-        values[quantity] = numeric_column(df, col, source, first_line) * factor
+        values[quantity] = export_column_values(df, col, source, first_line) * factor
 
     disp = values["displacement"]
     if "position" in name_words(split_column_name(chosen["displacement"])[0]):
