@@ -13,7 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Gram", "gram", "touching", "fixed_columns", "NodePosterior", "node_posterior"]
+from ..contact import touching
+
+__all__ = ["Gram", "gram", "fixed_columns", "NodePosterior", "node_posterior"]
 
 
 @dataclass
@@ -110,19 +112,6 @@ class Gram:
         """The nodes selected by ``keep`` (mask or indices)."""
         return Gram(self.z[keep], self.m0[keep], None if self.m1 is None else self.m1[keep],
                     self.first[keep], self.last[keep], self.n_contact[keep], self.n)
-
-
-def touching(shape, depth: np.ndarray) -> np.ndarray:
-    """``shape(depth)`` [m²] evaluated only where ``depth`` [m] is positive: 0 elsewhere, as
-    every contact law gives (a grid of surface nodes leaves half its depths or more out of
-    contact)."""
-    inside = depth > 0
-    if inside.all():
-        return shape(depth)
-    out = np.zeros(depth.shape)
-    if inside.any():
-        out[inside] = shape(depth[inside])
-    return out
 
 
 def fixed_columns(y: np.ndarray, u: np.ndarray | None) -> np.ndarray:

@@ -34,6 +34,7 @@ import math
 
 import numpy as np
 
+from ..contact import touching
 from ..errors import InputError
 from ..fitdata import ModelSpec
 from ..trace import SEGMENTS, IndentationTrace
@@ -137,10 +138,8 @@ def rate_dependence_check(trace: IndentationTrace, model: ModelSpec, *, z_surf: 
     t, z, f = trace.time, trace.z, trace.force
     z_ref = float(z.max()) if z_ref is None else float(z_ref)
     depth = z_surf - z
-    s = np.zeros(z.size)
     inside = depth > 0
-    if inside.any():
-        s[inside] = model.shape(depth[inside])
+    s = touching(model.shape, depth)
     base = f0 + f1 * (z - z_ref)
     mu = estar * s + base
     end = int(np.argmin(z)) + 1  # the loading segment, as the elastic fit reads it

@@ -24,6 +24,7 @@ from __future__ import annotations
 import importlib
 import math
 import pkgutil
+from collections.abc import Callable
 
 import numpy as np
 
@@ -58,6 +59,7 @@ for _module in pkgutil.iter_modules(__path__):
 del _module
 
 __all__ = [
+    "touching",
     "Tip",
     "TIP_KINDS",
     "TIP_PARAMETERS",
@@ -277,6 +279,19 @@ def shape(
     thickness_factor(np.zeros(1), tip, thickness_m, nu, base)  # checks h, base, the law
     s, a = law.shape_and_radius(np.asarray(depth, dtype=float), tip)  # one solve for both
     return s * _factor_at_radius(a, tip, np.asarray(thickness_m, dtype=float), nu, base)
+
+
+def touching(shape: Callable[[np.ndarray], np.ndarray], depth: np.ndarray) -> np.ndarray:
+    """``shape(depth)`` [m²] evaluated only where ``depth`` [m] is positive: 0 elsewhere, as
+    every contact law gives (a grid of surface nodes leaves half its depths or more out of
+    contact)."""
+    inside = depth > 0
+    if inside.all():
+        return shape(depth)
+    out = np.zeros(depth.shape)
+    if inside.any():
+        out[inside] = shape(depth[inside])
+    return out
 
 
 def force_star(depth: np.ndarray, Estar, tip: Tip, **kwargs) -> np.ndarray:
