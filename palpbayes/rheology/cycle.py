@@ -188,18 +188,23 @@ def _edges(t: np.ndarray, z: np.ndarray, rows: np.ndarray, seg: np.ndarray,
     at = [left, right]
     height = [zm + slope * (left - tm), zm + slope * (right - tm)]
     weight = [np.ones(B), np.ones(B)]
-    change = seg[1:] != seg[:-1]
-    for i in np.flatnonzero(change & (first[1:] == last[:-1] + 1)):
+    # where the segment changes, the crossing of the two blocks' lines is the corner; two
+    # blocks either touch, or the hold's leftover samples (not a whole block) lie between them:
+    # then the corner is placed inside that gap (the tip holds until it, not a line across)
+    for i in np.flatnonzero(seg[1:] != seg[:-1]):
         j = i + 1
         ds = slope[i] - slope[j]
         if ds == 0:
             continue
         tc = (zm[j] - zm[i] + slope[i] * tm[i] - slope[j] * tm[j]) / ds
-        if not left[i] < tc < right[j]:
+        if first[j] > last[i] + 1:  # a gap between the blocks
+            if not right[i] + 0.01 * step_out[i] < tc < left[j] - 0.01 * step_in[j]:
+                continue
+        elif not left[i] < tc < right[j]:
             continue  # the lines cross outside the two blocks: no corner to place
-        if min(tc - left[i], right[j] - tc) <= 0.01 * min(step_in[i], step_out[j]):
+        elif min(tc - left[i], right[j] - tc) <= 0.01 * min(step_in[i], step_out[j]):
             continue  # on an outer edge: a step of almost no length would magnify rounding
-        if abs(tc - right[i]) > 0.01 * step_out[i]:
+        elif abs(tc - right[i]) > 0.01 * step_out[i]:
             # the shared edge takes the line of the block on its side of the corner
             side = 1 if tc < right[i] else 0
             weight[side][i if side else j] = 0.0
@@ -209,19 +214,6 @@ def _edges(t: np.ndarray, z: np.ndarray, rows: np.ndarray, seg: np.ndarray,
         at.append(np.array([tc]))
         height.append(np.array([zm[i] + slope[i] * (tc - tm[i])]))
         weight.append(np.ones(1))
-    # two segments with unblocked samples between them (the hold's leftover, which is not a
-    # whole block): the crossing of their lines inside that gap is the corner, so that the
-    # tip holds until it and then moves (not a line across the gap)
-    for i in np.flatnonzero(change & (first[1:] > last[:-1] + 1)):
-        j = i + 1
-        ds = slope[i] - slope[j]
-        if ds == 0:
-            continue
-        tc = (zm[j] - zm[i] + slope[i] * tm[i] - slope[j] * tm[j]) / ds
-        if right[i] + 0.01 * step_out[i] < tc < left[j] - 0.01 * step_in[j]:
-            at.append(np.array([tc]))
-            height.append(np.array([zm[i] + slope[i] * (tc - tm[i])]))
-            weight.append(np.ones(1))
     at, height, weight = (np.concatenate(a) for a in (at, height, weight))
     knots, inverse = np.unique(at, return_inverse=True)
     z_knots = np.bincount(inverse, height * weight) / np.bincount(inverse, weight)
