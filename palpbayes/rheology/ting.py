@@ -111,7 +111,8 @@ class RetractDesign:
         self.m, self.t0 = float(m), float(t0)
         first = min(self.R, CORNER_BLOCKS)  # the corner where the retract starts
         picks = [symmetric_picks(n, k) for k in (CORNER_SAMPLES, SAMPLES)]
-        self.groups = [(0, first, picks[0].size), (first, self.R, picks[1].size)]
+        self.groups = [(0, first, picks[0]), (first, self.R, picks[1])]
+        self.sample_time = S
         self.t = np.concatenate([S[:first, picks[0]].ravel(), S[first:, picks[1]].ravel()])
         lag = self.t[:, None] - self.e[None, :]
         self.lag = np.clip(lag, 0.0, None)
@@ -212,15 +213,60 @@ class RetractDesign:
 
     def columns(self, z_nodes: np.ndarray, alpha: float) -> np.ndarray:
         """Block means (G, R) per unit modulus and unit prefactor: multiply by C·E0* for
-        the force [N]."""
+        the force [N].  The mean of a block's picks, except in the block where the contact
+        is lost (:meth:`pull_off_means`)."""
         V = self.values(z_nodes, alpha)
         out = np.empty((V.shape[0], self.R))
         at = 0
-        for lo, hi, k in self.groups:
+        for lo, hi, picks in self.groups:
             if hi > lo:
-                out[:, lo:hi] = V[:, at: at + (hi - lo) * k].reshape(-1, hi - lo, k).mean(axis=2)
-                at += (hi - lo) * k
+                n_eval = (hi - lo) * picks.size
+                out[:, lo:hi] = V[:, at: at + n_eval].reshape(-1, hi - lo, picks.size).mean(
+                    axis=2)
+                self.pull_off_means(V, at, lo, hi, picks, out)
+                at += n_eval
         return out
+
+    def pull_off_means(self, V: np.ndarray, at: int, lo: int, hi: int, picks: np.ndarray,
+                       out: np.ndarray) -> None:
+        """Replace in ``out`` (G, R) the means of the blocks ``lo`` ... ``hi`` − 1 (values
+        from column ``at`` of ``V`` (G, n), at each block's ``picks``) where the force falls
+        to zero between two picks.
+
+        There the force is not linear but a line down to a kink at zero, and the picks'
+        mean misses where the kink lies (2 noise sd on a flat punch's pull-off block at
+        500 mm/min).  The force is rebuilt at every sample: linear between the picks up to
+        the last positive one (value v_a at t_a), then down to zero along the steeper of the
+        line from the evaluation before it (the force's slope as it falls) and the chord to
+        the next pick (whose value, 0, bounds the crossing), zero after; its mean over the
+        block's samples is the block's value."""
+        k = picks.size
+        Vb = V[:, at: at + (hi - lo) * k].reshape(-1, hi - lo, k)
+        # positive: above the rounding of a cancelled integral (1e-14 of the peak seen)
+        pos = Vb > 1e-9 * V.max(axis=1)[:, None, None]
+        n_pos = pos.sum(axis=2)
+        # positive picks, then zero ones: the force falls to zero once, inside the block
+        cell = (n_pos > 0) & (n_pos < k) & (np.argmin(pos, axis=2) == n_pos)
+        g, b = np.nonzero(cell)
+        if g.size == 0:
+            return
+        c = np.arange(g.size)
+        a = n_pos[g, b] - 1  # the last positive pick
+        S = self.sample_time[lo + b]  # (c, n)
+        tp, v = S[:, picks], Vb[g, b]  # (c, k)
+        ta, va, tb = tp[c, a], v[c, a], tp[c, a + 1]
+        chord = -va / (tb - ta)
+        q = at + b * k + a - 1  # the evaluation before t_a (the previous block's last pick)
+        has = q >= 0
+        fall = np.full(g.size, -np.inf)
+        fall[has] = (va[has] - V[g[has], q[has]]) / (ta[has] - self.t[q[has]])
+        slope = np.minimum(fall, chord)
+        slope = np.where(np.isfinite(slope), slope, chord)
+        rebuilt = np.empty_like(S)
+        for i in c:  # the pull-off blocks only: a few cells per evaluation
+            rebuilt[i] = np.interp(S[i], tp[i], v[i])
+        line = np.clip(va[:, None] + slope[:, None] * (S - ta[:, None]), 0.0, None)
+        out[g, lo + b] = np.where(S > ta[:, None], line, rebuilt).mean(axis=1)
 
 
 def ting_cutoff(t: np.ndarray, edges: np.ndarray, z_edges: np.ndarray, alpha: float,
