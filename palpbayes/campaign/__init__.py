@@ -27,6 +27,9 @@ Modules, one job each
 :mod:`~palpbayes.campaign.compare`, :mod:`~palpbayes.campaign.compare_text`
     Pooling per material × tip (:mod:`palpbayes.pooling`) and the comparison with the ground
     truth and the paper (``palpbayes compare``), and its text table.
+:mod:`~palpbayes.campaign.stiffening_tables`, :mod:`~palpbayes.campaign.indentation`
+    The compare step's stiffening law per group (parameters, E(t) band) and each trace
+    replayed through the online estimator: the tables the report draws.
 :mod:`~palpbayes.campaign.pipeline`
     Fit, ground truth and compare in one call (``palpbayes report CAMPAIGN``).
 
@@ -43,17 +46,19 @@ from typing import TYPE_CHECKING, Any
 
 #: Submodules whose ``__all__`` make up the package's public names.
 API_MODULES = ("fitjob", "source", "settings", "run", "results", "compare", "compare_text",
-               "pipeline")
+               "pipeline", "stiffening_tables", "indentation")
 
 if TYPE_CHECKING:  # the same names, for static tools
     from .compare import *  # noqa: F403
     from .compare_text import *  # noqa: F403
     from .fitjob import *  # noqa: F403
+    from .indentation import *  # noqa: F403
     from .pipeline import *  # noqa: F403
     from .results import *  # noqa: F403
     from .run import *  # noqa: F403
     from .settings import *  # noqa: F403
     from .source import *  # noqa: F403
+    from .stiffening_tables import *  # noqa: F403
 
 
 def _public_names() -> dict[str, str]:

@@ -8,10 +8,15 @@ and writes, atomically,
   (:meth:`palpbayes.pooling.PooledEstimate.row`);
 * ``budget.csv`` — per material × tip, each input's share of the variance of log E of the
   pooled estimate (``material, tip, input, distribution, rel_sd_pct, share_pct``);
-* ``stiffening.csv`` — only when some material × tip has Bayesian fits at
-  :data:`STIFFENING_MIN_REST_TIMES` or more distinct positive rest times: the stiffening law
-  fitted to them (:func:`palpbayes.stiffening.fit_stiffening_summary`,
-  :meth:`~palpbayes.stiffening.StiffeningResult.row`).
+* ``stiffening.csv``, ``stiffening_parameters.csv``, ``stiffening_curves.csv`` — only when
+  some material × tip has Bayesian fits at
+  :data:`~palpbayes.campaign.stiffening_tables.STIFFENING_MIN_REST_TIMES` or more distinct
+  positive rest times: the stiffening law fitted to them, its parameters and its E(t) band
+  (:mod:`palpbayes.campaign.stiffening_tables`);
+* ``indentation.csv`` — when the trace files can be read: each trace replayed through the
+  online estimator, where a ±2 % rule stopped (:mod:`palpbayes.campaign.indentation`).
+
+The report draws these tables; it fits nothing.
 
 What the numbers are
 --------------------
@@ -84,6 +89,7 @@ from ..refit import ALTERNATIVE_COLUMNS
 from . import layout
 from .compare_text import format_comparison
 from .fitjob import trace_seed
+from .indentation import indentation_study
 from .reference import (
     gt_columns,
     load_groundtruth,
@@ -92,8 +98,9 @@ from .reference import (
     paper_estimates,
 )
 from .settings import read_settings
+from .stiffening_tables import stiffening_tables
 
-__all__ = ["COMPARISON_COLUMNS", "POOLED_COLUMNS", "STIFFENING_MIN_REST_TIMES", "Comparison",
+__all__ = ["COMPARISON_COLUMNS", "POOLED_COLUMNS", "Comparison",
            "compare_campaign", "load_groundtruth", "paper_estimates"]
 
 COMPARISON_COLUMNS = [
@@ -109,8 +116,6 @@ COMPARISON_COLUMNS = [
     # posterior probability of a bonded base (every trace lies on the same plate)
     "E_halfspace_pa", "E_bonded_pa", "E_free_pa", "p_bonded",
 ]
-#: A material × tip gets a stiffening fit when its Bayesian rows span this many rest times.
-STIFFENING_MIN_REST_TIMES = 3
 BUDGET_COLUMNS = ["material", "tip", "input", "distribution", "rel_sd_pct", "share_pct"]
 #: Columns of ``pooled.csv`` (:meth:`palpbayes.pooling.PooledResult.row` plus the group's
 #: representative trace); written as a header-only table when no group has Bayes rows.
@@ -138,6 +143,7 @@ class Comparison:
     groundtruth_source: str | None
     results_dir: Path
     stiffening: pd.DataFrame | None = None
+    indentation: pd.DataFrame | None = None
 
     def format(self) -> str:
         """The comparison in the paper's layout (:func:`format_comparison`)."""
@@ -421,38 +427,22 @@ def compare_campaign(
     pooled = pd.DataFrame(pooled_rows) if pooled_rows else pd.DataFrame(columns=POOLED_COLUMNS)
     budget_tab = pd.concat(budgets, ignore_index=True) if budgets else pd.DataFrame(
         columns=BUDGET_COLUMNS)
-    stiff = _stiffening(summary, materials, tips, seed)
+    stiff = stiffening_tables(summary, materials, tips, seed, level)
+    study = (indentation_study(geometry, settings) if "bayes" in set(summary["method"])
+             else pd.DataFrame())
     if write:
         write_csv_atomic(comparison, res / layout.COMPARISON)
         write_csv_atomic(pooled, res / layout.POOLED)
         write_csv_atomic(budget_tab, res / layout.BUDGET)
-        if stiff is not None:
-            write_csv_atomic(stiff, res / layout.STIFFENING)
-        else:  # no series with rest times now: a previous run's table would be stale
-            (res / layout.STIFFENING).unlink(missing_ok=True)
+        # a table with no rows now is removed: a previous run's would be stale
+        for table, name in ((stiff.rows, layout.STIFFENING),
+                            (stiff.parameters, layout.STIFFENING_PARAMETERS),
+                            (stiff.curves, layout.STIFFENING_CURVES),
+                            (study if len(study) else None, layout.INDENTATION)):
+            if table is not None:
+                write_csv_atomic(table, res / name)
+            else:
+                (res / name).unlink(missing_ok=True)
     return Comparison(comparison=comparison, pooled=pooled, budget=budget_tab, groundtruth=gt,
-                      groundtruth_source=gt_source, results_dir=res, stiffening=stiff)
-
-
-def _stiffening(summary: pd.DataFrame, materials: list[str], tips: list[str], seed: int
-                ) -> pd.DataFrame | None:
-    """Stiffening law per material × tip with enough distinct rest times (None if none)."""
-    from ..stiffening import fit_stiffening_summary
-
-    if "rest_time_s" not in summary or "E_stat_pa" not in summary:
-        return None
-    rows = []
-    for mat in materials:
-        for tip in tips:
-            g = summary[(summary["material"] == mat) & (summary["tip"] == tip)
-                        & (summary["method"] == "bayes")]
-            t = pd.to_numeric(g["rest_time_s"], errors="coerce")
-            ok = np.isfinite(t) & (t > 0) & np.isfinite(g["E_stat_pa"].astype(float))
-            if t[ok].nunique() < STIFFENING_MIN_REST_TIMES:
-                continue
-            fit = fit_stiffening_summary(g, method="bayes",
-                                         seed=trace_seed(seed, f"stiffening/{mat}/{tip}"))
-            rows.append({"material": mat, "tip": tip, "method": "bayes", **fit.row()})
-    return pd.DataFrame(rows) if rows else None
-
-
+                      groundtruth_source=gt_source, results_dir=res, stiffening=stiff.rows,
+                      indentation=study if len(study) else None)

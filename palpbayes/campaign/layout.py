@@ -12,6 +12,9 @@ A results folder (``palpbayes fit MANIFEST --out DIR``) holds::
       pooled.csv               hierarchical pooling per group    (compare)
       budget.csv               uncertainty budget per group      (compare)
       stiffening.csv           stiffening law per group          (compare)
+      stiffening_parameters.csv  its parameters, 90 % intervals  (compare)
+      stiffening_curves.csv    its E(t) band per group           (compare)
+      indentation.csv          each trace replayed online: where it stopped (compare)
       groundtruth.csv          per compression test              (groundtruth)
       groundtruth_summary.csv  per material                      (groundtruth)
       gap.csv                  the paper's robot-vs-Instron gap   (report, paper's materials)
@@ -32,7 +35,8 @@ from pathlib import Path
 
 __all__ = [
     "SETTINGS", "TRACES", "SUMMARY", "POSTERIOR_DIR", "PARTIAL_DIR", "COMPARISON", "POOLED",
-    "BUDGET", "STIFFENING", "GROUNDTRUTH", "GROUNDTRUTH_SUMMARY", "GAP", "REPORT",
+    "BUDGET", "STIFFENING", "STIFFENING_PARAMETERS", "STIFFENING_CURVES",
+    "INDENTATION", "GROUNDTRUTH", "GROUNDTRUTH_SUMMARY", "GAP", "REPORT",
     "COMPARE_OUTPUTS",
     "FIT_OUTPUTS", "REPLAY_HISTORY", "REPLAY_SUMMARY", "REPLAY_FIGURE", "posterior_path",
     "posterior_file", "partial_path", "RHEOLOGY_TABLE", "RHEOLOGY_DIR", "RHEOLOGY_OUTPUTS",
@@ -58,6 +62,15 @@ POOLED = "pooled.csv"
 BUDGET = "budget.csv"
 #: Stiffening law per material × tip (``palpbayes compare``, series with rest times only).
 STIFFENING = "stiffening.csv"
+#: The preferred stiffening law's parameters with 90 % intervals, per material × tip
+#: (``palpbayes compare``).
+STIFFENING_PARAMETERS = "stiffening_parameters.csv"
+#: The preferred stiffening law's median and 90 % band of E(t) per material × tip
+#: (``palpbayes compare``).
+STIFFENING_CURVES = "stiffening_curves.csv"
+#: Each trace replayed through the online estimator: where a ±2 % rule stopped
+#: (``palpbayes compare``, :mod:`palpbayes.campaign.indentation`).
+INDENTATION = "indentation.csv"
 #: Per compression test ground truth (``palpbayes groundtruth``).
 GROUNDTRUTH = "groundtruth.csv"
 #: Per material ground truth (``palpbayes groundtruth``).
@@ -83,7 +96,8 @@ REPLAY_SUMMARY = "replay_summary.csv"
 REPLAY_FIGURE = "replay.png"
 
 #: Tables written by ``palpbayes compare`` (derived from the fit: stale after a refit).
-COMPARE_OUTPUTS = (COMPARISON, POOLED, BUDGET, STIFFENING)
+COMPARE_OUTPUTS = (COMPARISON, POOLED, BUDGET, STIFFENING, STIFFENING_PARAMETERS,
+                   STIFFENING_CURVES, INDENTATION)
 #: Files that depend on the fit, removed by ``fit --force`` before a new run (the folders
 #: :data:`POSTERIOR_DIR` and :data:`PARTIAL_DIR` are emptied as well).  The ground-truth tables
 #: come from the compression tests, not from the fit, and are kept.

@@ -104,8 +104,10 @@ class ResultsFolder:
         ``settings.json`` as a dict ({} if absent).
     traces
         ``traces.csv``: geometry and file of every trace.
-    comparison, pooled, budget, stiffening
+    comparison, pooled, budget, stiffening, stiffening_parameters, stiffening_curves
         The compare step's tables.
+    indentation
+        Each trace replayed online (``indentation.csv``, the compare step).
     groundtruth, groundtruth_summary
         Per-test and per-material ground truth.
     gap
@@ -120,6 +122,9 @@ class ResultsFolder:
     pooled: pd.DataFrame | None = None
     budget: pd.DataFrame | None = None
     stiffening: pd.DataFrame | None = None
+    stiffening_parameters: pd.DataFrame | None = None
+    stiffening_curves: pd.DataFrame | None = None
+    indentation: pd.DataFrame | None = None
     groundtruth: pd.DataFrame | None = None
     groundtruth_summary: pd.DataFrame | None = None
     gap: pd.DataFrame | None = None
@@ -174,6 +179,9 @@ def load_results(path: str | os.PathLike) -> ResultsFolder:
         traces=_read_csv(p / layout.TRACES), comparison=_read_csv(p / layout.COMPARISON),
         pooled=_read_csv(p / layout.POOLED), budget=_read_csv(p / layout.BUDGET),
         stiffening=_read_csv(p / layout.STIFFENING),
+        stiffening_parameters=_read_csv(p / layout.STIFFENING_PARAMETERS),
+        stiffening_curves=_read_csv(p / layout.STIFFENING_CURVES),
+        indentation=_read_csv(p / layout.INDENTATION),
         groundtruth=_read_csv(p / layout.GROUNDTRUTH),
         groundtruth_summary=_read_csv(p / layout.GROUNDTRUTH_SUMMARY),
         gap=_read_csv(p / layout.GAP),

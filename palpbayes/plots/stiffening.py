@@ -24,6 +24,7 @@ def plot_stiffening(
     curve_median: np.ndarray | None = None,
     curve_lo: np.ndarray | None = None,
     curve_hi: np.ndarray | None = None,
+    curve_label: str = "fitted law",
     truth: tuple[np.ndarray, np.ndarray] | None = None,
     rested: tuple[float, float, float] | None = None,
     fit: Any = None,
@@ -41,6 +42,8 @@ def plot_stiffening(
         [Pa] Per-palpation estimate and interval.
     curve_t, curve_median, curve_lo, curve_hi
         [s], [Pa] The fitted law E(t) = c1·exp(c2·t) + c3·exp(c4·t) and its band.
+    curve_label
+        Legend label of the curve (e.g. ``"fitted E(t) = c0 + c1·exp(c2·t)"``).
     truth
         (t [s], E [Pa]) of the true law (simulations).
     rested
@@ -64,7 +67,7 @@ def plot_stiffening(
     t = np.asarray(rest_time, dtype=float)
     e = np.asarray(E, dtype=float) * KPA
     c = METHOD_COLORS["bayes"]
-    law = "fitted law"
+    law = curve_label
     if fit is not None and curve_median is None:
         curve_t = np.linspace(0.0, 1.05 * float(np.nanmax(t)), 300)
         pred = fit.predict(curve_t, level=level)

@@ -24,11 +24,13 @@
    converged with the largest R-hat and smallest ESS) and the walkers of the worst fit;
 6. the uncertainty budget (table and chart);
 7. the stiffening law E(t) vs rest time (:mod:`palpbayes.stiffening`) for every material × tip
-   whose palpations have at least :data:`STIFFENING_MIN_REST_TIMES` distinct rest times, and
-   ``stiffening.csv`` when present;
-8. "How much indentation did we need?": every trace whose file can be read, replayed through
-   the online estimator (:mod:`palpbayes.online`) with a ±2 % precision target; the median
-   depth and peak force at the stop per material × tip, against the recorded indentation;
+   whose palpations have at least
+   :data:`~palpbayes.campaign.stiffening_tables.STIFFENING_MIN_REST_TIMES` distinct rest
+   times, and ``stiffening.csv`` (the compare step's tables: the report fits nothing);
+8. "How much indentation did we need?": every trace whose file could be read, replayed
+   through the online estimator (:mod:`palpbayes.online`) with a ±2 % precision target by
+   the compare step (``indentation.csv``); the median depth and peak force at the stop per
+   material × tip, against the recorded indentation;
 9. viscoelastic fits, when the folder has ``rheology.csv`` (``palpbayes fit --rheology``;
    :mod:`~palpbayes.report.pages_rheology`): a table of every trace × relaxation model (the
    parameters with 90 % intervals, the model check, flag codes and, with several models,
@@ -67,7 +69,6 @@ from ..campaign.results import ResultsFolder, load_fit, load_results
 from .build import RASTER_DPI, REPORT_NAME, ReportInfo, build_report
 from .layout import BUDGET_GROUPS_PER_PAGE, CHART_GROUPS_PER_PAGE, PAGE_SIZE, TABLE_ROWS_PER_PAGE
 from .methods import MOVES_TEXT
-from .pages_stiffening import STIFFENING_MIN_REST_TIMES
 from .tables import (
     BAYES_E_COL,
     BAYES_NEW_COL,
@@ -82,7 +83,6 @@ __all__ = [
     "PAGE_SIZE",
     "REPORT_NAME",
     "RASTER_DPI",
-    "STIFFENING_MIN_REST_TIMES",
     "TABLE_ROWS_PER_PAGE",
     "CHART_GROUPS_PER_PAGE",
     "BUDGET_GROUPS_PER_PAGE",

@@ -124,7 +124,7 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     pages += [group_page(res, m, t, seed) for m, t in res.groups()]
     pages += diagnostics_page(res)
     pages += budget_pages(res)
-    pages += [stiffening_page(res, m, t, seed) for m, t in stiffening_groups(res)]
+    pages += [stiffening_page(res, m, t) for m, t in stiffening_groups(res)]
     pages += stiffening_table_pages(res)
     pages += online_pages(res)
     pages += rheology_pages(res.path, rheo)

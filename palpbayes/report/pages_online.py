@@ -1,5 +1,6 @@
 """"How much indentation did we need?": each recorded trace replayed through the online
-estimator (:mod:`palpbayes.online`) with a precision target, per material × tip."""
+estimator with a precision target (``indentation.csv``, written by ``palpbayes compare``:
+:mod:`palpbayes.campaign.indentation`), per material × tip."""
 
 from __future__ import annotations
 
@@ -7,56 +8,14 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from ..campaign.fitjob import FitOptions, trace_model
+from ..campaign.indentation import REPLAY_CHUNK, REPLAY_TARGET, online_noise
 from ..campaign.results import ResultsFolder
-from ..errors import PalpbayesError
-from ..io.manifest import load_trace
-from ..online import StoppingRule, needed_indentation
 from ..units import format_force, format_length
 from .format import wrap
 from .layout import Page, text_lines
 from .tables import continued, draw_table, page_chunks
 
-__all__ = ["REPLAY_TARGET", "indentation_study", "online_noise", "online_pages"]
-
-#: Relative half-width of the 90 % interval of E at which the replay stops (±2 %).
-REPLAY_TARGET = 0.02
-
-
-def indentation_study(res: ResultsFolder, target: float = REPLAY_TARGET) -> pd.DataFrame:
-    """Per trace with a readable file: where a ±``target`` rule would have stopped
-    (:func:`palpbayes.online.needed_indentation`), with its material and tip; empty when no
-    trace file can be read (a results folder moved without its traces)."""
-    if res.traces is None or "file" not in res.traces:
-        return pd.DataFrame()
-    opts = res.options
-    traces, models, meta = [], [], []
-    for _, row in res.traces.iterrows():
-        try:  # the model the fit used (tip, the row's or the run's nu, layer)
-            trace = load_trace(row, **res.settings.get("read_options", {}))
-            model = trace_model(trace, FitOptions(
-                nu=opts.get("nu"), layer=opts.get("layer", "off"),
-                bonding=opts.get("bonding", "unknown")), depth=np.nan)
-            if not model.is_concrete:  # the online estimator takes one shape function
-                model = (model.variant(base="bonded") if model.thickness is not None
-                         else model.half_space())
-        except (PalpbayesError, OSError):
-            continue
-        traces.append(trace)
-        models.append(model)
-        meta.append({"material": str(row.get("material", "")), "tip": trace.tip.kind})
-    if not traces:
-        return pd.DataFrame()
-    study = needed_indentation(traces, models, StoppingRule(target=target),
-                               noise=online_noise(opts))
-    return pd.concat([pd.DataFrame(meta), study], axis=1)
-
-
-def online_noise(options: dict) -> str:
-    """The campaign's noise model when the online estimator has it (gaussian, ar1), else
-    gaussian (Student-t noise is emcee's alone)."""
-    noise = str(options.get("noise", "gaussian"))
-    return noise if noise in ("gaussian", "ar1") else "gaussian"
+__all__ = ["online_pages"]
 
 
 def _group_table(study: pd.DataFrame) -> pd.DataFrame:
@@ -77,16 +36,18 @@ def _group_table(study: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def online_pages(res: ResultsFolder, target: float = REPLAY_TARGET) -> list[Page]:
-    """The study's table (split over pages like the other tables), or no page at all."""
-    study = indentation_study(res, target)
-    if study.empty:
+def online_pages(res: ResultsFolder) -> list[Page]:
+    """The table of ``indentation.csv`` per material × tip (split over pages like the other
+    tables), or no page at all when the compare step wrote none."""
+    study = res.indentation
+    if study is None or study.empty:
         return []
     table = _group_table(study)
     n_stop = int(study["stopped"].sum())
-    text = (f"Each recorded trace replayed as if live (palpbayes.online, chunks of 100 samples), "
-            f"stopped when the 90 % interval of E is within ±{100 * target:g} % (statistical, "
-            f"exact posterior, {online_noise(res.options)} noise): {n_stop} of {len(study)} "
+    text = (f"Each recorded trace replayed as if live (palpbayes.online, chunks of "
+            f"{REPLAY_CHUNK} samples), stopped when the 90 % interval of E is within "
+            f"±{100 * REPLAY_TARGET:g} % (statistical, exact posterior, "
+            f"{online_noise(res.options)} noise): {n_stop} of {len(study)} "
             "traces reached it. Medians per "
             "material and tip: the depth below the estimated surface and the peak force above "
             "the baseline at the stop, and their fractions of the recorded indentation. "

@@ -445,6 +445,30 @@ def test_compare_fits_the_stiffening_law_when_rest_times_vary(tmp_path, monkeypa
     assert cmp.stiffening is not None
     assert cmp.comparison["paper_E_pa"].notna().all()  # White sphere is a paper cell
     assert np.isnan(cmp.comparison["gt_E_pa"]).all()  # a list source: no campaign folder
+    # the preferred law's parameters and E(t) band, as the report draws them
+    par = pd.read_csv(res / "stiffening_parameters.csv")
+    med = par.set_index("parameter")["median"]
+    for k in med.index.intersection(["c0", "c1", "c2", "c3", "c4", "sigma_x"]):
+        assert med[k] == pytest.approx(st[k].iloc[0], rel=1e-9), k
+    assert (par["lo"] <= par["median"]).all() and (par["median"] <= par["hi"]).all()
+    curve = pd.read_csv(res / "stiffening_curves.csv")
+    assert len(curve) == 300 and curve["t_s"].iloc[0] == 0.0
+    assert curve["t_s"].iloc[-1] == pytest.approx(1.05 * max(rest))
+    assert ((curve["lo_pa"] <= curve["median_pa"]) & (curve["median_pa"] <= curve["hi_pa"])).all()
+    # the report draws the page from these tables and fits nothing
+    from palpbayes.campaign.results import load_results
+    from palpbayes.report import build_report
+
+    def refit(*a, **k):
+        raise AssertionError("the report fitted the stiffening law")
+
+    import palpbayes.stiffening
+
+    for where in (stiffening, palpbayes.stiffening):
+        monkeypatch.setattr(where, "fit_stiffening_summary", refit)
+        monkeypatch.setattr(where, "fit_stiffening", refit)
+    info = build_report(load_results(res), tmp_path / "r.pdf")
+    assert "Stiffening after repeated palpation: White · sphere" in info.titles
 
 
 # ----------------------------------------------------------------------------- coverage

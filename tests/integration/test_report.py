@@ -586,14 +586,19 @@ def test_diagnostics_page_counts_failed_model_checks(fitted):
 
 def test_indentation_page_replays_every_trace_file(fitted, tmp_path):
     """"How much indentation did we need?": each trace of the campaign replayed with a ±2 %
-    target stops well before the end of its recording, and the page is in the report; a
-    results folder whose trace files are gone gets no such page (and no error)."""
-    from palpbayes.report.pages_online import indentation_study, online_pages
+    target (by the compare step, ``indentation.csv``) stops well before the end of its
+    recording, and the page is in the report, drawn from that table; a results folder whose
+    trace files are gone gets no table (and no error), and a report without the table no
+    such page."""
+    from palpbayes.campaign.indentation import indentation_study
+    from palpbayes.report.pages_online import online_pages
 
     out, _, _ = fitted
     res = load_results(out)
-    study = indentation_study(res)
+    study = res.indentation
     assert len(study) == 4 and study["stopped"].all()
+    again = indentation_study(res.traces, res.settings)  # the table is what the study gives
+    pd.testing.assert_frame_equal(study[again.columns], again, check_dtype=False)
     assert set(study["material"]) == {"White", "Pink"} and set(study["tip"]) == {"sphere"}
     assert (study["depth_stop_m"] < 0.5 * study["depth_full_m"]).all()
     assert (study["peak_force_stop_n"] < study["peak_force_full_n"]).all()
@@ -603,5 +608,6 @@ def test_indentation_page_replays_every_trace_file(fitted, tmp_path):
     info = build_report(res, tmp_path / "r.pdf")
     assert "How much indentation did we need?" in info.titles
     moved = res.traces.assign(file=str(tmp_path / "gone.csv"))
-    gone = ResultsFolder(**{**res.__dict__, "traces": moved})
+    assert indentation_study(moved, res.settings).empty
+    gone = ResultsFolder(**{**res.__dict__, "indentation": None})
     assert online_pages(gone) == []
