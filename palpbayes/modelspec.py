@@ -154,7 +154,8 @@ class ModelSpec:
     def shape_of_draws(self, depth: np.ndarray, thickness=None, bonded=None) -> np.ndarray:
         """F/E* [m²] of posterior draws (rows of ``depth``, shape (D, N)), each with its own
         thickness [m] (``inf``: no layer) and base (``bonded`` 1.0 / 0.0; NaN where there is
-        no layer); None: the model's own."""
+        no layer); None: the model's own.  Evaluated where the depth is positive only (the
+        shape is 0 out of contact)."""
         depth = np.asarray(depth, dtype=float)
         if thickness is None and bonded is None:
             return self.shape(depth)
@@ -166,11 +167,12 @@ class ModelSpec:
             b = np.full(rows_n, self.bases[0])
         else:
             b = np.where(np.asarray(bonded, dtype=float) == 0.0, "free", "bonded")
-        out = np.empty(depth.shape)
+        out = np.zeros(depth.shape)
+        h = np.broadcast_to(h[:, None], depth.shape)
         for base in np.unique(b):
-            rows = b == base
-            out[rows] = shape(depth[rows], self.tip, thickness_m=h[rows, None], nu=self.nu,
-                              base=str(base))
+            cells = (depth > 0) & (b == base)[:, None]
+            out[cells] = shape(depth[cells], self.tip, thickness_m=h[cells], nu=self.nu,
+                               base=str(base))
         return out
 
     def shape_derivative(self, depth: np.ndarray) -> np.ndarray:

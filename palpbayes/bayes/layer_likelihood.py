@@ -142,13 +142,8 @@ class LayerLikelihood:
         """F/E* [m²] of each walker (rows) at heights ``z`` (default: the fitted samples)."""
         z = self.data.z if z is None else np.asarray(z, dtype=float)
         depth = np.asarray(z_surf, dtype=float)[:, None] - z[None, :]
-        out = np.zeros(depth.shape)
-        h = np.broadcast_to(np.asarray(thickness, dtype=float)[:, None], depth.shape)
-        # the shape is 0 out of contact: evaluated where the depth is positive only
-        for b in np.unique(bases):
-            cells = (depth > 0) & (bases == b)[:, None]
-            out[cells] = self.model.shape_at(depth[cells], thickness=h[cells], base=str(b))
-        return out
+        return self.model.shape_of_draws(depth, thickness=np.asarray(thickness, dtype=float),
+                                         bonded=(np.asarray(bases) == "bonded").astype(float))
 
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         """Log-likelihood (W,) of θ (W, ndim)."""
