@@ -104,7 +104,7 @@ def check_reusable(out_dir: str | os.PathLike, manifest: str | os.PathLike) -> N
 def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
                  options: FitOptions | None = None, *,
                  workers: int | None = None, force: bool = False,
-                 progress: bool | None = None) -> Path:
+                 progress: bool | None = None, scheduler: str | None = None) -> Path:
     """Fit a campaign (both methods), analyse its ground truth and compare; return out_dir.
 
     Steps: :func:`palpbayes.campaign.fit_campaign` (``palpbayes fit``); when the campaign folder
@@ -122,7 +122,7 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
         Results folder.
     options
         :class:`~palpbayes.campaign.fitjob.FitOptions` (default: both methods, package defaults).
-    workers, force, progress
+    workers, force, progress, scheduler
         As for :func:`~palpbayes.campaign.fit_campaign`.
     """
     from .fitjob import FitOptions
@@ -136,7 +136,7 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
         check_reusable(out, manifest)
         resume = True
     fit_campaign(manifest, out, options, workers=workers, resume=resume, force=force,
-                 progress=progress)
+                 progress=progress, scheduler=scheduler)
     gt_dir = manifest.parent / "groundtruth"
     if gt_dir.is_dir():  # for the report (compare analyses the same folder at full precision)
         from ..groundtruth import analyse

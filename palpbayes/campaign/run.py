@@ -1,7 +1,8 @@
 """Batch fitting of a campaign: every trace of a manifest, in parallel, resumable.
 
 :func:`fit_campaign` runs :func:`palpbayes.campaign.fitjob.fit_trace` on every trace over a
-process pool (each trace in :func:`palpbayes.campaign.partial.fit_and_record`) and writes a
+process pool or on Dask (``scheduler``: a LocalCluster or a cluster's scheduler; each trace in
+:func:`palpbayes.campaign.partial.fit_and_record`) and writes a
 results folder (docs/design.md §5, §7; file names in :mod:`palpbayes.campaign.layout`)::
 
     OUT_DIR/
@@ -133,6 +134,59 @@ def _run(todo: list[IndentationTrace], options: FitOptions, out: Path, workers: 
         pool.shutdown(wait=True, cancel_futures=True)
 
 
+def _run_dask(todo: list[IndentationTrace], options: FitOptions, out: Path, client,
+              on_done: Callable[[], None]) -> None:
+    """:func:`fit_and_record` of every trace on a Dask ``client``
+    (:func:`palpbayes.cluster.dask_client`): a few traces per worker in flight, so memory
+    does not grow with the campaign; each worker writes the trace's records into ``out`` as
+    the local pool does."""
+    from itertools import islice
+
+    from dask.distributed import as_completed
+
+    n_workers = max(1, len(client.scheduler_info().get("workers", {})) or 1)
+    jobs = iter(todo)
+    where = str(out.resolve())  # a worker's working folder may not be ours
+    opts = client.scatter(options, broadcast=True)
+    pending = as_completed()
+    for t in islice(jobs, 2 * n_workers):
+        pending.add(client.submit(fit_and_record, t, opts, where, pure=False))
+    for fut in pending:
+        res = fut.result()
+        fut.release()
+        if "error" in res:
+            raise_input(res["error"])
+        on_done()
+        for t in islice(jobs, 1):
+            pending.add(client.submit(fit_and_record, t, opts, where, pure=False))
+
+
+def _write_and_fit(traces: list[IndentationTrace], options: FitOptions, out: Path,
+                   settings: dict, force: bool, resume: bool, workers: int | None, client,
+                   progress: bool | None) -> None:
+    """Create the results folder, write the settings and the traces' table, fit what is not
+    recorded yet (on the Dask ``client`` or the local pool)."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / layout.PARTIAL_DIR).mkdir(exist_ok=True)
+        (out / layout.POSTERIOR_DIR).mkdir(exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create output folder {out} ({exc.strerror or exc}); choose "
+                         "another --out") from None
+    if force:
+        _clear_outputs(out)
+    write_text_atomic(json.dumps(settings, indent=2) + "\n", out / layout.SETTINGS)
+    write_csv_atomic(traces_table(traces), out / layout.TRACES, float_format="%.10g")
+
+    done = {t.trace_id for t in traces if resume and read_partial(out, t, options) is not None}
+    todo = [t for t in traces if t.trace_id not in done]
+    with progress_bar(len(traces), progress, initial=len(done)) as bar:
+        if client is not None:
+            _run_dask(todo, options, out, client, lambda: bar.update(1))
+        elif todo:
+            _run(todo, options, out, workers, lambda: bar.update(1))
+
+
 def fit_campaign(
     source: str | os.PathLike | Sequence[IndentationTrace],
     out_dir: str | os.PathLike,
@@ -143,6 +197,7 @@ def fit_campaign(
     force: bool = False,
     progress: bool | None = None,
     read_options: dict | None = None,
+    scheduler: str | None = None,
 ) -> pd.DataFrame:
     """Fit every trace of a campaign and write the results folder (module docstring).
 
@@ -160,7 +215,13 @@ def fit_campaign(
     options
         Fit options shared by every trace (default :class:`~palpbayes.campaign.fitjob.FitOptions`).
     workers
-        Worker processes (default ``os.cpu_count()``); 1 fits in this process.
+        Worker processes (default ``os.cpu_count()``); 1 fits in this process.  With
+        ``scheduler="local"``: the LocalCluster's workers.
+    scheduler
+        Fit on Dask instead of a process pool: ``"local"`` (a LocalCluster on this machine,
+        bound to loopback) or a scheduler address (``tcp://host:8786``), whose workers must
+        see the trace files and ``out_dir`` under the same paths (each writes its trace's
+        records there).  Same summary as the local run with the same seed.
     resume
         Keep traces already recorded in ``out_dir/.partial`` with the same options and fit the
         rest (an interrupted run picks up where it stopped).
@@ -192,9 +253,13 @@ def fit_campaign(
     out = Path(out_dir)
     _check_out_dir(out, resume, force)
     traces, src = load_source(source, read_options)
-    if workers is None:
+    if scheduler is not None and scheduler != "local" and workers is not None:
+        raise InputError(f"workers = {workers!r} applies to a local run; the Dask cluster at "
+                         f"{scheduler!r} has the workers it was started with")
+    if workers is None and scheduler is None:
         workers = os.cpu_count() or 1
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or workers < 1):
         raise InputError(f"workers {workers!r} must be a positive integer")
     options = options.with_progress(False)  # one bar over traces, none per fit
 
@@ -216,24 +281,20 @@ def fit_campaign(
                 raise
             exc.args = (f"trace {t.trace_id!r}: {exc}",)  # keep the class, name the trace
             raise
-    # every check passed: only now create the folder and (with force) remove the old results
+    # every check passed, the cluster (if any) answers: only now create the folder and (with
+    # force) remove the old results
+    client = None
+    if scheduler is not None:
+        from ..cluster import dask_client
+
+        client = dask_client(None if scheduler == "local" else scheduler, workers)
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        (out / layout.PARTIAL_DIR).mkdir(exist_ok=True)
-        (out / layout.POSTERIOR_DIR).mkdir(exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"cannot create output folder {out} ({exc.strerror or exc}); choose "
-                         "another --out") from None
-    if force:
-        _clear_outputs(out)
-    write_text_atomic(json.dumps(settings, indent=2) + "\n", out / layout.SETTINGS)
-    write_csv_atomic(traces_table(traces), out / layout.TRACES, float_format="%.10g")
+        _write_and_fit(traces, options, out, settings, force, resume, workers, client, progress)
+    finally:  # on an error or Ctrl-C the cluster's queued traces go with the client
+        if client is not None:
+            from ..cluster import close_client
 
-    done = {t.trace_id for t in traces if resume and read_partial(out, t, options) is not None}
-    todo = [t for t in traces if t.trace_id not in done]
-    with progress_bar(len(traces), progress, initial=len(done)) as bar:
-        _run(todo, options, out, workers, lambda: bar.update(1))
-
+            close_client(client)
     rows = []
     for t in traces:
         recorded = read_partial(out, t, options)

@@ -126,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
         options = options.with_progress(args.progress)
     summary = fit_campaign(source, args.out, options, workers=args.workers, resume=args.resume,
                            force=args.force, progress=args.progress,
-                           read_options=manifest_options)
+                           read_options=manifest_options, scheduler=args.scheduler)
     for line in console_lines(summary):
         print(line)
     print(f"wrote {Path(args.out) / layout.SUMMARY}")

@@ -114,6 +114,11 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
     r.add_argument("--max-steps", type=int, default=20000, help="emcee step cap")
     r.add_argument("--workers", type=int, default=None,
                    help="worker processes (default: all cores)")
+    r.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="fit the traces on Dask: 'local' (a LocalCluster on this machine, "
+                        "--workers processes, loopback only) or a scheduler address "
+                        "(tcp://host:8786) whose workers see the trace files and --out under "
+                        "the same paths; same results as without it")
     r.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bars (default: only on a terminal)")
 

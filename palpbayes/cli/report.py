@@ -116,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"fitting campaign {path} into {out} (methods: {options.method}, seed "
               f"{options.seed})")
         run_pipeline(path, out, options, workers=args.workers, force=args.force,
-                     progress=args.progress)
+                     progress=args.progress, scheduler=args.scheduler)
         results = out
     else:
         if args.out is not None:

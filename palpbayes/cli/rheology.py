@@ -31,7 +31,7 @@ ELASTIC_ONLY = {
     "thickness_range": "--thickness-range", "radius_tolerance": "--radius-tolerance",
     "gain_sd": "--gain-sd", "compliance_max": "--compliance-max", "engine": "--engine",
     "model_form": "--model-form", "strict": "--strict", "max_steps": "--max-steps",
-    "workers": "--workers"}
+    "workers": "--workers", "scheduler": "--scheduler"}
 #: Options only the viscoelastic fit uses.
 VISCO_ONLY = {"segments": "--segments", "t0": "--t0", "compression_speed": "--compression-speed",
               "drag": "--drag", "rheology_engine": "--rheology-engine"}

@@ -20,7 +20,6 @@ runs in this process (debugging, tests).
 
 from __future__ import annotations
 
-import os
 import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -33,17 +32,14 @@ from ..bayes.exact import exact_posterior, sampled_coordinates
 from ..bayes.flags import bound_flags
 from ..campaign.fitjob import FitOptions, check_fittable
 from ..campaign.run import progress_bar
+from ..cluster import close_client, dask_client
 from ..errors import FitError, InputError, PalpbayesError
 from ..flagcodes import flag_columns
 from ..intervals import LEVEL, central
 from ..io.manifest import load_trace
 from ..lsq import fit_lsq_data
 
-__all__ = ["PointOptions", "POINT_COLUMNS", "CONNECT_TIMEOUT", "check_positions", "fit_point",
-           "fit_points", "dask_client", "close_client"]
-
-#: How long to wait for a remote Dask scheduler before giving up.
-CONNECT_TIMEOUT = "20s"
+__all__ = ["PointOptions", "POINT_COLUMNS", "check_positions", "fit_point", "fit_points"]
 
 #: Columns of the per-point table (``points.csv``), in order.
 POINT_COLUMNS = [
@@ -160,50 +156,6 @@ def check_positions(manifest: pd.DataFrame) -> None:
         if col not in manifest.columns or manifest[col].isna().any():
             raise InputError(f"a map needs the palpation position of every trace: manifest "
                              f"column {col!r} (metres) is missing or has empty cells")
-
-
-def dask_client(scheduler: str | None = None, workers: int | None = None):
-    """A ``dask.distributed`` client: a new LocalCluster (``scheduler`` None or ``"local"``:
-    ``workers`` single-threaded processes, default one per core) or the scheduler at an
-    address.  The caller closes it (and its cluster) with ``client.close()``."""
-    try:
-        from dask.distributed import Client, LocalCluster
-    except ImportError as exc:  # pragma: no cover - dask is a dependency
-        raise InputError("the map's per-point fits need dask.distributed: "
-                         "pip install 'dask[distributed]'") from exc
-    if scheduler in (None, "local"):
-        n = int(os.cpu_count() or 1) if workers is None else int(workers)
-        if n < 1:
-            raise InputError(f"workers {workers!r} must be at least 1")
-        # loopback only, and the HTTP server on a free port: distributed's default (8787,
-        # all interfaces) collides with any other cluster or dashboard on the machine
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               host="127.0.0.1", dashboard_address="127.0.0.1:0",
-                               silence_logs=40)
-        try:
-            client = Client(cluster)
-        except BaseException:
-            cluster.close()
-            raise
-        client._palpbayes_cluster = cluster  # closed with the client below
-        return client
-    if workers is not None:
-        raise InputError(f"workers = {workers!r} applies to the local cluster only; a cluster at "
-                         f"{scheduler!r} has the workers it was started with")
-    try:
-        return Client(scheduler, timeout=CONNECT_TIMEOUT)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise InputError(f"cannot reach the Dask scheduler at {scheduler!r} ({exc}); start it "
-                         "with 'dask scheduler' and workers with 'dask worker ADDRESS', or "
-                         "leave --scheduler out for a local cluster") from None
-
-
-def close_client(client) -> None:
-    """Close a client made by :func:`dask_client` (and its LocalCluster)."""
-    cluster = getattr(client, "_palpbayes_cluster", None)
-    client.close()
-    if cluster is not None:
-        cluster.close()
 
 
 def fit_points(manifest: pd.DataFrame, options: PointOptions | None = None, *,

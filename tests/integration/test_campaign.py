@@ -515,3 +515,37 @@ def test_fit_options_nu_applies_to_simulated_traces():
     assert rows[0.45]["nu"] == 0.45
     # same E*, E scaled by (1 - nu^2)
     assert rows[0.45]["E_pa"] / rows[0.3]["E_pa"] == pytest.approx((1 - 0.45**2) / (1 - 0.3**2))
+
+
+# ----------------------------------------------------------------------------- Dask
+
+
+def test_a_campaign_on_a_local_dask_cluster_gives_the_local_summary(traces, tmp_path):
+    """``fit --scheduler local``: the same traces, options and seed on a LocalCluster give
+    summary.csv byte for byte as the process pool (each trace's seed is its own), and the
+    posterior files and resume records are written by the workers into the same folder."""
+    subset = traces[:3]
+    local = campaign.fit_campaign(subset, tmp_path / "local", OPTS, workers=1)
+    dask = campaign.fit_campaign(subset, tmp_path / "dask", OPTS, workers=2, scheduler="local")
+    pd.testing.assert_frame_equal(local, dask)
+    assert ((tmp_path / "local" / "summary.csv").read_bytes()
+            == (tmp_path / "dask" / "summary.csv").read_bytes())
+    for t in subset:
+        assert (tmp_path / "dask" / "posterior" / f"{t.trace_id}.nc").is_file()
+        assert (tmp_path / "dask" / ".partial" / f"{t.trace_id}.json").is_file()
+
+
+def test_an_unreachable_scheduler_fails_before_anything_is_written(camp, tmp_path, monkeypatch,
+                                                                    capsys):
+    import palpbayes.cluster as cluster
+
+    monkeypatch.setattr(cluster, "CONNECT_TIMEOUT", "2s")
+    out = tmp_path / "res"
+    args = ["fit", str(camp / "manifest.csv"), "--out", str(out), "--method", "lsq"]
+    assert main([*args, "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    err = capsys.readouterr().err
+    assert "Dask scheduler at 'tcp://127.0.0.1:9'" in err and "dask scheduler" in err
+    assert not out.exists()
+    assert main([*args, "--scheduler", "tcp://127.0.0.1:9", "--workers", "2"]) == 2
+    assert "has the workers it was started with" in capsys.readouterr().err
+    assert not out.exists()

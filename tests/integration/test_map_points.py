@@ -81,9 +81,9 @@ def test_map_needs_positions_and_exact_engine_noise(tmp_path):
 
 
 def test_unreachable_scheduler_is_a_clear_error(tmp_path, monkeypatch):
-    import palpbayes.maps.pertrace as pertrace
+    import palpbayes.cluster as cluster
 
-    monkeypatch.setattr(pertrace, "CONNECT_TIMEOUT", "2s")
+    monkeypatch.setattr(cluster, "CONNECT_TIMEOUT", "2s")
     m = _manifest(tmp_path, [50e3])
     with pytest.raises(InputError, match="Dask scheduler"):
         fit_points(m, scheduler="tcp://127.0.0.1:9", progress=False)
@@ -95,7 +95,7 @@ def test_local_cluster_listens_on_loopback_and_survives_a_busy_8787(tmp_path):
     did: "Port 8787 is already in use", an error under this suite's warnings-as-errors)."""
     import socket
 
-    from palpbayes.maps.pertrace import dask_client
+    from palpbayes.cluster import dask_client
 
     busy = socket.socket()
     try:
