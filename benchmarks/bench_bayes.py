@@ -1,4 +1,4 @@
-"""Efficiency of the Bayesian fit, measured in one run (issue 5):
+"""Efficiency of the Bayesian fit, measured in one run:
 
 (a) Bayes time / LS time on the same 3,840-point trace (target <= 10);
 (b) posterior sd(E*) / Cramér-Rao bound (target <= 1.2).

@@ -1,4 +1,4 @@
-"""Wall time and peak memory of ``palpbayes fit --method both`` against trace length (issue 8).
+"""Wall time and peak memory of ``palpbayes fit --method both`` against trace length.
 
 Each size runs in a fresh process (``python -m palpbayes fit``) so its peak resident set size
 (``ru_maxrss`` of the child) is measured alone; the 3,840-row paper trace is the baseline, so

@@ -1,4 +1,4 @@
-"""The exact engine and the online estimator, measured in one run (issue 14).
+"""The exact engine and the online estimator, measured in one run.
 
 Run: ``python benchmarks/bench_online.py [--traces 200]``.  Prints, on paper-like 3,840-point
 traces (30 mm specimen, 3 mm indentation, 800 Hz):

@@ -3,7 +3,7 @@
 Prints, measured in this run on this machine:
 
 * wall time, emcee steps and E error of the Bayesian fit of a paper-like trace at 3,840 and
-  15,360 points (800 Hz and 3.2 kHz), and their ratio (issue 12: 16,000-point traces used to
+  15,360 points (800 Hz and 3.2 kHz), and their ratio (16,000-point traces used to
   take up to 55 s and hit the 20,000-step cap);
 * CPU time of every model check (:func:`palpbayes.checks.run_checks`, with 200 posterior
   draws) on those traces, as a fraction of the fit;

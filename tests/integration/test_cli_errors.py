@@ -1,4 +1,4 @@
-"""Bad-input matrix (issue 8): every case exits 2, prints one clear line, writes nothing."""
+"""Bad-input matrix: every case exits 2, prints one clear line, writes nothing."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Real recordings (issue 12): untared sensors, nu = 0.5, a contact point the data decide.
+"""Real recordings: untared sensors, nu = 0.5, a contact point the data decide.
 
 Real AFM approach curves (../shared/data/afm-curves, raw force as the instrument gives it) must
 fit with nu = 0.5 and agree with the unconstrained least-squares reference of the same model

@@ -1,4 +1,4 @@
-"""Recordings as they come off the instruments (issue 16): ``palpbayes fit`` on a ROS 2 bag and
+"""Recordings as they come off the instruments: ``palpbayes fit`` on a ROS 2 bag and
 on AFM files with no conversion step, ``palpbayes inspect``, and one-line errors."""
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ CASES = {
 
 @pytest.mark.parametrize("case", list(CASES))
 def test_exact_engine_agrees_with_emcee_within_monte_carlo_error(case):
-    """Means and sds of E* and z_surf agree within Monte Carlo error (issue 14), with offsets,
+    """Means and sds of E* and z_surf agree within Monte Carlo error, with offsets,
     AR(1) noise and a drifting baseline."""
     c = dict(CASES[case])
     tip = PAPER_TIPS[c.pop("tip")]

@@ -101,7 +101,7 @@ def test_bad_input_is_refused_with_a_clear_message():
 def test_intervals_at_the_stop_cover_the_truth():
     """200 simulated palpations (three tips, moduli over a decade, random offsets), each stopped
     at a ±2 % target: the 90 % intervals at the stop cover the true E 86-94 % of the time
-    (issue 14; optional stopping on a Bayesian interval keeps its coverage)."""
+    (optional stopping on a Bayesian interval keeps its coverage)."""
     rng = np.random.default_rng(314)
     hits, n = 0, 200
     stopped = 0

@@ -1,4 +1,4 @@
-"""AFM files (issue 16): the approach segment of every curve as a trace in SI units (z up,
+"""AFM files: the approach segment of every curve as a trace in SI units (z up,
 pressing positive) with its segment codes, a force map as one trace per curve with its x, y; the
 approach curve equals the canonical CSV the shared data were converted to; a missing extra is
 named.  Segments of stress-relaxation and creep files: tests/unit/test_segments_io.py."""

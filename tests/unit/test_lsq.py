@@ -33,7 +33,7 @@ def test_noise_free_recovery(kind):
 
 @pytest.mark.parametrize("kind", ["sphere", "paraboloid"])
 def test_paper_noise_recovery(kind):
-    """48 mN p-p: E within 1 % and z_surf within 0.05 mm (issue 4), over 10 seeds."""
+    """48 mN p-p: E within 1 % and z_surf within 0.05 mm, over 10 seeds."""
     errs_E, errs_z, cover = [], [], 0
     for seed in range(10):
         tr = simulate_trace(E_TRUE, TIPS[kind], thickness=0.03, rng=seed, base=None)

@@ -1,4 +1,4 @@
-"""ROS 2 bags (issue 16): bags written here with rosbags (MCAP and sqlite3), read back equal to
+"""ROS 2 bags: bags written here with rosbags (MCAP and sqlite3), read back equal to
 the canonical CSV; time alignment, misaligned clocks, missing topics, wrong types and dropped
 messages give clear errors."""
 
