@@ -367,8 +367,12 @@ def onset_correction(win: Windows, depth: np.ndarray, m: float, kernel: str | No
     ta, tb = e[kk - 1], e[kk]
     sc = ta + (tb - ta) * (-d0) / (d1 - d0)
     u1 = d1**m
-    fa, fc, fb = (window_kernel(win, s, kernel, theta, t0) for s in (ta, sc, tb))
-    gc, gb = (window_kernel(win, s, kernel, theta, t0, order=2) for s in (sc, tb))
+    # e_{k-1} and e_k are knots, shared by many rows: each knot's means once
+    knots, at = np.unique(np.r_[kk - 1, kk], return_inverse=True)
+    fk = window_kernel(win, e[knots], kernel, theta, t0)
+    fa, fb = fk[at[: rows.size]], fk[at[rows.size:]]
+    gb = window_kernel(win, e[knots], kernel, theta, t0, order=2)[at[rows.size:]]
+    fc, gc = (window_kernel(win, sc, kernel, theta, t0, order=o) for o in (1, 2))
     rise = tb - sc  # 0 when d1 is so small that the crossing rounds onto the edge
     ok = rise > 0
     h = np.where(ok, rise, 1.0)
