@@ -3,7 +3,8 @@
 One module per job, imports flowing one way (``results`` -> ``store``, ``choice`` -> ``fit`` ->
 ``posterior`` -> ``cycle`` -> ``design``; ``posterior``, ``fit`` -> ``ting`` -> ``design``;
 ``fit`` -> ``compression``; ``pool`` -> ``fit``, ``posterior``; ``campaign`` -> ``pool``;
-``sampler`` -> ``posterior``; ``fit`` -> ``sampler``, ``flags`` -> ``offcontact``):
+``sampler`` -> ``column_table`` -> ``posterior``; ``fit`` -> ``sampler``, ``flags`` ->
+``offcontact``):
 
 * :mod:`~palpbayes.rheology.cycle` -- the samples a viscoelastic fit sees: the chosen
   segments, block means, the knots of the motion, the pre-contact baseline and the surface
@@ -18,8 +19,8 @@ One module per job, imports flowing one way (``results`` -> ``store``, ``choice`
 * :mod:`~palpbayes.rheology.sampler` -- the same posterior sampled by emcee, every parameter
   explicit (exact AR(1) likelihood, the columns tabulated once), started from the grid's
   draws: :func:`sample_emcee`, the check that the collapse is right;
-* :mod:`~palpbayes.rheology.sampler` -- the same posterior sampled by emcee with every
-  parameter explicit (the grid's cross-check, ``engine="emcee"``);
+* :mod:`~palpbayes.rheology.column_table` -- the regression columns tabulated on a
+  Chebyshev grid in (theta, surface) for the chain;
 * :mod:`~palpbayes.rheology.offcontact` -- what the force out of contact shows: a drag gap,
   a tilted baseline, adhesion at pull-off;
 * :mod:`~palpbayes.rheology.flags` -- the flags of a fit in words;
@@ -46,6 +47,7 @@ from __future__ import annotations
 from . import (
     campaign,
     choice,
+    column_table,
     compression,
     cycle,
     design,
@@ -61,6 +63,7 @@ from . import (
 )
 from .campaign import *  # noqa: F403
 from .choice import *  # noqa: F403
+from .column_table import *  # noqa: F403
 from .compression import *  # noqa: F403
 from .cycle import *  # noqa: F403
 from .design import *  # noqa: F403
@@ -76,6 +79,7 @@ from .ting import *  # noqa: F403
 
 __all__: list[str] = []
 __all__ += choice.__all__
+__all__ += column_table.__all__
 __all__ += compression.__all__
 __all__ += cycle.__all__
 __all__ += design.__all__
