@@ -98,7 +98,7 @@ from .reference import (
     paper_estimates,
 )
 from .settings import read_settings
-from .stiffening_tables import stiffening_tables
+from .stiffening_tables import fit_stiffening_tables
 
 __all__ = ["COMPARISON_COLUMNS", "POOLED_COLUMNS", "Comparison",
            "compare_campaign", "load_groundtruth", "paper_estimates"]
@@ -427,7 +427,7 @@ def compare_campaign(
     pooled = pd.DataFrame(pooled_rows) if pooled_rows else pd.DataFrame(columns=POOLED_COLUMNS)
     budget_tab = pd.concat(budgets, ignore_index=True) if budgets else pd.DataFrame(
         columns=BUDGET_COLUMNS)
-    stiff = stiffening_tables(summary, materials, tips, seed, level)
+    stiff = fit_stiffening_tables(summary, materials, tips, seed, level)
     study = (indentation_study(geometry, settings) if "bayes" in set(summary["method"])
              else pd.DataFrame())
     if write:

@@ -1,6 +1,6 @@
 """The stiffening law of each material × tip, as the tables the report draws.
 
-:func:`stiffening_tables` fits the law E(rest time) (:func:`palpbayes.stiffening.
+:func:`fit_stiffening_tables` fits the law E(rest time) (:func:`palpbayes.stiffening.
 fit_stiffening_summary`) to the Bayesian rows of every group whose palpations span
 :data:`STIFFENING_MIN_REST_TIMES` or more distinct positive rest times, and returns three
 tables that ``palpbayes compare`` writes (file names: :mod:`palpbayes.campaign.layout`):
@@ -27,7 +27,7 @@ from ..intervals import LEVEL
 from .fitjob import trace_seed
 
 __all__ = ["STIFFENING_MIN_REST_TIMES", "CURVE_POINTS", "StiffeningTables",
-           "stiffening_tables", "stiffening_rest_times"]
+           "fit_stiffening_tables", "stiffening_rest_times"]
 
 #: A material × tip gets a stiffening fit when its Bayesian rows span this many rest times.
 STIFFENING_MIN_REST_TIMES = 3
@@ -51,7 +51,7 @@ def stiffening_rest_times(group: pd.DataFrame) -> pd.Series:
     return t[np.isfinite(t) & (t > 0) & np.isfinite(e)]
 
 
-def stiffening_tables(summary: pd.DataFrame, materials: list[str], tips: list[str],
+def fit_stiffening_tables(summary: pd.DataFrame, materials: list[str], tips: list[str],
                       seed: int, level: float = LEVEL) -> StiffeningTables:
     """Fit the stiffening law of every group with enough rest times (module docstring).
 
