@@ -159,7 +159,11 @@ def run(args: argparse.Namespace) -> int:
                           force_sign=opts.get("force_sign", 1.0),
                           z_sign=opts.get("z_sign", 1.0))
     stream = batches(lines, parser, chunk=args.chunk, timeout=args.timeout or None)
-    state, _ = follow(stream, estimator, _say, as_json=args.json)
+    try:
+        state, _ = follow(stream, estimator, _say, as_json=args.json)
+    finally:
+        if lines is not sys.stdin:
+            lines.close()
     if state is not None and state.should_stop:
         _say(f"stop: {state.stop} at n {state.n} (t {state.t:.4f} s)")
         return EXIT_STATUS[state.stop]

@@ -44,9 +44,12 @@ def listen(port: int, host: str = DEFAULT_HOST) -> socket.socket:
 
 
 def accept_lines(server: socket.socket) -> tuple[TextIO, str]:
-    """Wait for one connection on ``server``; its lines and the peer's ``host:port``."""
+    """Wait for one connection on ``server``; its lines (close them to close the connection)
+    and the peer's ``host:port``."""
     conn, peer = server.accept()
-    return conn.makefile("r", encoding="utf-8", newline=None), f"{peer[0]}:{peer[1]}"
+    lines = conn.makefile("r", encoding="utf-8", newline=None)
+    conn.close()  # the socket closes with its lines
+    return lines, f"{peer[0]}:{peer[1]}"
 
 
 def connect_lines(host: str, port: int, timeout: float = 10.0) -> TextIO:
@@ -56,4 +59,6 @@ def connect_lines(host: str, port: int, timeout: float = 10.0) -> TextIO:
     except OSError as exc:
         raise InputError(f"cannot connect to {host}:{port}: {exc.strerror or exc}") from None
     conn.settimeout(None)
-    return conn.makefile("r", encoding="utf-8", newline=None)
+    lines = conn.makefile("r", encoding="utf-8", newline=None)
+    conn.close()  # the socket closes with its lines
+    return lines
