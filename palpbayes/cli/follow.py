@@ -145,6 +145,9 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr, flush=True)
     if args.listen is not None:
         host, port = parse_address(args.listen)
+        if host not in (DEFAULT_HOST, "localhost", "::1"):
+            print(f"note: listening on {host}, not loopback: anyone who can reach port "
+                  f"{port} can send samples", file=sys.stderr, flush=True)
         with listen(port, host) as server:
             h, p = server.getsockname()[:2]
             print(f"listening on {h}:{p}", file=sys.stderr, flush=True)
