@@ -3,7 +3,11 @@
 Reads samples (time, z, force) from stdin or a TCP connection, as CSV lines with a header or
 JSON lines (:mod:`palpbayes.online.stream`), feeds them to the online estimator in chunks as
 ``replay`` does, prints one line per update (flushed at once) and exits the moment the
-stopping rule fires, with a status that says why (:data:`EXIT_STATUS`).
+stopping rule fires, with a status that says why (:data:`EXIT_STATUS`).  Every sample sent
+is used (``replay`` keeps a recording's loading segment): the sender stops at the deepest
+point.  With ``--timeout`` a pause in the stream gives a partial chunk, so the updates (and
+the sample the rule fires at) can then differ from ``replay``'s; ``--timeout 0`` keeps them
+equal.
 """
 
 from __future__ import annotations
@@ -56,7 +60,9 @@ def register(subparsers) -> None:
         "header or JSON lines, from stdin or TCP; print E with its 90 %% interval after "
         "every chunk and exit the moment the stopping rule fires, with a status that says "
         "why (below), so that a robot script can stop the motion. The estimator and its "
-        "options are replay's.",
+        "options are replay's; unlike replay, which keeps a recording's loading segment, "
+        "follow uses every sample it is sent, so send the approach and the indentation only "
+        "(not the hold or retract).",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     src = p.add_mutually_exclusive_group()
