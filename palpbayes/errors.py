@@ -14,6 +14,7 @@ __all__ = [
     "PalpbayesError",
     "InputError",
     "DataFileError",
+    "StreamError",
     "MissingExtraError",
     "GeometryError",
     "NoContactError",
@@ -54,6 +55,26 @@ class DataFileError(InputError):
         if fix:
             msg += f" ({fix})"
         super().__init__(msg)
+
+
+class StreamError(InputError):
+    """A line of a live sample stream (``palpbayes follow``) cannot be used.
+
+    Parameters
+    ----------
+    source
+        Where the line came from (``stdin``, ``tcp 127.0.0.1:5000``).
+    line
+        Its line number in the stream, counting from 1 (the header is line 1 of a CSV stream).
+    problem
+        What is wrong, naming the column or value.
+    fix
+        What the sender can do about it.
+    """
+
+    def __init__(self, source: str, line: int, problem: str, fix: str):
+        self.source, self.line, self.problem, self.fix = source, line, problem, fix
+        super().__init__(f"{source} line {line}: {problem} ({fix})")
 
 
 class MissingExtraError(InputError):

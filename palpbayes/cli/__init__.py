@@ -17,8 +17,8 @@ from ..errors import InputError, PalpbayesError
 __all__ = ["main", "build_parser", "SUBCOMMANDS"]
 
 #: Subcommand modules, in the order ``--help`` lists them.
-SUBCOMMANDS = ("simulate", "fit", "groundtruth", "compare", "report", "replay", "inspect",
-               "map")
+SUBCOMMANDS = ("simulate", "fit", "groundtruth", "compare", "report", "replay", "follow",
+               "inspect", "map")
 
 
 class _Parser(argparse.ArgumentParser):

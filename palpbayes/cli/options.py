@@ -23,7 +23,8 @@ from ..contact import (
 from ..errors import InputError
 from ..fitdata import BONDINGS
 
-__all__ = ["add_nu_option", "add_model_options", "add_trace_options", "options_from_args",
+__all__ = ["add_nu_option", "add_model_options", "add_trace_options", "add_tip_options",
+           "add_column_options", "options_from_args",
            "thickness_from_args", "layer_from_args", "read_options_from_args", "dest",
            "RECORDING_FLAGS", "recording_options_from_args", "tip_from_args",
            "traces_from_args", "trace_from_args"]
@@ -123,8 +124,9 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                    help="progress bars (default: only on a terminal)")
 
 
-def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -> None:
-    """Tip, specimen, columns, units and signs of a trace file (``fit``, ``replay``)."""
+def add_tip_options(p: argparse.ArgumentParser, title: str = "single trace") -> None:
+    """Tip, its size, the specimen's thickness and material (``fit``, ``replay``,
+    ``follow``)."""
     t = p.add_argument_group(title)
     t.add_argument("--tip", choices=registered_kinds(), help="tip kind")
     for par in TIP_PARAMETERS.values():  # the tip's size, in the option's unit
@@ -134,7 +136,14 @@ def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -
                    help="specimen thickness [m] (the Bayesian model then treats it as a layer "
                         "on a rigid base), or 'unknown' to sample it")
     t.add_argument("--material", default="", help="material label")
-    c = p.add_argument_group("columns, units and signs (every trace, also of a manifest)")
+
+
+def add_column_options(p: argparse.ArgumentParser,
+                       title: str = "columns, units and signs (every trace, also of a "
+                                    "manifest)") -> None:
+    """Column names, units and signs of a text table or stream (``fit``, ``replay``,
+    ``follow``)."""
+    c = p.add_argument_group(title)
     for q, unit in (("time", "s"), ("z", "m"), ("force", "N")):
         c.add_argument(f"--{q}-column", metavar="NAME", help=f"column holding {q}")
         c.add_argument(f"--{q}-unit", metavar="UNIT", help=f"unit of {q} (default {unit})")
@@ -143,6 +152,12 @@ def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -
                         "sign that makes the force grow as the tip goes down)")
     c.add_argument("--z-sign", type=float, choices=(1.0, -1.0), default=1.0,
                    help="-1 if z is down-positive")
+
+
+def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -> None:
+    """Tip, specimen, columns, units and signs of a trace file (``fit``, ``replay``)."""
+    add_tip_options(p, title)
+    add_column_options(p)
     r = p.add_argument_group("ROS 2 bags and AFM files (palpbayes inspect FILE lists what is in "
                              "one)")
     r.add_argument("--force-topic", metavar="TOPIC",

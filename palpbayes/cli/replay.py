@@ -8,28 +8,14 @@ from pathlib import Path
 import pandas as pd
 
 from ..campaign import layout
-from ..contact import DEFAULT_NU, DEFAULT_NU_NOTE, check_nu
-from ..errors import InputError
-from ..fitdata import ModelSpec
+from ..contact import DEFAULT_NU_NOTE
 from ..io.atomic import write_csv_atomic, write_with
-from ..online import StoppingRule, replay
+from ..online import replay
 from ..units import format_force, format_length, format_pressure
-from .options import add_nu_option, add_trace_options, thickness_from_args, trace_from_args
+from .online_options import add_online_options, model_from_args, parse_fraction, rule_from_args
+from .options import add_trace_options, trace_from_args
 
 __all__ = ["register", "run", "parse_fraction"]
-
-
-def parse_fraction(text: str) -> float:
-    """'2%' -> 0.02, '0.02' -> 0.02 (a relative half-width)."""
-    t = str(text).strip()
-    try:
-        v = float(t[:-1]) / 100 if t.endswith("%") else float(t)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"{text!r} is not a fraction: give e.g. 2% or 0.02") from None
-    if not 0 < v < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} must lie between 0 and 100 %")
-    return v
 
 
 def register(subparsers) -> None:
@@ -40,26 +26,7 @@ def register(subparsers) -> None:
         "E then against E from the whole trace, and the interval narrowing with depth.",
     )
     p.add_argument("input", metavar="TRACE", help="trace CSV")
-    p.add_argument("--target", type=parse_fraction, default=None, metavar="FRACTION",
-                   help="target statistical precision: stop when the 90 %% interval of E "
-                   "from the data (noise and surface; not the budget's nu, tip radius, gain "
-                   "and compliance) is within ± this of E (e.g. 2%%); the budget interval is "
-                   "printed beside it")
-    p.add_argument("--max-force", type=float, default=None, metavar="N",
-                   help="stop at this force above the baseline [N]")
-    p.add_argument("--max-depth", type=float, default=None, metavar="M",
-                   help="stop at this depth below the estimated surface [m]")
-    p.add_argument("--chunk", type=int, default=100, metavar="SAMPLES",
-                   help="samples per update (default 100: 0.2 s at a UR robot's 500 Hz)")
-    p.add_argument("--noise", choices=("gaussian", "ar1"), default="gaussian",
-                   help="noise model (default gaussian)")
-    p.add_argument("--noise-pp", type=float, default=None, metavar="N",
-                   help="sensor peak-to-peak noise [N] (default: 6 sd of the baseline)")
-    add_nu_option(p, manifest=False, summary=False)
-    p.add_argument("--bonding", choices=("bonded", "free"), default=None,
-                   help="base of a layer of known --thickness: bonded to it or free (lying "
-                        "on it without friction); required with --thickness, because the "
-                        "online estimator takes one base (the offline fit weighs both)")
+    add_online_options(p)
     p.add_argument("--truth", type=float, default=None, metavar="PA",
                    help="true modulus [Pa] of a simulated trace, drawn on the figure")
     p.add_argument("--out", metavar="DIR", default=None,
@@ -81,34 +48,10 @@ def _show(label: str, s, budget) -> str:
             f"{format_pressure(budget.hi)}]  (±{rel:.2g} %)")
 
 
-def _layer(args: argparse.Namespace) -> dict:
-    """``thickness`` and ``bonding`` of the online model from --thickness and --bonding (a
-    thickness is never dropped: the half-space would read a thin block as stiffer)."""
-    if str(getattr(args, "thickness", None) or "").strip().lower() == "unknown":
-        raise InputError("--thickness unknown: online estimation needs a known thickness "
-                         "(or none, for a half-space); fit the whole trace with "
-                         "'palpbayes fit ... --thickness unknown' to infer it")
-    h = thickness_from_args(args)
-    if h is None:
-        if args.bonding is not None:
-            raise InputError("--bonding is the base of a layer: give --thickness M too")
-        return {}
-    if args.bonding is None:
-        raise InputError(f"--thickness {h:g} m: give the layer's base, --bonding bonded "
-                         "(glued, or on a plate it cannot slide on) or --bonding free "
-                         "(lubricated); the online estimator takes one base")
-    return {"thickness": h, "bonding": args.bonding}
-
-
 def run(args: argparse.Namespace) -> int:
-    if args.target is None and args.max_force is None and args.max_depth is None:
-        raise InputError("give a stopping rule: --target 2% (precision), --max-force N or "
-                         "--max-depth M")
-    rule = StoppingRule(target=args.target, max_force=args.max_force,
-                        max_depth=args.max_depth)
+    rule = rule_from_args(args)
     trace = trace_from_args(args)
-    model = ModelSpec(trace.tip, nu=DEFAULT_NU if args.nu is None else check_nu(args.nu),
-                      **_layer(args))
+    model = model_from_args(args, trace.tip)
     res = replay(trace, model, rule=rule, chunk=args.chunk, noise=args.noise,
                  noise_pp=args.noise_pp)
     s, f = res.at_stop, res.final

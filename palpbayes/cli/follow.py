@@ -1,0 +1,183 @@
+"""``palpbayes follow --tip ... --target 2%``: E live, from samples as they arrive.
+
+Reads samples (time, z, force) from stdin or a TCP connection, as CSV lines with a header or
+JSON lines (:mod:`palpbayes.online.stream`), feeds them to the online estimator in chunks as
+``replay`` does, prints one line per update (flushed at once) and exits the moment the
+stopping rule fires, with a status that says why (:data:`EXIT_STATUS`).  Every sample sent
+is used (``replay`` keeps a recording's loading segment): the sender stops at the deepest
+point.  With ``--timeout`` a pause in the stream gives a partial chunk, so the updates (and
+the sample the rule fires at) can then differ from ``replay``'s; ``--timeout 0`` keeps them
+equal.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections.abc import Callable, Iterable
+
+from ..contact import DEFAULT_NU_NOTE
+from ..errors import InputError
+from ..online import OnlineEstimator, OnlineState
+from ..online.stream import Batch, SampleParser, batches
+from ..online.tcp import DEFAULT_HOST, accept_lines, connect_lines, listen, parse_address
+from ..units import format_force, format_length, format_pressure
+from .online_options import add_online_options, estimator_from_args, rule_from_args
+from .options import add_column_options, add_tip_options, read_options_from_args, tip_from_args
+
+__all__ = ["register", "run", "follow", "update_text", "update_json", "EXIT_STATUS",
+           "EXIT_ENDED", "EXIT_BAD_INPUT"]
+
+#: Exit status when the stopping rule fires, per reason.
+EXIT_STATUS = {"target precision": 0, "max force": 3, "max depth": 4}
+#: Exit status when the stream ends before the rule fires (the robot must stop on its own).
+EXIT_ENDED = 5
+#: Exit status of bad input (a bad line, option or tip): the CLI's usual 2.
+EXIT_BAD_INPUT = 2
+
+EPILOG = f"""\
+exit status:
+  {EXIT_STATUS['target precision']}    stopped: target precision reached (--target)
+  {EXIT_STATUS['max force']}    stopped: max force reached (--max-force)
+  {EXIT_STATUS['max depth']}    stopped: max depth reached (--max-depth)
+  {EXIT_ENDED}    the stream ended before the stopping rule fired
+  {EXIT_BAD_INPUT}    bad input: a malformed line, a missing column, a non-finite value, time
+       going backwards (stderr names the line), or a bad option
+  1    failed otherwise;  130  interrupted
+
+Every update is one line on stdout, flushed at once; the last line starts with 'stop:'
+(the rule fired) or 'end:' (the stream ended).  Input is parsed as numbers only (float,
+json.loads): nothing is evaluated or unpickled."""
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "follow", help="E live from samples as they arrive; exit when the rule fires",
+        description="Read samples (time_s, z_m, force_n) as they arrive, as CSV lines with a "
+        "header or JSON lines, from stdin or TCP; print E with its 90 %% interval after "
+        "every chunk and exit the moment the stopping rule fires, with a status that says "
+        "why (below), so that a robot script can stop the motion. The estimator and its "
+        "options are replay's; unlike replay, which keeps a recording's loading segment, "
+        "follow uses every sample it is sent, so send the approach and the indentation only "
+        "(not the hold or retract).",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--listen", metavar="[HOST:]PORT", default=None,
+                     help=f"listen for one TCP connection on PORT (host {DEFAULT_HOST}, "
+                          "loopback only, unless HOST is given; 0: any free port, printed on "
+                          "stderr)")
+    src.add_argument("--connect", metavar="HOST:PORT", default=None,
+                     help="connect to a TCP server that sends the samples")
+    p.add_argument("--timeout", type=float, default=0.5, metavar="S",
+                   help="update with a partial chunk when no sample has arrived for S "
+                        "seconds (default 0.5; 0: wait for full chunks)")
+    p.add_argument("--json", action="store_true",
+                   help="print each update as one JSON object instead of text")
+    add_online_options(p)
+    add_tip_options(p, "tip and specimen")
+    add_column_options(p, "columns, units and signs of the samples")
+    p.set_defaults(input="the stream")
+
+
+def _value(x) -> float | None:
+    return None if x is None or not math.isfinite(x) else float(x)
+
+
+def update_json(state: OnlineState, batch: Batch) -> str:
+    """One update as a JSON object (NaN as null)."""
+    E = state.E
+    row = {"n": state.n, "line": batch.last_line, "t_s": _value(state.t),
+           "z_m": _value(state.z), "in_contact": state.in_contact,
+           "depth_m": _value(state.depth), "peak_force_n": _value(state.peak_force),
+           "E_pa": _value(E.median) if E else None, "E_lo_pa": _value(E.lo) if E else None,
+           "E_hi_pa": _value(E.hi) if E else None,
+           "rel_half_width": _value(E.rel_half_width) if E else None, "stop": state.stop}
+    return json.dumps(row)
+
+
+def update_text(state: OnlineState, batch: Batch) -> str:
+    """One update as a line of text: where, then E [90 % interval] and its half-width."""
+    head = f"n {state.n:6d}  t {state.t:8.3f} s"
+    if not state.in_contact:
+        return f"{head}  no contact yet"
+    where = (f"{head}  depth {format_length(state.depth):>9}  peak force "
+             f"{format_force(state.peak_force):>9}")
+    if state.E is None:
+        return f"{where}  in contact, no estimate yet"
+    E = state.E
+    return (f"{where}  E = {format_pressure(E.median)} [{format_pressure(E.lo)}, "
+            f"{format_pressure(E.hi)}]  (±{100 * E.rel_half_width:.2g} %)")
+
+
+def follow(stream: Iterable[Batch], estimator: OnlineEstimator,
+           emit: Callable[[str], None], as_json: bool = False
+           ) -> tuple[OnlineState | None, list[float]]:
+    """Update ``estimator`` with each batch, ``emit`` each update, stop when its rule fires.
+
+    Returns
+    -------
+    state
+        The last state (None if no sample arrived).
+    latencies
+        [s] Per update, from the arrival of the batch's last sample to the return of ``emit``.
+    """
+    fmt = update_json if as_json else update_text
+    state, latencies = None, []
+    for batch in stream:
+        state = estimator.update(batch.t, batch.z, batch.force)
+        emit(fmt(state, batch))
+        latencies.append(time.perf_counter() - batch.arrived)
+        if state.should_stop:
+            break
+    return state, latencies
+
+
+def _say(line: str) -> None:
+    print(line, flush=True)
+
+
+def run(args: argparse.Namespace) -> int:
+    rule = rule_from_args(args)
+    estimator = estimator_from_args(args, tip_from_args(args), rule)
+    opts = read_options_from_args(args)
+    if not (math.isfinite(args.timeout) and args.timeout >= 0):
+        raise InputError(f"--timeout {args.timeout!r} must be a time >= 0 [s]")
+    if args.nu is None:
+        print(f"note: {DEFAULT_NU_NOTE.replace(', or a nu column in the manifest', '')}",
+              file=sys.stderr, flush=True)
+    if args.listen is not None:
+        host, port = parse_address(args.listen)
+        if host not in (DEFAULT_HOST, "localhost", "::1"):
+            print(f"note: listening on {host}, not loopback: anyone who can reach port "
+                  f"{port} can send samples", file=sys.stderr, flush=True)
+        with listen(port, host) as server:
+            h, p = server.getsockname()[:2]
+            print(f"listening on {h}:{p}", file=sys.stderr, flush=True)
+            lines, peer = accept_lines(server)
+        source = f"tcp {peer}"
+    elif args.connect is not None:
+        host, port = parse_address(args.connect)
+        lines, source = connect_lines(host, port), f"tcp {host}:{port}"
+    else:
+        lines, source = sys.stdin, "stdin"
+    parser = SampleParser(source, columns=opts.get("columns"), units=opts.get("units"),
+                          force_sign=opts.get("force_sign", 1.0),
+                          z_sign=opts.get("z_sign", 1.0))
+    stream = batches(lines, parser, chunk=args.chunk, timeout=args.timeout or None)
+    try:
+        state, _ = follow(stream, estimator, _say, as_json=args.json)
+    finally:
+        if lines is not sys.stdin:
+            lines.close()
+    if state is not None and state.should_stop:
+        _say(f"stop: {state.stop} at n {state.n} (t {state.t:.4f} s)")
+        return EXIT_STATUS[state.stop]
+    n = 0 if state is None else state.n
+    why = ("" if state is not None and state.in_contact
+           else ", no contact detected")
+    _say(f"end: the stream ended after {n} samples without a stop{why}")
+    return EXIT_ENDED

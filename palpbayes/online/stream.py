@@ -1,0 +1,263 @@
+"""Samples as they arrive: lines of text (CSV or JSON) into (t, z, F) batches.
+
+A stream is either CSV, whose first line is a header naming the columns of the canonical
+trace CSV (``time_s, z_m, force_n``: SI, z up, force positive when pressing; separated by
+commas, semicolons, tabs or blanks), or JSON lines, one object per line with the same keys
+(``{"time_s": 0.00125, "z_m": 0.101, "force_n": 0.002}``).  The first non-blank line decides
+which.  Other column names, units and signs are taken as the trace CSV reader takes them
+(``columns``, ``units``, ``force_sign``, ``z_sign``).  Values are parsed with ``float`` and
+``json.loads`` only: nothing that arrives is evaluated or unpickled.
+
+Every bad line (malformed, a missing column, a non-finite value, time going backwards) raises
+:class:`~palpbayes.errors.StreamError` naming its line number, the column or value, and what
+to do.
+
+:func:`batches` groups the samples into chunks of ``chunk`` for the online estimator; a
+partial chunk is given when the stream ends, and when no sample has arrived for ``timeout``
+seconds, so a slow stream still gets decisions.  The lines are read by a background thread
+that stamps each with its arrival time (:func:`time.perf_counter`), so that the latency of
+a decision can be measured from the arrival of the last sample it used.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import queue
+import threading
+import time
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError, StreamError
+from ..io.units import force_factor, length_factor, time_factor
+
+__all__ = ["SampleParser", "Batch", "batches", "arrivals", "CANONICAL_COLUMNS"]
+
+#: Quantity -> canonical column (key) name, as in the trace CSV.
+CANONICAL_COLUMNS = {"time": "time_s", "z": "z_m", "force": "force_n"}
+_DEFAULT_UNIT = {"time": "s", "z": "m", "force": "N"}
+_FACTOR = {"time": time_factor, "z": length_factor, "force": force_factor}
+_FIX_COLUMNS = ("send the columns time_s, z_m, force_n or map them with --time-column, "
+                "--z-column, --force-column (and --time-unit, --z-unit, --force-unit)")
+
+
+class SampleParser:
+    """Parse the lines of one stream into samples (time [s], z [m], force [N]).
+
+    Parameters
+    ----------
+    source
+        Name of the stream in error messages (``stdin``, ``tcp 127.0.0.1:5000``).
+    columns
+        Quantity (``time``, ``z``, ``force``) -> column or key name, where it is not the
+        canonical one (:data:`CANONICAL_COLUMNS`).
+    units
+        Quantity -> unit of its values (default s, m, N).
+    force_sign, z_sign
+        -1 to flip a force that is negative when pressing, or a z that is down-positive.
+    """
+
+    def __init__(self, source: str = "stdin", columns: dict[str, str] | None = None,
+                 units: dict[str, str] | None = None, force_sign: float = 1.0,
+                 z_sign: float = 1.0) -> None:
+        columns, units = dict(columns or {}), dict(units or {})
+        unknown = (set(columns) | set(units)) - set(CANONICAL_COLUMNS)
+        if unknown:
+            raise InputError(f"unknown quantity {sorted(unknown)}; use time, z and force")
+        if force_sign not in (1, -1) or z_sign not in (1, -1):
+            raise InputError("force_sign and z_sign must be +1 or -1")
+        self.source = source
+        self.keys = {q: columns.get(q, CANONICAL_COLUMNS[q]) for q in CANONICAL_COLUMNS}
+        sign = {"time": 1.0, "z": float(z_sign), "force": float(force_sign)}
+        self.scale = {q: sign[q] * _FACTOR[q](units.get(q, _DEFAULT_UNIT[q]))
+                      for q in CANONICAL_COLUMNS}
+        self.kind: str | None = None  # "csv" or "json", from the first non-blank line
+        self.index: dict[str, int] = {}  # CSV: quantity -> field position
+        self.n_fields = 0
+        self.delimiter: str | None = None
+        self.last_time = -math.inf
+
+    def parse(self, line: str, lineno: int) -> tuple[float, float, float] | None:
+        """The sample (t [s], z [m], F [N]) of line ``lineno`` (from 1), or None for a blank
+        line or the CSV header."""
+        text = line.strip()
+        if not text:
+            return None
+        if self.kind is None:
+            self.kind = "json" if text.startswith("{") else "csv"
+            if self.kind == "csv":
+                self._header(text, lineno)
+                return None
+        raw = self._json(text, lineno) if self.kind == "json" else self._csv(text, lineno)
+        values = {q: self._number(raw[q], q, lineno) for q in CANONICAL_COLUMNS}
+        t = values["time"]
+        if t < self.last_time:
+            raise StreamError(self.source, lineno,
+                              f"time goes backwards: {self.keys['time']} = {raw['time']} after "
+                              f"{self.last_time / self.scale['time']:.10g}",
+                              "send the samples in time order, one clock for the whole stream")
+        self.last_time = t
+        return t, values["z"], values["force"]
+
+    def _header(self, text: str, lineno: int) -> None:
+        self.delimiter = next((d for d in ",;\t" if d in text), None)  # None: blanks
+        names = [n.strip().strip('"') for n in text.split(self.delimiter)]
+        missing = [self.keys[q] for q in CANONICAL_COLUMNS if self.keys[q] not in names]
+        if missing:
+            try:
+                float(names[0])
+                first = " (the first line is numbers: a CSV stream starts with its header)"
+            except ValueError:
+                first = ""
+            raise StreamError(self.source, lineno,
+                              f"missing column {', '.join(map(repr, missing))}{first}; the "
+                              f"header has {', '.join(map(repr, names))}", _FIX_COLUMNS)
+        self.index = {q: names.index(self.keys[q]) for q in CANONICAL_COLUMNS}
+        self.n_fields = len(names)
+
+    def _csv(self, text: str, lineno: int) -> dict[str, str]:
+        if text.startswith("{"):
+            raise StreamError(self.source, lineno, "a JSON object in a CSV stream",
+                              "send one format for the whole stream")
+        fields = [f.strip() for f in text.split(self.delimiter)]
+        if len(fields) != self.n_fields:
+            raise StreamError(self.source, lineno,
+                              f"{len(fields)} fields where the header names {self.n_fields}: "
+                              f"{text[:80]!r}", "send one value per header column")
+        return {q: fields[i] for q, i in self.index.items()}
+
+    def _json(self, text: str, lineno: int) -> dict:
+        try:
+            obj = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise StreamError(self.source, lineno, f"not a JSON object: {exc.msg} in "
+                              f"{text[:80]!r}", "send one JSON object per line") from None
+        if not isinstance(obj, dict):
+            raise StreamError(self.source, lineno, f"not a JSON object: {text[:80]!r}",
+                              "send one JSON object per line")
+        missing = [self.keys[q] for q in CANONICAL_COLUMNS if self.keys[q] not in obj]
+        if missing:
+            raise StreamError(self.source, lineno,
+                              f"missing key {', '.join(map(repr, missing))}; the object has "
+                              f"{', '.join(map(repr, obj)) or 'no keys'}", _FIX_COLUMNS)
+        return {q: obj[self.keys[q]] for q in CANONICAL_COLUMNS}
+
+    def _number(self, raw, quantity: str, lineno: int) -> float:
+        key = self.keys[quantity]
+        if isinstance(raw, bool) or not isinstance(raw, (int, float, str)):
+            raise StreamError(self.source, lineno, f"{key} = {raw!r} is not a number",
+                              "send a decimal number")
+        try:
+            v = float(raw)
+        except ValueError:
+            comma = " (a decimal comma? send a decimal point)" if "," in str(raw) else ""
+            raise StreamError(self.source, lineno, f"{key} = {raw!r} is not a number{comma}",
+                              "send a decimal number") from None
+        if not math.isfinite(v):
+            raise StreamError(self.source, lineno, f"{key} = {raw!r} is not finite",
+                              "drop the sample or send a measured value")
+        return v * self.scale[quantity]
+
+
+@dataclass(frozen=True)
+class Batch:
+    """Samples to give the estimator in one update.
+
+    Attributes
+    ----------
+    t, z, force
+        [s], [m], [N] The samples, in time order.
+    last_line
+        Line number of the last sample.
+    arrived
+        :func:`time.perf_counter` [s] when the last sample's line arrived.
+    why
+        ``"chunk"`` (a full chunk), ``"timeout"`` (no sample for the time-out) or ``"end"``.
+    """
+
+    t: np.ndarray
+    z: np.ndarray
+    force: np.ndarray
+    last_line: int
+    arrived: float
+    why: str
+
+    @property
+    def size(self) -> int:
+        return int(self.t.size)
+
+
+def arrivals(lines: Iterable[str]) -> queue.Queue:
+    """A queue of (arrival time [s, perf_counter], line) filled by a daemon thread reading
+    ``lines``; (time, None) at the end of the stream, (time, exception) if reading failed."""
+    q: queue.Queue = queue.Queue()
+
+    def read() -> None:
+        try:
+            for line in lines:
+                q.put((time.perf_counter(), line))
+        except (OSError, ValueError, UnicodeDecodeError) as exc:  # a closed or broken stream
+            q.put((time.perf_counter(), exc))
+            return
+        q.put((time.perf_counter(), None))
+
+    threading.Thread(target=read, name="palpbayes-stream", daemon=True).start()
+    return q
+
+
+def batches(lines: Iterable[str], parser: SampleParser, chunk: int = 100,
+            timeout: float | None = 0.5) -> Iterator[Batch]:
+    """Batches of ``chunk`` samples from ``lines`` as they arrive (module docstring).
+
+    Parameters
+    ----------
+    lines
+        The stream, one sample per line (a file, ``sys.stdin``, a socket's ``makefile``).
+    parser
+        Parses each line (:class:`SampleParser`).
+    chunk
+        Samples per batch; a partial batch at the end of the stream.
+    timeout
+        [s] Give a partial batch when no line has arrived for this long; None or 0: wait for
+        a full chunk.
+
+    Raises
+    ------
+    StreamError
+        On the first bad line (its number, the column or value, what to do).
+    """
+    if chunk < 1:
+        raise InputError(f"chunk = {chunk} samples must be at least 1")
+    q = arrivals(lines)
+    buf: list[tuple[float, float, float]] = []
+    lineno, last_arrival = 0, 0.0
+
+    def emit(why: str) -> Batch:
+        a = np.array(buf, dtype=float).reshape(-1, 3)
+        buf.clear()
+        return Batch(a[:, 0], a[:, 1], a[:, 2], lineno, last_arrival, why)
+
+    while True:
+        try:
+            arrived, line = q.get(timeout=timeout if (buf and timeout) else None)
+        except queue.Empty:
+            yield emit("timeout")
+            continue
+        if line is None:
+            break
+        if isinstance(line, BaseException):
+            raise InputError(f"{parser.source}: reading the stream failed after line "
+                             f"{lineno}: {line}")
+        lineno += 1
+        sample = parser.parse(line, lineno)
+        if sample is None:
+            continue
+        buf.append(sample)
+        last_arrival = arrived
+        if len(buf) >= chunk:
+            yield emit("chunk")
+    if buf:
+        yield emit("end")
