@@ -60,6 +60,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                         "Workshop)")
     a.add_argument("--sensitivity", type=float, metavar="M_PER_V",
                    help="deflection sensitivity [m/V], for files that lack it (AFM Workshop)")
+    a.add_argument("--thickness", type=float, metavar="M",
+                   help="specimen thickness [m]: the lump model (--lump) needs it; an AFM "
+                        "file does not record it")
     a.add_argument("--sample-rate", type=float, metavar="HZ",
                    help="sample rate of the approach [Hz], for files without a time column "
                         "(AFM Workshop; an elastic fit does not depend on it)")
@@ -103,6 +106,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--lump-max-steps {args.lump_max_steps} is too few; use at least "
                          "1000")
     afm = is_afm_file(args.input)
+    if not afm and args.thickness is not None:
+        raise InputError("--thickness is for an AFM map; a manifest gives the thickness in "
+                         "its column thickness_m")
     lump = (not afm) if args.lump is None else bool(args.lump)
     manifest = _afm_rows(args) if afm else read_manifest(args.input)
     # each point a half-space: the lump's forward model (palpbayes.sim.inclusion) reads the
@@ -194,7 +200,12 @@ def _afm_rows(args: argparse.Namespace):
     from ..maps.afm_source import afm_map_rows
 
     tip = tip_from_args(args)
-    return afm_map_rows(args.input, tip, **_afm_override(args))
+    rows = afm_map_rows(args.input, tip, **_afm_override(args))
+    if args.thickness is not None:
+        if not args.thickness > 0:
+            raise InputError(f"--thickness {args.thickness!r} must be a positive length [m]")
+        rows["thickness_m"] = float(args.thickness)
+    return rows
 
 
 def _truth(folder: Path) -> dict | None:
