@@ -74,9 +74,13 @@ def afm_map_rows(path: str | os.PathLike, tip: Tip, *, meta_override: dict | Non
     Raises
     ------
     DataFileError
-        The file cannot be read, or a curve has no position (naming the curve).
+        The file cannot be read, holds one curve, or a curve has no position (naming the
+        curve).
     """
     curves, source = load_afm_curves(path, meta_override)
+    if len(curves) < 2:
+        raise DataFileError(source, "holds one curve: it is not a force map",
+                            "fit it with palpbayes fit FILE --tip ...")
     stem = Path(path).name.split(".")[0] or "curve"
     rows = []
     for i, curve in enumerate(curves):
