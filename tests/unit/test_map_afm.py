@@ -180,3 +180,13 @@ def test_the_2x2_maps_point_agrees_with_palpbayes_fit(mapped_2x2, afm_files, tmp
     assert point["E_median_pa"] == pytest.approx(fit["E_stat_pa"], rel=0.01)
     assert point["E_lo_pa"] == pytest.approx(fit["E_stat_lo_pa"], rel=0.02)
     assert point["E_hi_pa"] == pytest.approx(fit["E_stat_hi_pa"], rel=0.02)
+
+
+def test_inspect_reads_the_workshop_zip_and_says_what_it_lacks(afm_files, capsys):
+    """afmformats reads the AFM Workshop zip only with k and the sensitivity; inspect shows its
+    16 curves and their positions anyway and names the options a map needs."""
+    assert main(["inspect", str(afm_files / WORKSHOP)]) == 0
+    out = capsys.readouterr().out
+    assert "AFM file, 16 curve(s) (force-distance)" in out
+    assert "curve 0: approach 391, retract 391 points  at x = 1 µm, y = 2 µm" in out
+    assert "--spring-constant" in out and "map FILE --tip" in out
