@@ -13,8 +13,10 @@ map) becomes a row with ``error`` set, so it stays a hole on the lattice, neithe
 filled.  A curve that fails to read or fit becomes a hole in the same way
 (:func:`palpbayes.maps.pertrace.fit_point` puts the reason in ``points.csv``).
 
-Positions are the file's own (metres); a curve without one is an error naming the file and
-the curve.  A hole's position is its grid index times the step fitted to the curves read.
+Positions are the file's own (afmformats converts them to metres; a span of
+:data:`MAX_SPAN` or more is rejected as not metres); a curve without one is an error naming
+the file and the curve.  A hole's position is its grid index times the step fitted to the
+curves read.
 """
 
 from __future__ import annotations
@@ -31,7 +33,11 @@ from ..io.afm import curve_metadata, load_afm_curves, read_afm
 from ..io.manifest import load_trace, tip_columns, tip_from_row
 from ..trace import IndentationTrace
 
-__all__ = ["AFM_ROW_COLUMNS", "NO_CURVE", "afm_map_rows", "load_point_trace", "is_afm_row"]
+__all__ = ["AFM_ROW_COLUMNS", "MAX_SPAN", "NO_CURVE", "afm_map_rows", "load_point_trace",
+           "is_afm_row"]
+
+#: [m] Largest extent of an AFM map's positions: a larger one is not in metres.
+MAX_SPAN = 0.05
 
 #: How the ``error`` of a hole (a grid node without a curve in the file) starts.
 NO_CURVE = "no curve at grid index"
@@ -74,8 +80,8 @@ def afm_map_rows(path: str | os.PathLike, tip: Tip, *, meta_override: dict | Non
     Raises
     ------
     DataFileError
-        The file cannot be read, holds one curve, or a curve has no position (naming the
-        curve).
+        The file cannot be read, holds one curve, a curve has no position (naming the
+        curve), or the positions span :data:`MAX_SPAN` or more (not metres).
     """
     curves, source = load_afm_curves(path, meta_override)
     if len(curves) < 2:
@@ -93,6 +99,11 @@ def afm_map_rows(path: str | os.PathLike, tip: Tip, *, meta_override: dict | Non
                      "y_m": float(meta["y_m"]), "grid_ix": meta.get("grid_index_x"),
                      "grid_iy": meta.get("grid_index_y"), "error": ""})
     df = pd.DataFrame(rows)
+    span = max(float(np.ptp(df["x_m"])), float(np.ptp(df["y_m"])))
+    if not span < MAX_SPAN:
+        raise DataFileError(source, f"the curves' positions span {span:g}: not metres, the "
+                            f"unit afmformats gives (an AFM map spans less than {MAX_SPAN:g} m)",
+                            "check the file's position metadata")
     if df["grid_ix"].notna().all() and df["grid_iy"].notna().all():
         df = pd.concat([df, _holes(df, stem)], ignore_index=True)
     else:

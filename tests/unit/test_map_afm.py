@@ -94,6 +94,10 @@ def test_files_that_are_not_maps_are_named_with_what_to_do(afm_files, shared_dat
                         lambda c: {k: v for k, v in real(c).items() if k != "y_m"})
     with pytest.raises(DataFileError, match=f"{PYFMRHEO}.*curve 0 has no position"):
         afm_map_rows(afm_files / PYFMRHEO, TIP)
+    monkeypatch.setattr(afm_source, "curve_metadata",  # positions in micrometres
+                        lambda c: {**real(c), "x_m": real(c)["x_m"] * 1e6})
+    with pytest.raises(DataFileError, match="span .* not metres"):
+        afm_map_rows(afm_files / PYFMRHEO, TIP)
 
 
 def test_a_curve_that_fails_and_a_hole_are_rows_with_their_error(afm_files):
