@@ -65,7 +65,6 @@ traces carry their x, y.  Needs the optional extra ``pip install 'palpbayes[afm]
 
 from __future__ import annotations
 
-import logging
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -76,18 +75,13 @@ import numpy as np
 from ..contact import Tip
 from ..errors import DataFileError, InputError
 from ..trace import SEGMENTS, IndentationTrace, parse_segments
+from .afm_load import AFM_SUFFIXES, load_afm_curves
 from .afm_workshop import is_afm_workshop_zip
-from .extras import import_extra
-from .tabular import check_file, check_plausible, split_trace_metadata, validate_force_sign
+from .tabular import check_plausible, split_trace_metadata, validate_force_sign
 
 __all__ = ["AFM_SUFFIXES", "AFM_MODALITIES", "MOTION_FRACTION", "IGNORED", "AFMCurveInfo",
            "is_afm_file", "read_afm", "describe_afm", "classify_segments", "parse_segments",
            "load_afm_curves", "curve_metadata"]
-
-#: File suffixes read through afmformats (its .txt/.csv/.tab/.zip formats are not claimed:
-#: palpbayes reads those as its own tables).
-AFM_SUFFIXES = (".jpk-force", ".jpk-force-map", ".jpk-qi-data", ".jpk-qi-series", ".ibw",
-                ".h5")
 
 #: afmformats modalities read: each starts with a force-distance approach.
 AFM_MODALITIES = ("force-distance", "stress-relaxation", "creep-compliance")
@@ -136,35 +130,6 @@ def _suffix(path: Path) -> str:
 
 def _stem(path: Path) -> str:
     return path.name[: len(path.name) - len(_suffix(path))] or path.name
-
-
-#: afmformats logs a traceback before re-raising a loader's error; palpbayes reports it once.
-logging.getLogger("afmformats").addHandler(logging.NullHandler())
-
-
-def load_afm_curves(path: str | os.PathLike, meta_override: dict | None = None
-                    ) -> tuple[list, str]:
-    """afmformats' curves of a file and its name for messages, every library error wrapped;
-    ``meta_override`` (afmformats metadata, SI units) fills what the file lacks."""
-    path = Path(path)
-    source = str(path)
-    afmformats = import_extra("afm", f"reading {_suffix(path)} files")
-    check_file(path, source)
-    try:
-        curves = afmformats.load_data(path, meta_override=dict(meta_override or {}))
-    except (KeyboardInterrupt, SystemExit, GeneratorExit):
-        raise
-    except BaseException as exc:  # afmformats' own errors derive from BaseException
-        fix = ("check that the file is complete and of the kind its name says; afmformats "
-               f"reads {', '.join(AFM_SUFFIXES)} and AFM Workshop zips")
-        if type(exc).__name__ == "MissingMetaDataError":  # e.g. AFM Workshop: k, sensitivity
-            fix = ("give what the file lacks (palpbayes map: --spring-constant N/m, "
-                   "--sensitivity m/V; read_afm: meta_override)")
-        raise DataFileError(source, f"afmformats cannot read it ({type(exc).__name__}: "
-                            f"{exc})".replace("\n", " "), fix) from None
-    if not curves:
-        raise DataFileError(source, "holds no curves", "check the file")
-    return list(curves), source
 
 
 def curve_metadata(curve) -> dict:
