@@ -106,9 +106,15 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--lump-max-steps {args.lump_max_steps} is too few; use at least "
                          "1000")
     afm = is_afm_file(args.input)
-    if not afm and args.thickness is not None:
-        raise InputError("--thickness is for an AFM map; a manifest gives the thickness in "
-                         "its column thickness_m")
+    if not afm:
+        given = [o for o, v in (("--tip", args.tip), ("--thickness", args.thickness),
+                                ("--spring-constant", args.spring_constant),
+                                ("--sensitivity", args.sensitivity),
+                                ("--sample-rate", args.sample_rate)) if v is not None]
+        if given:
+            raise InputError(f"{', '.join(given)}: for an AFM force map; a manifest gives the "
+                             "tip and the thickness in its columns (tip, radius_m ..., "
+                             "thickness_m)")
     lump = (not afm) if args.lump is None else bool(args.lump)
     manifest = _afm_rows(args) if afm else read_manifest(args.input)
     # each point a half-space: the lump's forward model (palpbayes.sim.inclusion) reads the

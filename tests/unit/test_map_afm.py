@@ -194,3 +194,14 @@ def test_inspect_reads_the_workshop_zip_and_says_what_it_lacks(afm_files, capsys
     assert "AFM file, 16 curve(s) (force-distance)" in out
     assert "curve 0: approach 391, retract 391 points  at x = 1 µm, y = 2 µm" in out
     assert "--spring-constant" in out and "map FILE --tip" in out
+
+
+def test_the_tip_is_required_for_an_afm_map_and_refused_for_a_manifest(afm_files, tmp_path,
+                                                                       capsys):
+    rc = main(["map", str(afm_files / PYFMRHEO), "--out", str(tmp_path / "a")])
+    err = capsys.readouterr().err
+    assert rc != 0 and "needs --tip" in err and PYFMRHEO in err
+    rc = main(["map", str(tmp_path / "manifest.csv"), "--tip", "sphere", "--thickness", "1e-3",
+               "--out", str(tmp_path / "b")])
+    err = capsys.readouterr().err
+    assert rc != 0 and "--tip, --thickness: for an AFM force map" in err
