@@ -26,7 +26,12 @@ from ..online.stream import Batch, SampleParser, batches
 from ..online.tcp import DEFAULT_HOST, accept_lines, connect_lines, listen, parse_address
 from ..units import format_force, format_length, format_pressure
 from .online_options import add_online_options, estimator_from_args, rule_from_args
-from .options import add_column_options, add_tip_options, read_options_from_args, tip_from_args
+from .options import (
+    add_column_options,
+    add_specimen_options,
+    read_options_from_args,
+    tip_from_args,
+)
 
 __all__ = ["register", "run", "follow", "update_text", "update_json", "EXIT_STATUS",
            "EXIT_ENDED", "EXIT_BAD_INPUT"]
@@ -78,7 +83,7 @@ def register(subparsers) -> None:
     p.add_argument("--json", action="store_true",
                    help="print each update as one JSON object instead of text")
     add_online_options(p)
-    add_tip_options(p, "tip and specimen")
+    add_specimen_options(p, "tip and specimen")
     add_column_options(p, "columns, units and signs of the samples")
     p.set_defaults(input="the stream")
 

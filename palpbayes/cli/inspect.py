@@ -80,8 +80,19 @@ def _segment_counts(counts: dict[int, int], names: dict[int, str]) -> str:
 
 def _afm(path: Path) -> None:
     from ..io.afm import describe_afm
+    from ..io.afm_workshop import is_afm_workshop_zip
 
-    curves = describe_afm(path)
+    note = ""
+    try:
+        curves = describe_afm(path)
+    except DataFileError:
+        if not is_afm_workshop_zip(path):
+            raise
+        # the structure does not need the force's scale: read it with placeholders
+        curves = describe_afm(path, {"spring constant": 1.0, "sensitivity": 1.0})
+        note = ("AFM Workshop map without spring constant and sensitivity (nor a time "
+                "column): give palpbayes map --spring-constant N/m --sensitivity m/V "
+                "--sample-rate HZ")
     kinds = sorted({c.modality for c in curves})
     print(f"{path}: AFM file, {len(curves)} curve(s) ({', '.join(kinds)})")
     first = curves[0]
@@ -95,6 +106,10 @@ def _afm(path: Path) -> None:
         print(f"  ... {len(curves) - MAX_CURVES_SHOWN} more")
     if len(curves) > 1:
         print("fit makes one trace per curve (a campaign); --curve I fits one of them")
+    if len(curves) > 1 and all(c.x_m is not None for c in curves):
+        print("map FILE --tip ... maps them (positions from the file)")
+    if note:
+        print(f"note: {note}")
 
 
 def _table(path: Path) -> None:

@@ -1,27 +1,36 @@
-"""``palpbayes map MANIFEST --out DIR``: a stiffness map with its uncertainty and the lump.
+"""``palpbayes map MANIFEST|AFMMAP --out DIR``: a stiffness map with its uncertainty and the lump.
 
 The manifest's rows carry the palpation position (``x_m``, ``y_m`` in metres) on a regular
-grid.  Per-point fits run on Dask (a LocalCluster by default, ``--scheduler ADDRESS`` for a
-cluster whose workers see the same files); then the spatial field and the lump model
-(:mod:`palpbayes.maps`).  Files: :mod:`palpbayes.maps.files`.  Try it with::
+grid.  An AFM force map (``.jpk-force-map``, ``.jpk-qi-data``, an AFM Workshop zip: any map
+afmformats reads) is mapped directly: positions from the file, the tip from ``--tip`` and its
+size (no AFM file records it), grid nodes without a curve kept as holes
+(:mod:`palpbayes.maps.afm_source`).  The lump model is off by default for an AFM map: a map
+of cells has no buried sphere and no block thickness; the field and P(E > k × median) are the
+answer (``--lump`` turns it on).  Per-point fits run on Dask (a LocalCluster by default,
+``--scheduler ADDRESS`` for a cluster whose workers see the same files); then the spatial
+field and the lump model (:mod:`palpbayes.maps`).  Files: :mod:`palpbayes.maps.files`.
+Try it with::
 
     palpbayes simulate phantom --map
     palpbayes map phantom/manifest.csv --out phantom-map
+    palpbayes map cells.jpk-force-map --tip paraboloid --radius 5e-6 --nu 0.5 --out cells-map
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from ..campaign.fitjob import FitOptions
 from ..contact import DEFAULT_NU_NOTE, check_nu
 from ..errors import InputError
 from ..flagcodes import level_and_text
+from ..io.afm import is_afm_file
 from ..io.manifest import read_manifest
 from ..units import format_length, format_pressure
-from .options import add_nu_option
+from .options import add_nu_option, add_tip_options, tip_from_args
 
 __all__ = ["register", "run"]
 
@@ -36,11 +45,27 @@ def register(subparsers) -> argparse.ArgumentParser:
             "Fit every trace of MANIFEST (columns x_m, y_m: palpation position in metres) with "
             "the exact engine on Dask, fit the stiff lump (one spherical inclusion), then a "
             "spatial GMRF field to what it leaves; write map.csv, points.csv, lump.csv, map.nc, "
-            "map.png and map-report.pdf into --out."),
+            "map.png and map-report.pdf into --out.  An AFM force map is read directly "
+            "(positions from the file; the tip from --tip; the lump model off unless --lump)."),
     )
-    p.add_argument("manifest", metavar="MANIFEST", help="manifest CSV with x_m and y_m columns")
+    p.add_argument("input", metavar="INPUT",
+                   help="manifest CSV with x_m and y_m columns, or an AFM force map "
+                        "(.jpk-force-map, .jpk-qi-data, AFM Workshop .zip)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.add_argument("--force", action="store_true", help="replace the map files in DIR")
+    a = p.add_argument_group("AFM force maps (no AFM file records the tip)")
+    add_tip_options(a)
+    a.add_argument("--spring-constant", type=float, metavar="N_PER_M",
+                   help="cantilever spring constant [N/m], for files that lack it (AFM "
+                        "Workshop)")
+    a.add_argument("--sensitivity", type=float, metavar="M_PER_V",
+                   help="deflection sensitivity [m/V], for files that lack it (AFM Workshop)")
+    a.add_argument("--thickness", type=float, metavar="M",
+                   help="specimen thickness [m]: the lump model (--lump) needs it; an AFM "
+                        "file does not record it")
+    a.add_argument("--sample-rate", type=float, metavar="HZ",
+                   help="sample rate of the approach [Hz], for files without a time column "
+                        "(AFM Workshop; an elastic fit does not depend on it)")
     g = p.add_argument_group("per-point fits")
     add_nu_option(g, summary=False)
     g.add_argument("--noise", choices=("gaussian", "ar1"), default="gaussian",
@@ -57,7 +82,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--detect", type=float, default=0.5, metavar="P",
                    help="report a lump as found when P(its apparent peak ratio > K) >= P "
                         "(default 0.5; 0: always)")
-    g.add_argument("--no-lump", action="store_true", help="skip the lump model")
+    g.add_argument("--lump", action=argparse.BooleanOptionalAction, default=None,
+                   help="fit the lump model (one buried stiff sphere; default: on for a "
+                        "manifest, off for an AFM map, whose cells have no buried sphere)")
     g.add_argument("--lump-max-steps", type=int, default=20000, metavar="N",
                    help="cap on the emcee steps per walker of the lump model; it stops "
                         "earlier once converged (default 20000)")
@@ -78,7 +105,18 @@ def run(args: argparse.Namespace) -> int:
     if args.lump_max_steps < 1000:
         raise InputError(f"--lump-max-steps {args.lump_max_steps} is too few; use at least "
                          "1000")
-    manifest = read_manifest(args.manifest)
+    afm = is_afm_file(args.input)
+    if not afm:
+        given = [o for o, v in (("--tip", args.tip), ("--thickness", args.thickness),
+                                ("--spring-constant", args.spring_constant),
+                                ("--sensitivity", args.sensitivity),
+                                ("--sample-rate", args.sample_rate)) if v is not None]
+        if given:
+            raise InputError(f"{', '.join(given)}: for an AFM force map; a manifest gives the "
+                             "tip and the thickness in its columns (tip, radius_m ..., "
+                             "thickness_m)")
+    lump = (not afm) if args.lump is None else bool(args.lump)
+    manifest = _afm_rows(args) if afm else read_manifest(args.input)
     # each point a half-space: the lump's forward model (palpbayes.sim.inclusion) reads the
     # block's thickness itself, and the map's per-point fits compare points with each other
     nu = None if args.nu is None else check_nu(args.nu)
@@ -86,22 +124,33 @@ def run(args: argparse.Namespace) -> int:
                                              engine="exact", seed=args.seed, layer="off"),
                               seed=args.seed)
     map_opts = MapOptions(threshold=args.threshold, detect=args.detect, seed=args.seed,
-                          lump=not args.no_lump, lump_max_steps=args.lump_max_steps)
-    check_map_manifest(manifest, lump=not args.no_lump)
+                          lump=lump, lump_max_steps=args.lump_max_steps,
+                          min_points=4 if afm else 10)
+    if afm:
+        point_opts = replace(point_opts, read_options=_afm_override(args))
+    try:
+        check_map_manifest(manifest, lump=lump, min_points=map_opts.min_points)
+    except InputError as exc:
+        if not afm:
+            raise
+        raise InputError(f"{args.input}: {exc}; a field needs curves on at least 2 rows and "
+                         "2 columns (4 or more); fit the curves one by one with palpbayes fit "
+                         f"{args.input} --tip ...") from None
     stage = prepare_out_dir(args.out, args.force)  # before the fits: a bad --out fails fast
     try:
         t0 = time.perf_counter()
         res = make_map(manifest, point_options=point_opts, options=map_opts,
                        scheduler=args.scheduler, workers=args.workers, progress=args.progress)
         elapsed = time.perf_counter() - t0
-        truth = _truth(Path(args.manifest).parent)
-        write_map(res, stage, extra={"manifest": str(Path(args.manifest).resolve()),
-                                     "elapsed_s": elapsed})
+        truth = None if afm else _truth(Path(args.input).parent)
+        write_map(res, stage, extra={("afm_file" if afm else "manifest"):
+                                     str(Path(args.input).resolve()), "elapsed_s": elapsed})
         if not args.no_report:
             from ..report.map_pages import write_map_figure, write_map_report
 
             write_map_figure(res, stage / FIGURE, truth=truth)
-            write_map_report(res, stage / REPORT, name=Path(args.manifest).parent.name,
+            write_map_report(res, stage / REPORT, name=(Path(args.input).name if afm
+                                                         else Path(args.input).parent.name),
                              truth=truth)
     except BaseException:
         discard(stage)
@@ -138,6 +187,31 @@ def run(args: argparse.Namespace) -> int:
     if nu is None and "nu" not in manifest.columns:
         print(f"note: {DEFAULT_NU_NOTE}")
     return 0
+
+
+def _afm_override(args: argparse.Namespace) -> dict:
+    """read_afm options: the metadata the file lacks, from the options."""
+    meta = {key: value for key, value in (("spring constant", args.spring_constant),
+                                          ("sensitivity", args.sensitivity),
+                                          ("rate approach", args.sample_rate))
+            if value is not None}
+    for key, value in meta.items():
+        if not value > 0:
+            raise InputError(f"the {key} must be positive, got {value!r}")
+    return {"meta_override": meta} if meta else {}
+
+
+def _afm_rows(args: argparse.Namespace):
+    """The map rows of an AFM force map (:func:`palpbayes.maps.afm_source.afm_map_rows`)."""
+    from ..maps.afm_source import afm_map_rows
+
+    tip = tip_from_args(args)
+    rows = afm_map_rows(args.input, tip, **_afm_override(args))
+    if args.thickness is not None:
+        if not args.thickness > 0:
+            raise InputError(f"--thickness {args.thickness!r} must be a positive length [m]")
+        rows["thickness_m"] = float(args.thickness)
+    return rows
 
 
 def _truth(folder: Path) -> dict | None:

@@ -24,7 +24,7 @@ from ..errors import InputError
 from ..fitdata import BONDINGS
 
 __all__ = ["add_nu_option", "add_model_options", "add_trace_options", "add_tip_options",
-           "add_column_options", "options_from_args",
+           "add_specimen_options", "add_column_options", "options_from_args",
            "thickness_from_args", "layer_from_args", "read_options_from_args", "dest",
            "RECORDING_FLAGS", "recording_options_from_args", "tip_from_args",
            "traces_from_args", "trace_from_args"]
@@ -124,14 +124,20 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                    help="progress bars (default: only on a terminal)")
 
 
-def add_tip_options(p: argparse.ArgumentParser, title: str = "single trace") -> None:
-    """Tip, its size, the specimen's thickness and material (``fit``, ``replay``,
-    ``follow``)."""
-    t = p.add_argument_group(title)
-    t.add_argument("--tip", choices=registered_kinds(), help="tip kind")
+def add_tip_options(g) -> None:
+    """``--tip`` and the tip-size options on the argument group ``g`` (read back by
+    :func:`tip_from_args`; ``fit``, ``replay``, ``follow``, ``map``)."""
+    g.add_argument("--tip", choices=registered_kinds(), help="tip kind")
     for par in TIP_PARAMETERS.values():  # the tip's size, in the option's unit
-        t.add_argument(par.option, type=float, metavar=par.metavar, dest=dest(par.option),
+        g.add_argument(par.option, type=float, metavar=par.metavar, dest=dest(par.option),
                        help=par.help)
+
+
+def add_specimen_options(p: argparse.ArgumentParser, title: str = "single trace") -> None:
+    """A group ``title`` with the tip, its size, the specimen's thickness and material
+    (``fit``, ``replay``, ``follow``)."""
+    t = p.add_argument_group(title)
+    add_tip_options(t)
     t.add_argument("--thickness", metavar="M|unknown",
                    help="specimen thickness [m] (the Bayesian model then treats it as a layer "
                         "on a rigid base), or 'unknown' to sample it")
@@ -156,7 +162,7 @@ def add_column_options(p: argparse.ArgumentParser,
 
 def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -> None:
     """Tip, specimen, columns, units and signs of a trace file (``fit``, ``replay``)."""
-    add_tip_options(p, title)
+    add_specimen_options(p, title)
     add_column_options(p)
     r = p.add_argument_group("ROS 2 bags and AFM files (palpbayes inspect FILE lists what is in "
                              "one)")
@@ -291,6 +297,7 @@ def recording_options_from_args(args: argparse.Namespace) -> dict:
 
 
 def tip_from_args(args: argparse.Namespace) -> Tip:
+    """The tip of ``--tip`` and its size options; an error naming ``args.input`` without."""
     if args.tip is None:
         sizes = ", ".join(f"{p.option} {p.metavar}" if p.metavar else p.option
                           for p in TIP_PARAMETERS.values())

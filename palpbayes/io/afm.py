@@ -75,16 +75,13 @@ import numpy as np
 from ..contact import Tip
 from ..errors import DataFileError, InputError
 from ..trace import SEGMENTS, IndentationTrace, parse_segments
-from .extras import import_extra
-from .tabular import check_file, check_plausible, split_trace_metadata, validate_force_sign
+from .afm_load import AFM_SUFFIXES, load_afm_curves
+from .afm_workshop import is_afm_workshop_zip
+from .tabular import check_plausible, split_trace_metadata, validate_force_sign
 
 __all__ = ["AFM_SUFFIXES", "AFM_MODALITIES", "MOTION_FRACTION", "IGNORED", "AFMCurveInfo",
-           "is_afm_file", "read_afm", "describe_afm", "classify_segments", "parse_segments"]
-
-#: File suffixes read through afmformats (its .txt/.csv/.tab/.zip formats are not claimed:
-#: palpbayes reads those as its own tables).
-AFM_SUFFIXES = (".jpk-force", ".jpk-force-map", ".jpk-qi-data", ".jpk-qi-series", ".ibw",
-                ".h5")
+           "is_afm_file", "read_afm", "describe_afm", "classify_segments", "parse_segments",
+           "load_afm_curves", "curve_metadata"]
 
 #: afmformats modalities read: each starts with a force-distance approach.
 AFM_MODALITIES = ("force-distance", "stress-relaxation", "creep-compliance")
@@ -119,9 +116,10 @@ class AFMCurveInfo:
 
 
 def is_afm_file(path: str | os.PathLike) -> bool:
-    """True when the file name ends with one of :data:`AFM_SUFFIXES`."""
+    """True when the file name ends with one of :data:`AFM_SUFFIXES`, or it is an AFM
+    Workshop force map (:func:`palpbayes.io.afm_workshop.is_afm_workshop_zip`)."""
     name = Path(path).name.lower()
-    return any(name.endswith(s) for s in AFM_SUFFIXES)
+    return any(name.endswith(s) for s in AFM_SUFFIXES) or is_afm_workshop_zip(path)
 
 
 def _suffix(path: Path) -> str:
@@ -134,27 +132,8 @@ def _stem(path: Path) -> str:
     return path.name[: len(path.name) - len(_suffix(path))] or path.name
 
 
-def _load(path: str | os.PathLike) -> tuple[list, str]:
-    """afmformats' curves of a file, every library error wrapped."""
-    path = Path(path)
-    source = str(path)
-    afmformats = import_extra("afm", f"reading {_suffix(path)} files")
-    check_file(path, source)
-    try:
-        curves = afmformats.load_data(path)
-    except (KeyboardInterrupt, SystemExit, GeneratorExit):
-        raise
-    except BaseException as exc:  # afmformats' own errors derive from BaseException
-        raise DataFileError(source, f"afmformats cannot read it ({type(exc).__name__}: "
-                            f"{exc})".replace("\n", " "),
-                            "check that the file is complete and of the kind its name says; "
-                            f"afmformats reads {', '.join(AFM_SUFFIXES)}") from None
-    if not curves:
-        raise DataFileError(source, "holds no curves", "check the file")
-    return list(curves), source
-
-
-def _metadata(curve) -> dict:
+def curve_metadata(curve) -> dict:
+    """The curve's afmformats metadata palpbayes keeps, under trace metadata names (SI)."""
     meta = {}
     have = dict.keys(curve.metadata)  # its __getitem__ raises for keys it lacks
     for key, name in _META.items():
@@ -324,7 +303,8 @@ def _curve_arrays(curve, index: int, source: str, wanted: tuple[str, ...] | None
         rate = dict.get(curve.metadata, "rate approach")
         if not rate or not np.isfinite(rate):
             raise DataFileError(source, f"{where} has neither a time column nor a sample rate",
-                                "export the curve with its time column")
+                                "export it with its time column, or give the sample rate "
+                                "(palpbayes map --sample-rate HZ)")
         t = np.flatnonzero(keep) / float(rate)
         how["time_column"] = f"index / rate approach ({float(rate):g} Hz)"
     return t, z, force, codes, how
@@ -339,6 +319,7 @@ def read_afm(
     force_sign: float = 1.0,
     z_sign: float = 1.0,
     check: bool = True,
+    meta_override: dict | None = None,
     **metadata,
 ) -> list[IndentationTrace]:
     """Read the curves of an AFM file into traces (SI units, z up, pressing positive).
@@ -362,6 +343,9 @@ def read_afm(
         +1 or -1 multiplying force and z.
     check
         Reject implausible traces (:func:`palpbayes.io.tabular.check_plausible`).
+    meta_override
+        afmformats metadata the file lacks, SI units (an AFM Workshop map needs
+        ``{"spring constant": [N/m], "sensitivity": [m/V]}``).
     **metadata
         Trace fields (``material``, ``thickness`` ...) and free metadata for every trace;
         ``trace_id`` is taken as the stem of the ids.
@@ -395,7 +379,7 @@ def read_afm(
     if "segment" in metadata:
         raise InputError("metadata may not set 'segment'; it comes from the file (choose the "
                          "segments with segments=...)")
-    data, source = _load(path)
+    data, source = load_afm_curves(path, meta_override)
     stem = str(metadata.pop("trace_id", None) or _stem(Path(path)))
     chosen = range(len(data)) if curves is None else list(curves)
     bad = [i for i in chosen if not 0 <= i < len(data)]
@@ -406,7 +390,7 @@ def read_afm(
     for i in chosen:
         t, z, force, codes, how = _curve_arrays(data[i], i, source, wanted)
         kwargs, free = split_trace_metadata(metadata, {
-            "reader": "afm", "curve_index": i, "n_curves": len(data), **_metadata(data[i]),
+            "reader": "afm", "curve_index": i, "n_curves": len(data), **curve_metadata(data[i]),
             **how, "force_sign": force_sign, "z_sign": float(z_sign)})
         tid = stem if len(data) == 1 else f"{stem}-{i}"
         trace = IndentationTrace(time=t - t[0], z=z_sign * z, force=force_sign * force, tip=tip,
@@ -423,15 +407,16 @@ def read_afm(
     return traces
 
 
-def describe_afm(path: str | os.PathLike) -> list[AFMCurveInfo]:
+def describe_afm(path: str | os.PathLike, meta_override: dict | None = None
+                 ) -> list[AFMCurveInfo]:
     """The curves of an AFM file: modality, columns, points per segment, what each segment is
     (:func:`classify_segments`), position."""
-    data, _ = _load(path)
+    data, _ = load_afm_curves(path, meta_override)
     out = []
     for i, c in enumerate(data):
         seg = _segment_ids(c)
         values, counts = np.unique(seg, return_counts=True)
-        meta = _metadata(c)
+        meta = curve_metadata(c)
         out.append(AFMCurveInfo(i, c.modality, tuple(c.columns),
                                 {int(v): int(n) for v, n in zip(values, counts, strict=True)},
                                 meta.get("x_m"), meta.get("y_m"),

@@ -36,8 +36,8 @@ from ..cluster import close_client, dask_client
 from ..errors import FitError, InputError, PalpbayesError
 from ..flagcodes import flag_columns
 from ..intervals import LEVEL, central
-from ..io.manifest import load_trace
 from ..lsq import fit_lsq_data
+from .afm_source import load_point_trace
 
 __all__ = ["PointOptions", "POINT_COLUMNS", "check_positions", "fit_point", "fit_points"]
 
@@ -91,9 +91,10 @@ def _empty_row(row: pd.Series) -> dict:
 def fit_point(row: pd.Series, options: PointOptions, index: int = 0) -> dict:
     """Fit one manifest row; return its :data:`POINT_COLUMNS` record.
 
-    A trace that cannot be fitted (no contact, bad geometry, unreadable file, a numerical
-    failure) gives a record with the reason in ``error`` and NaN estimates: the map leaves its
-    node without data instead of stopping.
+    A row that is a hole (its ``error`` set: a grid node of an AFM map without a curve) or
+    a trace that cannot be fitted (no contact, bad geometry, unreadable file or curve, a
+    numerical failure) gives a record with the reason in ``error`` and NaN estimates: the map
+    leaves its node without data instead of stopping.
 
     Parameters
     ----------
@@ -106,8 +107,11 @@ def fit_point(row: pd.Series, options: PointOptions, index: int = 0) -> dict:
         Row number (seeds the draws).
     """
     out = _empty_row(row)
+    if isinstance(row.get("error"), str) and row["error"]:  # a hole of an AFM map: no curve
+        out["error"] = row["error"]
+        return out
     try:
-        trace = load_trace(row, **options.read_options)
+        trace = load_point_trace(row, **options.read_options)
         data = check_fittable(trace, options.fit)
         prior = options.fit.priors.for_trace(data, options.fit.noise, options.fit.baseline)
         post = exact_posterior(data, prior)

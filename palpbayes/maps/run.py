@@ -31,6 +31,7 @@ from ..flagcodes import scoped
 from ..intervals import LEVEL, central, central_band
 from ..io.manifest import tip_from_row
 from ..sim.inclusion import contact_radius as tip_contact_radius
+from .afm_source import NO_CURVE
 from .gmrf import FieldPosterior, FieldPrior, fit_field, robust_spread
 from .lattice import lattice_from_positions
 from .lump import LumpPosterior, fit_lump
@@ -68,6 +69,9 @@ class MapOptions:
         Seed of the field draws and the lump sampler.
     lump
         Fit the lump model at all.
+    min_points
+        Fewest fitted points a map takes (>= 4; below 10 a flag says the field's
+        hyperparameters come from their priors: an AFM map of 2 × 2 curves).
     """
 
     threshold: float = 1.1
@@ -76,8 +80,12 @@ class MapOptions:
     lump_max_steps: int = 20000
     seed: int = 0
     lump: bool = True
+    min_points: int = 10
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.min_points, int) and self.min_points >= 4):
+            raise InputError(f"min_points = {self.min_points!r} must be a whole number of at "
+                             "least 4")
         if not (self.threshold > 1 and math.isfinite(self.threshold)):
             raise InputError(f"threshold k = {self.threshold!r} must be a number above 1 (E > k "
                              "× background), e.g. 1.1")
@@ -205,9 +213,19 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
           & np.isfinite(points["logE_sd"])).to_numpy()
     good = points[ok]
     flags: list[str] = []
-    if (~ok).any():
-        flags.append(f"{int((~ok).sum())} of {len(points)} traces could not be fitted (see "
-                     "points.csv, column error); their nodes have no data")
+    if len(good) < options.min_points:
+        errors = points.loc[~ok, "error"].fillna("").astype(str)
+        errors = errors[errors != ""]
+        why = f"; the first error: {errors.iloc[0]}" if len(errors) else ""
+        raise InputError(f"a map needs at least {options.min_points} fitted points, got "
+                         f"{len(good)} of {len(points)}{why}")
+    holes = int(points["error"].fillna("").str.startswith(NO_CURVE).sum())
+    if int((~ok).sum()) > holes:
+        flags.append(f"{int((~ok).sum()) - holes} of {len(points)} traces could not be fitted "
+                     "(see points.csv, column error); their nodes have no data")
+    if holes:
+        flags.append(f"info: {holes} of {len(points)} grid nodes have no curve in the file "
+                     "(holes without data; see points.csv, column error)")
     notes = good.get("notes", good.get("flags"))  # "flags": a points.csv written before
     n_flag = 0 if notes is None else int(notes.map(lambda v: isinstance(v, str) and v != "")
                                          .sum())
@@ -218,7 +236,9 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
                      + f"{n_flag} fitted points carry a flag ({n_warn} a warning; see "
                      "points.csv, columns notes, flag_codes and flag_level)")
     if len(good) < 10:
-        raise InputError(f"a map needs at least 10 fitted points, got {len(good)}")
+        flags.append(f"only {len(good)} fitted points: the field's sd and range come from "
+                     "their priors, not the data; read the per-point E (points.csv) as the "
+                     "measurement and the field between points as the prior's guess")
     # the lattice of every palpation, fitted or not: a point without a fit enters with an sd
     # of 1000 in log E (no information), so a failed edge row keeps its place on the map
     x, y = points["x_m"].to_numpy(float), points["y_m"].to_numpy(float)
@@ -228,7 +248,7 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
     depth = float(np.nanmedian(good["depth_m"]))
     a, lump, k = float("nan"), None, options.threshold
     if not options.lump:
-        flags.append("info: lump model not requested (--no-lump)")
+        flags.append("info: lump model off (--no-lump; the default for an AFM map)")
     elif thickness is None:
         flags.append("info: lump model skipped: it needs the block thickness (manifest column "
                      "thickness_m, metres)")
@@ -272,7 +292,7 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
                      p_lump=p_lump)
 
 
-def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True
+def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True, min_points: int = 10
                        ) -> tuple[Tip, float | None]:
     """The map's one tip and its block thickness (None if the manifest has none).
 
@@ -286,8 +306,9 @@ def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True
         Naming what is wrong and what to do.
     """
     check_positions(manifest)
-    if len(manifest) < 10:
-        raise InputError(f"a map needs at least 10 palpations, the manifest has {len(manifest)}")
+    n = int((manifest["error"].fillna("") == "").sum()) if "error" in manifest else len(manifest)
+    if n < min_points:
+        raise InputError(f"a map needs at least {min_points} palpations, the input has {n}")
     lattice_from_positions(manifest["x_m"].to_numpy(float), manifest["y_m"].to_numpy(float))
     tips = {tip_from_row(r) for _, r in manifest.iterrows()}
     if len(tips) != 1:
@@ -314,7 +335,8 @@ def make_map(manifest: pd.DataFrame, *, point_options: PointOptions | None = Non
     :func:`map_from_points`.  Every trace must use the same tip."""
     point_options = point_options or PointOptions()
     options = options or MapOptions()
-    tip, thickness = check_map_manifest(manifest, lump=options.lump)
+    tip, thickness = check_map_manifest(manifest, lump=options.lump,
+                                        min_points=options.min_points)
     points = fit_points(manifest, point_options, scheduler=scheduler, workers=workers,
                         progress=progress)
     result = map_from_points(points, tip=tip, thickness=thickness, options=options,

@@ -118,7 +118,8 @@ def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None =
 def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None = None,
                  background: tuple[float, float, float] | None = None,
                  truth: np.ndarray | None = None, title: str = "") -> Figure:
-    """E along one lattice row (default: the row of the largest posterior mean).
+    """E along one lattice row (default: the row of the largest posterior mean, titled so;
+    a row given is titled as the lump's).
 
     Posterior mean with its 90 % band, each point's own posterior (median, interval), the
     naive least-squares value and the background level.
@@ -134,8 +135,10 @@ def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None
     truth
         [Pa] True apparent modulus at each node of the row (simulated phantoms).
     """
+    what = "the lump"
     if row is None:
         row = int(nodes.loc[nodes["E_mean_pa"].idxmax(), "iy"])
+        what = "the largest E"  # no lump to go through (e.g. an AFM map, lump model off)
     r = nodes[nodes["iy"] == row].sort_values("ix")
     fig, ax = fig_ax(ax, (7.0, 4.0))
     x = r["x_m"].to_numpy() * MM
@@ -161,7 +164,7 @@ def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None
                 label="true apparent E")
     y_mm = float(r["y_m"].iloc[0]) * MM
     ax.set(xlabel="x [mm]", ylabel="E [kPa]",
-           title=title or f"profile through the lump (row y = {y_mm:.3g} mm)")
+           title=title or f"profile through {what} (row y = {y_mm:.3g} mm)")
     ax.legend(fontsize=7, loc="upper left")
     return fig
 

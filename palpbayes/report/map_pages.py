@@ -167,7 +167,7 @@ def _pages(res: MapResult, truth: dict | None) -> list[Page]:
         Page("Uncertainty map: posterior sd of E relative to its mean", one("uncertainty")),
         Page(f"Probability map: chance that E > {k:g} × the map median",
               one("probability")),
-        Page("Profile through the lump", profile),
+        Page("Profile through the lump" if lump else "Profile through the largest E", profile),
         _page_text("Methods", methods),
     ]
 

@@ -92,4 +92,4 @@ def test_repeated_positions_share_a_node():
                           options=MapOptions(field_draws=200, lump=False))
     assert len(res.nodes) == 100
     assert res.nodes.set_index(["ix", "iy"]).loc[[(0, 0), (5, 5)], "n_traces"].tolist() == [2, 2]
-    assert "info: lump model not requested (--no-lump)" in res.flags
+    assert "info: lump model off (--no-lump; the default for an AFM map)" in res.flags

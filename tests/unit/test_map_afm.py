@@ -1,0 +1,207 @@
+"""``palpbayes map`` of a real AFM force map (issue 26, "Real force maps"): the curves of the
+file become the map's rows with the file's positions, grid nodes without a curve and curves
+that fail stay holes, and the map of afmformats' extracted 2 × 2 JPK map runs end to end.
+
+The files are read from ``../shared/data/afm-files`` (see its README), never copied here."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from palpbayes.bayes.exact import exact_posterior
+from palpbayes.campaign.fitjob import FitOptions, check_fittable
+from palpbayes.cli import main
+from palpbayes.contact import Tip
+from palpbayes.errors import DataFileError
+from palpbayes.io.afm import read_afm
+from palpbayes.maps import afm_source
+from palpbayes.maps.afm_source import NO_CURVE, afm_map_rows
+from palpbayes.maps.lattice import lattice_from_positions
+from palpbayes.maps.pertrace import PointOptions, fit_point
+
+TIP = Tip("paraboloid", radius=5e-6)  # PyFMRheo's notebook; no AFM file records the tip
+MAP2X2 = "fmt-jpk-fd_map2x2_extracted.jpk-force-map"
+QI = "fmt-jpk-fd_2020.02.07-16.29.05.036.jpk-qi-data"
+WORKSHOP = "fmt-afm-workshop-fd_mapping_16_2018-08-01_13.07.zip"
+PYFMRHEO = "pyfmrheo-map-data-2022.10.29-12.27.34.564.jpk-force-map"
+#: afmformats' own test values for the Workshop map (the file records neither)
+WORKSHOP_META = {"spring constant": 20.0, "sensitivity": 0.01e-6}
+
+
+@pytest.fixture(scope="module")
+def afm_files():
+    from conftest import find_shared_data
+
+    return find_shared_data("afm-files", files=[MAP2X2, QI, WORKSHOP, PYFMRHEO])
+
+
+@pytest.mark.parametrize("name, meta, n_holes", [
+    (MAP2X2, None, 96), (QI, None, 0), (WORKSHOP, WORKSHOP_META, 0), (PYFMRHEO, None, 0)])
+def test_every_curve_is_a_row_at_the_position_afmformats_reads(afm_files, name, meta, n_holes):
+    import afmformats
+
+    rows = afm_map_rows(afm_files / name, TIP, meta_override=meta)
+    raw = afmformats.load_data(afm_files / name, meta_override=meta or {})
+    curves = rows[rows["curve_index"] >= 0]
+    assert len(curves) == len(raw) and (curves["error"] == "").all()
+    assert (rows["curve_index"] < 0).sum() == n_holes == len(rows) - len(raw)
+    np.testing.assert_array_equal(curves["curve_index"], np.arange(len(raw)))
+    np.testing.assert_array_equal(curves["x_m"], [c.metadata["position x"] for c in raw])
+    np.testing.assert_array_equal(curves["y_m"], [c.metadata["position y"] for c in raw])
+    if "grid index x" in raw[0].metadata:
+        np.testing.assert_array_equal(curves["grid_ix"], [c.metadata["grid index x"]
+                                                           for c in raw])
+    assert (rows["tip"] == "paraboloid").all() and (rows["radius_m"] == 5e-6).all()
+
+
+def test_the_pyfmrheo_map_is_a_4_by_4_lattice_of_5_um(afm_files):
+    rows = afm_map_rows(afm_files / PYFMRHEO, TIP)
+    lat, node = lattice_from_positions(rows["x_m"].to_numpy(), rows["y_m"].to_numpy())
+    assert (lat.nx, lat.ny) == (4, 4) and lat.step == pytest.approx(5e-6, rel=1e-6)
+    assert sorted(node) == list(range(16))
+
+
+def test_the_extracted_2x2_map_keeps_its_grid_and_its_96_missing_curves_as_holes(afm_files):
+    """afmformats' 2 × 2 map is the four corners of a 10 × 10 JPK grid of 60 µm steps (grid
+    size 600 µm): the missing 96 nodes stay on the lattice as holes, at their grid position."""
+    rows = afm_map_rows(afm_files / MAP2X2, TIP)
+    lat, node = lattice_from_positions(rows["x_m"].to_numpy(), rows["y_m"].to_numpy())
+    assert (lat.nx, lat.ny) == (10, 10) and lat.step == pytest.approx(60e-6, rel=1e-3)
+    assert sorted(node) == list(range(100))
+    holes = rows[rows["curve_index"] < 0]
+    assert holes["error"].str.startswith(NO_CURVE).all()
+    assert set(zip(rows.loc[rows["curve_index"] >= 0, "grid_ix"],
+                   rows.loc[rows["curve_index"] >= 0, "grid_iy"], strict=True)) == {
+        (0, 0), (9, 0), (9, 9), (0, 9)}
+    # a hole's node is its grid index
+    np.testing.assert_array_equal(node[holes.index] % 10, holes["grid_ix"].astype(int))
+    np.testing.assert_array_equal(node[holes.index] // 10, holes["grid_iy"].astype(int))
+
+
+def test_files_that_are_not_maps_are_named_with_what_to_do(afm_files, shared_data, monkeypatch):
+    single = afm_files / "fmt-jpk-fd_spot3-0192.jpk-force"
+    with pytest.raises(DataFileError, match="one curve.*palpbayes fit"):
+        afm_map_rows(single, TIP)
+    with pytest.raises(DataFileError, match="spring-constant"):
+        afm_map_rows(afm_files / WORKSHOP, TIP)  # the Workshop map lacks k and sensitivity
+    real = afm_source.curve_metadata
+    monkeypatch.setattr(afm_source, "curve_metadata",
+                        lambda c: {k: v for k, v in real(c).items() if k != "y_m"})
+    with pytest.raises(DataFileError, match=f"{PYFMRHEO}.*curve 0 has no position"):
+        afm_map_rows(afm_files / PYFMRHEO, TIP)
+    monkeypatch.setattr(afm_source, "curve_metadata",  # positions in micrometres
+                        lambda c: {**real(c), "x_m": real(c)["x_m"] * 1e6})
+    with pytest.raises(DataFileError, match="span .* not metres"):
+        afm_map_rows(afm_files / PYFMRHEO, TIP)
+
+
+def test_a_curve_that_fails_and_a_hole_are_rows_with_their_error(afm_files):
+    rows = afm_map_rows(afm_files / MAP2X2, TIP)
+    opts = PointOptions(fit=FitOptions(nu=0.5, engine="exact", layer="off"))
+    bad = rows.iloc[0].copy()
+    bad["curve_index"] = 7  # the file has 4 curves
+    out = fit_point(bad, opts)
+    assert MAP2X2 in out["error"] and "no curve 7" in out["error"]
+    assert np.isnan(out["E_median_pa"]) and out["x_m"] == bad["x_m"]
+    hole = fit_point(rows[rows["curve_index"] < 0].iloc[0], opts)
+    assert hole["error"].startswith(NO_CURVE) and np.isnan(hole["logE_mean"])
+
+
+def test_a_line_of_qi_curves_fails_saying_why_and_what_to_do(afm_files, tmp_path, capsys):
+    """QI's 4 curves lie on one row of its 128 × 128 grid: no 2-D lattice, no map."""
+    rc = main(["map", str(afm_files / QI), "--tip", "paraboloid", "--radius", "5e-6",
+               "--out", str(tmp_path / "qi"), "--scheduler", "synchronous", "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc != 0 and QI in err
+    assert all(s in err for s in ("single y value", "2 rows and 2 columns", "palpbayes fit"))
+    assert not (tmp_path / "qi").exists()
+
+
+
+@pytest.fixture(scope="module")
+def mapped_2x2(afm_files, tmp_path_factory):
+    out = tmp_path_factory.mktemp("afm") / "map2x2"
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rc = main(["map", str(afm_files / MAP2X2), "--tip", "paraboloid", "--radius", "5e-6",
+                   "--nu", "0.5", "--out", str(out), "--scheduler", "synchronous",
+                   "--no-progress"])
+    assert rc == 0
+    return out, buf.getvalue()
+
+
+def test_the_2x2_map_writes_its_files_with_holes_and_no_lump(mapped_2x2):
+    out, text = mapped_2x2
+    for name in ("map.csv", "points.csv", "map.nc", "map.png", "map-report.pdf",
+                 "settings.json"):
+        assert (out / name).stat().st_size > 0, name
+    assert not (out / "lump.csv").exists()
+    points = pd.read_csv(out / "points.csv", keep_default_na=False, na_values=[""])
+    assert len(points) == 100
+    fitted = points["error"].isna()
+    assert fitted.sum() == 4 and points.loc[~fitted, "error"].str.startswith(NO_CURVE).all()
+    nodes = pd.read_csv(out / "map.csv")
+    corners = {(0, 0), (9, 0), (9, 9), (0, 9)}
+    has = nodes["n_traces"] == 1
+    assert set(zip(nodes.loc[has, "ix"], nodes.loc[has, "iy"], strict=True)) == corners
+    assert (nodes.loc[~has, "n_traces"] == 0).all()
+    assert "mapped 4 of 100 palpations on a 10 x 10 lattice" in text
+    assert "only 4 fitted points" in text and "96 of 100 grid nodes have no curve" in text
+    assert "lump model off" in text
+
+
+def test_the_2x2_maps_point_is_the_exact_fit_of_the_same_curve(mapped_2x2, afm_files):
+    """Each point's E: the exact engine on the curve read on its own (read_afm, curve i)."""
+    points = pd.read_csv(mapped_2x2[0] / "points.csv").iloc[:4]
+    opts = FitOptions(nu=0.5, engine="exact", layer="off")
+    for i in (0, 3):
+        (trace,) = read_afm(afm_files / MAP2X2, tip=TIP, curves=[i])
+        data = check_fittable(trace, opts)
+        post = exact_posterior(data, opts.priors.for_trace(data, opts.noise, opts.baseline))
+        d = post.draws(np.random.default_rng(5), 2000)
+        E = np.median(data.model.to_E(d["E_star"]))
+        assert points.loc[i, "x_m"] == trace.metadata["x_m"]
+        assert points.loc[i, "E_median_pa"] == pytest.approx(E, rel=0.01)
+
+
+@pytest.mark.slow
+def test_the_2x2_maps_point_agrees_with_palpbayes_fit(mapped_2x2, afm_files, tmp_path):
+    """The map's per-point E against ``palpbayes fit --curve 0`` with the same tip, nu and
+    engine: its statistical E (the map leaves out the systematic budget, common to all
+    points)."""
+    out = tmp_path / "fit"
+    with contextlib.redirect_stdout(io.StringIO()):
+        main(["fit", str(afm_files / MAP2X2), "--curve", "0", "--tip", "paraboloid",
+              "--radius", "5e-6", "--nu", "0.5", "--engine", "exact", "--half-space",
+              "--method", "bayes", "--workers", "1", "--out", str(out), "--no-progress"])
+    fit = pd.read_csv(out / "summary.csv").iloc[0]
+    point = pd.read_csv(mapped_2x2[0] / "points.csv").iloc[0]
+    assert point["E_median_pa"] == pytest.approx(fit["E_stat_pa"], rel=0.01)
+    assert point["E_lo_pa"] == pytest.approx(fit["E_stat_lo_pa"], rel=0.02)
+    assert point["E_hi_pa"] == pytest.approx(fit["E_stat_hi_pa"], rel=0.02)
+
+
+def test_inspect_reads_the_workshop_zip_and_says_what_it_lacks(afm_files, capsys):
+    """afmformats reads the AFM Workshop zip only with k and the sensitivity; inspect shows its
+    16 curves and their positions anyway and names the options a map needs."""
+    assert main(["inspect", str(afm_files / WORKSHOP)]) == 0
+    out = capsys.readouterr().out
+    assert "AFM file, 16 curve(s) (force-distance)" in out
+    assert "curve 0: approach 391, retract 391 points  at x = 1 µm, y = 2 µm" in out
+    assert "--spring-constant" in out and "map FILE --tip" in out
+
+
+def test_the_tip_is_required_for_an_afm_map_and_refused_for_a_manifest(afm_files, tmp_path,
+                                                                       capsys):
+    rc = main(["map", str(afm_files / PYFMRHEO), "--out", str(tmp_path / "a")])
+    err = capsys.readouterr().err
+    assert rc != 0 and "needs --tip" in err and PYFMRHEO in err
+    rc = main(["map", str(tmp_path / "manifest.csv"), "--tip", "sphere", "--thickness", "1e-3",
+               "--out", str(tmp_path / "b")])
+    err = capsys.readouterr().err
+    assert rc != 0 and "--tip, --thickness: for an AFM force map" in err
