@@ -124,12 +124,12 @@ def tilted_mixture(log_w: np.ndarray, mu: np.ndarray, scale: np.ndarray, nu: flo
     w = np.exp(log_w - log_w.max())
     order = np.argsort(w)
     small = order[np.cumsum(w[order]) < TAIL * w.sum()]
-    keep = np.setdiff1d(np.arange(w.size), small)
+    keep = np.ones(w.size, dtype=bool)
+    keep[small] = False
     w, mu, scale = w[keep], mu[keep], scale[keep]
     lo, hi = bounds
     x = _grid(w, mu, scale, lo, hi)
-    dens = (w[:, None] / scale[:, None]
-            * np.exp(_t_logpdf((x[None, :] - mu[:, None]) / scale[:, None], nu))).sum(0)
+    dens = (w / scale) @ np.exp(_t_logpdf((x[None, :] - mu[:, None]) / scale[:, None], nu))
     if tilt:
         dens = dens / x
     cdf = np.concatenate([[0.0], np.cumsum(0.5 * (dens[1:] + dens[:-1]) * np.diff(x))])
