@@ -54,7 +54,9 @@ exit status:
   1    failed otherwise;  130  interrupted
 
 Every update is one line on stdout, flushed at once; the last line starts with 'stop:'
-(the rule fired) or 'end:' (the stream ended).  Input is parsed as numbers only (float,
+(the rule fired) or 'end:' (the stream ended).  The target precision is judged after every
+chunk; the max force and max depth at every sample as it arrives: a sample that reaches one
+ends its chunk, and the update on it is the stop.  Input is parsed as numbers only (float,
 json.loads): nothing is evaluated or unpickled."""
 
 
@@ -172,7 +174,8 @@ def run(args: argparse.Namespace) -> int:
     parser = SampleParser(source, columns=opts.get("columns"), units=opts.get("units"),
                           force_sign=opts.get("force_sign", 1.0),
                           z_sign=opts.get("z_sign", 1.0))
-    stream = batches(lines, parser, chunk=args.chunk, timeout=args.timeout or None)
+    stream = batches(lines, parser, chunk=args.chunk, timeout=args.timeout or None,
+                     limit=estimator.limit)
     try:
         state, _ = follow(stream, estimator, _say, as_json=args.json)
     finally:

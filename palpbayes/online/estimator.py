@@ -2,7 +2,9 @@
 
 :class:`OnlineEstimator` takes samples as they arrive (chunks of t, z, F), detects contact,
 and after every chunk gives the posterior of E with its interval (:class:`OnlineState`) and a
-``should_stop`` from a :class:`StoppingRule`.  The posterior is that of the exact engine
+``should_stop`` from a :class:`StoppingRule`; a chunk can end at the sample that reaches the
+rule's max force or max depth (:meth:`OnlineEstimator.limit`), so that the run stops there,
+not at the end of the chunk.  The posterior is that of the exact engine
 (:mod:`palpbayes.bayes.exact`): the same model and priors as ``palpbayes fit --engine exact``
 (Gaussian or AR(1) noise, constant baseline), with two online choices:
 
@@ -216,13 +218,17 @@ class OnlineEstimator:
         return float(self._base.level) if self._contact is not None else float("nan")
 
     # ------------------------------------------------------------------ data in
-    def _append(self, t, z, f) -> None:
+    @staticmethod
+    def _arrays(t, z, f) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         t, z, f = (np.atleast_1d(np.asarray(a, dtype=float)) for a in (t, z, f))
         if not (t.shape == z.shape == f.shape and t.ndim == 1):
             raise InputError(f"update: t, z and F must be 1-D of one length, got {t.shape}, "
                              f"{z.shape}, {f.shape}")
         if not (np.isfinite(t).all() and np.isfinite(z).all() and np.isfinite(f).all()):
             raise InputError("update: t, z and F must be finite (drop NaN samples first)")
+        return t, z, f
+
+    def _append(self, t: np.ndarray, z: np.ndarray, f: np.ndarray) -> None:
         need = self._n + t.size
         if need > self._t.size:
             cap = max(need, 2 * self._t.size, 1024)
@@ -234,9 +240,38 @@ class OnlineEstimator:
         self._t[self._n:need], self._z[self._n:need], self._f[self._n:need] = t, z, f
         self._n = need
 
+    def limit(self, z, force) -> tuple[int, str] | None:
+        """The first of these new samples (tip heights [m], forces [N]) at which the rule's
+        max force or max depth is reached, and which: (index, "max force" | "max depth").
+
+        Judged sample by sample against the baseline level and the median surface height of
+        the last update (the force above the baseline, the surface minus the tip height), so
+        that a robot can be stopped at the sample itself rather than at the end of its chunk:
+        ``replay`` (:func:`~palpbayes.online.recorded.chunks`) and ``palpbayes follow``
+        (:func:`~palpbayes.online.stream.batches`) end a chunk there, and the update on it
+        decides (the force above the baseline is the state's; its depth is measured from the
+        surface the update gives, which can stop it a sample later).  None when neither
+        limit is reached, and before the contact, when the baseline and the surface are not
+        known yet (a limit passed in the chunk where the contact is found stops the run at
+        that chunk's end), and once the rule has fired.
+        """
+        s, rule = self.state, self.rule
+        if (s is None or not s.in_contact or s.should_stop
+                or (rule.max_force is None and rule.max_depth is None)):
+            return None
+        z, force = np.atleast_1d(np.asarray(z, dtype=float)), np.asarray(force, dtype=float)
+        hits = {}
+        if rule.max_force is not None:
+            hits["max force"] = force - self._base.level >= rule.max_force
+        if rule.max_depth is not None and s.z_surf is not None:
+            hits["max depth"] = s.z_surf.median - z >= rule.max_depth
+        first = [(int(np.argmax(h)), why) for why, h in hits.items() if h.any()]
+        return min(first) if first else None
+
     def update(self, t, z, force) -> OnlineState:
         """Add samples (times [s], tip heights [m], forces [N], in time order) and return the
         new :class:`OnlineState`."""
+        t, z, force = self._arrays(t, z, force)
         start = self._n
         self._append(t, z, force)
         if self._contact is None:
@@ -380,8 +415,9 @@ class OnlineEstimator:
             return OnlineState(n, t, z, False, 0, 0.0, 0.0, None, None, "")
         peak = float(np.max(self._f[:n] - self._base.level))
         if not np.isfinite(self._post.logp).any():  # no surface has enough samples in contact
-            return OnlineState(n, t, z, True, n - self._contact, 0.0, peak, None, None, "",
-                               ("no surface height has enough samples in contact yet",))
+            early = OnlineState(n, t, z, True, n - self._contact, 0.0, peak, None, None, "",
+                                ("no surface height has enough samples in contact yet",))
+            return replace(early, stop=self.rule.reason(early))
         post = self.posterior()
         estar = post.estar_summary(self.level)
         zs = post.z_summary(self.level)

@@ -9,6 +9,7 @@ peak force saved against the recorded protocol (the paper's fixed 10 % indentati
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -141,15 +142,26 @@ def _row(s: OnlineState) -> dict:
             "z_surf_sd_m": s.z_surf.sd, "stop": s.stop}
 
 
-def chunks(trace: IndentationTrace, chunk: int):
+def chunks(trace: IndentationTrace, chunk: int,
+           limit: Callable[[np.ndarray, np.ndarray], tuple[int, str] | None] | None = None):
     """The loading segment of ``trace`` as (t [s], z [m], F [N]) chunks of ``chunk`` samples,
-    in time order: what a robot would stream."""
+    in time order: what a robot would stream.
+
+    ``limit`` (an estimator's :meth:`~palpbayes.online.OnlineEstimator.limit`, asked for
+    every chunk after the previous one has been used) ends a chunk at the sample it names, as
+    ``palpbayes follow`` does; the next chunk starts after it.
+    """
     if chunk < 1:
         raise InputError(f"chunk = {chunk} samples must be at least 1")
     seg = trace.loading_segment()
-    for a in range(0, seg.time.size, chunk):
-        b = min(a + chunk, seg.time.size)
+    a, n = 0, seg.time.size
+    while a < n:
+        b = min(a + chunk, n)
+        hit = None if limit is None else limit(seg.z[a:b], seg.force[a:b])
+        if hit is not None:
+            b = a + hit[0] + 1
         yield seg.time[a:b], seg.z[a:b], seg.force[a:b]
+        a = b
 
 
 def run_to_stop(trace: IndentationTrace, estimator: OnlineEstimator,
@@ -157,7 +169,7 @@ def run_to_stop(trace: IndentationTrace, estimator: OnlineEstimator,
     """Feed ``trace`` to ``estimator`` until its rule fires (or the trace ends); the last
     state.  The quick form of :func:`replay` for simulation studies of the stopping rule."""
     state = None
-    for t, z, f in chunks(trace, chunk):
+    for t, z, f in chunks(trace, chunk, estimator.limit):
         state = estimator.update(t, z, f)
         if state.should_stop:
             break
@@ -183,7 +195,7 @@ def replay(trace: IndentationTrace, model: ModelSpec | None = None, *,
     rule = rule or StoppingRule()
     est = OnlineEstimator(model, noise=noise, noise_pp=noise_pp, f_unc=f_unc, rule=rule)
     rows, at_stop, budget_at_stop = [], None, None
-    for t, z, f in chunks(trace, chunk):
+    for t, z, f in chunks(trace, chunk, est.limit):
         state = est.update(t, z, f)
         if state.in_contact:
             rows.append(_row(state))

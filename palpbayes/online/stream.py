@@ -14,7 +14,8 @@ to do.
 
 :func:`batches` groups the samples into chunks of ``chunk`` for the online estimator; a
 partial chunk is given when the stream ends, and when no sample has arrived for ``timeout``
-seconds, so a slow stream still gets decisions.  The lines are read by a background thread
+seconds, so a slow stream still gets decisions; an estimator's ``limit`` ends a chunk at the sample
+that reaches the stopping rule's max force or max depth.  The lines are read by a background thread
 that stamps each with its arrival time (:func:`time.perf_counter`), so that the latency of
 a decision can be measured from the arrival of the last sample it used.
 """
@@ -26,7 +27,7 @@ import math
 import queue
 import threading
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -175,7 +176,8 @@ class Batch:
     arrived
         :func:`time.perf_counter` [s] when the last sample's line arrived.
     why
-        ``"chunk"`` (a full chunk), ``"timeout"`` (no sample for the time-out) or ``"end"``.
+        ``"chunk"`` (a full chunk), ``"limit"`` (the ``limit`` of :func:`batches` ended it
+        at this sample), ``"timeout"`` (no sample for the time-out) or ``"end"``.
     """
 
     t: np.ndarray
@@ -209,7 +211,9 @@ def arrivals(lines: Iterable[str]) -> queue.Queue:
 
 
 def batches(lines: Iterable[str], parser: SampleParser, chunk: int = 100,
-            timeout: float | None = 0.5) -> Iterator[Batch]:
+            timeout: float | None = 0.5,
+            limit: Callable[[np.ndarray, np.ndarray], tuple[int, str] | None] | None = None
+            ) -> Iterator[Batch]:
     """Batches of ``chunk`` samples from ``lines`` as they arrive (module docstring).
 
     Parameters
@@ -223,6 +227,11 @@ def batches(lines: Iterable[str], parser: SampleParser, chunk: int = 100,
     timeout
         [s] Give a partial batch when no line has arrived for this long; None or 0: wait for
         a full chunk.
+    limit
+        An estimator's :meth:`~palpbayes.online.OnlineEstimator.limit`, asked with every
+        sample (its z [m] and F [N], one-element arrays) as it arrives: a sample it names
+        (one that reaches the rule's max force or max depth) ends the batch at once, as
+        :func:`palpbayes.online.recorded.chunks` ends a recorded chunk.
 
     Raises
     ------
@@ -259,5 +268,7 @@ def batches(lines: Iterable[str], parser: SampleParser, chunk: int = 100,
         last_arrival = arrived
         if len(buf) >= chunk:
             yield emit("chunk")
+        elif limit is not None and limit(np.array(sample[1:2]), np.array(sample[2:3])):
+            yield emit("limit")
     if buf:
         yield emit("end")

@@ -72,10 +72,15 @@ def test_each_stopping_rule_fires_where_it_should(rule, reason):
     assert s is not None and s.stop == reason
     hist = res.history
     before = hist[hist["n"] < s.n]
-    if reason == "max force":
+    if reason == "max force":  # at the very sample, not at the end of its chunk of 50
         assert s.peak_force >= 0.5 and (before["peak_force_n"] < 0.5).all()
-    elif reason == "max depth":
+        est = OnlineEstimator(ModelSpec(tip), rule=rule)
+        assert run_to_stop(tr, est, chunk=50).n == s.n and s.n % 50 != 0
+        seg = tr.loading_segment()
+        assert s.n == int(np.argmax(seg.force - est.baseline_level >= 0.5)) + 1
+    elif reason == "max depth":  # within a sample or two (its surface moves with the update)
         assert s.depth >= 5e-4 and (before["depth_m"] < 5e-4).all()
+        assert s.n % 50 != 0 and s.depth - 5e-4 < 3 * float(np.max(-np.diff(tr.z)))
     else:
         assert s.E.rel_half_width <= 0.03
         assert (before["rel_half_width"] > 0.03).all()

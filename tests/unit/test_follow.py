@@ -170,11 +170,16 @@ def test_the_library_listener_streams_to_the_estimator(recorded):
     rule = StoppingRule(max_force=0.1)
     est = OnlineEstimator(ModelSpec(PAPER_TIPS["paraboloid"], nu=0.3), rule=rule)
     with lines:
-        state, latencies = follow_cli.follow(batches(lines, SampleParser(), chunk=100), est,
-                                             lambda s: None)
-    s = replay(read_trace(path, tip=PAPER_TIPS["paraboloid"]), rule=rule).at_stop
+        state, latencies = follow_cli.follow(
+            batches(lines, SampleParser(), chunk=100, limit=est.limit), est, lambda s: None)
+    trace = read_trace(path, tip=PAPER_TIPS["paraboloid"])
+    s = replay(trace, rule=rule).at_stop
     assert (state.stop, state.n, state.E.median) == ("max force", s.n, s.E.median)
-    assert len(latencies) == s.n // 100 and all(0 <= x < 5 for x in latencies)
+    # the stop is the first sample whose force above the baseline reaches 0.1 N, in the
+    # middle of a chunk: the chunks before it and the one the limit ended
+    above = trace.force - est.baseline_level >= 0.1
+    assert s.n == int(above.argmax()) + 1 and s.n % 100 != 0
+    assert len(latencies) == s.n // 100 + 1 and all(0 <= x < 5 for x in latencies)
 
 
 BAD = [  # (stream, line number, words the message must have)
