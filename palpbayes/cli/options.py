@@ -23,8 +23,9 @@ from ..contact import (
 from ..errors import InputError
 from ..fitdata import BONDINGS
 
-__all__ = ["add_nu_option", "add_model_options", "add_trace_options", "add_tip_options",
-           "add_specimen_options", "add_column_options", "options_from_args",
+__all__ = ["add_nu_option", "add_f_unc_option", "positive_force", "add_model_options",
+           "add_trace_options", "add_tip_options", "add_specimen_options",
+           "add_column_options", "options_from_args",
            "thickness_from_args", "layer_from_args", "read_options_from_args", "dest",
            "RECORDING_FLAGS", "recording_options_from_args", "tip_from_args",
            "traces_from_args", "trace_from_args"]
@@ -41,6 +42,24 @@ def add_nu_option(g, manifest: bool = True, summary: bool = True) -> None:
     g.add_argument("--nu", type=float, default=None,
                    help="Poisson ratio (foams 0.1-0.3, silicone, gels and tissue 0.45-0.5; "
                    f"default: {default}{told})")
+
+
+def add_f_unc_option(g, default: str = "6 sd of the pre-contact baseline") -> None:
+    """``--f-unc``: the contact threshold of ``fit``, ``report`` and ``map`` (``default``:
+    the words for what it is when not given)."""
+    g.add_argument("--f-unc", type=float, default=None, metavar="N",
+                   help="contact threshold and least-squares surface constraint "
+                        f"|F(z_surf) - baseline| <= F_unc [N] (default: {default}); a "
+                        "shallow indentation (AFM QI curves) whose first samples in contact "
+                        "lie within it needs a lower one")
+
+
+def positive_force(option: str, value: float | None) -> float | None:
+    """``value`` of ``option`` [N], checked to be a positive finite force (None passes)."""
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise InputError(f"{option} {value!r} must be a positive force in newtons (the "
+                         "sensor's peak-to-peak noise)")
+    return value
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:
@@ -71,9 +90,7 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                         "(quadrature over the surface height with the linear parameters and "
                         "the noise integrated out; gaussian or ar1 noise; 10-100x faster)")
     w = p.add_argument_group("fitted points")
-    w.add_argument("--f-unc", type=float, default=None, metavar="N",
-                   help="contact threshold and least-squares surface constraint "
-                        "|F(z_surf) - baseline| <= F_unc [N] (default: --noise-pp)")
+    add_f_unc_option(w, "--noise-pp")
     w.add_argument("--tare", action="store_true",
                    help="subtract the pre-contact baseline from the force before fitting "
                         "(zero an untared sensor; the paper's least squares has no offset)")
@@ -197,10 +214,7 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
         if not (math.isfinite(v) and v >= 0):
             raise InputError(f"--{name.replace('_', '-')} {v!r} must be a non-negative number")
     for name in ("noise_pp", "f_unc"):
-        v = getattr(args, name)
-        if v is not None and not (math.isfinite(v) and v > 0):
-            raise InputError(f"--{name.replace('_', '-')} {v!r} must be a positive force in "
-                             "newtons (the sensor's peak-to-peak noise)")
+        positive_force(f"--{name.replace('_', '-')}", getattr(args, name))
     if args.engine == "exact" and (args.noise == "student" or args.surface_prior == "soft"):
         what = ("--noise student" if args.noise == "student" else "--surface-prior soft")
         raise InputError(f"--engine exact takes --noise gaussian or ar1 and --surface-prior "
