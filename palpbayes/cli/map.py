@@ -31,9 +31,11 @@ from ..io.afm import is_afm_file
 from ..io.manifest import read_manifest
 from ..units import format_length, format_pressure
 from .options import (
+    add_afm_meta_options,
     add_f_unc_option,
     add_nu_option,
     add_tip_options,
+    afm_meta_from_args,
     positive_force,
     tip_from_args,
 )
@@ -61,17 +63,10 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="replace the map files in DIR")
     a = p.add_argument_group("AFM force maps (no AFM file records the tip)")
     add_tip_options(a)
-    a.add_argument("--spring-constant", type=float, metavar="N_PER_M",
-                   help="cantilever spring constant [N/m], for files that lack it (AFM "
-                        "Workshop)")
-    a.add_argument("--sensitivity", type=float, metavar="M_PER_V",
-                   help="deflection sensitivity [m/V], for files that lack it (AFM Workshop)")
+    add_afm_meta_options(a)
     a.add_argument("--thickness", type=float, metavar="M",
                    help="specimen thickness [m]: the lump model (--lump) needs it; an AFM "
                         "file does not record it")
-    a.add_argument("--sample-rate", type=float, metavar="HZ",
-                   help="sample rate of the approach [Hz], for files without a time column "
-                        "(AFM Workshop; an elastic fit does not depend on it)")
     g = p.add_argument_group("per-point fits")
     add_nu_option(g, summary=False)
     g.add_argument("--noise", choices=("gaussian", "ar1"), default="gaussian",
@@ -201,13 +196,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _afm_override(args: argparse.Namespace) -> dict:
     """read_afm options: the metadata the file lacks, from the options."""
-    meta = {key: value for key, value in (("spring constant", args.spring_constant),
-                                          ("sensitivity", args.sensitivity),
-                                          ("rate approach", args.sample_rate))
-            if value is not None}
-    for key, value in meta.items():
-        if not value > 0:
-            raise InputError(f"the {key} must be positive, got {value!r}")
+    meta = afm_meta_from_args(args)
     return {"meta_override": meta} if meta else {}
 
 

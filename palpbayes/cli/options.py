@@ -27,7 +27,8 @@ __all__ = ["add_nu_option", "add_f_unc_option", "positive_force", "add_model_opt
            "add_trace_options", "add_tip_options", "add_specimen_options",
            "add_column_options", "options_from_args",
            "thickness_from_args", "layer_from_args", "read_options_from_args", "dest",
-           "RECORDING_FLAGS", "recording_options_from_args", "tip_from_args",
+           "RECORDING_FLAGS", "recording_options_from_args", "AFM_META_OPTIONS",
+           "add_afm_meta_options", "afm_meta_from_args", "tip_from_args",
            "traces_from_args", "trace_from_args"]
 
 
@@ -177,6 +178,41 @@ def add_column_options(p: argparse.ArgumentParser,
                    help="-1 if z is down-positive")
 
 
+#: Option -> (argparse attribute, afmformats metadata key) of the calibration an AFM file may
+#: lack (AFM Workshop: no spring constant, sensitivity nor time column).
+AFM_META_OPTIONS = {"--spring-constant": ("spring_constant", "spring constant"),
+                    "--sensitivity": ("sensitivity", "sensitivity"),
+                    "--sample-rate": ("sample_rate", "rate approach")}
+
+
+def add_afm_meta_options(g) -> None:
+    """``--spring-constant``, ``--sensitivity`` and ``--sample-rate`` on the argument group
+    ``g`` (read back by :func:`afm_meta_from_args`; ``fit``, ``replay``, ``map``)."""
+    g.add_argument("--spring-constant", type=float, metavar="N_PER_M",
+                   help="cantilever spring constant [N/m], for AFM files that lack it (AFM "
+                        "Workshop)")
+    g.add_argument("--sensitivity", type=float, metavar="M_PER_V",
+                   help="deflection sensitivity [m/V], for AFM files that lack it (AFM "
+                        "Workshop)")
+    g.add_argument("--sample-rate", type=float, metavar="HZ",
+                   help="sample rate of the approach [Hz], for AFM files without a time "
+                        "column (AFM Workshop; an elastic fit does not depend on it)")
+
+
+def afm_meta_from_args(args: argparse.Namespace) -> dict:
+    """The afmformats metadata the AFM file lacks, from :func:`add_afm_meta_options`'s options
+    (SI units; only those given, each checked positive): ``read_afm``'s ``meta_override``."""
+    meta = {}
+    for option, (attr, key) in AFM_META_OPTIONS.items():
+        value = getattr(args, attr, None)
+        if value is None:
+            continue
+        if not (math.isfinite(value) and value > 0):
+            raise InputError(f"{option} {value!r} must be a positive number")
+        meta[key] = float(value)
+    return meta
+
+
 def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -> None:
     """Tip, specimen, columns, units and signs of a trace file (``fit``, ``replay``)."""
     add_specimen_options(p, title)
@@ -197,6 +233,7 @@ def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -
                         "topic, or an extra offset of a PoseStamped tip [m] (default 0)")
     r.add_argument("--curve", type=int, action="append", metavar="I", dest="curves",
                    help="fit only curve I of an AFM force map (repeatable; default all)")
+    add_afm_meta_options(r)
 
 
 def options_from_args(args: argparse.Namespace) -> FitOptions:
@@ -300,9 +337,13 @@ RECORDING_FLAGS = {"force_topic": "--force-topic", "pose_topic": "--pose-topic",
 
 
 def recording_options_from_args(args: argparse.Namespace) -> dict:
-    """Reader options of a ROS 2 bag or AFM file from the arguments (only those given)."""
+    """Reader options of a ROS 2 bag or AFM file from the arguments (only those given; an
+    AFM file's missing calibration as ``meta_override``, :func:`afm_meta_from_args`)."""
     opts = {key: getattr(args, key) for key in RECORDING_FLAGS
             if getattr(args, key, None) is not None}
+    meta = afm_meta_from_args(args)
+    if meta:
+        opts["meta_override"] = meta
     if args.force_sign is not None:
         opts["force_sign"] = args.force_sign
     if args.z_sign != 1.0:
@@ -335,6 +376,11 @@ def traces_from_args(args: argparse.Namespace, segments: str | None = None) -> l
 
     tip = tip_from_args(args)
     kind = recording_kind(args.input)
+    given = [o for o, (attr, _) in AFM_META_OPTIONS.items()
+             if getattr(args, attr, None) is not None]
+    if given and kind != "afm":
+        raise InputError(f"{args.input} is {KIND_NAMES[kind]}: {', '.join(given)} apply to "
+                         "AFM files only")
     if kind == "table":
         bag_or_afm = recording_options_from_args(args)
         extra = sorted(set(bag_or_afm) - {"force_sign", "z_sign"})

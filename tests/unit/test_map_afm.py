@@ -129,7 +129,7 @@ def test_qi_curves_fail_by_default_saying_why_and_which_option(afm_files, tmp_pa
 
 @pytest.fixture(scope="module")
 def mapped_qi(afm_files, tmp_path_factory):
-    """The QI line mapped with F_unc = 20 pN (2 sd of its baseline noise)."""
+    """The QI line mapped with F_unc = 20 pN (about 1.7 sd of its baseline noise, 11-12 pN)."""
     out = tmp_path_factory.mktemp("afm") / "qi"
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
@@ -267,3 +267,52 @@ def test_the_tip_is_required_for_an_afm_map_and_refused_for_a_manifest(afm_files
                "--out", str(tmp_path / "b")])
     err = capsys.readouterr().err
     assert rc != 0 and "--tip, --thickness: for an AFM force map" in err
+
+
+def test_fit_takes_the_calibration_an_afm_file_lacks_with_maps_options(afm_files, tmp_path):
+    """``fit`` and ``replay`` read the Workshop zip with --spring-constant/--sensitivity/
+    --sample-rate, defined once (cli.options.add_afm_meta_options) for them and ``map``."""
+    from palpbayes.cli import build_parser
+    from palpbayes.cli.options import traces_from_args
+
+    parser = build_parser()
+    flags = ["--spring-constant", "20", "--sensitivity", "1e-8", "--sample-rate", "1000"]
+    args = parser.parse_args(["fit", str(afm_files / WORKSHOP), "--curve", "3", "--tip",
+                              "paraboloid", "--radius", "5e-6", *flags, "--out", "x"])
+    (trace,) = traces_from_args(args)
+    (want,) = read_afm(afm_files / WORKSHOP, tip=TIP, curves=[3],
+                       meta_override={**WORKSHOP_META, "rate approach": 1000.0})
+    np.testing.assert_array_equal(trace.force, want.force)
+    np.testing.assert_array_equal(trace.z, want.z)
+    helps = {}
+    for command in ("fit", "replay", "map"):
+        sub = parser._subparsers._group_actions[0].choices[command]
+        helps[command] = {a.option_strings[0]: a.help for a in sub._actions
+                          if a.option_strings and a.option_strings[0] in flags[::2]}
+    assert helps["fit"] == helps["replay"] == helps["map"] and len(helps["fit"]) == 3
+    with pytest.raises(DataFileError, match="spring-constant"):  # the file lacks k
+        traces_from_args(parser.parse_args(["fit", str(afm_files / WORKSHOP), "--tip",
+                                            "paraboloid", "--radius", "5e-6", "--out", "x"]))
+
+
+def test_fit_of_a_workshop_curve_runs_and_the_options_are_refused_elsewhere(
+        afm_files, tmp_path, capsys):
+    out = tmp_path / "ws"
+    with contextlib.redirect_stdout(io.StringIO()):
+        rc = main(["fit", str(afm_files / WORKSHOP), "--curve", "3", "--tip", "paraboloid",
+                   "--radius", "5e-6", "--nu", "0.5", "--engine", "exact", "--half-space",
+                   "--no-model-form", "--spring-constant", "20", "--sensitivity", "1e-8",
+                   "--sample-rate", "1000", "--workers", "1", "--out", str(out),
+                   "--no-progress"])
+    assert rc == 0
+    row = pd.read_csv(out / "summary.csv").iloc[0]
+    assert 300e3 < row["E_pa"] < 600e3  # the map's 431 kPa (docs/reference.md), one curve
+    table = tmp_path / "t.csv"
+    pd.DataFrame({"time_s": [0.0, 1.0], "z_m": [0.0, -1e-3], "force_n": [0.0, 1.0]}).to_csv(
+        table, index=False)
+    rc = main(["fit", str(table), "--tip", "sphere", "--radius", "0.01", "--sensitivity",
+               "1e-8", "--out", str(tmp_path / "t")])
+    assert rc == 2 and "--sensitivity apply to AFM files only" in capsys.readouterr().err
+    rc = main(["fit", str(afm_files / WORKSHOP), "--tip", "paraboloid", "--radius", "5e-6",
+               "--spring-constant", "-1", "--out", str(tmp_path / "n")])
+    assert rc == 2 and "--spring-constant -1.0 must be a positive" in capsys.readouterr().err
