@@ -127,17 +127,20 @@ def test_qi_curves_fail_by_default_saying_why_and_which_option(afm_files, tmp_pa
     assert not (tmp_path / "qi").exists()
 
 
+def _map_cli(path, out, *extra: str) -> tuple:
+    """``palpbayes map PATH`` with PyFMRheo's tip and nu, in this process: (out, stdout)."""
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rc = main(["map", str(path), "--tip", "paraboloid", "--radius", "5e-6", "--nu", "0.5",
+                   *extra, "--out", str(out), "--scheduler", "synchronous", "--no-progress"])
+    assert rc == 0
+    return out, buf.getvalue()
+
+
 @pytest.fixture(scope="module")
 def mapped_qi(afm_files, tmp_path_factory):
     """The QI line mapped with F_unc = 20 pN (about 1.7 sd of its baseline noise, 11-12 pN)."""
-    out = tmp_path_factory.mktemp("afm") / "qi"
-    buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        rc = main(["map", str(afm_files / QI), "--tip", "paraboloid", "--radius", "5e-6",
-                   "--nu", "0.5", "--f-unc", "2e-11", "--out", str(out), "--scheduler",
-                   "synchronous", "--no-progress"])
-    assert rc == 0
-    return out, buf.getvalue()
+    return _map_cli(afm_files / QI, tmp_path_factory.mktemp("afm") / "qi", "--f-unc", "2e-11")
 
 
 def test_the_qi_line_maps_end_to_end_with_a_lower_contact_threshold(mapped_qi):
@@ -187,14 +190,7 @@ def test_the_2x2_maps_figure_reads_in_micrometres_and_marks_its_96_holes(mapped_
 
 @pytest.fixture(scope="module")
 def mapped_2x2(afm_files, tmp_path_factory):
-    out = tmp_path_factory.mktemp("afm") / "map2x2"
-    buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        rc = main(["map", str(afm_files / MAP2X2), "--tip", "paraboloid", "--radius", "5e-6",
-                   "--nu", "0.5", "--out", str(out), "--scheduler", "synchronous",
-                   "--no-progress"])
-    assert rc == 0
-    return out, buf.getvalue()
+    return _map_cli(afm_files / MAP2X2, tmp_path_factory.mktemp("afm") / "map2x2")
 
 
 def test_the_2x2_map_writes_its_files_with_holes_and_no_lump(mapped_2x2):
