@@ -30,15 +30,8 @@ from ..flagcodes import level_and_text
 from ..io.afm import is_afm_file
 from ..io.manifest import read_manifest
 from ..units import format_length, format_pressure
-from .options import (
-    add_afm_meta_options,
-    add_f_unc_option,
-    add_nu_option,
-    add_tip_options,
-    afm_meta_from_args,
-    positive_force,
-    tip_from_args,
-)
+from .afm_options import add_afm_meta_options, afm_meta_from_args
+from .options import add_f_unc_option, add_nu_option, add_tip_options, positive_force, tip_from_args
 
 __all__ = ["register", "run"]
 

@@ -22,13 +22,13 @@ from ..contact import (
 )
 from ..errors import InputError
 from ..fitdata import BONDINGS
+from .afm_options import AFM_META_OPTIONS, add_afm_meta_options, afm_meta_from_args
 
 __all__ = ["add_nu_option", "add_f_unc_option", "positive_force", "add_model_options",
            "add_trace_options", "add_tip_options", "add_specimen_options",
            "add_column_options", "options_from_args",
            "thickness_from_args", "layer_from_args", "read_options_from_args", "dest",
-           "RECORDING_FLAGS", "recording_options_from_args", "AFM_META_OPTIONS",
-           "add_afm_meta_options", "afm_meta_from_args", "tip_from_args",
+           "RECORDING_FLAGS", "recording_options_from_args", "tip_from_args",
            "traces_from_args", "trace_from_args"]
 
 
@@ -176,41 +176,6 @@ def add_column_options(p: argparse.ArgumentParser,
                         "sign that makes the force grow as the tip goes down)")
     c.add_argument("--z-sign", type=float, choices=(1.0, -1.0), default=1.0,
                    help="-1 if z is down-positive")
-
-
-#: Option -> (argparse attribute, afmformats metadata key) of the calibration an AFM file may
-#: lack (AFM Workshop: no spring constant, sensitivity nor time column).
-AFM_META_OPTIONS = {"--spring-constant": ("spring_constant", "spring constant"),
-                    "--sensitivity": ("sensitivity", "sensitivity"),
-                    "--sample-rate": ("sample_rate", "rate approach")}
-
-
-def add_afm_meta_options(g) -> None:
-    """``--spring-constant``, ``--sensitivity`` and ``--sample-rate`` on the argument group
-    ``g`` (read back by :func:`afm_meta_from_args`; ``fit``, ``replay``, ``map``)."""
-    g.add_argument("--spring-constant", type=float, metavar="N_PER_M",
-                   help="cantilever spring constant [N/m], for AFM files that lack it (AFM "
-                        "Workshop)")
-    g.add_argument("--sensitivity", type=float, metavar="M_PER_V",
-                   help="deflection sensitivity [m/V], for AFM files that lack it (AFM "
-                        "Workshop)")
-    g.add_argument("--sample-rate", type=float, metavar="HZ",
-                   help="sample rate of the approach [Hz], for AFM files without a time "
-                        "column (AFM Workshop; an elastic fit does not depend on it)")
-
-
-def afm_meta_from_args(args: argparse.Namespace) -> dict:
-    """The afmformats metadata the AFM file lacks, from :func:`add_afm_meta_options`'s options
-    (SI units; only those given, each checked positive): ``read_afm``'s ``meta_override``."""
-    meta = {}
-    for option, (attr, key) in AFM_META_OPTIONS.items():
-        value = getattr(args, attr, None)
-        if value is None:
-            continue
-        if not (math.isfinite(value) and value > 0):
-            raise InputError(f"{option} {value!r} must be a positive number")
-        meta[key] = float(value)
-    return meta
 
 
 def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -> None:
