@@ -280,8 +280,11 @@ def prepare(
     n_contact = int(np.count_nonzero(keep & (z < z_c)))
     if n_contact < 5:
         raise NoContactError(
-            f"{source}: only {n_contact} sample(s) in contact inside the fit window; the "
-            "indentation is too shallow or the window too narrow"
+            f"{source}: only {n_contact} sample(s) in contact inside the fit window (below the "
+            f"contact onset, where the force stays more than F_unc = {format_force(f_unc)} "
+            "above its pre-contact level); the indentation is too shallow or the window too "
+            "narrow (a shallow indentation's first samples in contact lie within F_unc: a "
+            "lower --f-unc counts them; by default F_unc is 6 sd of the baseline noise)"
         )
     offset = base.level if tare else 0.0
     return FitData(

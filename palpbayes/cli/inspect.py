@@ -91,8 +91,8 @@ def _afm(path: Path) -> None:
         # the structure does not need the force's scale: read it with placeholders
         curves = describe_afm(path, {"spring constant": 1.0, "sensitivity": 1.0})
         note = ("AFM Workshop map without spring constant and sensitivity (nor a time "
-                "column): give palpbayes map --spring-constant N/m --sensitivity m/V "
-                "--sample-rate HZ")
+                "column): give palpbayes map (or fit, replay) --spring-constant N/m "
+                "--sensitivity m/V --sample-rate HZ")
     kinds = sorted({c.modality for c in curves})
     print(f"{path}: AFM file, {len(curves)} curve(s) ({', '.join(kinds)})")
     first = curves[0]

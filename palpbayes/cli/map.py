@@ -30,7 +30,8 @@ from ..flagcodes import level_and_text
 from ..io.afm import is_afm_file
 from ..io.manifest import read_manifest
 from ..units import format_length, format_pressure
-from .options import add_nu_option, add_tip_options, tip_from_args
+from .afm_options import add_afm_meta_options, afm_meta_from_args
+from .options import add_f_unc_option, add_nu_option, add_tip_options, positive_force, tip_from_args
 
 __all__ = ["register", "run"]
 
@@ -55,22 +56,16 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="replace the map files in DIR")
     a = p.add_argument_group("AFM force maps (no AFM file records the tip)")
     add_tip_options(a)
-    a.add_argument("--spring-constant", type=float, metavar="N_PER_M",
-                   help="cantilever spring constant [N/m], for files that lack it (AFM "
-                        "Workshop)")
-    a.add_argument("--sensitivity", type=float, metavar="M_PER_V",
-                   help="deflection sensitivity [m/V], for files that lack it (AFM Workshop)")
+    add_afm_meta_options(a)
     a.add_argument("--thickness", type=float, metavar="M",
                    help="specimen thickness [m]: the lump model (--lump) needs it; an AFM "
                         "file does not record it")
-    a.add_argument("--sample-rate", type=float, metavar="HZ",
-                   help="sample rate of the approach [Hz], for files without a time column "
-                        "(AFM Workshop; an elastic fit does not depend on it)")
     g = p.add_argument_group("per-point fits")
     add_nu_option(g, summary=False)
     g.add_argument("--noise", choices=("gaussian", "ar1"), default="gaussian",
                    help="noise model of the exact engine (default gaussian)")
     g.add_argument("--tare", action="store_true", help="subtract the pre-contact force level")
+    add_f_unc_option(g)
     g.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="Dask scheduler address (tcp://host:8786); default: a LocalCluster; "
                         "'synchronous' runs in this process")
@@ -121,20 +116,23 @@ def run(args: argparse.Namespace) -> int:
     # block's thickness itself, and the map's per-point fits compare points with each other
     nu = None if args.nu is None else check_nu(args.nu)
     point_opts = PointOptions(fit=FitOptions(nu=nu, noise=args.noise, tare=args.tare,
+                                             f_unc=positive_force("--f-unc", args.f_unc),
                                              engine="exact", seed=args.seed, layer="off"),
                               seed=args.seed)
+    # an AFM line of curves (QI data) maps as a line; a manifest's grid must be 2-D
     map_opts = MapOptions(threshold=args.threshold, detect=args.detect, seed=args.seed,
                           lump=lump, lump_max_steps=args.lump_max_steps,
-                          min_points=4 if afm else 10)
+                          min_points=4 if afm else 10, line=afm)
     if afm:
         point_opts = replace(point_opts, read_options=_afm_override(args))
     try:
-        check_map_manifest(manifest, lump=lump, min_points=map_opts.min_points)
+        check_map_manifest(manifest, lump=lump, min_points=map_opts.min_points,
+                           line=map_opts.line)
     except InputError as exc:
         if not afm:
             raise
-        raise InputError(f"{args.input}: {exc}; a field needs curves on at least 2 rows and "
-                         "2 columns (4 or more); fit the curves one by one with palpbayes fit "
+        raise InputError(f"{args.input}: {exc}; a field needs at least 4 curves (on a grid "
+                         "or a line); fit the curves one by one with palpbayes fit "
                          f"{args.input} --tip ...") from None
     stage = prepare_out_dir(args.out, args.force)  # before the fits: a bad --out fails fast
     try:
@@ -191,13 +189,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _afm_override(args: argparse.Namespace) -> dict:
     """read_afm options: the metadata the file lacks, from the options."""
-    meta = {key: value for key, value in (("spring constant", args.spring_constant),
-                                          ("sensitivity", args.sensitivity),
-                                          ("rate approach", args.sample_rate))
-            if value is not None}
-    for key, value in meta.items():
-        if not value > 0:
-            raise InputError(f"the {key} must be positive, got {value!r}")
+    meta = afm_meta_from_args(args)
     return {"meta_override": meta} if meta else {}
 
 

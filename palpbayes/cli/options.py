@@ -22,9 +22,11 @@ from ..contact import (
 )
 from ..errors import InputError
 from ..fitdata import BONDINGS
+from .afm_options import AFM_META_OPTIONS, add_afm_meta_options, afm_meta_from_args
 
-__all__ = ["add_nu_option", "add_model_options", "add_trace_options", "add_tip_options",
-           "add_specimen_options", "add_column_options", "options_from_args",
+__all__ = ["add_nu_option", "add_f_unc_option", "positive_force", "add_model_options",
+           "add_trace_options", "add_tip_options", "add_specimen_options",
+           "add_column_options", "options_from_args",
            "thickness_from_args", "layer_from_args", "read_options_from_args", "dest",
            "RECORDING_FLAGS", "recording_options_from_args", "tip_from_args",
            "traces_from_args", "trace_from_args"]
@@ -41,6 +43,24 @@ def add_nu_option(g, manifest: bool = True, summary: bool = True) -> None:
     g.add_argument("--nu", type=float, default=None,
                    help="Poisson ratio (foams 0.1-0.3, silicone, gels and tissue 0.45-0.5; "
                    f"default: {default}{told})")
+
+
+def add_f_unc_option(g, default: str = "6 sd of the pre-contact baseline") -> None:
+    """``--f-unc``: the contact threshold of ``fit``, ``report`` and ``map`` (``default``:
+    the words for what it is when not given)."""
+    g.add_argument("--f-unc", type=float, default=None, metavar="N",
+                   help="contact threshold and least-squares surface constraint "
+                        f"|F(z_surf) - baseline| <= F_unc [N] (default: {default}); a "
+                        "shallow indentation (AFM QI curves) whose first samples in contact "
+                        "lie within it needs a lower one")
+
+
+def positive_force(option: str, value: float | None) -> float | None:
+    """``value`` of ``option`` [N], checked to be a positive finite force (None passes)."""
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise InputError(f"{option} {value!r} must be a positive force in newtons (the "
+                         "sensor's peak-to-peak noise)")
+    return value
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:
@@ -71,9 +91,7 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                         "(quadrature over the surface height with the linear parameters and "
                         "the noise integrated out; gaussian or ar1 noise; 10-100x faster)")
     w = p.add_argument_group("fitted points")
-    w.add_argument("--f-unc", type=float, default=None, metavar="N",
-                   help="contact threshold and least-squares surface constraint "
-                        "|F(z_surf) - baseline| <= F_unc [N] (default: --noise-pp)")
+    add_f_unc_option(w, "--noise-pp")
     w.add_argument("--tare", action="store_true",
                    help="subtract the pre-contact baseline from the force before fitting "
                         "(zero an untared sensor; the paper's least squares has no offset)")
@@ -180,6 +198,7 @@ def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -
                         "topic, or an extra offset of a PoseStamped tip [m] (default 0)")
     r.add_argument("--curve", type=int, action="append", metavar="I", dest="curves",
                    help="fit only curve I of an AFM force map (repeatable; default all)")
+    add_afm_meta_options(r)
 
 
 def options_from_args(args: argparse.Namespace) -> FitOptions:
@@ -197,10 +216,7 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
         if not (math.isfinite(v) and v >= 0):
             raise InputError(f"--{name.replace('_', '-')} {v!r} must be a non-negative number")
     for name in ("noise_pp", "f_unc"):
-        v = getattr(args, name)
-        if v is not None and not (math.isfinite(v) and v > 0):
-            raise InputError(f"--{name.replace('_', '-')} {v!r} must be a positive force in "
-                             "newtons (the sensor's peak-to-peak noise)")
+        positive_force(f"--{name.replace('_', '-')}", getattr(args, name))
     if args.engine == "exact" and (args.noise == "student" or args.surface_prior == "soft"):
         what = ("--noise student" if args.noise == "student" else "--surface-prior soft")
         raise InputError(f"--engine exact takes --noise gaussian or ar1 and --surface-prior "
@@ -286,9 +302,13 @@ RECORDING_FLAGS = {"force_topic": "--force-topic", "pose_topic": "--pose-topic",
 
 
 def recording_options_from_args(args: argparse.Namespace) -> dict:
-    """Reader options of a ROS 2 bag or AFM file from the arguments (only those given)."""
+    """Reader options of a ROS 2 bag or AFM file from the arguments (only those given; an
+    AFM file's missing calibration as ``meta_override``, :func:`afm_meta_from_args`)."""
     opts = {key: getattr(args, key) for key in RECORDING_FLAGS
             if getattr(args, key, None) is not None}
+    meta = afm_meta_from_args(args)
+    if meta:
+        opts["meta_override"] = meta
     if args.force_sign is not None:
         opts["force_sign"] = args.force_sign
     if args.z_sign != 1.0:
@@ -321,6 +341,11 @@ def traces_from_args(args: argparse.Namespace, segments: str | None = None) -> l
 
     tip = tip_from_args(args)
     kind = recording_kind(args.input)
+    given = [o for o, (attr, _) in AFM_META_OPTIONS.items()
+             if getattr(args, attr, None) is not None]
+    if given and kind != "afm":
+        raise InputError(f"{args.input} is {KIND_NAMES[kind]}: {', '.join(given)} apply to "
+                         "AFM files only")
     if kind == "table":
         bag_or_afm = recording_options_from_args(args)
         extra = sorted(set(bag_or_afm) - {"force_sign", "z_sign"})

@@ -57,8 +57,8 @@ def _load(source: str, stamp: tuple, override: tuple) -> tuple:
         fix = ("check that the file is complete and of the kind its name says; afmformats "
                f"reads {', '.join(AFM_SUFFIXES)} and AFM Workshop zips")
         if type(exc).__name__ == "MissingMetaDataError":  # e.g. AFM Workshop: k, sensitivity
-            fix = ("give what the file lacks (palpbayes map: --spring-constant N/m, "
-                   "--sensitivity m/V; read_afm: meta_override)")
+            fix = ("give what the file lacks (palpbayes fit, replay or map: "
+                   "--spring-constant N/m, --sensitivity m/V; read_afm: meta_override)")
         raise DataFileError(source, f"afmformats cannot read it ({type(exc).__name__}: "
                             f"{exc})".replace("\n", " "), fix) from None
     if not curves:

@@ -33,7 +33,7 @@ __all__ = ["recording_kind", "read_recording", "READER_OPTIONS", "KIND_NAMES"]
 READER_OPTIONS = {
     "bag": {"force_topic", "pose_topic", "force_axis", "force_sign", "time_offset",
             "tool_offset", "dh", "max_gap", "check"},
-    "afm": {"curves", "force_sign", "z_sign", "check", "segments"},
+    "afm": {"curves", "force_sign", "z_sign", "check", "segments", "meta_override"},
     "table": {"columns", "units", "force_sign", "z_sign", "check", "delimiter"},
 }
 #: How messages name each kind.

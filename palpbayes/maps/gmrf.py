@@ -216,8 +216,8 @@ def _check_inputs(x, y, mean, sd) -> tuple[np.ndarray, ...]:
 
 
 def fit_field(x, y, mean, sd, *, prior: FieldPrior | None = None, step: float | None = None,
-              grid_points: int = 7, progress: bool = False, margin: int | None = None
-              ) -> FieldPosterior:
+              grid_points: int = 7, progress: bool = False, margin: int | None = None,
+              line: bool = False) -> FieldPosterior:
     """Posterior of the log-modulus field from palpations on a regular grid.
 
     Parameters
@@ -237,13 +237,16 @@ def fit_field(x, y, mean, sd, *, prior: FieldPrior | None = None, step: float | 
         Print the stages and timings to stderr.
     margin
         Padding [nodes] on each side; default :func:`default_margin`.
+    line
+        Accept palpations on one row or column (a line scan): the field is still the 2-D
+        field, observed along that line.
 
     Returns
     -------
     FieldPosterior
     """
     xs, ys, yv, sv = _check_inputs(x, y, mean, sd)
-    lat, node = lattice_from_positions(xs, ys, step=step)
+    lat, node = lattice_from_positions(xs, ys, step=step, line=line)
     m = default_margin(lat) if margin is None else margin
     padded, index = pad(lat, m)
     pr = (prior or FieldPrior()).resolved(lat.step, yv)

@@ -113,8 +113,8 @@ def _origin(v: np.ndarray, step: float) -> float:
     return float(phase + step * np.round((v.min() - phase) / step))
 
 
-def lattice_from_positions(x, y, *, step: float | None = None, tol: float = 0.25
-                           ) -> tuple[Lattice, np.ndarray]:
+def lattice_from_positions(x, y, *, step: float | None = None, tol: float = 0.25,
+                           line: bool = False) -> tuple[Lattice, np.ndarray]:
     """Infer the regular lattice of palpation positions and each observation's node.
 
     Parameters
@@ -129,6 +129,9 @@ def lattice_from_positions(x, y, *, step: float | None = None, tol: float = 0.25
         spacings that are not multiples of one another).
     tol
         Largest accepted distance of a position from its node along x or y, in steps.
+    line
+        Accept positions on a single row or column (a line scan, e.g. an AFM's QI line):
+        a lattice of one node across.
 
     Returns
     -------
@@ -140,9 +143,10 @@ def lattice_from_positions(x, y, *, step: float | None = None, tol: float = 0.25
     Raises
     ------
     InputError
-        NaN or infinite positions, fewer than two distinct positions along x or along y (a
-        single line is not a map), a position more than ``tol``·step off the grid (the first
-        such position is named), or a lattice of more than :data:`MAX_NODES` nodes.
+        NaN or infinite positions, fewer than two distinct positions, fewer than two along x
+        or along y (a single line is not a map) unless ``line``, a position more than
+        ``tol``·step off the grid (the first such position is named), or a lattice of more
+        than :data:`MAX_NODES` nodes.
     """
     x, y = np.asarray(x, dtype=float).ravel(), np.asarray(y, dtype=float).ravel()
     if x.shape != y.shape:
@@ -175,7 +179,7 @@ def lattice_from_positions(x, y, *, step: float | None = None, tol: float = 0.25
     ix, iy = ix - ix.min(), iy - iy.min()
     nx, ny = int(ix.max()) + 1, int(iy.max()) + 1
     for name, n in (("x", nx), ("y", ny)):
-        if n < 2:
+        if n < 2 and not line:
             raise InputError(f"the positions have a single {name} value on the grid of step "
                              f"{h:.6g} m: a map needs a 2-D grid (fit a line scan trace by "
                              "trace instead)")

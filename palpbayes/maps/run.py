@@ -72,6 +72,9 @@ class MapOptions:
     min_points
         Fewest fitted points a map takes (>= 4; below 10 a flag says the field's
         hyperparameters come from their priors: an AFM map of 2 × 2 curves).
+    line
+        Accept palpations on one row or column (an AFM line of QI curves): the 2-D field
+        observed along a line, a flag saying so.
     """
 
     threshold: float = 1.1
@@ -81,6 +84,7 @@ class MapOptions:
     seed: int = 0
     lump: bool = True
     min_points: int = 10
+    line: bool = False
 
     def __post_init__(self) -> None:
         if not (isinstance(self.min_points, int) and self.min_points >= 4):
@@ -242,7 +246,10 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
     # the lattice of every palpation, fitted or not: a point without a fit enters with an sd
     # of 1000 in log E (no information), so a failed edge row keeps its place on the map
     x, y = points["x_m"].to_numpy(float), points["y_m"].to_numpy(float)
-    lat, node = lattice_from_positions(x, y)
+    lat, node = lattice_from_positions(x, y, line=options.line)
+    if min(lat.nx, lat.ny) == 1:
+        flags.append(f"info: the palpations lie on one line ({lat.nx} × {lat.ny} nodes): the "
+                     "field is read along it, and its range across the line is the prior's")
     mean = np.where(ok, points["logE_mean"], float(good["logE_mean"].median()))
     sd = np.where(ok, points["logE_sd"], _NO_DATA_SD)
     depth = float(np.nanmedian(good["depth_m"]))
@@ -265,7 +272,8 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
         # the field is fitted to what the lump leaves (its posterior-mean log excess)
         mean = mean - lump.excess(x, y).mean(axis=0)
     prior = FieldPrior().resolved(lat.step, mean[ok])
-    fp = fit_field(x, y, mean, sd, prior=prior, step=lat.step, progress=progress)
+    fp = fit_field(x, y, mean, sd, prior=prior, step=lat.step, progress=progress,
+                   line=options.line)
     flags += [scoped("field", f) for f in fp.flags]
     rng = np.random.default_rng(options.seed)
     joint = fp.draws(rng, options.field_draws)
@@ -292,13 +300,14 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
                      p_lump=p_lump)
 
 
-def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True, min_points: int = 10
-                       ) -> tuple[Tip, float | None]:
+def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True, min_points: int = 10,
+                       line: bool = False) -> tuple[Tip, float | None]:
     """The map's one tip and its block thickness (None if the manifest has none).
 
     Everything that can be checked before the fits is: positions on a regular lattice
-    (:func:`palpbayes.maps.lattice.lattice_from_positions`), at least 10 rows, one tip, one
-    thickness, and a tip kind whose contact radius the lump model knows (``lump``).
+    (:func:`palpbayes.maps.lattice.lattice_from_positions`; on one line only with ``line``),
+    at least ``min_points`` rows, one tip, one thickness, and a tip kind whose contact radius
+    the lump model knows (``lump``).
 
     Raises
     ------
@@ -309,7 +318,8 @@ def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True, min_points:
     n = int((manifest["error"].fillna("") == "").sum()) if "error" in manifest else len(manifest)
     if n < min_points:
         raise InputError(f"a map needs at least {min_points} palpations, the input has {n}")
-    lattice_from_positions(manifest["x_m"].to_numpy(float), manifest["y_m"].to_numpy(float))
+    lattice_from_positions(manifest["x_m"].to_numpy(float), manifest["y_m"].to_numpy(float),
+                           line=line)
     tips = {tip_from_row(r) for _, r in manifest.iterrows()}
     if len(tips) != 1:
         raise InputError(f"a map takes traces of one tip; the manifest has {len(tips)}: "
@@ -336,7 +346,7 @@ def make_map(manifest: pd.DataFrame, *, point_options: PointOptions | None = Non
     point_options = point_options or PointOptions()
     options = options or MapOptions()
     tip, thickness = check_map_manifest(manifest, lump=options.lump,
-                                        min_points=options.min_points)
+                                        min_points=options.min_points, line=options.line)
     points = fit_points(manifest, point_options, scheduler=scheduler, workers=workers,
                         progress=progress)
     result = map_from_points(points, tip=tip, thickness=thickness, options=options,

@@ -1,8 +1,11 @@
 """Stiffness maps: posterior mean, uncertainty, probability of a stiff lump, a profile.
 
 Every function takes the node table of a map (:data:`palpbayes.maps.run.NODE_COLUMNS`, one row
-per lattice node with ``ix``, ``iy``, ``x_m``, ``y_m``) and draws positions in mm and moduli in
-kPa.  The estimated lump centre (when there is one) is marked with its 90 % interval.
+per lattice node with ``ix``, ``iy``, ``x_m``, ``y_m``) and draws moduli in kPa and positions
+in the unit of the map's size (:func:`position_unit`: µm for an AFM map, mm for the robot's).
+The estimated lump centre (when there is one) is marked with its 90 % interval; a node
+without a fitted point (``n_traces`` 0: no curve, or its fit failed) is marked as a hole.  A
+lattice of one row is drawn as a strip of one pixel's height.
 """
 
 from __future__ import annotations
@@ -14,9 +17,16 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from .style import KPA, METHOD_COLORS, MM, fig_ax
+from .style import KPA, METHOD_COLORS, MM, UM, fig_ax
 
-__all__ = ["plot_map", "plot_map_panel", "plot_profile", "map_grid"]
+__all__ = ["plot_map", "plot_map_panel", "plot_profile", "map_grid", "position_unit",
+           "HOLE_LABEL", "MM_EXTENT"]
+
+#: [m] A map whose positions span less than this is labelled in µm, a larger one in mm.
+MM_EXTENT = 1e-3
+
+#: Legend entry of the nodes without a fitted point.
+HOLE_LABEL = "no fit (hole)"
 
 #: What each map panel shows: (node column, title, colour-bar label, colormap, scale).
 PANELS: dict[str, tuple[str, str, str, str, float]] = {
@@ -37,25 +47,66 @@ def map_grid(nodes: pd.DataFrame, column: str) -> np.ndarray:
     return out
 
 
-def _extent(nodes: pd.DataFrame) -> tuple[float, float, float, float]:
-    x, y = nodes["x_m"].to_numpy() * MM, nodes["y_m"].to_numpy() * MM
-    hx = 0.5 * (np.ptp(x) / max(int(nodes["ix"].max()), 1)) if np.ptp(x) > 0 else 0.5
-    hy = 0.5 * (np.ptp(y) / max(int(nodes["iy"].max()), 1)) if np.ptp(y) > 0 else 0.5
-    return (x.min() - hx, x.max() + hx, y.min() - hy, y.max() + hy)
+def position_unit(nodes: pd.DataFrame) -> tuple[str, float]:
+    """The unit of a map's positions on its axes and the factor from metres to it.
+
+    Parameters
+    ----------
+    nodes
+        Node table of a map (``x_m``, ``y_m`` [m]).
+
+    Returns
+    -------
+    tuple of (str, float)
+        ``("µm", 1e6)`` when the lattice spans less than :data:`MM_EXTENT` along both axes
+        (an AFM map), ``("mm", 1e3)`` otherwise (the robot's maps).
+    """
+    span = max(float(np.ptp(nodes["x_m"].to_numpy(float))),
+               float(np.ptp(nodes["y_m"].to_numpy(float))))
+    return ("µm", UM) if span < MM_EXTENT else ("mm", MM)
 
 
-def _mark_lump(ax: Axes, lump: Mapping[str, tuple[float, float, float]] | None) -> None:
-    """Cross at the lump centre with its interval in x and y (mm)."""
+def _half_step(nodes: pd.DataFrame, scale: float) -> float:
+    """Half the lattice step in axis units (the half-width of a pixel)."""
+    for pos, index in (("x_m", "ix"), ("y_m", "iy")):
+        n = int(nodes[index].max())
+        if n > 0:
+            return 0.5 * float(np.ptp(nodes[pos].to_numpy(float))) * scale / n
+    return 0.5  # a single node: any pixel size
+
+
+def _extent(nodes: pd.DataFrame, scale: float) -> tuple[float, float, float, float]:
+    """imshow extent in axis units: one square pixel per node, a one-row map a strip."""
+    x, y = nodes["x_m"].to_numpy() * scale, nodes["y_m"].to_numpy() * scale
+    h = _half_step(nodes, scale)
+    return (x.min() - h, x.max() + h, y.min() - h, y.max() + h)
+
+
+def _mark_holes(ax: Axes, nodes: pd.DataFrame, scale: float) -> None:
+    """An 'x' at every node without a fitted point (``n_traces`` 0), white under black."""
+    if "n_traces" not in nodes:
+        return
+    holes = nodes[nodes["n_traces"].fillna(0).to_numpy() == 0]
+    if holes.empty:
+        return
+    x, y = holes["x_m"].to_numpy() * scale, holes["y_m"].to_numpy() * scale
+    ax.plot(x, y, "x", color="w", ms=7, mew=3.0, zorder=3)
+    ax.plot(x, y, "x", color="k", ms=6, mew=1.3, zorder=4, label=HOLE_LABEL)
+
+
+def _mark_lump(ax: Axes, lump: Mapping[str, tuple[float, float, float]] | None,
+               scale: float) -> None:
+    """Cross at the lump centre with its interval in x and y (axis units: ``scale`` per m)."""
     if not lump:
         return
     (cx, xlo, xhi), (cy, ylo, yhi) = lump["x_m"], lump["y_m"]
-    err = {"xerr": [[(cx - xlo) * MM], [(xhi - cx) * MM]],
-           "yerr": [[(cy - ylo) * MM], [(yhi - cy) * MM]], "fmt": "+"}
+    err = {"xerr": [[(cx - xlo) * scale], [(xhi - cx) * scale]],
+           "yerr": [[(cy - ylo) * scale], [(yhi - cy) * scale]], "fmt": "+"}
     # black under white: seen on a dark map and on a white one (and in the legend)
-    ax.errorbar([cx * MM], [cy * MM], color="k", ms=12, mew=3.5, capsize=5, capthick=3.5,
-                lw=3.0, label="lump centre (90 % interval)", **err)
-    ax.errorbar([cx * MM], [cy * MM], color="w", ms=10, mew=1.5, capsize=4, capthick=1.5,
-                lw=1.2, **err)
+    ax.errorbar([cx * scale], [cy * scale], color="k", ms=12, mew=3.5, capsize=5,
+                capthick=3.5, lw=3.0, label="lump centre (90 % interval)", **err)
+    ax.errorbar([cx * scale], [cy * scale], color="w", ms=10, mew=1.5, capsize=4,
+                capthick=1.5, lw=1.2, **err)
 
 
 def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None = None,
@@ -63,7 +114,8 @@ def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None =
                    threshold: float | None = None, truth: tuple[float, float] | None = None,
                    title: str | None = None,
                    limits: tuple[float, float] | None = None) -> Figure:
-    """One map: ``kind`` is ``mean``, ``uncertainty``, ``probability`` or ``lsq``.
+    """One map: ``kind`` is ``mean``, ``uncertainty``, ``probability`` or ``lsq``; nodes
+    without a fitted point are marked ``x`` (:data:`HOLE_LABEL` in the legend).
 
     Parameters
     ----------
@@ -92,26 +144,28 @@ def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None =
     kw = {"vmin": 0.0, "vmax": 1.0} if kind == "probability" else {}
     if limits is not None:
         kw = {"vmin": limits[0], "vmax": limits[1]}
-    im = ax.imshow(z, origin="lower", extent=_extent(nodes), cmap=cmap, interpolation="nearest",
-                   aspect="equal", **kw)
+    unit, scale = position_unit(nodes)
+    im = ax.imshow(z, origin="lower", extent=_extent(nodes, scale), cmap=cmap,
+                   interpolation="nearest", aspect="equal", **kw)
     fig.colorbar(im, ax=ax, label=label, shrink=0.9)
     if kind == "probability" and np.isfinite(z).any() and np.nanmax(z) >= 0.5:
-        xs = np.unique(nodes["x_m"]) * MM
-        ys = np.unique(nodes["y_m"]) * MM
+        xs = np.unique(nodes["x_m"]) * scale
+        ys = np.unique(nodes["y_m"]) * scale
         if xs.size > 1 and ys.size > 1:
             ax.contour(xs, ys, z, levels=[0.5, 0.9], colors=["0.3", "k"], linewidths=[0.8, 1.2])
             for colour, width, text in (("0.3", 0.8, "chance 0.5"), ("k", 1.2, "chance 0.9")):
                 ax.plot([], [], color=colour, lw=width, label=f"contour: {text}")
-    _mark_lump(ax, lump)
+    _mark_holes(ax, nodes, scale)
+    _mark_lump(ax, lump, scale)
     if truth is not None:
-        ax.plot([truth[0] * MM], [truth[1] * MM], "o", mfc="none", mec=METHOD_COLORS["truth"],
+        ax.plot([truth[0] * scale], [truth[1] * scale], "o", mfc="none", mec=METHOD_COLORS["truth"],
                 ms=12, mew=2, label="true centre")
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
     t = title or default_title
     if kind == "probability" and threshold is not None:
         t = f"chance that E > {threshold:g} × the map median"
-    ax.set(xlabel="x [mm]", ylabel="y [mm]", title=t)
+    ax.set(xlabel=f"x [{unit}]", ylabel=f"y [{unit}]", title=t)
     return fig
 
 
@@ -122,7 +176,8 @@ def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None
     a row given is titled as the lump's).
 
     Posterior mean with its 90 % band, each point's own posterior (median, interval), the
-    naive least-squares value and the background level.
+    naive least-squares value, the background level and, along the bottom, an ``x`` at
+    every node without a fitted point (:data:`HOLE_LABEL`).
 
     Parameters
     ----------
@@ -141,19 +196,20 @@ def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None
         what = "the largest E"  # no lump to go through (e.g. an AFM map, lump model off)
     r = nodes[nodes["iy"] == row].sort_values("ix")
     fig, ax = fig_ax(ax, (7.0, 4.0))
-    x = r["x_m"].to_numpy() * MM
+    unit, scale = position_unit(nodes)
+    x = r["x_m"].to_numpy() * scale
     c = METHOD_COLORS["bayes"]
     ax.fill_between(x, r["E_lo_pa"] * KPA, r["E_hi_pa"] * KPA, color=c, alpha=0.25, lw=0,
                     label="map: 90 % band")
     ax.plot(x, r["E_mean_pa"] * KPA, color=c, lw=1.8, label="map: posterior mean")
     pts = r[np.isfinite(r["E_point_pa"])]
     if len(pts):
-        ax.errorbar(pts["x_m"] * MM, pts["E_point_pa"] * KPA,
+        ax.errorbar(pts["x_m"] * scale, pts["E_point_pa"] * KPA,
                     yerr=[(pts["E_point_pa"] - pts["E_point_lo_pa"]) * KPA,
                           (pts["E_point_hi_pa"] - pts["E_point_pa"]) * KPA],
                     fmt="o", ms=3, color="0.25", capsize=2, lw=0.8,
                     label="each point's own posterior")
-    ax.plot(r["x_m"] * MM, r["E_lsq_pa"] * KPA, "x", color=METHOD_COLORS["lsq"], ms=5,
+    ax.plot(r["x_m"] * scale, r["E_lsq_pa"] * KPA, "x", color=METHOD_COLORS["lsq"], ms=5,
             label="naive least squares")
     if background is not None:
         med, lo, hi = background
@@ -162,9 +218,14 @@ def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None
     if truth is not None:
         ax.plot(x, np.asarray(truth) * KPA, color=METHOD_COLORS["truth"], lw=1.2,
                 label="true apparent E")
-    y_mm = float(r["y_m"].iloc[0]) * MM
-    ax.set(xlabel="x [mm]", ylabel="E [kPa]",
-           title=title or f"profile through {what} (row y = {y_mm:.3g} mm)")
+    if "n_traces" in r:
+        holes = r[r["n_traces"].fillna(0).to_numpy() == 0]
+        if len(holes):  # along the bottom edge, whatever the E scale
+            ax.plot(holes["x_m"] * scale, np.full(len(holes), 0.03), "x", color="k", ms=6,
+                    mew=1.3, transform=ax.get_xaxis_transform(), label=HOLE_LABEL)
+    y_row = float(r["y_m"].iloc[0]) * scale
+    ax.set(xlabel=f"x [{unit}]", ylabel="E [kPa]",
+           title=title or f"profile through {what} (row y = {y_row:.3g} {unit})")
     ax.legend(fontsize=7, loc="upper left")
     return fig
 

@@ -113,3 +113,15 @@ def test_pad_maps_every_data_node_to_its_place():
     assert pad(lat, 0)[0] == lat
     with pytest.raises(InputError):
         pad(lat, -1)
+
+
+def test_a_line_scan_is_a_lattice_of_one_row_or_column_only_when_asked():
+    x = 3.0 + np.arange(6) * STEP
+    lat, node = lattice_from_positions(x, np.full(6, 2.0), line=True)
+    assert (lat.nx, lat.ny) == (6, 1) and lat.step == pytest.approx(STEP)
+    np.testing.assert_array_equal(node, np.arange(6))
+    lat, node = lattice_from_positions(np.full(6, 2.0), x[::-1], line=True)
+    assert (lat.nx, lat.ny) == (1, 6)
+    np.testing.assert_array_equal(node, np.arange(6)[::-1])
+    with pytest.raises(InputError, match="single y value"):
+        lattice_from_positions(x, np.full(6, 2.0))

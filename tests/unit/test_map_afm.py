@@ -1,6 +1,8 @@
 """``palpbayes map`` of a real AFM force map (issue 26, "Real force maps"): the curves of the
 file become the map's rows with the file's positions, grid nodes without a curve and curves
-that fail stay holes, and the map of afmformats' extracted 2 × 2 JPK map runs end to end.
+that fail stay holes, the map of afmformats' extracted 2 × 2 JPK map runs end to end, and so
+does the QI line with a lower contact threshold (--f-unc); the figures read in µm with the
+holes marked.
 
 The files are read from ``../shared/data/afm-files`` (see its README), never copied here."""
 
@@ -112,27 +114,83 @@ def test_a_curve_that_fails_and_a_hole_are_rows_with_their_error(afm_files):
     assert hole["error"].startswith(NO_CURVE) and np.isnan(hole["logE_mean"])
 
 
-def test_a_line_of_qi_curves_fails_saying_why_and_what_to_do(afm_files, tmp_path, capsys):
-    """QI's 4 curves lie on one row of its 128 × 128 grid: no 2-D lattice, no map."""
+def test_qi_curves_fail_by_default_saying_why_and_which_option(afm_files, tmp_path, capsys):
+    """QI's 4 curves indent ~35 nm: at the default F_unc (6 sd of the baseline, 74 pN) only
+    2-3 samples lie past the onset, every fit fails, and the map stops with status 2 naming
+    the threshold and --f-unc (nothing written)."""
     rc = main(["map", str(afm_files / QI), "--tip", "paraboloid", "--radius", "5e-6",
                "--out", str(tmp_path / "qi"), "--scheduler", "synchronous", "--no-progress"])
     err = capsys.readouterr().err
-    assert rc != 0 and QI in err
-    assert all(s in err for s in ("single y value", "2 rows and 2 columns", "palpbayes fit"))
+    assert rc == 2 and QI in err
+    assert all(s in err for s in ("got 0 of 4", "sample(s) in contact", "F_unc = 74 pN",
+                                  "lower --f-unc")), err
     assert not (tmp_path / "qi").exists()
 
+
+def _map_cli(path, out, *extra: str) -> tuple:
+    """``palpbayes map PATH`` with PyFMRheo's tip and nu, in this process: (out, stdout)."""
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rc = main(["map", str(path), "--tip", "paraboloid", "--radius", "5e-6", "--nu", "0.5",
+                   *extra, "--out", str(out), "--scheduler", "synchronous", "--no-progress"])
+    assert rc == 0
+    return out, buf.getvalue()
+
+
+@pytest.fixture(scope="module")
+def mapped_qi(afm_files, tmp_path_factory):
+    """The QI line mapped with F_unc = 20 pN (about 1.7 sd of its baseline noise, 11-12 pN)."""
+    return _map_cli(afm_files / QI, tmp_path_factory.mktemp("afm") / "qi", "--f-unc", "2e-11")
+
+
+def test_the_qi_line_maps_end_to_end_with_a_lower_contact_threshold(mapped_qi):
+    out, text = mapped_qi
+    for name in ("map.csv", "points.csv", "map.nc", "map.png", "map-report.pdf"):
+        assert (out / name).stat().st_size > 0, name
+    points = pd.read_csv(out / "points.csv", keep_default_na=False, na_values=[""])
+    assert len(points) == 4 and points["error"].isna().all()
+    # a soft specimen: kPa, each point's interval wide (a few samples in contact)
+    assert ((points["E_median_pa"] > 500) & (points["E_median_pa"] < 5e3)).all()
+    assert (points["E_hi_pa"] / points["E_lo_pa"] > 1.5).all()
+    assert (points["depth_m"] < 100e-9).all()
+    nodes = pd.read_csv(out / "map.csv")
+    assert len(nodes) == 4 and set(nodes["iy"]) == {0} and (nodes["n_traces"] == 1).all()
+    assert "mapped 4 of 4 palpations on a 4 x 1 lattice (step 78.1 nm)" in text
+    assert "the palpations lie on one line (4 × 1 nodes)" in text
+
+
+def test_the_qi_lines_figure_is_a_strip_in_micrometres(mapped_qi):
+    from palpbayes.plots.maps import plot_map
+
+    nodes = pd.read_csv(mapped_qi[0] / "map.csv")
+    fig = plot_map(nodes)
+    images = [ax for ax in fig.axes if ax.images]
+    assert len(images) == 3
+    for ax in images:
+        assert ax.images[0].get_array().shape == (1, 4)
+        assert (ax.get_xlabel(), ax.get_ylabel()) == ("x [µm]", "y [µm]")
+
+
+def test_the_2x2_maps_figure_reads_in_micrometres_and_marks_its_96_holes(mapped_2x2):
+    from palpbayes.plots.maps import HOLE_LABEL, plot_map_panel
+
+    nodes = pd.read_csv(mapped_2x2[0] / "map.csv")
+    ax = plot_map_panel(nodes, "mean").axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("x [µm]", "y [µm]")
+    (holes,) = [ln for ln in ax.get_lines() if ln.get_label() == HOLE_LABEL]
+    x, y = holes.get_data()
+    assert len(x) == 96
+    corners = {(0, 0), (9, 0), (9, 9), (0, 9)}
+    step = 60.0  # µm
+    x0, y0 = nodes["x_m"].min() * 1e6, nodes["y_m"].min() * 1e6
+    got = {(round((a - x0) / step), round((b - y0) / step)) for a, b in zip(x, y, strict=True)}
+    assert len(got) == 96 and not got & corners
+    assert HOLE_LABEL in [t.get_text() for t in ax.get_legend().get_texts()]
 
 
 @pytest.fixture(scope="module")
 def mapped_2x2(afm_files, tmp_path_factory):
-    out = tmp_path_factory.mktemp("afm") / "map2x2"
-    buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        rc = main(["map", str(afm_files / MAP2X2), "--tip", "paraboloid", "--radius", "5e-6",
-                   "--nu", "0.5", "--out", str(out), "--scheduler", "synchronous",
-                   "--no-progress"])
-    assert rc == 0
-    return out, buf.getvalue()
+    return _map_cli(afm_files / MAP2X2, tmp_path_factory.mktemp("afm") / "map2x2")
 
 
 def test_the_2x2_map_writes_its_files_with_holes_and_no_lump(mapped_2x2):
@@ -205,3 +263,52 @@ def test_the_tip_is_required_for_an_afm_map_and_refused_for_a_manifest(afm_files
                "--out", str(tmp_path / "b")])
     err = capsys.readouterr().err
     assert rc != 0 and "--tip, --thickness: for an AFM force map" in err
+
+
+def test_fit_takes_the_calibration_an_afm_file_lacks_with_maps_options(afm_files, tmp_path):
+    """``fit`` and ``replay`` read the Workshop zip with --spring-constant/--sensitivity/
+    --sample-rate, defined once (cli.options.add_afm_meta_options) for them and ``map``."""
+    from palpbayes.cli import build_parser
+    from palpbayes.cli.options import traces_from_args
+
+    parser = build_parser()
+    flags = ["--spring-constant", "20", "--sensitivity", "1e-8", "--sample-rate", "1000"]
+    args = parser.parse_args(["fit", str(afm_files / WORKSHOP), "--curve", "3", "--tip",
+                              "paraboloid", "--radius", "5e-6", *flags, "--out", "x"])
+    (trace,) = traces_from_args(args)
+    (want,) = read_afm(afm_files / WORKSHOP, tip=TIP, curves=[3],
+                       meta_override={**WORKSHOP_META, "rate approach": 1000.0})
+    np.testing.assert_array_equal(trace.force, want.force)
+    np.testing.assert_array_equal(trace.z, want.z)
+    helps = {}
+    for command in ("fit", "replay", "map"):
+        sub = parser._subparsers._group_actions[0].choices[command]
+        helps[command] = {a.option_strings[0]: a.help for a in sub._actions
+                          if a.option_strings and a.option_strings[0] in flags[::2]}
+    assert helps["fit"] == helps["replay"] == helps["map"] and len(helps["fit"]) == 3
+    with pytest.raises(DataFileError, match="spring-constant"):  # the file lacks k
+        traces_from_args(parser.parse_args(["fit", str(afm_files / WORKSHOP), "--tip",
+                                            "paraboloid", "--radius", "5e-6", "--out", "x"]))
+
+
+def test_fit_of_a_workshop_curve_runs_and_the_options_are_refused_elsewhere(
+        afm_files, tmp_path, capsys):
+    out = tmp_path / "ws"
+    with contextlib.redirect_stdout(io.StringIO()):
+        rc = main(["fit", str(afm_files / WORKSHOP), "--curve", "3", "--tip", "paraboloid",
+                   "--radius", "5e-6", "--nu", "0.5", "--engine", "exact", "--half-space",
+                   "--no-model-form", "--spring-constant", "20", "--sensitivity", "1e-8",
+                   "--sample-rate", "1000", "--workers", "1", "--out", str(out),
+                   "--no-progress"])
+    assert rc == 0
+    row = pd.read_csv(out / "summary.csv").iloc[0]
+    assert 300e3 < row["E_pa"] < 600e3  # the map's 431 kPa (docs/reference.md), one curve
+    table = tmp_path / "t.csv"
+    pd.DataFrame({"time_s": [0.0, 1.0], "z_m": [0.0, -1e-3], "force_n": [0.0, 1.0]}).to_csv(
+        table, index=False)
+    rc = main(["fit", str(table), "--tip", "sphere", "--radius", "0.01", "--sensitivity",
+               "1e-8", "--out", str(tmp_path / "t")])
+    assert rc == 2 and "--sensitivity apply to AFM files only" in capsys.readouterr().err
+    rc = main(["fit", str(afm_files / WORKSHOP), "--tip", "paraboloid", "--radius", "5e-6",
+               "--spring-constant", "-1", "--out", str(tmp_path / "n")])
+    assert rc == 2 and "--spring-constant -1.0 must be a positive" in capsys.readouterr().err

@@ -1,13 +1,15 @@
 """map.png as a reader sees it: titles in plain words, contours and the lump centre in the
-legend, the centre's marker drawn in black under white (visible on a white panel)."""
+legend, the centre's marker drawn in black under white (visible on a white panel), positions
+in µm on an AFM map and in mm on the robot's, holes marked, a one-row map drawn."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
 from matplotlib.colors import to_rgba
 
-from palpbayes.plots.maps import plot_map, plot_map_panel
+from palpbayes.plots.maps import HOLE_LABEL, plot_map, plot_map_panel, plot_profile, position_unit
 
 
 def _nodes(n=9, step=3e-3):
@@ -47,3 +49,75 @@ def test_contours_and_the_lump_centre_are_in_the_legend_and_visible_on_white():
     assert len(bars) == 1 and to_rgba(bars[0].lines[0].get_color()) == to_rgba("k")
     others = [c for c in ax.containers if c is not bars[0]]
     assert any(to_rgba(c.lines[0].get_color()) == to_rgba("w") for c in others)
+
+
+def _afm_nodes(nx=4, ny=4, step=5e-6, holes=((1, 2), (3, 0))):
+    """An AFM-sized map (5 µm steps) with nodes that have no fitted point."""
+    nodes = _nodes(n=max(nx, ny), step=step)
+    nodes = nodes[(nodes["ix"] < nx) & (nodes["iy"] < ny)].reset_index(drop=True)
+    nodes["n_traces"] = 1
+    for i, j in holes:
+        at = (nodes["ix"] == i) & (nodes["iy"] == j)
+        nodes.loc[at, "n_traces"] = 0
+        nodes.loc[at, ["E_point_pa", "E_point_lo_pa", "E_point_hi_pa", "E_lsq_pa"]] = np.nan
+    return nodes
+
+
+def _hole_markers(ax):
+    return [ln for ln in ax.get_lines() if ln.get_label() == HOLE_LABEL]
+
+
+def test_an_afm_map_reads_in_micrometres_and_a_robot_map_in_millimetres():
+    fig = plot_map(_afm_nodes(), background=(50e3, 49e3, 51e3))
+    panels = [ax for ax in fig.axes if ax.get_xlabel().startswith("x [")]
+    assert len(panels) == 4  # three maps and the profile
+    assert {ax.get_xlabel() for ax in panels} == {"x [µm]"}
+    assert all(ax.get_ylabel() == "y [µm]" for ax in panels if ax.images)
+    profile = next(ax for ax in fig.axes if ax.get_title().startswith("profile"))
+    assert profile.get_title().endswith(" µm)")
+    # the image spans the lattice in µm: 4 nodes of 5 µm, each pixel centred on its node
+    img = next(ax for ax in fig.axes if ax.images).images[0]
+    np.testing.assert_allclose(img.get_extent(), [-2.5, 17.5, -2.5, 17.5])
+    robot = plot_map_panel(_nodes(), "mean").axes[0]  # 9 × 9 nodes of 3 mm
+    assert (robot.get_xlabel(), robot.get_ylabel()) == ("x [mm]", "y [mm]")
+    assert position_unit(_nodes()) == ("mm", 1e3)
+
+
+def test_the_lump_cross_is_drawn_in_the_axis_unit():
+    lump_um = {k: tuple(v * 1e-3 for v in lo_hi) for k, lo_hi in LUMP.items()}  # 12 µm
+    ax = plot_map_panel(_afm_nodes(), "mean", lump=lump_um).axes[0]
+    bars = [c for c in ax.containers if c.get_label() == "lump centre (90 % interval)"]
+    x, y = bars[0].lines[0].get_data()
+    assert (float(x[0]), float(y[0])) == pytest.approx((12.0, 12.0))
+
+
+def test_holes_are_marked_in_every_map_panel_and_named_in_the_legend():
+    nodes = _afm_nodes()
+    for kind in ("mean", "uncertainty", "probability", "lsq"):
+        ax = plot_map_panel(nodes, kind).axes[0]
+        (marks,) = _hole_markers(ax)
+        assert marks.get_marker() == "x" and to_rgba(marks.get_color()) == to_rgba("k")
+        got = sorted(zip(*marks.get_data(), strict=True))
+        assert got == [(pytest.approx(5.0), pytest.approx(10.0)),
+                       (pytest.approx(15.0), pytest.approx(0.0))], kind
+        assert HOLE_LABEL in [t.get_text() for t in ax.get_legend().get_texts()]
+    # a map without holes draws none
+    full = _afm_nodes(holes=())
+    assert not _hole_markers(plot_map_panel(full, "mean").axes[0])
+
+
+def test_the_profile_marks_the_holes_of_its_row():
+    nodes = _afm_nodes()
+    ax = plot_profile(nodes, row=2).axes[0]
+    (marks,) = _hole_markers(ax)
+    np.testing.assert_allclose(marks.get_data()[0], [5.0])
+    assert not _hole_markers(plot_profile(nodes, row=1).axes[0])
+
+
+def test_a_one_row_map_is_a_strip_of_square_pixels():
+    nodes = _afm_nodes(nx=4, ny=1, step=78e-9, holes=((2, 0),))
+    ax = plot_map_panel(nodes, "mean").axes[0]
+    assert ax.images[0].get_array().shape == (1, 4)
+    x0, x1, y0, y1 = ax.images[0].get_extent()
+    assert (x1 - x0, y1 - y0) == (pytest.approx(4 * 0.078), pytest.approx(0.078))
+    assert ax.get_xlabel() == "x [µm]" and len(_hole_markers(ax)) == 1
