@@ -7,11 +7,11 @@ written at its time; ``--fast``: as fast as the pipe takes them) into the stdin 
 thread.  The latency of an update is the time from writing the last sample of its chunk to
 reading the printed update back from the pipe: the estimator, the formatting, and both pipes,
 as the robot sees it.  A sample that reaches the max force or max depth ends its chunk, so the
-stop lines of those runs are timed from that very sample.  Printed: median and max over the updates in contact of a run that
-never stops (every chunk of the trace) and of one run per stopping reason, the latency of
-each stop line, the ratio to the 1.25 ms sample interval (the target: <= 10 ms, 8 samples,
-at 800 Hz on 2 cores), and the estimator's own update time on the same chunks in this
-process, which is most of it.
+stop lines of those runs are timed from that very sample.  Printed: median and max over the
+updates in contact of a run that never stops (every chunk of the trace) and of one run per
+stopping reason, the latency of each stop line, the ratio to the 1.25 ms sample interval (the
+target: <= 10 ms, 8 samples, at 800 Hz on 2 cores), and the estimator's own update time on
+the same chunks in this process, which is most of it.
 """
 
 from __future__ import annotations
