@@ -5,7 +5,6 @@ an unknown base, an unknown thickness, and emcee against the exact engine on the
 from __future__ import annotations
 
 import warnings
-from dataclasses import astuple, replace
 
 import numpy as np
 import pytest
@@ -13,8 +12,7 @@ import pytest
 from palpbayes.bayes import BudgetSpec, PriorSpec, SamplerSettings, fit_bayes
 from palpbayes.bayes.layer_fit import layer_coordinates
 from palpbayes.bayes.layer_likelihood import LayerLikelihood, base_swap_move
-from palpbayes.bayes.exact import ExactPosterior, exact_posterior, warm_start
-from palpbayes.bayes.layers import layer_posterior, log_evidence
+from palpbayes.bayes.layers import layer_posterior
 from palpbayes.bayes.likelihood import TraceLikelihood
 from palpbayes.contact import Tip
 from palpbayes.errors import ConvergenceWarning, InputError
@@ -141,6 +139,7 @@ def test_layer_likelihood_equals_each_concrete_model():
     for model in (ModelSpec(tip, nu=NU, thickness=h),
                   ModelSpec(tip, nu=NU, thickness_range=(4e-3, 2.0))):
         data = prepare(tr, model.half_space())
+        from dataclasses import replace
         data = replace(data, model=model)
         prior = PriorSpec().for_trace(data, "gaussian")
         post = layer_posterior(data, prior)
@@ -228,23 +227,3 @@ def test_emcee_and_exact_agree_with_an_unknown_thickness():
         assert em[col] == pytest.approx(ex[col], rel=0.05), col
     lo, hi = central(em_res.draws("E"))
     assert lo <= E_TRUE <= hi
-
-
-def test_a_warm_started_component_is_the_cold_one():
-    """exact.warm_start: a thickness component refined from the half-space fit's basin and a
-    skeleton has the evidence and the E* and surface summaries of one refined from the coarse
-    grid (the same refinement rule), from fewer surface nodes."""
-    tip, h, depth = CASES["paraboloid 30 mm"]
-    tr = simulate_trace(E_TRUE, tip, nu=NU, thickness=h, depth=depth, base="bonded", rng=3)
-    model = ModelSpec(tip, nu=NU, thickness=h)
-    data = prepare(tr, model.half_space())
-    prior = PriorSpec().for_trace(data, "gaussian")
-    half = exact_posterior(data, prior)
-    for hh in (0.5 * h, h, 4 * h):
-        d = replace(data, model=model.variant(thickness=hh, base="bonded"))
-        cold, warm = exact_posterior(d, prior), exact_posterior(d, prior, warm_start(half))
-        assert warm.n_nodes < cold.n_nodes
-        assert log_evidence(warm) == pytest.approx(log_evidence(cold), abs=2e-3)
-        for get in (ExactPosterior.estar_summary, ExactPosterior.z_summary):
-            c, w = astuple(get(cold)), astuple(get(warm))
-            np.testing.assert_allclose(w, c, rtol=5e-4, atol=0)  # sd: 1.4e-4
