@@ -58,7 +58,7 @@ from .priors import TracePrior
 __all__ = ["ExactPosterior", "exact_posterior", "refine_grid", "cell_widths", "phi_grid",
            "node_log_mass", "sampled_coordinates",
            "log_marginal_phi", "COARSE_NODES",
-           "MAX_STEP", "KEEP", "PHI_NODES", "warm_start", "WARM_SKELETON", "WARM_WINDOW"]
+           "MAX_STEP", "KEEP", "PHI_NODES"]
 
 #: Nodes of the first, uniform grid over the surface prior's support.
 COARSE_NODES = 129
@@ -73,9 +73,6 @@ PHI_NODES = 41
 PROPOSALS = 8
 #: Most surface nodes in all (refinement stops there and says so).
 MAX_NODES = 6000
-#: :func:`warm_start`: uniform skeleton nodes, and the window below the best log density of the
-#: fitted model whose nodes are kept.
-WARM_SKELETON, WARM_WINDOW = 17, KEEP + 6.0
 
 
 def refine_grid(lo: float, hi: float, evaluate, coarse: int = COARSE_NODES,
@@ -344,18 +341,8 @@ def _phi_nodes(values: np.ndarray, logp_phi: np.ndarray, bounds) -> np.ndarray:
     return np.linspace(lo, hi, k)
 
 
-def exact_posterior(data: FitData, prior: TracePrior,
-                    start: np.ndarray | None = None) -> ExactPosterior:
+def exact_posterior(data: FitData, prior: TracePrior) -> ExactPosterior:
     """The exact posterior of one prepared trace (module docstring).
-
-    Parameters
-    ----------
-    data, prior
-        The prepared trace and its priors.
-    start
-        [m] Surface nodes to refine from instead of the :data:`COARSE_NODES` uniform ones,
-        sorted, within the prior's support, its ends included (:func:`warm_start`: a model
-        close to one already fitted, as the layer's thickness components are).
 
     Raises
     ------
@@ -385,8 +372,7 @@ def exact_posterior(data: FitData, prior: TracePrior,
         return log_marginal_phi(lp, phi)
 
     lo, hi = prior.z_bounds
-    nodes, _, complete = refine_grid(
-        lo, hi, evaluate, start=None if start is None else (start, evaluate(start)))
+    nodes, _, complete = refine_grid(lo, hi, evaluate)
     g = grams[0]
     for other in grams[1:]:
         g = g.concat(other)
@@ -405,21 +391,6 @@ def exact_posterior(data: FitData, prior: TracePrior,
     return ExactPosterior(z=g.z, phi=phi, post=post, log_mass=node_log_mass(post.logp, g.z, phi),
                           complete=complete,
                           prior=prior)
-
-
-def warm_start(post: ExactPosterior, skeleton: int = WARM_SKELETON,
-               window: float = WARM_WINDOW) -> np.ndarray:
-    """[m] Surface nodes to start a close model's grid from (``exact_posterior(start=...)``):
-    the nodes of ``post`` whose surface marginal lies within ``window`` of its best log
-    density, and ``skeleton`` uniform nodes over the prior's support (every 8th of the coarse
-    grid) that find a basin the close model has elsewhere.  The refinement then goes on by
-    the same rule (:func:`refine_grid`), so the grid it ends with resolves the close model as
-    the coarse start would, at about half the cost (the coarse grid's far nodes, each a pass
-    over the samples below it, are most of a fit's work)."""
-    lo, hi = post.prior.z_bounds
-    lz = logsumexp(post.log_mass, axis=1)
-    near = post.z[lz >= lz.max() - window]
-    return np.unique(np.concatenate([np.linspace(lo, hi, skeleton), near]))
 
 
 def node_log_mass(logp: np.ndarray, z: np.ndarray, phi: np.ndarray) -> np.ndarray:

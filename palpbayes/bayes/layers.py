@@ -47,7 +47,7 @@ from scipy.special import logsumexp
 from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
 from ..intervals import LEVEL
-from .exact import ExactPosterior, cell_widths, exact_posterior, refine_grid, warm_start
+from .exact import ExactPosterior, cell_widths, exact_posterior, refine_grid
 from .mixture import MixtureSummary
 from .priors import P_HALFSPACE, TracePrior
 
@@ -257,12 +257,8 @@ class LayerPosterior:
         return {key: v[order] for key, v in out.items()}
 
 
-def _component(data: FitData, prior: TracePrior, model: ModelSpec,
-               near: ExactPosterior | None = None) -> ExactPosterior:
-    """The exact posterior of one concrete model; started from :func:`warm_start` of ``near``
-    (a component already fitted) when given."""
-    return exact_posterior(replace(data, model=model), prior,
-                           None if near is None else warm_start(near))
+def _component(data: FitData, prior: TracePrior, model: ModelSpec) -> ExactPosterior:
+    return exact_posterior(replace(data, model=model), prior)
 
 
 def layer_posterior(data: FitData, prior: TracePrior) -> LayerPosterior:
@@ -288,13 +284,9 @@ def layer_posterior(data: FitData, prior: TracePrior) -> LayerPosterior:
         comps.append(LayerComponent(HALFSPACE, math.inf, (math.inf, math.inf), post,
                                     log_evidence(post), math.log(P_HALFSPACE)))
         log_p = {b: v + math.log1p(-P_HALFSPACE) for b, v in log_p.items()}
-    # every component after the first starts its surface grid from the one fitted nearest
-    # to it (exact.warm_start): the same refinement rule, half the passes over the samples
-    first = comps[0].post if comps else None
     for base in model.bases:
         if model.thickness is not None:
-            post = _component(data, prior, model.variant(base=base), comps[-1].post
-                              if comps else None)
+            post = _component(data, prior, model.variant(base=base))
             lh = math.log(model.thickness)
             comps.append(LayerComponent(base, model.thickness, (lh, lh), post,
                                         log_evidence(post), log_p[base]))
@@ -305,10 +297,7 @@ def layer_posterior(data: FitData, prior: TracePrior) -> LayerPosterior:
         def evaluate(nodes: np.ndarray, base=base, posts=posts) -> np.ndarray:
             out = np.empty(nodes.size)
             for i, lh in enumerate(nodes):
-                near = (posts[min(posts, key=lambda k, lh=lh: abs(k - lh))] if posts
-                        else first)
-                p = _component(data, prior, model.variant(thickness=math.exp(lh), base=base),
-                               near)
+                p = _component(data, prior, model.variant(thickness=math.exp(lh), base=base))
                 posts[float(lh)] = p
                 out[i] = log_evidence(p)
             return out
