@@ -17,6 +17,7 @@ import numpy as np
 from scipy.special import beta, gamma, hyp1f1, hyp2f1, loggamma
 
 from ..errors import InputError
+from .ting_rule import ting_rule
 
 __all__ = ["PowerLawKernel", "PronyKernel", "standard_linear_solid", "HereditaryContact",
            "hereditary_contact", "hereditary_force", "ramp_apparent_modulus",
@@ -37,9 +38,13 @@ def _rule(degree: int):
 
 
 _LINEAR, _CUBIC, _RHO_SERIES = _rule(2), _rule(4), 0.2
+# Taylor series in rho <= top: moments (rho^L/L! < 1e-14) and m0 = -expm1(-rho)/rho
+# = Σ (-rho)^n/(n+1)! (rho^L/(L+1)! < 1e-17, then exp(-rho) = 1 - rho·m0 to 1e-16); a row's
+# count is rounded up to one of _BUCKETS, so that the rows share few Horner loops.
 _REACH = np.array([(1e-14 * math.factorial(n)) ** (1 / n) for n in range(1, 13)])
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(12)
-_GL_X, _GL_W = (_GL_X + 1) / 2, _GL_W / 2
+_M0_REACH = np.array([(1e-17 * math.factorial(n + 1)) ** (1 / n) for n in range(1, 14)])
+_M0_SERIES = np.array([(-1.0) ** n / math.factorial(n + 1) for n in range(13)])
+_BUCKETS = np.array([4, 8, 13])
 
 
 def _number(name: str, value, unit: str = "", bound: str = "") -> float:
@@ -172,16 +177,20 @@ def _power_soe(alpha: float, dt_min: float, span: float) -> tuple[np.ndarray, np
 
 
 def _soe(kernel: Kernel, dt_min: float, span: float):
-    """(a0, a, x, alpha, k): E(t) ≈ a0 + Σ a_j·exp(-x_j·t), exact for Prony (alpha None); for
-    a power law valid on lags >= the shortest step, the last step using k·t^(-alpha)."""
+    """(a0, a, x, alpha, k): E(t) ≈ a0 + Σ a_j·exp(-x_j·t), the rates x [1/s] decreasing, exact
+    for Prony (alpha None); for a power law valid on lags >= the shortest step, the last step
+    using k·t^(-alpha)."""
     if isinstance(kernel, PronyKernel):
         E, tau = np.array(kernel.E), np.array(kernel.tau)
-        return kernel.E_inf, E[E > 0], 1.0 / tau[E > 0], None, 0.0
+        keep = np.flatnonzero(E > 0)
+        keep = keep[np.argsort(tau[keep], kind="stable")]
+        return kernel.E_inf, E[keep], 1.0 / tau[keep], None, 0.0
     if kernel.alpha == 0.0:
         return kernel.E0, np.zeros(0), np.zeros(0), None, 0.0
     k = kernel.E0 * kernel.t0**kernel.alpha
     w, x = _power_soe(kernel.alpha, dt_min, span)
-    return 0.0, k * w, x, kernel.alpha, k
+    order = np.argsort(-x, kind="stable")
+    return 0.0, k * w[order], x[order], kernel.alpha, k
 
 
 class _Steps:
@@ -192,9 +201,11 @@ class _Steps:
     f(sigma) = m·(d1 - d0)·d^(m-1) at lag fraction sigma (from the step's end) is a polynomial
     (m = 1, 2) or its cubic interpolant: relative error ~3e-4·z^4 for a relative change z of d
     (< 2e-9 for |z| <= 5 %; larger falls, e.g. noise near the contact start, use it too).
+    ``coef`` (steps, degree) and ``series`` (steps, 12) are also kept transposed, ``cT`` and
+    ``sT``, for the row-wise sums of :func:`_exp_steps`.
     """
 
-    def __init__(self, t: np.ndarray, d: np.ndarray, m: float):
+    def __init__(self, t: np.ndarray, d: np.ndarray, m: float, u: np.ndarray | None = None):
         self.m, self.dt = m, np.diff(t)
         d0, d1 = d[:-1], d[1:]
         jump, both = d1 - d0, (d0 > 0) & (d1 > 0)
@@ -208,52 +219,112 @@ class _Steps:
         self.ell[self.cin] = self.L1[self.cin]
         self.wa[self.cout] = self.L1[self.cout]
         self.ell[self.cout] = self.dt[self.cout] - self.wa[self.cout]  # contact: lags wa..+ell
-        self.u0, self.u1 = np.clip(d0, 0, None) ** m, np.clip(d1, 0, None) ** m
-        self.dd = np.clip(d1, 0, None) - np.clip(d0, 0, None)
+        dp = np.clip(d, 0, None)
+        u = dp**m if u is None else u
+        self.u0, self.u1, self.dd = u[:-1], u[1:], np.diff(dp)
         nodes, to_coef, taylor = _LINEAR if poly else _CUBIC
-        f = m * jump[:, None] * np.clip(d1[:, None] - jump[:, None] * nodes, 0, None) ** (m - 1)
+        if m == 1.0:
+            f = np.repeat(jump[:, None], nodes.size, axis=1)
+        elif m == 2.0:
+            f = 2 * jump[:, None] * np.clip(d1[:, None] - jump[:, None] * nodes, 0, None)
+        else:
+            f = m * jump[:, None] * np.clip(d1[:, None] - jump[:, None] * nodes, 0, None) ** (
+                m - 1)
         f[~both] = 0.0
         f[self.rise] = 0.0
         self.coef = f @ to_coef
         self.series = self.coef @ taylor
+        self.cT, self.sT = self.coef.T.copy(), self.series.T.copy()
+
+    def placed(self, pos: np.ndarray, slots: int) -> _Steps:
+        """The same steps in ``slots`` >= steps places, step i at place pos[i]; the empty places
+        are steps of the shortest length out of contact (nothing to integrate)."""
+        new = object.__new__(_Steps)
+        new.m = self.m
+        for name in ("dt", "L1", "wa", "ell", "u0", "u1", "dd", "cT", "sT"):
+            a = getattr(self, name)
+            out = np.full(a.shape[:-1] + (slots,), a.min() if name == "dt" else 0.0)
+            out[..., pos] = a
+            setattr(new, name, out)
+        for name in ("cin", "cout", "rise"):
+            setattr(new, name, pos[getattr(self, name)])
+        return new
 
 
-def _moments(rho, decay, m0, coef, series) -> np.ndarray:
-    """Σ_k coef[:, k]·∫_0^1 exp(-rho·s)·s^k ds for rho of shape (terms, steps); a row's Taylor
-    series stops where its largest rho needs no more terms (rho^L/L! < 1e-14)."""
-    out, top = np.empty_like(rho), rho.max(axis=1)
-    rec = np.flatnonzero(top > _RHO_SERIES)
-    if rec.size:
-        r, e, mk = (v if rec.size == len(top) else v[rec] for v in (rho, decay, m0))
-        acc = coef[:, 0] * mk
-        with np.errstate(over="ignore", invalid="ignore"):
-            for k in range(1, coef.shape[1]):
-                mk = (k * mk - e) / r
-                acc += coef[:, k] * mk
-        out[rec] = acc
-    ser = np.flatnonzero(rho.min(axis=1) <= _RHO_SERIES)
-    terms = np.searchsorted(_REACH, np.minimum(top[ser], _RHO_SERIES)) + 1
-    for n_terms in np.unique(terms):
-        rows = ser[terms == n_terms]
-        r = rho[rows]
-        acc = np.zeros_like(r) + series[:, n_terms - 1]
-        for j in range(n_terms - 2, -1, -1):
-            acc = acc * r + series[:, j]
-        out[rows] = np.where(r > _RHO_SERIES, out[rows], acc)
+def _series_rows(top: np.ndarray, first: int) -> list[tuple[int, int, int]]:
+    """(start, stop, terms) of the rows from ``first`` on, whose largest rho ``top`` decreases:
+    runs of equal Taylor length (both series, rounded up to :data:`_BUCKETS`; 13 where
+    top > 0.2, the rows whose small rho only use the series)."""
+    need = np.maximum(np.searchsorted(_REACH, np.minimum(top, _RHO_SERIES)) + 1,
+                      np.searchsorted(_M0_REACH, np.minimum(top, _RHO_SERIES)) + 1)
+    terms = _BUCKETS[np.searchsorted(_BUCKETS, need)]
+    terms[top > _RHO_SERIES] = _BUCKETS[-1]
+    out, j = [], first
+    while j < top.size:
+        stop = j + int(np.count_nonzero(terms[j:] == terms[j]))
+        out.append((j, stop, int(terms[j])))
+        j = stop
     return out
 
 
 def _exp_steps(x: np.ndarray, st: _Steps):
     """Decays exp(-x·dt) and increments ∫ exp(-x·(t_i+1 - s)) d[d^m] and ... d[d_+] over the
-    steps, shape (len(x), N - 1) (one array for both when m = 1)."""
+    steps, shape (len(x), steps) (one array for both when m = 1).
+
+    With rho = x·dt and m0 = (1 - exp(-rho))/rho: rows whose rho exceed 0.2 somewhere take
+    expm1 and the moments ∫_0^1 exp(-rho·s)·s^k ds by their upward recursion; rows (or the
+    samples of a row) with rho <= 0.2 take Taylor series in rho, as short as the row's largest
+    rho allows (:func:`_series_rows`), for m0, exp(-rho) = 1 - rho·m0 and the moments.  The rows
+    are taken by decreasing rate (then put back), so that each kind is a slice.
+    """
+    if x.size > 1 and np.any(np.diff(x) > 0):
+        order = np.argsort(-x, kind="stable")
+        back = np.argsort(order)
+        decay, iu, idd = _exp_steps(x[order], st)
+        return decay[back], (idd[back] if iu is idd else iu[back]), idd[back]
     rho = np.multiply.outer(x, st.dt)
-    m0 = np.expm1(-rho)
-    decay = 1.0 + m0  # exp(-rho) to 1e-16 absolute
-    m0 /= -rho
+    m0, decay = np.empty_like(rho), np.empty_like(rho)
+    n_rec = int(np.count_nonzero(x * st.dt.max() > _RHO_SERIES))  # some rho > 0.2
+    n_all = int(np.count_nonzero(x * st.dt.min() > _RHO_SERIES))  # every rho > 0.2
+    if n_rec:
+        r = rho[:n_rec]
+        np.expm1(-r, out=m0[:n_rec])
+        np.add(m0[:n_rec], 1.0, out=decay[:n_rec])  # exp(-rho) to 1e-16 absolute
+        m0[:n_rec] /= -r
+    groups = _series_rows(x * st.dt.max(), n_all)
+    for lo, hi, terms in groups:
+        if hi <= n_rec:
+            continue
+        lo = max(lo, n_rec)
+        r = rho[lo:hi]
+        acc = np.full_like(r, _M0_SERIES[terms - 1])
+        for c in _M0_SERIES[terms - 2::-1]:
+            acc *= r
+            acc += c
+        m0[lo:hi] = acc
+        np.subtract(1.0, r * acc, out=decay[lo:hi])
     idd, m = st.dd * m0, st.m
     iu = idd
     if m != 1.0:
-        iu = _moments(rho, decay, m0, st.coef, st.series)
+        iu = np.empty_like(rho)
+        if n_rec:
+            r, e, mk = rho[:n_rec], decay[:n_rec], m0[:n_rec]
+            acc = st.cT[0] * mk
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                for k in range(1, st.cT.shape[0]):
+                    mk = (k * mk - e) / r
+                    acc += st.cT[k] * mk
+            iu[:n_rec] = acc
+        for lo, hi, terms in groups:
+            r = rho[lo:hi]
+            acc = np.zeros_like(r) + st.sT[min(terms, 12) - 1]
+            for j in range(min(terms, 12) - 2, -1, -1):
+                acc *= r
+                acc += st.sT[j]
+            if lo < n_rec:  # rows with rho on both sides of 0.2
+                iu[lo:hi] = np.where(r > _RHO_SERIES, iu[lo:hi], acc)
+            else:
+                iu[lo:hi] = acc
         c = st.rise  # from the zero of the step's line: d1^m·1F1(1; m+1; -x·L1) - (at d0)
         iu[:, c] = st.u1[c] * hyp1f1(1.0, m + 1.0, -np.multiply.outer(x, st.L1[c]))
         iu[:, c] -= decay[:, c] * st.u0[c] * hyp1f1(1.0, m + 1.0, -np.multiply.outer(
@@ -285,32 +356,45 @@ def _power_steps(alpha: float, st: _Steps) -> tuple[np.ndarray, np.ndarray]:
     return lu, ld
 
 
-def _scan(decay: np.ndarray, inc: np.ndarray) -> np.ndarray:
-    """H[..., 0] = 0, H[..., i+1] = decay[:, i]·H[..., i] + inc[..., i] for ``inc`` of shape
-    (..., rows, n): a two-level blocked scan (O(sqrt n) Python steps, O(n) work per row, only
-    multiplications by decays <= 1, so nothing overflows)."""
-    rows, n = decay.shape
-    size = max(1, math.isqrt(n))
-    blocks, lead = -(-n // size), inc.shape[:-2]
+def _layout(n: int) -> tuple[int, int, np.ndarray]:
+    """Blocks of n steps: (size, blocks, place) with step i = b·size + s, s < size, kept at
+    place s·blocks + b of an array read as (size, blocks): a block's steps along axis 0."""
+    size = max(1, min(n, round(n ** (1 / 3))))
+    blocks = -(-n // size)
+    i = np.arange(n)
+    return size, blocks, (i % size) * blocks + i // size
 
-    def layout(a, fill):  # (..., rows, n) -> (size, ..., rows, blocks)
-        a = np.concatenate([a, np.full(a.shape[:-1] + (blocks * size - n,), fill)], axis=-1)
-        return np.ascontiguousarray(np.moveaxis(a.reshape(a.shape[:-1] + (blocks, size)), -1,
-                                                0))
 
-    dec, h = layout(decay, 1.0), layout(inc, 0.0)
-    prod = dec.copy()
+def _scan(decay: np.ndarray, h: np.ndarray) -> None:
+    """In place, for ``h`` of shape (..., rows, size, blocks) and ``decay`` (rows, size, blocks)
+    (the steps of :func:`_layout`): h[s, b] becomes the state after step (b, s) of
+    H <- decay·H + h from H = 0.  Blocked scan: a loop over the size steps of every block at
+    once, then the blocks' end states by the same scan one level down (O(n^(1/3)) Python
+    steps a level, O(n) work a row; only multiplications by decays <= 1: no overflow)."""
+    size, blocks = decay.shape[-2:]
+    tmp = np.empty(h.shape[:-2] + (blocks,))
     for s in range(1, size):
-        h[s] += dec[s] * h[s - 1]
-        prod[s] *= prod[s - 1]
-    start, carry = np.empty(h.shape[1:]), np.zeros(h.shape[1:-1])
-    for b in range(blocks):
-        start[..., b] = carry
-        carry = prod[-1, :, b] * carry + h[-1, ..., b]
-    h += prod.reshape((size,) + (1,) * len(lead) + (rows, blocks)) * start
-    out = np.zeros(lead + (rows, n + 1))
-    out[..., 1:] = np.moveaxis(h, 0, -1).reshape(lead + (rows, -1))[..., :n]
-    return out
+        np.multiply(decay[:, s], h[..., s - 1, :], out=tmp)
+        h[..., s, :] += tmp
+    if blocks == 1:
+        return
+    prod = np.cumprod(decay, axis=1)
+    start = np.zeros(h.shape[:-2] + (blocks,))  # state at each block's start
+    start[..., 1:] = _scan_ordered(prod[:, -1, :-1], h[..., -1, :-1])
+    h += prod * start[..., None, :]
+
+
+def _scan_ordered(decay: np.ndarray, inc: np.ndarray) -> np.ndarray:
+    """States after each step of H <- decay·H + inc from H = 0, for ``decay`` (rows, n) and
+    ``inc`` (..., rows, n) in time order (:func:`_scan` on a copy in its layout)."""
+    n = decay.shape[-1]
+    size, blocks, place = _layout(n)
+    slots = size * blocks
+    dec = np.ones(decay.shape[:-1] + (slots,))
+    h = np.zeros(inc.shape[:-1] + (slots,))
+    dec[..., place], h[..., place] = decay, inc
+    _scan(dec.reshape(dec.shape[:-1] + (size, blocks)), h.reshape(h.shape[:-1] + (size, blocks)))
+    return h[..., place]
 
 
 def _check(t, depth, C, m, kernel) -> tuple[np.ndarray, np.ndarray, float, float]:
@@ -393,35 +477,45 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     """
     t, d, C, m = _check(t, depth, C, m, kernel)
     dp = np.clip(d, 0.0, None)
-    u = dp**m
-    st = _Steps(t, d, m)
+    u = dp if m == 1.0 else dp**m
+    st = _Steps(t, d, m, u)
     soe = a0, a, x, alpha, k = _soe(kernel, float(st.dt.min()), float(t[-1] - t[0]))
-    Hu, Hd = np.zeros((x.size, t.size)), np.zeros((x.size, t.size))  # per term, d^m and d_+
-    fu, fd = np.zeros(t.size), np.zeros(t.size)  # ∫_0^t E(t - s) d[d^m], ∫_0^t E(t - s) d[d_+]
-    chunk = max(1, 250_000 // t.size)
-    for j in range(0, x.size, chunk):
-        sl = slice(j, j + chunk)
-        decay, iu, idd = _exp_steps(x[sl], st)
-        if iu is idd:
-            Hu[sl] = Hd[sl] = _scan(decay, idd)
-        else:
-            Hu[sl], Hd[sl] = _scan(decay, np.stack([iu, idd]))
-        if alpha is None:
-            fu, fd = fu + a[sl] @ Hu[sl], fd + a[sl] @ Hd[sl]
-        else:  # the sum holds for lags >= one step: history up to the previous sample
-            fu[1:] += a[sl] @ Hu[sl, 1:] - a[sl] @ iu
-            fd[1:] += a[sl] @ Hd[sl, 1:] - a[sl] @ idd
+    n, K = t.size - 1, x.size
+    runmax = np.maximum.accumulate(d)
+    ting = (d < runmax) & (runmax > 0)
+    rows = np.flatnonzero(ting)
+    # per term, in time order for Ting's rule: histories of d^m and d_+, and the step decays
+    Hu, Hd = np.zeros((n + 1, K)), np.zeros((n + 1, K))
+    decays = np.zeros((n, K))
+    fu, fd = np.zeros(n + 1), np.zeros(n + 1)  # ∫_0^t E(t - s) d[d^m], ∫_0^t E(t - s) d[d_+]
+    if K:
+        size, blocks, place = _layout(n)
+        sp, gu, gd = st.placed(place, size * blocks), 0.0, 0.0
+        chunk = max(1, 2_000_000 // (size * blocks))
+        for j in range(0, K, chunk):
+            sl = slice(j, j + chunk)
+            decay, iu, idd = _exp_steps(x[sl], sp)
+            if alpha is not None:  # the sum holds for lags >= one step: history to the
+                gu, gd = gu - a[sl] @ iu, gd - a[sl] @ idd  # previous sample
+            h = idd[None] if iu is idd else np.stack([iu, idd])
+            h, decay = (v.reshape(v.shape[:-1] + (size, blocks)) for v in (h, decay))
+            _scan(decay, h)
+            gu, gd = gu + a[sl] @ h[0].reshape(-1, size * blocks), gd + a[sl] @ h[-1].reshape(
+                -1, size * blocks)
+            if rows.size:
+                h = h.transpose(0, 3, 2, 1).reshape(h.shape[0], size * blocks, -1)
+                Hu[1:, sl], Hd[1:, sl] = h[0, :n], h[-1, :n]
+                decays[:, sl] = decay.transpose(2, 1, 0).reshape(size * blocks, -1)[:n]
+        fu[1:], fd[1:] = gu[place], gd[place]
     if alpha is None:
         fu, fd = fu + a0 * u, fd + a0 * dp
     else:
         lu, ld = _power_steps(alpha, st)
         fu[1:], fd[1:] = fu[1:] + k * lu, fd[1:] + k * ld
     force, t1 = C * fu, np.where(u > 0, t, np.nan)
-    runmax = np.maximum.accumulate(d)
-    ting = (d < runmax) & (runmax > 0)
-    if ting.any():
-        _ting(t, d, dp, u, st, soe, kernel, Hu, Hd, fd, np.flatnonzero(ting), force, t1, C)
-    if not x.size:  # elastic: exactly C·E·d^m
+    if rows.size:
+        ting_rule(t, d, dp, u, st.dt, m, soe, kernel, Hu, Hd, decays, fd, rows, force, t1, C)
+    if not K:  # elastic: exactly C·E·d^m
         force = C * a0 * u
     return HereditaryContact(np.maximum(force, 0.0), t1, ting)
 
@@ -430,45 +524,6 @@ def hereditary_force(t, depth, C: float, m: float, kernel: Kernel) -> np.ndarray
     """Contact force [N] at every sample: :func:`hereditary_contact` (equations, accuracy and
     parameters there)."""
     return hereditary_contact(t, depth, C, m, kernel).force
-
-
-def _ting(t, d, dp, u, st, soe, kernel, Hu, Hd, G, rows, force, t1, C) -> None:
-    """Ting's rule at the samples ``rows`` (depth below its running maximum), in place."""
-    a0, a, x = soe[:3]
-    kc = int(np.argmax(d > 0))  # first sample in contact (d[0] <= 0, so kc >= 1)
-    s0 = t[kc - 1] + st.dt[kc - 1] * -d[kc - 1] / (d[kc] - d[kc - 1])
-    kmax = np.maximum.accumulate(np.where(d == np.maximum.accumulate(d), np.arange(t.size), 0))
-
-    def hist(H, v, r, k):  # ∫_0^{t_k} E(t_r - s) dv(s): lag >= one step, the sum holds
-        return a0 * v[k] + a @ (np.exp(-np.multiply.outer(x, t[r] - t[k])) * H[:, k])
-
-    g, f, tt = G[rows], np.zeros(rows.size), np.full(rows.size, np.nan)
-    hi, lo = kmax[rows], np.full(rows.size, kc - 1)
-    grow = (g > 0) & (g - hist(Hd, dp, rows, hi) > 0)  # no root before t_max: t1 = t_max
-    act = np.flatnonzero((g > 0) & ~grow & (hi - lo > 1))
-    while act.size:  # keep ∫_{t_lo}^{t} E·d' ds > 0 >= ∫_{t_hi}^{t} E·d' ds
-        mid = (lo[act] + hi[act]) // 2
-        neg = g[act] - hist(Hd, dp, rows[act], mid) <= 0
-        hi[act[neg]], lo[act[~neg]] = mid[neg], mid[~neg]
-        act = act[hi[act] - lo[act] > 1]
-    i = np.flatnonzero(grow)
-    tt[i], f[i] = t[hi[i]], C * hist(Hu, u, rows[i], hi[i])
-    i = np.flatnonzero((g > 0) & ~grow)
-    if i.size:
-        r, k = rows[i], hi[i] - 1  # t1 on the step from sample k to k + 1
-        b = (d[k + 1] - d[k]) / st.dt[k]
-        w_lo, w_hi = t[r] - t[k + 1], t[r] - np.where(k + 1 == kc, s0, t[k])  # lags
-        A_hi = kernel.integral(w_hi)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            target = np.nan_to_num(A_hi - (g[i] - hist(Hd, dp, r, k)) / b, nan=-np.inf)
-        target = np.clip(target, kernel.integral(w_lo), A_hi)
-        w1 = np.where(b > 0, kernel._inverse_integral(target, w_lo, w_hi), w_lo)
-        q = np.log1p((w_hi - w1) / w1)  # ∫_{start}^{t1} E(t - s)·d/ds[d^m] ds in ln(lag)
-        w = w1[:, None] * np.exp(q[:, None] * _GL_X)
-        ds = np.clip(d[k, None] + b[:, None] * (t[r, None] - w - t[k, None]), 0.0, None)
-        part = (kernel(w) * w * st.m * ds ** (st.m - 1) * _GL_W).sum(axis=1) * b * q
-        tt[i], f[i] = t[r] - w1, C * (hist(Hu, u, r, k) + part)
-    force[rows], t1[rows] = f, tt
 
 
 def ramp_apparent_modulus(kernel: Kernel, speed, depth, m: float) -> np.ndarray:
