@@ -44,7 +44,12 @@ _LINEAR, _CUBIC, _RHO_SERIES = _rule(2), _rule(4), 0.2
 _REACH = np.array([(1e-14 * math.factorial(n)) ** (1 / n) for n in range(1, 13)])
 _M0_REACH = np.array([(1e-17 * math.factorial(n + 1)) ** (1 / n) for n in range(1, 14)])
 _M0_SERIES = np.array([(-1.0) ** n / math.factorial(n + 1) for n in range(13)])
-_BUCKETS = np.array([4, 8, 13])
+_BUCKETS = np.array([2, 3, 4, 6, 8, 10, 13])
+# At most _FEW terms whose rates x·(duration) <= 2·_SPREAD: the recursions as cumulative sums
+# scaled by exp(±x·t) (|x·t| <= _SPREAD from mid-record: no overflow), fewer Python steps.
+_FEW, _SPREAD = 4, 600.0
+#: Most numbers [-] in one block of terms' arrays (terms × steps): the memory per array.
+_CHUNK = 2_000_000
 
 
 def _number(name: str, value, unit: str = "", bound: str = "") -> float:
@@ -267,68 +272,75 @@ def _series_rows(top: np.ndarray, first: int) -> list[tuple[int, int, int]]:
     return out
 
 
-def _exp_steps(x: np.ndarray, st: _Steps):
+def _exp_steps(x: np.ndarray, st: _Steps, out: tuple[np.ndarray, np.ndarray] | None = None):
     """Decays exp(-x·dt) and increments ∫ exp(-x·(t_i+1 - s)) d[d^m] and ... d[d_+] over the
-    steps, shape (len(x), steps) (one array for both when m = 1).
+    steps, shape (len(x), steps) (one array for both when m = 1); written into ``out`` =
+    (decays, increments of shape (2 or 1 when m = 1, len(x), steps)) if given.
 
     With rho = x·dt and m0 = (1 - exp(-rho))/rho: rows whose rho exceed 0.2 somewhere take
     expm1 and the moments ∫_0^1 exp(-rho·s)·s^k ds by their upward recursion; rows (or the
     samples of a row) with rho <= 0.2 take Taylor series in rho, as short as the row's largest
     rho allows (:func:`_series_rows`), for m0, exp(-rho) = 1 - rho·m0 and the moments.  The rows
-    are taken by decreasing rate (then put back), so that each kind is a slice.
+    are taken by decreasing rate (then put back), so that each kind is a slice; the series are
+    evaluated in place (few large temporaries).
     """
     if x.size > 1 and np.any(np.diff(x) > 0):
         order = np.argsort(-x, kind="stable")
         back = np.argsort(order)
         decay, iu, idd = _exp_steps(x[order], st)
         return decay[back], (idd[back] if iu is idd else iu[back]), idd[back]
-    rho = np.multiply.outer(x, st.dt)
-    m0, decay = np.empty_like(rho), np.empty_like(rho)
+    m, shape = st.m, (x.size, st.dt.size)
+    if out is None:
+        out = np.empty(shape), np.empty((1 if m == 1.0 else 2,) + shape)
+    decay, iu, idd = out[0], out[1][0], out[1][-1]
+    rho, m0 = np.multiply.outer(x, st.dt), np.empty(shape)
     n_rec = int(np.count_nonzero(x * st.dt.max() > _RHO_SERIES))  # some rho > 0.2
     n_all = int(np.count_nonzero(x * st.dt.min() > _RHO_SERIES))  # every rho > 0.2
     if n_rec:
         r = rho[:n_rec]
-        np.expm1(-r, out=m0[:n_rec])
+        np.negative(r, out=m0[:n_rec])
+        np.expm1(m0[:n_rec], out=m0[:n_rec])
         np.add(m0[:n_rec], 1.0, out=decay[:n_rec])  # exp(-rho) to 1e-16 absolute
-        m0[:n_rec] /= -r
+        m0[:n_rec] /= r
+        np.negative(m0[:n_rec], out=m0[:n_rec])
     groups = _series_rows(x * st.dt.max(), n_all)
     for lo, hi, terms in groups:
         if hi <= n_rec:
             continue
         lo = max(lo, n_rec)
-        r = rho[lo:hi]
-        acc = np.full_like(r, _M0_SERIES[terms - 1])
+        r, acc, dec = rho[lo:hi], m0[lo:hi], decay[lo:hi]
+        acc.fill(_M0_SERIES[terms - 1])
         for c in _M0_SERIES[terms - 2::-1]:
             acc *= r
             acc += c
-        m0[lo:hi] = acc
-        np.subtract(1.0, r * acc, out=decay[lo:hi])
-    idd, m = st.dd * m0, st.m
-    iu = idd
+        np.multiply(r, acc, out=dec)
+        np.subtract(1.0, dec, out=dec)
     if m != 1.0:
-        iu = np.empty_like(rho)
         if n_rec:
-            r, e, mk = rho[:n_rec], decay[:n_rec], m0[:n_rec]
-            acc = st.cT[0] * mk
+            r, e, acc = rho[:n_rec], decay[:n_rec], iu[:n_rec]
+            mk, tmp = m0[:n_rec].copy(), np.empty_like(r)
+            np.multiply(st.cT[0], mk, out=acc)
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
                 for k in range(1, st.cT.shape[0]):
-                    mk = (k * mk - e) / r
-                    acc += st.cT[k] * mk
-            iu[:n_rec] = acc
+                    mk *= k
+                    mk -= e
+                    mk /= r
+                    np.multiply(st.cT[k], mk, out=tmp)
+                    acc += tmp
         for lo, hi, terms in groups:
-            r = rho[lo:hi]
-            acc = np.zeros_like(r) + st.sT[min(terms, 12) - 1]
-            for j in range(min(terms, 12) - 2, -1, -1):
+            r, n_terms = rho[lo:hi], min(terms, 12)
+            acc = iu[lo:hi] if lo >= n_rec else np.empty_like(r)
+            acc[...] = st.sT[n_terms - 1]
+            for j in range(n_terms - 2, -1, -1):
                 acc *= r
                 acc += st.sT[j]
             if lo < n_rec:  # rows with rho on both sides of 0.2
                 iu[lo:hi] = np.where(r > _RHO_SERIES, iu[lo:hi], acc)
-            else:
-                iu[lo:hi] = acc
         c = st.rise  # from the zero of the step's line: d1^m·1F1(1; m+1; -x·L1) - (at d0)
         iu[:, c] = st.u1[c] * hyp1f1(1.0, m + 1.0, -np.multiply.outer(x, st.L1[c]))
         iu[:, c] -= decay[:, c] * st.u0[c] * hyp1f1(1.0, m + 1.0, -np.multiply.outer(
             x, np.maximum(st.L1[c] - st.dt[c], 0.0)))
+    np.multiply(st.dd, m0, out=idd)
     for c in (st.cin, st.cout):
         if c.size:
             r = np.multiply.outer(x, st.ell[c])
@@ -372,13 +384,14 @@ def _scan(decay: np.ndarray, h: np.ndarray) -> None:
     once, then the blocks' end states by the same scan one level down (O(n^(1/3)) Python
     steps a level, O(n) work a row; only multiplications by decays <= 1: no overflow)."""
     size, blocks = decay.shape[-2:]
-    tmp = np.empty(h.shape[:-2] + (blocks,))
+    tmp, prod = np.empty(h.shape[:-2] + (blocks,)), np.empty_like(decay)
+    prod[:, 0] = decay[:, 0]  # products of the decays from each block's start
     for s in range(1, size):
         np.multiply(decay[:, s], h[..., s - 1, :], out=tmp)
         h[..., s, :] += tmp
+        np.multiply(prod[:, s - 1], decay[:, s], out=prod[:, s])
     if blocks == 1:
         return
-    prod = np.cumprod(decay, axis=1)
     start = np.zeros(h.shape[:-2] + (blocks,))  # state at each block's start
     start[..., 1:] = _scan_ordered(prod[:, -1, :-1], h[..., -1, :-1])
     h += prod * start[..., None, :]
@@ -485,27 +498,49 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     ting = (d < runmax) & (runmax > 0)
     rows = np.flatnonzero(ting)
     # per term, in time order for Ting's rule: histories of d^m and d_+, and the step decays
-    Hu, Hd = np.zeros((n + 1, K)), np.zeros((n + 1, K))
+    Hu = Hd = np.zeros((n + 1, K))
     decays = np.zeros((n, K))
     fu, fd = np.zeros(n + 1), np.zeros(n + 1)  # ∫_0^t E(t - s) d[d^m], ∫_0^t E(t - s) d[d_+]
-    if K:
+    if K and K <= _FEW and x[0] * (t[-1] - t[0]) <= 2 * _SPREAD:
+        # few terms, none decaying by over e^1200 on the record: the scan as one cumulative
+        # sum, H_i+1 = exp(-x·t'_i+1)·Σ_{j<=i} inc_j·exp(x·t'_j+1), t' = t - mid-record
+        decay, iu, idd = _exp_steps(x, st)
+        gu = gd = 0.0
+        if alpha is not None:
+            gu, gd = -(a @ iu), -(a @ idd)
+        h = idd[None] if iu is idd else np.stack([iu, idd])
+        grow = np.exp(np.multiply.outer(x, t[1:] - 0.5 * (t[0] + t[-1])))
+        h *= grow
+        np.cumsum(h, axis=-1, out=h)
+        h /= grow
+        fu[1:], fd[1:] = gu + a @ h[0], gd + a @ h[-1]
+        Hu, Hd = np.zeros((n + 1, K)), np.zeros((n + 1, K))
+        Hu[1:], Hd[1:], decays = h[0].T, h[-1].T, decay.T
+    elif K:
         size, blocks, place = _layout(n)
         sp, gu, gd = st.placed(place, size * blocks), 0.0, 0.0
-        chunk = max(1, 2_000_000 // (size * blocks))
+        if rows.size:  # time order = (blocks, size): one strided copy each, the first row 0
+            ordered = np.empty((2 if m != 1.0 else 1, size * blocks + 1, K))
+            ordered[:, 0] = 0.0
+            Hu, Hd = ordered[0, :n + 1], ordered[-1, :n + 1]
+            decays = np.empty((size * blocks, K))
+            by_block = ordered[:, 1:].reshape(-1, blocks, size, K), decays.reshape(blocks, size, K)
+        chunk = max(1, _CHUNK // (size * blocks))
         for j in range(0, K, chunk):
             sl = slice(j, j + chunk)
-            decay, iu, idd = _exp_steps(x[sl], sp)
+            rows_k = len(range(*sl.indices(K)))
+            decay, h = np.empty((rows_k, size * blocks)), np.empty(
+                (1 if m == 1.0 else 2, rows_k, size * blocks))
+            _, iu, idd = _exp_steps(x[sl], sp, (decay, h))
             if alpha is not None:  # the sum holds for lags >= one step: history to the
                 gu, gd = gu - a[sl] @ iu, gd - a[sl] @ idd  # previous sample
-            h = idd[None] if iu is idd else np.stack([iu, idd])
             h, decay = (v.reshape(v.shape[:-1] + (size, blocks)) for v in (h, decay))
             _scan(decay, h)
             gu, gd = gu + a[sl] @ h[0].reshape(-1, size * blocks), gd + a[sl] @ h[-1].reshape(
                 -1, size * blocks)
             if rows.size:
-                h = h.transpose(0, 3, 2, 1).reshape(h.shape[0], size * blocks, -1)
-                Hu[1:, sl], Hd[1:, sl] = h[0, :n], h[-1, :n]
-                decays[:, sl] = decay.transpose(2, 1, 0).reshape(size * blocks, -1)[:n]
+                by_block[0][..., sl] = h.transpose(0, 3, 2, 1)
+                by_block[1][..., sl] = decay.transpose(2, 1, 0)
         fu[1:], fd[1:] = gu[place], gd[place]
     if alpha is None:
         fu, fd = fu + a0 * u, fd + a0 * dp
@@ -514,7 +549,8 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
         fu[1:], fd[1:] = fu[1:] + k * lu, fd[1:] + k * ld
     force, t1 = C * fu, np.where(u > 0, t, np.nan)
     if rows.size:
-        ting_rule(t, d, dp, u, st.dt, m, soe, kernel, Hu, Hd, decays, fd, rows, force, t1, C)
+        ting_rule(t, d, dp, u, st.dt, m, soe, kernel, Hu, Hd, decays[:n], fd, rows, force, t1,
+                  C)
     if not K:  # elastic: exactly C·E·d^m
         force = C * a0 * u
     return HereditaryContact(np.maximum(force, 0.0), t1, ting)
