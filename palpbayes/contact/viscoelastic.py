@@ -394,7 +394,9 @@ def _scan(decay: np.ndarray, h: np.ndarray) -> None:
         return
     start = np.zeros(h.shape[:-2] + (blocks,))  # state at each block's start
     start[..., 1:] = _scan_ordered(prod[:, -1, :-1], h[..., -1, :-1])
-    h += prod * start[..., None, :]
+    for s in range(size):  # slab by slab: no temporary as large as h
+        np.multiply(prod[:, s], start, out=tmp)
+        h[..., s, :] += tmp
 
 
 def _scan_ordered(decay: np.ndarray, inc: np.ndarray) -> np.ndarray:
