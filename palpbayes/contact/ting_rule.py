@@ -44,6 +44,7 @@ class _History:
         groups, count = q[first], np.diff(np.r_[first, q.size])
         big = count * _FACTOR_ROWS >= groups + 1 - lo0
         self.factored = np.repeat(big, count)
+        self.all_factored = bool(big.all())
         self.aA = np.zeros((rows.size, x.size))  # a_j·A_j(r)
         self.base = np.zeros(rows.size, dtype=np.intp)  # row of P(k) = base + k
         parts, samples, offset = [], [], 0
@@ -62,6 +63,8 @@ class _History:
 
     def weights(self, i, k) -> np.ndarray:
         """a_j·exp(-x_j·(t_r - t_k)) for rows ``i`` at samples ``k``, shape (len(i), K)."""
+        if self.all_factored:
+            return self.aA[i] * self.P[self.base[i] + k]
         out = np.empty((i.size, self.x.size))
         f = self.factored[i]
         out[f] = self.aA[i[f]] * self.P[self.base[i[f]] + k[f]]

@@ -113,8 +113,10 @@ class PronyKernel:
                                     for e, s in zip(self.E, self.tau, strict=True))
 
     def _inverse_integral(self, target, lo, hi) -> np.ndarray:
-        w = np.array(lo, dtype=float)  # Newton from below: the integral is concave
+        # Newton from below (the integral is concave), from where the tangent at hi reaches
+        # the target (below the root: a concave function lies under its tangents)
         with np.errstate(divide="ignore", invalid="ignore"):
+            w = np.clip(np.nan_to_num(hi - (self.integral(hi) - target) / self(hi)), lo, hi)
             for _ in range(100):
                 step = np.maximum(np.nan_to_num((target - self.integral(w)) / self(w)), 0.0)
                 w, w_old = np.minimum(w + step, hi), w
