@@ -2,7 +2,8 @@
 Lee–Radok and Ting hereditary integrals on a measured time axis, the relaxation kernels
 :class:`PowerLawKernel` and :class:`PronyKernel`, and the closed forms of a ramp and of a
 constant-strain-rate compression (``../shared/DESIGN.md`` §9 "Viscoelastic contact", whose
-closed forms the tests check; "DESIGN §9" below).  A helper module: it registers no law.
+closed forms the tests check; "DESIGN §9" below).  Ting's rule on the retract is in
+:mod:`~palpbayes.contact.ting_rule`.  A helper module: it registers no law.
 
 References: E. H. Lee, J. R. M. Radok, J. Appl. Mech. 27:438 (1960); T. C. T. Ting, J. Appl.
 Mech. 33:845 (1966); G. Beylkin, L. Monzón, Appl. Comput. Harmon. Anal. 28:131 (2010).
@@ -14,9 +15,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import beta, gamma, hyp1f1, hyp2f1, loggamma
+from scipy.special import beta, gamma, hyp1f1, loggamma
 
 from ..errors import InputError
+from .hereditary_steps import ARENA, _exp_steps, _layout, _power_steps, _scan, _Steps
+from .ting_rule import ting_rule
 
 __all__ = ["PowerLawKernel", "PronyKernel", "standard_linear_solid", "HereditaryContact",
            "hereditary_contact", "hereditary_force", "ramp_apparent_modulus",
@@ -26,20 +29,11 @@ __all__ = ["PowerLawKernel", "PronyKernel", "standard_linear_solid", "Hereditary
 SOE_TOLERANCE = 1e-7
 
 
-def _rule(degree: int):
-    """Chebyshev nodes of a step's lag fraction, node values -> monomial coefficients c_k, and
-    c_k -> Taylor coefficients in rho of Σ_k c_k·∫_0^1 exp(-rho·s)·s^k ds."""
-    nodes = (1 - np.cos((2 * np.arange(degree) + 1) * np.pi / (2 * degree))) / 2
-    to_coef = np.linalg.inv(np.vander(nodes, increasing=True)).T
-    taylor = np.array([[(-1.0) ** j / ((k + j + 1) * math.factorial(j)) for j in range(12)]
-                       for k in range(degree)])
-    return nodes, to_coef, taylor
-
-
-_LINEAR, _CUBIC, _RHO_SERIES = _rule(2), _rule(4), 0.2
-_REACH = np.array([(1e-14 * math.factorial(n)) ** (1 / n) for n in range(1, 13)])
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(12)
-_GL_X, _GL_W = (_GL_X + 1) / 2, _GL_W / 2
+# At most _FEW terms whose rates x·(duration) <= 2·_SPREAD: the recursions as cumulative sums
+# scaled by exp(±x·t) (|x·t| <= _SPREAD from mid-record: no overflow), fewer Python steps.
+_FEW, _SPREAD = 4, 600.0
+#: Most numbers [-] in one block of terms' arrays (terms × steps): the memory per array.
+_CHUNK = 2_000_000
 
 
 def _number(name: str, value, unit: str = "", bound: str = "") -> float:
@@ -119,8 +113,10 @@ class PronyKernel:
                                     for e, s in zip(self.E, self.tau, strict=True))
 
     def _inverse_integral(self, target, lo, hi) -> np.ndarray:
-        w = np.array(lo, dtype=float)  # Newton from below: the integral is concave
+        # Newton from below (the integral is concave), from where the tangent at hi reaches
+        # the target (below the root: a concave function lies under its tangents)
         with np.errstate(divide="ignore", invalid="ignore"):
+            w = np.clip(np.nan_to_num(hi - (self.integral(hi) - target) / self(hi)), lo, hi)
             for _ in range(100):
                 step = np.maximum(np.nan_to_num((target - self.integral(w)) / self(w)), 0.0)
                 w, w_old = np.minimum(w + step, hi), w
@@ -172,145 +168,20 @@ def _power_soe(alpha: float, dt_min: float, span: float) -> tuple[np.ndarray, np
 
 
 def _soe(kernel: Kernel, dt_min: float, span: float):
-    """(a0, a, x, alpha, k): E(t) ≈ a0 + Σ a_j·exp(-x_j·t), exact for Prony (alpha None); for
-    a power law valid on lags >= the shortest step, the last step using k·t^(-alpha)."""
+    """(a0, a, x, alpha, k): E(t) ≈ a0 + Σ a_j·exp(-x_j·t), the rates x [1/s] decreasing, exact
+    for Prony (alpha None); for a power law valid on lags >= the shortest step, the last step
+    using k·t^(-alpha)."""
     if isinstance(kernel, PronyKernel):
         E, tau = np.array(kernel.E), np.array(kernel.tau)
-        return kernel.E_inf, E[E > 0], 1.0 / tau[E > 0], None, 0.0
+        keep = np.flatnonzero(E > 0)
+        keep = keep[np.argsort(tau[keep], kind="stable")]
+        return kernel.E_inf, E[keep], 1.0 / tau[keep], None, 0.0
     if kernel.alpha == 0.0:
         return kernel.E0, np.zeros(0), np.zeros(0), None, 0.0
     k = kernel.E0 * kernel.t0**kernel.alpha
     w, x = _power_soe(kernel.alpha, dt_min, span)
-    return 0.0, k * w, x, kernel.alpha, k
-
-
-class _Steps:
-    """Per time step (sample i to i + 1): its part in contact and the integrand of d^m.
-
-    Where the contact starts or ends, or d grows by over 5 %, d^m is a power of the time from
-    the zero of the step's line: integrated in closed form.  Elsewhere in contact,
-    f(sigma) = m·(d1 - d0)·d^(m-1) at lag fraction sigma (from the step's end) is a polynomial
-    (m = 1, 2) or its cubic interpolant: relative error ~3e-4·z^4 for a relative change z of d
-    (< 2e-9 for |z| <= 5 %; larger falls, e.g. noise near the contact start, use it too).
-    """
-
-    def __init__(self, t: np.ndarray, d: np.ndarray, m: float):
-        self.m, self.dt = m, np.diff(t)
-        d0, d1 = d[:-1], d[1:]
-        jump, both = d1 - d0, (d0 > 0) & (d1 > 0)
-        poly = m in (1.0, 2.0)
-        self.cin = np.flatnonzero((d0 <= 0) & (d1 > 0))
-        self.cout = np.flatnonzero((d0 > 0) & (d1 <= 0))
-        self.rise = np.flatnonzero((d1 > 0) & ((d0 <= 0) | ((jump > 0.05 * d1) & (not poly))))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            self.L1 = self.dt * d1 / jump  # time from the zero of the step's line to its end
-        self.wa, self.ell = np.zeros_like(jump), np.where(both, self.dt, 0.0)
-        self.ell[self.cin] = self.L1[self.cin]
-        self.wa[self.cout] = self.L1[self.cout]
-        self.ell[self.cout] = self.dt[self.cout] - self.wa[self.cout]  # contact: lags wa..+ell
-        self.u0, self.u1 = np.clip(d0, 0, None) ** m, np.clip(d1, 0, None) ** m
-        self.dd = np.clip(d1, 0, None) - np.clip(d0, 0, None)
-        nodes, to_coef, taylor = _LINEAR if poly else _CUBIC
-        f = m * jump[:, None] * np.clip(d1[:, None] - jump[:, None] * nodes, 0, None) ** (m - 1)
-        f[~both] = 0.0
-        f[self.rise] = 0.0
-        self.coef = f @ to_coef
-        self.series = self.coef @ taylor
-
-
-def _moments(rho, decay, m0, coef, series) -> np.ndarray:
-    """Σ_k coef[:, k]·∫_0^1 exp(-rho·s)·s^k ds for rho of shape (terms, steps); a row's Taylor
-    series stops where its largest rho needs no more terms (rho^L/L! < 1e-14)."""
-    out, top = np.empty_like(rho), rho.max(axis=1)
-    rec = np.flatnonzero(top > _RHO_SERIES)
-    if rec.size:
-        r, e, mk = (v if rec.size == len(top) else v[rec] for v in (rho, decay, m0))
-        acc = coef[:, 0] * mk
-        with np.errstate(over="ignore", invalid="ignore"):
-            for k in range(1, coef.shape[1]):
-                mk = (k * mk - e) / r
-                acc += coef[:, k] * mk
-        out[rec] = acc
-    ser = np.flatnonzero(rho.min(axis=1) <= _RHO_SERIES)
-    terms = np.searchsorted(_REACH, np.minimum(top[ser], _RHO_SERIES)) + 1
-    for n_terms in np.unique(terms):
-        rows = ser[terms == n_terms]
-        r = rho[rows]
-        acc = np.zeros_like(r) + series[:, n_terms - 1]
-        for j in range(n_terms - 2, -1, -1):
-            acc = acc * r + series[:, j]
-        out[rows] = np.where(r > _RHO_SERIES, out[rows], acc)
-    return out
-
-
-def _exp_steps(x: np.ndarray, st: _Steps):
-    """Decays exp(-x·dt) and increments ∫ exp(-x·(t_i+1 - s)) d[d^m] and ... d[d_+] over the
-    steps, shape (len(x), N - 1) (one array for both when m = 1)."""
-    rho = np.multiply.outer(x, st.dt)
-    m0 = np.expm1(-rho)
-    decay = 1.0 + m0  # exp(-rho) to 1e-16 absolute
-    m0 /= -rho
-    idd, m = st.dd * m0, st.m
-    iu = idd
-    if m != 1.0:
-        iu = _moments(rho, decay, m0, st.coef, st.series)
-        c = st.rise  # from the zero of the step's line: d1^m·1F1(1; m+1; -x·L1) - (at d0)
-        iu[:, c] = st.u1[c] * hyp1f1(1.0, m + 1.0, -np.multiply.outer(x, st.L1[c]))
-        iu[:, c] -= decay[:, c] * st.u0[c] * hyp1f1(1.0, m + 1.0, -np.multiply.outer(
-            x, np.maximum(st.L1[c] - st.dt[c], 0.0)))
-    for c in (st.cin, st.cout):
-        if c.size:
-            r = np.multiply.outer(x, st.ell[c])
-            lag = np.exp(-np.multiply.outer(x, st.wa[c]))
-            idd[:, c] = st.dd[c] * lag * -np.expm1(-r) / r
-            if m != 1.0 and c is st.cout:
-                iu[:, c] = -st.u0[c] * lag * hyp1f1(m, m + 1.0, -r)
-    return decay, iu, idd
-
-
-def _power_steps(alpha: float, st: _Steps) -> tuple[np.ndarray, np.ndarray]:
-    """∫ (t_i+1 - s)^(-alpha) d[d^m] and ... d[d_+] over each step, exact for the step's
-    polynomial or power (Euler: m·B(m, 1 - alpha) and 2F1(alpha, m; m + 1; L0/L1)); the first
-    is 0 where the contact ends (never used: Ting's rule holds there)."""
-    ell = np.where(st.ell > 0, st.ell, 1.0)
-    ld = st.dd * ((st.wa + ell) ** (1 - alpha) - st.wa ** (1 - alpha)) / ((1 - alpha) * ell)
-    if st.m == 1.0:
-        return ld, ld
-    m, c = st.m, st.rise
-    lu = ell**-alpha * (st.coef @ (1 / (np.arange(st.coef.shape[1]) + 1 - alpha)))
-    L0 = np.maximum(st.L1[c] - st.dt[c], 0.0)
-    lu[c] = st.L1[c] ** -alpha * (st.u1[c] * m * beta(m, 1 - alpha)
-                                  - st.u0[c] * hyp2f1(alpha, m, m + 1, L0 / st.L1[c]))
-    lu[st.cout] = 0.0
-    return lu, ld
-
-
-def _scan(decay: np.ndarray, inc: np.ndarray) -> np.ndarray:
-    """H[..., 0] = 0, H[..., i+1] = decay[:, i]·H[..., i] + inc[..., i] for ``inc`` of shape
-    (..., rows, n): a two-level blocked scan (O(sqrt n) Python steps, O(n) work per row, only
-    multiplications by decays <= 1, so nothing overflows)."""
-    rows, n = decay.shape
-    size = max(1, math.isqrt(n))
-    blocks, lead = -(-n // size), inc.shape[:-2]
-
-    def layout(a, fill):  # (..., rows, n) -> (size, ..., rows, blocks)
-        a = np.concatenate([a, np.full(a.shape[:-1] + (blocks * size - n,), fill)], axis=-1)
-        return np.ascontiguousarray(np.moveaxis(a.reshape(a.shape[:-1] + (blocks, size)), -1,
-                                                0))
-
-    dec, h = layout(decay, 1.0), layout(inc, 0.0)
-    prod = dec.copy()
-    for s in range(1, size):
-        h[s] += dec[s] * h[s - 1]
-        prod[s] *= prod[s - 1]
-    start, carry = np.empty(h.shape[1:]), np.zeros(h.shape[1:-1])
-    for b in range(blocks):
-        start[..., b] = carry
-        carry = prod[-1, :, b] * carry + h[-1, ..., b]
-    h += prod.reshape((size,) + (1,) * len(lead) + (rows, blocks)) * start
-    out = np.zeros(lead + (rows, n + 1))
-    out[..., 1:] = np.moveaxis(h, 0, -1).reshape(lead + (rows, -1))[..., :n]
-    return out
+    order = np.argsort(-x, kind="stable")
+    return 0.0, k * w[order], x[order], kernel.alpha, k
 
 
 def _check(t, depth, C, m, kernel) -> tuple[np.ndarray, np.ndarray, float, float]:
@@ -361,10 +232,15 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     3e-4·z^4 of the step's increment, z its relative change: < 2e-9 for |z| <= 5 %).  Each
     exponential term (a Prony branch, or one of the K ~ 30-45 of the power law's sum,
     :func:`_power_soe`, accurate to :data:`SOE_TOLERANCE` on [shortest step, duration]) is an
-    exact O(N) recursion; the power law's last step is integrated against t^(-alpha) in closed
-    form.  Ting's t1: vectorised bisection over the samples (O(N·K·log N)), then the root in
-    the step from the kernel's exact integral; that partial step's force by 12-point
-    Gauss-Legendre in log-lag.
+    exact O(N) recursion H <- exp(-x·dt)·H + increment, run for all terms at once as a blocked
+    scan (:func:`~palpbayes.contact.hereditary_steps._scan`, O(N^(1/3)) Python steps; up to 4
+    Prony terms as one cumulative sum);
+    the power law's last step is integrated against t^(-alpha) in closed form.  Ting's t1
+    (:func:`~palpbayes.contact.ting_rule.ting_rule`): vectorised bisection over the samples
+    (O(rows·K·log N), the exponentials as products of cumulative products of the step decays),
+    then the root in the step from the kernel's exact integral; that partial step's force by
+    12-point Gauss-Legendre in log-lag (4 points where the step spans ln(lag) by <= 0.05).
+    Its cost per call: ``benchmarks/bench_viscoelastic.py``.
 
     Parameters
     ----------
@@ -393,35 +269,73 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     """
     t, d, C, m = _check(t, depth, C, m, kernel)
     dp = np.clip(d, 0.0, None)
-    u = dp**m
-    st = _Steps(t, d, m)
+    u = dp if m == 1.0 else dp**m
+    st = _Steps(t, d, m, u)
     soe = a0, a, x, alpha, k = _soe(kernel, float(st.dt.min()), float(t[-1] - t[0]))
-    Hu, Hd = np.zeros((x.size, t.size)), np.zeros((x.size, t.size))  # per term, d^m and d_+
-    fu, fd = np.zeros(t.size), np.zeros(t.size)  # ∫_0^t E(t - s) d[d^m], ∫_0^t E(t - s) d[d_+]
-    chunk = max(1, 250_000 // t.size)
-    for j in range(0, x.size, chunk):
-        sl = slice(j, j + chunk)
-        decay, iu, idd = _exp_steps(x[sl], st)
-        if iu is idd:
-            Hu[sl] = Hd[sl] = _scan(decay, idd)
-        else:
-            Hu[sl], Hd[sl] = _scan(decay, np.stack([iu, idd]))
-        if alpha is None:
-            fu, fd = fu + a[sl] @ Hu[sl], fd + a[sl] @ Hd[sl]
-        else:  # the sum holds for lags >= one step: history up to the previous sample
-            fu[1:] += a[sl] @ Hu[sl, 1:] - a[sl] @ iu
-            fd[1:] += a[sl] @ Hd[sl, 1:] - a[sl] @ idd
+    n, K = t.size - 1, x.size
+    runmax = np.maximum.accumulate(d)
+    ting = (d < runmax) & (runmax > 0)
+    rows = np.flatnonzero(ting)
+    # per term, in time order for Ting's rule: histories of d^m and d_+, and the step decays
+    Hu = Hd = np.zeros((n + 1, K))
+    decays = np.zeros((n, K))
+    fu, fd = np.zeros(n + 1), np.zeros(n + 1)  # ∫_0^t E(t - s) d[d^m], ∫_0^t E(t - s) d[d_+]
+    empty = np.empty
+    if K and K <= _FEW and x[0] * (t[-1] - t[0]) <= 2 * _SPREAD:
+        # few terms, none decaying by over e^1200 on the record: the scan as one cumulative
+        # sum, H_i+1 = exp(-x·t'_i+1)·Σ_{j<=i} inc_j·exp(x·t'_j+1), t' = t - mid-record
+        decay, iu, idd = _exp_steps(x, st)
+        gu = gd = 0.0
+        if alpha is not None:
+            gu, gd = -(a @ iu), -(a @ idd)
+        h = idd[None] if iu is idd else np.stack([iu, idd])
+        grow = np.exp(np.multiply.outer(x, t[1:] - 0.5 * (t[0] + t[-1])))
+        h *= grow
+        np.cumsum(h, axis=-1, out=h)
+        h /= grow
+        fu[1:], fd[1:] = gu + a @ h[0], gd + a @ h[-1]
+        Hu, Hd = np.zeros((n + 1, K)), np.zeros((n + 1, K))
+        Hu[1:], Hd[1:], decays = h[0].T, h[-1].T, decay.T
+    elif K:
+        size, blocks, place = _layout(n)
+        sp, gu, gd = st.placed(place, size * blocks), 0.0, 0.0
+        chunk, c = max(1, _CHUNK // (size * blocks)), 1 if m == 1.0 else 2
+        # scratch kept between calls when one block of terms fits (decays, increments,
+        # their time-ordered copies, rho and m0 of _exp_steps, its recursion's two rows)
+        # and Ting's products
+        empty = ARENA.start((2 * c + 10) * (K + 1) * (size * blocks + 1) if chunk >= K else 0
+                            ).empty
+        if rows.size:  # time order = (blocks, size): one strided copy each, the first row 0
+            ordered = empty((c, size * blocks + 1, K))
+            ordered[:, 0] = 0.0
+            Hu, Hd = ordered[0, :n + 1], ordered[-1, :n + 1]
+            decays = empty((size * blocks, K))
+            by_block = ordered[:, 1:].reshape(-1, blocks, size, K), decays.reshape(blocks, size, K)
+        for j in range(0, K, chunk):
+            sl = slice(j, j + chunk)
+            rows_k = len(range(*sl.indices(K)))
+            decay, h = empty((rows_k, size * blocks)), empty((c, rows_k, size * blocks))
+            _, iu, idd = _exp_steps(x[sl], sp, (decay, h), empty)
+            if alpha is not None:  # the sum holds for lags >= one step: history to the
+                gu, gd = gu - a[sl] @ iu, gd - a[sl] @ idd  # previous sample
+            h, decay = (v.reshape(v.shape[:-1] + (size, blocks)) for v in (h, decay))
+            _scan(decay, h)
+            gu, gd = gu + a[sl] @ h[0].reshape(-1, size * blocks), gd + a[sl] @ h[-1].reshape(
+                -1, size * blocks)
+            if rows.size:
+                by_block[0][..., sl] = h.transpose(0, 3, 2, 1)
+                by_block[1][..., sl] = decay.transpose(2, 1, 0)
+        fu[1:], fd[1:] = gu[place], gd[place]
     if alpha is None:
         fu, fd = fu + a0 * u, fd + a0 * dp
     else:
         lu, ld = _power_steps(alpha, st)
         fu[1:], fd[1:] = fu[1:] + k * lu, fd[1:] + k * ld
     force, t1 = C * fu, np.where(u > 0, t, np.nan)
-    runmax = np.maximum.accumulate(d)
-    ting = (d < runmax) & (runmax > 0)
-    if ting.any():
-        _ting(t, d, dp, u, st, soe, kernel, Hu, Hd, fd, np.flatnonzero(ting), force, t1, C)
-    if not x.size:  # elastic: exactly C·E·d^m
+    if rows.size:
+        ting_rule(t, d, dp, u, st.dt, m, soe, kernel, Hu, Hd, decays[:n], fd, rows, force, t1,
+                  C, empty)
+    if not K:  # elastic: exactly C·E·d^m
         force = C * a0 * u
     return HereditaryContact(np.maximum(force, 0.0), t1, ting)
 
@@ -430,45 +344,6 @@ def hereditary_force(t, depth, C: float, m: float, kernel: Kernel) -> np.ndarray
     """Contact force [N] at every sample: :func:`hereditary_contact` (equations, accuracy and
     parameters there)."""
     return hereditary_contact(t, depth, C, m, kernel).force
-
-
-def _ting(t, d, dp, u, st, soe, kernel, Hu, Hd, G, rows, force, t1, C) -> None:
-    """Ting's rule at the samples ``rows`` (depth below its running maximum), in place."""
-    a0, a, x = soe[:3]
-    kc = int(np.argmax(d > 0))  # first sample in contact (d[0] <= 0, so kc >= 1)
-    s0 = t[kc - 1] + st.dt[kc - 1] * -d[kc - 1] / (d[kc] - d[kc - 1])
-    kmax = np.maximum.accumulate(np.where(d == np.maximum.accumulate(d), np.arange(t.size), 0))
-
-    def hist(H, v, r, k):  # ∫_0^{t_k} E(t_r - s) dv(s): lag >= one step, the sum holds
-        return a0 * v[k] + a @ (np.exp(-np.multiply.outer(x, t[r] - t[k])) * H[:, k])
-
-    g, f, tt = G[rows], np.zeros(rows.size), np.full(rows.size, np.nan)
-    hi, lo = kmax[rows], np.full(rows.size, kc - 1)
-    grow = (g > 0) & (g - hist(Hd, dp, rows, hi) > 0)  # no root before t_max: t1 = t_max
-    act = np.flatnonzero((g > 0) & ~grow & (hi - lo > 1))
-    while act.size:  # keep ∫_{t_lo}^{t} E·d' ds > 0 >= ∫_{t_hi}^{t} E·d' ds
-        mid = (lo[act] + hi[act]) // 2
-        neg = g[act] - hist(Hd, dp, rows[act], mid) <= 0
-        hi[act[neg]], lo[act[~neg]] = mid[neg], mid[~neg]
-        act = act[hi[act] - lo[act] > 1]
-    i = np.flatnonzero(grow)
-    tt[i], f[i] = t[hi[i]], C * hist(Hu, u, rows[i], hi[i])
-    i = np.flatnonzero((g > 0) & ~grow)
-    if i.size:
-        r, k = rows[i], hi[i] - 1  # t1 on the step from sample k to k + 1
-        b = (d[k + 1] - d[k]) / st.dt[k]
-        w_lo, w_hi = t[r] - t[k + 1], t[r] - np.where(k + 1 == kc, s0, t[k])  # lags
-        A_hi = kernel.integral(w_hi)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            target = np.nan_to_num(A_hi - (g[i] - hist(Hd, dp, r, k)) / b, nan=-np.inf)
-        target = np.clip(target, kernel.integral(w_lo), A_hi)
-        w1 = np.where(b > 0, kernel._inverse_integral(target, w_lo, w_hi), w_lo)
-        q = np.log1p((w_hi - w1) / w1)  # ∫_{start}^{t1} E(t - s)·d/ds[d^m] ds in ln(lag)
-        w = w1[:, None] * np.exp(q[:, None] * _GL_X)
-        ds = np.clip(d[k, None] + b[:, None] * (t[r, None] - w - t[k, None]), 0.0, None)
-        part = (kernel(w) * w * st.m * ds ** (st.m - 1) * _GL_W).sum(axis=1) * b * q
-        tt[i], f[i] = t[r] - w1, C * (hist(Hu, u, r, k) + part)
-    force[rows], t1[rows] = f, tt
 
 
 def ramp_apparent_modulus(kernel: Kernel, speed, depth, m: float) -> np.ndarray:
