@@ -15,7 +15,6 @@ Handbook of Mathematical Functions (1964), 13.2.1 (Kummer's 1F1) and 15.3.1 (Eul
 from __future__ import annotations
 
 import math
-import threading
 
 import numpy as np
 from scipy.special import beta, hyp1f1, hyp2f1
@@ -115,12 +114,10 @@ def _series_rows(top: np.ndarray, first: int) -> list[tuple[int, int, int]]:
     return out
 
 
-def _exp_steps(x: np.ndarray, st: _Steps, out: tuple[np.ndarray, np.ndarray] | None = None,
-               empty=np.empty):
+def _exp_steps(x: np.ndarray, st: _Steps, out: tuple[np.ndarray, np.ndarray] | None = None):
     """Decays exp(-x·dt) and increments ∫ exp(-x·(t_i+1 - s)) d[d^m] and ... d[d_+] over the
     steps, shape (len(x), steps) (one array for both when m = 1); written into ``out`` =
-    (decays, increments of shape (2 or 1 when m = 1, len(x), steps)) if given; the scratch
-    arrays from ``empty(shape)``.
+    (decays, increments of shape (2 or 1 when m = 1, len(x), steps)) if given.
 
     With rho = x·dt and m0 = (1 - exp(-rho))/rho: rows whose rho exceed 0.2 somewhere take
     expm1 and the moments ∫_0^1 exp(-rho·s)·s^k ds by their upward recursion; rows (or the
@@ -138,7 +135,7 @@ def _exp_steps(x: np.ndarray, st: _Steps, out: tuple[np.ndarray, np.ndarray] | N
     if out is None:
         out = np.empty(shape), np.empty((1 if m == 1.0 else 2,) + shape)
     decay, iu, idd = out[0], out[1][0], out[1][-1]
-    rho, m0 = np.multiply(x[:, None], st.dt, out=empty(shape)), empty(shape)
+    rho, m0 = np.multiply.outer(x, st.dt), np.empty(shape)
     n_rec = int(np.count_nonzero(x * st.dt.max() > _RHO_SERIES))  # some rho > 0.2
     n_all = int(np.count_nonzero(x * st.dt.min() > _RHO_SERIES))  # every rho > 0.2
     if n_rec:
@@ -163,8 +160,7 @@ def _exp_steps(x: np.ndarray, st: _Steps, out: tuple[np.ndarray, np.ndarray] | N
     if m != 1.0:
         if n_rec:
             r, e, acc = rho[:n_rec], decay[:n_rec], iu[:n_rec]
-            mk, tmp = empty(r.shape), empty(r.shape)
-            mk[...] = m0[:n_rec]
+            mk, tmp = m0[:n_rec].copy(), np.empty_like(r)
             np.multiply(st.cT[0], mk, out=acc)
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
                 for k in range(1, st.cT.shape[0]):
@@ -212,35 +208,6 @@ def _power_steps(alpha: float, st: _Steps) -> tuple[np.ndarray, np.ndarray]:
                                   - st.u0[c] * hyp2f1(alpha, m, m + 1, L0 / st.L1[c]))
     lu[st.cout] = 0.0
     return lu, ld
-
-
-class _Arena(threading.local):
-    """Scratch memory of one thread, kept between calls: fresh large arrays cost a page fault
-    per 4 KiB on first touch, which dominated :func:`hereditary_contact`'s time (e.g. 8 of
-    19 ms for a power law at N = 4,000 on a sandboxed 2-core machine).  :meth:`start` sizes it
-    for one call (at most :data:`ARENA_MAX` numbers are kept); :meth:`empty` hands out
-    uninitialised views of it in turn, or fresh arrays once it is used up."""
-
-    def __init__(self):
-        self.buf, self.used = np.empty(0), 0
-
-    def start(self, need: int) -> _Arena:
-        if self.buf.size < need <= ARENA_MAX:
-            self.buf = np.empty(need)
-        self.used = 0
-        return self
-
-    def empty(self, shape) -> np.ndarray:
-        n = math.prod(shape)
-        if self.used + n > self.buf.size:
-            return np.empty(shape)
-        self.used += n
-        return self.buf[self.used - n:self.used].reshape(shape)
-
-
-#: Most float64 numbers [-] the scratch memory of a thread keeps between calls (32 MB).
-ARENA_MAX = 4_000_000
-ARENA = _Arena()
 
 
 def _layout(n: int) -> tuple[int, int, np.ndarray]:

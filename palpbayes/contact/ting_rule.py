@@ -36,30 +36,30 @@ class _History:
     """∫_0^{t_k} E(t_r - s) dv(s) = a0·v[k] + Σ_j a_j·exp(-x_j·(t_r - t_k))·H[k, j] for the
     Ting rows r (index ``i`` into them) at samples k < r (lag >= one step: the sum holds)."""
 
-    def __init__(self, t, rows, kmax, lo0, soe, decay, empty=np.empty):
+    def __init__(self, t, rows, kmax, lo0, soe, decay):
         a0, a, x = soe[:3]
-        self.t, self.rows, self.a0, self.a, self.x, self.empty = t, rows, a0, a, x, empty
+        self.t, self.rows, self.a0, self.a, self.x = t, rows, a0, a, x
         q = kmax[rows]  # non-decreasing: the groups are runs
         first = np.flatnonzero(np.r_[True, q[1:] != q[:-1]])
         groups, count = q[first], np.diff(np.r_[first, q.size])
         big = count * _FACTOR_ROWS >= groups + 1 - lo0
         self.factored = np.repeat(big, count)
         self.all_factored = bool(big.all())
-        self.aA = empty((rows.size, x.size))  # a_j·A_j(r), used on the factored rows only
+        self.aA = np.zeros((rows.size, x.size))  # a_j·A_j(r)
         self.base = np.zeros(rows.size, dtype=np.intp)  # row of P(k) = base + k
-        self.spans = [(int(g), int(i0), int(n)) for g, i0, n in zip(
-            groups[big], first[big], count[big], strict=True)]
-        self.P = empty((sum(g + 1 - lo0 for g, _, _ in self.spans), x.size))
-        self.lo0, offset = lo0, 0
-        for g, i0, n in self.spans:
+        parts, samples, offset = [], [], 0
+        for g, i0, n in zip(groups[big], first[big], count[big], strict=True):
             r = rows[i0:i0 + n]  # rows are sorted and kmax rises: a group is contiguous
-            P = self.P[offset:offset + g + 1 - lo0]
-            P[-1] = 1.0
-            np.cumprod(decay[lo0:g][::-1], axis=0, out=P[:-1][::-1])
-            A = np.cumprod(decay[g:r[-1]], axis=0, out=empty((r[-1] - g, x.size)))
-            np.multiply(A[r - g - 1], a, out=self.aA[i0:i0 + n])
+            P = np.ones((g + 1 - lo0, x.size))
+            P[:-1] = np.cumprod(decay[lo0:g][::-1], axis=0)[::-1]
+            A = np.cumprod(decay[g:r[-1]], axis=0)
+            self.aA[i0:i0 + n] = a * A[r - g - 1]
             self.base[i0:i0 + n] = offset - lo0
+            parts.append(P)
+            samples.append(np.arange(lo0, g + 1))
             offset += P.shape[0]
+        self.P = np.concatenate(parts) if parts else np.zeros((0, x.size))
+        self.sample = np.concatenate(samples) if samples else np.zeros(0, dtype=np.intp)
 
     def weights(self, i, k) -> np.ndarray:
         """a_j·exp(-x_j·(t_r - t_k)) for rows ``i`` at samples ``k``, shape (len(i), K)."""
@@ -87,13 +87,7 @@ class _History:
             gg, l, h = g[ii], lo[ii], hi[ii]
             if fast:  # a0·dp[k] as one more term: one gather and one dot product a step
                 aA = np.concatenate([self.aA[ii], np.full((ii.size, 1), self.a0)], axis=1)
-                PH, offset = self.empty((self.P.shape[0], self.x.size + 1)), 0
-                for top, _, _ in self.spans:  # [P(k)·H[k], dp[k]] for k = lo0..top
-                    part = PH[offset:offset + top + 1 - self.lo0]
-                    np.multiply(self.P[offset:offset + part.shape[0]], Hd[self.lo0:top + 1],
-                                out=part[:, :-1])
-                    part[:, -1] = dp[self.lo0:top + 1]
-                    offset += part.shape[0]
+                PH = np.concatenate([self.P * Hd[self.sample], dp[self.sample, None]], axis=1)
                 base = self.base[ii]
             for _ in range(int(np.max(h - l, initial=1)).bit_length()):
                 mid = (l + h) >> 1  # a finished row (h = l + 1) re-tests l: no change
@@ -105,8 +99,7 @@ class _History:
             lo[ii], hi[ii] = l, h
 
 
-def ting_rule(t, d, dp, u, dt, m, soe, kernel, Hu, Hd, decay, G, rows, force, t1, C,
-              empty=np.empty) -> None:
+def ting_rule(t, d, dp, u, dt, m, soe, kernel, Hu, Hd, decay, G, rows, force, t1, C) -> None:
     """Ting's rule at the samples ``rows`` (depth below its running maximum), in place.
 
     Parameters
@@ -134,13 +127,11 @@ def ting_rule(t, d, dp, u, dt, m, soe, kernel, Hu, Hd, decay, G, rows, force, t1
         [N], [s] Outputs, written at ``rows``.
     C
         [N/(Pa·m^m)] Prefactor of the elastic law.
-    empty
-        ``empty(shape)``: uninitialised scratch arrays (the caller's kept memory).
     """
     kc = int(np.argmax(d > 0))  # first sample in contact (d[0] <= 0, so kc >= 1)
     s0 = t[kc - 1] + dt[kc - 1] * -d[kc - 1] / (d[kc] - d[kc - 1])
     kmax = np.maximum.accumulate(np.where(d == np.maximum.accumulate(d), np.arange(t.size), 0))
-    hist = _History(t, rows, kmax, kc - 1, soe, decay, empty)
+    hist = _History(t, rows, kmax, kc - 1, soe, decay)
     everyone = np.arange(rows.size)
     g, f, tt = G[rows], np.zeros(rows.size), np.full(rows.size, np.nan)
     hi, lo = kmax[rows], np.full(rows.size, kc - 1)

@@ -18,7 +18,7 @@ import numpy as np
 from scipy.special import beta, gamma, hyp1f1, loggamma
 
 from ..errors import InputError
-from .hereditary_steps import ARENA, _exp_steps, _layout, _power_steps, _scan, _Steps
+from .hereditary_steps import _exp_steps, _layout, _power_steps, _scan, _Steps
 from .ting_rule import ting_rule
 
 __all__ = ["PowerLawKernel", "PronyKernel", "standard_linear_solid", "HereditaryContact",
@@ -280,7 +280,6 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     Hu = Hd = np.zeros((n + 1, K))
     decays = np.zeros((n, K))
     fu, fd = np.zeros(n + 1), np.zeros(n + 1)  # ∫_0^t E(t - s) d[d^m], ∫_0^t E(t - s) d[d_+]
-    empty = np.empty
     if K and K <= _FEW and x[0] * (t[-1] - t[0]) <= 2 * _SPREAD:
         # few terms, none decaying by over e^1200 on the record: the scan as one cumulative
         # sum, H_i+1 = exp(-x·t'_i+1)·Σ_{j<=i} inc_j·exp(x·t'_j+1), t' = t - mid-record
@@ -299,23 +298,19 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     elif K:
         size, blocks, place = _layout(n)
         sp, gu, gd = st.placed(place, size * blocks), 0.0, 0.0
-        chunk, c = max(1, _CHUNK // (size * blocks)), 1 if m == 1.0 else 2
-        # scratch kept between calls when one block of terms fits (decays, increments,
-        # their time-ordered copies, rho and m0 of _exp_steps, its recursion's two rows)
-        # and Ting's products
-        empty = ARENA.start((2 * c + 10) * (K + 1) * (size * blocks + 1) if chunk >= K else 0
-                            ).empty
         if rows.size:  # time order = (blocks, size): one strided copy each, the first row 0
-            ordered = empty((c, size * blocks + 1, K))
+            ordered = np.empty((2 if m != 1.0 else 1, size * blocks + 1, K))
             ordered[:, 0] = 0.0
             Hu, Hd = ordered[0, :n + 1], ordered[-1, :n + 1]
-            decays = empty((size * blocks, K))
+            decays = np.empty((size * blocks, K))
             by_block = ordered[:, 1:].reshape(-1, blocks, size, K), decays.reshape(blocks, size, K)
+        chunk = max(1, _CHUNK // (size * blocks))
         for j in range(0, K, chunk):
             sl = slice(j, j + chunk)
             rows_k = len(range(*sl.indices(K)))
-            decay, h = empty((rows_k, size * blocks)), empty((c, rows_k, size * blocks))
-            _, iu, idd = _exp_steps(x[sl], sp, (decay, h), empty)
+            decay, h = np.empty((rows_k, size * blocks)), np.empty(
+                (1 if m == 1.0 else 2, rows_k, size * blocks))
+            _, iu, idd = _exp_steps(x[sl], sp, (decay, h))
             if alpha is not None:  # the sum holds for lags >= one step: history to the
                 gu, gd = gu - a[sl] @ iu, gd - a[sl] @ idd  # previous sample
             h, decay = (v.reshape(v.shape[:-1] + (size, blocks)) for v in (h, decay))
@@ -334,7 +329,7 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     force, t1 = C * fu, np.where(u > 0, t, np.nan)
     if rows.size:
         ting_rule(t, d, dp, u, st.dt, m, soe, kernel, Hu, Hd, decays[:n], fd, rows, force, t1,
-                  C, empty)
+                  C)
     if not K:  # elastic: exactly C·E·d^m
         force = C * a0 * u
     return HereditaryContact(np.maximum(force, 0.0), t1, ting)

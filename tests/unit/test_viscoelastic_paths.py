@@ -6,8 +6,6 @@ Gauss-Legendre points in the partial step) giving the same force and t1 to round
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 import pytest
 
@@ -53,8 +51,6 @@ PATHS = {  # module, name, value
     "Ting direct": [(ting_rule, "_FACTOR_ROWS", 0)],
     "Ting factored": [(ting_rule, "_FACTOR_ROWS", 10**9)],
     "12 points": [(ting_rule, "_Q_FEW", 0.0)],
-    "no kept memory": [(hereditary_steps, "ARENA_MAX", 0),
-                       (viscoelastic, "ARENA", hereditary_steps._Arena())],
 }
 
 
@@ -94,22 +90,3 @@ def test_exp_steps_writes_into_the_given_buffers():
         np.testing.assert_allclose(b[:, place], a, rtol=1e-15, atol=0)
     empty = np.setdiff1d(np.arange(size * blocks), place)
     assert np.all(out[1][:, :, empty] == 0)
-
-
-def test_kept_memory_is_never_in_a_result():
-    """Results of earlier calls stay as they were after later calls reuse the scratch memory,
-    and calls in two threads at once give the serial results."""
-    t, d = _noisy_cycle()
-    kernels = [PowerLawKernel(1e5, 0.3), PowerLawKernel(3e4, 0.6), PowerLawKernel(2e5, 0.1)]
-    first = [hereditary_contact(t, d, C_PARA, 1.5, k) for k in kernels]
-    kept = [(r.force.copy(), r.t1.copy()) for r in first]
-    for k in kernels[::-1]:
-        hereditary_contact(t, 0.8 * d, C_PARA, 1.5, k)
-    for r, (force, t1) in zip(first, kept, strict=True):
-        np.testing.assert_array_equal(r.force, force)
-        np.testing.assert_array_equal(r.t1, t1)
-    with ThreadPoolExecutor(2) as pool:
-        both = list(pool.map(lambda k: hereditary_contact(t, d, C_PARA, 1.5, k).force,
-                             kernels * 3))
-    for got, (force, _) in zip(both, kept * 3, strict=True):
-        np.testing.assert_array_equal(got, force)
