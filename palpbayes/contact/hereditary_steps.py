@@ -5,8 +5,7 @@ exp(-x·lag) of the kernel, the step's decay exp(-x·dt) and its increments
 ∫ exp(-x·(t_i+1 - s)) d[d^m] and d[d_+] (:func:`_exp_steps`); the power law's last step against
 t^(-alpha) (:func:`_power_steps`); and the recursion H <- exp(-x·dt)·H + increment for all terms
 at once, as a blocked scan on arrays laid out by blocks of steps (:func:`_layout`,
-:func:`_scan`); the scratch memory a thread keeps between calls (:class:`_Arena`).  A helper
-module: it registers no law.
+:func:`_scan`).  A helper module: it registers no law.
 
 References: E. H. Lee, J. R. M. Radok, J. Appl. Mech. 27:438 (1960); M. Abramowitz, I. A. Stegun,
 Handbook of Mathematical Functions (1964), 13.2.1 (Kummer's 1F1) and 15.3.1 (Euler's 2F1).
