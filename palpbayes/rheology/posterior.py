@@ -35,7 +35,11 @@ left is a 3-D density on (z_s, θ, phi), integrated on a grid:
    the grid's moments are recomputed and the grid rebuilt until they are steady and every sd
    is at least :data:`RESOLVE` node steps (clipped at the prior bounds); while the box still
    moves it has :data:`SEARCH_THETA` theta nodes (each costs one hereditary matrix), and the
-   settled box is computed once more with FINE and must give the same moments;
+   settled box is computed once more with FINE and must give the same moments.  While the
+   ridge is narrower than the surface nodes, the box follows the line through every theta
+   row's best node and narrows in z_s alone (theta's moments then come from whichever row's
+   node fell nearest the ridge, and shrank the box onto it, off the mode); a row whose best
+   node is its first or last, within :data:`KEEP` of the box's best, widens the box in z_s;
 3. the moduli's priors are applied to draws by importance resampling: log-uniform (1/E) on
    E0* and E1*, flat on E_inf* >= 0, each modulus positive.
 
@@ -311,6 +315,43 @@ def _sheared(centre, sd, slope, bounds, n_theta: int = FINE
     return ct, z
 
 
+def _rows_leave_ridge(lp: np.ndarray, z: np.ndarray, z_bounds: tuple[float, float]) -> bool:
+    """True when a theta row of a sheared box (``lp`` and ``z`` of shape (rows, FINE)) has its
+    largest log density on its first or last surface node (not a prior bound) within
+    :data:`KEEP` of the box's best: the ridge of (theta, z_s) leaves the box there, so the
+    best node of the box is not the posterior's mode, only the best point of a line that
+    crosses the ridge (the regression line of z_s on theta was off).  Such a box must widen
+    in z_s, however steady its moments look."""
+    arg = np.argmax(lp, axis=1)
+    rows = np.arange(lp.shape[0])
+    at_edge = (((arg == 0) & (z[:, 0] > z_bounds[0]))
+               | ((arg == lp.shape[1] - 1) & (z[:, -1] < z_bounds[1])))
+    return bool(np.any(at_edge & (lp[rows, arg] > np.max(lp) - KEEP)))
+
+
+def _ridge_line(lp: np.ndarray, gt: np.ndarray, gz: np.ndarray, theta: float, slope: float
+                ) -> tuple[tuple[float, float], float, float]:
+    """The line z_s = a + slope·theta through the best node of every theta row of a sheared
+    box whose best log density lies within :data:`KEEP` of the box's and inside the row (not
+    on its first or last node, which the ridge may lie beyond); least squares, or the
+    previous ``slope`` through the best row when only that row qualifies.  Returns the centre
+    (theta, the line's z_s there), the slope, and the largest distance [m] of those rows' best
+    nodes from the line."""
+    rows = np.arange(lp.shape[0])
+    arg = np.argmax(lp, axis=1)
+    best = lp[rows, arg]
+    near = (best > np.max(best) - KEEP) & (arg > 0) & (arg < lp.shape[1] - 1)
+    near[int(np.argmax(best))] = True
+    zs = gz[rows, arg]
+    if near.sum() >= 2 and np.ptp(gt[near]) > 0:
+        slope, icpt = np.polyfit(gt[near], zs[near], 1)
+    else:
+        k = int(np.argmax(best))
+        icpt = zs[k] - slope * gt[k]
+    off = np.abs(zs[near] - (icpt + slope * gt[near]))
+    return (theta, float(icpt + slope * theta)), float(slope), float(off.max())
+
+
 def _coarse_basins(lp: np.ndarray, thetas: np.ndarray, z: np.ndarray) -> list:
     """Local maxima of the coarse grid (8-neighbourhood) within KEEP of the best."""
     pad = np.pad(lp, 1, constant_values=-np.inf)
@@ -346,7 +387,7 @@ def _separate_basins(ev: NodeEvaluator, from_c, basins: list, best: tuple[float,
 
 
 def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 1.0,
-                   drag: bool = False, tilt: bool = False, max_iterations: int = 10
+                   drag: bool = False, tilt: bool = False, max_iterations: int = 20
                    ) -> GridPosterior:
     """The collapsed posterior of ``data`` under ``rheology`` (module docstring); ``drag``
     adds a viscous drag b·(−dz/dt) to the model, ``tilt`` a baseline F1·(z − z_ref).
@@ -392,7 +433,8 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
         spacing = (max(np.diff(gt).min(), 0.0) * (n_theta - 1) / (FINE - 1)
                    if gt.size > 1 else 0.0, float(np.diff(gz, axis=1).min()))
         edge = (a in (0, gt.size - 1) and gt[a] not in bounds[0],
-                b in (0, gz.shape[1] - 1) and gz[a, b] not in bounds[1])
+                b in (0, gz.shape[1] - 1) and gz[a, b] not in bounds[1]
+                or _rows_leave_ridge(lp, gz, bounds[1]))
         resolved = all(s_ >= RESOLVE * h or s_ == 0.0 and h == 0.0
                        for s_, h in zip((st, sz), spacing, strict=True))
         steady = (abs(st - sd[0]) <= 0.3 * sd[0] and abs(sz - sd[1]) <= 0.3 * sd[1]
@@ -410,6 +452,18 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
             centre, slope, sd = (mt, mz), new_slope, (st, sz)
             continue
         floor = (spacing[0] / 4, spacing[1] / 4)  # all mass on one node: shrink, do not stop
+        if gt.size > 1 and sz < RESOLVE * spacing[1]:
+            # the ridge of (theta, z_s) is narrower than the z nodes: which row's best node
+            # falls nearest it is luck, so theta's moments say nothing yet (they shrank the
+            # box onto one row, off the mode, and a picometre in the record moved the result):
+            # follow the line through the rows' best nodes and narrow z alone
+            centre, slope, half_z = _ridge_line(lp, gt, gz, centre[0], slope)
+            sd = (sd[0], max(sd[1] / 2, 2 * half_z / SPAN_SD, floor[1], 1e-15))
+            continue
+        if gt.size > 1 and st < RESOLVE * spacing[0]:
+            # theta not resolved: the moments' slope of z_s on theta comes from one row and is
+            # noise; the ridge's line through the rows' best nodes is not
+            (_, mz), new_slope, _ = _ridge_line(lp, gt, gz, mt, slope)
         centre, slope = (mt, mz), new_slope
         sd = (max(st, floor[0], (c_hi - c_lo) * 1e-9), max(sz, floor[1], 1e-15))
     log_cell = (post.logp.reshape(gt.size, FINE, -1) + _log_cells(gt, gz)[:, :, None]
