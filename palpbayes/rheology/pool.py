@@ -35,7 +35,8 @@ from ..bayes.exact import cell_widths
 from ..errors import InputError
 from ..intervals import LEVEL, central_band
 from .fit import RheologyFit
-from .posterior import ALPHA_MAX, FINE, SPAN_SD, NodeEvaluator
+from .grid_search import FINE, SPAN_SD
+from .posterior import ALPHA_MAX, NodeEvaluator
 
 __all__ = ["PooledPowerLaw", "pool_power_law", "DISAGREE_SD"]
 

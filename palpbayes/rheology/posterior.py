@@ -28,18 +28,14 @@ left is a 3-D density on (z_s, θ, phi), integrated on a grid:
 
 1. a coarse grid (:data:`COARSE_THETA` × :data:`COARSE_Z`) over the whole prior finds the
    best basin (other basins within :data:`KEEP` of it are reported);
-2. a sheared grid of :data:`FINE` × :data:`FINE` nodes follows the basin: θ_i spans
-   ±:data:`SPAN_SD` marginal sd of θ, and on each θ_i the surface nodes span ±SPAN_SD
-   *conditional* sd of z_s around its conditional mean (the regression line of z_s on θ), so
-   a narrow, tilted ridge (surface and alpha trade off) is resolved as well as a round basin;
-   the grid's moments are recomputed and the grid rebuilt until they are steady and every sd
-   is at least :data:`RESOLVE` node steps (clipped at the prior bounds); while the box still
-   moves it has :data:`SEARCH_THETA` theta nodes (each costs one hereditary matrix), and the
-   settled box is computed once more with FINE and must give the same moments.  While the
-   ridge is narrower than the surface nodes, the box follows the line through every theta
-   row's best node and narrows in z_s alone (theta's moments then come from whichever row's
-   node fell nearest the ridge, and shrank the box onto it, off the mode); a row whose best
-   node is its first or last, within :data:`KEEP` of the box's best, widens the box in z_s;
+2. a sheared grid of :data:`FINE` × :data:`FINE` nodes follows the basin
+   (:func:`~palpbayes.rheology.grid_search.box_search`): θ_i spans ±:data:`SPAN_SD` marginal
+   sd of θ, and on each θ_i the surface nodes span ±SPAN_SD *conditional* sd of z_s around
+   the regression line of z_s on θ, so a narrow, tilted ridge (surface and alpha trade off)
+   is resolved as well as a round basin; the box is rebuilt until its moments are steady and
+   resolved.  A box that does not settle (a ridge narrower than the coarse θ nodes and the
+   surface nodes) starts again from the mode found on the profile max_z log p
+   (:func:`~palpbayes.rheology.grid_search.climb`), and is flagged if it still does not;
 3. the moduli's priors are applied to draws by importance resampling: log-uniform (1/E) on
    E0* and E1*, flat on E_inf* >= 0, each modulus positive.
 
@@ -60,6 +56,7 @@ from ..bayes.exact import cell_widths
 from ..errors import FitError, InputError
 from .cycle import CycleData
 from .design import lee_radok_columns
+from .grid_search import FINE, KEEP, SEARCH_THETA, SPAN_SD, box_search, climb, log_cells
 from .ting import RETRACT, RetractDesign, with_retract
 
 __all__ = ["RHEOLOGIES", "GridPosterior", "grid_posterior", "NodeEvaluator", "ALPHA_MAX",
@@ -73,16 +70,6 @@ RHEOLOGIES = {"power-law": "alpha", "sls": "tau", "elastic": None}
 ALPHA_MAX = 0.95
 #: Coarse grid: theta nodes and surface nodes.
 COARSE_THETA, COARSE_Z = 13, 97
-#: Nodes per axis of the fine box.
-FINE = 25
-#: Theta nodes of the fine box while it is still moving (the last box has :data:`FINE`).
-SEARCH_THETA = 13
-#: Half-width of the fine grid in (marginal, conditional) standard deviations.
-SPAN_SD = 6.0
-#: Smallest sd of the final grid, in node steps.
-RESOLVE = 1.5
-#: Basins lower than the best by more than this (log density) are not reported.
-KEEP = 14.0
 #: Support of the uniform phi prior and its grid.
 PHI_BOUNDS = (0.0, 0.98)
 PHI_NODES = 25
@@ -282,76 +269,6 @@ class NodeEvaluator:
         return lp.reshape(thetas.size, z.size), post
 
 
-def _moments(ct: np.ndarray, z: np.ndarray, lp: np.ndarray) -> tuple[float, ...]:
-    """Mean and sd of θ, the slope of z on θ, the conditional mean of z at the mean θ and its
-    conditional sd, from the grid's masses (lp + log cell areas)."""
-    w = np.exp(lp - lp.max())
-    w /= w.sum()
-    mt = float((w.sum(1)) @ ct)
-    vt = float(w.sum(1) @ (ct - mt) ** 2)
-    mz = float((w * z).sum())
-    vz = float((w * (z - mz) ** 2).sum())
-    cov = float((w * (ct[:, None] - mt) * (z - mz)).sum())
-    slope = cov / vt if vt > 0 else 0.0
-    return mt, math.sqrt(max(vt, 0.0)), slope, mz, math.sqrt(max(vz - slope * cov, 0.0))
-
-
-def _log_cells(ct: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """log area (Gt, Gz) of every node's cell of a sheared grid (θ width × its row's z width;
-    a shear keeps areas)."""
-    return np.log(cell_widths(ct))[:, None] + np.log(np.stack([cell_widths(r) for r in z]))
-
-
-def _sheared(centre, sd, slope, bounds, n_theta: int = FINE
-             ) -> tuple[np.ndarray, np.ndarray]:
-    (tlo, thi), (zlo, zhi) = bounds
-    (mt, mz), (st, sz) = (min(max(centre[0], tlo), thi), centre[1]), sd
-    ct = np.linspace(max(tlo, mt - SPAN_SD * st), min(thi, mt + SPAN_SD * st),
-                     n_theta if thi > tlo else 1)  # the elastic law: one theta node
-    mid = mz + slope * (ct - mt)
-    mid = np.clip(mid, zlo, zhi)  # a ridge may leave the prior: keep every row inside it
-    z = np.stack([np.linspace(max(zlo, c - SPAN_SD * sz), min(zhi, c + SPAN_SD * sz), FINE)
-                  for c in mid])
-    return ct, z
-
-
-def _rows_leave_ridge(lp: np.ndarray, z: np.ndarray, z_bounds: tuple[float, float]) -> bool:
-    """True when a theta row of a sheared box (``lp`` and ``z`` of shape (rows, FINE)) has its
-    largest log density on its first or last surface node (not a prior bound) within
-    :data:`KEEP` of the box's best: the ridge of (theta, z_s) leaves the box there, so the
-    best node of the box is not the posterior's mode, only the best point of a line that
-    crosses the ridge (the regression line of z_s on theta was off).  Such a box must widen
-    in z_s, however steady its moments look."""
-    arg = np.argmax(lp, axis=1)
-    rows = np.arange(lp.shape[0])
-    at_edge = (((arg == 0) & (z[:, 0] > z_bounds[0]))
-               | ((arg == lp.shape[1] - 1) & (z[:, -1] < z_bounds[1])))
-    return bool(np.any(at_edge & (lp[rows, arg] > np.max(lp) - KEEP)))
-
-
-def _ridge_line(lp: np.ndarray, gt: np.ndarray, gz: np.ndarray, theta: float, slope: float
-                ) -> tuple[tuple[float, float], float, float]:
-    """The line z_s = a + slope·theta through the best node of every theta row of a sheared
-    box whose best log density lies within :data:`KEEP` of the box's and inside the row (not
-    on its first or last node, which the ridge may lie beyond); least squares, or the
-    previous ``slope`` through the best row when only that row qualifies.  Returns the centre
-    (theta, the line's z_s there), the slope, and the largest distance [m] of those rows' best
-    nodes from the line."""
-    rows = np.arange(lp.shape[0])
-    arg = np.argmax(lp, axis=1)
-    best = lp[rows, arg]
-    near = (best > np.max(best) - KEEP) & (arg > 0) & (arg < lp.shape[1] - 1)
-    near[int(np.argmax(best))] = True
-    zs = gz[rows, arg]
-    if near.sum() >= 2 and np.ptp(gt[near]) > 0:
-        slope, icpt = np.polyfit(gt[near], zs[near], 1)
-    else:
-        k = int(np.argmax(best))
-        icpt = zs[k] - slope * gt[k]
-    off = np.abs(zs[near] - (icpt + slope * gt[near]))
-    return (theta, float(icpt + slope * theta)), float(slope), float(off.max())
-
-
 def _coarse_basins(lp: np.ndarray, thetas: np.ndarray, z: np.ndarray) -> list:
     """Local maxima of the coarse grid (8-neighbourhood) within KEEP of the best."""
     pad = np.pad(lp, 1, constant_values=-np.inf)
@@ -421,52 +338,17 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
     step = (ct[1] - ct[0] if ct.size > 1 else 0.0, cz[1] - cz[0])
     centre, sd, slope = (float(ct[i]), float(cz[j])), step, 0.0
     bounds = ((c_lo, c_hi), (data.z_lo, data.z_hi))
-    converged = False
-    n_theta = SEARCH_THETA  # theta nodes cost one hereditary matrix each: search on fewer
-    for _ in range(max_iterations):
-        gt, gz = _sheared(centre, sd, slope, bounds, n_theta)
-        lp, post = ev.logp_rows(from_c(gt), gz)
-        if not np.isfinite(lp).any():
-            raise FitError("the fine grid holds no finite density; report this record")
-        a, b = np.unravel_index(np.argmax(lp), lp.shape)
-        mt, st, new_slope, mz, sz = _moments(gt, gz, lp + _log_cells(gt, gz))
-        spacing = (max(np.diff(gt).min(), 0.0) * (n_theta - 1) / (FINE - 1)
-                   if gt.size > 1 else 0.0, float(np.diff(gz, axis=1).min()))
-        edge = (a in (0, gt.size - 1) and gt[a] not in bounds[0],
-                b in (0, gz.shape[1] - 1) and gz[a, b] not in bounds[1]
-                or _rows_leave_ridge(lp, gz, bounds[1]))
-        resolved = all(s_ >= RESOLVE * h or s_ == 0.0 and h == 0.0
-                       for s_, h in zip((st, sz), spacing, strict=True))
-        steady = (abs(st - sd[0]) <= 0.3 * sd[0] and abs(sz - sd[1]) <= 0.3 * sd[1]
-                  and abs(mt - centre[0]) <= 0.5 * sd[0]
-                  and abs(mz - centre[1]) <= 0.5 * max(sd[1], abs(slope) * sd[0]))
-        if edge[0] or edge[1]:  # the mode sits on the grid's edge: go there, widen
-            centre = (float(gt[a]), float(gz[a, b]))
-            sd = (sd[0] * (2 if edge[0] else 1), sd[1] * (2 if edge[1] else 1))
-            continue
-        if steady and resolved:
-            if gt.size == 1 or n_theta == FINE:
-                converged = True
-                break
-            n_theta = FINE  # the search has settled: the same box at full resolution
-            centre, slope, sd = (mt, mz), new_slope, (st, sz)
-            continue
-        floor = (spacing[0] / 4, spacing[1] / 4)  # all mass on one node: shrink, do not stop
-        if gt.size > 1 and sz < RESOLVE * spacing[1]:
-            # the ridge of (theta, z_s) is narrower than the z nodes: which row's best node
-            # falls nearest it is luck, so theta's moments say nothing yet (they shrank the
-            # box onto one row, off the mode, and a picometre in the record moved the result):
-            # follow the line through the rows' best nodes and narrow z alone
-            centre, slope, half_z = _ridge_line(lp, gt, gz, centre[0], slope)
-            sd = (sd[0], max(sd[1] / 2, 2 * half_z / SPAN_SD, floor[1], 1e-15))
-            continue
-        if gt.size > 1 and st < RESOLVE * spacing[0]:
-            # theta not resolved: the moments' slope of z_s on theta comes from one row and is
-            # noise; the ridge's line through the rows' best nodes is not
-            (_, mz), new_slope, _ = _ridge_line(lp, gt, gz, mt, slope)
-        centre, slope = (mt, mz), new_slope
-        sd = (max(st, floor[0], (c_hi - c_lo) * 1e-9), max(sz, floor[1], 1e-15))
-    log_cell = (post.logp.reshape(gt.size, FINE, -1) + _log_cells(gt, gz)[:, :, None]
+    box = box_search(ev, from_c, bounds, centre, sd, slope, max_iterations)
+    if not box.converged and c_hi > c_lo:
+        # a ridge narrower than the coarse theta nodes and the surface nodes: climb to the
+        # mode on the profile and search again from there (grid_search.climb)
+        start = climb(ev, from_c, bounds, (float(ct[i]), float(cz[j])), step)
+        again = box_search(ev, from_c, bounds, *start, max_iterations)
+        if again.converged or again.lp.max() > box.lp.max():
+            box = again
+    gt, gz, lp, post, slope, converged = (box.gt, box.gz, box.lp, box.post, box.slope,
+                                          box.converged)
+    log_cell = (post.logp.reshape(gt.size, FINE, -1) + log_cells(gt, gz)[:, :, None]
                 + np.log(cell_widths(ev.phi))[None, None, :])
     log_mass = log_cell - logsumexp(log_cell)
     names = ev.names

@@ -1,0 +1,292 @@
+"""Where the collapsed viscoelastic posterior's fine grid goes: the sheared box and its search.
+
+:func:`~palpbayes.rheology.posterior.grid_posterior` integrates a density on (θ, z_s, phi),
+θ = alpha or log tau, whose (θ, z_s) ridge may be tilted (the surface and alpha trade off) and
+far narrower than the coarse grid's nodes.  This module moves a sheared box of nodes onto it:
+
+* :func:`box_search`: θ_i spans ±:data:`SPAN_SD` marginal sd of θ, and on each θ_i the
+  surface nodes span ±SPAN_SD *conditional* sd of z_s around the regression line of z_s on θ;
+  the box's moments are recomputed and the box rebuilt until they are steady and every sd is
+  at least :data:`RESOLVE` node steps (clipped at the prior bounds).  While the box still moves
+  it has :data:`SEARCH_THETA` θ nodes (each costs one hereditary matrix); the settled box is
+  computed once more with :data:`FINE` and must give the same moments.  While the ridge is
+  narrower than the surface nodes, the box follows the line through every θ row's best node
+  and narrows in z_s alone (θ's moments then come from whichever row's node fell nearest the
+  ridge); a row whose best node is its first or last, within :data:`KEEP` of the box's best,
+  widens the box in z_s.
+* :func:`climb`: when the box does not settle, the mode itself, found on the profile
+  max_z log p(θ, z_s) (bounded Brent on θ, zoomed surface rows for the max), with the
+  profile's curvature (θ's marginal sd), a row's curvature (z_s's conditional sd) and the
+  ridge's slope, from which the box search starts again.  A ridge narrower than the coarse
+  θ nodes *and* the surface nodes (a record pressed slowly, its mode hundreds in log density
+  above every node the box had seen) otherwise leaves the box cycling between widening and
+  narrowing in z_s, its θ nodes never closer than the coarse grid's.
+
+The density is evaluated by a ``NodeEvaluator`` (:mod:`~palpbayes.rheology.posterior`):
+``logp(thetas, z)`` on a product grid, ``logp_rows(thetas, z_rows)`` on a sheared one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from ..bayes.exact import cell_widths
+from ..errors import FitError
+
+__all__ = ["FINE", "SEARCH_THETA", "SPAN_SD", "RESOLVE", "KEEP", "BoxResult", "box_search",
+           "climb", "moments", "log_cells", "sheared"]
+
+#: Nodes per axis of the fine box.
+FINE = 25
+#: Theta nodes of the fine box while it is still moving (the last box has :data:`FINE`).
+SEARCH_THETA = 13
+#: Half-width of the fine grid in (marginal, conditional) standard deviations.
+SPAN_SD = 6.0
+#: Smallest sd of the final grid, in node steps.
+RESOLVE = 1.5
+#: Basins lower than the best by more than this (log density) are not reported.
+KEEP = 14.0
+#: Surface nodes per zoom of :func:`climb`'s rows, and the most zooms per row.
+ZOOM_NODES, MAX_ZOOMS = 25, 12
+
+Bounds = tuple[tuple[float, float], tuple[float, float]]
+
+
+@dataclass
+class BoxResult:
+    """The last box of :func:`box_search`: θ coordinates ``gt`` (Gt,), surface nodes ``gz``
+    (Gt, FINE) [m], log density ``lp`` (Gt, FINE) marginal over phi, the node posteriors
+    ``post``, the box's ``slope`` dz_s/dθ and whether it settled."""
+
+    gt: np.ndarray
+    gz: np.ndarray
+    lp: np.ndarray
+    post: object
+    slope: float
+    converged: bool
+
+
+def moments(ct: np.ndarray, z: np.ndarray, lp: np.ndarray) -> tuple[float, ...]:
+    """Mean and sd of θ, the slope of z on θ, the conditional mean of z at the mean θ and its
+    conditional sd, from the grid's masses (lp + log cell areas)."""
+    w = np.exp(lp - lp.max())
+    w /= w.sum()
+    mt = float((w.sum(1)) @ ct)
+    vt = float(w.sum(1) @ (ct - mt) ** 2)
+    mz = float((w * z).sum())
+    vz = float((w * (z - mz) ** 2).sum())
+    cov = float((w * (ct[:, None] - mt) * (z - mz)).sum())
+    slope = cov / vt if vt > 0 else 0.0
+    return mt, math.sqrt(max(vt, 0.0)), slope, mz, math.sqrt(max(vz - slope * cov, 0.0))
+
+
+def log_cells(ct: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """log area (Gt, Gz) of every node's cell of a sheared grid (θ width × its row's z width;
+    a shear keeps areas)."""
+    return np.log(cell_widths(ct))[:, None] + np.log(np.stack([cell_widths(r) for r in z]))
+
+
+def sheared(centre, sd, slope, bounds: Bounds, n_theta: int = FINE
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """θ coordinates (n_theta,) and surface rows (n_theta, FINE) of the box around ``centre``
+    (θ, z_s) spanning ±:data:`SPAN_SD` × ``sd`` (θ's marginal, z_s's conditional), its rows
+    centred on the line of ``slope``, every node inside ``bounds``."""
+    (tlo, thi), (zlo, zhi) = bounds
+    (mt, mz), (st, sz) = (min(max(centre[0], tlo), thi), centre[1]), sd
+    ct = np.linspace(max(tlo, mt - SPAN_SD * st), min(thi, mt + SPAN_SD * st),
+                     n_theta if thi > tlo else 1)  # the elastic law: one theta node
+    mid = mz + slope * (ct - mt)
+    mid = np.clip(mid, zlo, zhi)  # a ridge may leave the prior: keep every row inside it
+    z = np.stack([np.linspace(max(zlo, c - SPAN_SD * sz), min(zhi, c + SPAN_SD * sz), FINE)
+                  for c in mid])
+    return ct, z
+
+
+def rows_leave_ridge(lp: np.ndarray, z: np.ndarray, z_bounds: tuple[float, float]) -> bool:
+    """True when a theta row of a sheared box (``lp`` and ``z`` of shape (rows, FINE)) has its
+    largest log density on its first or last surface node (not a prior bound) within
+    :data:`KEEP` of the box's best: the ridge of (theta, z_s) leaves the box there, so the
+    best node of the box is not the posterior's mode, only the best point of a line that
+    crosses the ridge (the regression line of z_s on theta was off).  Such a box must widen
+    in z_s, however steady its moments look."""
+    arg = np.argmax(lp, axis=1)
+    rows = np.arange(lp.shape[0])
+    at_edge = (((arg == 0) & (z[:, 0] > z_bounds[0]))
+               | ((arg == lp.shape[1] - 1) & (z[:, -1] < z_bounds[1])))
+    return bool(np.any(at_edge & (lp[rows, arg] > np.max(lp) - KEEP)))
+
+
+def ridge_line(lp: np.ndarray, gt: np.ndarray, gz: np.ndarray, theta: float, slope: float
+               ) -> tuple[tuple[float, float], float, float]:
+    """The line z_s = a + slope·theta through the best node of every theta row of a sheared
+    box whose best log density lies within :data:`KEEP` of the box's and inside the row (not
+    on its first or last node, which the ridge may lie beyond); least squares, or the
+    previous ``slope`` through the best row when only that row qualifies.  Returns the centre
+    (theta, the line's z_s there), the slope, and the largest distance [m] of those rows' best
+    nodes from the line."""
+    rows = np.arange(lp.shape[0])
+    arg = np.argmax(lp, axis=1)
+    best = lp[rows, arg]
+    near = (best > np.max(best) - KEEP) & (arg > 0) & (arg < lp.shape[1] - 1)
+    near[int(np.argmax(best))] = True
+    zs = gz[rows, arg]
+    if near.sum() >= 2 and np.ptp(gt[near]) > 0:
+        slope, icpt = np.polyfit(gt[near], zs[near], 1)
+    else:
+        k = int(np.argmax(best))
+        icpt = zs[k] - slope * gt[k]
+    off = np.abs(zs[near] - (icpt + slope * gt[near]))
+    return (theta, float(icpt + slope * theta)), float(slope), float(off.max())
+
+
+def box_search(ev, from_c: Callable, bounds: Bounds, centre: tuple[float, float],
+               sd: tuple[float, float], slope: float, max_iterations: int) -> BoxResult:
+    """Move the sheared box from ``centre`` (θ coordinate, z_s [m]) with half-widths
+    ``SPAN_SD·sd`` and ``slope`` until it settles (module docstring), at most
+    ``max_iterations`` boxes."""
+    (c_lo, c_hi) = bounds[0]
+    converged = False
+    n_theta = SEARCH_THETA  # theta nodes cost one hereditary matrix each: search on fewer
+    for _ in range(max_iterations):
+        gt, gz = sheared(centre, sd, slope, bounds, n_theta)
+        lp, post = ev.logp_rows(from_c(gt), gz)
+        if not np.isfinite(lp).any():
+            raise FitError("the fine grid holds no finite density; report this record")
+        a, b = np.unravel_index(np.argmax(lp), lp.shape)
+        mt, st, new_slope, mz, sz = moments(gt, gz, lp + log_cells(gt, gz))
+        spacing = (max(np.diff(gt).min(), 0.0) * (n_theta - 1) / (FINE - 1)
+                   if gt.size > 1 else 0.0, float(np.diff(gz, axis=1).min()))
+        edge = (a in (0, gt.size - 1) and gt[a] not in bounds[0],
+                b in (0, gz.shape[1] - 1) and gz[a, b] not in bounds[1]
+                or rows_leave_ridge(lp, gz, bounds[1]))
+        resolved = all(s_ >= RESOLVE * h or s_ == 0.0 and h == 0.0
+                       for s_, h in zip((st, sz), spacing, strict=True))
+        steady = (abs(st - sd[0]) <= 0.3 * sd[0] and abs(sz - sd[1]) <= 0.3 * sd[1]
+                  and abs(mt - centre[0]) <= 0.5 * sd[0]
+                  and abs(mz - centre[1]) <= 0.5 * max(sd[1], abs(slope) * sd[0]))
+        if edge[0] or edge[1]:  # the mode sits on the grid's edge: go there, widen
+            centre = (float(gt[a]), float(gz[a, b]))
+            sd = (sd[0] * (2 if edge[0] else 1), sd[1] * (2 if edge[1] else 1))
+            continue
+        if steady and resolved:
+            if gt.size == 1 or n_theta == FINE:
+                converged = True
+                break
+            n_theta = FINE  # the search has settled: the same box at full resolution
+            centre, slope, sd = (mt, mz), new_slope, (st, sz)
+            continue
+        floor = (spacing[0] / 4, spacing[1] / 4)  # all mass on one node: shrink, do not stop
+        if gt.size > 1 and sz < RESOLVE * spacing[1]:
+            # the ridge of (theta, z_s) is narrower than the z nodes: which row's best node
+            # falls nearest it is luck, so theta's moments say nothing yet (they shrank the
+            # box onto one row, off the mode, and a picometre in the record moved the result):
+            # follow the line through the rows' best nodes and narrow z alone
+            centre, slope, half_z = ridge_line(lp, gt, gz, centre[0], slope)
+            sd = (sd[0], max(sd[1] / 2, 2 * half_z / SPAN_SD, floor[1], 1e-15))
+            continue
+        if gt.size > 1 and st < RESOLVE * spacing[0]:
+            # theta not resolved: the moments' slope of z_s on theta comes from one row and is
+            # noise; the ridge's line through the rows' best nodes is not
+            (_, mz), new_slope, _ = ridge_line(lp, gt, gz, mt, slope)
+        centre, slope = (mt, mz), new_slope
+        sd = (max(st, floor[0], (c_hi - c_lo) * 1e-9), max(sz, floor[1], 1e-15))
+    return BoxResult(gt, gz, lp, post, float(slope), converged)
+
+
+def _parabola_sd(x: np.ndarray, y: np.ndarray, k: int) -> float:
+    """sd of the Gaussian whose log is the parabola through the three nodes around ``k``
+    (inf where the nodes are not concave)."""
+    k = min(max(k, 1), x.size - 2)
+    a = np.polyfit(x[k - 1:k + 2] - x[k], y[k - 1:k + 2], 2)[0]
+    return math.sqrt(-0.5 / a) if a < 0 else math.inf
+
+
+def _row_max(ev, theta: float, z_guess: float, width: float, z_bounds: tuple[float, float]
+             ) -> tuple[float, float, float]:
+    """Largest log density over z_s on the row θ, by zooming: :data:`ZOOM_NODES` nodes over
+    ``z_guess ± width`` (moved along while the best node is the window's first or last), then
+    ±2 node steps around the best, until the row's curvature spans :data:`RESOLVE` steps.
+    Returns (z_s [m], log density, conditional sd of z_s [m] from the curvature)."""
+    zlo, zhi = z_bounds
+    lo, hi = max(zlo, z_guess - width), min(zhi, z_guess + width)
+    sd = math.inf
+    for _ in range(MAX_ZOOMS):
+        z = np.linspace(lo, hi, ZOOM_NODES)
+        lp = ev.logp(np.array([theta]), z)[0][0]
+        k = int(np.argmax(lp))
+        h = z[1] - z[0]
+        if (k == 0 and z[0] > zlo) or (k == z.size - 1 and z[-1] < zhi):  # beyond: move on
+            lo, hi = max(zlo, z[k] - (hi - lo) / 2), min(zhi, z[k] + (hi - lo) / 2)
+            sd = math.inf
+            continue
+        sd = _parabola_sd(z, lp, k)
+        if sd >= RESOLVE * h or h <= 1e-15:
+            break
+        lo, hi = max(zlo, z[k] - 2 * h), min(zhi, z[k] + 2 * h)
+    return float(z[k]), float(lp[k]), min(sd, zhi - zlo)
+
+
+def climb(ev, from_c: Callable, bounds: Bounds, centre: tuple[float, float],
+          step: tuple[float, float]) -> tuple[tuple[float, float], tuple[float, float], float]:
+    """The mode of log p(θ, z_s) near ``centre`` (θ coordinate, z_s [m]), within one coarse
+    ``step`` (θ, z_s) of it: bounded Brent on the profile max_z log p (rows by
+    :func:`_row_max`).  Returns the mode, (θ's sd from the profile's curvature, z_s's
+    conditional sd from the best row's), and the ridge's slope dz_s/dθ; the box search
+    starts from them."""
+    (c_lo, c_hi), z_bounds = bounds
+    seen: dict[float, tuple[float, float, float]] = {}
+
+    def guess(c: float) -> tuple[float, float]:
+        if not seen:
+            return centre[1], 2.0 * step[1]
+        cs = np.array(sorted(seen, key=lambda k: abs(k - c))[:2])
+        zs = np.array([seen[k][0] for k in cs])
+        width = 4.0 * min(seen[k][2] for k in cs)
+        if cs.size == 2 and cs[0] != cs[1]:
+            z = zs[0] + (c - cs[0]) * (zs[1] - zs[0]) / (cs[1] - cs[0])
+            width = max(width, abs(z - zs[0]))
+        else:
+            z = zs[0]
+        return float(z), float(max(width, 1e-12))
+
+    def negative_profile(c: float) -> float:
+        z, lp, sd = _row_max(ev, float(from_c(c)), *guess(c), z_bounds)
+        seen[float(c)] = (z, lp, sd)
+        return -lp
+
+    lo, hi = max(c_lo, centre[0] - step[0]), min(c_hi, centre[0] + step[0])
+    res = minimize_scalar(negative_profile, bounds=(lo, hi), method="bounded",
+                          options={"xatol": 1e-4 * (hi - lo)})
+    c_best = float(res.x)
+    if c_best not in seen:
+        negative_profile(c_best)
+    z_best, lp_best, sz = seen[c_best]
+    # theta's sd and the ridge's slope from the profile at c_best ± delta, delta chosen so
+    # that the profile drops by 0.5-30 there (Brent's last evaluations are too close)
+    drops = [(abs(c - c_best) / math.sqrt(2 * (lp_best - v[1])))
+             for c, v in seen.items() if 0.5 < lp_best - v[1] < 30]
+    delta = float(np.median(drops)) if drops else step[0] / 4
+    st, slope = step[0] / 4, 0.0
+    for _ in range(8):
+        sides = [c for c in (c_best - delta, c_best + delta) if c_lo <= c <= c_hi]
+        if not sides or delta <= 1e-12 * (c_hi - c_lo):
+            break
+        for c in sides:
+            negative_profile(c)
+        drop = lp_best - float(np.mean([seen[c][1] for c in sides]))
+        if drop > 30:
+            delta /= 4
+            continue
+        if drop < 0.5 and delta < step[0]:
+            delta *= 4
+            continue
+        st = delta / math.sqrt(2 * max(drop, 1e-3))
+        slope = (seen[sides[-1]][0] - seen[sides[0]][0]) / (sides[-1] - sides[0]) if len(
+            sides) == 2 else (seen[sides[0]][0] - z_best) / (sides[0] - c_best)
+        break
+    return (c_best, z_best), (min(st, step[0]), sz), float(slope)
