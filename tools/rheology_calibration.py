@@ -100,6 +100,7 @@ def _rows(label, i, tip_name, truth, fit, model, per_record) -> list[dict]:
         rows.append({"model": label, "index": i, "tip": tip_name, "parameter": name,
                      "truth": truth[name], "median": med, "sd": float(np.std(d)), "lo": lo,
                      "hi": hi, "ppc_passed": bool(fit.ppc.passed),
+                     "settled": bool(fit.grid.converged),
                      "model_ok": fit.model_ok, "block": fit.data.block,
                      "seconds": fit.seconds, **per_record})
     return rows
@@ -142,8 +143,8 @@ def run(n: int, workers: int, models=tuple(PARAMETERS)) -> pd.DataFrame:
 
 def table(df: pd.DataFrame) -> pd.DataFrame:
     """Per model and parameter: coverage of the 90 % interval, z-score mean and sd, median
-    |relative error| [%], share of passed posterior-predictive checks and of model_ok (the
-    check passed and phi not at its bound), median fit time [s]; per model (the same on each
+    |relative error| [%], share of passed posterior-predictive checks, of model_ok (the
+    check passed and phi not at its bound) and of grids that settled, median fit time [s]; per model (the same on each
     of its rows): shares of records where PSIS-LOO prefers the true model
     (``choice_true``), the other (``choice_wrong``), and of elastic fits flagged rate
     dependent (``elastic_flagged``)."""
@@ -160,6 +161,7 @@ def table(df: pd.DataFrame) -> pd.DataFrame:
                          "median_err_pct": g["err_pct"].median(),
                          "ppc_passed": g["ppc_passed"].mean(),
                          "model_ok": g["model_ok"].mean(),
+                         "settled": g["settled"].mean(),
                          "choice_true": g["choice_true"].mean(),
                          "choice_wrong": g["choice_wrong"].mean(),
                          "elastic_flagged": g["elastic_rate_flag"].mean(),
