@@ -14,13 +14,14 @@ far narrower than the coarse grid's nodes.  This module moves a sheared box of n
   and narrows in z_s alone (θ's moments then come from whichever row's node fell nearest the
   ridge); a row whose best node is its first or last, within :data:`KEEP` of the box's best,
   widens the box in z_s.
-* :func:`climb`: when the box does not settle, the mode itself, found on the profile
-  max_z log p(θ, z_s) (bounded Brent on θ, zoomed surface rows for the max), with the
-  profile's curvature (θ's marginal sd), a row's curvature (z_s's conditional sd) and the
-  ridge's slope, from which the box search starts again.  A ridge narrower than the coarse
-  θ nodes *and* the surface nodes (a record pressed slowly, its mode hundreds in log density
-  above every node the box had seen) otherwise leaves the box cycling between widening and
-  narrowing in z_s, its θ nodes never closer than the coarse grid's.
+* :func:`climb`: where the box starts, the mode itself, found on the profile
+  max_z log p(θ, z_s) near the coarse grid's best node (bounded Brent on θ, zoomed surface
+  rows for the max), with the profile's curvature (θ's marginal sd), a row's curvature (z_s's
+  conditional sd) and the ridge's slope.  From there the box settles in two boxes, about
+  half the hereditary matrices of a search from the coarse node.  A ridge narrower than the
+  coarse θ nodes *and* the surface nodes (a record pressed slowly, its mode hundreds in log
+  density above every node the box sees) left a search from the coarse node cycling
+  between widening and narrowing in z_s, its θ nodes never closer than the coarse grid's.
 
 The density is evaluated by a ``NodeEvaluator`` (:mod:`~palpbayes.rheology.posterior`):
 ``logp(thetas, z)`` on a product grid, ``logp_rows(thetas, z_rows)`` on a sheared one.

@@ -33,9 +33,10 @@ left is a 3-D density on (z_s, θ, phi), integrated on a grid:
    sd of θ, and on each θ_i the surface nodes span ±SPAN_SD *conditional* sd of z_s around
    the regression line of z_s on θ, so a narrow, tilted ridge (surface and alpha trade off)
    is resolved as well as a round basin; the box is rebuilt until its moments are steady and
-   resolved.  A box that does not settle (a ridge narrower than the coarse θ nodes and the
-   surface nodes) starts again from the mode found on the profile max_z log p
-   (:func:`~palpbayes.rheology.grid_search.climb`), and is flagged if it still does not;
+   resolved.  The box starts at the mode found on the profile max_z log p near the coarse
+   grid's best node (:func:`~palpbayes.rheology.grid_search.climb`), with θ's sd, z_s's
+   conditional sd and the ridge's slope from their curvatures; a box that does not settle
+   from there searches again from the coarse node, and is flagged if it still does not;
 3. the moduli's priors are applied to draws by importance resampling: log-uniform (1/E) on
    E0* and E1*, flat on E_inf* >= 0, each modulus positive.
 
@@ -338,12 +339,14 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
     step = (ct[1] - ct[0] if ct.size > 1 else 0.0, cz[1] - cz[0])
     centre, sd, slope = (float(ct[i]), float(cz[j])), step, 0.0
     bounds = ((c_lo, c_hi), (data.z_lo, data.z_hi))
-    box = box_search(ev, from_c, bounds, centre, sd, slope, max_iterations)
+    # the box starts at the mode climbed on the profile, with its sds and slope (half the
+    # hereditary matrices of a box search from the coarse node, the same posterior to ~0.003
+    # sd); where it does not settle from there, the search from the coarse node is tried too
+    start = (climb(ev, from_c, bounds, centre, step) if c_hi > c_lo
+             else (centre, sd, slope))
+    box = box_search(ev, from_c, bounds, *start, max_iterations)
     if not box.converged and c_hi > c_lo:
-        # a ridge narrower than the coarse theta nodes and the surface nodes: climb to the
-        # mode on the profile and search again from there (grid_search.climb)
-        start = climb(ev, from_c, bounds, (float(ct[i]), float(cz[j])), step)
-        again = box_search(ev, from_c, bounds, *start, max_iterations)
+        again = box_search(ev, from_c, bounds, centre, sd, slope, max_iterations)
         if again.converged or again.lp.max() > box.lp.max():
             box = again
     gt, gz, lp, post, slope, converged = (box.gt, box.gz, box.lp, box.post, box.slope,

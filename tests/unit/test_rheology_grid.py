@@ -64,7 +64,8 @@ def test_a_ridge_between_all_nodes_is_climbed(power_law_1058):
     (31 µm).  The box used to cycle between widening and narrowing in z_s, its alpha nodes
     those of the coarse grid, for all its iterations, and reported a mode 255 in log density
     below the truth: E0 17 sd from the truth, the grid unsettled, the predictive check failed.
-    Climbing the profile to the mode settles the grid with the truth within 3 sd."""
+    The box now starts at the mode climbed on the profile max_z log p: the grid settles
+    with the truth within 3 sd."""
     trace, truth = power_law_1058
     fit = fit_rheology(trace, "power-law", rng=0)
     assert fit.grid.converged and fit.ppc.passed
