@@ -144,8 +144,9 @@ def run(n: int, workers: int, models=tuple(PARAMETERS)) -> pd.DataFrame:
 def table(df: pd.DataFrame) -> pd.DataFrame:
     """Per model and parameter: coverage of the 90 % interval, z-score mean and sd, median
     |relative error| [%], share of passed posterior-predictive checks, of model_ok (the
-    check passed and phi not at its bound) and of grids that settled, median fit time [s]; per model (the same on each
-    of its rows): shares of records where PSIS-LOO prefers the true model
+    check passed and phi not at its bound) and of grids that settled, median fit time [s];
+    per model (the same on each of its rows): shares of records where PSIS-LOO prefers the
+    true model
     (``choice_true``), the other (``choice_wrong``), and of elastic fits flagged rate
     dependent (``elastic_flagged``)."""
     z = (df["truth"] - df["median"]) / df["sd"]

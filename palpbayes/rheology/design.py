@@ -355,7 +355,11 @@ def onset_correction(win: Windows, depth: np.ndarray, m: float, kernel: str | No
     rises from the crossing s_c of d = 0 (linear in d between the two edges) to the step's
     end, as a line plus a quadratic bump through the midpoint of [s_c, e_k] (as on every other
     step), instead of the step's line from its start.  ``depth`` (G, K) [m] at the edges;
-    rows that start in contact or never touch get no correction."""
+    rows that start in contact or never touch get no correction.  Both ends of the rise take
+    the band of sample-mean blocks of a source just before e_k (``side="left"``), so that the
+    differences over the rise, divided by its length and its square, stay finite as s_c
+    reaches e_k (the surface a picometre above a knot); the subtracted line keeps e_k's own
+    band, as the step's columns have it."""
     e = win.edges
     G, K = depth.shape
     out = np.zeros((G, win.lo.size))

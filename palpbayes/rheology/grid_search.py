@@ -147,9 +147,34 @@ def ridge_line(lp: np.ndarray, gt: np.ndarray, gz: np.ndarray, theta: float, slo
 
 def box_search(ev, from_c: Callable, bounds: Bounds, centre: tuple[float, float],
                sd: tuple[float, float], slope: float, max_iterations: int) -> BoxResult:
-    """Move the sheared box from ``centre`` (θ coordinate, z_s [m]) with half-widths
-    ``SPAN_SD·sd`` and ``slope`` until it settles (module docstring), at most
-    ``max_iterations`` boxes."""
+    """Move the sheared box until it settles (module docstring).
+
+    Parameters
+    ----------
+    ev
+        A ``NodeEvaluator`` (:mod:`~palpbayes.rheology.posterior`): ``logp_rows(thetas,
+        z_rows)``.
+    from_c
+        θ from its coordinate (alpha itself, or exp of log tau).
+    bounds
+        ((θ coordinate low, high), (z_s low, high) [m]): the priors' support.
+    centre, sd, slope
+        The first box: its centre (θ coordinate, z_s [m]), half-widths ``SPAN_SD·sd`` (θ's
+        marginal sd, z_s's conditional sd [m]) and the slope dz_s/dθ of its rows' centres.
+    max_iterations
+        Boxes at most.
+
+    Returns
+    -------
+    BoxResult
+        The last box; ``converged`` False when it had not settled within
+        ``max_iterations``.
+
+    Raises
+    ------
+    FitError
+        A box holds no finite density.
+    """
     (c_lo, c_hi) = bounds[0]
     converged = False
     n_theta = SEARCH_THETA  # theta nodes cost one hereditary matrix each: search on fewer
@@ -199,79 +224,130 @@ def box_search(ev, from_c: Callable, bounds: Bounds, centre: tuple[float, float]
     return BoxResult(gt, gz, lp, post, float(slope), converged)
 
 
-def _parabola_sd(x: np.ndarray, y: np.ndarray, k: int) -> float:
-    """sd of the Gaussian whose log is the parabola through the three nodes around ``k``
-    (inf where the nodes are not concave)."""
-    k = min(max(k, 1), x.size - 2)
-    a = np.polyfit(x[k - 1:k + 2] - x[k], y[k - 1:k + 2], 2)[0]
-    return math.sqrt(-0.5 / a) if a < 0 else math.inf
+def _vertex(x: np.ndarray, y: np.ndarray, k: int) -> tuple[float, float, float]:
+    """Vertex (x, y) of the parabola through the three nodes around ``k`` (kept within one
+    node step of x_k) and the sd of the Gaussian whose log it is; the node itself and NaN
+    where the three are not concave or not finite (a surface with too few samples in
+    contact)."""
+    j = min(max(k, 1), x.size - 2)
+    xs, ys = x[j - 1:j + 2] - x[k], y[j - 1:j + 2]
+    if not np.all(np.isfinite(ys)):
+        return float(x[k]), float(y[k]), math.nan
+    a, b, c = np.polyfit(xs, ys, 2)
+    if not a < 0:
+        return float(x[k]), float(y[k]), math.nan
+    h = float(x[1] - x[0])
+    v = min(max(-b / (2 * a), -h, x[0] - x[k]), h, x[-1] - x[k])  # inside the window
+    return float(x[k] + v), float(max(a * v * v + b * v + c, y[k])), math.sqrt(-0.5 / a)
 
 
 def _row_max(ev, theta: float, z_guess: float, width: float, z_bounds: tuple[float, float]
              ) -> tuple[float, float, float]:
     """Largest log density over z_s on the row θ, by zooming: :data:`ZOOM_NODES` nodes over
-    ``z_guess ± width`` (moved along while the best node is the window's first or last), then
-    ±2 node steps around the best, until the row's curvature spans :data:`RESOLVE` steps.
-    Returns (z_s [m], log density, conditional sd of z_s [m] from the curvature)."""
+    ``z_guess ± width`` (moved and doubled while the best node is the window's first or last
+    and not a prior bound), then ±2 node steps around the best, until the row's curvature
+    spans :data:`RESOLVE` steps.
+
+    Returns
+    -------
+    tuple
+        z_s [m] and log density of the vertex of the parabola through the best node and its
+        neighbours, and the conditional sd [m] of z_s from its curvature (NaN where the row
+        has none: no concave neighbourhood, the maximum on the prior's bound, or the zooms
+        ran out while the window moved).
+    """
     zlo, zhi = z_bounds
     lo, hi = max(zlo, z_guess - width), min(zhi, z_guess + width)
-    sd = math.inf
+    best = (z_guess, -math.inf, math.nan)
     for _ in range(MAX_ZOOMS):
         z = np.linspace(lo, hi, ZOOM_NODES)
         lp = ev.logp(np.array([theta]), z)[0][0]
         k = int(np.argmax(lp))
         h = z[1] - z[0]
         if (k == 0 and z[0] > zlo) or (k == z.size - 1 and z[-1] < zhi):  # beyond: move on
-            lo, hi = max(zlo, z[k] - (hi - lo) / 2), min(zhi, z[k] + (hi - lo) / 2)
-            sd = math.inf
+            width = hi - lo
+            lo, hi = max(zlo, z[k] - width), min(zhi, z[k] + width)
+            best = (float(z[k]), float(lp[k]), math.nan)
             continue
-        sd = _parabola_sd(z, lp, k)
-        if sd >= RESOLVE * h or h <= 1e-15:
+        best = _vertex(z, lp, k)
+        if not best[2] < RESOLVE * h or h <= 1e-15:  # resolved, or no curvature to resolve
             break
         lo, hi = max(zlo, z[k] - 2 * h), min(zhi, z[k] + 2 * h)
-    return float(z[k]), float(lp[k]), min(sd, zhi - zlo)
+    if best[0] <= zlo or best[0] >= zhi:  # on the prior's bound: not a point of the ridge
+        return best[0], best[1], math.nan
+    return best
 
 
 def climb(ev, from_c: Callable, bounds: Bounds, centre: tuple[float, float],
           step: tuple[float, float]) -> tuple[tuple[float, float], tuple[float, float], float]:
-    """The mode of log p(θ, z_s) near ``centre`` (θ coordinate, z_s [m]), within one coarse
-    ``step`` (θ, z_s) of it: bounded Brent on the profile max_z log p (rows by
-    :func:`_row_max`).  Returns the mode, (θ's sd from the profile's curvature, z_s's
-    conditional sd from the best row's), and the ridge's slope dz_s/dθ; the box search
-    starts from them."""
+    """The mode of log p(θ, z_s) on the profile max_z log p near the coarse grid's best node.
+
+    Bounded Brent (:func:`scipy.optimize.minimize_scalar`) on θ within one coarse step of
+    ``centre``, moved on (at most three times) while its result sits at that bracket's edge;
+    each row's maximum over z_s by :func:`_row_max`, its window predicted from the rows
+    already seen (the ridge's line through the two nearest; two coarse surface steps wide
+    until two rows are known).  θ's sd comes from the profile's drop at the mode ± delta
+    (delta chosen so that the drop is 0.5–30; the profile of a Gaussian has the marginal's
+    curvature), the slope from the rows' maxima there.
+
+    Parameters
+    ----------
+    ev
+        A ``NodeEvaluator`` (:mod:`~palpbayes.rheology.posterior`): ``logp(thetas, z)``.
+    from_c
+        θ from its coordinate (alpha itself, or exp of log tau).
+    bounds
+        ((θ coordinate low, high), (z_s low, high) [m]): the priors' support.
+    centre
+        (θ coordinate, z_s [m]) of the coarse grid's best node.
+    step
+        The coarse grid's node steps (θ coordinate, z_s [m]).
+
+    Returns
+    -------
+    tuple
+        The mode (θ coordinate, z_s [m]); (θ's sd, capped at one coarse step; z_s's
+        conditional sd [m] at the mode, or the coarse surface step where the row has no
+        curvature); the ridge's slope dz_s/dθ [m per unit coordinate].  The box search
+        (:func:`box_search`) starts from them.
+    """
     (c_lo, c_hi), z_bounds = bounds
     seen: dict[float, tuple[float, float, float]] = {}
 
     def guess(c: float) -> tuple[float, float]:
-        if not seen:
-            return centre[1], 2.0 * step[1]
-        cs = np.array(sorted(seen, key=lambda k: abs(k - c))[:2])
+        known = [k for k in seen if math.isfinite(seen[k][2])]
+        if len(known) < 2:
+            return (seen[known[0]][0] if known else centre[1]), 2.0 * step[1]
+        cs = np.array(sorted(known, key=lambda k: abs(k - c))[:2])
         zs = np.array([seen[k][0] for k in cs])
         width = 4.0 * min(seen[k][2] for k in cs)
-        if cs.size == 2 and cs[0] != cs[1]:
-            z = zs[0] + (c - cs[0]) * (zs[1] - zs[0]) / (cs[1] - cs[0])
-            width = max(width, abs(z - zs[0]))
-        else:
-            z = zs[0]
-        return float(z), float(max(width, 1e-12))
+        z = zs[0] + (c - cs[0]) * (zs[1] - zs[0]) / (cs[1] - cs[0])
+        return float(z), float(max(width, abs(z - zs[0]), 1e-12))
 
     def negative_profile(c: float) -> float:
-        z, lp, sd = _row_max(ev, float(from_c(c)), *guess(c), z_bounds)
-        seen[float(c)] = (z, lp, sd)
-        return -lp
+        c = float(c)
+        if c not in seen:
+            seen[c] = _row_max(ev, float(from_c(c)), *guess(c), z_bounds)
+        return -seen[c][1]
 
-    lo, hi = max(c_lo, centre[0] - step[0]), min(c_hi, centre[0] + step[0])
-    res = minimize_scalar(negative_profile, bounds=(lo, hi), method="bounded",
-                          options={"xatol": 1e-4 * (hi - lo)})
-    c_best = float(res.x)
-    if c_best not in seen:
+    half = step[0]
+    lo, hi = max(c_lo, centre[0] - half), min(c_hi, centre[0] + half)
+    for _ in range(4):
+        xatol = 1e-4 * (hi - lo)
+        c_best = float(minimize_scalar(negative_profile, bounds=(lo, hi), method="bounded",
+                                       options={"xatol": xatol}).x)
         negative_profile(c_best)
-    z_best, lp_best, sz = seen[c_best]
+        at_edge = ((c_best - lo < 3 * xatol and lo > c_lo)
+                   or (hi - c_best < 3 * xatol and hi < c_hi))
+        if not at_edge:
+            break
+        lo, hi = max(c_lo, c_best - half), min(c_hi, c_best + half)
+    lp_best = seen[c_best][1]
     # theta's sd and the ridge's slope from the profile at c_best ± delta, delta chosen so
     # that the profile drops by 0.5-30 there (Brent's last evaluations are too close)
     drops = [(abs(c - c_best) / math.sqrt(2 * (lp_best - v[1])))
              for c, v in seen.items() if 0.5 < lp_best - v[1] < 30]
-    delta = float(np.median(drops)) if drops else step[0] / 4
+    delta = 2.0 * float(np.median(drops)) if drops else step[0] / 4  # a drop of ~2
     st, slope = step[0] / 4, 0.0
     for _ in range(8):
         sides = [c for c in (c_best - delta, c_best + delta) if c_lo <= c <= c_hi]
@@ -287,7 +363,11 @@ def climb(ev, from_c: Callable, bounds: Bounds, centre: tuple[float, float],
             delta *= 4
             continue
         st = delta / math.sqrt(2 * max(drop, 1e-3))
-        slope = (seen[sides[-1]][0] - seen[sides[0]][0]) / (sides[-1] - sides[0]) if len(
-            sides) == 2 else (seen[sides[0]][0] - z_best) / (sides[0] - c_best)
+        ends = sides if len(sides) == 2 else [sides[0], c_best]
+        slope = (seen[ends[0]][0] - seen[ends[-1]][0]) / (ends[0] - ends[-1])
         break
-    return (c_best, z_best), (min(st, step[0]), sz), float(slope)
+    c_mode = max(seen, key=lambda c: seen[c][1])  # a side row above Brent's best: the mode
+    z_mode, _, sz = seen[c_mode]
+    if not math.isfinite(sz):
+        sz = step[1]
+    return (c_mode, z_mode), (min(st, step[0]), sz), float(slope)

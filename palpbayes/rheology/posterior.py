@@ -342,12 +342,17 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
     # the box starts at the mode climbed on the profile, with its sds and slope (half the
     # hereditary matrices of a box search from the coarse node, the same posterior to ~0.003
     # sd); where it does not settle from there, the search from the coarse node is tried too
-    start = (climb(ev, from_c, bounds, centre, step) if c_hi > c_lo
-             else (centre, sd, slope))
-    box = box_search(ev, from_c, bounds, *start, max_iterations)
-    if not box.converged and c_hi > c_lo:
+    box = None
+    if c_hi > c_lo:
+        try:
+            box = box_search(ev, from_c, bounds, *climb(ev, from_c, bounds, centre, step),
+                             max_iterations)
+        except FitError:  # the climbed box held no finite density: the coarse node's search
+            box = None
+    if box is None or not box.converged:
         again = box_search(ev, from_c, bounds, centre, sd, slope, max_iterations)
-        if again.converged or again.lp.max() > box.lp.max():
+        if box is None or (again.lp.max() > box.lp.max()
+                           or again.converged and again.lp.max() >= box.lp.max() - KEEP):
             box = again
     gt, gz, lp, post, slope, converged = (box.gt, box.gz, box.lp, box.post, box.slope,
                                           box.converged)

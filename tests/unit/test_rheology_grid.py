@@ -24,13 +24,18 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
-def record():
+def calibration_record():
+    """``(model, index) -> (trace, truth)``: a record of tools/rheology_calibration.py."""
     spec = importlib.util.spec_from_file_location("rheology_calibration",
                                                   ROOT / "tools" / "rheology_calibration.py")
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
-    trace, truth, _ = tool.record("sls", 1220)
-    return trace, truth
+    return lambda model, i: tool.record(model, i)[:2]
+
+
+@pytest.fixture(scope="module")
+def record(calibration_record):
+    return calibration_record("sls", 1220)
 
 
 def test_a_picometre_does_not_move_the_posterior(record):
@@ -48,13 +53,8 @@ def test_a_picometre_does_not_move_the_posterior(record):
 
 
 @pytest.fixture(scope="module")
-def power_law_1058():
-    spec = importlib.util.spec_from_file_location("rheology_calibration",
-                                                  ROOT / "tools" / "rheology_calibration.py")
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
-    trace, truth, _ = tool.record("power-law", 1058)
-    return trace, truth
+def power_law_1058(calibration_record):
+    return calibration_record("power-law", 1058)
 
 
 def test_a_ridge_between_all_nodes_is_climbed(power_law_1058):
@@ -67,7 +67,19 @@ def test_a_ridge_between_all_nodes_is_climbed(power_law_1058):
     The box now starts at the mode climbed on the profile max_z log p: the grid settles
     with the truth within 3 sd."""
     trace, truth = power_law_1058
-    fit = fit_rheology(trace, "power-law", rng=0)
+    from palpbayes.rheology import posterior
+
+    searches = []
+
+    def counted(*args, **kwargs):
+        searches.append(posterior_box_search(*args, **kwargs))
+        return searches[-1]
+
+    posterior_box_search = posterior.box_search
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(posterior, "box_search", counted)
+        fit = fit_rheology(trace, "power-law", rng=0)
+    assert [box.converged for box in searches] == [True]  # from the climb, no fallback
     assert fit.grid.converged and fit.ppc.passed
     for name in ("E0", "alpha", "z_surf"):
         d = fit.draws[name]
@@ -76,15 +88,19 @@ def test_a_ridge_between_all_nodes_is_climbed(power_law_1058):
 
 
 class _TiltedGaussian:
-    """A NodeEvaluator stand-in: log p(theta, z) of a Gaussian with theta's sd ``st``, z's
-    conditional sd ``sz`` around the line z0 + slope·(theta − t0)."""
+    """A NodeEvaluator stand-in: log p(theta, z) of a Gaussian in theta (sd ``st``) and, on
+    each theta, in z (sd ``sz``) around the curve z0 + slope·(theta − t0) + bend·(theta −
+    t0)²: the profile max_z log p is theta's Gaussian, its maximum z on the curve."""
 
-    def __init__(self, t0, z0, st, sz, slope):
+    def __init__(self, t0, z0, st, sz, slope, bend=0.0):
         self.t0, self.z0, self.st, self.sz, self.slope = t0, z0, st, sz, slope
+        self.bend = bend
+
+    def ridge(self, th):
+        return self.z0 + self.slope * (th - self.t0) + self.bend * (th - self.t0) ** 2
 
     def _lp(self, th, z):
-        return -0.5 * (((th - self.t0) / self.st) ** 2
-                       + ((z - self.z0 - self.slope * (th - self.t0)) / self.sz) ** 2)
+        return -0.5 * (((th - self.t0) / self.st) ** 2 + ((z - self.ridge(th)) / self.sz) ** 2)
 
     def logp(self, thetas, z):
         return self._lp(np.asarray(thetas)[:, None], np.asarray(z)[None, :]), None
@@ -113,3 +129,29 @@ def test_climb_finds_the_mode_sd_and_slope_of_a_tilted_ridge():
     assert box.converged
     mt, s_t, b, mz, s_z = moments(box.gt, box.gz, box.lp + log_cells(box.gt, box.gz))
     assert (mt, s_t, b, s_z) == pytest.approx((0.2119, 4e-4, -2.8e-3, 1e-6), rel=0.02)
+
+
+@pytest.mark.parametrize("bend, z0, st_rel", [
+    (0.4, 969.9e-6, 0.05),  # the ridge bends 2.3 µm away from its tangent at ±6 theta sd
+    (40.0, 969.9e-6, 0.05),  # 0.23 mm: the tangent's 6.7 µm is small beside it
+    # the mode half a conditional sd below the surface's bound: a row one sd of theta away
+    # has its ridge beyond the bound, so the profile is lower on that side (not a Gaussian)
+    (0.0, 1.0097e-3 - 0.5e-6, 0.25),
+])
+def test_climb_on_a_curved_ridge_and_near_the_surface_bound(bend, z0, st_rel):
+    """The climb's mode lies on the ridge within 0.05 conditional sd (the vertex of each row's
+    parabola, not its best node), theta within 0.05 sd, theta's sd within ``st_rel`` and the
+    slope at the mode within 2 %, on bent ridges and with the mode next to the prior's
+    bound (z in metres: ``bend`` [m per unit theta²])."""
+    from palpbayes.rheology.grid_search import climb
+
+    ev = _TiltedGaussian(0.2119, z0, 4e-4, 1e-6, -2.8e-3, bend)
+    bounds = ((0.0, 0.95), (-2e-3, 1.0097e-3))
+    (ct, zt), (st, sz), slope = climb(ev, lambda c: c, bounds, (0.2375, 899e-6),
+                                      (0.059, 31e-6))
+    assert abs(ct - ev.t0) < 0.05 * ev.st
+    assert abs(zt - ev.ridge(ct)) < 0.05 * ev.sz
+    assert st == pytest.approx(ev.st, rel=st_rel)
+    assert sz == pytest.approx(ev.sz, rel=0.2)
+    if z0 < 1e-3:
+        assert slope == pytest.approx(-2.8e-3 + 2 * bend * (ct - ev.t0), rel=0.02)
