@@ -340,7 +340,7 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
     centre, sd, slope = (float(ct[i]), float(cz[j])), step, 0.0
     bounds = ((c_lo, c_hi), (data.z_lo, data.z_hi))
     # the box starts at the mode climbed on the profile, with its sds and slope (half the
-    # hereditary matrices of a box search from the coarse node, the same posterior to ~0.003
+    # hereditary matrices of a box search from the coarse node, the same posterior to 0.023
     # sd); where it does not settle from there, the search from the coarse node is tried too
     box = None
     if c_hi > c_lo:
