@@ -17,7 +17,12 @@ or 500 mm/min, a 5–15 s hold, AR(1) sensor noise of 8 mN with lag-one correlat
 offset of ±50 mN, the surface anywhere in ±1 mm; power law E0* 30–150 kPa, alpha 0.05–0.4;
 SLS E_inf* 20–100 kPa, E1* 10–100 kPa, tau 0.3–5 s (log-uniform).
 
-    python tools/rheology_calibration.py [--n 100] [--workers 2] [--csv out.csv] [--retract]
+    python tools/rheology_calibration.py [--n 100] [--start 0] [--workers 2] [--csv out.csv]
+        [--retract] [--coverage-only]
+
+``--start S`` fits records S … S + n − 1 (fresh indices: no test uses those from 1000 on);
+``--coverage-only`` fits the true model alone (coverage, checks and time; no model choice, no
+elastic fit: a third of the time).
 
 ``--retract`` also fits the power-law records over the whole cycle, the retract by Ting's
 rule, with the viscous drag term that the retract brings (rows labelled "power-law, with
@@ -106,14 +111,20 @@ def _rows(label, i, tip_name, truth, fit, model, per_record) -> list[dict]:
     return rows
 
 
-def fit_one(job: tuple[str, int]) -> list[dict]:
+def fit_one(job: tuple[str, int] | tuple[str, int, bool]) -> list[dict]:
     """One record's rows: per parameter, the truth, median, sd and 90 % interval; per record,
     the model PSIS-LOO prefers (``"none"`` within two se) and whether the elastic fit's rate
-    check fails materially."""
-    model, i = job
+    check fails materially (neither when the job's third item, coverage only, is true)."""
+    model, i, alone = (*job, False)[:3]
     if model == WHOLE:
         return fit_whole(i)
     trace, truth, tip_name = record(model, i)
+    if alone:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fit = fit_rheology(trace, model, rng=i)
+        return _rows(model, i, tip_name, truth, fit, model,
+                     {"choice": "", "elastic_rate_flag": np.nan})
     other = "sls" if model == "power-law" else "power-law"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -129,10 +140,12 @@ def fit_one(job: tuple[str, int]) -> list[dict]:
     return _rows(model, i, tip_name, truth, fit, model, per_record)
 
 
-def run(n: int, workers: int, models=tuple(PARAMETERS)) -> pd.DataFrame:
-    """Fit ``n`` records of each model on ``workers`` processes; one row per parameter
-    (``models`` may include :data:`WHOLE`)."""
-    jobs = [(m, i) for m in models for i in range(n)]
+def run(n: int, workers: int, models=tuple(PARAMETERS), start: int = 0,
+        coverage_only: bool = False) -> pd.DataFrame:
+    """Fit records ``start`` … ``start + n − 1`` of each model on ``workers`` processes; one
+    row per parameter (``models`` may include :data:`WHOLE`; ``coverage_only``: the true
+    model alone)."""
+    jobs = [(m, i, coverage_only) for m in models for i in range(start, start + n)]
     if workers > 1:
         with ProcessPoolExecutor(workers) as pool:
             rows = list(pool.map(fit_one, jobs, chunksize=2))
@@ -172,12 +185,18 @@ def table(df: pd.DataFrame) -> pd.DataFrame:
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=100, help="records per model")
+    ap.add_argument("--start", type=int, default=0, help="index of the first record")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--csv", help="write the per-record rows here")
     ap.add_argument("--retract", action="store_true",
                     help="also fit the power-law records over the whole cycle (Ting's rule)")
+    ap.add_argument("--coverage-only", action="store_true",
+                    help="fit the true model alone (no model choice, no elastic fit)")
     a = ap.parse_args(argv)
-    df = run(a.n, a.workers, tuple(PARAMETERS) + ((WHOLE,) if a.retract else ()))
+    if a.n < 1 or a.start < 0:
+        ap.error(f"--n {a.n} must be >= 1 and --start {a.start} >= 0")
+    df = run(a.n, a.workers, tuple(PARAMETERS) + ((WHOLE,) if a.retract else ()), a.start,
+             a.coverage_only)
     if a.csv:
         df.to_csv(a.csv, index=False)
     with pd.option_context("display.width", 120):

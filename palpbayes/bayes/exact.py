@@ -56,7 +56,7 @@ from .mixture import NORMAL_NU, MixtureSummary, tilted_mixture
 from .priors import TracePrior
 
 __all__ = ["ExactPosterior", "exact_posterior", "refine_grid", "cell_widths", "phi_grid",
-           "node_log_mass", "sampled_coordinates",
+           "phi_nodes_around", "node_log_mass", "sampled_coordinates",
            "log_marginal_phi", "COARSE_NODES",
            "MAX_STEP", "KEEP", "PHI_NODES"]
 
@@ -328,8 +328,10 @@ def phi_grid(bounds: tuple[float, float], n: int = PHI_NODES) -> np.ndarray:
     return np.linspace(bounds[0], bounds[1], n)
 
 
-def _phi_nodes(values: np.ndarray, logp_phi: np.ndarray, bounds) -> np.ndarray:
-    """A finer phi grid around the phi marginal: ±8 sd with steps of sd/4 (at most 65)."""
+def phi_nodes_around(values: np.ndarray, logp_phi: np.ndarray, bounds) -> np.ndarray:
+    """A finer phi grid around a phi density known at ``values`` (log density ``logp_phi``):
+    its mean ± 8 sd, cut to the prior's ``bounds``, in steps of sd/4 (9 to 65 nodes; the sd
+    is at least an eighth of the smallest step of ``values``)."""
     w = np.exp(logp_phi - logp_phi.max()) * cell_widths(values)
     w /= w.sum()
     mean = float(w @ values)
@@ -380,7 +382,7 @@ def exact_posterior(data: FitData, prior: TracePrior) -> ExactPosterior:
         post = node_posterior(g, phi, weights, centers)
         zw = cell_widths(g.z)
         lp_phi = logsumexp(post.logp + np.log(zw)[:, None], axis=0)
-        phi = _phi_nodes(phi, lp_phi, prior.spec.phi_bounds)
+        phi = phi_nodes_around(phi, lp_phi, prior.spec.phi_bounds)
     post = node_posterior(g, phi, weights, centers)
     if not np.isfinite(post.logp).any():
         raise InputError(

@@ -41,7 +41,9 @@ left is a 3-D density on (z_s, θ, phi), integrated on a grid:
    E0* and E1*, flat on E_inf* >= 0, each modulus positive.
 
 Priors on θ: alpha uniform on [0, :data:`ALPHA_MAX`]; tau log-uniform on
-[dt/10, 100·span] (dt the shortest step, span the record).  phi uniform on [0, 0.98].
+[dt/10, 100·span] (dt the shortest step, span the record).  phi uniform on [0, 0.98]:
+:data:`PHI_NODES` uniform nodes on the coarse grid and the climb, then nodes a quarter of
+its sd apart around its density at the climbed mode (:meth:`NodeEvaluator.focus_phi`).
 """
 
 from __future__ import annotations
@@ -53,7 +55,7 @@ import numpy as np
 from scipy.special import logsumexp
 
 from ..bayes.conjugate import Gram, NodePosterior, node_posterior
-from ..bayes.exact import cell_widths
+from ..bayes.exact import cell_widths, phi_nodes_around
 from ..errors import FitError, InputError
 from .cycle import CycleData
 from .design import lee_radok_columns
@@ -71,9 +73,11 @@ RHEOLOGIES = {"power-law": "alpha", "sls": "tau", "elastic": None}
 ALPHA_MAX = 0.95
 #: Coarse grid: theta nodes and surface nodes.
 COARSE_THETA, COARSE_Z = 13, 97
-#: Support of the uniform phi prior and its grid.
+#: Support of the uniform phi prior and its first grid (coarse grid and climb).
 PHI_BOUNDS = (0.0, 0.98)
 PHI_NODES = 25
+#: Points of the phi density at the climbed mode from which the box's phi nodes are set.
+PHI_SCAN = 2_000
 #: Offset prior sd in units of the block-mean noise scale (vague: the data fix the offset).
 OFFSET_SD = 100.0
 #: Proposals per returned draw (importance resampling of the moduli's priors).
@@ -224,9 +228,29 @@ class NodeEvaluator:
         self.retract = (RetractDesign(data.edges, data.z_edges, data.sample_time[ret], data.m,
                                       t0) if rheology == "power-law" and ret.any() else None)
 
-    def columns(self, theta: float, z: np.ndarray) -> np.ndarray:
+    def focus_phi(self, theta: float, z: float) -> np.ndarray:
+        """Set :attr:`phi` to nodes around the phi density at the node (``theta``, ``z`` [m]):
+        its mean ± 8 sd in steps of sd/4 (:func:`~palpbayes.bayes.exact.phi_nodes_around`,
+        from :data:`PHI_SCAN` points over the prior); returns them.
+
+        The first grid's :data:`PHI_NODES` are 0.04 apart, while phi's sd is ~
+        sqrt((1 − phi²)/N): 0.01 on 10,000 block means, 1e-4 on real AFM records whose phi
+        sits at 0.98.  One node then carries the whole phi marginal, the grid's draws all
+        have that phi, and emcee's start (spread over the node's cell) is 50 times too wide
+        in phi.  Moving the nodes changes neither the prior nor the density at a node: only
+        the trapezoid rule over phi, now resolved."""
+        scan = np.linspace(*PHI_BOUNDS, PHI_SCAN)
+        post = node_posterior(self.gram(np.array([theta]), np.array([z])), scan,
+                              self.weights, self.centers)
+        if np.isfinite(post.logp).any():
+            self.phi = phi_nodes_around(scan, post.logp[0], PHI_BOUNDS)
+        return self.phi
+
+    def columns(self, theta: float, z: np.ndarray, constant: np.ndarray | None = None
+                ) -> np.ndarray:
         """X (G, N, q): one column per name of :attr:`names` (modulus, 1, second modulus,
-        speed, height from z_ref) and y last, for surfaces ``z``."""
+        speed, height from z_ref) and y last, for surfaces ``z``; ``constant`` is the SLS's
+        E_inf* column at ``z`` if already known (:meth:`constant_column`)."""
         d = self.data
         kind = {"power-law": "power-law", "sls": "exponential", "elastic": None}[self.rheology]
         b = lee_radok_columns(self.windows, z, d.z_edges, d.m, kind, theta, self.t0)
@@ -239,12 +263,20 @@ class NodeEvaluator:
             [np.broadcast_to(d.z - d.z_ref, (G, N))] if self.tilt else [])
         if self.rheology != "sls":
             return np.stack([b, ones, *extra, y], axis=-1)
-        inf = d.C * lee_radok_columns(self.windows, z, d.z_edges, d.m, None)
+        inf = self.constant_column(z) if constant is None else constant
         return np.stack([inf, ones, b, *extra, y], axis=-1)
+
+    def constant_column(self, z: np.ndarray) -> np.ndarray:
+        """The constant kernel's column (G, N) [N/Pa] at surfaces ``z``: the SLS's E_inf*
+        term, the same for every tau."""
+        d = self.data
+        return d.C * lee_radok_columns(self.windows, z, d.z_edges, d.m, None)
 
     def gram(self, thetas: np.ndarray, z: np.ndarray) -> Gram:
         n_contact = np.count_nonzero(self.data.z[None, :] < z[:, None], axis=1)
-        X = np.concatenate([self.columns(float(th), z) for th in thetas])  # (Gt·Gz, N, q)
+        # the SLS's constant-kernel column once for all theta nodes on the same surfaces
+        inf = self.constant_column(z) if self.rheology == "sls" and thetas.size > 1 else None
+        X = np.concatenate([self.columns(float(th), z, inf) for th in thetas])  # (Gt·Gz, N, q)
         self.n += thetas.size * z.size
         Xt = X.swapaxes(1, 2)  # batched matmul: ~8x faster than einsum here
         m0 = Xt @ X
@@ -342,13 +374,18 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
     # the box starts at the mode climbed on the profile, with its sds and slope (half the
     # hereditary matrices of a box search from the coarse node, the same posterior to 0.023
     # sd); where it does not settle from there, the search from the coarse node is tried too
-    box = None
+    # phi's nodes are then set around its density at that mode (NodeEvaluator.focus_phi)
+    box, focus = None, centre
     if c_hi > c_lo:
         try:
-            box = box_search(ev, from_c, bounds, *climb(ev, from_c, bounds, centre, step),
-                             max_iterations)
+            top, sd_top, slope_top = climb(ev, from_c, bounds, centre, step)
+            ev.focus_phi(float(from_c(top[0])), top[1])
+            focus = top
+            box = box_search(ev, from_c, bounds, top, sd_top, slope_top, max_iterations)
         except FitError:  # the climbed box held no finite density: the coarse node's search
             box = None
+    if focus is centre:
+        ev.focus_phi(float(from_c(centre[0])), centre[1])
     if box is None or not box.converged:
         again = box_search(ev, from_c, bounds, centre, sd, slope, max_iterations)
         if box is None or (again.lp.max() > box.lp.max()

@@ -155,3 +155,35 @@ def test_climb_on_a_curved_ridge_and_near_the_surface_bound(bend, z0, st_rel):
     assert sz == pytest.approx(ev.sz, rel=0.2)
     if z0 < 1e-3:
         assert slope == pytest.approx(-2.8e-3 + 2 * bend * (ct - ev.t0), rel=0.02)
+
+
+def test_phi_at_its_bound_is_resolved_on_a_real_record(shared_data):
+    """afmformats' real stress-relaxation curve (a cell, 12,000 samples in 767 blocks): the
+    block means' noise correlation piles up at phi's bound 0.98 with a posterior sd of
+    ~1e-4, 400 times finer than the first grid's phi nodes (0.041 apart).  With those nodes
+    every grid draw had phi = 0.98 exactly (sd 3e-16), and emcee, started from them, hit its
+    6,000-step cap (autocorrelation 45-95 steps).  Near the bound log p rises in phi at a
+    rate lambda (its curvature changes it by ~1e-4 over 1/lambda), so the marginal is a density
+    cut at the bound: mean 0.98 - 1/lambda, sd 1/lambda.  lambda here is read off the node
+    posterior at the grid's mode directly, not from the grid's phi nodes."""
+    from palpbayes.bayes.conjugate import node_posterior
+    from palpbayes.contact import Tip
+    from palpbayes.io.afm import read_afm
+    from palpbayes.rheology.posterior import PHI_BOUNDS, NodeEvaluator
+
+    path = shared_data("afm-files/fmt-jpk-sr_cell1-0008.jpk-force")
+    trace = read_afm(path, tip=Tip("paraboloid", radius=5e-6), segments="all")[0]
+    fit = fit_rheology(trace, "power-law", nu=0.5, rng=0)
+    g = fit.grid
+    it, iz, _ = np.unravel_index(np.argmax(g.log_mass), g.log_mass.shape)
+    ev = NodeEvaluator(fit.data, "power-law", fit.t0, g.drag, g.tilt)
+    top, dphi = PHI_BOUNDS[1], 2e-5
+    lp = node_posterior(ev.gram(g.theta[[it]], g.z[it, [iz]]), np.array([top - dphi, top]),
+                        ev.weights, ev.centers).logp[0]
+    lam = (lp[1] - lp[0]) / dphi
+    assert 3e3 < lam < 3e4  # the sd is ~1e-4
+    phi = g.draws(np.random.default_rng(0), 20_000)["phi"]
+    assert np.std(phi) == pytest.approx(1 / lam, rel=0.15)
+    assert top - np.mean(phi) == pytest.approx(1 / lam, rel=0.15)
+    assert np.ptp(g.phi) < 20 / lam  # the nodes span the density, not the prior
+    assert any("phi piles up" in f for f in fit.flags)
