@@ -9,7 +9,8 @@ far narrower than the coarse grid's nodes.  This module moves a sheared box of n
   the box's moments are recomputed and the box rebuilt until they are steady and every sd is
   at least :data:`RESOLVE` node steps (clipped at the prior bounds).  While the box still moves
   it has :data:`SEARCH_THETA` θ nodes (each costs one hereditary matrix); the settled box is
-  computed once more with :data:`FINE` and must give the same moments.  While the ridge is
+  computed once more with :data:`FINE` (its search rows kept, the rows between them added:
+  :func:`refined`) and must give the same moments.  While the ridge is
   narrower than the surface nodes, the box follows the line through every θ row's best node
   and narrows in z_s alone (θ's moments then come from whichever row's node fell nearest the
   ridge); a row whose best node is its first or last, within :data:`KEEP` of the box's best,
@@ -40,12 +41,14 @@ from ..bayes.exact import cell_widths
 from ..errors import FitError
 
 __all__ = ["FINE", "SEARCH_THETA", "SPAN_SD", "RESOLVE", "KEEP", "BoxResult", "box_search",
-           "climb", "moments", "log_cells", "sheared"]
+           "climb", "moments", "log_cells", "sheared", "refined"]
 
 #: Nodes per axis of the fine box.
 FINE = 25
-#: Theta nodes of the fine box while it is still moving (the last box has :data:`FINE`).
+#: Theta nodes of the fine box while it is still moving (the last box has :data:`FINE`:
+#: twice the steps, so that the settled search box's rows are kept).
 SEARCH_THETA = 13
+assert FINE - 1 == 2 * (SEARCH_THETA - 1)
 #: Half-width of the fine grid in (marginal, conditional) standard deviations.
 SPAN_SD = 6.0
 #: Smallest sd of the final grid, in node steps.
@@ -178,9 +181,13 @@ def box_search(ev, from_c: Callable, bounds: Bounds, centre: tuple[float, float]
     (c_lo, c_hi) = bounds[0]
     converged = False
     n_theta = SEARCH_THETA  # theta nodes cost one hereditary matrix each: search on fewer
+    pending = None
     for _ in range(max_iterations):
-        gt, gz = sheared(centre, sd, slope, bounds, n_theta)
-        lp, post = ev.logp_rows(from_c(gt), gz)
+        if pending is None:
+            gt, gz = sheared(centre, sd, slope, bounds, n_theta)
+            lp, post = ev.logp_rows(from_c(gt), gz)
+        else:
+            (gt, gz, lp, post), pending = pending, None
         if not np.isfinite(lp).any():
             raise FitError("the fine grid holds no finite density; report this record")
         a, b = np.unravel_index(np.argmax(lp), lp.shape)
@@ -203,8 +210,10 @@ def box_search(ev, from_c: Callable, bounds: Bounds, centre: tuple[float, float]
             if gt.size == 1 or n_theta == FINE:
                 converged = True
                 break
-            n_theta = FINE  # the search has settled: the same box at full resolution
-            centre, slope, sd = (mt, mz), new_slope, (st, sz)
+            # the search has settled: the same box at full resolution, its theta rows kept
+            # (the new rows fall halfway between them), checked as any box
+            n_theta = FINE
+            pending = refined(ev, from_c, (centre, sd, slope), bounds, (gt, gz, lp, post))
             continue
         floor = (spacing[0] / 4, spacing[1] / 4)  # all mass on one node: shrink, do not stop
         if gt.size > 1 and sz < RESOLVE * spacing[1]:
@@ -222,6 +231,31 @@ def box_search(ev, from_c: Callable, bounds: Bounds, centre: tuple[float, float]
         centre, slope = (mt, mz), new_slope
         sd = (max(st, floor[0], (c_hi - c_lo) * 1e-9), max(sz, floor[1], 1e-15))
     return BoxResult(gt, gz, lp, post, float(slope), converged)
+
+
+def refined(ev, from_c: Callable, box: tuple, bounds: Bounds, search: tuple) -> tuple:
+    """The box ``box`` = (centre, sd, slope) with :data:`FINE` θ rows, from its
+    :data:`SEARCH_THETA`-row ``search`` = (gt, gz, lp, post): FINE − 1 = 2·(SEARCH_THETA − 1),
+    so the search's rows are every other row and only the rows between them are evaluated.
+    Returns (gt, gz, lp, post) of the full box."""
+    gt, gz, lp, post = search
+    ct, z = sheared(*box, bounds, FINE)
+    ct[::2], z[::2] = gt, gz  # the same nodes up to rounding: keep the evaluated ones
+    lp_new, post_new = ev.logp_rows(from_c(ct[1::2]), z[1::2])
+    out = np.empty((FINE, z.shape[1]))
+    out[::2], out[1::2] = lp, lp_new
+    n_z = z.shape[1]
+
+    def weave(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        w = np.empty((FINE, n_z) + a.shape[1:], dtype=a.dtype)
+        w[::2] = a.reshape((-1, n_z) + a.shape[1:])
+        w[1::2] = b.reshape((-1, n_z) + b.shape[1:])
+        return w.reshape((FINE * n_z,) + a.shape[1:])
+
+    merged = None if post is None else type(post)(
+        *(weave(getattr(post, f), getattr(post_new, f)) for f in ("logp", "beta", "scale", "S")),
+        post.nu)
+    return ct, z, out, merged
 
 
 def _vertex(x: np.ndarray, y: np.ndarray, k: int) -> tuple[float, float, float]:

@@ -187,3 +187,36 @@ def test_phi_at_its_bound_is_resolved_on_a_real_record(shared_data):
     assert top - np.mean(phi) == pytest.approx(1 / lam, rel=0.15)
     assert np.ptp(g.phi) < 20 / lam  # the nodes span the density, not the prior
     assert any("phi piles up" in f for f in fit.flags)
+
+
+def test_the_full_box_keeps_the_search_rows_and_adds_the_rows_between():
+    """grid_search.refined: the settled 13-row search box at 25 rows evaluates only the 12 new
+    rows, and gives the same log density and node posteriors (offset, moduli, their scale,
+    S) as evaluating the 25-row box afresh."""
+    from palpbayes.contact.viscoelastic import PowerLawKernel
+    from palpbayes.paper import PAPER_TIPS
+    from palpbayes.rheology.cycle import prepare_cycle
+    from palpbayes.rheology.grid_search import FINE, SEARCH_THETA, refined, sheared
+    from palpbayes.rheology.posterior import NodeEvaluator
+    from palpbayes.sim import simulate_viscoelastic
+
+    trace = simulate_viscoelastic(PowerLawKernel(80e3, 0.2), PAPER_TIPS["paraboloid"],
+                                  depth=3e-3, speed=50 / 6e4, hold_time=1.0, rate=800.0,
+                                  z_surf=2e-4, noise_sd=0.008, phi=0.3, rng=1)
+    ev = NodeEvaluator(prepare_cycle(trace, segments="approach,hold", max_points=200),
+                       "power-law", 1.0)
+    box = ((0.2, 2e-4), (0.01, 2e-6), -1e-4)
+    bounds = ((0.0, 0.95), (ev.data.z_lo, ev.data.z_hi))
+    gt, gz = sheared(*box, bounds, SEARCH_THETA)
+    search = (gt, gz, *ev.logp_rows(gt, gz))
+    n0 = ev.n
+    ct, z, lp, post = refined(ev, lambda c: c, box, bounds, search)
+    assert ev.n - n0 == (FINE - SEARCH_THETA) * FINE  # only the new rows were evaluated
+    ct_f, z_f = sheared(*box, bounds, FINE)
+    lp_f, post_f = ev.logp_rows(ct_f, z_f)
+    np.testing.assert_allclose(ct, ct_f, rtol=1e-14)
+    np.testing.assert_allclose(z, z_f, rtol=1e-12)
+    np.testing.assert_allclose(lp, lp_f, rtol=1e-9)
+    for name in ("logp", "beta", "scale", "S"):
+        np.testing.assert_allclose(getattr(post, name), getattr(post_f, name), rtol=1e-7,
+                                   atol=1e-300)
