@@ -343,8 +343,10 @@ def phi_nodes_around(values: np.ndarray, logp_phi: np.ndarray, bounds) -> np.nda
     return np.linspace(lo, hi, k)
 
 
-def exact_posterior(data: FitData, prior: TracePrior) -> ExactPosterior:
-    """The exact posterior of one prepared trace (module docstring).
+def exact_posterior(data: FitData, prior: TracePrior, coarse: int = COARSE_NODES
+                    ) -> ExactPosterior:
+    """The exact posterior of one prepared trace (module docstring); ``coarse`` uniform
+    surface nodes to start the refinement from (:func:`refine_grid`).
 
     Raises
     ------
@@ -374,7 +376,7 @@ def exact_posterior(data: FitData, prior: TracePrior) -> ExactPosterior:
         return log_marginal_phi(lp, phi)
 
     lo, hi = prior.z_bounds
-    nodes, _, complete = refine_grid(lo, hi, evaluate)
+    nodes, _, complete = refine_grid(lo, hi, evaluate, coarse=coarse)
     g = grams[0]
     for other in grams[1:]:
         g = g.concat(other)

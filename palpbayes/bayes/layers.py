@@ -47,7 +47,7 @@ from scipy.special import logsumexp
 from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
 from ..intervals import LEVEL
-from .exact import ExactPosterior, cell_widths, exact_posterior, refine_grid
+from .exact import COARSE_NODES, ExactPosterior, cell_widths, exact_posterior, refine_grid
 from .mixture import MixtureSummary
 from .priors import P_HALFSPACE, TracePrior
 
@@ -63,6 +63,10 @@ MAX_THICKNESS_NODES = 120
 #: until it changes by at most THICKNESS_STEP between nodes (coarser than the surface's
 #: 0.5 / 14: E hardly changes across such a step of h, and each node costs a whole fit).
 THICKNESS_STEP, THICKNESS_KEEP = 1.0, 10.0
+#: First, uniform surface nodes of each thickness node's posterior (the half-space component
+#: and a known thickness take the exact engine's :data:`~palpbayes.bayes.exact.COARSE_NODES`,
+#: which find the surface's basins; the layers' posteriors refine from a quarter of them).
+THICKNESS_COARSE = 33
 #: Default prior range of an unknown thickness, in multiples of the indentation depth:
 #: from a layer 1.5 times deeper than the tip goes (a thinner one would be pierced) to one
 #: 1,000 times deeper (a half-space for any tip).
@@ -257,8 +261,9 @@ class LayerPosterior:
         return {key: v[order] for key, v in out.items()}
 
 
-def _component(data: FitData, prior: TracePrior, model: ModelSpec) -> ExactPosterior:
-    return exact_posterior(replace(data, model=model), prior)
+def _component(data: FitData, prior: TracePrior, model: ModelSpec,
+               coarse: int = COARSE_NODES) -> ExactPosterior:
+    return exact_posterior(replace(data, model=model), prior, coarse)
 
 
 def layer_posterior(data: FitData, prior: TracePrior) -> LayerPosterior:
@@ -297,7 +302,8 @@ def layer_posterior(data: FitData, prior: TracePrior) -> LayerPosterior:
         def evaluate(nodes: np.ndarray, base=base, posts=posts) -> np.ndarray:
             out = np.empty(nodes.size)
             for i, lh in enumerate(nodes):
-                p = _component(data, prior, model.variant(thickness=math.exp(lh), base=base))
+                p = _component(data, prior, model.variant(thickness=math.exp(lh), base=base),
+                               THICKNESS_COARSE)
                 posts[float(lh)] = p
                 out[i] = log_evidence(p)
             return out
