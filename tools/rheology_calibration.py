@@ -20,7 +20,8 @@ SLS E_inf* 20–100 kPa, E1* 10–100 kPa, tau 0.3–5 s (log-uniform).
     python tools/rheology_calibration.py [--n 100] [--start 0] [--workers 2] [--csv out.csv]
         [--retract] [--coverage-only]
 
-``--start S`` fits records S … S + n − 1 (fresh indices: no test uses those from 1000 on);
+``--start S`` fits records S … S + n − 1 (fresh indices: the calibration tests use 0–99, and
+of those from 1000 on only sls-1220 and power-law-1058 are in a test);
 ``--coverage-only`` fits the true model alone (coverage, checks and time; no model choice, no
 elastic fit: a third of the time).
 

@@ -165,7 +165,7 @@ def box_search(ev, from_c: Callable, bounds: Bounds, centre: tuple[float, float]
         The first box: its centre (θ coordinate, z_s [m]), half-widths ``SPAN_SD·sd`` (θ's
         marginal sd, z_s's conditional sd [m]) and the slope dz_s/dθ of its rows' centres.
     max_iterations
-        Boxes at most.
+        Boxes at most (and the full-resolution box of a search that settles on the last).
 
     Returns
     -------
@@ -181,8 +181,9 @@ def box_search(ev, from_c: Callable, bounds: Bounds, centre: tuple[float, float]
     (c_lo, c_hi) = bounds[0]
     converged = False
     n_theta = SEARCH_THETA  # theta nodes cost one hereditary matrix each: search on fewer
-    pending = None
-    for _ in range(max_iterations):
+    pending, iteration = None, 0
+    while iteration < max_iterations or pending is not None:  # a refined box gets its check
+        iteration += 1
         if pending is None:
             gt, gz = sheared(centre, sd, slope, bounds, n_theta)
             lp, post = ev.logp_rows(from_c(gt), gz)

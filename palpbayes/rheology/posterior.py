@@ -49,7 +49,7 @@ its sd apart around its density at the climbed mode (:meth:`NodeEvaluator.focus_
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.special import logsumexp
@@ -228,23 +228,53 @@ class NodeEvaluator:
         self.retract = (RetractDesign(data.edges, data.z_edges, data.sample_time[ret], data.m,
                                       t0) if rheology == "power-law" and ret.any() else None)
 
+    def phi_density(self, theta: float, z: float) -> tuple[np.ndarray, float, float] | None:
+        """phi's density at the node (``theta``, ``z`` [m]): nodes around it (its mean ± 8 sd
+        in steps of sd/4, :func:`~palpbayes.bayes.exact.phi_nodes_around`), its mean and sd;
+        None where no phi has a finite density.  Two scans of :data:`PHI_SCAN` points: over
+        the prior, then over the first scan's range (a density 1e-4 wide, as on real records,
+        spans less than a step of the first)."""
+        g = self.gram(np.array([theta]), np.array([z]))
+        scan, nodes = np.linspace(*PHI_BOUNDS, PHI_SCAN), None
+        for _ in range(2):
+            lp = node_posterior(g, scan, self.weights, self.centers).logp[0]
+            if not np.isfinite(lp).any():
+                return None
+            nodes = phi_nodes_around(scan, lp, PHI_BOUNDS)
+            w = np.exp(lp - lp.max()) * cell_widths(scan)
+            w /= w.sum()
+            mean = float(w @ scan)
+            sd = float(np.sqrt(max(w @ (scan - mean) ** 2, 0.0)))
+            scan = np.linspace(nodes[0], nodes[-1], PHI_SCAN)
+        return nodes, mean, sd
+
     def focus_phi(self, theta: float, z: float) -> np.ndarray:
-        """Set :attr:`phi` to nodes around the phi density at the node (``theta``, ``z`` [m]):
-        its mean ± 8 sd in steps of sd/4 (:func:`~palpbayes.bayes.exact.phi_nodes_around`,
-        from :data:`PHI_SCAN` points over the prior); returns them.
+        """Set :attr:`phi` to the nodes of :meth:`phi_density` at the node (``theta``, ``z``
+        [m]) (unchanged where it has none); returns them.
 
         The first grid's :data:`PHI_NODES` are 0.04 apart, while phi's sd is ~
         sqrt((1 − phi²)/N): 0.01 on 10,000 block means, 1e-4 on real AFM records whose phi
         sits at 0.98.  One node then carries the whole phi marginal, the grid's draws all
         have that phi, and emcee's start (spread over the node's cell) is 50 times too wide
         in phi.  Moving the nodes changes neither the prior nor the density at a node: only
-        the trapezoid rule over phi, now resolved."""
-        scan = np.linspace(*PHI_BOUNDS, PHI_SCAN)
-        post = node_posterior(self.gram(np.array([theta]), np.array([z])), scan,
-                              self.weights, self.centers)
-        if np.isfinite(post.logp).any():
-            self.phi = phi_nodes_around(scan, post.logp[0], PHI_BOUNDS)
+        the trapezoid rule over phi, now resolved.  Set them at the posterior's mode: at a
+        surface far off it the residuals make phi look near its bound."""
+        found = self.phi_density(theta, z)
+        if found is not None:
+            self.phi = found[0]
         return self.phi
+
+    def phi_resolved(self, theta: float, z: float) -> bool:
+        """True when :attr:`phi` resolves phi's density at the node (``theta``, ``z`` [m]):
+        its nodes span the mean ± 6 sd (within the prior) in steps of at most sd/2."""
+        found = self.phi_density(theta, z)
+        if found is None:
+            return True
+        _, mean, sd = found
+        lo, hi = max(PHI_BOUNDS[0], mean - 6 * sd), min(PHI_BOUNDS[1], mean + 6 * sd)
+        step = float(np.diff(self.phi).max()) if self.phi.size > 1 else math.inf
+        return bool(self.phi[0] <= lo + 1e-12 and self.phi[-1] >= hi - 1e-12
+                    and step <= sd / 2)
 
     def columns(self, theta: float, z: np.ndarray, constant: np.ndarray | None = None
                 ) -> np.ndarray:
@@ -374,23 +404,28 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
     # the box starts at the mode climbed on the profile, with its sds and slope (half the
     # hereditary matrices of a box search from the coarse node, the same posterior to 0.023
     # sd); where it does not settle from there, the search from the coarse node is tried too
-    # phi's nodes are then set around its density at that mode (NodeEvaluator.focus_phi)
-    box, focus = None, centre
+    # phi's nodes are then set around its density at that mode (NodeEvaluator.focus_phi),
+    # and checked again at the final box's best node (below)
+    box = None
     if c_hi > c_lo:
         try:
             top, sd_top, slope_top = climb(ev, from_c, bounds, centre, step)
             ev.focus_phi(float(from_c(top[0])), top[1])
-            focus = top
             box = box_search(ev, from_c, bounds, top, sd_top, slope_top, max_iterations)
         except FitError:  # the climbed box held no finite density: the coarse node's search
             box = None
-    if focus is centre:
-        ev.focus_phi(float(from_c(centre[0])), centre[1])
     if box is None or not box.converged:
         again = box_search(ev, from_c, bounds, centre, sd, slope, max_iterations)
         if box is None or (again.lp.max() > box.lp.max()
                            or again.converged and again.lp.max() >= box.lp.max() - KEEP):
             box = again
+    k, l = np.unravel_index(np.argmax(box.lp), box.lp.shape)
+    if not ev.phi_resolved(float(from_c(box.gt[k])), float(box.gz[k, l])):
+        # the box's mode is not where phi's nodes were set (the elastic law, which has no
+        # climb; a fallback search; a climb off the mode): the same box on nodes set there
+        ev.focus_phi(float(from_c(box.gt[k])), float(box.gz[k, l]))
+        lp_new, post_new = ev.logp_rows(from_c(box.gt), box.gz)
+        box = replace(box, lp=lp_new, post=post_new)
     gt, gz, lp, post, slope, converged = (box.gt, box.gz, box.lp, box.post, box.slope,
                                           box.converged)
     log_cell = (post.logp.reshape(gt.size, FINE, -1) + log_cells(gt, gz)[:, :, None]
