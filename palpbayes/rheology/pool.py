@@ -171,6 +171,8 @@ def pool_power_law(fits: Sequence[RheologyFit], *, n_alpha: int = 41, n_e0: int 
     e_hi = float((med[:, 0] + 2 * SPAN_SD * sd[:, 0]).max())
     evaluators = [NodeEvaluator(f.data, "power-law", t0, f.grid.drag, f.grid.tilt)  # once each
                   for f in fits]
+    for f, ev in zip(fits, evaluators, strict=True):  # phi resolved where each fit found it,
+        ev.phi = np.union1d(ev.phi, f.grid.phi)       # the uniform nodes elsewhere
     for _ in range(3):  # zoom until the pooled sd spans >= ZOOM_NODES nodes on both axes
         alpha = np.linspace(a_lo, a_hi, n_alpha)
         e0 = np.linspace(e_lo, e_hi, n_e0)
