@@ -49,7 +49,7 @@ its sd apart around its density at the climbed mode (:meth:`NodeEvaluator.focus_
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.special import logsumexp
@@ -59,7 +59,7 @@ from ..bayes.exact import cell_widths, phi_nodes_around
 from ..errors import FitError, InputError
 from .cycle import CycleData
 from .design import lee_radok_columns
-from .grid_search import FINE, KEEP, SEARCH_THETA, SPAN_SD, box_search, climb, log_cells
+from .grid_search import FINE, KEEP, SEARCH_THETA, SPAN_SD, box_search, climb, log_cells, moments
 from .ting import RETRACT, RetractDesign, with_retract
 
 __all__ = ["RHEOLOGIES", "GridPosterior", "grid_posterior", "NodeEvaluator", "ALPHA_MAX",
@@ -422,10 +422,13 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
     k, l = np.unravel_index(np.argmax(box.lp), box.lp.shape)
     if not ev.phi_resolved(float(from_c(box.gt[k])), float(box.gz[k, l])):
         # the box's mode is not where phi's nodes were set (the elastic law, which has no
-        # climb; a fallback search; a climb off the mode): the same box on nodes set there
+        # climb; a fallback search; a climb off the mode): nodes set there, and the box
+        # searched again on them from its own moments (a sharper phi can narrow z_s a lot)
         ev.focus_phi(float(from_c(box.gt[k])), float(box.gz[k, l]))
-        lp_new, post_new = ev.logp_rows(from_c(box.gt), box.gz)
-        box = replace(box, lp=lp_new, post=post_new)
+        lp_new, _ = ev.logp_rows(from_c(box.gt), box.gz)
+        mt, st, b, mz, sz = moments(box.gt, box.gz, lp_new + log_cells(box.gt, box.gz))
+        box = box_search(ev, from_c, bounds, (mt, mz), (st, max(sz, 1e-15)), b,
+                         max_iterations)
     gt, gz, lp, post, slope, converged = (box.gt, box.gz, box.lp, box.post, box.slope,
                                           box.converged)
     log_cell = (post.logp.reshape(gt.size, FINE, -1) + log_cells(gt, gz)[:, :, None]
