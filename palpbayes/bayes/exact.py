@@ -56,7 +56,7 @@ from .mixture import NORMAL_NU, MixtureSummary, tilted_mixture
 from .priors import TracePrior
 
 __all__ = ["ExactPosterior", "exact_posterior", "refine_grid", "cell_widths", "phi_grid",
-           "phi_nodes_around", "node_log_mass", "sampled_coordinates",
+           "phi_moments", "phi_nodes_around", "node_log_mass", "sampled_coordinates",
            "log_marginal_phi", "COARSE_NODES",
            "MAX_STEP", "KEEP", "PHI_NODES"]
 
@@ -328,14 +328,20 @@ def phi_grid(bounds: tuple[float, float], n: int = PHI_NODES) -> np.ndarray:
     return np.linspace(bounds[0], bounds[1], n)
 
 
+def phi_moments(values: np.ndarray, logp_phi: np.ndarray) -> tuple[float, float]:
+    """Mean and sd of a phi density known at sorted ``values`` (log density ``logp_phi``),
+    by the trapezoid rule."""
+    w = np.exp(logp_phi - logp_phi.max()) * cell_widths(values)
+    w /= w.sum()
+    mean = float(w @ values)
+    return mean, float(np.sqrt(max(w @ (values - mean) ** 2, 0.0)))
+
+
 def phi_nodes_around(values: np.ndarray, logp_phi: np.ndarray, bounds) -> np.ndarray:
     """A finer phi grid around a phi density known at ``values`` (log density ``logp_phi``):
     its mean ± 8 sd, cut to the prior's ``bounds``, in steps of sd/4 (9 to 65 nodes; the sd
     is at least an eighth of the smallest step of ``values``)."""
-    w = np.exp(logp_phi - logp_phi.max()) * cell_widths(values)
-    w /= w.sum()
-    mean = float(w @ values)
-    sd = float(np.sqrt(max(w @ (values - mean) ** 2, 0.0)))
+    mean, sd = phi_moments(values, logp_phi)
     step = np.diff(values).min()
     sd = max(sd, step / 8)
     lo, hi = max(bounds[0], mean - 8 * sd), min(bounds[1], mean + 8 * sd)

@@ -55,7 +55,7 @@ import numpy as np
 from scipy.special import logsumexp
 
 from ..bayes.conjugate import Gram, NodePosterior, node_posterior
-from ..bayes.exact import cell_widths, phi_nodes_around
+from ..bayes.exact import cell_widths, phi_moments, phi_nodes_around
 from ..errors import FitError, InputError
 from .cycle import CycleData
 from .design import lee_radok_columns
@@ -241,10 +241,7 @@ class NodeEvaluator:
             if not np.isfinite(lp).any():
                 return None
             nodes = phi_nodes_around(scan, lp, PHI_BOUNDS)
-            w = np.exp(lp - lp.max()) * cell_widths(scan)
-            w /= w.sum()
-            mean = float(w @ scan)
-            sd = float(np.sqrt(max(w @ (scan - mean) ** 2, 0.0)))
+            mean, sd = phi_moments(scan, lp)
             scan = np.linspace(nodes[0], nodes[-1], PHI_SCAN)
         return nodes, mean, sd
 
@@ -264,13 +261,10 @@ class NodeEvaluator:
             self.phi = found[0]
         return self.phi
 
-    def phi_resolved(self, theta: float, z: float) -> bool:
-        """True when :attr:`phi` resolves phi's density at the node (``theta``, ``z`` [m]):
-        its nodes span the mean ± 6 sd (within the prior) in steps of at most sd/2."""
-        found = self.phi_density(theta, z)
-        if found is None:
-            return True
-        _, mean, sd = found
+    def resolves_phi(self, mean: float, sd: float) -> bool:
+        """True when :attr:`phi` resolves a phi density of ``mean`` and ``sd``
+        (:meth:`phi_density`): its nodes span the mean ± 6 sd (within the prior) in steps of
+        at most sd/2."""
         lo, hi = max(PHI_BOUNDS[0], mean - 6 * sd), min(PHI_BOUNDS[1], mean + 6 * sd)
         step = float(np.diff(self.phi).max()) if self.phi.size > 1 else math.inf
         return bool(self.phi[0] <= lo + 1e-12 and self.phi[-1] >= hi - 1e-12
@@ -420,11 +414,12 @@ def grid_posterior(data: CycleData, rheology: str = "power-law", *, t0: float = 
                            or again.converged and again.lp.max() >= box.lp.max() - KEEP):
             box = again
     k, l = np.unravel_index(np.argmax(box.lp), box.lp.shape)
-    if not ev.phi_resolved(float(from_c(box.gt[k])), float(box.gz[k, l])):
+    found = ev.phi_density(float(from_c(box.gt[k])), float(box.gz[k, l]))
+    if found is not None and not ev.resolves_phi(*found[1:]):
         # the box's mode is not where phi's nodes were set (the elastic law, which has no
         # climb; a fallback search; a climb off the mode): nodes set there, and the box
         # searched again on them from its own moments (a sharper phi can narrow z_s a lot)
-        ev.focus_phi(float(from_c(box.gt[k])), float(box.gz[k, l]))
+        ev.phi = found[0]
         lp_new, _ = ev.logp_rows(from_c(box.gt), box.gz)
         mt, st, b, mz, sz = moments(box.gt, box.gz, lp_new + log_cells(box.gt, box.gz))
         box = box_search(ev, from_c, bounds, (mt, mz), (st, max(sz, 1e-15)), b,
