@@ -70,9 +70,7 @@ class ColumnTable:
         self.z_nodes = np.stack([chebyshev_points(self.breaks[p], self.breaks[p + 1], nz)[0]
                                  for p in range(P)])  # (P, nz)
         self.z_w = chebyshev_points(0.0, 1.0, nz)[1]
-        zs = self.z_nodes.ravel()
-        inf = ev.constant_column(zs) if ev.rheology == "sls" else None  # the same for every θ
-        cols = [ev.columns(self.theta(c), zs, inf) for c in self.c_nodes]
+        cols = ev.columns_at(self.theta(self.c_nodes), self.z_nodes.ravel())
         self.fixed = cols[0][0][:, extra]  # (N, extra): drag, tilt (no θ, no z_s)
         tab = np.stack([X[..., self.moduli] for X in cols])  # (n_theta, P·nz, N, moduli)
         n_t, _, N, pm = tab.shape

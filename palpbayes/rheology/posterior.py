@@ -296,11 +296,15 @@ class NodeEvaluator:
         d = self.data
         return d.C * lee_radok_columns(self.windows, z, d.z_edges, d.m, None)
 
+    def columns_at(self, thetas: np.ndarray, z: np.ndarray) -> list[np.ndarray]:
+        """:meth:`columns` for every theta of ``thetas`` on the same surfaces ``z``, the SLS's
+        constant-kernel column computed once for all of them."""
+        inf = self.constant_column(z) if self.rheology == "sls" and len(thetas) > 1 else None
+        return [self.columns(float(th), z, inf) for th in thetas]
+
     def gram(self, thetas: np.ndarray, z: np.ndarray) -> Gram:
         n_contact = np.count_nonzero(self.data.z[None, :] < z[:, None], axis=1)
-        # the SLS's constant-kernel column once for all theta nodes on the same surfaces
-        inf = self.constant_column(z) if self.rheology == "sls" and thetas.size > 1 else None
-        X = np.concatenate([self.columns(float(th), z, inf) for th in thetas])  # (Gt·Gz, N, q)
+        X = np.concatenate(self.columns_at(thetas, z))  # (Gt·Gz, N, q)
         self.n += thetas.size * z.size
         Xt = X.swapaxes(1, 2)  # batched matmul: ~8x faster than einsum here
         m0 = Xt @ X
