@@ -158,17 +158,15 @@ def _independence_move(start: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> emc
     L = np.linalg.cholesky(S + 1e-12 * np.trace(S) * np.eye(d))
     mirrors = [(j, b) for j in range(d) for b in (lo[j], hi[j]) if np.isfinite(b)]
 
+    def mirrored(y: np.ndarray, j: int, b: float) -> np.ndarray:
+        m = y.copy()
+        m[:, j] = 2 * b - y[:, j]
+        return m
+
     def log_g(x):
         ys = [x]
-        for j in sorted({j for j, _ in mirrors}):
-            more = []
-            for y in ys:
-                for jj, b in mirrors:
-                    if jj == j:
-                        m = y.copy()
-                        m[:, j] = 2 * b - y[:, j]
-                        more.append(m)
-            ys += more
+        for j in range(d):  # each coordinate: as it is, or mirrored at one of its bounds
+            ys += [mirrored(y, j, b) for y in ys for jj, b in mirrors if jj == j]
         Y = np.stack(ys)  # (images, walkers, ndim)
         q = np.linalg.solve(L, (Y - mu).reshape(-1, d).T)
         lt = (-0.5 * (T_DF + d) * np.log1p((q * q).sum(axis=0) / T_DF)).reshape(Y.shape[:2])
