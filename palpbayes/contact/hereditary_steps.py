@@ -18,6 +18,8 @@ import math
 import numpy as np
 from scipy.special import beta, hyp1f1, hyp2f1
 
+from .scratch import scratch
+
 
 def _rule(degree: int):
     """Chebyshev nodes of a step's lag fraction, node values -> monomial coefficients c_k, and
@@ -47,8 +49,8 @@ class _Steps:
     f(sigma) = m·(d1 - d0)·d^(m-1) at lag fraction sigma (from the step's end) is a polynomial
     (m = 1, 2) or its cubic interpolant: relative error ~3e-4·z^4 for a relative change z of d
     (< 2e-9 for |z| <= 5 %; larger falls, e.g. noise near the contact start, use it too).
-    ``coef`` (steps, degree) and ``series`` (steps, 12) are also kept transposed, ``cT`` and
-    ``sT``, for the row-wise sums of :func:`_exp_steps`.
+    Its monomial coefficients ``cT`` (degree, steps) and the Taylor coefficients ``sT``
+    (12, steps) of :func:`_exp_steps` are kept one row per coefficient, for row-wise sums.
     """
 
     def __init__(self, t: np.ndarray, d: np.ndarray, m: float, u: np.ndarray | None = None):
@@ -65,22 +67,26 @@ class _Steps:
         self.ell[self.cin] = self.L1[self.cin]
         self.wa[self.cout] = self.L1[self.cout]
         self.ell[self.cout] = self.dt[self.cout] - self.wa[self.cout]  # contact: lags wa..+ell
-        dp = np.clip(d, 0, None)
+        dp = np.maximum(d, 0.0)
         u = dp**m if u is None else u
         self.u0, self.u1, self.dd = u[:-1], u[1:], np.diff(dp)
         nodes, to_coef, taylor = _LINEAR if poly else _CUBIC
+        # f at the nodes, one row per node; zero out of contact and where integrated exactly
+        scale = np.where(both, m * jump, 0.0)
+        scale[self.rise] = 0.0
         if m == 1.0:
-            f = np.repeat(jump[:, None], nodes.size, axis=1)
-        elif m == 2.0:
-            f = 2 * jump[:, None] * np.clip(d1[:, None] - jump[:, None] * nodes, 0, None)
+            f = np.broadcast_to(scale, (nodes.size, scale.size))
         else:
-            f = m * jump[:, None] * np.clip(d1[:, None] - jump[:, None] * nodes, 0, None) ** (
-                m - 1)
-        f[~both] = 0.0
-        f[self.rise] = 0.0
-        self.coef = f @ to_coef
-        self.series = self.coef @ taylor
-        self.cT, self.sT = self.coef.T.copy(), self.series.T.copy()
+            f = np.multiply.outer(nodes, -jump)
+            f += d1
+            np.maximum(f, 0.0, out=f)
+            if m == 1.5:
+                np.sqrt(f, out=f)
+            elif m != 2.0:
+                f **= m - 1
+            f *= scale
+        self.cT = to_coef.T @ f  # (degree, steps) and (12, steps): rows read one at a time
+        self.sT = taylor.T @ self.cT
 
     def placed(self, pos: np.ndarray, slots: int) -> _Steps:
         """The same steps in ``slots`` >= steps places, step i at place pos[i]; the empty places
@@ -134,7 +140,7 @@ def _exp_steps(x: np.ndarray, st: _Steps, out: tuple[np.ndarray, np.ndarray] | N
     if out is None:
         out = np.empty(shape), np.empty((1 if m == 1.0 else 2,) + shape)
     decay, iu, idd = out[0], out[1][0], out[1][-1]
-    rho, m0 = np.multiply.outer(x, st.dt), np.empty(shape)
+    rho, m0 = np.multiply.outer(x, st.dt, out=scratch("rho", shape)), scratch("m0", shape)
     n_rec = int(np.count_nonzero(x * st.dt.max() > _RHO_SERIES))  # some rho > 0.2
     n_all = int(np.count_nonzero(x * st.dt.min() > _RHO_SERIES))  # every rho > 0.2
     if n_rec:
@@ -159,7 +165,8 @@ def _exp_steps(x: np.ndarray, st: _Steps, out: tuple[np.ndarray, np.ndarray] | N
     if m != 1.0:
         if n_rec:
             r, e, acc = rho[:n_rec], decay[:n_rec], iu[:n_rec]
-            mk, tmp = m0[:n_rec].copy(), np.empty_like(r)
+            mk, tmp = scratch("mk", r.shape), scratch("tmp", r.shape)
+            mk[...] = m0[:n_rec]
             np.multiply(st.cT[0], mk, out=acc)
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
                 for k in range(1, st.cT.shape[0]):
@@ -201,7 +208,7 @@ def _power_steps(alpha: float, st: _Steps) -> tuple[np.ndarray, np.ndarray]:
     if st.m == 1.0:
         return ld, ld
     m, c = st.m, st.rise
-    lu = ell**-alpha * (st.coef @ (1 / (np.arange(st.coef.shape[1]) + 1 - alpha)))
+    lu = ell**-alpha * ((1 / (np.arange(st.cT.shape[0]) + 1 - alpha)) @ st.cT)
     L0 = np.maximum(st.L1[c] - st.dt[c], 0.0)
     lu[c] = st.L1[c] ** -alpha * (st.u1[c] * m * beta(m, 1 - alpha)
                                   - st.u0[c] * hyp2f1(alpha, m, m + 1, L0 / st.L1[c]))
@@ -218,14 +225,16 @@ def _layout(n: int) -> tuple[int, int, np.ndarray]:
     return size, blocks, (i % size) * blocks + i // size
 
 
-def _scan(decay: np.ndarray, h: np.ndarray) -> None:
+def _scan(decay: np.ndarray, h: np.ndarray, top: bool = False) -> None:
     """In place, for ``h`` of shape (..., rows, size, blocks) and ``decay`` (rows, size, blocks)
     (the steps of :func:`_layout`): h[s, b] becomes the state after step (b, s) of
     H <- decay·H + h from H = 0.  Blocked scan: a loop over the size steps of every block at
     once, then the blocks' end states by the same scan one level down (O(n^(1/3)) Python
-    steps a level, O(n) work a row; only multiplications by decays <= 1: no overflow)."""
+    steps a level, O(n) work a row; only multiplications by decays <= 1: no overflow).
+    ``top``: the outer level, whose products of decays take a scratch array."""
     size, blocks = decay.shape[-2:]
-    tmp, prod = np.empty(h.shape[:-2] + (blocks,)), np.empty_like(decay)
+    tmp = np.empty(h.shape[:-2] + (blocks,))
+    prod = scratch("products", decay.shape) if top else np.empty_like(decay)
     prod[:, 0] = decay[:, 0]  # products of the decays from each block's start
     for s in range(1, size):
         np.multiply(decay[:, s], h[..., s - 1, :], out=tmp)

@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .scratch import scratch
+
 # Gauss-Legendre on [0, 1] in ln(lag) for the partial step [t_k, t1]: 12 points, or 4 where the
 # step spans ln(lag) by q <= _Q_FEW away from the contact's first step (error ~ (q/2)^8/8!
 # relative: < 1e-17)
@@ -40,40 +42,67 @@ class _History:
         a0, a, x = soe[:3]
         self.t, self.rows, self.a0, self.a, self.x = t, rows, a0, a, x
         q = kmax[rows]  # non-decreasing: the groups are runs
-        first = np.flatnonzero(np.r_[True, q[1:] != q[:-1]])
-        groups, count = q[first], np.diff(np.r_[first, q.size])
+        change = np.empty(q.size, dtype=bool)
+        change[:1] = True
+        np.not_equal(q[1:], q[:-1], out=change[1:])
+        first = np.flatnonzero(change)
+        count = np.empty_like(first)
+        np.subtract(first[1:], first[:-1], out=count[:-1])
+        count[-1] = q.size - first[-1]
+        groups = q[first]
         big = count * _FACTOR_ROWS >= groups + 1 - lo0
         self.factored = np.repeat(big, count)
         self.all_factored = bool(big.all())
-        self.aA = np.zeros((rows.size, x.size))  # a_j·A_j(r)
+        self.aA = scratch("ting a·A", (rows.size, x.size + 1), zero=not self.all_factored)
+        self.aA[:, -1] = a0  # a_j·A_j(r), then a0: the products' last column is v
         self.base = np.zeros(rows.size, dtype=np.intp)  # row of P(k) = base + k
         parts, samples, offset = [], [], 0
+        one = int(np.count_nonzero(big)) == 1  # the usual case: one retract, in scratch
         for g, i0, n in zip(groups[big], first[big], count[big], strict=True):
             r = rows[i0:i0 + n]  # rows are sorted and kmax rises: a group is contiguous
-            P = np.ones((g + 1 - lo0, x.size))
-            P[:-1] = np.cumprod(decay[lo0:g][::-1], axis=0)[::-1]
-            A = np.cumprod(decay[g:r[-1]], axis=0)
-            self.aA[i0:i0 + n] = a * A[r - g - 1]
+            P = scratch("ting P", (g + 1 - lo0, x.size)) if one else np.empty(
+                (g + 1 - lo0, x.size))
+            P[-1] = 1.0
+            np.cumprod(decay[lo0:g][::-1], axis=0, out=P[:-1][::-1])
+            A = np.cumprod(decay[g:r[-1]], axis=0, out=scratch("ting A", (r[-1] - g, x.size)))
+            np.multiply(a, A[r - g - 1], out=self.aA[i0:i0 + n, :-1])
             self.base[i0:i0 + n] = offset - lo0
             parts.append(P)
             samples.append(np.arange(lo0, g + 1))
             offset += P.shape[0]
-        self.P = np.concatenate(parts) if parts else np.zeros((0, x.size))
+        self.P = (parts[0] if one else np.concatenate(parts) if parts
+                  else np.zeros((0, x.size)))
         self.sample = np.concatenate(samples) if samples else np.zeros(0, dtype=np.intp)
+        # the samples as a slice when they are one run (one group): no gather
+        self.span = slice(lo0, lo0 + self.sample.size) if one else self.sample
+        self._products: dict[str, np.ndarray] = {}
 
-    def weights(self, i, k) -> np.ndarray:
-        """a_j·exp(-x_j·(t_r - t_k)) for rows ``i`` at samples ``k``, shape (len(i), K)."""
-        if self.all_factored:
-            return self.aA[i] * self.P[self.base[i] + k]
-        out = np.empty((i.size, self.x.size))
-        f = self.factored[i]
-        out[f] = self.aA[i[f]] * self.P[self.base[i[f]] + k[f]]
-        lag = self.t[self.rows[i[~f]]] - self.t[k[~f]]
-        out[~f] = self.a * np.exp(-np.multiply.outer(lag, self.x))
+    def products(self, H, v, name: str) -> np.ndarray:
+        """[P(k)·H[k], v[k]] at the factored samples, shape (samples, K + 1), computed once
+        per ``name`` (which history H and v are: ``"d"`` or ``"u"``)."""
+        out = self._products.get(name)
+        if out is None:
+            K = self.x.size
+            out = self._products[name] = scratch(f"ting P·H {name}", (self.sample.size, K + 1))
+            np.multiply(self.P, H[self.span], out=out[:, :K])
+            out[:, K] = v[self.span]
         return out
 
-    def __call__(self, H, v, i, k) -> np.ndarray:
-        return self.a0 * v[k] + np.einsum("ij,ij->i", self.weights(i, k), H[k])
+    def __call__(self, H, v, i, k, name: str) -> np.ndarray:
+        """∫_0^{t_k} E(t_r - s) dv(s) for rows ``i`` at samples ``k`` (``name`` as in
+        :meth:`products`)."""
+        if self.all_factored:
+            return np.einsum("ij,ij->i", self.aA[i], self.products(H, v, name)[self.base[i] + k])
+        out = np.empty(i.size)
+        f = self.factored[i]
+        fi, fk, ni, nk = i[f], k[f], i[~f], k[~f]
+        if fi.size:
+            out[f] = np.einsum("ij,ij->i", self.aA[fi],
+                               self.products(H, v, name)[self.base[fi] + fk])
+        lag = self.t[self.rows[ni]] - self.t[nk]
+        out[~f] = self.a0 * v[nk] + np.einsum("ij,ij->i", self.a * np.exp(
+            -np.multiply.outer(lag, self.x)), H[nk])
+        return out
 
     def search(self, Hd, dp, g, i, lo, hi) -> None:
         """Bisection over the samples for the rows ``i``, vectorised: ``lo`` and ``hi`` (in
@@ -86,15 +115,16 @@ class _History:
             ii = i[sel]
             gg, l, h = g[ii], lo[ii], hi[ii]
             if fast:  # a0·dp[k] as one more term: one gather and one dot product a step
-                aA = np.concatenate([self.aA[ii], np.full((ii.size, 1), self.a0)], axis=1)
-                PH = np.concatenate([self.P * Hd[self.sample], dp[self.sample, None]], axis=1)
+                aA, PH = self.aA[ii], self.products(Hd, dp, "d")
                 base = self.base[ii]
+                at = scratch("ting search gather", aA.shape)
             for _ in range(int(np.max(h - l, initial=1)).bit_length()):
                 mid = (l + h) >> 1  # a finished row (h = l + 1) re-tests l: no change
                 if fast:
-                    neg = np.einsum("ij,ij->i", aA, PH[base + mid]) >= gg
+                    np.take(PH, base + mid, axis=0, out=at)
+                    neg = np.einsum("ij,ij->i", aA, at) >= gg
                 else:
-                    neg = self(Hd, dp, ii, mid) >= gg
+                    neg = self(Hd, dp, ii, mid, "d") >= gg
                 h, l = np.where(neg, mid, h), np.where(neg, l, mid)
             lo[ii], hi[ii] = l, h
 
@@ -132,15 +162,16 @@ def ting_rule(t, d, dp, u, dt, m, soe, kernel, Hu, Hd, decay, G, rows, force, t1
     s0 = t[kc - 1] + dt[kc - 1] * -d[kc - 1] / (d[kc] - d[kc - 1])
     kmax = np.maximum.accumulate(np.where(d == np.maximum.accumulate(d), np.arange(t.size), 0))
     hist = _History(t, rows, kmax, kc - 1, soe, decay)
+    nu = "d" if Hu is Hd else "u"  # m = 1: d^m is d_+
     everyone = np.arange(rows.size)
     g, f, tt = G[rows], np.zeros(rows.size), np.full(rows.size, np.nan)
     hi, lo = kmax[rows], np.full(rows.size, kc - 1)
-    grow = (g > 0) & (g - hist(Hd, dp, everyone, hi) > 0)  # no root before t_max: t1 = t_max
+    grow = (g > 0) & (g - hist(Hd, dp, everyone, hi, "d") > 0)  # no root before t_max: t1 = t_max
     act = np.flatnonzero((g > 0) & ~grow & (hi - lo > 1))
     if act.size:
         hist.search(Hd, dp, g, act, lo, hi)
     i = np.flatnonzero(grow)
-    tt[i], f[i] = t[hi[i]], C * hist(Hu, u, i, hi[i])
+    tt[i], f[i] = t[hi[i]], C * hist(Hu, u, i, hi[i], nu)
     i = np.flatnonzero((g > 0) & ~grow)
     if i.size:
         r, k = rows[i], hi[i] - 1  # t1 on the step from sample k to k + 1
@@ -148,8 +179,9 @@ def ting_rule(t, d, dp, u, dt, m, soe, kernel, Hu, Hd, decay, G, rows, force, t1
         w_lo, w_hi = t[r] - t[k + 1], t[r] - np.where(k + 1 == kc, s0, t[k])  # lags
         A_hi = kernel.integral(w_hi)
         with np.errstate(divide="ignore", invalid="ignore"):
-            target = np.nan_to_num(A_hi - (g[i] - hist(Hd, dp, i, k)) / b, nan=-np.inf)
-        target = np.clip(target, kernel.integral(w_lo), A_hi)
+            target = A_hi - (g[i] - hist(Hd, dp, i, k, "d")) / b
+        # clipped to the step's integrals; NaN (b = 0) takes the lower one: fmax drops NaN
+        target = np.fmin(np.fmax(target, kernel.integral(w_lo)), A_hi)
         w1 = np.where(b > 0, kernel._inverse_integral(target, w_lo, w_hi), w_lo)
         q = np.log1p((w_hi - w1) / w1)  # ∫_{start}^{t1} E(t - s)·d/ds[d^m] ds in ln(lag)
         few = (q <= _Q_FEW) & (k + 1 != kc)
@@ -161,5 +193,5 @@ def ting_rule(t, d, dp, u, dt, m, soe, kernel, Hu, Hd, decay, G, rows, force, t1
                                                                - t[k[sel], None]), 0.0, None)
                 part[sel] = (kernel(w) * w * m * ds ** (m - 1) * gw).sum(axis=1) * b[
                     sel] * q[sel]
-        tt[i], f[i] = t[r] - w1, C * (hist(Hu, u, i, k) + part)
+        tt[i], f[i] = t[r] - w1, C * (hist(Hu, u, i, k, nu) + part)
     force[rows], t1[rows] = f, tt
