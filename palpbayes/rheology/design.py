@@ -56,7 +56,7 @@ from .lattice import KnotLattice, knot_lattice
 
 __all__ = ["Windows", "block_kernel_means", "step_kernel_means", "knot_products",
            "band_corrections", "integrated_kernel", "double_integrated_kernel",
-           "triple_integrated_kernel", "window_kernel", "onset_correction",
+           "triple_integrated_kernel", "window_kernel", "window_kernels", "onset_correction",
            "lee_radok_columns", "KERNELS", "BAND", "SPAN"]
 
 #: Kernels of the columns: parameter alpha [-] or tau [s]; ``None`` is the constant kernel.
@@ -66,6 +66,73 @@ KERNELS = ("power-law", "exponential")
 BAND = 2
 #: Most knot steps one block's window spans (two where the hold's corner lies inside it).
 SPAN = 2
+
+
+class Lags:
+    """Lags x [s] that a record fixes (knot and sample times, not theta nor the surface),
+    clipped at 0, with their logarithms: Φ, Ψ and Ψ₂ at any theta from one exponential per lag
+    and order set (the power law's x^(k − alpha) = x^(k−1)·exp((1 − alpha)·ln x))."""
+
+    def __init__(self, x: np.ndarray, log: np.ndarray | None = None):
+        self.x = np.maximum(x, 0.0) if log is None else x
+        self._log = log
+
+    @classmethod
+    def given(cls, x: np.ndarray, log: np.ndarray) -> Lags:
+        """Lags x >= 0 whose logarithms ``log`` the caller has (no copy)."""
+        return cls(x, log)
+
+    @property
+    def log(self) -> np.ndarray:
+        """ln x (−inf at 0), computed on first use (the power law's alone)."""
+        if self._log is None:
+            with np.errstate(divide="ignore"):
+                self._log = np.log(self.x)
+        return self._log
+
+    def integrals(self, orders: tuple[int, ...], kernel: str | None, theta: float = 0.0,
+                  t0: float = 1.0) -> list[np.ndarray]:
+        """Φ (order 1), Ψ (2) or Ψ₂ (3) per unit modulus at the lags, in ``orders``' order
+        (as :func:`integrated_kernel`, :func:`double_integrated_kernel`,
+        :func:`triple_integrated_kernel`)."""
+        if kernel == "exponential":  # one expm1(−y), y = x/tau, for every order
+            y = self.x / theta
+            em = np.expm1(-y)
+            out = []
+            for k in orders:
+                if k == 1:
+                    f = em * -theta
+                elif k == 2:  # as double_integrated_kernel: its series below y = 1e-3
+                    f = y + em
+                    if (small := y < 1e-3).any():
+                        ys = y[small]
+                        f[small] = ys * ys * (0.5 - ys * (1.0 / 6.0 - ys * (1.0 / 24.0
+                                                                            - ys / 120.0)))
+                    f *= theta**2
+                else:  # as triple_integrated_kernel: its series below y = 1e-2
+                    f = 0.5 * y * y - y - em
+                    if (small := y < 1e-2).any():
+                        ys = y[small]
+                        f[small] = ys**3 * (1.0 / 6.0 - ys * (1.0 / 24.0 - ys * (
+                            1.0 / 120.0 - ys / 720.0)))
+                    f *= theta**3
+                out.append(f)
+            return out
+        if kernel is None:  # Φ = x, Ψ = x²/2, Ψ₂ = x³/6
+            x = self.x
+            return [x.copy() if k == 1 else x * x * (0.5 if k == 2 else x / 6.0)
+                    for k in orders]
+        base = np.multiply(self.log, 1.0 - theta)
+        np.exp(base, out=base)
+        base *= t0**theta / (1.0 - theta)  # Φ
+        out = []
+        for k in orders:
+            f = base.copy() if k == 1 else base * self.x
+            if k == 3:
+                f *= self.x
+            f *= {1: 1.0, 2: 1.0 / (2.0 - theta), 3: 1.0 / ((2.0 - theta) * (3.0 - theta))}[k]
+            out.append(f)
+        return out
 
 
 class Windows:
@@ -100,7 +167,15 @@ class Windows:
         self._steps = np.diff(e)[None, :]
         self._work: list[np.ndarray] | None = None
         self._constant: tuple[np.ndarray, ...] | None = None
+        self._lags: dict[object, Lags] = {}
         self.lattice: KnotLattice | None = knot_lattice(e)
+
+    def lags_of(self, key: object, make) -> Lags:
+        """The :class:`Lags` of ``make()`` (lags the record fixes), built once per ``key``."""
+        out = self._lags.get(key)
+        if out is None:
+            out = self._lags[key] = Lags(make())
+        return out
 
     def window_means(self, R: np.ndarray) -> np.ndarray:
         """Means over every block's window (G, B) of quantities given per knot step as step
@@ -218,7 +293,7 @@ def knot_products(win: Windows, a1: np.ndarray, a2: np.ndarray, kernel: str | No
     G, K = a1.shape
     out = np.zeros((G, K - 1))
     pairs = ((a1, double_integrated_kernel), (a2, triple_integrated_kernel))
-    for g in lat.groups:
+    for gi, g in enumerate(lat.groups):
         grid = np.arange(g.size + 1) * g.step
         spec = 0.0
         for a, f in pairs:
@@ -234,14 +309,16 @@ def knot_products(win: Windows, a1: np.ndarray, a2: np.ndarray, kernel: str | No
         else:
             out[:, g.steps] = Z[:, start]
         if g.others.size:  # sources of other groups or none, before the group's end
-            for a, f in pairs:
-                F = (f(e[g.steps + 1][:, None] - e[None, g.others], kernel, theta, t0)
-                     - f(e[g.steps][:, None] - e[None, g.others], kernel, theta, t0))
-                out[:, g.steps] += a[:, g.others] @ F.T
+            lags = win.lags_of(("others", gi), lambda g=g: e[np.r_[g.steps, g.steps + 1]][
+                :, None] - e[None, g.others])
+            n = g.steps.size
+            for a, F in zip((a1, a2), lags.integrals((2, 3), kernel, theta, t0), strict=True):
+                out[:, g.steps] += a[:, g.others] @ (F[n:] - F[:n]).T
     direct = lat.direct_steps
     if direct.size:  # every source into the steps that join two groups or touch no lattice
-        for a, f in pairs:
-            F = f(e[np.r_[direct, direct + 1]][:, None] - e[None, :], kernel, theta, t0)
+        lags = win.lags_of("direct", lambda: e[np.r_[direct, direct + 1]][:, None]
+                           - e[None, :])
+        for a, F in zip((a1, a2), lags.integrals((2, 3), kernel, theta, t0), strict=True):
             out[:, direct] += a @ (F[direct.size:] - F[:direct.size]).T
     out /= np.diff(e)[None, :]
     return out
@@ -258,14 +335,12 @@ def band_corrections(win: Windows, kernel: str | None, theta: float = 0.0,
     src = win.edges[win.band]
     lo, hi = win.edges[win.lo][:, None], win.edges[win.hi][:, None]
     w = win.width[:, None]
-    out = []
-    for point, integral in ((integrated_kernel, double_integrated_kernel),
-                            (double_integrated_kernel, triple_integrated_kernel)):
-        sample = win.sample_means(lambda x, f=point: f(x, kernel, theta, t0), src)
-        window = (integral(hi - src, kernel, theta, t0)
-                  - integral(lo - src, kernel, theta, t0)) / w
-        out.append(np.where(win.band_ok, sample - window, 0.0))
-    return out[0], out[1]
+    at_samples = win.lags_of("band samples", lambda: win.samples[:, :, None] - src[:, None, :])
+    at_ends = win.lags_of("band windows", lambda: np.stack([hi - src, lo - src]))
+    sample = [f.mean(axis=1) for f in at_samples.integrals((1, 2), kernel, theta, t0)]
+    window = [(f[0] - f[1]) / w for f in at_ends.integrals((2, 3), kernel, theta, t0)]
+    return tuple(np.where(win.band_ok, a - b, 0.0) for a, b in zip(sample, window,
+                                                                    strict=True))
 
 
 def block_kernel_means(win: Windows, kernel: str | None, theta: float = 0.0,
@@ -334,19 +409,36 @@ def window_kernel(win: Windows, s: np.ndarray, kernel: str | None, theta: float 
     that holds s_r to :data:`BAND` after it; a source on a block's upper edge belongs to the
     next block (``side`` "right") or to that block (``"left"``: the limit of sources just
     before the edge)."""
+    return window_kernels(win, s, kernel, theta, t0, ((order, side),))[0]
+
+
+def window_kernels(win: Windows, s: np.ndarray, kernel: str | None, theta: float,
+                   t0: float, requests: tuple[tuple[int, str], ...],
+                   at_edges: Lags | None = None) -> list[np.ndarray]:
+    """:func:`window_kernel` for each (order, side) of ``requests``, the kernel's
+    exponentials shared between them; ``at_edges``: the :class:`Lags` e_j − s_r (R, K) when
+    the caller has them (sources at knots: columns of ``win``'s lags)."""
     s = np.asarray(s, dtype=float)
-    f = double_integrated_kernel if order == 1 else triple_integrated_kernel
-    at_knots = f(win.edges[None, :] - s[:, None], kernel, theta, t0)  # windows share edges
-    out = (at_knots[:, win.hi] - at_knots[:, win.lo]) / win.width[None, :]
-    if win.samples is not None and s.size:
-        g = integrated_kernel if order == 1 else double_integrated_kernel
+    if at_edges is None:
+        at_edges = Lags(win.edges[None, :] - s[:, None])  # windows share edges
+    orders = sorted({o for o, _ in requests})
+    means = {o: (A[:, win.hi] - A[:, win.lo]) / win.width[None, :] for o, A in zip(
+        orders, at_edges.integrals(tuple(o + 1 for o in orders), kernel, theta, t0),
+        strict=True)}
+    if win.samples is None or not s.size:
+        return [means[o].copy() for o, _ in requests]
+    out: dict[tuple[int, str], np.ndarray] = {}
+    for side in dict.fromkeys(sd for _, sd in requests):  # each side's samples once
         first = np.searchsorted(win.edges[win.hi], s, side=side)
         near = np.clip(first[:, None] + np.arange(BAND + 1)[None, :], 0, win.lo.size - 1)
-        vals = win.sample_means(lambda x: g(x, kernel, theta, t0),
-                                np.broadcast_to(s[:, None, None], near.shape + (1,))
-                                .reshape(-1, 1), near.ravel())
-        out[np.arange(s.size)[:, None], near] = vals.reshape(near.shape)
-    return out
+        x = win.samples[near.ravel()] - np.repeat(s, near.shape[1])[:, None]
+        wanted = sorted({o for o, sd in requests if sd == side})
+        for o, f in zip(wanted, Lags(x).integrals(tuple(wanted), kernel, theta, t0),
+                        strict=True):
+            res = means[o].copy()
+            res[np.arange(s.size)[:, None], near] = f.mean(axis=1).reshape(near.shape)
+            out[o, side] = res
+    return [out[r] for r in requests]
 
 
 def onset_correction(win: Windows, depth: np.ndarray, m: float, kernel: str | None,
@@ -375,16 +467,18 @@ def onset_correction(win: Windows, depth: np.ndarray, m: float, kernel: str | No
     u1 = d1**m
     # e_{k-1} and e_k are knots, shared by many rows: each knot's means once
     knots, at = np.unique(np.r_[kk - 1, kk], return_inverse=True)
-    fk = window_kernel(win, e[knots], kernel, theta, t0)
+    # e_j - e_k at the knots: columns of the record's lags (their logarithms kept)
+    lags = Lags.given(win.lags[:, knots].T, win.log[:, knots].T)
+    fk, fl, gb = window_kernels(win, e[knots], kernel, theta, t0,
+                                ((1, "right"), (1, "left"), (2, "left")), lags)
     fa, fb = fk[at[: rows.size]], fk[at[rows.size:]]
     # the differences (fc − fb)/h and (gc − gb)/h² of the rise [s_c, e_k] take both ends with
     # the band of blocks of sources just before e_k: with e_k's own band (the next block's),
     # the one block where sample means and window means swap put an O(1) step over h², and a
     # surface a picometre above a knot gave a spike of ~d^(-1/2) in the columns (the density
     # jumped by -1,000 and then by +9 within nanometres)
-    fl, gb = (window_kernel(win, e[knots], kernel, theta, t0, order=o, side="left")
-              [at[rows.size:]] for o in (1, 2))
-    fc, gc = (window_kernel(win, sc, kernel, theta, t0, order=o) for o in (1, 2))
+    fl, gb = fl[at[rows.size:]], gb[at[rows.size:]]
+    fc, gc = window_kernels(win, sc, kernel, theta, t0, ((1, "right"), (2, "right")))
     rise = tb - sc  # 0 when d1 is so small that the crossing rounds onto the edge
     ok = rise > 0
     h = np.where(ok, rise, 1.0)

@@ -17,11 +17,16 @@ from palpbayes.errors import InputError
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.rheology import fit_rheology, prepare_cycle
 from palpbayes.rheology.design import (
+    Lags,
     Windows,
     block_kernel_means,
+    double_integrated_kernel,
     integrated_kernel,
     knot_products,
     lee_radok_columns,
+    triple_integrated_kernel,
+    window_kernel,
+    window_kernels,
 )
 from palpbayes.rheology.lattice import knot_lattice
 from palpbayes.sim import simulate_viscoelastic
@@ -206,6 +211,46 @@ def test_columns_for_many_surfaces_equal_one_at_a_time():
         one = lee_radok_columns(win, nodes[i:i + 1], d.z_edges, 1.5, "power-law", 0.3)[0]
         np.testing.assert_allclose(many[i], one, rtol=1e-12, atol=1e-18)
     assert not many[0].any() and many[3].max() > many[2].max() > many[1].max() > 0
+
+
+@pytest.mark.parametrize("kind, theta", [("power-law", 0.0), ("power-law", 0.37),
+                                         ("power-law", 0.95), ("exponential", 2e-3),
+                                         ("exponential", 0.7), (None, 0.0)])
+def test_lag_tables_give_the_kernel_integrals(kind, theta):
+    """Phi, Psi and Psi2 from one exponential per lag (Lags.integrals) equal the kernels' own
+    functions to 1e-13 relative, any order subset, on lags from -1 s (0) through 1e-9 s (the
+    exponential's series) to 50 s; the logarithms given by the caller give the same."""
+    x = np.r_[-1.0, 0.0, np.geomspace(1e-9, 50.0, 400)].reshape(2, -1)
+    fs = {1: integrated_kernel, 2: double_integrated_kernel, 3: triple_integrated_kernel}
+    lags = Lags(x)
+    with np.errstate(divide="ignore"):
+        given = Lags.given(np.maximum(x, 0.0), np.log(np.maximum(x, 0.0)))
+    for orders in ((1, 2, 3), (3,), (2, 3), (1,)):
+        for table in (lags, given):
+            for k, got in zip(orders, table.integrals(orders, kind, theta, 2.0), strict=True):
+                ref = fs[k](x, kind, theta, 2.0)
+                assert got.shape == x.shape and np.all(got[x <= 0] == 0.0)
+                np.testing.assert_allclose(got, ref, rtol=1e-13, atol=0)
+
+
+@pytest.mark.parametrize("kind, theta", [("power-law", 0.3), ("exponential", 0.4)])
+def test_window_kernels_share_what_window_kernel_computes(kind, theta):
+    """window_kernels' requests (orders 1, 2 on both sides) equal window_kernel one at a time,
+    with the lags of the sources computed or given, for sources on knots and between them."""
+    t, z, seg = _cycle_axis(jitter=0.02)
+    d = prepare_cycle(IndentationTrace(t, z, z * 0, tip=PARABOLOID, segment=seg),
+                      max_points=100)
+    win = d.windows()
+    knots = np.array([3, 10, 11, 40])
+    requests = ((1, "right"), (2, "left"), (1, "left"), (2, "right"))
+    between = 0.3 * win.edges[knots] + 0.7 * win.edges[knots + 1]
+    for s, given in ((win.edges[knots], Lags.given(win.lags[:, knots].T,
+                                                   win.log[:, knots].T)),
+                     (win.edges[knots], None), (between, None)):
+        got = window_kernels(win, s, kind, theta, 1.0, requests, given)
+        for (order, side), g in zip(requests, got, strict=True):
+            ref = window_kernel(win, s, kind, theta, 1.0, order=order, side=side)
+            np.testing.assert_allclose(g, ref, rtol=1e-12, atol=1e-15 * np.abs(ref).max())
 
 
 @pytest.mark.parametrize("jitter, tol", [(0.0, 1e-6), (0.02, 1e-4)])
