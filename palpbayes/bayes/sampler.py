@@ -15,6 +15,17 @@ changed by less than ``tau_rtol`` since the last check — and, when an ``accept
 fit passes R-hat <= 1.01 and ESS >= 400), that test passes — or at ``max_steps``.  Burn-in
 ``ceil(2·max tau)`` is discarded and the chain thinned by ``max(1, floor(min tau / 2))``.
 
+Stuck walkers: a walker that starts in a poor spot of a narrow, curved posterior can stay
+there for good — the differential-evolution proposals are as small as the ensemble's spread,
+and none of them climbs (measured: an AR(1) fit of a real AFM curve, two of 32 walkers 90 log
+units below the rest for 20,000 steps: R-hat 1.17, ESS 34).  At every check from
+``min_steps`` on, a walker whose best log posterior over the last ``check_every`` steps lies
+more than chi2_ndim(1 − 1e-6)/2 below the ensemble's median is moved onto a randomly chosen
+walker of the rest, and the chain is restarted from that ensemble (:data:`MAX_RESTARTS` times
+at most): everything before is burn-in, the kept chain is plain emcee.  Under the posterior a
+walker that far out has probability ~1e-6; a mode that low holds ~e^(−18) of the mass for 5
+parameters.  An ensemble without such walkers runs exactly as before.
+
 Seeding: emcee has no ``seed`` argument and copies NumPy's global state when built, so the
 sampler's own ``RandomState`` is replaced by one seeded from ``seed`` (docs/design.md §8).
 """
@@ -27,10 +38,17 @@ from dataclasses import dataclass
 
 import emcee
 import numpy as np
+from scipy.stats import chi2
 
 from ..errors import InputError
 
-__all__ = ["SamplerSettings", "ChainResult", "run_emcee", "MOVES"]
+__all__ = ["SamplerSettings", "ChainResult", "run_emcee", "stuck_walkers", "MOVES",
+           "MAX_RESTARTS"]
+
+#: Most restarts of a chain after stuck walkers were moved (module docstring).
+MAX_RESTARTS = 3
+#: Probability [-] under the posterior below which a walker's log posterior counts as stuck.
+STUCK_P = 1e-6
 
 
 #: The move schedules (see :class:`SamplerSettings`), name -> description (used in reports).
@@ -106,6 +124,8 @@ class ChainResult:
         Mean acceptance fraction of the walkers.
     hit_cap
         True if sampling stopped at ``max_steps`` before tau was stable.
+    moved
+        Stuck walkers moved during burn-in (module docstring); 0 for a clean run.
     """
 
     samples: np.ndarray
@@ -116,6 +136,7 @@ class ChainResult:
     thin: int
     acceptance: float
     hit_cap: bool
+    moved: int = 0
 
 
 def _moves(kind: str):
@@ -178,25 +199,41 @@ def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | N
     progress = settings.progress
     if progress is None:
         progress = sys.stderr.isatty()
-    old_tau = np.full(ndim, np.inf)
-    hit_cap = True
-    for _ in sampler.sample(p0, iterations=settings.max_steps, progress=progress):
-        it = sampler.iteration
-        if it % settings.check_every or it < settings.min_steps:
-            continue
-        tau = sampler.get_autocorr_time(tol=0)
-        stable = np.all(np.abs(old_tau - tau) / tau < settings.tau_rtol)
-        old_tau = tau
-        if not (np.all(tau * settings.tau_factor < it) and stable):
-            continue
-        if accept is not None:
-            burn, thin = _burn_thin(tau, it)
-            chain = np.swapaxes(sampler.get_chain(discard=burn, thin=thin), 0, 1)
-            lp = sampler.get_log_prob(discard=burn, thin=thin).T
-            if not accept(chain, lp):
+    hit_cap, start, spent, moved = True, p0, 0, 0
+    for restart in range(MAX_RESTARTS + 1):
+        old_tau = np.full(ndim, np.inf)
+        again = None
+        for state in sampler.sample(start, iterations=settings.max_steps - spent,
+                                    progress=progress):
+            it = sampler.iteration
+            if it % settings.check_every or it < settings.min_steps:
                 continue
-        hit_cap = False
-        break
+            if restart < MAX_RESTARTS:
+                stuck = stuck_walkers(sampler.get_log_prob()[-settings.check_every:], ndim)
+                if stuck.any():  # move them onto the others, restart: all this is burn-in
+                    again = state.coords.copy()
+                    again[stuck] = again[sampler._random.choice(np.flatnonzero(~stuck),
+                                                                int(stuck.sum()))]
+                    moved += int(stuck.sum())
+                    break
+            tau = sampler.get_autocorr_time(tol=0)
+            stable = np.all(np.abs(old_tau - tau) / tau < settings.tau_rtol)
+            old_tau = tau
+            if not (np.all(tau * settings.tau_factor < it) and stable):
+                continue
+            if accept is not None:
+                burn, thin = _burn_thin(tau, it)
+                chain = np.swapaxes(sampler.get_chain(discard=burn, thin=thin), 0, 1)
+                lp = sampler.get_log_prob(discard=burn, thin=thin).T
+                if not accept(chain, lp):
+                    continue
+            hit_cap = False
+            break
+        if again is None:
+            break
+        spent += sampler.iteration
+        sampler.reset()
+        start = again
     tau = sampler.get_autocorr_time(tol=0)
     burn, thin = _burn_thin(tau, sampler.iteration)
     chain = sampler.get_chain(discard=burn, thin=thin)  # (draws, walkers, ndim)
@@ -205,9 +242,18 @@ def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | N
         samples=np.ascontiguousarray(np.swapaxes(chain, 0, 1)),
         log_prob=np.ascontiguousarray(lp.T),
         tau=np.asarray(tau, dtype=float),
-        n_steps=int(sampler.iteration),
+        n_steps=spent + int(sampler.iteration),
         burn=burn,
         thin=thin,
         acceptance=float(np.mean(sampler.acceptance_fraction)),
         hit_cap=hit_cap,
+        moved=moved,
     )
+
+
+def stuck_walkers(log_prob: np.ndarray, ndim: int, p: float = STUCK_P) -> np.ndarray:
+    """Walkers (bool, W) whose best log posterior over the steps of ``log_prob`` (steps, W)
+    lies more than chi2_ndim(1 − p)/2 below the median over walkers of their best: under the
+    posterior, 2·(max − lp) of a draw is ~chi2 with ndim degrees of freedom near the mode."""
+    best = np.max(log_prob, axis=0)
+    return best < np.median(best) - 0.5 * float(chi2.isf(p, ndim))
