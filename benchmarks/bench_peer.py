@@ -139,7 +139,11 @@ def main() -> None:
               f"{t_exact / t_peer:>10.0f} {t_plain / t_peer:>10.1f} {e_peer:>10.4g} "
               f"{estar:>10.4g}")
     r = np.array(rows)
-    med = np.nanmedian
+
+    def med(x):  # NaN, quietly, for a column never timed (emcee with --emcee 0)
+        x = np.asarray(x, dtype=float)
+        return float(np.nanmedian(x)) if np.isfinite(x).any() else float("nan")
+
     print(f"\n{len(rows)} curves ({int(np.isfinite(r[:, 2]).sum())} fitted by palpbayes, "
           f"{int(np.isfinite(r[:, 0]).sum())} by nanite); medians: nanite "
           f"{1e3 * med(r[:, 0]):.0f} ms, paper least squares {1e3 * med(r[:, 1]):.0f} ms, "
