@@ -162,7 +162,7 @@ def ting_rule(t, d, dp, u, dt, m, soe, kernel, Hu, Hd, decay, G, rows, force, t1
     s0 = t[kc - 1] + dt[kc - 1] * -d[kc - 1] / (d[kc] - d[kc - 1])
     kmax = np.maximum.accumulate(np.where(d == np.maximum.accumulate(d), np.arange(t.size), 0))
     hist = _History(t, rows, kmax, kc - 1, soe, decay)
-    nu = "d" if Hu is Hd else "u"  # m = 1: d^m is d_+
+    nu = "d" if m == 1.0 else "u"  # m = 1: d^m is d_+ (the same histories)
     everyone = np.arange(rows.size)
     g, f, tt = G[rows], np.zeros(rows.size), np.full(rows.size, np.nan)
     hi, lo = kmax[rows], np.full(rows.size, kc - 1)

@@ -114,18 +114,19 @@ class PronyKernel:
                                     for e, s in zip(self.E, self.tau, strict=True))
 
     def _value_and_integral(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """E(t) [Pa] and ∫_0^t E(s) ds [Pa·s], one expm1 per branch for both."""
+        """E(t) [Pa] and ∫_0^t E(s) ds [Pa·s] (exp for E: 1 + expm1 would round a branch
+        to 0 beyond ~37 tau, and with E_inf = 0 the Newton step to 0/0)."""
         value, integral = np.full(t.shape, self.E_inf), self.E_inf * t
         for e, s in zip(self.E, self.tau, strict=True):
-            em = np.expm1(-t / s)
-            value += e * (1.0 + em)
-            integral -= (e * s) * em
+            y = -t / s
+            value += e * np.exp(y)
+            integral -= (e * s) * np.expm1(y)
         return value, integral
 
     def _inverse_integral(self, target, lo, hi) -> np.ndarray:
         # Newton from below (the integral is concave), from where the tangent at hi reaches
-        # the target (below the root: a concave function lies under its tangents); fmax/fmin
-        # take a NaN step (0/0 where E has underflowed) as none and clip to [lo, hi]
+        # the target (below the root: a concave function lies under its tangents); fmax and
+        # fmin clip to [lo, hi] and take a NaN step (0/0 where E underflows to 0) as none
         target, lo, hi = (np.asarray(v, dtype=float) for v in (target, lo, hi))
         with np.errstate(divide="ignore", invalid="ignore"):
             value, integral = self._value_and_integral(hi)

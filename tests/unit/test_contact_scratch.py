@@ -88,3 +88,49 @@ def test_no_state_carried_between_calls(kernel):
     np.testing.assert_array_equal(results["long"].force, first.force)
     np.testing.assert_array_equal(results["short"].force, other.force)
     assert np.all(first.force[first.ting] >= 0) and first.ting.sum() > 100
+
+
+def _poisoned(name, shape, zero=False):
+    """A fresh array full of NaN (zeros when asked): a read of anything not written shows."""
+    return np.zeros(shape) if zero else np.full(shape, np.nan)
+
+
+@pytest.mark.parametrize("m", [1.0, 1.5, 2.0, 1.3])
+@pytest.mark.parametrize("cycles", [1, 3])
+def test_nothing_unwritten_is_read(m, cycles, monkeypatch):
+    """Every scratch array replaced by a fresh NaN-filled one: force and t1 bit-identical, for
+    the power law, the SLS, a 5-term Prony series and a Maxwell solid (E_inf = 0), one
+    approach-hold-retract or three of them (several groups of Ting's rows)."""
+    from palpbayes.contact import hereditary_steps, ting_rule, viscoelastic
+
+    rng = np.random.default_rng(7)
+    n = 900 * cycles
+    t = np.concatenate([[0.0], np.cumsum(rng.uniform(0.7, 1.3, n - 1) / 800.0)])
+    x = (t / t[-1] * cycles) % 1.0
+    d = np.interp(x, [0.0, 0.45, 0.6, 1.0], [-0.1e-3, 2e-3, 2e-3, -0.5e-3])
+    kernels = (PowerLawKernel(1e5, 0.3), standard_linear_solid(5e4, 5e4, 0.5),
+               PronyKernel(2e4, (3e4, 3e4, 3e4, 1e4, 1e4), (1e-3, 0.05, 0.5, 5.0, 50.0)),
+               PronyKernel(0.0, (5e4,), (0.2,)))
+    plain = [hereditary_contact(t, d, C_PARA, m, k) for k in kernels]
+    for module in (viscoelastic, hereditary_steps, ting_rule):
+        monkeypatch.setattr(module, "scratch", _poisoned)
+    for k, ref in zip(kernels, plain, strict=True):
+        got = hereditary_contact(t, d, C_PARA, m, k)
+        assert np.all(np.isfinite(got.force)) and got.ting.sum() > 100
+        np.testing.assert_array_equal(got.force, ref.force)
+        np.testing.assert_array_equal(got.t1, ref.t1)
+
+
+def test_prony_inverse_where_the_branch_has_decayed():
+    """A Maxwell solid (E_inf = 0) far beyond its tau: E(w) is a tiny positive number, not 0,
+    so Newton still reaches the root; the target at a bound returns that bound (on [45, 50]
+    the integral is 1 to the last bit: any w is a root, the upper bound is returned)."""
+    k = PronyKernel(0.0, (1.0,), (1.0,))
+    lo, hi = np.array([30.0, 45.0, 0.1]), np.array([40.0, 50.0, 3.0])
+    np.testing.assert_allclose(k._inverse_integral(k.integral(hi), lo, hi), hi, rtol=1e-12)
+    got = k._inverse_integral(k.integral(lo), lo, hi)
+    np.testing.assert_allclose(got[[0, 2]], lo[[0, 2]], rtol=1e-12)
+    assert k.integral(got[1]) == k.integral(lo[1])
+    w = np.array([0.5, 1.7])
+    np.testing.assert_allclose(k._inverse_integral(k.integral(w), np.zeros(2), np.full(2, 3.0)),
+                               w, rtol=1e-12)

@@ -39,6 +39,12 @@ def test_chi2_rule_flags_the_outlier_and_spares_a_healthy_ensemble():
     lp = -0.5 * rng.chisquare(ndim, size=(100, 32))
     lp[:, [4, 9]] -= 90.0
     assert np.flatnonzero(stuck_walkers(lp, ndim)).tolist() == [4, 9]
+    # with the chain: walker 4 sits still (stuck), walker 9 moves as often as the others do
+    # (a broad mode of its own, low in density): only 4 is moved
+    chain = np.cumsum(rng.normal(size=(100, 32, ndim)) * (rng.random((100, 32, 1)) < 0.2),
+                      axis=0)
+    chain[:, 4] = chain[0, 4]
+    assert np.flatnonzero(stuck_walkers(lp, ndim, chain)).tolist() == [4]
 
 
 def test_a_stuck_walker_is_moved_and_the_chain_is_plain_afterwards():
@@ -64,3 +70,15 @@ def test_a_healthy_ensemble_is_not_touched(seed):
     p0 = np.random.default_rng(seed).normal(scale=3.0, size=(16, 2))
     res = run_emcee(lambda th: -0.5 * np.sum(th**2, axis=1), p0, SETTINGS, seed=seed)
     assert res.moved == 0 and not res.hit_cap
+
+
+@pytest.mark.parametrize("max_steps", [500, 800, 1100])
+def test_no_restart_without_the_budget_for_a_whole_chain(max_steps):
+    """A stuck walker found when fewer than min_steps + check_every steps would be left: no
+    restart (the run goes on as before the repair: here the stuck walker's chain passes the
+    tau rule, which is why fits add the R-hat test), and never a crash or an unchecked chain."""
+    settings = SamplerSettings(n_walkers=16, max_steps=max_steps, min_steps=500,
+                               check_every=100, progress=False)
+    res = run_emcee(_two_modes, _start(1), settings, seed=5)
+    assert res.n_steps <= max_steps and res.samples.shape[1] >= 10
+    assert res.moved <= (1 if max_steps >= 500 + 500 + 100 else 0)

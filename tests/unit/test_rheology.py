@@ -233,10 +233,26 @@ def test_lag_tables_give_the_kernel_integrals(kind, theta):
                 np.testing.assert_allclose(got, ref, rtol=1e-13, atol=0)
 
 
+def _window_kernel_reference(win, s, kind, theta, order, side):
+    """Block means of Phi (order 1) or Psi (2) of t - s from the kernels' own functions: the
+    window mean from the next integral at the window's ends, the BAND + 1 blocks from the
+    one holding s as means over their samples."""
+    f = double_integrated_kernel if order == 1 else triple_integrated_kernel
+    g = integrated_kernel if order == 1 else double_integrated_kernel
+    at = f(win.edges[None, :] - s[:, None], kind, theta, 1.0)
+    out = (at[:, win.hi] - at[:, win.lo]) / win.width[None, :]
+    first = np.searchsorted(win.edges[win.hi], s, side=side)
+    for r in range(s.size):
+        for o in np.clip(first[r] + np.arange(3), 0, win.lo.size - 1):
+            out[r, o] = g(win.samples[o] - s[r], kind, theta, 1.0).mean()
+    return out
+
+
 @pytest.mark.parametrize("kind, theta", [("power-law", 0.3), ("exponential", 0.4)])
 def test_window_kernels_share_what_window_kernel_computes(kind, theta):
-    """window_kernels' requests (orders 1, 2 on both sides) equal window_kernel one at a time,
-    with the lags of the sources computed or given, for sources on knots and between them."""
+    """window_kernels' requests (orders 1, 2 on both sides) equal the kernels' own functions
+    assembled one block at a time, with the lags of the sources computed or given, for
+    sources on knots and between them."""
     t, z, seg = _cycle_axis(jitter=0.02)
     d = prepare_cycle(IndentationTrace(t, z, z * 0, tip=PARABOLOID, segment=seg),
                       max_points=100)
@@ -249,8 +265,10 @@ def test_window_kernels_share_what_window_kernel_computes(kind, theta):
                      (win.edges[knots], None), (between, None)):
         got = window_kernels(win, s, kind, theta, 1.0, requests, given)
         for (order, side), g in zip(requests, got, strict=True):
-            ref = window_kernel(win, s, kind, theta, 1.0, order=order, side=side)
+            ref = _window_kernel_reference(win, s, kind, theta, order, side)
             np.testing.assert_allclose(g, ref, rtol=1e-12, atol=1e-15 * np.abs(ref).max())
+            one = window_kernel(win, s, kind, theta, 1.0, order=order, side=side)
+            np.testing.assert_array_equal(one, g)
 
 
 @pytest.mark.parametrize("jitter, tol", [(0.0, 1e-6), (0.02, 1e-4)])
