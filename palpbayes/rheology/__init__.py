@@ -1,7 +1,8 @@
 """Viscoelastic palpation: the whole recorded cycle fitted with a relaxation modulus.
 
 One module per job, imports flowing one way (``results`` -> ``store``, ``choice`` -> ``fit`` ->
-``posterior`` -> ``cycle`` -> ``design``; ``posterior``, ``fit`` -> ``ting`` -> ``design``;
+``posterior`` -> ``cycle`` -> ``design`` -> ``kernels``; ``posterior``, ``fit`` -> ``ting`` ->
+``design``, ``kernels``;
 ``fit`` -> ``compression``; ``pool`` -> ``fit``, ``posterior``; ``campaign`` -> ``pool``;
 ``sampler`` -> ``column_table`` -> ``posterior``; ``fit`` -> ``sampler``, ``flags`` ->
 ``offcontact``):
@@ -10,8 +11,9 @@ One module per job, imports flowing one way (``results`` -> ``store``, ``choice`
   segments, block means, the knots of the motion, the pre-contact baseline and the surface
   range;
 * :mod:`~palpbayes.rheology.design` -- the Lee–Radok hereditary integral as regression
-  columns, block means of the force for every trial surface at once (power law,
-  exponential branch, constant);
+  columns, block means of the force for every trial surface at once;
+* :mod:`~palpbayes.rheology.kernels` -- the relaxation kernels (power law, exponential
+  branch, constant) and their integrals per unit modulus, at lags a record fixes;
 * :mod:`~palpbayes.rheology.ting` -- Ting's rule on the retract as regression columns (power
   law: t1 depends on alpha and the motion only, so the force stays linear in E0*);
 * :mod:`~palpbayes.rheology.posterior` -- the collapsed posterior on a (surface × alpha or
@@ -53,6 +55,7 @@ from . import (
     design,
     fit,
     flags,
+    kernels,
     offcontact,
     pool,
     posterior,
@@ -69,6 +72,7 @@ from .cycle import *  # noqa: F403
 from .design import *  # noqa: F403
 from .fit import *  # noqa: F403
 from .flags import *  # noqa: F403
+from .kernels import *  # noqa: F403
 from .offcontact import *  # noqa: F403
 from .pool import *  # noqa: F403
 from .posterior import *  # noqa: F403
@@ -83,6 +87,7 @@ __all__ += column_table.__all__
 __all__ += compression.__all__
 __all__ += cycle.__all__
 __all__ += design.__all__
+__all__ += kernels.__all__
 __all__ += posterior.__all__
 __all__ += fit.__all__
 __all__ += flags.__all__

@@ -28,13 +28,8 @@ blocks of regularly sampled segments; a hold's corner and a few other knots may 
 convolutions and run by FFT in O(N log N) per surface; otherwise they are dense BLAS products
 of the K × K step means (:func:`step_kernel_means`).  Irregular sampling costs first
 order in the offset between a block's mean sample time and its window's centre (~1e-3 of the
-peak at steps ± 50 %, ~3e-5 at ± 2 %).  Kernels (per unit modulus):
-
-* power law (springpot) E(t) = (t/t0)^(−alpha): Φ(x) = t0^alpha·x^(1−alpha)/(1−alpha),
-  Ψ(x) = Φ(x)·x/(2−alpha);
-* exponential branch E(t) = exp(−t/tau): Φ(x) = −tau·expm1(−x/tau),
-  Ψ(x) = tau·x + tau²·expm1(−x/tau);
-* constant (the SLS's E_inf, the elastic limit): Φ(x) = x, the block mean of u.
+peak at steps ± 50 %, ~3e-5 at ± 2 %).  The kernels (power law, exponential branch,
+constant) and their integrals Φ, Ψ, Ψ₂ per unit modulus are :mod:`~palpbayes.rheology.kernels`'s.
 
 Two corrections make the piecewise-linear u follow d^m (:func:`lee_radok_columns`): on every
 step in contact u bends (d^m with d linear) by a quadratic bump through the step's midpoint,
@@ -52,87 +47,23 @@ import numpy as np
 from scipy import fft as sp_fft
 
 from ..errors import InputError
+from .kernels import (
+    Lags,
+    check_kernel,
+    double_integrated_kernel,
+    triple_integrated_kernel,
+)
 from .lattice import KnotLattice, knot_lattice
 
 __all__ = ["Windows", "block_kernel_means", "step_kernel_means", "knot_products",
-           "band_corrections", "integrated_kernel", "double_integrated_kernel",
-           "triple_integrated_kernel", "window_kernel", "window_kernels", "onset_correction",
-           "lee_radok_columns", "KERNELS", "BAND", "SPAN"]
+           "band_corrections", "window_kernel", "window_kernels", "onset_correction",
+           "lee_radok_columns", "BAND", "SPAN"]
 
-#: Kernels of the columns: parameter alpha [-] or tau [s]; ``None`` is the constant kernel.
-KERNELS = ("power-law", "exponential")
 #: Knots before a block's window (its own knots too) on which the block's response is the
 #: mean over its own samples; :func:`window_kernel` takes the same blocks after a source.
 BAND = 2
 #: Most knot steps one block's window spans (two where the hold's corner lies inside it).
 SPAN = 2
-
-
-class Lags:
-    """Lags x [s] that a record fixes (knot and sample times, not theta nor the surface),
-    clipped at 0, with their logarithms: Φ, Ψ and Ψ₂ at any theta from one exponential per lag
-    and order set (the power law's x^(k − alpha) = x^(k−1)·exp((1 − alpha)·ln x))."""
-
-    def __init__(self, x: np.ndarray, log: np.ndarray | None = None):
-        self.x = np.maximum(x, 0.0) if log is None else x
-        self._log = log
-
-    @classmethod
-    def given(cls, x: np.ndarray, log: np.ndarray) -> Lags:
-        """Lags x >= 0 whose logarithms ``log`` the caller has (no copy)."""
-        return cls(x, log)
-
-    @property
-    def log(self) -> np.ndarray:
-        """ln x (−inf at 0), computed on first use (the power law's alone)."""
-        if self._log is None:
-            with np.errstate(divide="ignore"):
-                self._log = np.log(self.x)
-        return self._log
-
-    def integrals(self, orders: tuple[int, ...], kernel: str | None, theta: float = 0.0,
-                  t0: float = 1.0) -> list[np.ndarray]:
-        """Φ (order 1), Ψ (2) or Ψ₂ (3) per unit modulus at the lags, in ``orders``' order
-        (as :func:`integrated_kernel`, :func:`double_integrated_kernel`,
-        :func:`triple_integrated_kernel`)."""
-        if kernel == "exponential":  # one expm1(−y), y = x/tau, for every order
-            y = self.x / theta
-            em = np.expm1(-y)
-            out = []
-            for k in orders:
-                if k == 1:
-                    f = em * -theta
-                elif k == 2:  # as double_integrated_kernel: its series below y = 1e-3
-                    f = y + em
-                    if (small := y < 1e-3).any():
-                        ys = y[small]
-                        f[small] = ys * ys * (0.5 - ys * (1.0 / 6.0 - ys * (1.0 / 24.0
-                                                                            - ys / 120.0)))
-                    f *= theta**2
-                else:  # as triple_integrated_kernel: its series below y = 1e-2
-                    f = 0.5 * y * y - y - em
-                    if (small := y < 1e-2).any():
-                        ys = y[small]
-                        f[small] = ys**3 * (1.0 / 6.0 - ys * (1.0 / 24.0 - ys * (
-                            1.0 / 120.0 - ys / 720.0)))
-                    f *= theta**3
-                out.append(f)
-            return out
-        if kernel is None:  # Φ = x, Ψ = x²/2, Ψ₂ = x³/6
-            x = self.x
-            return [x.copy() if k == 1 else x * x * (0.5 if k == 2 else x / 6.0)
-                    for k in orders]
-        base = np.multiply(self.log, 1.0 - theta)
-        np.exp(base, out=base)
-        base *= t0**theta / (1.0 - theta)  # Φ
-        out = []
-        for k in orders:
-            f = base.copy() if k == 1 else base * self.x
-            if k == 3:
-                f *= self.x
-            f *= {1: 1.0, 2: 1.0 / (2.0 - theta), 3: 1.0 / ((2.0 - theta) * (3.0 - theta))}[k]
-            out.append(f)
-        return out
 
 
 class Windows:
@@ -192,17 +123,6 @@ class Windows:
         return f(t[:, :, None] - sources[:, None, :]).mean(axis=1)
 
 
-def _check(kernel: str | None, theta: float) -> None:
-    if kernel == "power-law":
-        if not 0.0 <= theta < 1.0:
-            raise InputError(f"alpha = {theta!r} must lie in [0, 1)")
-    elif kernel == "exponential":
-        if not theta > 0:
-            raise InputError(f"tau = {theta!r} s must be positive")
-    elif kernel is not None:
-        raise InputError(f"unknown kernel {kernel!r}; use one of {', '.join(KERNELS)}")
-
-
 def step_kernel_means(win: Windows, kernel: str | None, theta: float = 0.0, t0: float = 1.0,
                       *, scratch: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Means (K − 1, K) over every knot step [e_j, e_{j+1}] of Φ(t − e_k) [s] and of
@@ -223,7 +143,7 @@ def step_kernel_means(win: Windows, kernel: str | None, theta: float = 0.0, t0: 
         rebuilds these matrices hundreds of times, and fresh multi-megabyte arrays cost
         more in page faults than the arithmetic).
     """
-    _check(kernel, theta)
+    check_kernel(kernel, theta)
     K = win.edges.size
     if scratch:
         if win._work is None:
@@ -288,7 +208,7 @@ def knot_products(win: Windows, a1: np.ndarray, a2: np.ndarray, kernel: str | No
     if lat is None:
         D1, D2 = step_kernel_means(win, kernel, theta, t0, scratch=True)
         return a1 @ D1.T + a2 @ D2.T
-    _check(kernel, theta)
+    check_kernel(kernel, theta)
     e = win.edges
     G, K = a1.shape
     out = np.zeros((G, K - 1))
@@ -357,48 +277,6 @@ def block_kernel_means(win: Windows, kernel: str | None, theta: float = 0.0,
         np.add.at(A, (np.broadcast_to(rows, win.band.shape), win.band), d)
         out.append(A)
     return out[0], out[1]
-
-
-def integrated_kernel(x: np.ndarray, kernel: str | None, theta: float = 0.0,
-                      t0: float = 1.0) -> np.ndarray:
-    """Φ(x) = ∫_0^x K(y) dy [s] per unit modulus at lags ``x`` (0 for x <= 0)."""
-    x = np.clip(np.asarray(x, dtype=float), 0.0, None)
-    if kernel is None:
-        return x
-    if kernel == "power-law":
-        return x ** (1.0 - theta) * (t0**theta / (1.0 - theta))
-    return -theta * np.expm1(-x / theta)
-
-
-def double_integrated_kernel(x: np.ndarray, kernel: str | None, theta: float = 0.0,
-                             t0: float = 1.0) -> np.ndarray:
-    """Ψ(x) = ∫_0^x Φ(y) dy [s²] per unit modulus (0 for x <= 0); for the exponential,
-    tau²·(y + expm1(−y)) with y = x/tau, by its series below y = 1e-3 (no cancellation)."""
-    x = np.clip(np.asarray(x, dtype=float), 0.0, None)
-    if kernel is None:
-        return 0.5 * x * x
-    if kernel == "power-law":
-        return x ** (2.0 - theta) * (t0**theta / ((1.0 - theta) * (2.0 - theta)))
-    y = x / theta
-    small = y < 1e-3
-    series = y * y * (0.5 - y * (1.0 / 6.0 - y * (1.0 / 24.0 - y / 120.0)))
-    return theta**2 * np.where(small, series, y + np.expm1(-np.where(small, 1.0, y)))
-
-
-def triple_integrated_kernel(x: np.ndarray, kernel: str | None, theta: float = 0.0,
-                             t0: float = 1.0) -> np.ndarray:
-    """Ψ₂(x) = ∫_0^x Ψ(y) dy [s³] per unit modulus (0 for x <= 0)."""
-    x = np.clip(np.asarray(x, dtype=float), 0.0, None)
-    if kernel is None:
-        return x**3 / 6.0
-    if kernel == "power-law":
-        return x ** (3.0 - theta) * (t0**theta / ((1.0 - theta) * (2.0 - theta)
-                                                  * (3.0 - theta)))
-    y = x / theta
-    small = y < 1e-2
-    series = y**3 * (1.0 / 6.0 - y * (1.0 / 24.0 - y * (1.0 / 120.0 - y / 720.0)))
-    big = 0.5 * y * y - y - np.expm1(-np.where(small, 1.0, y))
-    return theta**3 * np.where(small, series, big)
 
 
 def window_kernel(win: Windows, s: np.ndarray, kernel: str | None, theta: float = 0.0,

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .design import double_integrated_kernel, integrated_kernel
+from .kernels import double_integrated_kernel, integrated_kernel
 
 __all__ = ["RetractDesign", "ting_columns", "ting_cutoff", "source_coefficients",
            "with_retract", "symmetric_picks", "SAMPLES", "CORNER_BLOCKS", "CORNER_SAMPLES",

@@ -17,16 +17,18 @@ from palpbayes.errors import InputError
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.rheology import fit_rheology, prepare_cycle
 from palpbayes.rheology.design import (
-    Lags,
     Windows,
     block_kernel_means,
-    double_integrated_kernel,
-    integrated_kernel,
     knot_products,
     lee_radok_columns,
-    triple_integrated_kernel,
     window_kernel,
     window_kernels,
+)
+from palpbayes.rheology.kernels import (
+    Lags,
+    double_integrated_kernel,
+    integrated_kernel,
+    triple_integrated_kernel,
 )
 from palpbayes.rheology.lattice import knot_lattice
 from palpbayes.sim import simulate_viscoelastic
