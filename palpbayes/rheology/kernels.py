@@ -109,7 +109,14 @@ class Lags:
                   t0: float = 1.0) -> list[np.ndarray]:
         """Φ (order 1), Ψ (2) or Ψ₂ (3) per unit modulus at the lags, in ``orders``' order
         (as :func:`integrated_kernel`, :func:`double_integrated_kernel`,
-        :func:`triple_integrated_kernel`)."""
+        :func:`triple_integrated_kernel`).
+
+        Raises
+        ------
+        InputError
+            An unknown kernel or theta outside its range (:func:`check_kernel`).
+        """
+        check_kernel(kernel, theta)
         if kernel == "exponential":  # one expm1(−y), y = x/tau, for every order
             y = self.x / theta
             em = np.expm1(-y)

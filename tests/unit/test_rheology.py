@@ -233,6 +233,10 @@ def test_lag_tables_give_the_kernel_integrals(kind, theta):
                 ref = fs[k](x, kind, theta, 2.0)
                 assert got.shape == x.shape and np.all(got[x <= 0] == 0.0)
                 np.testing.assert_allclose(got, ref, rtol=1e-13, atol=0)
+    with pytest.raises(InputError, match="unknown kernel"):
+        lags.integrals((1,), "springpot", 0.3)
+    with pytest.raises(InputError, match="alpha = 1.0"):
+        lags.integrals((1,), "power-law", 1.0)
 
 
 def _window_kernel_reference(win, s, kind, theta, order, side):
