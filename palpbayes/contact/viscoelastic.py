@@ -290,9 +290,10 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     runmax = np.maximum.accumulate(d)
     ting = (d < runmax) & (runmax > 0)
     rows = np.flatnonzero(ting)
-    # per term, in time order for Ting's rule: histories of d^m and d_+, and the step decays
-    Hu = Hd = np.zeros((n + 1, K))  # set below where there are terms and Ting's rows
-    decays = np.zeros((n, K))
+    # per term, in time order for Ting's rule: histories of d^m and d_+, and the step decays;
+    # empty here (no terms: an elastic kernel), set by the branches below where Ting reads them
+    Hu = Hd = np.zeros((n + 1, 0))
+    decays = np.zeros((n, 0))
     fu, fd = np.zeros(n + 1), np.zeros(n + 1)  # ∫_0^t E(t - s) d[d^m], ∫_0^t E(t - s) d[d_+]
     if K and K <= _FEW and x[0] * (t[-1] - t[0]) <= 2 * _SPREAD:
         # few terms, none decaying by over e^1200 on the record: the scan as one cumulative

@@ -115,13 +115,6 @@ class Windows:
         np.cumsum(R * self._steps, axis=1, out=S[:, 1:])
         return (S[:, self.hi] - S[:, self.lo]) / self.width[None, :]
 
-    def sample_means(self, f, sources: np.ndarray, rows: np.ndarray | None = None
-                     ) -> np.ndarray:
-        """Mean over each block's samples of f(t − s) for sources ``sources`` (R, J) [s] of
-        blocks ``rows`` (R,) (default all)."""
-        t = self.samples if rows is None else self.samples[rows]
-        return f(t[:, :, None] - sources[:, None, :]).mean(axis=1)
-
 
 def step_kernel_means(win: Windows, kernel: str | None, theta: float = 0.0, t0: float = 1.0,
                       *, scratch: bool = False) -> tuple[np.ndarray, np.ndarray]:
@@ -346,7 +339,7 @@ def onset_correction(win: Windows, depth: np.ndarray, m: float, kernel: str | No
     # e_{k-1} and e_k are knots, shared by many rows: each knot's means once
     knots, at = np.unique(np.r_[kk - 1, kk], return_inverse=True)
     # e_j - e_k at the knots: columns of the record's lags (their logarithms kept)
-    lags = Lags.given(win.lags[:, knots].T, win.log[:, knots].T)
+    lags = Lags(win.lags[:, knots].T, win.log[:, knots].T)
     fk, fl, gb = window_kernels(win, e[knots], kernel, theta, t0,
                                 ((1, "right"), (1, "left"), (2, "left")), lags)
     fa, fb = fk[at[: rows.size]], fk[at[rows.size:]]

@@ -89,13 +89,10 @@ class Lags:
     and order set (the power law's x^(k − alpha) = x^(k−1)·exp((1 − alpha)·ln x))."""
 
     def __init__(self, x: np.ndarray, log: np.ndarray | None = None):
+        """``x`` [s] clipped at 0; or, with ``log`` (ln x, from the caller), x >= 0 as given
+        (no copy)."""
         self.x = np.maximum(x, 0.0) if log is None else x
         self._log = log
-
-    @classmethod
-    def given(cls, x: np.ndarray, log: np.ndarray) -> Lags:
-        """Lags x >= 0 whose logarithms ``log`` the caller has (no copy)."""
-        return cls(x, log)
 
     @property
     def log(self) -> np.ndarray:

@@ -226,7 +226,7 @@ def test_lag_tables_give_the_kernel_integrals(kind, theta):
     fs = {1: integrated_kernel, 2: double_integrated_kernel, 3: triple_integrated_kernel}
     lags = Lags(x)
     with np.errstate(divide="ignore"):
-        given = Lags.given(np.maximum(x, 0.0), np.log(np.maximum(x, 0.0)))
+        given = Lags(np.maximum(x, 0.0), np.log(np.maximum(x, 0.0)))
     for orders in ((1, 2, 3), (3,), (2, 3), (1,)):
         for table in (lags, given):
             for k, got in zip(orders, table.integrals(orders, kind, theta, 2.0), strict=True):
@@ -266,7 +266,7 @@ def test_window_kernels_share_what_window_kernel_computes(kind, theta):
     knots = np.array([3, 10, 11, 40])
     requests = ((1, "right"), (2, "left"), (1, "left"), (2, "right"))
     between = 0.3 * win.edges[knots] + 0.7 * win.edges[knots + 1]
-    for s, given in ((win.edges[knots], Lags.given(win.lags[:, knots].T,
+    for s, given in ((win.edges[knots], Lags(win.lags[:, knots].T,
                                                    win.log[:, knots].T)),
                      (win.edges[knots], None), (between, None)):
         got = window_kernels(win, s, kind, theta, 1.0, requests, given)
