@@ -1,10 +1,11 @@
 """Scratch arrays reused from one hereditary-integral call to the next, per thread.
 
-The power law's recursions work on (terms × samples) arrays: ~1 MB each for 4,000 samples and
-34 terms, a dozen of them per call.  A fresh array that large is memory the operating system
+The power law's recursions work on (terms × samples) arrays: ~0.7 MB each for 4,000 samples
+and 23 terms, a dozen of them per call.  A fresh array that large is memory the operating system
 maps page by page on first touch (and glibc gives back when it is freed), and for these arrays
 those page faults cost about as much as the arithmetic: ``benchmarks/bench_viscoelastic.py``
-measured 8.5 ms a call with fresh arrays and 5.9 ms with glibc's trimming switched off.
+measured 8.5 ms a call with fresh arrays and 5.9 ms with glibc's trimming switched off (then
+34 terms).
 :func:`scratch` hands out the same memory again on the next call instead.  A helper module:
 it registers no law.
 

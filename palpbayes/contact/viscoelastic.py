@@ -11,10 +11,12 @@ Mech. 33:845 (1966); G. Beylkin, L. Monzón, Appl. Comput. Harmon. Anal. 28:131 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import eigh_tridiagonal
 from scipy.special import beta, gamma, hyp1f1, loggamma
 
 from ..errors import InputError
@@ -35,6 +37,9 @@ SOE_TOLERANCE = 1e-7
 _FEW, _SPREAD = 4, 600.0
 #: Most numbers [-] in one block of terms' arrays (terms × steps): the memory per array.
 _CHUNK = 2_000_000
+#: The power law's sum of exponentials: rates x <= _TAIL_REACH/duration by a Gauss rule of
+#: _TAIL_NODES points (:func:`_power_soe`).
+_TAIL_NODES, _TAIL_REACH = 6, 8.0
 
 
 def _number(name: str, value, unit: str = "", bound: str = "") -> float:
@@ -163,22 +168,57 @@ def _power_soe(alpha: float, dt_min: float, span: float) -> tuple[np.ndarray, np
 
     Trapezoidal rule in y = ln x of t^(-alpha) = ∫ exp(alpha·y - e^y·t) dy / Gamma(alpha)
     (Beylkin & Monzón 2010): the step h keeps the aliasing error 2|Gamma(alpha + 2·pi·i/h)| /
-    Gamma(alpha) below a third of :data:`SOE_TOLERANCE`; the top node is x = ln(3/tol)/dt_min;
-    the rule's geometric tail of slow nodes is lumped into one exponential with its zeroth and
-    first moments, from where that costs (x·t)² < tol/3.
+    Gamma(alpha) below a third of :data:`SOE_TOLERANCE`; the top node is x = ln(3/tol)/dt_min.
+    The rule's slow nodes, from x_c <= :data:`_TAIL_REACH`/span down (a geometric series), are
+    replaced by the :data:`_TAIL_NODES`-point Gauss rule of that discrete measure
+    (:func:`_tail_rule`): exact for polynomials of degree < 12 in x, it integrates exp(-x·t)
+    for x·t <= 8 to < 4e-9 relative to t^(-alpha) for every alpha in (0, 1) (checked
+    numerically), with ~10 terms fewer than the rule's own tail (23 for alpha = 0.3 on
+    [1 ms, 5 s], where the rule alone took 34).
     """
+    h, u, w = _tail_rule(alpha)
+    y_hi = math.log(math.log(3 / SOE_TOLERANCE) / dt_min)
+    n = max(1, math.ceil((y_hi - math.log(_TAIL_REACH / span)) / h))
+    y = y_hi - h * np.arange(n + 1)  # the trapezoid's nodes, then y_c = y[-1], the tail's top
+    c = h * alpha / gamma(alpha + 1)
+    return (np.concatenate([c * np.exp(alpha * y[:-1]), w * math.exp(alpha * y[-1])]),
+            np.concatenate([np.exp(y[:-1]), u * math.exp(y[-1])]))
+
+
+@functools.lru_cache(maxsize=128)
+def _tail_rule(alpha: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """(h, u, w): the trapezoid's step h in ln x (:func:`_power_soe`) and the Gauss rule of
+    its tail below x_c, nodes u = x/x_c and weights w/x_c^alpha (both depend on alpha
+    only).  The tail's nodes u = exp(-h·j) down to 1e-12, then the rest lumped into one
+    node with its zeroth and first moments (error ~(x·t·u)^2 < 1e-22)."""
     eps = SOE_TOLERANCE
     hs = np.linspace(0.3, 1.5, 121)
     h = hs[2 * np.exp(loggamma(alpha + 2j * np.pi / hs).real - loggamma(alpha)) <= eps / 3][-1]
-    g1 = gamma(alpha + 1)
-    c2 = h * alpha / (-math.expm1(-(2 + alpha) * h) * g1)
-    y_lo = math.log((2 * eps / (3 * c2)) ** (1 / (2 + alpha)) / span)
-    y_hi = math.log(math.log(3 / eps) / dt_min)
-    y = y_hi - h * np.arange(max(1, math.ceil((y_hi - y_lo) / h)) + 1)
-    y_tail = y[-1] - h
-    s0, s1 = (h * alpha * math.exp((alpha + k) * y_tail) / (-math.expm1(-(alpha + k) * h) * g1)
-              for k in (0, 1))
-    return np.append(h * alpha * np.exp(alpha * y) / g1, s0), np.append(np.exp(y), s1 / s0)
+    c = h * alpha / gamma(alpha + 1)
+    j = np.arange(math.ceil(math.log(1e12) / h) + 1)
+    u, w = np.exp(-h * j), c * np.exp(-alpha * h * j)
+    rest = h * (j[-1] + 1)  # the rest's top, -ln u; its moments sum a geometric series
+    s0, s1 = (c * math.exp(-(alpha + k) * rest) / -math.expm1(-(alpha + k) * h) for k in (0, 1))
+    nodes, weights = _gauss_rule(np.append(u, s1 / s0), np.append(w, s0), _TAIL_NODES)
+    return float(h), nodes, weights
+
+
+def _gauss_rule(u: np.ndarray, w: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes and weights of the n-point Gauss rule of the discrete measure Σ w_i·δ(u - u_i)
+    (w_i > 0, n < its number of points): the three-term recurrence of its orthogonal
+    polynomials by the Stieltjes procedure, then Golub–Welsch (W. Gautschi, Orthogonal
+    Polynomials: Computation and Approximation, 2004, §2.2.3)."""
+    a, b = np.zeros(n), np.zeros(n)
+    p_old, p = np.zeros_like(u), np.ones_like(u)
+    norm = mass = float(w.sum())
+    for k in range(n):
+        a[k] = (w @ (u * p * p)) / norm
+        if k + 1 < n:
+            p_old, p = p, (u - a[k]) * p - b[k] * p_old
+            norm_old, norm = norm, float(w @ (p * p))
+            b[k + 1] = norm / norm_old
+    nodes, vectors = eigh_tridiagonal(a, np.sqrt(b[1:]))
+    return nodes, mass * vectors[0] ** 2
 
 
 def _soe(kernel: Kernel, dt_min: float, span: float):
@@ -244,7 +284,7 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     (m = 1, 2; where the contact starts or ends; where d rises by over 5 %: Euler/Kummer
     integrals), else against the cubic interpolant of d^(m-1) on the step (relative error
     3e-4·z^4 of the step's increment, z its relative change: < 2e-9 for |z| <= 5 %).  Each
-    exponential term (a Prony branch, or one of the K ~ 30-45 of the power law's sum,
+    exponential term (a Prony branch, or one of the K ~ 17-45 of the power law's sum,
     :func:`_power_soe`, accurate to :data:`SOE_TOLERANCE` on [shortest step, duration]) is an
     exact O(N) recursion H <- exp(-x·dt)·H + increment, run for all terms at once as a blocked
     scan (:func:`~palpbayes.contact.hereditary_steps._scan`, O(N^(1/3)) Python steps; up to 4
