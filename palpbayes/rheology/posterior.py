@@ -223,6 +223,7 @@ class NodeEvaluator:
         self.weights = np.array([1.0 / OFFSET_SD**2])
         self.centers = np.zeros(1)
         self.phi = np.linspace(*PHI_BOUNDS, PHI_NODES)
+        self._phi_found: tuple | None = None  # phi_density's last node and answer
         self.n = 0
         ret = data.segment == RETRACT
         self.retract = (RetractDesign(data.edges, data.z_edges, data.sample_time[ret], data.m,
@@ -233,7 +234,10 @@ class NodeEvaluator:
         in steps of sd/4, :func:`~palpbayes.bayes.exact.phi_nodes_around`), its mean and sd;
         None where no phi has a finite density.  Two scans of :data:`PHI_SCAN` points: over
         the prior, then over the first scan's range (a density 1e-4 wide, as on real records,
-        spans less than a step of the first)."""
+        spans less than a step of the first).  The last node's answer is kept: the final
+        box's mode is often the climbed one."""
+        if self._phi_found is not None and self._phi_found[0] == (theta, z):
+            return self._phi_found[1]
         g = self.gram(np.array([theta]), np.array([z]))
         scan, nodes = np.linspace(*PHI_BOUNDS, PHI_SCAN), None
         for _ in range(2):
@@ -243,7 +247,8 @@ class NodeEvaluator:
             nodes = phi_nodes_around(scan, lp, PHI_BOUNDS)
             mean, sd = phi_moments(scan, lp)
             scan = np.linspace(nodes[0], nodes[-1], PHI_SCAN)
-        return nodes, mean, sd
+        self._phi_found = ((theta, z), (nodes, mean, sd))
+        return self._phi_found[1]
 
     def focus_phi(self, theta: float, z: float) -> np.ndarray:
         """Set :attr:`phi` to the nodes of :meth:`phi_density` at the node (``theta``, ``z``

@@ -244,3 +244,30 @@ def test_a_search_that_settles_on_its_last_iteration_gets_its_full_box():
     box = box_search(ev, lambda c: c, ((0.0, 0.95), (-1e-3, 1e-3)), (0.3, 1e-4),
                      (0.02, 1e-6), 0.01, 1)
     assert box.converged and box.gt.size == FINE and ev.rows == FINE
+
+
+def test_phi_density_at_the_node_it_last_scanned_is_not_scanned_again():
+    """The final box's mode is often the climbed one, where phi's density was scanned: the
+    evaluator keeps the last node's answer (one gram less), and a new node is scanned."""
+    from palpbayes.contact.viscoelastic import PowerLawKernel
+    from palpbayes.paper import PAPER_TIPS
+    from palpbayes.rheology.cycle import prepare_cycle
+    from palpbayes.rheology.posterior import NodeEvaluator
+    from palpbayes.sim import simulate_viscoelastic
+
+    trace = simulate_viscoelastic(PowerLawKernel(80e3, 0.2), PAPER_TIPS["paraboloid"],
+                                  depth=3e-3, speed=50 / 6e4, hold_time=1.0, rate=800.0,
+                                  z_surf=2e-4, noise_sd=0.008, phi=0.3, rng=1)
+    data = prepare_cycle(trace, segments="approach,hold", max_points=200)
+    ev, fresh = NodeEvaluator(data, "power-law", 1.0), NodeEvaluator(data, "power-law", 1.0)
+    grams = []
+    gram = ev.gram
+    ev.gram = lambda *a: grams.append(a) or gram(*a)
+    first = ev.phi_density(0.2, 2e-4)
+    assert ev.phi_density(0.2, 2e-4) is first and len(grams) == 1
+    other = ev.phi_density(0.21, 2e-4)
+    assert len(grams) == 2
+    for got, want in ((first, fresh.phi_density(0.2, 2e-4)),
+                      (other, fresh.phi_density(0.21, 2e-4))):
+        np.testing.assert_array_equal(got[0], want[0])
+        assert got[1:] == want[1:]
