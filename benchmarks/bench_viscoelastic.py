@@ -25,7 +25,7 @@ from palpbayes.contact import (
     hereditary_force,
     standard_linear_solid,
 )
-from palpbayes.contact.viscoelastic import _power_soe
+from palpbayes.contact.soe import power_law_soe
 
 C, M = 4 * np.sqrt(0.01) / (3 * (1 - 0.3**2)), 1.5  # paraboloid R = 10 mm, nu = 0.3
 KERNELS = {
@@ -55,7 +55,7 @@ def main() -> None:
         repeat = max(3, 100_000 // n)
         t_el = median_time(lambda d=d: C * 1e5 * np.clip(d, 0.0, None) ** M, 20 * repeat)
         for name, kernel in KERNELS.items():
-            k = (_power_soe(kernel.alpha, np.diff(t).min(), t[-1])[1].size
+            k = (power_law_soe(kernel.alpha, np.diff(t).min(), t[-1])[1].size
                  if isinstance(kernel, PowerLawKernel) else len(kernel.E))
             t_ve = median_time(lambda t=t, d=d, kernel=kernel: hereditary_force(t, d, C, M, kernel),
                                repeat)

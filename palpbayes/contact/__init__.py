@@ -41,8 +41,8 @@ from .registry import (
     registered_laws,
     unregister,
 )
+from .soe import SOE_TOLERANCE
 from .viscoelastic import (
-    SOE_TOLERANCE,
     HereditaryContact,
     PowerLawKernel,
     PronyKernel,

@@ -6,30 +6,27 @@ closed forms the tests check; "DESIGN §9" below).  Ting's rule on the retract i
 :mod:`~palpbayes.contact.ting_rule`.  A helper module: it registers no law.
 
 References: E. H. Lee, J. R. M. Radok, J. Appl. Mech. 27:438 (1960); T. C. T. Ting, J. Appl.
-Mech. 33:845 (1966); G. Beylkin, L. Monzón, Appl. Comput. Harmon. Anal. 28:131 (2010).
+Mech. 33:845 (1966).  The power law's sum of exponentials is in :mod:`~palpbayes.contact.soe`.
 """
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import eigh_tridiagonal
-from scipy.special import beta, gamma, hyp1f1, loggamma
+from scipy.special import beta, hyp1f1
 
 from ..errors import InputError
 from .hereditary_steps import _exp_steps, _layout, _power_steps, _scan, _Steps
 from .scratch import scratch
+from .soe import power_law_soe
 from .ting_rule import ting_rule
 
 __all__ = ["PowerLawKernel", "PronyKernel", "standard_linear_solid", "HereditaryContact",
            "hereditary_contact", "hereditary_force", "ramp_apparent_modulus",
-           "constant_strain_rate_stress", "SOE_TOLERANCE"]
+           "constant_strain_rate_stress"]
 
-#: Relative accuracy [-] of the power law's sum of exponentials on [shortest step, duration].
-SOE_TOLERANCE = 1e-7
 
 
 # At most _FEW terms whose rates x·(duration) <= 2·_SPREAD: the recursions as cumulative sums
@@ -37,9 +34,6 @@ SOE_TOLERANCE = 1e-7
 _FEW, _SPREAD = 4, 600.0
 #: Most numbers [-] in one block of terms' arrays (terms × steps): the memory per array.
 _CHUNK = 2_000_000
-#: The power law's sum of exponentials: rates x <= _TAIL_REACH/duration by a Gauss rule of
-#: _TAIL_NODES points (:func:`_power_soe`).
-_TAIL_NODES, _TAIL_REACH = 6, 8.0
 
 
 def _number(name: str, value, unit: str = "", bound: str = "") -> float:
@@ -163,64 +157,6 @@ class HereditaryContact:
     ting: np.ndarray
 
 
-def _power_soe(alpha: float, dt_min: float, span: float) -> tuple[np.ndarray, np.ndarray]:
-    """Weights w and rates x [1/s] with Σ w_j·exp(-x_j·t) ≈ t^(-alpha) on [dt_min, span].
-
-    Trapezoidal rule in y = ln x of t^(-alpha) = ∫ exp(alpha·y - e^y·t) dy / Gamma(alpha)
-    (Beylkin & Monzón 2010): the step h keeps the aliasing error 2|Gamma(alpha + 2·pi·i/h)| /
-    Gamma(alpha) below a third of :data:`SOE_TOLERANCE`; the top node is x = ln(3/tol)/dt_min.
-    The rule's slow nodes, from x_c <= :data:`_TAIL_REACH`/span down (a geometric series), are
-    replaced by the :data:`_TAIL_NODES`-point Gauss rule of that discrete measure
-    (:func:`_tail_rule`): exact for polynomials of degree < 12 in x, it integrates exp(-x·t)
-    for x·t <= 8 to < 4e-9 relative to t^(-alpha) for every alpha in (0, 1) (checked
-    numerically), with ~10 terms fewer than the rule's own tail (23 for alpha = 0.3 on
-    [1 ms, 5 s], where the rule alone took 34).
-    """
-    h, u, w = _tail_rule(alpha)
-    y_hi = math.log(math.log(3 / SOE_TOLERANCE) / dt_min)
-    n = max(1, math.ceil((y_hi - math.log(_TAIL_REACH / span)) / h))
-    y = y_hi - h * np.arange(n + 1)  # the trapezoid's nodes, then y_c = y[-1], the tail's top
-    c = h * alpha / gamma(alpha + 1)
-    return (np.concatenate([c * np.exp(alpha * y[:-1]), w * math.exp(alpha * y[-1])]),
-            np.concatenate([np.exp(y[:-1]), u * math.exp(y[-1])]))
-
-
-@functools.lru_cache(maxsize=128)
-def _tail_rule(alpha: float) -> tuple[float, np.ndarray, np.ndarray]:
-    """(h, u, w): the trapezoid's step h in ln x (:func:`_power_soe`) and the Gauss rule of
-    its tail below x_c, nodes u = x/x_c and weights w/x_c^alpha (both depend on alpha
-    only).  The tail's nodes u = exp(-h·j) down to 1e-12, then the rest lumped into one
-    node with its zeroth and first moments (error ~(x·t·u)^2 < 1e-22)."""
-    eps = SOE_TOLERANCE
-    hs = np.linspace(0.3, 1.5, 121)
-    h = hs[2 * np.exp(loggamma(alpha + 2j * np.pi / hs).real - loggamma(alpha)) <= eps / 3][-1]
-    c = h * alpha / gamma(alpha + 1)
-    j = np.arange(math.ceil(math.log(1e12) / h) + 1)
-    u, w = np.exp(-h * j), c * np.exp(-alpha * h * j)
-    rest = h * (j[-1] + 1)  # the rest's top, -ln u; its moments sum a geometric series
-    s0, s1 = (c * math.exp(-(alpha + k) * rest) / -math.expm1(-(alpha + k) * h) for k in (0, 1))
-    nodes, weights = _gauss_rule(np.append(u, s1 / s0), np.append(w, s0), _TAIL_NODES)
-    return float(h), nodes, weights
-
-
-def _gauss_rule(u: np.ndarray, w: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Nodes and weights of the n-point Gauss rule of the discrete measure Σ w_i·δ(u - u_i)
-    (w_i > 0, n < its number of points): the three-term recurrence of its orthogonal
-    polynomials by the Stieltjes procedure, then Golub–Welsch (W. Gautschi, Orthogonal
-    Polynomials: Computation and Approximation, 2004, §2.2.3)."""
-    a, b = np.zeros(n), np.zeros(n)
-    p_old, p = np.zeros_like(u), np.ones_like(u)
-    norm = mass = float(w.sum())
-    for k in range(n):
-        a[k] = (w @ (u * p * p)) / norm
-        if k + 1 < n:
-            p_old, p = p, (u - a[k]) * p - b[k] * p_old
-            norm_old, norm = norm, float(w @ (p * p))
-            b[k + 1] = norm / norm_old
-    nodes, vectors = eigh_tridiagonal(a, np.sqrt(b[1:]))
-    return nodes, mass * vectors[0] ** 2
-
-
 def _soe(kernel: Kernel, dt_min: float, span: float):
     """(a0, a, x, alpha, k): E(t) ≈ a0 + Σ a_j·exp(-x_j·t), the rates x [1/s] decreasing, exact
     for Prony (alpha None); for a power law valid on lags >= the shortest step, the last step
@@ -233,7 +169,7 @@ def _soe(kernel: Kernel, dt_min: float, span: float):
     if kernel.alpha == 0.0:
         return kernel.E0, np.zeros(0), np.zeros(0), None, 0.0
     k = kernel.E0 * kernel.t0**kernel.alpha
-    w, x = _power_soe(kernel.alpha, dt_min, span)
+    w, x = power_law_soe(kernel.alpha, dt_min, span)
     order = np.argsort(-x, kind="stable")
     return 0.0, k * w[order], x[order], kernel.alpha, k
 
@@ -285,8 +221,9 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     integrals), else against the cubic interpolant of d^(m-1) on the step (relative error
     3e-4·z^4 of the step's increment, z its relative change: < 2e-9 for |z| <= 5 %).  Each
     exponential term (a Prony branch, or one of the K ~ 17-45 of the power law's sum,
-    :func:`_power_soe`, accurate to :data:`SOE_TOLERANCE` on [shortest step, duration]) is an
-    exact O(N) recursion H <- exp(-x·dt)·H + increment, run for all terms at once as a blocked
+    :func:`~palpbayes.contact.soe.power_law_soe`, accurate to
+    :data:`~palpbayes.contact.soe.SOE_TOLERANCE` = 1e-7 relative on [shortest step, duration])
+    is an exact O(N) recursion H <- exp(-x·dt)·H + increment, run for all terms at once as a blocked
     scan (:func:`~palpbayes.contact.hereditary_steps._scan`, O(N^(1/3)) Python steps; up to 4
     Prony terms as one cumulative sum);
     the power law's last step is integrated against t^(-alpha) in closed form.  Ting's t1

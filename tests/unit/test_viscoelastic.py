@@ -12,13 +12,11 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 from scipy.special import beta, dawsn, gamma, hyp2f1
 
+from palpbayes.contact.soe import SOE_TOLERANCE, gauss_rule, power_law_soe
 from palpbayes.contact.viscoelastic import (
-    SOE_TOLERANCE,
     PowerLawKernel,
     PronyKernel,
     _exp_steps,
-    _gauss_rule,
-    _power_soe,
     _power_steps,
     _Steps,
     constant_strain_rate_stress,
@@ -279,7 +277,7 @@ def test_each_step_kind_is_integrated_exactly():
 @pytest.mark.parametrize("span", [1.0, 3.0, 1e2, 5.7e3, 1e5, 1e8])
 def test_sum_of_exponentials_meets_its_tolerance(alpha, span):
     dt = 1e-3
-    w, x = _power_soe(alpha, dt, dt * span)
+    w, x = power_law_soe(alpha, dt, dt * span)
     s = np.geomspace(dt, dt * span, 4000)
     approx = np.exp(-np.multiply.outer(s, x)) @ w
     assert np.max(np.abs(approx * s**alpha - 1)) < SOE_TOLERANCE
@@ -289,14 +287,14 @@ def test_sum_of_exponentials_meets_its_tolerance(alpha, span):
 def test_sum_of_exponentials_is_short():
     """The tail's Gauss rule: alpha = 0.3 on [0.875 ms, 5 s] (bench_viscoelastic's cycle) in
     23 terms (34 with the trapezoid's own tail)."""
-    assert _power_soe(0.3, 0.7 / 800, 5.0)[1].size == 23
+    assert power_law_soe(0.3, 0.7 / 800, 5.0)[1].size == 23
 
 
 def test_gauss_rule_of_a_discrete_measure_integrates_its_moments():
     rng = np.random.default_rng(3)
     u, w = np.sort(rng.uniform(0.0, 1.0, 40)), rng.uniform(0.1, 1.0, 40)
     for n in (1, 3, 6):
-        nodes, weights = _gauss_rule(u, w, n)
+        nodes, weights = gauss_rule(u, w, n)
         assert np.all((nodes > u[0]) & (nodes < u[-1]) & (weights > 0))
         for p in range(2 * n):  # exact for degree < 2n, not for 2n
             assert weights @ nodes**p == pytest.approx(w @ u**p, rel=1e-12)
