@@ -28,8 +28,9 @@ TAIL_NODES, TAIL_REACH = 6, 8.0
 
 def power_law_soe(alpha: float, dt_min: float, span: float) -> tuple[np.ndarray, np.ndarray]:
     """Weights w [s^-alpha] and rates x [1/s] with Σ w_j·exp(-x_j·t) ≈ t^(-alpha) to a relative
-    :data:`SOE_TOLERANCE` for t [s] in [``dt_min``, ``span``] (0 <= ``alpha`` < 1 [-]; the
-    shortest time step and the record's duration, 0 < dt_min <= span), all positive.
+    :data:`SOE_TOLERANCE` for t [s] in [``dt_min``, ``span``] (0 < ``alpha`` < 1 [-], alpha = 0
+    being a constant; the shortest time step and the record's duration, 0 < dt_min <= span),
+    all positive.
 
     Trapezoidal rule in y = ln x of t^(-alpha) = ∫ exp(alpha·y - e^y·t) dy / Gamma(alpha)
     (Beylkin & Monzón 2010): the step h keeps the aliasing error 2|Gamma(alpha + 2·pi·i/h)| /

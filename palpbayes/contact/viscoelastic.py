@@ -28,7 +28,6 @@ __all__ = ["PowerLawKernel", "PronyKernel", "standard_linear_solid", "Hereditary
            "constant_strain_rate_stress"]
 
 
-
 # At most _FEW terms whose rates x·(duration) <= 2·_SPREAD: the recursions as cumulative sums
 # scaled by exp(±x·t) (|x·t| <= _SPREAD from mid-record: no overflow), fewer Python steps.
 _FEW, _SPREAD = 4, 600.0
