@@ -290,6 +290,22 @@ def test_sum_of_exponentials_is_short():
     assert power_law_soe(0.3, 0.7 / 800, 5.0)[1].size == 23
 
 
+@pytest.mark.parametrize("alpha", [0.05, 0.3, 0.7, 0.9, 0.99])
+def test_the_tails_gauss_rule_keeps_within_its_share_of_the_tolerance(alpha):
+    """The trapezoid's slow tail (rates up to x_c, a geometric series) against its 6-point
+    Gauss rule, for x_c·t up to soe.TAIL_REACH: within a third of SOE_TOLERANCE of
+    t^(-alpha) (the aliasing has the same share)."""
+    from palpbayes.contact import soe
+
+    h, u, w = soe._tail_rule(alpha)
+    j = np.arange(int(80 / (alpha * h)))  # the series to exp(-80)
+    uu, ww = np.exp(-h * j), h * alpha / gamma(alpha + 1) * np.exp(-alpha * h * j)
+    t = np.geomspace(1e-6, soe.TAIL_REACH, 300)
+    series = np.exp(-np.multiply.outer(t, uu)) @ ww
+    rule = np.exp(-np.multiply.outer(t, u)) @ w
+    assert np.max(np.abs(rule - series) * t**alpha) < SOE_TOLERANCE / 3
+
+
 def test_gauss_rule_of_a_discrete_measure_integrates_its_moments():
     rng = np.random.default_rng(3)
     u, w = np.sort(rng.uniform(0.0, 1.0, 40)), rng.uniform(0.1, 1.0, 40)
