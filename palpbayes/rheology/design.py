@@ -68,8 +68,9 @@ SPAN = 2
 
 class Windows:
     """Knots e (K,) [s] of the piecewise-linear source and the blocks: window [e[lo], e[hi]]
-    (spanning one or more knot steps) and sample times ``samples`` (B, n) of each block; lags
-    max(e_i − e_j, 0) and their logarithm (−inf at zero lag), built once per record.
+    (spanning one or more knot steps) and sample times ``samples`` (B, n) of each block; the
+    knots' lags max(e_i − e_j, 0) (``knot_lags``, their logarithms when the power law asks),
+    built once per record.
     ``samples`` None takes every block's mean over its window (no sample-level band)."""
 
     def __init__(self, edges: np.ndarray, lo: np.ndarray | None = None,
@@ -88,9 +89,7 @@ class Windows:
         if self.samples is not None and (self.samples.ndim != 2
                                          or self.samples.shape[0] != self.lo.size):
             raise InputError("samples must be (blocks, samples per block)")
-        self.lags = np.clip(e[:, None] - e[None, :], 0.0, None)
-        with np.errstate(divide="ignore"):
-            self.log = np.log(self.lags)
+        self.knot_lags = Lags(e[:, None] - e[None, :])
         # the knots whose response a block takes from its samples: BAND before its window on
         band = self.lo[:, None] + np.arange(-BAND, SPAN + 1)[None, :]
         self.band_ok = (band >= 0) & (band <= e.size - 1)
@@ -146,10 +145,10 @@ def step_kernel_means(win: Windows, kernel: str | None, theta: float = 0.0, t0: 
     else:
         P, Q, D1, D2 = (np.empty((K, K)), np.empty((K, K)), np.empty((K - 1, K)),
                         np.empty((K - 1, K)))
-    lags = win.lags
+    lags = win.knot_lags.x
     inv_h = (1.0 / np.diff(win.edges))[:, None]
     if kernel == "power-law":  # Ψ = c·x^(2−alpha), Ψ₂ = Ψ·x/(3 − alpha): one exp per lag
-        np.multiply(win.log, 2.0 - theta, out=P)
+        np.multiply(win.knot_lags.log, 2.0 - theta, out=P)
         np.exp(P, out=P)
         P *= t0**theta / ((1.0 - theta) * (2.0 - theta))
     elif kernel == "exponential":  # Ψ = tau²·(y + expm1(−y)), y = x/tau
@@ -338,8 +337,8 @@ def onset_correction(win: Windows, depth: np.ndarray, m: float, kernel: str | No
     u1 = d1**m
     # e_{k-1} and e_k are knots, shared by many rows: each knot's means once
     knots, at = np.unique(np.r_[kk - 1, kk], return_inverse=True)
-    # e_j - e_k at the knots: columns of the record's lags (their logarithms kept)
-    lags = Lags(win.lags[:, knots].T, win.log[:, knots].T)
+    # e_j - e_k at the knots: columns of the record's lags (their logarithms, if computed)
+    lags = win.knot_lags.columns(knots)
     fk, fl, gb = window_kernels(win, e[knots], kernel, theta, t0,
                                 ((1, "right"), (1, "left"), (2, "left")), lags)
     fa, fb = fk[at[: rows.size]], fk[at[rows.size:]]

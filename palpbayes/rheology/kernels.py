@@ -94,6 +94,12 @@ class Lags:
         self.x = np.maximum(x, 0.0) if log is None else x
         self._log = log
 
+    def columns(self, index: np.ndarray) -> Lags:
+        """The lags ``x[:, index].T`` (a column per index), with their logarithms when these
+        are computed already."""
+        x = self.x[:, index].T
+        return Lags(x, None if self._log is None else self._log[:, index].T)
+
     @property
     def log(self) -> np.ndarray:
         """ln x (−inf at 0), computed on first use (the power law's alone)."""

@@ -258,7 +258,8 @@ def _window_kernel_reference(win, s, kind, theta, order, side):
 def test_window_kernels_share_what_window_kernel_computes(kind, theta):
     """window_kernels' requests (orders 1, 2 on both sides) equal the kernels' own functions
     assembled one block at a time, with the lags of the sources computed or given, for
-    sources on knots and between them."""
+    sources on knots and between them (the record's knot lags as columns, with their
+    logarithms or without)."""
     t, z, seg = _cycle_axis(jitter=0.02)
     d = prepare_cycle(IndentationTrace(t, z, z * 0, tip=PARABOLOID, segment=seg),
                       max_points=100)
@@ -266,9 +267,10 @@ def test_window_kernels_share_what_window_kernel_computes(kind, theta):
     knots = np.array([3, 10, 11, 40])
     requests = ((1, "right"), (2, "left"), (1, "left"), (2, "right"))
     between = 0.3 * win.edges[knots] + 0.7 * win.edges[knots + 1]
-    for s, given in ((win.edges[knots], Lags(win.lags[:, knots].T,
-                                                   win.log[:, knots].T)),
-                     (win.edges[knots], None), (between, None)):
+    lazy = win.knot_lags.columns(knots)  # before the record's logarithms are computed
+    assert np.isneginf(win.knot_lags.log).any()  # now computed (zero lags: -inf)
+    for s, given in ((win.edges[knots], win.knot_lags.columns(knots)),
+                     (win.edges[knots], lazy), (win.edges[knots], None), (between, None)):
         got = window_kernels(win, s, kind, theta, 1.0, requests, given)
         for (order, side), g in zip(requests, got, strict=True):
             ref = _window_kernel_reference(win, s, kind, theta, order, side)
