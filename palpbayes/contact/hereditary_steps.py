@@ -1,11 +1,11 @@
 """The recursions of the hereditary integral on a measured time axis, for
 :func:`~palpbayes.contact.viscoelastic.hereditary_contact` (``../shared/DESIGN.md`` §9): per time
-step, the part in contact and the integrand of d^m (:class:`_Steps`); per exponential term
+step, the part in contact and the integrand of d^m (:class:`Steps`); per exponential term
 exp(-x·lag) of the kernel, the step's decay exp(-x·dt) and its increments
-∫ exp(-x·(t_i+1 - s)) d[d^m] and d[d_+] (:func:`_exp_steps`); the power law's last step against
-t^(-alpha) (:func:`_power_steps`); and the recursion H <- exp(-x·dt)·H + increment for all terms
-at once, as a blocked scan on arrays laid out by blocks of steps (:func:`_layout`,
-:func:`_scan`).  A helper module: it registers no law.
+∫ exp(-x·(t_i+1 - s)) d[d^m] and d[d_+] (:func:`exp_steps`); the power law's last step against
+t^(-alpha) (:func:`power_steps`); and the recursion H <- exp(-x·dt)·H + increment for all terms
+at once, as a blocked scan on arrays laid out by blocks of steps (:func:`block_layout`,
+:func:`blocked_scan`).  A helper module: it registers no law.
 
 References: E. H. Lee, J. R. M. Radok, J. Appl. Mech. 27:438 (1960); M. Abramowitz, I. A. Stegun,
 Handbook of Mathematical Functions (1964), 13.2.1 (Kummer's 1F1) and 15.3.1 (Euler's 2F1).
@@ -19,6 +19,9 @@ import numpy as np
 from scipy.special import beta, hyp1f1, hyp2f1
 
 from .scratch import scratch
+
+__all__ = ["Steps", "exp_steps", "power_steps", "block_layout", "blocked_scan",
+           "scan_ordered"]
 
 
 def _rule(degree: int):
@@ -41,7 +44,7 @@ _M0_SERIES = np.array([(-1.0) ** n / math.factorial(n + 1) for n in range(13)])
 _BUCKETS = np.array([2, 3, 4, 6, 8, 10, 13])
 
 
-class _Steps:
+class Steps:
     """Per time step (sample i to i + 1): its part in contact and the integrand of d^m.
 
     Where the contact starts or ends, or d grows by over 5 %, d^m is a power of the time from
@@ -50,7 +53,7 @@ class _Steps:
     (m = 1, 2) or its cubic interpolant: relative error ~3e-4·z^4 for a relative change z of d
     (< 2e-9 for |z| <= 5 %; larger falls, e.g. noise near the contact start, use it too).
     Its monomial coefficients ``cT`` (degree, steps) and the Taylor coefficients ``sT``
-    (12, steps) of :func:`_exp_steps` are kept one row per coefficient, for row-wise sums.
+    (12, steps) of :func:`exp_steps` are kept one row per coefficient, for row-wise sums.
     """
 
     def __init__(self, t: np.ndarray, d: np.ndarray, m: float, u: np.ndarray | None = None):
@@ -88,10 +91,10 @@ class _Steps:
         self.cT = to_coef.T @ f  # (degree, steps) and (12, steps): rows read one at a time
         self.sT = taylor.T @ self.cT
 
-    def placed(self, pos: np.ndarray, slots: int) -> _Steps:
+    def placed(self, pos: np.ndarray, slots: int) -> Steps:
         """The same steps in ``slots`` >= steps places, step i at place pos[i]; the empty places
         are steps of the shortest length out of contact (nothing to integrate)."""
-        new = object.__new__(_Steps)
+        new = object.__new__(Steps)
         new.m = self.m
         for name in ("dt", "L1", "wa", "ell", "u0", "u1", "dd", "cT", "sT"):
             a = getattr(self, name)
@@ -119,7 +122,7 @@ def _series_rows(top: np.ndarray, first: int) -> list[tuple[int, int, int]]:
     return out
 
 
-def _exp_steps(x: np.ndarray, st: _Steps, out: tuple[np.ndarray, np.ndarray] | None = None):
+def exp_steps(x: np.ndarray, st: Steps, out: tuple[np.ndarray, np.ndarray] | None = None):
     """Decays exp(-x·dt) and increments ∫ exp(-x·(t_i+1 - s)) d[d^m] and ... d[d_+] over the
     steps, shape (len(x), steps) (one array for both when m = 1); written into ``out`` =
     (decays, increments of shape (2 or 1 when m = 1, len(x), steps)) if given.
@@ -134,7 +137,7 @@ def _exp_steps(x: np.ndarray, st: _Steps, out: tuple[np.ndarray, np.ndarray] | N
     if x.size > 1 and np.any(np.diff(x) > 0):
         order = np.argsort(-x, kind="stable")
         back = np.argsort(order)
-        decay, iu, idd = _exp_steps(x[order], st)
+        decay, iu, idd = exp_steps(x[order], st)
         return decay[back], (idd[back] if iu is idd else iu[back]), idd[back]
     m, shape = st.m, (x.size, st.dt.size)
     if out is None:
@@ -199,7 +202,7 @@ def _exp_steps(x: np.ndarray, st: _Steps, out: tuple[np.ndarray, np.ndarray] | N
     return decay, iu, idd
 
 
-def _power_steps(alpha: float, st: _Steps) -> tuple[np.ndarray, np.ndarray]:
+def power_steps(alpha: float, st: Steps) -> tuple[np.ndarray, np.ndarray]:
     """∫ (t_i+1 - s)^(-alpha) d[d^m] and ... d[d_+] over each step, exact for the step's
     polynomial or power (Euler: m·B(m, 1 - alpha) and 2F1(alpha, m; m + 1; L0/L1)); the first
     is 0 where the contact ends (never used: Ting's rule holds there)."""
@@ -216,7 +219,7 @@ def _power_steps(alpha: float, st: _Steps) -> tuple[np.ndarray, np.ndarray]:
     return lu, ld
 
 
-def _layout(n: int) -> tuple[int, int, np.ndarray]:
+def block_layout(n: int) -> tuple[int, int, np.ndarray]:
     """Blocks of n steps: (size, blocks, place) with step i = b·size + s, s < size, kept at
     place s·blocks + b of an array read as (size, blocks): a block's steps along axis 0."""
     size = max(1, min(n, round(n ** (1 / 3))))
@@ -225,9 +228,9 @@ def _layout(n: int) -> tuple[int, int, np.ndarray]:
     return size, blocks, (i % size) * blocks + i // size
 
 
-def _scan(decay: np.ndarray, h: np.ndarray, top: bool = False) -> None:
+def blocked_scan(decay: np.ndarray, h: np.ndarray, top: bool = False) -> None:
     """In place, for ``h`` of shape (..., rows, size, blocks) and ``decay`` (rows, size, blocks)
-    (the steps of :func:`_layout`): h[s, b] becomes the state after step (b, s) of
+    (the steps of :func:`block_layout`): h[s, b] becomes the state after step (b, s) of
     H <- decay·H + h from H = 0.  Blocked scan: a loop over the size steps of every block at
     once, then the blocks' end states by the same scan one level down (O(n^(1/3)) Python
     steps a level, O(n) work a row; only multiplications by decays <= 1: no overflow).
@@ -243,20 +246,21 @@ def _scan(decay: np.ndarray, h: np.ndarray, top: bool = False) -> None:
     if blocks == 1:
         return
     start = np.zeros(h.shape[:-2] + (blocks,))  # state at each block's start
-    start[..., 1:] = _scan_ordered(prod[:, -1, :-1], h[..., -1, :-1])
+    start[..., 1:] = scan_ordered(prod[:, -1, :-1], h[..., -1, :-1])
     for s in range(size):  # slab by slab: no temporary as large as h
         np.multiply(prod[:, s], start, out=tmp)
         h[..., s, :] += tmp
 
 
-def _scan_ordered(decay: np.ndarray, inc: np.ndarray) -> np.ndarray:
+def scan_ordered(decay: np.ndarray, inc: np.ndarray) -> np.ndarray:
     """States after each step of H <- decay·H + inc from H = 0, for ``decay`` (rows, n) and
-    ``inc`` (..., rows, n) in time order (:func:`_scan` on a copy in its layout)."""
+    ``inc`` (..., rows, n) in time order (:func:`blocked_scan` on a copy in its layout)."""
     n = decay.shape[-1]
-    size, blocks, place = _layout(n)
+    size, blocks, place = block_layout(n)
     slots = size * blocks
     dec = np.ones(decay.shape[:-1] + (slots,))
     h = np.zeros(inc.shape[:-1] + (slots,))
     dec[..., place], h[..., place] = decay, inc
-    _scan(dec.reshape(dec.shape[:-1] + (size, blocks)), h.reshape(h.shape[:-1] + (size, blocks)))
+    blocked_scan(dec.reshape(dec.shape[:-1] + (size, blocks)),
+                 h.reshape(h.shape[:-1] + (size, blocks)))
     return h[..., place]

@@ -18,7 +18,7 @@ import numpy as np
 from scipy.special import beta, hyp1f1
 
 from ..errors import InputError
-from .hereditary_steps import _exp_steps, _layout, _power_steps, _scan, _Steps
+from .hereditary_steps import Steps, block_layout, blocked_scan, exp_steps, power_steps
 from .scratch import scratch
 from .soe import power_law_soe
 from .ting_rule import ting_rule
@@ -223,7 +223,7 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     :func:`~palpbayes.contact.soe.power_law_soe`, accurate to
     :data:`~palpbayes.contact.soe.SOE_TOLERANCE` = 1e-7 relative on [shortest step, duration])
     is an exact O(N) recursion H <- exp(-x·dt)·H + increment, run for all terms at once as a blocked
-    scan (:func:`~palpbayes.contact.hereditary_steps._scan`, O(N^(1/3)) Python steps; up to 4
+    scan (:func:`~palpbayes.contact.hereditary_steps.blocked_scan`, O(N^(1/3)) Python steps; up to 4
     Prony terms as one cumulative sum);
     the power law's last step is integrated against t^(-alpha) in closed form.  Ting's t1
     (:func:`~palpbayes.contact.ting_rule.ting_rule`): vectorised bisection over the samples
@@ -260,7 +260,7 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     t, d, C, m = _check(t, depth, C, m, kernel)
     dp = np.maximum(d, 0.0)
     u = dp if m == 1.0 else dp * np.sqrt(dp) if m == 1.5 else dp**m  # sqrt: 3x faster
-    st = _Steps(t, d, m, u)
+    st = Steps(t, d, m, u)
     soe = a0, a, x, alpha, k = _soe(kernel, float(st.dt.min()), float(t[-1] - t[0]))
     n, K = t.size - 1, x.size
     runmax = np.maximum.accumulate(d)
@@ -274,7 +274,7 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     if K and K <= _FEW and x[0] * (t[-1] - t[0]) <= 2 * _SPREAD:
         # few terms, none decaying by over e^1200 on the record: the scan as one cumulative
         # sum, H_i+1 = exp(-x·t'_i+1)·Σ_{j<=i} inc_j·exp(x·t'_j+1), t' = t - mid-record
-        decay, iu, idd = _exp_steps(x, st)
+        decay, iu, idd = exp_steps(x, st)
         gu = gd = 0.0
         if alpha is not None:
             gu, gd = -(a @ iu), -(a @ idd)
@@ -287,7 +287,7 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
         Hu, Hd = np.zeros((n + 1, K)), np.zeros((n + 1, K))
         Hu[1:], Hd[1:], decays = h[0].T, h[-1].T, decay.T
     elif K:
-        size, blocks, place = _layout(n)
+        size, blocks, place = block_layout(n)
         sp, gu, gd = st.placed(place, size * blocks), 0.0, 0.0
         if rows.size:  # time order = (blocks, size): one strided copy each, the first row 0
             ordered = scratch("ordered", (2 if m != 1.0 else 1, size * blocks + 1, K))
@@ -301,11 +301,11 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
             rows_k = len(range(*sl.indices(K)))
             decay, h = scratch("decay", (rows_k, size * blocks)), scratch(
                 "increments", (1 if m == 1.0 else 2, rows_k, size * blocks))
-            _, iu, idd = _exp_steps(x[sl], sp, (decay, h))
+            _, iu, idd = exp_steps(x[sl], sp, (decay, h))
             if alpha is not None:  # the sum holds for lags >= one step: history to the
                 gu, gd = gu - a[sl] @ iu, gd - a[sl] @ idd  # previous sample
             h, decay = (v.reshape(v.shape[:-1] + (size, blocks)) for v in (h, decay))
-            _scan(decay, h, top=True)
+            blocked_scan(decay, h, top=True)
             gu, gd = gu + a[sl] @ h[0].reshape(-1, size * blocks), gd + a[sl] @ h[-1].reshape(
                 -1, size * blocks)
             if rows.size:
@@ -315,7 +315,7 @@ def hereditary_contact(t, depth, C: float, m: float, kernel: Kernel) -> Heredita
     if alpha is None:
         fu, fd = fu + a0 * u, fd + a0 * dp
     else:
-        lu, ld = _power_steps(alpha, st)
+        lu, ld = power_steps(alpha, st)
         fu[1:], fd[1:] = fu[1:] + k * lu, fd[1:] + k * ld
     force, t1 = C * fu, np.where(u > 0, t, np.nan)
     if rows.size:

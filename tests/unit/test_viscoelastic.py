@@ -12,13 +12,11 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 from scipy.special import beta, dawsn, gamma, hyp2f1
 
+from palpbayes.contact.hereditary_steps import Steps, exp_steps, power_steps
 from palpbayes.contact.soe import SOE_TOLERANCE, gauss_rule, power_law_soe
 from palpbayes.contact.viscoelastic import (
     PowerLawKernel,
     PronyKernel,
-    _exp_steps,
-    _power_steps,
-    _Steps,
     constant_strain_rate_stress,
     hereditary_contact,
     hereditary_force,
@@ -260,9 +258,9 @@ def test_each_step_kind_is_integrated_exactly():
     t = np.array([0.0, 0.4, 1.0, 1.3, 1.7, 2.2, 2.6])
     d = np.array([-1.0, 1.0, 3.0, 3.1, 3.0, -1.0, -0.5]) * 1e-3
     m, alpha, x = 1.5, 0.4, np.array([0.01, 0.7, 5.0, 60.0])
-    st = _Steps(t, d, m)
-    decay, iu, idd = _exp_steps(x, st)
-    lu, ld = _power_steps(alpha, st)
+    st = Steps(t, d, m)
+    decay, iu, idd = exp_steps(x, st)
+    lu, ld = power_steps(alpha, st)
     np.testing.assert_allclose(decay, np.exp(-np.multiply.outer(x, np.diff(t))), atol=1e-15)
     for i in range(t.size - 1):
         for mm, got_exp, got_pow in ((1.0, idd[:, i], ld[i]), (m, iu[:, i], lu[i])):

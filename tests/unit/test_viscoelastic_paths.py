@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from palpbayes.contact import hereditary_steps, ting_rule, viscoelastic
-from palpbayes.contact.hereditary_steps import _scan_ordered
+from palpbayes.contact.hereditary_steps import scan_ordered
 from palpbayes.contact.viscoelastic import (
     PowerLawKernel,
     PronyKernel,
@@ -32,7 +32,7 @@ def test_blocked_scan_is_the_recursion(n):
         h = decay[:, i] * h + inc[..., i]
         ref[..., i] = h
     scale = np.abs(inc).sum(axis=-1, keepdims=True)
-    np.testing.assert_allclose(_scan_ordered(decay, inc), ref, rtol=0, atol=1e-14 * scale.max())
+    np.testing.assert_allclose(scan_ordered(decay, inc), ref, rtol=0, atol=1e-14 * scale.max())
 
 
 def _noisy_cycle(n=1500, seed=3):
@@ -79,12 +79,12 @@ def test_exp_steps_writes_into_the_given_buffers():
     """The layout copy of the steps (empty places: nothing to integrate) and out= buffers give
     the same decays and increments as the plain call."""
     t, d = _noisy_cycle(200)
-    st = hereditary_steps._Steps(t, d, 1.5)
+    st = hereditary_steps.Steps(t, d, 1.5)
     x = np.array([3e3, 40.0, 0.5, 1e-3])
-    decay, iu, idd = hereditary_steps._exp_steps(x, st)
-    size, blocks, place = hereditary_steps._layout(t.size - 1)
+    decay, iu, idd = hereditary_steps.exp_steps(x, st)
+    size, blocks, place = hereditary_steps.block_layout(t.size - 1)
     out = np.full((x.size, size * blocks), np.nan), np.full((2, x.size, size * blocks), np.nan)
-    got = hereditary_steps._exp_steps(x, st.placed(place, size * blocks), out)
+    got = hereditary_steps.exp_steps(x, st.placed(place, size * blocks), out)
     assert got[0] is out[0] and got[1].base is out[1] and np.all(np.isfinite(out[1]))
     for a, b in zip((decay, iu, idd), got, strict=True):
         np.testing.assert_allclose(b[:, place], a, rtol=1e-15, atol=0)
