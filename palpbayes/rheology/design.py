@@ -48,9 +48,11 @@ from scipy import fft as sp_fft
 
 from ..errors import InputError
 from .kernels import (
+    PSI2_SERIES,
     Lags,
     check_kernel,
     double_integrated_kernel,
+    psi2_series,
     triple_integrated_kernel,
 )
 from .lattice import KnotLattice, knot_lattice
@@ -167,11 +169,11 @@ def step_kernel_means(win: Windows, kernel: str | None, theta: float = 0.0, t0: 
         P *= 1.0 / (3.0 - theta)
     elif kernel == "exponential":  # Ψ₂ = tau³·(y²/2 − y − expm1(−y)), series for small y
         np.multiply(lags, 1.0 / theta, out=P)
-        small = P < 1e-2
+        small = P < PSI2_SERIES
         y = P[small]
         np.multiply(P, 0.5 * P - 1.0, out=P)
         P -= Q
-        P[small] = y**3 * (1.0 / 6.0 - y * (1.0 / 24.0 - y * (1.0 / 120.0 - y / 720.0)))
+        P[small] = psi2_series(y)
         P *= theta**3
     else:  # Ψ₂ = x³/6
         P *= lags

@@ -22,10 +22,26 @@ import numpy as np
 from ..errors import InputError
 
 __all__ = ["KERNELS", "Lags", "check_kernel", "integrated_kernel", "double_integrated_kernel",
-           "triple_integrated_kernel"]
+           "triple_integrated_kernel", "psi_series", "psi2_series", "PSI_SERIES",
+           "PSI2_SERIES"]
 
 #: Kernels of the columns: parameter alpha [-] or tau [s]; ``None`` is the constant kernel.
 KERNELS = ("power-law", "exponential")
+#: y = x/tau [-] below which the exponential's Ψ and Ψ₂ take their Taylor series
+#: (:func:`psi_series`, :func:`psi2_series`): the closed forms cancel there.
+PSI_SERIES, PSI2_SERIES = 1e-3, 1e-2
+
+
+def psi_series(y: np.ndarray) -> np.ndarray:
+    """Ψ/tau² = y + expm1(−y) of the exponential by its Taylor series to y⁵ (used below
+    :data:`PSI_SERIES`: the first term left out is y⁴/360 < 3e-15 of it there)."""
+    return y * y * (0.5 - y * (1.0 / 6.0 - y * (1.0 / 24.0 - y / 120.0)))
+
+
+def psi2_series(y: np.ndarray) -> np.ndarray:
+    """Ψ₂/tau³ = y²/2 − y − expm1(−y) of the exponential by its Taylor series to y⁶ (used
+    below :data:`PSI2_SERIES`: the first term left out is y⁴/840 < 1.2e-11 of it there)."""
+    return y**3 * (1.0 / 6.0 - y * (1.0 / 24.0 - y * (1.0 / 120.0 - y / 720.0)))
 
 
 def check_kernel(kernel: str | None, theta: float) -> None:
@@ -62,9 +78,8 @@ def double_integrated_kernel(x: np.ndarray, kernel: str | None, theta: float = 0
     if kernel == "power-law":
         return x ** (2.0 - theta) * (t0**theta / ((1.0 - theta) * (2.0 - theta)))
     y = x / theta
-    small = y < 1e-3
-    series = y * y * (0.5 - y * (1.0 / 6.0 - y * (1.0 / 24.0 - y / 120.0)))
-    return theta**2 * np.where(small, series, y + np.expm1(-np.where(small, 1.0, y)))
+    small = y < PSI_SERIES
+    return theta**2 * np.where(small, psi_series(y), y + np.expm1(-np.where(small, 1.0, y)))
 
 
 def triple_integrated_kernel(x: np.ndarray, kernel: str | None, theta: float = 0.0,
@@ -77,10 +92,9 @@ def triple_integrated_kernel(x: np.ndarray, kernel: str | None, theta: float = 0
         return x ** (3.0 - theta) * (t0**theta / ((1.0 - theta) * (2.0 - theta)
                                                   * (3.0 - theta)))
     y = x / theta
-    small = y < 1e-2
-    series = y**3 * (1.0 / 6.0 - y * (1.0 / 24.0 - y * (1.0 / 120.0 - y / 720.0)))
+    small = y < PSI2_SERIES
     big = 0.5 * y * y - y - np.expm1(-np.where(small, 1.0, y))
-    return theta**3 * np.where(small, series, big)
+    return theta**3 * np.where(small, psi2_series(y), big)
 
 
 class Lags:
@@ -127,19 +141,15 @@ class Lags:
             for k in orders:
                 if k == 1:
                     f = em * -theta
-                elif k == 2:  # as double_integrated_kernel: its series below y = 1e-3
+                elif k == 2:
                     f = y + em
-                    if (small := y < 1e-3).any():
-                        ys = y[small]
-                        f[small] = ys * ys * (0.5 - ys * (1.0 / 6.0 - ys * (1.0 / 24.0
-                                                                            - ys / 120.0)))
+                    if (small := y < PSI_SERIES).any():
+                        f[small] = psi_series(y[small])
                     f *= theta**2
-                else:  # as triple_integrated_kernel: its series below y = 1e-2
+                else:
                     f = 0.5 * y * y - y - em
-                    if (small := y < 1e-2).any():
-                        ys = y[small]
-                        f[small] = ys**3 * (1.0 / 6.0 - ys * (1.0 / 24.0 - ys * (
-                            1.0 / 120.0 - ys / 720.0)))
+                    if (small := y < PSI2_SERIES).any():
+                        f[small] = psi2_series(y[small])
                     f *= theta**3
                 out.append(f)
             return out

@@ -4,6 +4,8 @@ hereditary integral, recovery of known relaxation moduli from simulated ramp–h
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -237,6 +239,25 @@ def test_lag_tables_give_the_kernel_integrals(kind, theta):
         lags.integrals((1,), "springpot", 0.3)
     with pytest.raises(InputError, match="alpha = 1.0"):
         lags.integrals((1,), "power-law", 1.0)
+
+
+def test_the_exponentials_series_meet_the_closed_forms_where_they_hand_over():
+    """Psi/tau^2 and Psi2/tau^3 of the exponential: their short series (one each, shared by
+    the kernel functions, the lag tables and the dense step means) against the full Taylor
+    sums below their thresholds, and against the closed forms at the threshold."""
+    from palpbayes.rheology.kernels import PSI2_SERIES, PSI_SERIES, psi2_series, psi_series
+
+    def full(y, first):  # sum over n >= first of (-y)^n / n!, exactly summed
+        return math.fsum((-y) ** n / math.factorial(n) for n in range(first, 40))
+
+    for y in np.geomspace(1e-9, PSI_SERIES, 30):
+        assert psi_series(y) == pytest.approx(full(y, 2), rel=3e-15)
+    for y in np.geomspace(1e-9, PSI2_SERIES, 30):
+        assert psi2_series(y) == pytest.approx(-full(y, 3), rel=1.2e-11)
+    y = PSI_SERIES
+    assert psi_series(y) == pytest.approx(y + math.expm1(-y), rel=1e-9)
+    y = PSI2_SERIES
+    assert psi2_series(y) == pytest.approx(0.5 * y * y - y - math.expm1(-y), rel=1e-9)
 
 
 def _window_kernel_reference(win, s, kind, theta, order, side):
