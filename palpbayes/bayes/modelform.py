@@ -196,8 +196,10 @@ def layer_alternative(fit: Callable[..., object], data: FitData, z_surf: float, 
     contact depth below ``z_surf`` [m] (Gaussian noise for a Student-t fit, which the exact
     engine lacks), with ``options`` (baseline, priors, budget, seed, ...), on the loading
     alone (no rate check: the layer is judged on what it is meant to explain).  Plausible
-    when it converges and its own checks ran and find no material misfit; a fit it refuses (or that
-    fails numerically) is an implausible alternative with the reason.
+    when it converges, raises no flag, and its own checks ran and find no material misfit;
+    otherwise the note names what did not hold (a flag by its headline, e.g. "thickness
+    posterior at its lower prior bound (722 nm)").  A fit it refuses (or that fails
+    numerically) is an implausible alternative with the reason.
 
     Parameters
     ----------
@@ -230,7 +232,11 @@ def layer_alternative(fit: Callable[..., object], data: FitData, z_surf: float, 
         return Alternative(LAYER, math.nan, math.nan, math.nan, False, f"not fitted: {exc}")
     E = np.ravel(res.draws("E_total"))
     checks = checks_summary(res.checks)
-    why = ([] if res.converged else ["not converged"]) + (
+    # a flag (a posterior at a prior bound, ...) by its headline, the text before its ":";
+    # the reason it has no "; " (the separator of the notes' own column)
+    why = (["not converged (" + ", ".join(res.diagnostics.problems()) + ")"]
+           if not res.diagnostics.converged else []) + [
+        w.split(":")[0].replace("; ", ", ") for w in res.warnings] + (
         [] if checks["model_ok"] is True else
         [f"its own checks fail ({checks['misfit_checks']})" if res.checks
          else "its checks did not run"])

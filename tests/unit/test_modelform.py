@@ -252,3 +252,27 @@ def test_deep_window_recovers_e_under_an_onset():
     assert abs(dc["estar_all"] / et - 1) > 0.04
     assert dc["estar_deep"] / et == pytest.approx(1.0, abs=0.03)
     assert dc["estar_deep_se"] > 0
+
+
+def test_a_flagged_layer_fit_is_left_out_with_the_flag_named():
+    """A layer fit whose chains converge but whose posterior is flagged (its thickness at the
+    prior's lower bound, as on real AFM curves) is left out with that flag's headline as the
+    reason, not as "not converged"."""
+    from dataclasses import replace
+
+    from palpbayes.bayes.fit import fit_bayes_data
+
+    trace, tip = misfit_trace("layer_bonded", 1)
+    data = prepare_trace(trace, ModelSpec(tip, nu=MISFIT_NU))
+    flag = ("thickness posterior at its lower prior bound (722 nm): the layer's thickness "
+            "piles up at the thinnest the prior allows; more words")
+
+    def flagged_fit(*args, **kwargs):
+        res = fit_bayes_data(*args, **kwargs)
+        assert res.diagnostics.converged
+        return replace(res, warnings=[flag])
+
+    alt = layer_alternative(flagged_fit, data, float(data.z.max()) - 1e-3)
+    assert not alt.plausible
+    assert alt.note.split("; ")[0] == "thickness posterior at its lower prior bound (722 nm)"
+    assert "not converged" not in alt.note
