@@ -85,9 +85,13 @@ def fit_bayes_data(
     lsq: LSQResult | None = None,
     engine: str = "emcee",
     with_model_form: bool = True,
+    log_prob: bool = True,
 ) -> BayesResult:
     """Posterior of one prepared trace; see :func:`fit_bayes` (``with_model_form=False``
-    skips the model-form alternatives, :mod:`palpbayes.bayes.modelform`)."""
+    skips the model-form alternatives, :mod:`palpbayes.bayes.modelform`; ``log_prob=False``
+    leaves the exact engine's draws of a partly unknown layer without their log posterior,
+    ``sample_stats`` without ``lp``: for a fit whose InferenceData nobody keeps, the model
+    form's layer alternative)."""
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}")
     priors = priors or PriorSpec()
@@ -108,7 +112,7 @@ def fit_bayes_data(
         settings = f"exact engine, {chains.n_steps} (surface, phi) nodes"
     elif engine == "exact":
         chains, modes, like, mixture = exact_layer_chains(
-            data, prior, np.random.default_rng(sampler_ss), EXACT_DRAWS)
+            data, prior, np.random.default_rng(sampler_ss), EXACT_DRAWS, log_prob)
         settings = (f"exact engine, {len(mixture.components)} layer components, "
                     f"{chains.n_steps} (surface, phi) nodes")
     elif data.model.is_concrete:
@@ -232,7 +236,7 @@ def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, 
     """arviz InferenceData of the draws, with the fit's settings as attributes."""
     return az.from_dict(
         posterior=post,
-        sample_stats={"lp": chains.log_prob},
+        sample_stats=None if chains.log_prob is None else {"lp": chains.log_prob},
         observed_data={"force": data.force},
         constant_data={"z": data.z},
         attrs={

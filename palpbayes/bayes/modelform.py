@@ -226,7 +226,7 @@ def layer_alternative(fit: Callable[..., object], data: FitData, z_surf: float, 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ConvergenceWarning)
             res = fit(replace(data, model=model, cycle=None), engine="exact",
-                      with_model_form=False,
+                      with_model_form=False, log_prob=False,
                       noise=noise if noise in ("gaussian", "ar1") else "gaussian", **options)
     except (PalpbayesError, ValueError, np.linalg.LinAlgError) as exc:
         return Alternative(LAYER, math.nan, math.nan, math.nan, False, f"not fitted: {exc}")

@@ -118,7 +118,8 @@ class ChainResult:
     samples
         (n_walkers, n_draws, ndim) parameter draws, walkers as chains.
     log_prob
-        (n_walkers, n_draws) log-posterior of each draw.
+        (n_walkers, n_draws) log-posterior of each draw; None when not computed (the exact
+        engine's draws of a fit whose InferenceData is not kept).
     tau
         Integrated autocorrelation time per parameter [steps].
     n_steps, burn, thin
@@ -132,7 +133,7 @@ class ChainResult:
     """
 
     samples: np.ndarray
-    log_prob: np.ndarray
+    log_prob: np.ndarray | None
     tau: np.ndarray
     n_steps: int
     burn: int

@@ -259,3 +259,25 @@ def test_thickness_components_start_from_fewer_surface_nodes_and_give_the_same_p
         qa, qb = (np.percentile(p.draws(np.random.default_rng(1), 20_000)[name], [5, 50, 95])
                   for p in (fewer, full))
         np.testing.assert_allclose(qa, qb, rtol=2e-3)
+
+
+def test_a_layer_fit_without_its_log_posterior_draws_the_same():
+    """``log_prob=False`` (the model form's layer alternative) leaves out only the exact
+    mixture's log posterior of each draw: the same draws, summary and checks, no ``lp``."""
+    from palpbayes.bayes.fit import fit_bayes_data
+
+    tip = Tip("paraboloid", radius=0.0117)
+    tr = simulate_trace(E_TRUE, tip, nu=NU, thickness=0.01, depth=3e-3, base="bonded",
+                        rng=3)
+    data = prepare(tr, ModelSpec(tip, nu=NU, thickness_range=(4.5e-3, 3.0)))
+    full, lean = (fit_bayes_data(data, engine="exact", budget=BudgetSpec.none(),
+                                 with_model_form=False, log_prob=lp) for lp in (True, False))
+    assert "lp" in full.idata.sample_stats and not hasattr(lean.idata, "sample_stats")
+    assert np.isfinite(np.asarray(full.idata.sample_stats["lp"])).all()
+    for name in ("E_star", "z_surf", "thickness", "bonded"):
+        np.testing.assert_array_equal(full.draws(name), lean.draws(name))
+    a, b = full.summary_row(), lean.summary_row()
+    assert a["model_ok"] and [(c.name, c.passed) for c in full.checks] == [
+        (c.name, c.passed) for c in lean.checks]
+    assert {k: v for k, v in a.items() if k != "rhat_max"} == pytest.approx(
+        {k: v for k, v in b.items() if k != "rhat_max"}, nan_ok=True)
