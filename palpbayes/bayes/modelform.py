@@ -232,8 +232,8 @@ def layer_alternative(fit: Callable[..., object], data: FitData, z_surf: float, 
         return Alternative(LAYER, math.nan, math.nan, math.nan, False, f"not fitted: {exc}")
     E = np.ravel(res.draws("E_total"))
     checks = checks_summary(res.checks)
-    # a flag (a posterior at a prior bound, ...) by its headline, the text before its ":";
-    # the reason it has no "; " (the separator of the notes' own column)
+    # a flag (a posterior at a prior bound, ...) by its headline, the text before its first
+    # ":"; "; " separates the reasons, so none holds one
     why = (["not converged (" + ", ".join(res.diagnostics.problems()) + ")"]
            if not res.diagnostics.converged else []) + [
         w.split(":")[0].replace("; ", ", ") for w in res.warnings] + (
