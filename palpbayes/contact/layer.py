@@ -90,6 +90,7 @@ LAMBDA_VALID = 2.0
 _U_MAX = 25.0
 _U_PANELS, _U_ORDER = 200, 16   # composite Gauss–Legendre: 3,200 nodes, ~25 per period of
 _Y_STEP = 0.005                 # cos(u·y) at the largest y
+_Y_BLOCK = 64
 # lambda grid of the profile tables: dense near 0 (chi ~ lambda), 241 points
 _LAMBDA_GRID = LAMBDA_MAX * np.linspace(0.0, 1.0, 241) ** 2
 # uniform chi grid of the lookup table (np.interp at run time)
@@ -126,18 +127,39 @@ def kernel(t: np.ndarray, nu: float, base: str) -> np.ndarray:
         2.0 * k * (1.0 + e4) + 2.0 * (1.0 + k * k + 4.0 * t * t) * e2)
 
 
+@dataclass(frozen=True)
+class _UniformCubic:
+    """A cubic spline on the uniform knots 0, step, 2·step, ... (coefficients ``c`` of
+    :class:`scipy.interpolate.CubicSpline`, shape (4, intervals)), evaluated by index
+    arithmetic instead of a search: its values to 1 ulp, four times faster.  Beyond the last
+    knot the last cubic is continued, as scipy's default extrapolation."""
+
+    step: float
+    c: np.ndarray
+
+    def __call__(self, y: np.ndarray) -> np.ndarray:
+        y = np.asarray(y, dtype=float)
+        i = np.minimum((y * (1.0 / self.step)).astype(np.intp), self.c.shape[1] - 1)
+        dx = y - i * self.step
+        c = self.c
+        return ((c[0, i] * dx + c[1, i]) * dx + c[2, i]) * dx + c[3, i]
+
+
 @functools.lru_cache(maxsize=64)
-def _transform_spline(nu: float, base: str) -> CubicSpline:
+def _transform_spline(nu: float, base: str) -> _UniformCubic:
     x, w = leggauss(_U_ORDER)
     edges = np.linspace(0.0, _U_MAX, _U_PANELS + 1)
     half = 0.5 * np.diff(edges)[:, None]
     u = (edges[:-1, None] + half * (x[None, :] + 1.0)).ravel()
     g = (kernel(u, nu, base) - 1.0) * (half * w[None, :]).ravel()
     y = np.arange(0.0, 2.0 * LAMBDA_MAX + 4 * _Y_STEP, _Y_STEP)
-    vals = np.empty(y.size)
-    for i in range(0, y.size, 256):  # (256 × 3000) blocks: bounded memory
-        vals[i:i + 256] = np.cos(np.outer(y[i:i + 256], u)) @ g
-    return CubicSpline(y, vals)
+    # cos(y·u) for y = start + b·step in blocks of _Y_BLOCK rows: Re(exp(i·start·u)·exp(i·b·
+    # step·u)), two small tables of exponentials and one complex matrix product (the direct
+    # cos of every (y, u) pair to 3e-15; ten times faster)
+    starts = y[::_Y_BLOCK]
+    rows = np.exp(1j * np.outer(np.arange(_Y_BLOCK) * _Y_STEP, u))
+    vals = ((np.exp(1j * np.outer(starts, u)) * g) @ rows.T).real.ravel()[:y.size]
+    return _UniformCubic(_Y_STEP, CubicSpline(y, vals).c)
 
 
 def _key_nu(nu: float, base: str) -> float:
@@ -173,18 +195,32 @@ def solve_layer(lam: float, nu: float, base: str, exponents: tuple[float, ...] =
     edge, integral
         phi(1) and ∫_0^1 phi(tau) dtau for each right-hand side.
     """
-    n = _nodes(lam)
-    x, w = leggauss(n)
-    t, wt = 0.5 * (x + 1.0), 0.5 * w
-    rhs = np.column_stack([t ** e for e in exponents])
-    if lam == 0.0:
-        return np.ones(len(exponents)), wt @ rhs
+    edge, integral = _solve_many(np.array([float(lam)]), nu, base, exponents)
+    return edge[0], integral[0]
+
+
+def _solve_many(lams: np.ndarray, nu: float, base: str, exponents: tuple[float, ...]
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`solve_layer` at every a/h of ``lams``: edges and integrals, shape
+    (lams, exponents).  The values of a/h that take the same Nyström nodes are solved as one
+    stack (one spline evaluation and one batched solve per node count)."""
+    lams = np.asarray(lams, dtype=float)
+    edge = np.empty((lams.size, len(exponents)))
+    integral = np.empty_like(edge)
     spline = _transform_spline(_key_nu(nu, base), _check_base(base))
-    km = spline(lam * np.abs(t[None, :] - t[:, None])) + spline(lam * (t[None, :] + t[:, None]))
-    phi = np.linalg.solve(np.eye(n) + (lam / np.pi) * km * wt[None, :], rhs)
-    k1 = spline(lam * (1.0 - t)) + spline(lam * (1.0 + t))
-    edge = 1.0 - (lam / np.pi) * (k1 * wt) @ phi
-    return edge, wt @ phi
+    counts = np.array([_nodes(float(v)) for v in lams])
+    for n in np.unique(counts):
+        pick = np.flatnonzero(counts == n)
+        lam = lams[pick, None, None]
+        x, w = leggauss(int(n))
+        t, wt = 0.5 * (x + 1.0), 0.5 * w
+        rhs = np.column_stack([t ** e for e in exponents])
+        km = spline(lam * np.abs(t[None, :] - t[:, None])) + spline(lam * (t[None, :] + t[:, None]))
+        phi = np.linalg.solve(np.eye(int(n)) + (lam / np.pi) * km * wt[None, :], rhs)
+        k1 = spline(lam[:, :, 0] * (1.0 - t)) + spline(lam[:, :, 0] * (1.0 + t))  # (k, n)
+        edge[pick] = 1.0 - (lam[:, :, 0] / np.pi) * np.einsum("kn,kne->ke", k1 * wt, phi)
+        integral[pick] = np.einsum("n,kne->ke", wt, phi)
+    return edge, integral
 
 
 def flat_punch_factor(a_over_h, nu: float, base: str):
@@ -228,12 +264,12 @@ def _log_table(x: np.ndarray, logf: np.ndarray) -> tuple[np.ndarray, np.ndarray,
 @functools.lru_cache(maxsize=64)
 def _flat_table(nu: float, base: str) -> _LogTable:
     lams = _LAMBDA_GRID
-    logf = np.array([math.log(solve_layer(float(lam), nu, base)[1][0]) for lam in lams])
+    logf = np.log(_solve_many(lams, nu, base, (0.0,))[1][:, 0])
     return _LogTable(*_log_table(lams, logf))
 
 
 def flat_table(nu: float, base: str) -> _LogTable:
-    """The flat punch's factor tabulated in a/h (cached per process; ~0.05 s to build)."""
+    """The flat punch's factor tabulated in a/h (cached per process; ~0.1 s to build)."""
     base = _check_base(base)
     return _flat_table(_key_nu(nu, base), base)
 
@@ -281,16 +317,12 @@ class ProfileTable:
 
 @functools.lru_cache(maxsize=128)
 def _profile_table(n: float, nu: float, base: str) -> ProfileTable:
-    chis, logf = [0.0], [0.0]
     lams = _LAMBDA_GRID[1:]
-    for lam in lams:
-        edge, integ = solve_layer(float(lam), nu, base, (0.0, n))
-        rho = edge[1] / edge[0]            # depth = kappa_n·c·a^n·rho
-        chi = lam * rho ** (1.0 / n)       # half-space contact radius at that depth, over h
-        f = (n + 1) / n * lam ** (n + 1) * (rho * integ[0] - integ[1]) / chi ** (n + 1)
-        chis.append(chi)
-        logf.append(math.log(f))
-    chis, logf = np.asarray(chis), np.asarray(logf)
+    edge, integ = _solve_many(lams, nu, base, (0.0, n))
+    rho = edge[:, 1] / edge[:, 0]          # depth = kappa_n·c·a^n·rho
+    chi = lams * rho ** (1.0 / n)          # half-space contact radius at that depth, over h
+    f = (n + 1) / n * lams ** (n + 1) * (rho * integ[:, 0] - integ[:, 1]) / chi ** (n + 1)
+    chis, logf = np.r_[0.0, chi], np.r_[0.0, np.log(f)]
     grid, table, slope = _log_table(chis, logf)
     return ProfileTable(n=n, nu=nu, base=base, chi=grid, log_factor=table,
                         lam=PchipInterpolator(chis, np.r_[0.0, lams])(grid), tail_slope=slope)
@@ -299,7 +331,9 @@ def _profile_table(n: float, nu: float, base: str) -> ProfileTable:
 def profile_table(n: float, nu: float, base: str) -> ProfileTable:
     """The :class:`ProfileTable` of profile exponent ``n`` (cached per process).
 
-    Building one costs ~0.1 s (240 Nyström solves); it is kept for the life of the process.
+    Building one costs ~0.1 s (240 Nyström solves, stacked by node count), and the kernel
+    transform of its nu and base ~0.02 s the first time; it is kept for the life of the
+    process.
     """
     base = _check_base(base)
     if not (math.isfinite(n) and n > 0):

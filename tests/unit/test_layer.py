@@ -190,3 +190,36 @@ def test_thin_layers_continue_as_a_power_law_and_bad_input_is_named():
     with pytest.raises(GeometryError, match="Dimitriadis"):
         dimitriadis_factor(np.array([(1.2 * 0.02) ** 2 / 0.01]), 0.01, 0.02, 0.3)
     assert DIMITRIADIS_CHI_MAX == 1.0
+
+
+def test_kernel_transform_equals_the_direct_cosine_sum_and_its_spline():
+    """The transform's blocked exponentials give the direct Σ g(u)·cos(y·u) of the same
+    quadrature, and its uniform-knot evaluation gives scipy's CubicSpline on the same knots
+    (between knots, on them, and beyond the last)."""
+    from numpy.polynomial.legendre import leggauss
+    from scipy.interpolate import CubicSpline
+
+    for nu, base in ((0.3, "bonded"), (0.5, "free")):
+        x, w = leggauss(layer._U_ORDER)
+        edges = np.linspace(0.0, layer._U_MAX, layer._U_PANELS + 1)
+        half = 0.5 * np.diff(edges)[:, None]
+        u = (edges[:-1, None] + half * (x[None, :] + 1.0)).ravel()
+        g = (layer.kernel(u, nu, base) - 1.0) * (half * w[None, :]).ravel()
+        y = np.arange(0.0, 2.0 * layer.LAMBDA_MAX + 4 * layer._Y_STEP, layer._Y_STEP)
+        direct = np.cos(np.outer(y, u)) @ g
+        fast = layer._transform_spline(layer._key_nu(nu, base), base)
+        np.testing.assert_allclose(fast(y), direct, rtol=0, atol=1e-14)
+        reference = CubicSpline(y, direct)
+        q = np.r_[np.random.default_rng(0).uniform(0.0, y[-1], 5000), y[::7], y[-1] + 0.003]
+        np.testing.assert_allclose(fast(q), reference(q), rtol=0, atol=1e-14)
+
+
+def test_stacked_nystrom_solves_equal_one_at_a_time():
+    """The tables' solves, stacked by node count, give each a/h's own solve."""
+    lams = np.array([0.0, 0.05, 0.9, 1.0, 1.3, 2.0, 4.5, 7.99, 8.0])  # five node counts
+    edge, integral = layer._solve_many(lams, 0.4, "bonded", (0.0, 2.0))
+    for k, lam in enumerate(lams):
+        e1, i1 = layer._solve_many(np.array([lam]), 0.4, "bonded", (0.0, 2.0))
+        np.testing.assert_allclose(edge[k], e1[0], rtol=1e-13)
+        np.testing.assert_allclose(integral[k], i1[0], rtol=1e-13)
+    assert edge[0].tolist() == [1.0, 1.0]  # a/h = 0: the half-space (phi = the right side)
