@@ -132,14 +132,16 @@ class _UniformCubic:
     """A cubic spline on the uniform knots 0, step, 2·step, ... (coefficients ``c`` of
     :class:`scipy.interpolate.CubicSpline`, shape (4, intervals)), evaluated by index
     arithmetic instead of a search: its values to 1 ulp, four times faster.  Beyond the last
-    knot the last cubic is continued, as scipy's default extrapolation."""
+    knot the last cubic is continued (below 0 the first), as scipy's default extrapolation;
+    NaN gives NaN."""
 
     step: float
     c: np.ndarray
 
     def __call__(self, y: np.ndarray) -> np.ndarray:
         y = np.asarray(y, dtype=float)
-        i = np.minimum((y * (1.0 / self.step)).astype(np.intp), self.c.shape[1] - 1)
+        q = y * (1.0 / self.step)  # the interval's index, clipped before the cast (NaN, inf)
+        i = np.minimum(np.where(q > 0, q, 0.0), self.c.shape[1] - 1).astype(np.intp)
         dx = y - i * self.step
         c = self.c
         return ((c[0, i] * dx + c[1, i]) * dx + c[2, i]) * dx + c[3, i]

@@ -195,7 +195,7 @@ def test_thin_layers_continue_as_a_power_law_and_bad_input_is_named():
 def test_kernel_transform_equals_the_direct_cosine_sum_and_its_spline():
     """The transform's blocked exponentials give the direct Σ g(u)·cos(y·u) of the same
     quadrature, and its uniform-knot evaluation gives scipy's CubicSpline on the same knots
-    (between knots, on them, and beyond the last)."""
+    (between knots, on them, beyond both ends, and NaN for NaN)."""
     from numpy.polynomial.legendre import leggauss
     from scipy.interpolate import CubicSpline
 
@@ -210,7 +210,8 @@ def test_kernel_transform_equals_the_direct_cosine_sum_and_its_spline():
         fast = layer._transform_spline(layer._key_nu(nu, base), base)
         np.testing.assert_allclose(fast(y), direct, rtol=0, atol=1e-14)
         reference = CubicSpline(y, direct)
-        q = np.r_[np.random.default_rng(0).uniform(0.0, y[-1], 5000), y[::7], y[-1] + 0.003]
+        q = np.r_[np.random.default_rng(0).uniform(0.0, y[-1], 5000), y[::7], y[-1] + 0.003,
+                  -0.002, np.nan]
         np.testing.assert_allclose(fast(q), reference(q), rtol=0, atol=1e-14)
 
 
