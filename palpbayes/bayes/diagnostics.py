@@ -52,7 +52,10 @@ class Diagnostics:
 
     @property
     def rhat_max(self) -> float:
-        return float(max(self.rhat.values()))
+        """The largest R-hat; NaN when any is NaN (undefined: not converged), whatever the
+        order of the parameters."""
+        values = np.array(list(self.rhat.values()), dtype=float)
+        return float(np.max(values)) if values.size else float("nan")
 
     @property
     def ess_min(self) -> float:

@@ -186,7 +186,8 @@ def solve_layer(lam: float, nu: float, base: str, exponents: tuple[float, ...] =
     Parameters
     ----------
     lam
-        Contact radius over thickness a/h [-], 0 <= lam <= 2·:data:`LAMBDA_MAX`.
+        Contact radius over thickness a/h [-], 0 <= lam <= :data:`LAMBDA_MAX` (the kernel
+        transform is tabulated for the arguments up to 2·:data:`LAMBDA_MAX` that it takes).
     nu, base
         Poisson ratio [-] and base condition (:func:`kernel`).
     exponents
@@ -197,6 +198,10 @@ def solve_layer(lam: float, nu: float, base: str, exponents: tuple[float, ...] =
     edge, integral
         phi(1) and ∫_0^1 phi(tau) dtau for each right-hand side.
     """
+    if not 0.0 <= lam <= LAMBDA_MAX:
+        raise ValueError(f"a/h = {lam!r} is outside the layer solution's range "
+                         f"[0, {LAMBDA_MAX:g}]; beyond it use the tables' power-law tail "
+                         "(flat_punch_factor, profile_factor)")
     edge, integral = _solve_many(np.array([float(lam)]), nu, base, exponents)
     return edge[0], integral[0]
 
@@ -218,7 +223,8 @@ def _solve_many(lams: np.ndarray, nu: float, base: str, exponents: tuple[float, 
         t, wt = 0.5 * (x + 1.0), 0.5 * w
         rhs = np.column_stack([t ** e for e in exponents])
         km = spline(lam * np.abs(t[None, :] - t[:, None])) + spline(lam * (t[None, :] + t[:, None]))
-        phi = np.linalg.solve(np.eye(int(n)) + (lam / np.pi) * km * wt[None, :], rhs)
+        phi = np.linalg.solve(np.eye(int(n)) + (lam / np.pi) * km * wt[None, :],
+                              np.broadcast_to(rhs, (pick.size,) + rhs.shape))
         k1 = spline(lam[:, :, 0] * (1.0 - t)) + spline(lam[:, :, 0] * (1.0 + t))  # (k, n)
         edge[pick] = 1.0 - (lam[:, :, 0] / np.pi) * np.einsum("kn,kne->ke", k1 * wt, phi)
         integral[pick] = np.einsum("n,kne->ke", wt, phi)

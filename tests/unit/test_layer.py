@@ -215,12 +215,33 @@ def test_kernel_transform_equals_the_direct_cosine_sum_and_its_spline():
         np.testing.assert_allclose(fast(q), reference(q), rtol=0, atol=1e-14)
 
 
+def _one_solve(lam: float, nu: float, base: str, exponents) -> tuple[np.ndarray, np.ndarray]:
+    """The Nyström solve of one a/h written out plainly (module docstring of the layer)."""
+    n = layer._nodes(lam)
+    x, w = np.polynomial.legendre.leggauss(n)
+    t, wt = 0.5 * (x + 1.0), 0.5 * w
+    rhs = np.column_stack([t ** e for e in exponents])
+    k = layer.kernel_transform
+    km = k(lam * (t[None, :] - t[:, None]), nu, base) + k(lam * (t[None, :] + t[:, None]), nu,
+                                                          base)
+    phi = np.linalg.solve(np.eye(n) + (lam / np.pi) * km * wt[None, :], rhs)
+    k1 = k(lam * (1.0 - t), nu, base) + k(lam * (1.0 + t), nu, base)
+    return 1.0 - (lam / np.pi) * (k1 * wt) @ phi, wt @ phi
+
+
 def test_stacked_nystrom_solves_equal_one_at_a_time():
-    """The tables' solves, stacked by node count, give each a/h's own solve."""
+    """The tables' solves, stacked by node count, give each a/h's own plain solve; a/h
+    beyond the tabulated range is refused."""
     lams = np.array([0.0, 0.05, 0.9, 1.0, 1.3, 2.0, 4.5, 7.99, 8.0])  # five node counts
-    edge, integral = layer._solve_many(lams, 0.4, "bonded", (0.0, 2.0))
-    for k, lam in enumerate(lams):
-        e1, i1 = layer._solve_many(np.array([lam]), 0.4, "bonded", (0.0, 2.0))
-        np.testing.assert_allclose(edge[k], e1[0], rtol=1e-13)
-        np.testing.assert_allclose(integral[k], i1[0], rtol=1e-13)
-    assert edge[0].tolist() == [1.0, 1.0]  # a/h = 0: the half-space (phi = the right side)
+    for nu, base in ((0.4, "bonded"), (0.3, "free")):
+        edge, integral = layer._solve_many(lams, nu, base, (0.0, 2.0))
+        for k, lam in enumerate(lams):
+            e1, i1 = _one_solve(float(lam), nu, base, (0.0, 2.0))
+            np.testing.assert_allclose(edge[k], e1, rtol=1e-13)
+            np.testing.assert_allclose(integral[k], i1, rtol=1e-13)
+            e2, i2 = layer.solve_layer(float(lam), nu, base, (0.0, 2.0))
+            assert e2.tolist() == edge[k].tolist() and i2.tolist() == integral[k].tolist()
+        assert edge[0].tolist() == [1.0, 1.0]  # a/h = 0: the half-space (phi = the right side)
+    for lam in (-0.1, layer.LAMBDA_MAX + 0.5):
+        with pytest.raises(ValueError, match="outside the layer solution's range"):
+            layer.solve_layer(lam, 0.4, "bonded")
