@@ -126,8 +126,21 @@ def emcee_layer_chains(data: FitData, prior: TracePrior, settings: SamplerSettin
     extra = ([(base_swap_move(like, float(np.median(z))), SWAP_WEIGHT)]
              if "bond" in prior.names else None)
     chains = run_emcee(log_prob, p0, settings, int(sampler_ss.generate_state(1)[0]),
-                       accept=accept, extra_moves=extra)
+                       accept=None if accept is None else _with_real_estar(accept, like),
+                       extra_moves=extra)
     return chains, _modes(post), like, settings
+
+
+def _with_real_estar(accept, like: LayerLikelihood):
+    """The sampler's stop test on the sampled coordinates and the real ln E* as one more
+    column: the first coordinate is the aligned ln E* (module docstring of
+    :mod:`palpbayes.bayes.layer_likelihood`), while the fit's diagnostics read the real E*,
+    which also mixes over the base and the thickness; a test on the aligned one alone could
+    stop the chains where the real one's R-hat is still above its bound."""
+    def test(chain: np.ndarray, log_prob: np.ndarray) -> bool:
+        real = like.log_estar(chain.reshape(-1, chain.shape[-1])).reshape(chain.shape[:-1])
+        return accept(np.concatenate([chain, real[..., None]], axis=-1), log_prob)
+    return test
 
 
 def _h_interval(h: np.ndarray) -> tuple[float, float]:
