@@ -43,21 +43,21 @@ def power_law_soe(alpha: float, dt_min: float, span: float) -> tuple[np.ndarray,
     numerically), with ~10 terms fewer than the rule's own tail (23 for alpha = 0.3 on
     [1 ms, 5 s], where the rule alone took 34).
     """
-    h, u, w = _tail_rule(alpha)
+    h, c, u, w = _tail_rule(alpha)
     y_hi = math.log(math.log(3 / SOE_TOLERANCE) / dt_min)
     n = max(1, math.ceil((y_hi - math.log(TAIL_REACH / span)) / h))
     y = y_hi - h * np.arange(n + 1)  # the trapezoid's nodes, then y_c = y[-1], the tail's top
-    c = h * alpha / gamma(alpha + 1)
     return (np.concatenate([c * np.exp(alpha * y[:-1]), w * math.exp(alpha * y[-1])]),
             np.concatenate([np.exp(y[:-1]), u * math.exp(y[-1])]))
 
 
 @functools.lru_cache(maxsize=128)
-def _tail_rule(alpha: float) -> tuple[float, np.ndarray, np.ndarray]:
-    """(h, u, w): the trapezoid's step h in ln x (:func:`power_law_soe`) and the Gauss rule of
-    its tail below x_c, nodes u = x/x_c and weights w/x_c^alpha (both depend on alpha
-    only).  The tail's nodes u = exp(-h·j) down to 1e-12, then the rest lumped into one
-    node with its zeroth and first moments (error ~(x·t·u)^2 < 1e-22)."""
+def _tail_rule(alpha: float) -> tuple[float, float, np.ndarray, np.ndarray]:
+    """(h, c, u, w): the trapezoid's step h in ln x (:func:`power_law_soe`), its weight
+    factor c = h·alpha/Gamma(alpha + 1) (node y weighs c·exp(alpha·y)), and the Gauss rule of
+    its tail below x_c, nodes u = x/x_c and weights w/x_c^alpha (all depend on alpha only).
+    The tail's nodes u = exp(-h·j) down to 1e-12, then the rest lumped into one node with its
+    zeroth and first moments (error ~(x·t·u)^2 < 1e-22)."""
     eps = SOE_TOLERANCE
     hs = np.linspace(0.3, 1.5, 121)
     h = hs[2 * np.exp(loggamma(alpha + 2j * np.pi / hs).real - loggamma(alpha)) <= eps / 3][-1]
@@ -67,7 +67,7 @@ def _tail_rule(alpha: float) -> tuple[float, np.ndarray, np.ndarray]:
     rest = h * (j[-1] + 1)  # the rest's top, -ln u; its moments sum a geometric series
     s0, s1 = (c * math.exp(-(alpha + k) * rest) / -math.expm1(-(alpha + k) * h) for k in (0, 1))
     nodes, weights = gauss_rule(np.append(u, s1 / s0), np.append(w, s0), TAIL_NODES)
-    return float(h), nodes, weights
+    return float(h), float(c), nodes, weights
 
 
 def gauss_rule(u: np.ndarray, w: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:

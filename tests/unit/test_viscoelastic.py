@@ -295,7 +295,7 @@ def test_the_tails_gauss_rule_keeps_within_its_share_of_the_tolerance(alpha):
     t^(-alpha) (the aliasing has the same share)."""
     from palpbayes.contact import soe
 
-    h, u, w = soe._tail_rule(alpha)
+    h, _, u, w = soe._tail_rule(alpha)
     j = np.arange(int(80 / (alpha * h)))  # the series to exp(-80)
     uu, ww = np.exp(-h * j), h * alpha / gamma(alpha + 1) * np.exp(-alpha * h * j)
     t = np.geomspace(1e-6, soe.TAIL_REACH, 300)
