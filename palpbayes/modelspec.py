@@ -1,6 +1,7 @@
 """The contact model of a fit (:class:`ModelSpec`): tip, Poisson ratio and the specimen's
-layer (thickness and base, each known or to be inferred), with its shape function
-F/E* = s(d) (:mod:`palpbayes.contact`).  :class:`palpbayes.fitdata.FitData` carries one.
+layer (thickness and base, each known or to be inferred) or the specimen as tested (a block of
+known footprint and height: :mod:`palpbayes.twin`), with its shape function F/E* = s(d)
+(:mod:`palpbayes.contact`).  :class:`palpbayes.fitdata.FitData` carries one.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import numpy as np
 
 from .contact import Tip, check_nu, exponent, shape
 from .errors import FitError, InputError
+from .twin import Specimen, twin_shape
 from .units import format_length
 
 __all__ = ["ModelSpec", "BONDINGS"]
@@ -49,6 +51,11 @@ class ModelSpec:
         is known or absent.
     p_bonded
         Prior probability of the bonded base when ``bonding`` is unknown.
+    specimen
+        The block as tested (:class:`~palpbayes.twin.Specimen`: footprint and height); None:
+        a layer of infinite width (or a half-space).  With a specimen the shape function is
+        its finite-element twin's (:func:`palpbayes.twin.twin_shape`), and ``thickness`` is
+        its height.
     """
 
     tip: Tip
@@ -57,9 +64,21 @@ class ModelSpec:
     bonding: str = "unknown"
     thickness_range: tuple[float, float] | None = None
     p_bonded: float = 0.5
+    specimen: Specimen | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "nu", check_nu(self.nu))
+        if self.specimen is not None:
+            if self.thickness_range is not None:
+                raise InputError("a specimen's height is its thickness: give the specimen "
+                                 "(--specimen) or an unknown thickness (--thickness unknown), "
+                                 "not both")
+            h = self.specimen.height
+            if self.thickness is None:
+                object.__setattr__(self, "thickness", h)
+            elif not np.isclose(float(self.thickness), h, rtol=1e-9, atol=0.0):
+                raise InputError(f"specimen thickness {self.thickness!r} m differs from the "
+                                 f"specimen's height {h!r} m: give one of the two")
         if self.bonding not in BONDINGS:
             raise InputError(f"unknown bonding {self.bonding!r}; use one of "
                              f"{', '.join(BONDINGS)}")
@@ -115,12 +134,20 @@ class ModelSpec:
         b = base if base is not None else (self.bonding if self.bonding != "unknown" else None)
         if self.has_layer and (h is None or b is None):
             raise InputError("a concrete variant of a layer model needs its thickness and base")
+        spec = self.specimen
+        if spec is not None and h != spec.height:
+            spec = spec.with_height(h)
         return replace(self, thickness=h, thickness_range=None,
-                       bonding=b if b is not None else self.bonding)
+                       bonding=b if b is not None else self.bonding, specimen=spec)
 
     def half_space(self) -> ModelSpec:
         """The same tip and nu on a half-space (the paper's model)."""
-        return replace(self, thickness=None, thickness_range=None)
+        return replace(self, thickness=None, thickness_range=None, specimen=None)
+
+    def layer_only(self) -> ModelSpec:
+        """The same model with the specimen's footprint dropped: a layer of its height and
+        infinite width (itself when there is no specimen)."""
+        return self if self.specimen is None else replace(self, specimen=None)
 
     def _require_concrete(self, what: str) -> None:
         if not self.is_concrete:
@@ -134,10 +161,13 @@ class ModelSpec:
         return exponent(self.tip) if not self.has_layer else None
 
     def shape(self, depth: np.ndarray) -> np.ndarray:
-        """F/E* [m²] at depth [m] (with the layer's bottom effect when it has one)."""
+        """F/E* [m²] at depth [m] (with the layer's bottom effect when it has one, the
+        specimen twin's law when it has a specimen)."""
         self._require_concrete("single shape function")
         if self.thickness is None:
             return shape(depth, self.tip)
+        if self.specimen is not None:
+            return twin_shape(depth, self.tip, self.specimen, self.nu, self.bases[0])
         return shape(depth, self.tip, thickness_m=self.thickness, nu=self.nu,
                      base=self.bases[0])
 
@@ -149,7 +179,16 @@ class ModelSpec:
         if h is None:
             return shape(depth, self.tip)
         b = base if base is not None else self.base
+        if self.specimen is not None:
+            self._same_height(h)
+            return twin_shape(depth, self.tip, self.specimen, self.nu, b)
         return shape(depth, self.tip, thickness_m=h, nu=self.nu, base=b)
+
+    def _same_height(self, thickness) -> None:
+        h = np.asarray(thickness, dtype=float)
+        if not np.allclose(h, self.specimen.height, rtol=1e-9, atol=0.0):
+            raise FitError("the specimen twin's thickness is the specimen's height; another "
+                           "thickness needs its own twin (ModelSpec.variant)")
 
     def shape_of_draws(self, depth: np.ndarray, thickness=None, bonded=None) -> np.ndarray:
         """F/E* [m²] of posterior draws (rows of ``depth``, shape (D, N)), each with its own
@@ -168,11 +207,17 @@ class ModelSpec:
         else:
             b = np.where(np.asarray(bonded, dtype=float) == 0.0, "free", "bonded")
         out = np.zeros(depth.shape)
+        if self.specimen is not None:
+            self._same_height(h)
         h = np.broadcast_to(h[:, None], depth.shape)
         for base in np.unique(b):
             cells = (depth > 0) & (b == base)[:, None]
-            out[cells] = shape(depth[cells], self.tip, thickness_m=h[cells], nu=self.nu,
-                               base=str(base))
+            if self.specimen is not None:
+                out[cells] = twin_shape(depth[cells], self.tip, self.specimen, self.nu,
+                                        str(base))
+            else:
+                out[cells] = shape(depth[cells], self.tip, thickness_m=h[cells], nu=self.nu,
+                                   base=str(base))
         return out
 
     def shape_derivative(self, depth: np.ndarray) -> np.ndarray:
@@ -188,10 +233,13 @@ class ModelSpec:
         return Estar * (1.0 - self.nu**2)
 
     def describe_layer(self) -> str:
-        """The layer in words: ``half-space``, ``h=20 mm, base unknown``, ..."""
+        """The layer in words: ``half-space``, ``h=20 mm, base unknown``, ``50 × 50 × 20 mm
+        block, free base``, ..."""
         if not self.has_layer:
             return "half-space"
-        if self.thickness is not None:
+        if self.specimen is not None:
+            h = self.specimen.describe()
+        elif self.thickness is not None:
             h = f"h={self.thickness * 1e3:g} mm"
         else:
             lo, hi = self.thickness_range

@@ -36,6 +36,12 @@ from pathlib import Path
 for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 
+# The specimen twin's tables (palpbayes.twin.cache) of this test run in a folder of its own,
+# not the user's ~/.cache: every run starts without them, as CI does (xdist workers inherit the
+# controller's folder).
+os.environ.setdefault("PALPBAYES_CACHE_DIR", os.path.join(
+    __import__("tempfile").gettempdir(), f"palpbayes-test-cache-{os.getpid()}"))
+
 import pytest  # noqa: E402
 from hypothesis import settings  # noqa: E402
 

@@ -12,7 +12,7 @@ import numpy as np
 
 from .registry import ContactLaw, register
 
-__all__ = ["EXPONENT", "LAW", "contact_radius", "prefactor", "shape"]
+__all__ = ["EXPONENT", "LAW", "contact_radius", "prefactor", "profile", "shape"]
 
 EXPONENT = 2.0
 
@@ -41,6 +41,11 @@ def contact_radius(depth: np.ndarray, half_angle: float) -> np.ndarray:
     return 2.0 / np.pi * np.tan(half_angle) * np.clip(np.asarray(depth, dtype=float), 0.0, None)
 
 
+def profile(r: np.ndarray, half_angle: float) -> np.ndarray:
+    """The cone's height above its apex, r·cot(alpha) [m]."""
+    return np.asarray(r, dtype=float) / np.tan(half_angle)
+
+
 #: The cone's entry of the registry (no length scale: ``scaled`` is None).
 LAW = register(ContactLaw(
     kind="cone",
@@ -59,4 +64,5 @@ LAW = register(ContactLaw(
     order=40,
     contact_radius=lambda depth, tip: contact_radius(depth, tip.half_angle),
     profile_exponent=lambda tip: 1.0,
+    profile=lambda r, tip: profile(r, tip.half_angle),
 ))

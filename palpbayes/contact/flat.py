@@ -9,7 +9,7 @@ import numpy as np
 from ..units import format_length
 from .registry import ContactLaw, register, scale_radius
 
-__all__ = ["EXPONENT", "LAW", "prefactor", "shape"]
+__all__ = ["EXPONENT", "LAW", "prefactor", "profile", "shape"]
 
 #: Force exponent m in F = k·d^m.
 EXPONENT = 1.0
@@ -34,6 +34,12 @@ def shape(depth: np.ndarray, radius: float) -> np.ndarray:
     return 2.0 * radius * d
 
 
+def profile(r: np.ndarray, radius: float) -> np.ndarray:
+    """The punch's face: height 0 [m] for r <= a, ``inf`` beyond (no surface there)."""
+    r = np.asarray(r, dtype=float)
+    return np.where(r <= radius * (1.0 + 1e-12), 0.0, np.inf)
+
+
 #: The flat punch's entry of the registry.
 LAW = register(ContactLaw(
     kind="flat",
@@ -55,5 +61,6 @@ LAW = register(ContactLaw(
     # on a layer: Hayes et al. (1972)'s punch, solved for any nu and base (.layer)
     contact_radius=lambda depth, tip: np.full(np.shape(depth), float(tip.radius)),
     profile_exponent=lambda tip: math.inf,
+    profile=lambda r, tip: profile(r, tip.radius),
     default_fit_fraction=0.2,  # the paper's: the start of a flat punch's contact is not linear
 ))

@@ -10,7 +10,7 @@ import numpy as np
 from ..units import format_length
 from .registry import ContactLaw, register, scale_radius
 
-__all__ = ["EXPONENT", "LAW", "contact_radius", "prefactor", "shape"]
+__all__ = ["EXPONENT", "LAW", "contact_radius", "prefactor", "profile", "shape"]
 
 EXPONENT = 1.5
 
@@ -39,6 +39,12 @@ def contact_radius(depth: np.ndarray, radius: float) -> np.ndarray:
     return np.sqrt(radius * np.clip(np.asarray(depth, dtype=float), 0.0, None))
 
 
+def profile(r: np.ndarray, radius: float) -> np.ndarray:
+    """The tip's height above its apex, r²/(2R) [m]."""
+    r = np.asarray(r, dtype=float)
+    return r * r / (2.0 * radius)
+
+
 #: The paraboloid's entry of the registry.
 LAW = register(ContactLaw(
     kind="paraboloid",
@@ -59,4 +65,5 @@ LAW = register(ContactLaw(
     profile_exponent=lambda tip: 2.0,
     max_depth=lambda tip: tip.radius,
     max_depth_name="tip radius",
+    profile=lambda r, tip: profile(r, tip.radius),
 ))

@@ -3,6 +3,8 @@ Reduction (Popov & Hess 2015); the formulas are in :mod:`.mdr`."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from .mdr import contact_radius, power_law_exponent, power_law_prefactor, shape
 from .registry import ContactLaw, Tip, register
 
@@ -32,4 +34,5 @@ LAW = register(ContactLaw(
     scaled=_scaled,
     contact_radius=lambda depth, tip: contact_radius(depth, tip.c, tip.n),
     profile_exponent=lambda tip: float(tip.n),
+    profile=lambda r, tip: tip.c * np.asarray(r, dtype=float) ** tip.n,
 ))

@@ -87,6 +87,11 @@ class ContactLaw:
         ``hertz_approximation(tip) -> Tip``: the power-law tip the paper fitted in its place
         (sphere -> paraboloid of the same radius), fitted beside it and reported as
         ``E_hertz_pa``; None for no such column.
+    profile
+        ``profile(r, tip) -> f`` [m]: the tip's surface height above its apex at radius
+        ``r`` [m] (``inf`` where the tip has no surface: beyond a flat punch's or a sphere's
+        radius), what a finite-element contact solves against (:mod:`palpbayes.twin`);
+        None: the tip cannot be set on a specimen twin.
     """
 
     kind: str
@@ -108,6 +113,7 @@ class ContactLaw:
     max_depth: Callable[[Tip], float] | None = None
     max_depth_name: str = ""
     hertz_approximation: Callable[[Tip], Tip] | None = None
+    profile: Callable[[np.ndarray, Tip], np.ndarray] | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.kind, str) and self.kind == self.kind.strip().lower()

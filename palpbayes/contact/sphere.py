@@ -19,7 +19,7 @@ from ..units import format_length
 from . import paraboloid
 from .registry import ContactLaw, Tip, register, scale_radius
 
-__all__ = ["LAW", "contact_radius", "hertz_difference", "shape", "shape_and_radius"]
+__all__ = ["LAW", "contact_radius", "hertz_difference", "profile", "shape", "shape_and_radius"]
 
 _SERIES_LIMIT = 0.1  # below this u the force bracket is summed as a series (no cancellation)
 _SERIES_TERMS = np.arange(1, 10)
@@ -97,6 +97,15 @@ def shape_and_radius(depth: np.ndarray, radius: float) -> tuple[np.ndarray, np.n
     return radius * radius * _bracket(u, t), u * radius
 
 
+def profile(r: np.ndarray, radius: float) -> np.ndarray:
+    """The sphere's height above its apex, R − sqrt(R² − r²) [m] (written r²/(R + sqrt(R² −
+    r²)), without cancellation); ``inf`` beyond r = R."""
+    r = np.asarray(r, dtype=float)
+    inside = r <= radius
+    root = np.sqrt(np.where(inside, radius * radius - r * r, 0.0))
+    return np.where(inside, r * r / (radius + root), np.inf)
+
+
 def hertz_difference(d_over_r: float) -> float:
     """Relative force of the exact sphere vs Hertz at depth d/R, s_sphere/s_Hertz - 1 [-]
     (negative: less force; -0.030 at d/R = 0.3)."""
@@ -132,4 +141,5 @@ LAW = register(ContactLaw(
     max_depth=lambda tip: tip.radius,
     max_depth_name="tip radius",
     hertz_approximation=lambda tip: Tip("paraboloid", radius=tip.radius),
+    profile=lambda r, tip: profile(r, tip.radius),
 ))

@@ -1,0 +1,86 @@
+"""The twin's tables on disk, under a key of their inputs.
+
+A table costs about a second of finite elements; it is stored as a ``.npz`` file (arrays
+only, read with ``allow_pickle=False``: nothing is unpickled) named by the SHA-256 of its key,
+the key itself stored inside and compared on reading (a file whose key differs, or that cannot
+be read, is rebuilt).  Files are written atomically.
+
+The folder is ``$PALPBAYES_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/palpbayes``, else
+``~/.cache/palpbayes``; ``PALPBAYES_CACHE_DIR=off`` keeps the tables in memory only.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from ..io.atomic import atomic_path
+
+__all__ = ["cache_dir", "load_arrays", "save_arrays", "key_text"]
+
+#: Subfolder of the cache for the twin's tables; its number changes with the solver.
+_SUBDIR = "twin-v1"
+
+
+def cache_dir() -> Path | None:
+    """The folder of the twin's tables, or None when disk caching is off."""
+    env = os.environ.get("PALPBAYES_CACHE_DIR")
+    if env is not None and env.strip().lower() in ("off", "none", "0", ""):
+        return None
+    if env:
+        root = Path(env)
+    else:
+        xdg = os.environ.get("XDG_CACHE_HOME")
+        root = (Path(xdg) if xdg else Path.home() / ".cache") / "palpbayes"
+    return root / _SUBDIR
+
+
+def key_text(key: dict) -> str:
+    """The canonical text of a key (sorted JSON, floats to 12 significant digits)."""
+    def norm(v):
+        if isinstance(v, float):
+            return float(f"{v:.12g}")
+        return v
+    return json.dumps({k: norm(v) for k, v in key.items()}, sort_keys=True)
+
+
+def _file(key: dict) -> Path | None:
+    folder = cache_dir()
+    if folder is None:
+        return None
+    digest = hashlib.sha256(key_text(key).encode()).hexdigest()[:32]
+    return folder / f"{key.get('kind', 'table')}-{digest}.npz"
+
+
+def load_arrays(key: dict) -> dict[str, np.ndarray] | None:
+    """The arrays stored under ``key``, or None (absent, unreadable or another key)."""
+    path = _file(key)
+    if path is None or not path.is_file():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            if str(data["key"]) != key_text(key):
+                return None
+            return {k: data[k] for k in data.files if k != "key"}
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError):
+        return None
+
+
+def save_arrays(key: dict, arrays: dict[str, np.ndarray]) -> Path | None:
+    """Store ``arrays`` under ``key`` (atomic); the path, or None when caching is off or
+    the folder cannot be written (the table is then kept in memory only)."""
+    path = _file(key)
+    if path is None:
+        return None
+    with contextlib.suppress(OSError):
+        with atomic_path(path, suffix=".npz") as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, key=np.array(key_text(key)), **arrays)
+        return path
+    return None

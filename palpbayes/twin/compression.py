@@ -1,0 +1,111 @@
+"""The compression test of the specimen twin: what an Instron reads on this block.
+
+A compression test divides the platen force by the block's area and the crosshead travel by
+its height: E_app = (F/A)/(delta/H).  Between frictionless (lubricated) platens the block is in
+uniaxial stress and E_app = E exactly.  Bonded platens (or enough friction that the faces do
+not slide) hold the faces' lateral expansion: the block bulges at its free side only, and
+E_app > E, by how much depending on nu and the shape factor S = loaded area / free lateral
+area (D/(4H) for a cylinder).  For a thin incompressible layer E_app → 2·S²·E (the "pressure
+solution"; Gent & Lindley 1959 write E·(1 + 2·S²)), for a thin compressible one Chalhoub &
+Kelly (1990)'s E_app = K·[1 − 2·I1(x)/(x·I0(x))], x² = 48·G·S²/K, and as S → ∞ the constrained
+(oedometric) modulus E·(1 − nu)/((1 + nu)(1 − 2·nu)); the twin is checked against each
+(``tests/unit/test_twin.py``).
+
+**Model.**  The half of an axisymmetric cylinder (the cuboid's twin: the cylinder of equal
+area, :class:`~palpbayes.twin.specimen.Specimen`) above its mid-plane (u_z = 0 there, u_r
+free: symmetry), the platen pushing its top face down by a unit strain: u_z prescribed, u_r = 0
+(bonded) or free (lubricated).  The force is the platen's reaction; the mesh is graded towards
+the platen's edge, where the bonded corner's stresses are singular.
+
+References: A. N. Gent, P. B. Lindley, Proc. Inst. Mech. Eng. 173, 111–122 (1959);
+M. S. Chalhoub, J. M. Kelly, J. Eng. Mech. 116, 1755–1770 (1990) (effect of bulk
+compressibility on the stiffness of cylindrical bearings).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+from ..errors import GeometryError
+from .mesh import RESOLUTIONS, Resolution, compression_grid
+
+__all__ = ["PLATENS", "compression_factor", "platen_factor", "oedometric_factor",
+           "pressure_solution_factor"]
+
+#: Platen conditions of a compression test: ``lubricated`` (frictionless: E exactly),
+#: ``bonded`` (the faces cannot slide), ``unknown`` (either: an interval spanning both).
+PLATENS = ("lubricated", "bonded", "unknown")
+
+
+def platen_factor(radius_over_height: float, nu: float, platens: str,
+                  resolution: str | Resolution = "default") -> float:
+    """E_app/E [-] of a cylinder of radius/height ``radius_over_height`` compressed between
+    ``platens`` (``"lubricated"`` or ``"bonded"``) (module docstring).
+
+    Raises
+    ------
+    GeometryError
+        An unknown platen condition or a non-positive aspect ratio.
+    """
+    if platens not in PLATENS[:2]:
+        raise GeometryError(f"platens {platens!r}: the twin computes 'lubricated' or 'bonded' "
+                            "(an unknown condition spans both)")
+    if not (math.isfinite(radius_over_height) and radius_over_height > 0):
+        raise GeometryError(f"radius/height {radius_over_height!r} must be positive")
+    key = resolution if isinstance(resolution, str) else None
+    if key is not None:
+        return _cached(round(float(radius_over_height), 9), round(float(nu), 9), platens, key)
+    return _solve(float(radius_over_height), float(nu), platens, resolution)
+
+
+@functools.lru_cache(maxsize=512)
+def _cached(aspect: float, nu: float, platens: str, resolution: str) -> float:
+    return _solve(aspect, nu, platens, RESOLUTIONS[resolution])
+
+
+def _solve(aspect: float, nu: float, platens: str, res: Resolution) -> float:
+    from .fe import AxisymmetricSolid  # scikit-fem is imported when a twin is first solved
+
+    r_nodes, z_nodes = compression_grid(aspect, 0.5, res)
+    solid = AxisymmetricSolid(r_nodes, z_nodes, nu)
+    platen_z = solid.dofs("z", solid.on_top)
+    fixed = [solid.dofs("r", solid.on_axis), solid.dofs("z", solid.on_bottom), platen_z]
+    if platens == "bonded":
+        fixed.append(solid.dofs("r", solid.on_top))
+    fac = solid.factorize(np.concatenate(fixed))
+    prescribed = np.zeros(fac.fixed.size)
+    prescribed[np.isin(fac.fixed, platen_z)] = -0.5  # unit strain over the half-height 0.5
+    x = fac.solve(np.zeros(solid.size), prescribed)
+    force = -2.0 * math.pi * fac.reaction(x, platen_z).sum()
+    return float(force / (math.pi * aspect * aspect))  # stress over unit strain, E = 1
+
+
+def compression_factor(specimen, nu: float, platens: str,
+                       resolution: str | Resolution = "default") -> float:
+    """E_app/E [-] of the :class:`~palpbayes.twin.specimen.Specimen` between ``platens``
+    (its equal-area cylinder)."""
+    return platen_factor(specimen.radius / specimen.height, nu, platens, resolution)
+
+
+def oedometric_factor(nu: float) -> float:
+    """The constrained modulus over E, (1 − nu)/((1 + nu)(1 − 2·nu)) [-]: a bonded block of
+    infinite shape factor (inf at nu = 0.5)."""
+    return math.inf if nu >= 0.5 else (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu))
+
+
+def pressure_solution_factor(shape_factor: float, nu: float) -> float:
+    """Chalhoub & Kelly (1990)'s thin bonded cylinder, E_app/E [-] (E = 1): K·[1 −
+    2·I1(x)/(x·I0(x))], x² = 48·G·S²/K; 2·S² at nu = 0.5 (the incompressible pressure
+    solution).  Valid for S >> 1."""
+    from scipy.special import ive
+
+    s = float(shape_factor)
+    if nu >= 0.5:
+        return 2.0 * s * s
+    g = 1.0 / (2.0 * (1.0 + nu))
+    k = 1.0 / (3.0 * (1.0 - 2.0 * nu))
+    x = math.sqrt(48.0 * g * s * s / k)
+    return k * (1.0 - 2.0 * ive(1, x) / (x * ive(0, x)))

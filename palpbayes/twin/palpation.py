@@ -1,0 +1,177 @@
+"""A rigid frictionless tip pressed into the twin of a specimen: force against depth.
+
+The specimen is a cylinder of radius ``radius`` and height ``height`` on a rigid base, bonded
+to it (u = 0) or lying on it without friction (u_z = 0); its side is free.  The tip presses the
+top face at its centre, without friction (the surface may slide under it).
+
+**The contact.**  The top face's vertical flexibility at the nodes the tip may reach (up to 1.3
+times the half-space contact radius of the deepest depth asked) is computed once, one back
+substitution per node; at each depth d the nodal forces f >= 0 then solve the linear
+complementarity problem
+
+    w = C·f >= d − g(r),    f >= 0,    f·(w − d + g(r)) = 0,
+
+(w the surface's downward displacement, g the tip's profile, C the flexibility): the
+surface touches the tip where it pushes, and lies below it elsewhere.  It is the quadratic
+programme min ½·f'Cf − f'(d − g) over f >= 0, solved as a non-negative least-squares problem
+(Lawson & Hanson's active set, :func:`scipy.optimize.nnls`) on the Cholesky factor of C; so
+the contact radius is solved, not imposed.  A flat punch is in contact over its face at every
+depth (its pressure is positive everywhere): its face is pushed down by d, and the force is the
+reaction there.
+
+Checked (``tests/unit/test_twin.py``): a paraboloid and a sphere in a deep, wide block against
+Hertz and Sneddon, a flat punch and a paraboloid in a wide layer against
+:mod:`palpbayes.contact.layer`, each within 0.1 %; the contact radius against Hertz's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import nnls
+
+from ..contact import Tip, get_law
+from ..errors import GeometryError
+from .mesh import RESOLUTIONS, Resolution, contact_grid, depth_grid, punch_grid
+
+__all__ = ["PalpationCurve", "solve_palpation", "TWIN_BASES"]
+
+#: Base conditions of the twin: bonded to the plate, or lying on it without friction.
+TWIN_BASES = ("bonded", "free")
+#: Candidate contact nodes reach this many times the deepest half-space contact radius.
+_REACH = 1.3
+
+
+@dataclass(frozen=True)
+class PalpationCurve:
+    """Force per unit effective modulus of a tip in the twin, at each depth.
+
+    Attributes
+    ----------
+    depth
+        Depths [L] (the caller's length unit L).
+    shape
+        F/E* [L²] at each depth (E* = E/(1 − nu²)).
+    contact_radius
+        [L] Radius of the outermost node in contact (the punch's radius for a flat punch).
+    dofs
+        Unknowns of the finite-element model.
+    """
+
+    depth: np.ndarray
+    shape: np.ndarray
+    contact_radius: np.ndarray
+    dofs: int
+
+
+def _solid(radius: float, height: float, nu: float, r_nodes: np.ndarray, first: float,
+           res: Resolution):
+    from .fe import AxisymmetricSolid  # scikit-fem is imported when a twin is first solved
+
+    return AxisymmetricSolid(r_nodes, depth_grid(height, first, res), nu)
+
+
+def _fixed(solid, base: str) -> np.ndarray:
+    if base not in TWIN_BASES:
+        raise GeometryError(f"unknown base {base!r}; use one of {', '.join(TWIN_BASES)}")
+    fixed = [solid.dofs("r", solid.on_axis), solid.dofs("z", solid.on_bottom)]
+    if base == "bonded":
+        fixed.append(solid.dofs("r", solid.on_bottom))
+    return np.concatenate(fixed)
+
+
+def solve_palpation(radius: float, height: float, tip: Tip, nu: float, base: str,
+                    depths: np.ndarray, resolution: str | Resolution = "default"
+                    ) -> PalpationCurve:
+    """F/E* of ``tip`` pressed ``depths`` into the twin (module docstring).
+
+    Parameters
+    ----------
+    radius, height
+        The cylinder's radius and height [L] (any length unit L, the tip's too).
+    tip
+        A tip whose law has a ``profile`` (every registered kind).
+    nu
+        Poisson ratio [-], 0 <= nu <= 0.5.
+    base
+        ``"bonded"`` or ``"free"``.
+    depths
+        Depths [L], positive; the deepest sets the mesh.
+    resolution
+        A name of :data:`~palpbayes.twin.mesh.RESOLUTIONS` or a
+        :class:`~palpbayes.twin.mesh.Resolution`.
+
+    Raises
+    ------
+    GeometryError
+        A tip without a profile, a contact wider than the specimen, or a depth beyond the
+        tip's law.
+    """
+    res = RESOLUTIONS[resolution] if isinstance(resolution, str) else resolution
+    law = get_law(tip)
+    if law.profile is None or law.profile_exponent is None:
+        raise GeometryError(f"tip '{tip.kind}' has no profile: it cannot be pressed into the "
+                            "specimen twin")
+    depths = np.asarray(depths, dtype=float)
+    if not (depths.size and np.all(np.isfinite(depths)) and np.all(depths > 0)):
+        raise GeometryError("twin depths must be positive and finite")
+    if math.isinf(law.profile_exponent(tip)):
+        return _punch(radius, height, tip, nu, base, depths, res)
+    a_top = float(law.contact_radius(np.array([depths.max()]), tip)[0])
+    reach = _REACH * a_top
+    while True:
+        if reach >= radius:
+            raise GeometryError(
+                f"a contact radius of {a_top:.4g} (half-space, at depth {depths.max():.4g}) "
+                f"does not fit well inside the specimen's radius {radius:.4g}: the twin needs "
+                "the contact well inside the top face (a shallower depth, a wider specimen)")
+        curve = _curved(radius, height, tip, nu, base, depths, res, reach)
+        if curve is not None:
+            return curve
+        reach *= _REACH  # the contact reached the last candidate: a wider zone (pile-up)
+
+
+def _curved(radius: float, height: float, tip: Tip, nu: float, base: str, depths: np.ndarray,
+            res: Resolution, reach: float) -> PalpationCurve | None:
+    """The complementarity solution with candidate nodes up to ``reach``; None when the
+    contact reaches the last of them."""
+    law = get_law(tip)
+    a_mesh = reach / _REACH
+    solid = _solid(radius, height, nu, contact_grid(a_mesh, radius, res), res.first * a_mesh,
+                   res)
+    fac = solid.factorize(_fixed(solid, base))
+    cand = solid.dofs("z", lambda r, z: solid.on_top(r, z) & (r <= reach * (1 + 1e-9)))
+    r_c = solid.location(cand)[0]
+    g = np.asarray(law.profile(r_c, tip), dtype=float)
+    keep = np.isfinite(g)
+    cand, r_c, g = cand[keep], r_c[keep], g[keep]
+    chol = np.linalg.cholesky(fac.columns(cand))
+    shape = np.empty(depths.size)
+    a = np.empty(depths.size)
+    for i, d in enumerate(depths):
+        f, _ = nnls(chol.T, np.linalg.solve(chol, d - g), maxiter=50 * cand.size)
+        touching = np.flatnonzero(f > 0)
+        if touching.size and touching[-1] >= cand.size - 2:
+            return None
+        shape[i] = 2.0 * math.pi * f.sum() * (1.0 - nu * nu)
+        a[i] = r_c[touching[-1]] if touching.size else 0.0
+    return PalpationCurve(depths, shape, a, solid.size)
+
+
+def _punch(radius: float, height: float, tip: Tip, nu: float, base: str, depths: np.ndarray,
+           res: Resolution) -> PalpationCurve:
+    a = float(tip.radius)
+    if a >= radius:
+        raise GeometryError(f"a flat punch of radius {a:.4g} does not fit on a specimen of "
+                            f"radius {radius:.4g}")
+    solid = _solid(radius, height, nu, punch_grid(a, radius, res), res.punch_first * a, res)
+    face = solid.dofs("z", lambda r, z: solid.on_top(r, z) & (r <= a * (1 + 1e-9)))
+    support = _fixed(solid, base)
+    fac = solid.factorize(np.r_[support, face])
+    prescribed = np.zeros(fac.fixed.size)
+    prescribed[np.isin(fac.fixed, face)] = -1.0  # the face pushed down by a unit depth
+    x = fac.solve(np.zeros(solid.size), prescribed)
+    s1 = -2.0 * math.pi * fac.reaction(x, face).sum() * (1.0 - nu * nu)
+    return PalpationCurve(depths, s1 * depths, np.full(depths.size, a), solid.size)

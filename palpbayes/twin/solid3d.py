@@ -1,0 +1,737 @@
+"""Three-dimensional linear elasticity of a cuboid specimen: the yardstick of the twin.
+
+The specimen twin (:mod:`.palpation`, :mod:`.compression`) models a block L × W × H as the
+cylinder of equal footprint area, which is axisymmetric and cheap.  This module solves the
+block itself, in 3-D, so that the error of that equivalence can be measured
+(``benchmarks/bench_twin_3d.py``, ``tests/statistical/test_twin_3d.py``).  It is a reference,
+not part of the fits: one solve takes seconds to minutes where the axisymmetric twin takes a
+fraction of a second.
+
+**Model.**  Linear elasticity with E = 1 (forces scale with E), pure displacement
+formulation on triquadratic 27-node hexahedra (:class:`skfem.ElementHex2`, isoparametric on a
+:class:`skfem.MeshHex2`, so that circles are curved edges); the stiffness is assembled by
+scikit-fem from the gradient products ∫ ∂_k φ_a ∂_l φ_b (one scalar
+:class:`~skfem.BilinearForm` per pair k <= l), K_kl = lambda·D_kl + mu·D_lk + mu·δ_kl·Σ_m D_mm,
+which is :func:`skfem.models.elasticity.linear_elasticity` at a tenth of its assembly time.
+Without a pressure unknown the quadratic elements lock as nu → 0.5: the module accepts
+nu <= 0.45 only (the axisymmetric twin's mixed P2/P1 elements reach 0.5).
+
+**Palpation** (:func:`palpation_force_3d`, :class:`Palpation3D`).  A quarter of the block,
+x in [0, L/2], y in [0, W/2], z in [0, H] (u_x = 0 on x = 0, u_y = 0 on y = 0: symmetry), the
+tip on the axis x = y = 0 of the top face z = H, the base z = 0 bonded (u = 0) or free
+(u_z = 0).  The footprint is an O-grid: a core block around the axis, then rings on exact
+circles out to the contact zone's edge, then rings blending from the circles into the
+rectangle's edges, extruded over a grid graded towards the top face.  A flat punch's grid is
+graded towards its edge r = a from both sides (the edge is singular), with the circle r = a a
+mesh line.  A curved tip's contact is solved as in :mod:`.palpation`: the top face's
+flexibility at the candidate nodes (every top-face node up to 1.3 contact radii) gives the
+linear complementarity problem of a frictionless contact, solved by
+:func:`scipy.optimize.nnls`; the flexibility is the inverse of the Schur complement of the
+candidates, read off the trailing block of the LU factors with the candidates ordered last
+(one factorization, no back substitution).  A flat punch pushes the face r <= a down
+(prescribed u_z); the force is the reaction there.  The force of the whole block is four times
+the quarter's.
+
+**Compression** (:func:`compression_factor_3d`).  An eighth of the block, the mid-plane
+z = 0 held (u_z = 0), the platen pushing the face z = H/2 down by a unit strain, bonded
+(u_x = u_y = 0 there too) or lubricated (free); E_app = (F/A)/(delta/H).  The tensor grid is
+graded towards the platen's edges, where the bonded corner is singular.  Lubricated platens
+give uniaxial stress, which the quadratic elements hold exactly: E_app/E = 1 to round-off.
+
+**Solver.**  SuperLU (:func:`scipy.sparse.linalg.splu`) in natural order on the matrix
+permuted by a nested dissection computed here (recursive bisection of the elements at their
+median centroid, the separator being the nodes shared by both halves), without pivoting (the
+matrix is symmetric positive definite once supported).  SuperLU's own orderings fill these 3-D
+quadratic meshes three times as much and factorize ten times as slowly.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from scipy.optimize import nnls
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+from skfem import Basis, BilinearForm, ElementHex2, MeshHex, MeshHex2, asm
+from skfem.models.elasticity import lame_parameters
+
+from ..contact import Tip, get_law
+from ..errors import GeometryError
+from .mesh import graded
+
+__all__ = ["Resolution3D", "RESOLUTIONS_3D", "MAX_NU_3D", "Solid3D", "Palpation3D",
+           "palpation_force_3d", "compression_factor_3d", "footprint_mesh",
+           "compression_mesh"]
+
+#: Largest Poisson ratio of the pure displacement formulation (locking beyond).
+MAX_NU_3D = 0.45
+#: Candidate contact nodes reach this many times the mesh's contact radius.
+_REACH = 1.3
+_BASES = ("bonded", "free")
+
+
+@dataclass(frozen=True)
+class Resolution3D:
+    """How fine a 3-D mesh is.
+
+    Parameters
+    ----------
+    per_radius
+        Rings per contact radius in a curved tip's contact zone.
+    angular
+        Cells per 45° around the axis.
+    core
+        Radius of the core block around the axis, as a fraction of the contact radius (a
+        curved tip's) or of the punch's radius (half of it).
+    outer
+        Growth of a ring to the next beyond the contact zone.
+    top
+        First cell under the top face, as a fraction of the contact radius (curved tips).
+    vertical
+        Growth of a cell to the next with depth.
+    punch_first
+        Smallest cell at a flat punch's edge (radially and under the face), as a fraction
+        of its radius.
+    punch_growth
+        Growth of the cells away from the punch's edge.
+    platen_first
+        Compression: smallest cell at the platen's edges, as a fraction of the height.
+    platen_growth
+        Compression: growth of the cells away from the platen's edges.
+    """
+
+    per_radius: float = 8.0
+    angular: int = 6
+    core: float = 0.4
+    outer: float = 1.45
+    top: float = 0.1
+    vertical: float = 1.35
+    punch_first: float = 0.01
+    punch_growth: float = 1.45
+    platen_first: float = 0.01
+    platen_growth: float = 1.4
+
+
+#: Named resolutions (``bench_twin_3d.py`` measures their cost and accuracy).
+RESOLUTIONS_3D = {
+    "coarse": Resolution3D(per_radius=5.0, angular=4, outer=1.6, top=0.15, vertical=1.5,
+                           punch_first=0.02, punch_growth=1.6, platen_first=0.03,
+                           platen_growth=1.6),
+    "default": Resolution3D(),
+    "fine": Resolution3D(per_radius=11.0, angular=8, outer=1.35, top=0.07, vertical=1.25,
+                         punch_first=0.005, punch_growth=1.35, platen_first=0.004,
+                         platen_growth=1.3),
+}
+
+
+def _resolution(resolution: str | Resolution3D) -> Resolution3D:
+    if isinstance(resolution, Resolution3D):
+        return resolution
+    try:
+        return RESOLUTIONS_3D[resolution]
+    except KeyError:
+        raise GeometryError(f"unknown 3-D resolution {resolution!r}; use one of "
+                            f"{', '.join(RESOLUTIONS_3D)} or a Resolution3D") from None
+
+
+def _check(nu: float, *sizes: float) -> None:
+    if not 0.0 <= nu <= MAX_NU_3D:
+        raise GeometryError(f"Poisson ratio {nu!r}: the 3-D model (pure displacement "
+                            f"formulation) takes 0 <= nu <= {MAX_NU_3D}")
+    if not all(math.isfinite(s) and s > 0 for s in sizes):
+        raise GeometryError(f"block sizes {sizes} must be positive and finite")
+
+
+# ---------------------------------------------------------------------------------------------
+# meshes
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return u[0] * v[1] - u[1] * v[0]
+
+
+class _Footprint:
+    """The quarter footprint's O-grid (module docstring): a continuous map of each block's
+    logical coordinates, so that the quadratic nodes of every cell lie on the same curves."""
+
+    def __init__(self, half_length: float, half_width: float, circles: np.ndarray,
+                 outer: np.ndarray, angular: int) -> None:
+        self.x_max, self.y_max = float(half_length), float(half_width)
+        self.circles = np.asarray(circles, dtype=float)  # r_0 = core radius b < ... < R_c
+        self.outer = np.asarray(outer, dtype=float)  # fractions (0, 1] from R_c to the edge
+        b = self.circles[0]
+        self.theta_c = math.atan2(self.y_max, self.x_max)
+        self.n_a = max(2, round(angular * self.theta_c / (math.pi / 4)))
+        self.n_b = max(2, round(angular * (math.pi / 2 - self.theta_c) / (math.pi / 4)))
+        self.p1 = np.array([b, 0.0])
+        self.p2 = np.array([0.0, b])
+        self.pc = 0.8 * math.sqrt(2.0) * b * np.array([math.cos(self.theta_c),
+                                                       math.sin(self.theta_c)])
+        # parameters of the inner edges' nodes (rays at uniform angles)
+        th = np.linspace(0.0, self.theta_c, self.n_a + 1)
+        u = np.array([np.cos(th), np.sin(th)])
+        self.eta = -_cross(u, self.p1[:, None]) / _cross(u, (self.pc - self.p1)[:, None])
+        th = np.linspace(self.theta_c, math.pi / 2, self.n_b + 1)
+        u = np.array([np.cos(th), np.sin(th)])
+        self.zeta = -_cross(u, self.pc[:, None]) / _cross(u, (self.p2 - self.pc)[:, None])
+        self.eta[[0, -1]] = 0.0, 1.0
+        self.zeta[[0, -1]] = 0.0, 1.0
+        self.blend = 2.0 * b  # circles are exact from here on
+        self.n_levels = self.circles.size + self.outer.size
+
+    def _levels(self, q: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """Points at the (fractional) radial level ``s`` on the rays through the inner-edge
+        points ``q`` (2, n)."""
+        rho_in = np.hypot(q[0], q[1])
+        theta = np.arctan2(q[1], q[0])
+        b, rc = self.circles[0], self.circles[-1]
+        with np.errstate(divide="ignore"):
+            rho_out = np.minimum(self.x_max / np.cos(theta), self.y_max / np.sin(theta))
+        w = np.clip(1.0 - (self.circles - b) / (self.blend - b), 0.0, 1.0)
+        inner = self.circles[:, None] + (rho_in - b)[None, :] * w[:, None]
+        inner[0] = rho_in
+        outer = rc + self.outer[:, None] * (rho_out - rc)[None, :]
+        levels = np.vstack([inner, outer])  # (n_levels, n)
+        lo = np.clip(np.floor(s).astype(int), 0, self.n_levels - 2)
+        f = s - lo
+        cols = np.arange(s.size)
+        rho = (1.0 - f) * levels[lo, cols] + f * levels[lo + 1, cols]
+        return rho * np.array([np.cos(theta), np.sin(theta)])
+
+    @staticmethod
+    def _param(j: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        return np.interp(j, np.arange(nodes.size, dtype=float), nodes)
+
+    def map_a(self, lp: np.ndarray) -> np.ndarray:
+        eta = self._param(lp[1], self.eta)
+        q = self.p1[:, None] + eta[None, :] * (self.pc - self.p1)[:, None]
+        return self._levels(q, lp[0])
+
+    def map_b(self, lp: np.ndarray) -> np.ndarray:
+        zeta = self._param(lp[1], self.zeta)
+        q = self.pc[:, None] + zeta[None, :] * (self.p2 - self.pc)[:, None]
+        return self._levels(q, lp[0])
+
+    def map_core(self, lp: np.ndarray) -> np.ndarray:
+        xi = self._param(lp[0], 1.0 - self.zeta[::-1])
+        eta = self._param(lp[1], self.eta)
+        return (np.outer(self.p1, xi * (1 - eta)) + np.outer(self.pc, xi * eta)
+                + np.outer(self.p2, (1 - xi) * eta))
+
+    def blocks(self) -> list[tuple[np.ndarray, np.ndarray, Callable]]:
+        """(logical x nodes, logical y nodes, map) of the core and the two ring blocks."""
+        levels = np.arange(self.n_levels, dtype=float)
+        return [(np.arange(self.n_b + 1.0), np.arange(self.n_a + 1.0), self.map_core),
+                (levels, np.arange(self.n_a + 1.0), self.map_a),
+                (levels, np.arange(self.n_b + 1.0), self.map_b)]
+
+
+def _merge_points(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """(index of one representative, label) of every cluster of ``points`` (d, n) closer
+    than ``tol``."""
+    pairs = cKDTree(points.T).query_pairs(tol, output_type="ndarray")
+    n = points.shape[1]
+    graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    first = np.full(label.max() + 1, n)
+    np.minimum.at(first, label, np.arange(n))
+    return first, label
+
+
+def footprint_mesh(half_length: float, half_width: float, circles: np.ndarray,
+                   outer: np.ndarray, z_nodes: np.ndarray, angular: int) -> MeshHex2:
+    """The quarter block [0, ``half_length``] × [0, ``half_width``] × [z_0, z_n] [L] as an
+    O-grid (module docstring) with quadratic geometry.
+
+    Parameters
+    ----------
+    half_length, half_width
+        Half the block's footprint [L] (any length unit L).
+    circles
+        Radii [L] of the rings, increasing: the first is the core block's radius, the last
+        (below both half sizes) the edge of the zone of exact circles.
+    outer
+        Fractions (0, 1], increasing to 1, of the way from the last circle to the block's
+        edge at which the outer rings lie.
+    z_nodes
+        Increasing heights [L] of the layers.
+    angular
+        Cells per 45° around the axis.
+    """
+    fp = _Footprint(half_length, half_width, circles, outer, angular)
+    z_nodes = np.asarray(z_nodes, dtype=float)
+    scale = max(half_length, half_width, z_nodes[-1] - z_nodes[0])
+    verts, ts, straight, exact = [], [], [], []
+    offset = 0
+    for lx, ly, fmap in fp.blocks():
+        logical = MeshHex.init_tensor(lx, ly, z_nodes)
+        p = logical.p.copy()
+        p[:2] = fmap(p[:2])
+        phys = MeshHex(p, logical.t)
+        q = MeshHex2.from_mesh(logical).doflocs.copy()
+        q[:2] = fmap(q[:2])
+        verts.append(p)
+        ts.append(logical.t + offset)
+        offset += p.shape[1]
+        straight.append(MeshHex2.from_mesh(phys).doflocs)
+        exact.append(q)
+    first, label = _merge_points(np.hstack(verts), 1e-9 * scale)
+    merged = MeshHex(np.hstack(verts)[:, first], label[np.hstack(ts)])
+    quad = MeshHex2.from_mesh(merged)
+    dist, idx = cKDTree(np.hstack(straight).T).query(quad.doflocs.T)
+    if dist.max() > 1e-9 * scale:
+        raise RuntimeError("footprint mesh: quadratic nodes do not match their blocks'")
+    return MeshHex2(np.hstack(exact)[:, idx], quad.t)
+
+
+def compression_mesh(half_length: float, half_width: float, half_height: float,
+                     res: Resolution3D) -> MeshHex:
+    """The eighth block [0, ``half_length``] × [0, ``half_width``] × [0, ``half_height``]
+    [L], graded towards the platen's edges x = half_length, y = half_width, z = half_height."""
+    first = res.platen_first * 2.0 * half_height
+
+    def towards_end(stop: float) -> np.ndarray:
+        nodes = stop - graded(0.0, stop, first, res.platen_growth)[::-1]
+        nodes[0] = 0.0
+        return nodes
+
+    return MeshHex.init_tensor(towards_end(half_length), towards_end(half_width),
+                               towards_end(half_height))
+
+
+def _towards_top(height: float, first: float, growth: float) -> np.ndarray:
+    z = height - graded(0.0, height, first, growth)[::-1]
+    z[0] = 0.0
+    return z
+
+
+# ---------------------------------------------------------------------------------------------
+# the solid
+
+
+def _gradient_product(k: int, l_: int) -> BilinearForm:
+    @BilinearForm
+    def form(u, v, w):
+        return u.grad[l_] * v.grad[k]
+    return form
+
+
+def _nested_dissection(element_nodes: np.ndarray, centroids: np.ndarray, n_nodes: int,
+                       leaf: int = 48) -> np.ndarray:
+    """A nested-dissection order of the nodes: the elements split at the median centroid
+    along their longest extent, the nodes the halves share (a separator) numbered after
+    both halves, recursively."""
+    in_l = np.zeros(n_nodes, dtype=bool)
+    in_r = np.zeros(n_nodes, dtype=bool)
+
+    def split(elements: np.ndarray, nodes: np.ndarray) -> list:
+        if nodes.size <= leaf or elements.size < 2:
+            return [nodes]
+        c = centroids[:, elements]
+        axis = int(np.argmax(np.ptp(c, axis=1)))
+        key = c[axis]
+        left = key < np.median(key)
+        if left.all() or not left.any():
+            left = key <= np.median(key)
+            if left.all() or not left.any():
+                return [nodes]
+        el, er = elements[left], elements[~left]
+        in_l[element_nodes[:, el].ravel()] = True
+        in_r[element_nodes[:, er].ravel()] = True
+        sep = nodes[in_l[nodes] & in_r[nodes]]
+        n_left = nodes[in_l[nodes] & ~in_r[nodes]]
+        n_right = nodes[in_r[nodes] & ~in_l[nodes]]
+        in_l[element_nodes[:, el].ravel()] = False
+        in_r[element_nodes[:, er].ravel()] = False
+        return [(el, n_left), (er, n_right), sep]
+
+    # iterative post-order: halves first, then their separator
+    stack: list = [(np.arange(element_nodes.shape[1]), np.unique(element_nodes))]
+    pending: list = []
+    while stack:
+        item = stack.pop()
+        if isinstance(item, np.ndarray):
+            pending.append(item)
+            continue
+        parts = split(*item)
+        if len(parts) == 1:
+            pending.append(parts[0])
+        else:
+            stack.extend([parts[2], parts[1], parts[0]])  # left popped first, separator last
+    return np.concatenate(pending)
+
+
+@dataclass
+class Factorized3D:
+    """The solid's matrix with some degrees of freedom prescribed, factorized once.
+
+    Attributes
+    ----------
+    unknowns
+        Global indices of the unknown degrees of freedom, in the factor's order (the ones
+        asked ``last`` at the end).
+    fixed
+        Global indices of the prescribed ones.
+    seconds
+        Wall time of the factorization [s].
+    """
+
+    matrix: sp.csr_matrix
+    unknowns: np.ndarray
+    fixed: np.ndarray
+    n_last: int
+    lu: spla.SuperLU
+    seconds: float
+
+    def solve(self, prescribed: np.ndarray | None = None,
+              load: np.ndarray | None = None) -> np.ndarray:
+        """Every degree of freedom [-] for the ``prescribed`` values of the fixed ones
+        (default 0) and nodal ``load`` (global length, default 0)."""
+        n = self.matrix.shape[0]
+        x = np.zeros(n)
+        rhs = np.zeros(self.unknowns.size) if load is None else np.asarray(load)[self.unknowns]
+        if prescribed is not None:
+            x[self.fixed] = prescribed
+            rhs = rhs - self.matrix[self.unknowns][:, self.fixed] @ x[self.fixed]
+        x[self.unknowns] = self.lu.solve(rhs)
+        return x
+
+    def reaction(self, x: np.ndarray, dofs: np.ndarray) -> np.ndarray:
+        """Nodal forces [-] the supports exert at ``dofs`` for the solution ``x``."""
+        return self.matrix[dofs] @ x
+
+    def flexibility(self) -> np.ndarray:
+        """Flexibility matrix [-] of the ``last`` degrees of freedom (the response of each to
+        a unit load at each), the inverse of their Schur complement: the trailing block of
+        the LU factors (by back substitutions when SuperLU moved them)."""
+        n, k = self.unknowns.size, self.n_last
+        pr, pc = self.lu.perm_r[n - k:], self.lu.perm_c[n - k:]
+        if pr.min() >= n - k and pc.min() >= n - k:
+            low = self.lu.L[n - k:, n - k:].toarray()
+            up = self.lu.U[n - k:, n - k:].toarray()
+            schur = (low @ up)[np.ix_(pr - (n - k), pc - (n - k))]
+            flex = np.linalg.inv(0.5 * (schur + schur.T))
+        else:  # pragma: no cover - SuperLU keeps a trailing clique last in natural order
+            rhs = np.zeros((n, k))
+            rhs[np.arange(n - k, n), np.arange(k)] = 1.0
+            flex = self.lu.solve(rhs)[n - k:]
+        return 0.5 * (flex + flex.T)
+
+
+class Solid3D:
+    """A linear-elastic body (E = 1, Poisson ratio ``nu``) meshed by ``mesh`` (hexahedra),
+    on triquadratic elements.
+
+    Degrees of freedom are numbered component-major: u_k at node a is ``k·N + a`` (k = 0, 1,
+    2 for x, y, z; N nodes).
+
+    Parameters
+    ----------
+    mesh
+        A :class:`skfem.MeshHex` or :class:`skfem.MeshHex2` [L] (any length unit L).
+    nu
+        Poisson ratio [-], 0 <= nu <= 0.45.
+    """
+
+    def __init__(self, mesh: MeshHex, nu: float) -> None:
+        _check(nu, 1.0)
+        self.nu = float(nu)
+        self.mesh = mesh
+        self.basis = Basis(mesh, ElementHex2(), intorder=4)
+        det = mesh._mapping().detDF(self.basis.X)  # skfem's hexahedra: all of one sign
+        if not (np.all(det > 0) or np.all(det < 0)):
+            raise RuntimeError("3-D mesh has inverted cells")
+        lam, mu = lame_parameters(1.0, nu)
+        d = {(k, m): asm(_gradient_product(k, m), self.basis).tocsr()
+             for k in range(3) for m in range(k, 3)}
+
+        def block(k: int, m: int) -> sp.csr_matrix:
+            return d[(k, m)] if k <= m else d[(m, k)].T.tocsr()
+
+        trace = d[(0, 0)] + d[(1, 1)] + d[(2, 2)]
+        self.matrix = sp.bmat([[lam * block(k, m) + mu * block(m, k)
+                                + (mu * trace if k == m else 0.0 * trace)
+                                for m in range(3)] for k in range(3)], format="csr")
+        self.n_nodes = self.basis.N
+        self.locs = self.basis.doflocs
+        self._order: np.ndarray | None = None
+
+    @property
+    def size(self) -> int:
+        """Number of unknowns (three displacements per node)."""
+        return 3 * self.n_nodes
+
+    def dofs(self, component: int, where: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+        """Global indices of displacement ``component`` (0, 1, 2: x, y, z) at the nodes whose
+        location (3, n) satisfies ``where``."""
+        return component * self.n_nodes + np.flatnonzero(where(self.locs))
+
+    def factorize(self, fixed: np.ndarray, last: np.ndarray | None = None) -> Factorized3D:
+        """:class:`Factorized3D` with the degrees of freedom ``fixed`` prescribed and ``last``
+        (unknown) numbered last, for their :meth:`Factorized3D.flexibility`."""
+        t0 = time.perf_counter()
+        if self._order is None:
+            centroids = self.mesh.p[:, self.mesh.t].mean(axis=1)
+            self._order = _nested_dissection(self.basis.element_dofs, centroids, self.n_nodes)
+        order = (np.arange(3)[None, :] * self.n_nodes + self._order[:, None]).ravel()
+        fixed = np.unique(np.asarray(fixed, dtype=np.intp))
+        last = np.zeros(0, np.intp) if last is None else np.asarray(last, dtype=np.intp)
+        if np.intersect1d(fixed, last).size:
+            raise ValueError("a degree of freedom cannot be both fixed and last")
+        drop = np.zeros(self.size, dtype=bool)
+        drop[fixed] = True
+        drop[last] = True
+        unknowns = np.r_[order[~drop[order]], last]
+        a = self.matrix[unknowns][:, unknowns].tocsc()
+        lu = spla.splu(a, permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                       options={"SymmetricMode": True})
+        return Factorized3D(self.matrix, unknowns, fixed, last.size, lu,
+                            time.perf_counter() - t0)
+
+
+# ---------------------------------------------------------------------------------------------
+# palpation
+
+
+def _profile_law(tip: Tip):
+    law = get_law(tip)
+    if law.profile is None or law.profile_exponent is None:
+        raise GeometryError(f"tip '{tip.kind}' has no profile: it cannot be pressed into the "
+                            "3-D block")
+    return law
+
+
+class Palpation3D:
+    """A quarter block meshed and factorized once for a tip pressed at the centre of its top
+    face: every curved tip and depth whose contact stays inside the mesh's contact zone, or a
+    flat punch of the mesh's radius at any depth.
+
+    Parameters
+    ----------
+    length, width, height
+        The block [L] (any length unit L, the tip's too).
+    nu
+        Poisson ratio [-], 0 <= nu <= 0.45.
+    base
+        ``"bonded"`` (u = 0 at z = 0) or ``"free"`` (u_z = 0 only).
+    contact_radius
+        [L] The largest contact radius the mesh is made for (a curved tip: the candidate
+        contact nodes reach 1.3 times it), or the punch's radius (``punch=True``).
+    punch
+        Mesh for a flat punch of radius ``contact_radius`` (graded towards its edge).
+    resolution
+        A name of :data:`RESOLUTIONS_3D` or a :class:`Resolution3D`.
+
+    Attributes
+    ----------
+    size
+        Number of unknowns.
+    seconds
+        Wall time of the set-up (mesh, assembly, factorization, flexibility) [s].
+    """
+
+    def __init__(self, length: float, width: float, height: float, nu: float, base: str,
+                 contact_radius: float, punch: bool = False,
+                 resolution: str | Resolution3D = "default") -> None:
+        t0 = time.perf_counter()
+        _check(nu, length, width, height, contact_radius)
+        if base not in _BASES:
+            raise GeometryError(f"unknown base {base!r}; use one of {', '.join(_BASES)}")
+        res = _resolution(resolution)
+        self.nu, self.base, self.punch = float(nu), base, bool(punch)
+        self.length, self.width, self.height = float(length), float(width), float(height)
+        a = float(contact_radius)
+        half = 0.5 * min(length, width)
+        if punch:
+            b = 0.5 * a
+            first = res.punch_first * a
+            inner = a - graded(0.0, a - b, first, res.punch_growth)[::-1]
+            zone = min(_REACH * a, a + 0.5 * (half - a))
+            ring = a + graded(0.0, zone - a, first, res.punch_growth)
+            circles = np.unique(np.r_[b, inner, ring])
+            z_first = first
+        else:
+            b = res.core * a
+            reach = _REACH * a
+            n = max(2, math.ceil((reach - b) / a * res.per_radius))
+            circles = np.linspace(b, reach, n + 1)
+            z_first = res.top * a
+        if circles[-1] >= 0.9 * half:
+            raise GeometryError(f"a contact zone of radius {circles[-1]:.4g} does not fit well "
+                                f"inside the block's half width {half:.4g}: the 3-D model "
+                                "needs the contact well inside the top face")
+        self.zone = float(circles[-1])
+        step = circles[-1] - circles[-2]
+        outer = graded(circles[-1], half, step * res.outer, res.outer)
+        outer = (outer[1:] - circles[-1]) / (half - circles[-1])
+        z_nodes = _towards_top(height, z_first, res.punch_growth if punch else res.vertical)
+        mesh = footprint_mesh(0.5 * length, 0.5 * width, circles, outer, z_nodes, res.angular)
+        self.solid = solid = Solid3D(mesh, nu)
+        tol = 1e-9 * max(length, width, height)
+        x, y, z = solid.locs
+        top = np.abs(z - height) <= tol
+        fixed = [solid.dofs(0, lambda p: p[0] <= tol), solid.dofs(1, lambda p: p[1] <= tol),
+                 solid.dofs(2, lambda p: p[2] <= tol)]
+        if base == "bonded":
+            fixed += [solid.dofs(k, lambda p: p[2] <= tol) for k in (0, 1)]
+        support = np.unique(np.concatenate(fixed))
+        r = np.hypot(x, y)
+        if punch:
+            self.face = 2 * solid.n_nodes + np.flatnonzero(top & (r <= a * (1 + 1e-9)))
+            self.radius = a
+            fac = solid.factorize(np.r_[support, self.face])
+            prescribed = np.zeros(fac.fixed.size)
+            prescribed[np.isin(fac.fixed, self.face)] = -1.0
+            u = fac.solve(prescribed)
+            self._per_depth = -4.0 * fac.reaction(u, self.face).sum() * (1.0 - nu * nu)
+        else:
+            nodes = np.flatnonzero(top & (r <= self.zone * (1 + 1e-9)))
+            nodes = nodes[np.argsort(r[nodes], kind="stable")]
+            self.candidates = 2 * solid.n_nodes + nodes
+            self.r_candidates = r[nodes]
+            # a contact reaching the outermost ring of candidates has no room to grow
+            self._r_limit = float(circles[-2]) * (1 + 1e-9)
+            fac = solid.factorize(support, last=self.candidates)
+            self._flex = fac.flexibility()
+            self._chol = np.linalg.cholesky(self._flex)
+        self.factor_seconds = fac.seconds
+        del fac
+        self.size = solid.size
+        self.seconds = time.perf_counter() - t0
+
+    def shape(self, tip: Tip, depth: float) -> tuple[float, float]:
+        """(F/E* [L²], contact radius [L]) of ``tip`` pressed ``depth`` [L] into the block's
+        centre (E* = E/(1 − nu²); the contact radius is the outermost node in contact, the
+        punch's radius for a flat punch).
+
+        Raises
+        ------
+        GeometryError
+            A tip without profile, a punch of another radius than the mesh's, or a contact
+            that reaches the last ring of candidate nodes (mesh a wider contact zone).
+        """
+        law = _profile_law(tip)
+        if not (math.isfinite(depth) and depth > 0):
+            raise GeometryError(f"depth {depth!r} must be positive")
+        if math.isinf(law.profile_exponent(tip)):
+            if not self.punch or not math.isclose(float(tip.radius), self.radius,
+                                                  rel_tol=1e-9):
+                raise GeometryError("this block is meshed for another flat punch")
+            return float(self._per_depth * depth), self.radius
+        if self.punch:
+            raise GeometryError("this block is meshed for a flat punch")
+        g = np.asarray(law.profile(self.r_candidates, tip), dtype=float)
+        keep = np.isfinite(g)
+        # a sphere narrower than the zone: the nodes beyond it cannot touch
+        chol = (self._chol if keep.all()
+                else np.linalg.cholesky(self._flex[np.ix_(keep, keep)]))
+        gap = depth - g[keep]
+        f, _ = nnls(chol.T, np.linalg.solve(chol, gap), maxiter=50 * int(keep.sum()))
+        touching = self.r_candidates[keep][f > 0]
+        a = float(touching.max()) if touching.size else 0.0
+        if a > self._r_limit:
+            raise GeometryError(f"the contact (radius {a:.4g}) reaches the edge of the mesh's "
+                                f"contact zone ({self.zone:.4g}): mesh a wider one")
+        return float(4.0 * f.sum() * (1.0 - self.nu ** 2)), a
+
+
+def palpation_force_3d(length: float, width: float, height: float, tip: Tip, nu: float,
+                       base: str, depth: float, resolution: str | Resolution3D = "default"
+                       ) -> float:
+    """F/E* [L²] of a rigid frictionless ``tip`` pressed ``depth`` into the centre of the top
+    face of a block ``length`` × ``width`` × ``height`` on a rigid plate (module docstring).
+
+    Parameters
+    ----------
+    length, width, height
+        The block [L] (any length unit L, the tip's and the depth's too: F/E* is in L²;
+        metres give m²).
+    tip
+        A tip with a profile (flat, sphere, paraboloid, cone, power).
+    nu
+        Poisson ratio [-], 0 <= nu <= 0.45 (E* = E/(1 − nu²)).
+    base
+        ``"bonded"`` (u = 0 at z = 0) or ``"free"`` (frictionless: u_z = 0 only).
+    depth
+        [L] Indentation depth, positive.
+    resolution
+        A name of :data:`RESOLUTIONS_3D` or a :class:`Resolution3D`.
+
+    Raises
+    ------
+    GeometryError
+        A tip without profile, nu out of range, an unknown base, or a contact too wide for
+        the block.
+    """
+    law = _profile_law(tip)
+    if math.isinf(law.profile_exponent(tip)):
+        model = Palpation3D(length, width, height, nu, base, float(tip.radius), punch=True,
+                            resolution=resolution)
+        return model.shape(tip, depth)[0]
+    a = float(law.contact_radius(np.array([float(depth)]), tip)[0])
+    while True:
+        model = Palpation3D(length, width, height, nu, base, a, resolution=resolution)
+        try:
+            return model.shape(tip, depth)[0]
+        except GeometryError as err:
+            if "reaches the edge" not in str(err):
+                raise
+        a *= _REACH
+
+
+# ---------------------------------------------------------------------------------------------
+# compression
+
+
+def compression_factor_3d(length: float, width: float, height: float, nu: float,
+                          platens: str, resolution: str | Resolution3D = "default") -> float:
+    """E_app/E [-] of the block ``length`` × ``width`` × ``height`` [L] compressed between
+    ``platens`` (module docstring): E_app = (F/A)/(delta/H).
+
+    Parameters
+    ----------
+    length, width, height
+        The block [L] (any length unit L; the factor has none).
+    nu
+        Poisson ratio [-], 0 <= nu <= 0.45.
+    platens
+        ``"bonded"`` (the faces cannot slide: u_x = u_y = 0 there) or ``"lubricated"``
+        (frictionless: exactly 1).
+    resolution
+        A name of :data:`RESOLUTIONS_3D` or a :class:`Resolution3D`.
+
+    Raises
+    ------
+    GeometryError
+        An unknown platen condition, nu out of range, or a non-positive size.
+    """
+    return _compression(length, width, height, nu, platens, resolution)[0]
+
+
+def _compression(length: float, width: float, height: float, nu: float, platens: str,
+                 resolution: str | Resolution3D = "default") -> tuple[float, int]:
+    """(E_app/E, number of unknowns) of :func:`compression_factor_3d`."""
+    _check(nu, length, width, height)
+    if platens not in ("bonded", "lubricated"):
+        raise GeometryError(f"platens {platens!r}: use 'bonded' or 'lubricated'")
+    res = _resolution(resolution)
+    half = 0.5 * height
+    solid = Solid3D(compression_mesh(0.5 * length, 0.5 * width, half, res), nu)
+    tol = 1e-9 * max(length, width, height)
+    platen = solid.dofs(2, lambda p: p[2] >= half - tol)
+    fixed = [solid.dofs(0, lambda p: p[0] <= tol), solid.dofs(1, lambda p: p[1] <= tol),
+             solid.dofs(2, lambda p: p[2] <= tol), platen]
+    if platens == "bonded":
+        fixed += [solid.dofs(k, lambda p: p[2] >= half - tol) for k in (0, 1)]
+    fac = solid.factorize(np.concatenate(fixed))
+    prescribed = np.zeros(fac.fixed.size)
+    prescribed[np.isin(fac.fixed, platen)] = -half  # a unit strain over the half height
+    u = fac.solve(prescribed)
+    force = -4.0 * fac.reaction(u, platen).sum()
+    return float(force / (length * width)), solid.size
