@@ -11,6 +11,7 @@ side by side.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -50,7 +51,8 @@ def layer_alternatives(E: float, z_surf: float, z: np.ndarray, fitted, model) ->
         The concrete :class:`~palpbayes.fitdata.ModelSpec` E belongs to.
     model
         The model with the specimen's layer (its known thickness, or the fitted one when
-        ``fitted`` has a layer): bonded and free are NaN without a thickness.
+        ``fitted`` has a layer): bonded and free are NaN without a thickness, and the
+        specimen's twin (:mod:`palpbayes.twin`) when ``model`` has a specimen.
     """
     out = dict.fromkeys(ALTERNATIVE_COLUMNS, float("nan"))
     depth = fitted_depths(z_surf, z)
@@ -59,7 +61,9 @@ def layer_alternatives(E: float, z_surf: float, z: np.ndarray, fitted, model) ->
     out["E_halfspace_pa"] = E * refit_factor(depth, fitted.shape, fitted.half_space().shape)
     h = model.thickness if model.thickness is not None else fitted.thickness
     if h is not None and np.isfinite(h):
+        source = fitted if model.specimen is None else replace(fitted, specimen=model.specimen,
+                                                               thickness=None)
         for base in ("bonded", "free"):
-            alt = fitted.variant(thickness=h, base=base)
+            alt = source.variant(thickness=h, base=base)
             out[f"E_{base}_pa"] = E * refit_factor(depth, fitted.shape, alt.shape)
     return out

@@ -23,9 +23,14 @@ compliance C       Uniform(0, 2e-6 m/N) robot + sensor    depth d − C·F: refi
 
 "Refit" means: the posterior-median model curve F̂ = E*·s(d) is refitted with the perturbed
 model s', E*' = E*·Σ s·s' / Σ s'² (least squares with E* linear), tabulated on a grid of the
-perturbation and interpolated.  Because the factors multiply, their logarithms add and, the
-inputs being independent, the variance of ln E is the sum of the variances of the logarithms of
-the factors: the *share* of each input is its term over the total.
+perturbation and interpolated. For the twin of a specimen (:mod:`palpbayes.twin`) the Poisson
+ratio's refit uses the twin at each node of nu, for either base (the block's free sides make
+even a free one depend on nu); the tip-radius and thickness refits use the layer of the
+specimen's height without its footprint (what the finite width adds to their sensitivity is of
+second order, and a twin per perturbed tip or height would cost seconds each). Because the
+factors multiply, their logarithms add and, the inputs being independent, the variance of ln E
+is the sum of the variances of the logarithms of the factors: the *share* of each input is its
+term over the total.
 """
 
 from __future__ import annotations
@@ -39,7 +44,7 @@ from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
 from ..refit import refit_factor
 
-__all__ = ["BudgetSpec", "Budget", "propagate"]
+__all__ = ["BudgetSpec", "Budget", "propagate", "nu_nodes"]
 
 
 @dataclass(frozen=True)
@@ -94,10 +99,13 @@ class Budget:
         Draws of E with every input [Pa], same shape as the posterior draws of E*.
     table
         One row per input: ``input, distribution, rel_sd_pct, share_pct``.
+    nu
+        The Poisson ratio of each draw [-] (same shape as ``E``), None when not kept.
     """
 
     E: np.ndarray
     table: pd.DataFrame
+    nu: np.ndarray | None = None
 
 
 def _refit_factor(model: ModelSpec, depth: np.ndarray, alt_shape) -> float:
@@ -106,6 +114,14 @@ def _refit_factor(model: ModelSpec, depth: np.ndarray, alt_shape) -> float:
 
 #: Poisson ratios at which a bonded layer's refit is computed (then interpolated).
 _NU_NODES = 5
+
+
+def nu_nodes(spec: BudgetSpec, nu: float) -> np.ndarray:
+    """The Poisson ratios [-] at which the budget refits a model whose shape depends on nu
+    (a bonded layer, a specimen twin), and interpolates between: :data:`_NU_NODES` evenly over
+    the budget's range, or ``[nu]`` when nu is fixed."""
+    lo, hi = spec.nu_bounds(nu)
+    return np.linspace(lo, hi, _NU_NODES) if hi > lo else np.array([float(nu)])
 
 
 def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
@@ -144,23 +160,31 @@ def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
     nu = rng.uniform(lo, hi, n) if hi > lo else np.full(n, model.nu)
     log_nu = np.log1p(-nu**2)
     layered = model.has_layer and np.isfinite(model.thickness)
-    if layered and hi > lo and depth.size and (bonded is not None or model.base == "bonded"):
-        grid = np.linspace(lo, hi, _NU_NODES)
-        bonded_model = model.variant(base="bonded")
-        fac = [_refit_factor(bonded_model, depth, replace(bonded_model, nu=v).shape)
-               for v in grid]
-        shift = np.log(np.interp(nu, grid, fac))
-        is_bonded = (np.ones(n, dtype=bool) if bonded is None
-                     else np.asarray(bonded, dtype=float).ravel() == 1.0)
-        log_nu = log_nu + np.where(is_bonded, shift, 0.0)
+    twin = model.specimen is not None
+    # the bases whose shape depends on nu: a bonded layer's; a twin's, both
+    nu_bases = ("bonded", "free") if twin else ("bonded",)
+    draw_bases = (np.full(n, model.base) if bonded is None
+                  else np.where(np.asarray(bonded, dtype=float).ravel() == 1.0, "bonded",
+                                "free"))
+    if layered and hi > lo and depth.size:
+        grid = nu_nodes(spec, model.nu)
+        for base in nu_bases:
+            rows = draw_bases == base
+            if not rows.any():
+                continue
+            base_model = model.variant(base=base)
+            fac = [_refit_factor(base_model, depth, replace(base_model, nu=v).shape)
+                   for v in grid]
+            log_nu[rows] += np.log(np.interp(nu[rows], grid, fac))
     log_terms = {"E* (posterior)": np.log(estar.ravel()), "Poisson ratio": log_nu}
     rows = [("E* (posterior)", "posterior draws"),
             ("Poisson ratio", f"Uniform({lo:.3g}, {hi:.3g})" if hi > lo else f"fixed {lo:.3g}")]
 
     tol = spec.radius_tolerance
+    sized = model.layer_only()  # the tip's and the height's refits without the footprint
     if tol > 0 and model.tip.has_length_scale:
         grid = np.linspace(-tol, tol, 9)
-        fac = [_refit_factor(model, depth, replace(model, tip=model.tip.scaled(1 + e)).shape)
+        fac = [_refit_factor(sized, depth, replace(sized, tip=sized.tip.scaled(1 + e)).shape)
                for e in grid]
         eps = rng.uniform(-tol, tol, n)
         log_terms["tip radius"] = np.log(np.interp(eps, grid, fac))
@@ -168,8 +192,8 @@ def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
     tol_h = spec.thickness_tolerance
     if tol_h > 0 and layered and not sampled_thickness and depth.size:
         grid = np.linspace(-tol_h, tol_h, 9)
-        fac = [_refit_factor(model, depth,
-                             replace(model, thickness=model.thickness * (1 + e)).shape)
+        fac = [_refit_factor(sized, depth,
+                             replace(sized, thickness=sized.thickness * (1 + e)).shape)
                for e in grid]
         eps = rng.uniform(-tol_h, tol_h, n)
         log_terms["thickness"] = np.log(np.interp(eps, grid, fac))
@@ -202,4 +226,4 @@ def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
           "share_pct": 100 * variances[name] / var_total if var_total > 0 else np.nan}
          for name, dist in rows]
     )
-    return Budget(E=np.exp(total).reshape(shape), table=table)
+    return Budget(E=np.exp(total).reshape(shape), table=table, nu=nu.reshape(shape))

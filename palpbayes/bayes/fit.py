@@ -15,10 +15,11 @@ from ..errors import ConvergenceError, ConvergenceWarning, FitError, InputError,
 from ..fitdata import FitData, ModelSpec, prepare_trace
 from ..lsq import LSQResult, fit_lsq_data
 from ..trace import IndentationTrace
-from .budget import BudgetSpec, propagate
+from .budget import BudgetSpec, nu_nodes, propagate
 from .diagnostics import chain_passes, compute_diagnostics, import_arviz
 from .exact import exact_posterior, sampled_coordinates
 from .flags import bound_flags, is_bimodal, posterior_flags
+from .instron import instron_bonded_draws
 from .layer_fit import (
     best_model,
     concrete_draws,
@@ -86,12 +87,14 @@ def fit_bayes_data(
     engine: str = "emcee",
     with_model_form: bool = True,
     log_prob: bool = True,
+    platens: str = "unknown",
 ) -> BayesResult:
     """Posterior of one prepared trace; see :func:`fit_bayes` (``with_model_form=False``
     skips the model-form alternatives, :mod:`palpbayes.bayes.modelform`; ``log_prob=False``
     leaves the exact engine's draws of a partly unknown layer without their log posterior,
     ``sample_stats`` without ``lp``: for a fit whose InferenceData nobody keeps, the model
-    form's layer alternative)."""
+    form's layer alternative; ``platens``: the compression test the Instron-equivalent
+    modulus of a fit with a specimen is for, :mod:`palpbayes.bayes.instron`)."""
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; use one of {', '.join(ENGINES)}")
     priors = priors or PriorSpec()
@@ -130,6 +133,9 @@ def fit_bayes_data(
                     np.random.default_rng(budget_ss), bonded=post.get("bonded"),
                     sampled_thickness=data.model.thickness_unknown)
     post["E_total"] = bud.E
+    if data.model.specimen is not None:  # what a compression test of the block would read
+        post["E_instron_bonded"] = instron_bonded_draws(
+            bud.E, bud.nu, data.model.specimen, nu_nodes(budget, data.model.nu))
     az = import_arviz()
     with warnings.catch_warnings():
         # heavy thinning of a short chain can leave fewer draws than walkers: fine for us
@@ -138,6 +144,7 @@ def fit_bayes_data(
                           lsq, noise, prior, modes)
     idata.posterior.attrs["engine"] = engine
     idata.posterior.attrs["model_fitted"] = best.describe()
+    idata.posterior.attrs["platens"] = platens
     if mixture is not None and data.model.bonding == "unknown":
         idata.posterior.attrs["log_bf_bonded"] = mixture.log_bayes_factor()
     flags = posterior_flags(post, post_theta, prior) + layer_warnings(post, data, best)
@@ -311,6 +318,7 @@ def fit_bayes(
     strict: bool = False,
     engine: str = "emcee",
     with_model_form: bool = True,
+    platens: str = "unknown",
 ) -> BayesResult:
     """Bayesian fit of E*, z_surf, sigma and F0 (and phi or nu_t) to one trace.
 
@@ -355,6 +363,10 @@ def fit_bayes(
         When a model check finds a material misfit, refit E under the alternatives it points
         to and widen E's interval to their envelope (:mod:`palpbayes.bayes.modelform`;
         default True).
+    platens
+        With a specimen in ``model``: the compression test's platens its Instron-equivalent
+        modulus is for, ``"lubricated"``, ``"bonded"`` or ``"unknown"`` (default; an interval
+        spanning both, :mod:`palpbayes.bayes.instron`).
 
     Returns
     -------
@@ -370,4 +382,4 @@ def fit_bayes(
     return fit_bayes_data(data, noise=noise, baseline=baseline, priors=priors, budget=budget,
                           settings=settings, seed=seed, tabulate=tabulate, strict=strict,
                           trace_id=trace.trace_id, engine=engine,
-                          with_model_form=with_model_form)
+                          with_model_form=with_model_form, platens=platens)

@@ -27,8 +27,10 @@ from ..flagcodes import flag_columns
 from ..intervals import LEVEL, central, central_band
 from ..io.atomic import write_netcdf_atomic
 from ..refit import layer_alternatives
+from ..twin import Specimen
 from .budget import Budget
 from .diagnostics import Diagnostics, import_arviz
+from .instron import instron_columns
 from .layer_fit import concrete_draws
 from .modelform import ModelForm
 
@@ -159,6 +161,11 @@ class BayesResult:
             if sel.any():
                 E_med = float(np.median(E[sel]))
         checks = checks_summary(self.checks)
+        bonded_draws = (self.draws("E_instron_bonded")
+                        if "E_instron_bonded" in self.idata.posterior else None)
+        instron = instron_columns(E, bonded_draws,
+                                  str(self.idata.posterior.attrs.get("platens", "unknown")),
+                                  (lo / blo, hi / bhi))
         return {
             "trace_id": self.trace_id,
             "method": "bayes",
@@ -200,6 +207,7 @@ class BayesResult:
             "model_fitted": best.describe_layer(),
             **self.layer,
             **self._alternatives(E, E_med, z_med, best),
+            **instron,
         }
 
     def _alternatives(self, E: np.ndarray, E_med: float, z_med: float, best: ModelSpec
@@ -350,16 +358,20 @@ def _model_state(model: ModelSpec) -> dict:
     return {"tip": dataclasses.asdict(model.tip), "nu": model.nu, "thickness": model.thickness,
             "bonding": model.bonding,
             "thickness_range": None if model.thickness_range is None
-            else list(model.thickness_range), "p_bonded": model.p_bonded}
+            else list(model.thickness_range), "p_bonded": model.p_bonded,
+            "specimen": None if model.specimen is None
+            else dataclasses.asdict(model.specimen)}
 
 
 def _model_from_state(m: dict) -> ModelSpec:
     """A :class:`ModelSpec` from :func:`_model_state` (or the older ``bonded`` flag)."""
     bonding = m.get("bonding") or ("bonded" if m.get("bonded", True) else "free")
     rng = m.get("thickness_range")
+    block = m.get("specimen")
     return ModelSpec(Tip(**m["tip"]), nu=m["nu"], thickness=m["thickness"], bonding=bonding,
                      thickness_range=None if rng is None else tuple(rng),
-                     p_bonded=m.get("p_bonded", 0.5))
+                     p_bonded=m.get("p_bonded", 0.5),
+                     specimen=None if block is None else Specimen(**block))
 
 
 def _to_json(obj):
@@ -377,6 +389,7 @@ def _from_json(obj: dict):
     return obj
 
 
-_UNITS = {"E_total": "Pa", "E": "Pa", "E_star": "Pa", "z_surf": "m", "sigma": "N", "F0": "N",
-          "F1": "N/m", "phi": "-", "nu_t": "-", "thickness": "m", "bonded": "-"}
-_SAMPLED = {"E_total": "E_star", "E": "E_star"}
+_UNITS = {"E_total": "Pa", "E_instron_bonded": "Pa", "E": "Pa", "E_star": "Pa", "z_surf": "m",
+          "sigma": "N", "F0": "N", "F1": "N/m", "phi": "-", "nu_t": "-", "thickness": "m",
+          "bonded": "-"}
+_SAMPLED = {"E_total": "E_star", "E": "E_star", "E_instron_bonded": "E_star"}

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
+from ..bayes.budget import nu_nodes
 from ..bayes.layers import default_thickness_range
 from ..checks import CheckResult, check_fit, checks_summary
 from ..contact import DEFAULT_NU, check_tip_plausible, get_law
@@ -23,9 +24,12 @@ from ..flagcodes import flag_columns
 from ..lsq import LSQResult, fit_lsq_data
 from ..refit import layer_alternatives
 from ..trace import IndentationTrace
+from ..twin import PLATENS, Specimen, prepare_tables, specimen_from_sizes, twin_depth_limit
+from ..twin.specimen import FOOTPRINT_COLUMNS
 from .layout import posterior_file
 
 __all__ = ["FitOptions", "FitOutcome", "fit_trace", "check_fittable", "trace_model", "nu_source",
+           "trace_specimen", "prepare_twin",
            "SUMMARY_COLUMNS", "METHODS", "LAYER_MODES"]
 
 METHODS = ("bayes", "lsq", "both")
@@ -66,6 +70,11 @@ SUMMARY_COLUMNS = [
     # read as a half-space, a bonded and a free layer (palpbayes.refit.layer_alternatives)
     "layer", "model_fitted", "thickness_m", "thickness_lo_m", "thickness_hi_m", "p_bonded",
     "p_halfspace", "E_halfspace_pa", "E_bonded_pa", "E_free_pa",
+    # the specimen as tested (a block's footprint known: its finite-element twin, bayes
+    # rows): what a compression test of the block between these platens would report, with
+    # its 90 % interval (palpbayes.bayes.instron); the bonded and free columns above are then
+    # the twin's
+    "platens", "E_instron_pa", "E_instron_lo_pa", "E_instron_hi_pa",
 ]
 
 #: How a fit treats the specimen's thickness: ``auto`` a layer on a rigid base wherever the
@@ -125,6 +134,14 @@ class FitOptions:
     model_form
         Widen a Bayesian fit's interval by the model form when a check finds a material
         misfit (:mod:`palpbayes.bayes.modelform`; default True).
+    specimen
+        The block as tested (:class:`~palpbayes.twin.Specimen`, ``--specimen``) for every
+        trace whose manifest row gives no footprint of its own: the Bayesian model is then its
+        finite-element twin (:mod:`palpbayes.twin`).
+    platens
+        The compression test's platens the Bayesian rows' Instron-equivalent modulus is for
+        (``E_instron_pa``): ``"lubricated"``, ``"bonded"`` or ``"unknown"`` (default: an
+        interval spanning both); used with a specimen only.
     """
 
     method: str = "bayes"
@@ -145,8 +162,13 @@ class FitOptions:
     strict: bool = False
     engine: str = "emcee"
     model_form: bool = True
+    specimen: Specimen | None = None
+    platens: str = "unknown"
 
     def __post_init__(self) -> None:
+        if self.platens not in PLATENS:
+            raise InputError(f"unknown platens {self.platens!r}; use one of "
+                             f"{', '.join(PLATENS)}")
         if self.layer not in LAYER_MODES:
             raise InputError(f"unknown layer mode {self.layer!r}; use one of "
                              f"{', '.join(LAYER_MODES)}")
@@ -217,14 +239,62 @@ def trace_model(trace: IndentationTrace, options: FitOptions,
         raise GeometryError(f"{src}: {exc}") from None
     # a manifest's per-row nu (trace.metadata["nu"]) overrides the run's option
     nu = trace.metadata.get("nu", DEFAULT_NU if options.nu is None else options.nu)
-    if options.layer == "off" or (options.layer == "auto" and trace.thickness is None):
+    block = trace_specimen(trace, options)
+    if options.layer == "off" or (options.layer == "auto" and trace.thickness is None
+                                  and block is None):
         return ModelSpec(tip, nu=nu, bonding=options.bonding)
+    if block is not None:
+        if options.layer == "unknown":
+            raise InputError(f"{src}: the specimen {block.describe()} has a known height; an "
+                             "unknown thickness (--thickness unknown) contradicts it")
+        return ModelSpec(tip, nu=nu, bonding=options.bonding, specimen=block)
     if options.layer == "auto":
         return ModelSpec(tip, nu=nu, thickness=trace.thickness, bonding=options.bonding)
     rng = options.thickness_range
     if rng is None:
         rng = default_thickness_range(np.nan if depth is None else depth)
     return ModelSpec(tip, nu=nu, bonding=options.bonding, thickness_range=tuple(rng))
+
+
+def trace_specimen(trace: IndentationTrace, options: FitOptions) -> Specimen | None:
+    """The block a trace was pressed into: its manifest row's footprint (``length_m``,
+    ``width_m`` or ``diameter_m`` with ``thickness_m``), else the run's ``specimen`` option;
+    None without either.
+
+    Raises
+    ------
+    GeometryError
+        An incomplete footprint, or a ``specimen`` option whose height differs from the
+        trace's own thickness.
+    """
+    meta = trace.metadata or {}
+    src = trace.source or trace.trace_id
+    try:
+        block = specimen_from_sizes(trace.thickness, *(meta.get(c) for c in FOOTPRINT_COLUMNS))
+    except GeometryError as exc:
+        raise GeometryError(f"{src}: {exc}") from None
+    if block is not None or options.specimen is None:
+        return block
+    if trace.thickness is not None and not np.isclose(trace.thickness,
+                                                      options.specimen.height, rtol=1e-9):
+        raise GeometryError(
+            f"{src}: the specimen's height {options.specimen.height:g} m (--specimen) differs "
+            f"from the trace's thickness {trace.thickness:g} m (--thickness or thickness_m): "
+            "give one of the two")
+    return options.specimen
+
+
+def prepare_twin(model: ModelSpec, options: FitOptions) -> int:
+    """Build (or load from the cache) the twin's tables a fit of ``model`` needs: its nu and
+    the budget's nodes of nu (a Bayesian fit), for each base it allows; 0 without a
+    specimen.  A progress bar shows on stderr while new tables are solved."""
+    if model.specimen is None:
+        return 0
+    nus = [model.nu]
+    if options.method in ("bayes", "both"):
+        nus += list(nu_nodes(options.budget, model.nu))
+    return prepare_tables(model.specimen, model.tip, nus, model.bases,
+                          progress=options.settings.progress)
 
 
 def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
@@ -267,14 +337,28 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     data = replace(data, model=model)
 
     depth = data.z_contact - data.z_min
-    if trace.thickness is not None and depth > trace.thickness:
+    if model.specimen is not None:
+        try:
+            prepare_twin(model, options)
+        except GeometryError as exc:
+            raise GeometryError(f"{src}: {exc}") from None
+    known = trace.thickness if trace.thickness is not None else (
+        None if model.specimen is None else model.specimen.height)
+    if known is not None and depth > known:
         raise GeometryError(
             f"{src}: the indentation depth {depth * 1e3:.4g} mm (contact onset to deepest "
-            f"point) exceeds the specimen thickness {trace.thickness * 1e3:.4g} mm; is z in "
+            f"point) exceeds the specimen thickness {known * 1e3:.4g} mm; is z in "
             "another unit (give it, e.g. --z-unit mm or --z-unit cm)? or check the thickness "
             "(--thickness, thickness_m, in metres)"
         )
     fitted = data.z_contact - float(data.z.min())
+    if model.specimen is not None and fitted > twin_depth_limit(model.specimen, tip):
+        raise GeometryError(
+            f"{src}: the indentation depth {fitted * 1e3:.4g} mm (contact onset to deepest "
+            f"fitted point) exceeds the {twin_depth_limit(model.specimen, tip) * 1e3:.4g} mm "
+            f"the twin of the {model.specimen.describe()} is solved to (half its height, a "
+            "contact radius at most half its footprint's); fit a shallower window "
+            "(--max-depth M)")
     law = get_law(tip)
     if law.max_depth is not None and fitted > law.max_depth(tip):
         raise GeometryError(
@@ -298,8 +382,10 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
                    for b in model.bases]
     tol = options.budget.radius_tolerance
     if options.method in ("bayes", "both") and tol > 0 and tip.has_length_scale:
+        # the budget refits a scaled tip without the specimen's footprint (budget.propagate)
         models += [(f"{note} (with the tip radius scaled by the budget's +{tol * 100:g} % "
-                    "tolerance)", replace(m, tip=tip.scaled(1.0 + tol))) for note, m in models]
+                    "tolerance)", replace(m.layer_only(), tip=tip.scaled(1.0 + tol)))
+                   for note, m in models]
     for note, m in models:
         for d, where in ((max(fitted, 0.0), ""), (deepest, approach)):
             try:
@@ -405,6 +491,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
                 settings=options.settings, seed=seed,
                 strict=options.strict, trace_id=trace.trace_id, lsq=lsq,
                 engine=options.engine, with_model_form=options.model_form,
+                platens=options.platens,
             )
         rows.append(with_hertz({**bayes.summary_row(), **meta}))
         if posterior_dir is not None:

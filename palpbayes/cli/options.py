@@ -20,14 +20,16 @@ from ..contact import (
     default_fit_fraction_text,
     registered_kinds,
 )
-from ..errors import InputError
+from ..errors import GeometryError, InputError
 from ..fitdata import BONDINGS
+from ..twin import PLATENS, parse_specimen
 from .afm_options import AFM_META_OPTIONS, add_afm_meta_options, afm_meta_from_args
 
 __all__ = ["add_nu_option", "add_f_unc_option", "positive_force", "add_model_options",
            "add_trace_options", "add_tip_options", "add_specimen_options",
            "add_column_options", "options_from_args",
-           "thickness_from_args", "layer_from_args", "read_options_from_args", "dest",
+           "thickness_from_args", "layer_from_args", "specimen_from_args",
+           "read_options_from_args", "dest",
            "RECORDING_FLAGS", "recording_options_from_args", "tip_from_args",
            "traces_from_args", "trace_from_args"]
 
@@ -113,6 +115,17 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                    help="log-uniform prior range of an unknown thickness [m] (with "
                         "--thickness unknown; default 1.5 to 1000 times the indentation "
                         "depth)")
+    t.add_argument("--specimen", metavar="L,W,H|D,H",
+                   help="the block as tested, in metres: L,W,H (a cuboid, e.g. "
+                        "0.05,0.05,0.02) or D,H (a cylinder); the Bayesian model is then its "
+                        "finite-element twin on its plate (--bonding), and each row carries "
+                        "E_instron, what a compression test of the block would read (a "
+                        "manifest's length_m, width_m or diameter_m columns give it per row)")
+    t.add_argument("--platens", choices=PLATENS, default="unknown",
+                   help="the compression test E_instron is for: lubricated (frictionless "
+                        "platens: E), bonded (the faces cannot slide: stiffer) or unknown "
+                        "(default: an interval spanning both); with --specimen or a "
+                        "manifest's footprint")
     t.add_argument("--finite-thickness", action="store_true", help=argparse.SUPPRESS)
     t.add_argument("--non-bonded", action="store_true", help=argparse.SUPPRESS)
     b = p.add_argument_group("uncertainty budget and model form")
@@ -227,6 +240,7 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
                         gain_sd=args.gain_sd, compliance_max=args.compliance_max)
     settings = SamplerSettings(max_steps=args.max_steps, progress=args.progress)
     layer, bonding = layer_from_args(args)
+    specimen = specimen_from_args(args)
     return FitOptions(
         method=args.method, nu=nu, layer=layer, bonding=bonding,
         thickness_range=(None if args.thickness_range is None
@@ -238,7 +252,30 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
         settings=settings,
         seed=args.seed, strict=args.strict, engine=args.engine,
         model_form=getattr(args, "model_form", True),
+        specimen=specimen, platens=getattr(args, "platens", "unknown"),
     )
+
+
+def specimen_from_args(args: argparse.Namespace):
+    """The :class:`~palpbayes.twin.Specimen` of ``--specimen`` (None when absent), checked
+    against ``--thickness`` and ``--half-space``."""
+    text = getattr(args, "specimen", None)
+    if text is None:
+        return None
+    try:
+        spec = parse_specimen(text)
+    except GeometryError as exc:
+        raise InputError(f"--specimen: {exc}") from None
+    h = thickness_from_args(args)
+    if h is not None and not math.isclose(h, spec.height, rel_tol=1e-9):
+        raise InputError(f"--thickness {h:g} m differs from the height {spec.height:g} m of "
+                         f"--specimen {text}: give the specimen alone")
+    if str(getattr(args, "thickness", None) or "").strip().lower() == "unknown":
+        raise InputError("--specimen gives the thickness: it contradicts --thickness unknown")
+    if getattr(args, "half_space", False):
+        raise InputError("--specimen and --half-space contradict each other: the specimen's "
+                         "twin models the block, the half-space the paper's model")
+    return spec
 
 
 def thickness_from_args(args: argparse.Namespace) -> float | None:

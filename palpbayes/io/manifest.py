@@ -13,6 +13,9 @@ Columns (SI units; file paths relative to the manifest's folder):
 ``profile_c``      power-law profile coefficient c of f = c·r^n (power only)
 ``profile_n``      power-law profile exponent n (power only)
 ``thickness_m``    specimen thickness [m]
+``length_m``       specimen footprint: length and width of a block [m] (optional; with
+``width_m``        ``thickness_m`` the fit uses the specimen's finite-element twin,
+``diameter_m``     :mod:`palpbayes.twin`), or the diameter of a cylinder [m]
 ``repetition``     repetition number within (material, tip)
 ``rest_time_s``    rest time before this indentation [s] (empty if unknown)
 =================  ==========================================================
@@ -41,6 +44,7 @@ import pandas as pd
 from ..contact import TIP_PARAMETERS, Tip
 from ..errors import DataFileError, GeometryError, InputError
 from ..trace import IndentationTrace
+from ..twin.specimen import FOOTPRINT_COLUMNS, check_specimen_plausible, specimen_from_sizes
 from .atomic import write_csv_atomic
 from .tabular import sniff_delimiter
 from .trace_csv import read_trace
@@ -54,6 +58,8 @@ __all__ = [
     "write_manifest",
     "tip_from_row",
     "tip_columns",
+    "specimen_from_row",
+    "footprint_metadata",
     "iter_traces",
     "load_trace",
 ]
@@ -61,13 +67,16 @@ __all__ = [
 MANIFEST_COLUMNS = [
     "trace_id", "file", "specimen", "material", "tip",
     *(p.column for p in TIP_PARAMETERS.values()),
-    "thickness_m", "repetition", "rest_time_s",
+    "thickness_m", "repetition", "rest_time_s", *FOOTPRINT_COLUMNS,
 ]
 REQUIRED_COLUMNS = ["trace_id", "file", "material", "tip"]
 #: Numeric columns: (unit named in messages, example value, whole numbers only).
 NUMERIC_COLUMNS = {
     **{p.column: (p.unit, p.example, False) for p in TIP_PARAMETERS.values()},
     "thickness_m": ("metres", "0.02", False),
+    "length_m": ("metres", "0.05", False),
+    "width_m": ("metres", "0.05", False),
+    "diameter_m": ("metres", "0.05", False),
     "repetition": ("a whole number", "1", True),
     "rest_time_s": ("seconds", "60", False),
     "nu": ("-", "0.3", False),
@@ -193,6 +202,7 @@ def read_manifest(path: str | os.PathLike) -> pd.DataFrame:
         except GeometryError as exc:
             raise DataFileError(path, f"{where}: {exc}") from None
         for col, ok, must in (("thickness_m", lambda v: v > 0, "positive"),
+                              *((c, lambda v: v > 0, "positive") for c in FOOTPRINT_COLUMNS),
                               ("rest_time_s", lambda v: v >= 0, "non-negative")):
             v = row[col]
             if pd.notna(v) and not ok(v):
@@ -200,6 +210,14 @@ def read_manifest(path: str | os.PathLike) -> pd.DataFrame:
                 raise DataFileError(path, f"{where}: column {col!r} is {v:g}, which must be "
                                     f"{must}", f"give it in {unit}, e.g. {example}, or leave "
                                     "it empty")
+        try:
+            spec = specimen_from_row(row)
+            if spec is not None:
+                check_specimen_plausible(spec)
+        except GeometryError as exc:
+            raise DataFileError(path, f"{where}: {exc}",
+                                "give length_m and width_m (a block) or diameter_m (a "
+                                "cylinder), with thickness_m, in metres") from None
         if "nu" in df.columns and pd.notna(row.get("nu")):
             from ..contact import check_nu
 
@@ -234,6 +252,18 @@ def tip_from_row(row: pd.Series) -> Tip:
     return Tip(str(row["tip"]), **sizes)
 
 
+def specimen_from_row(row: pd.Series):
+    """The :class:`~palpbayes.twin.Specimen` of a manifest row (its footprint columns and
+    ``thickness_m``), or None when the row gives no footprint."""
+    return specimen_from_sizes(_opt(row, "thickness_m"),
+                               *(_opt(row, c) for c in FOOTPRINT_COLUMNS))
+
+
+def footprint_metadata(row: pd.Series) -> dict[str, float]:
+    """The footprint columns a row gives, for a trace's metadata."""
+    return {c: _opt(row, c) for c in FOOTPRINT_COLUMNS if _opt(row, c) is not None}
+
+
 def tip_columns(tip: Tip) -> dict[str, float]:
     """The tip-size columns of a manifest row for ``tip`` (NaN for the parameters it lacks);
     the inverse of :func:`tip_from_row` with the ``tip`` column."""
@@ -257,7 +287,8 @@ def load_trace(row: pd.Series, **read_options) -> IndentationTrace:
         thickness=_opt(row, "thickness_m"),
         repetition=None if rep is None else int(rep),
         rest_time=_opt(row, "rest_time_s"),
-        metadata={} if _opt(row, "nu") is None else {"nu": _opt(row, "nu")},
+        metadata={**({} if _opt(row, "nu") is None else {"nu": _opt(row, "nu")}),
+                  **footprint_metadata(row)},
         **read_options,
     )
 

@@ -23,9 +23,11 @@ from numpy.typing import ArrayLike
 
 from ..contact import Tip, effective_modulus, shape, thickness_factor
 from ..errors import GeometryError, InputError
+from ..twin import Specimen, twin_factor
 
 __all__ = [
     "SIM_BASES",
+    "SIM_RESOLUTION",
     "layer_factor",
     "STIFFENING_STRAIN0",
     "stiffening_factor",
@@ -66,10 +68,13 @@ def stiffening_factor(depth: ArrayLike, thickness: float | None, stiffening: flo
 
 #: Base conditions the simulator knows by name (a number in [0, 1] is a partial bond).
 SIM_BASES = ("bonded", "free")
+#: Mesh of the simulator's specimen twin (finer than the fits', :data:`palpbayes.twin.mesh.
+#: RESOLUTIONS`).
+SIM_RESOLUTION = "fine"
 
 
 def layer_factor(depth: ArrayLike, tip: Tip, thickness: float | None, nu: float,
-                 base: str | float | None) -> np.ndarray:
+                 base: str | float | None, block: Specimen | None = None) -> np.ndarray:
     """The bottom effect of the simulated specimen: F_layer/F_half-space [-].
 
     Parameters
@@ -88,22 +93,32 @@ def layer_factor(depth: ArrayLike, tip: Tip, thickness: float | None, nu: float,
         thickness_factor`, the exact layer solution); a number w in [0, 1]: a *partial* bond,
         (1 − w)·f_free + w·f_bonded — a misspecification knob for a block lying on a plate with
         friction, which the fit's two-component model (bonded or free) does not contain.
+    block
+        The specimen as tested (:class:`~palpbayes.twin.Specimen`, its height the
+        ``thickness``): the factor is its finite-element twin's on the ``fine`` mesh
+        (:func:`palpbayes.twin.twin_factor`; the fits use the ``default`` one, so data are not
+        drawn from the very model that fits them); None: a layer of infinite width.
     """
     d = np.asarray(depth, dtype=float)
     if base is None:
         return np.ones_like(d)
     if thickness is None:
         raise GeometryError("a layer (base=...) needs the specimen thickness (give thickness=)")
+
+    def factor(b: str) -> np.ndarray:
+        if block is None:
+            return thickness_factor(d, tip, thickness, nu, b)
+        return twin_factor(d, tip, block, nu, b, resolution=SIM_RESOLUTION)
+
     if isinstance(base, str):
         if base not in SIM_BASES:
             raise InputError(f"unknown base {base!r}; use one of {', '.join(SIM_BASES)}, a "
                              "number in [0, 1] (partial bond) or None (half-space)")
-        return thickness_factor(d, tip, thickness, nu, base)
+        return factor(base)
     w = float(base)
     if not 0.0 <= w <= 1.0:
         raise InputError(f"partial bond {base!r} must lie in [0, 1] (0 free, 1 bonded)")
-    return ((1.0 - w) * thickness_factor(d, tip, thickness, nu, "free")
-            + w * thickness_factor(d, tip, thickness, nu, "bonded"))
+    return (1.0 - w) * factor("free") + w * factor("bonded")
 
 
 def blunted_paraboloid_shape(depth: ArrayLike, radius: float, flat_radius: float
@@ -151,13 +166,15 @@ def true_force(
     base: str | float | None = None,
     stiffening: float = 0.0,
     apex_flat_radius: float = 0.0,
+    block: Specimen | None = None,
 ) -> np.ndarray:
     """The simulator's noise-free force F = E*·s(d)·f(d)·xi(d) [N] (0 for d <= 0).
 
     s is :func:`palpbayes.contact.shape` on a half-space (or, with ``apex_flat_radius`` b > 0
     on a paraboloid tip, :func:`blunted_paraboloid_shape`: an apex worn flat), f the
     specimen's bottom effect (:func:`layer_factor`: off with ``base=None``; the layer factor
-    is that of the sharp tip), xi :func:`stiffening_factor`.  With every knob off this is
+    is that of the sharp tip; with a ``block`` its finite-element twin's), xi
+    :func:`stiffening_factor`.  With every knob off this is
     exactly :func:`palpbayes.contact.force`.
     """
     d = np.asarray(depth, dtype=float)
@@ -171,7 +188,7 @@ def true_force(
     else:
         s = shape(d, tip)
     if base is not None:
-        s = s * layer_factor(d, tip, thickness, nu, base)
+        s = s * layer_factor(d, tip, thickness, nu, base, block)
     f = effective_modulus(E, nu) * s
     if stiffening != 0:
         f = f * stiffening_factor(d, thickness, stiffening)

@@ -34,6 +34,7 @@ from ..contact import Tip, check_nu, effective_modulus
 from ..errors import InputError
 from ..noise import PAPER_NOISE_PP, sigma_from_pp
 from ..trace import IndentationTrace
+from ..twin import FOOTPRINT_COLUMNS, Specimen
 from ._checks import ar1_phi, finite, nonneg, positive
 from .force import onset_force_profile, solve_series_compliance, true_force
 
@@ -111,6 +112,7 @@ def simulate_trace(
     base: str | float | None = "free",
     stiffening: float = 0.0,
     apex_flat_radius: float = 0.0,
+    block: Specimen | None = None,
     rng: np.random.Generator | int | None = None,
     trace_id: str = "sim",
     specimen: str = "",
@@ -190,6 +192,13 @@ def simulate_trace(
         [m] Radius b of a flat worn into a paraboloid tip's apex
         (:func:`~palpbayes.sim.force.blunted_paraboloid_shape`); 0 (default) is the sharp
         paraboloid.
+    block
+        The specimen as tested, a block or cylinder of known footprint
+        (:class:`~palpbayes.twin.Specimen`): the force is its finite-element twin's on the
+        simulator's finer mesh (:func:`~palpbayes.sim.force.layer_factor`), on the ``base``
+        (a half-space with ``base=None`` is refused); its height is the ``thickness`` (given
+        or not), and the trace's metadata carry its footprint (``length_m``, ``width_m`` or
+        ``diameter_m``), so that a fit of the trace uses the twin too.
     rng
         numpy Generator or seed.  The draws are made in a fixed order whatever the options
         (one uniform for b, N normals for the force, N normals for z), so the same seed gives
@@ -223,6 +232,17 @@ def simulate_trace(
     E = positive(E, "Young's modulus E [Pa]")
     nu = check_nu(nu)
     z_surf = finite(z_surf, "surface height z_surf [m]")
+    if block is not None:
+        if not isinstance(block, Specimen):
+            raise InputError(f"block must be a palpbayes.twin.Specimen, got "
+                             f"{type(block).__name__}")
+        if thickness is not None and not np.isclose(thickness, block.height, rtol=1e-9):
+            raise InputError(f"thickness {thickness!r} m differs from the block's height "
+                             f"{block.height!r} m: give one of the two")
+        if base is None:
+            raise InputError("a block (block=...) lies on a plate: give base='free', "
+                             "'bonded' or a partial bond, not None")
+        thickness = block.height
     if thickness is not None:
         thickness = positive(thickness, "specimen thickness [m]")
     if depth is None:
@@ -251,7 +271,7 @@ def simulate_trace(
     if thickness is None:
         base = None
     law = {"nu": nu, "tip": tip, "thickness": thickness, "base": base,
-           "stiffening": stiffening, "apex_flat_radius": apex_flat_radius}
+           "stiffening": stiffening, "apex_flat_radius": apex_flat_radius, "block": block}
     true_force(np.array([depth]), E, **law)  # validate geometry before drawing anything
 
     gen = np.random.default_rng(rng)
@@ -305,6 +325,9 @@ def simulate_trace(
     }
     if isinstance(rng, int | np.integer):
         metadata["seed"] = int(rng)
+    if block is not None:  # the footprint, as a manifest row gives it (FOOTPRINT_COLUMNS)
+        metadata.update({c: getattr(block, c[:-2]) for c in FOOTPRINT_COLUMNS
+                         if getattr(block, c[:-2]) is not None})
     return IndentationTrace(
         time=t, z=z_rec, force=f_rec, tip=tip, trace_id=trace_id, specimen=specimen,
         material=material, thickness=thickness, repetition=repetition, rest_time=rest_time,

@@ -323,48 +323,46 @@ def _gradient_product(k: int, l_: int) -> BilinearForm:
 
 
 def _nested_dissection(element_nodes: np.ndarray, centroids: np.ndarray, n_nodes: int,
-                       leaf: int = 48) -> np.ndarray:
-    """A nested-dissection order of the nodes: the elements split at the median centroid
-    along their longest extent, the nodes the halves share (a separator) numbered after
-    both halves, recursively."""
+                       leaf: int = 16) -> np.ndarray:
+    """A nested-dissection order of the nodes: the elements split across one axis near their
+    median centroid (the axis and quantile of the smallest separator), the nodes both halves
+    share (the separator) numbered after them, recursively."""
     in_l = np.zeros(n_nodes, dtype=bool)
     in_r = np.zeros(n_nodes, dtype=bool)
 
-    def split(elements: np.ndarray, nodes: np.ndarray) -> list:
-        if nodes.size <= leaf or elements.size < 2:
-            return [nodes]
-        c = centroids[:, elements]
-        axis = int(np.argmax(np.ptp(c, axis=1)))
-        key = c[axis]
-        left = key < np.median(key)
-        if left.all() or not left.any():
-            left = key <= np.median(key)
-            if left.all() or not left.any():
-                return [nodes]
-        el, er = elements[left], elements[~left]
-        in_l[element_nodes[:, el].ravel()] = True
-        in_r[element_nodes[:, er].ravel()] = True
-        sep = nodes[in_l[nodes] & in_r[nodes]]
-        n_left = nodes[in_l[nodes] & ~in_r[nodes]]
-        n_right = nodes[in_r[nodes] & ~in_l[nodes]]
-        in_l[element_nodes[:, el].ravel()] = False
-        in_r[element_nodes[:, er].ravel()] = False
-        return [(el, n_left), (er, n_right), sep]
+    def split(elements: np.ndarray, nodes: np.ndarray) -> list | None:
+        best = None
+        for key in centroids[:, elements]:
+            for q in (0.35, 0.425, 0.5, 0.575, 0.65):
+                left = key < np.quantile(key, q)
+                if left.all() or not left.any():
+                    continue
+                el, er = elements[left], elements[~left]
+                in_l[element_nodes[:, el].ravel()] = True
+                in_r[element_nodes[:, er].ravel()] = True
+                a, b = in_l[nodes], in_r[nodes]
+                in_l[element_nodes[:, el].ravel()] = False
+                in_r[element_nodes[:, er].ravel()] = False
+                sep = nodes[a & b]
+                if best is None or sep.size < best[2].size:
+                    best = [(el, nodes[a & ~b]), (er, nodes[b & ~a]), sep]
+        return best
 
-    # iterative post-order: halves first, then their separator
+    # post-order: each half's nodes, then their separator
     stack: list = [(np.arange(element_nodes.shape[1]), np.unique(element_nodes))]
-    pending: list = []
+    order: list[np.ndarray] = []
     while stack:
         item = stack.pop()
         if isinstance(item, np.ndarray):
-            pending.append(item)
+            order.append(item)
             continue
-        parts = split(*item)
-        if len(parts) == 1:
-            pending.append(parts[0])
+        elements, nodes = item
+        parts = split(elements, nodes) if nodes.size > leaf and elements.size > 1 else None
+        if parts is None:
+            order.append(nodes)
         else:
-            stack.extend([parts[2], parts[1], parts[0]])  # left popped first, separator last
-    return np.concatenate(pending)
+            stack.extend(parts[::-1])  # the left half popped first, the separator last
+    return np.concatenate(order)
 
 
 @dataclass
