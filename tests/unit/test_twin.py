@@ -210,7 +210,8 @@ def test_parse_specimen():
     assert cyl.shape_factor == pytest.approx(0.05 / 0.12)
     assert parse_specimen(box.as_text()) == box
     for bad, match in (("0.05", "give L,W,H"), ("0.05,x,0.02", "not a number"),
-                       ("0.05,-1,0.02", "positive"), ("50,50,20", "height 20 m is implausibly large.*did you mean 0.02")):
+                       ("0.05,-1,0.02", "positive"),
+                       ("50,50,20", "height 20 m is implausibly large.*did you mean 0.02")):
         with pytest.raises(GeometryError, match=match):
             parse_specimen(bad)
 
