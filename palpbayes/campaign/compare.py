@@ -90,6 +90,7 @@ from . import layout
 from .compare_text import format_comparison
 from .fitjob import trace_seed
 from .indentation import indentation_study
+from .instron import INSTRON_GROUP_COLUMNS, instron_group_columns, instron_gt_columns
 from .reference import (
     gt_columns,
     load_groundtruth,
@@ -115,6 +116,9 @@ COMPARISON_COLUMNS = [
     # (for lsq: what the layer would do to the paper's estimate), and for bayes the group's
     # posterior probability of a bonded base (every trace lies on the same plate)
     "E_halfspace_pa", "E_bonded_pa", "E_free_pa", "p_bonded",
+    # bayes with the specimen's twin: what a compression test of a new specimen would read,
+    # beside the Instron (palpbayes.campaign.instron)
+    *INSTRON_GROUP_COLUMNS,
 ]
 BUDGET_COLUMNS = ["material", "tip", "input", "distribution", "rel_sd_pct", "share_pct"]
 #: Columns of ``pooled.csv`` (:meth:`palpbayes.pooling.PooledResult.row` plus the group's
@@ -227,7 +231,8 @@ def _base_evidence(idata, p_prior: float) -> float:
 
 
 def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None,
-                 budget: BudgetSpec, seed: int, tau_prior_sd: float, settings, level: float
+                 budget: BudgetSpec, seed: int, tau_prior_sd: float, settings, level: float,
+                 settings_fields: dict | None = None
                  ) -> tuple[dict, dict | None, pd.DataFrame | None]:
     material, tip = g["material"].iloc[0], g["tip"].iloc[0]
     ids, ms, ss, meds, log_bf, ratios, models = [], [], [], [], [], [], []
@@ -318,6 +323,8 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None,
             "budget_applied": spec is not None,
             "p_bonded": row["p_bonded"], "base_ratio": np.nan if base_ratio is None
             else base_ratio}
+    row.update(instron_group_columns(pooled.E_new, pooled.nu, fitted, budget,
+                                     str((settings_fields or {}).get("platens", "unknown"))))
     btab = pooled.budget.assign(material=material, tip=tip)[BUDGET_COLUMNS]
     return row, prow, btab
 
@@ -403,7 +410,8 @@ def compare_campaign(
                     row = _lsq_row(g, level)
                 else:
                     row, prow, btab = _bayes_group(g, res, geometry, budget, seed,
-                                                   tau_prior_sd, pooling_settings, level)
+                                                   tau_prior_sd, pooling_settings, level,
+                                                   fields)
                     if prow is not None:
                         pooled_rows.append(prow)
                         budgets.append(btab)
@@ -412,6 +420,7 @@ def compare_campaign(
                 row["E_new_sd_eq_pa"] = new_specimen_sd(row.get("E_new_lo_pa", np.nan),
                                                         row.get("E_new_hi_pa", np.nan), level)
                 row.update(gt_columns(row, gt, mat, level))
+                row.update(instron_gt_columns(row, gt, mat))
                 row.update(paper_columns(paper, mat, tip))
                 if truth is not None and "z_surf_true_m" in truth:
                     ok = g[g["trace_id"].isin(truth.index) & np.isfinite(g["z_surf_m"])]

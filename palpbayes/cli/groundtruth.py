@@ -5,7 +5,9 @@ E_sd_pa, strain_lo, strain_hi, strain_toe, r2, n_points``) and ``DIR/groundtruth
 (one row per material: ``material, n, E_mean_pa, E_sd_pa, E_sem_pa, strain_lo, strain_hi,
 window_lo, window_hi``), atomically, and prints the summary and the strain window used.  Strains
 in the files are fractions; ``--strain-window`` takes **percent**.  The fitting rule is documented
-in :mod:`palpbayes.groundtruth`.
+in :mod:`palpbayes.groundtruth`.  With ``--platens bonded --nu X`` each test's E is also
+corrected for the friction of its platens (``E_corrected_pa``, ``platen_factor``:
+:mod:`palpbayes.groundtruth.platens`), the block being the test's cross-section and height.
 """
 
 from __future__ import annotations
@@ -16,8 +18,14 @@ from pathlib import Path
 
 from ..campaign import layout
 from ..campaign.pipeline import write_groundtruth
+from ..contact import check_nu
 from ..errors import InputError
-from ..groundtruth import DEFAULT_STRAIN_WINDOW, analyse
+from ..groundtruth import (
+    DEFAULT_STRAIN_WINDOW,
+    analyse,
+    correct_for_platens,
+    summarise_corrected,
+)
 from ..io.groundtruth_inputs import scan_inputs
 
 __all__ = ["register", "run"]
@@ -52,6 +60,14 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="specimen cross-section [m^2] for every test (overrides headers)")
     p.add_argument("--height-m", type=float, default=None, metavar="M",
                    help="specimen height [m] for every test (overrides headers)")
+    c = p.add_argument_group("platen friction (the specimen twin's compression test)")
+    c.add_argument("--platens", choices=("lubricated", "bonded"), default=None,
+                   help="correct each test's E for its platens: bonded (the faces could not "
+                        "slide: the test read c*E, c > 1 growing with nu and the block's "
+                        "width/height) or lubricated (c = 1); needs --nu")
+    c.add_argument("--nu", type=float, default=None,
+                   help="Poisson ratio of the blocks for --platens (foams 0.1-0.3, silicone "
+                        "and gels 0.45-0.5)")
     return p
 
 
@@ -79,11 +95,19 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out} exists and is not a folder")
+    if (args.platens is None) != (args.nu is None):
+        raise InputError("--platens and --nu go together: the platen correction depends on "
+                         "the Poisson ratio (e.g. --platens bonded --nu 0.3)")
+    if args.nu is not None:
+        check_nu(args.nu)
 
     _, _, skipped = scan_inputs(args.inputs)
     per_file, summary = analyse(args.inputs, strain_window=window,
                                 toe_compensation=args.toe_compensation,
                                 skip_toe=args.skip_toe, area_m2=area, height_m=height)
+    if args.platens is not None:
+        per_file = correct_for_platens(per_file, args.platens, args.nu)
+        summary = summarise_corrected(per_file, summary)
     out.mkdir(parents=True, exist_ok=True)
     write_groundtruth(per_file, summary, out)
 
@@ -99,6 +123,12 @@ def run(args: argparse.Namespace) -> int:
         strain_lo_pct=100 * summary["strain_lo"], strain_hi_pct=100 * summary["strain_hi"],
     )[["material", "n", "E_mean_kPa", "E_sd_kPa", "E_sem_kPa", "strain_lo_pct",
        "strain_hi_pct"]]
+    if args.platens is not None:
+        shown["E_corrected_kPa"] = summary["E_corrected_mean_pa"] / 1e3
+        c = per_file["platen_factor"]
+        print(f"{args.platens} platens at nu {args.nu:g}: the tests read E x "
+              f"{c.min():.4g}" + (f"-{c.max():.4g}" if c.max() > c.min() else "")
+              + " (the blocks' twins); E_corrected_kPa = the material's E")
     print(shown.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     print(f"wrote {out / layout.GROUNDTRUTH} and {out / layout.GROUNDTRUTH_SUMMARY}")
     return 0

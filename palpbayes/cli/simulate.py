@@ -1,8 +1,10 @@
 """``palpbayes simulate OUT_DIR``: write a synthetic palpation campaign (docs/design.md §7).
 
 The folder holds a manifest, one CSV per trace, Instron-like ground-truth exports and the true
-values (see :mod:`palpbayes.sim.campaign`).  Its specimens are layers of the paper's thickness
-lying on a rigid plate without friction (``--base free``; the paper's blocks rest on a plate).
+values (see :mod:`palpbayes.sim.campaign`).  Its specimens are the paper's 50 × 50 mm blocks of
+its thicknesses (their finite-element twins, :mod:`palpbayes.twin`), lying on a rigid plate
+without friction (``--base free``), and its compression tests run between bonded platens
+(``--platens bonded``: the Instron reads the blocks stiffer than E).
 The shipped example was made with::
 
     palpbayes simulate data/example-campaign --seed 2026 --repetitions 3
@@ -76,6 +78,13 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="AR(1) coefficient of the force noise, |PHI| < 1 (default 0: white)")
     c.add_argument("--gt-specimens", type=int, default=None, metavar="N",
                    help="compression tests per material (default 5)")
+    c.add_argument("--platens", choices=("bonded", "lubricated"), default=None,
+                   help="platens of the compression tests: bonded (default: a foam on dry "
+                        "steel does not slide, the Instron reads c*E with c > 1) or lubricated "
+                        "(it reads E)")
+    c.add_argument("--layer-only", action="store_true",
+                   help="simulate each block as a layer of infinite width (the physics before "
+                        "the specimen twin) and leave its footprint out of the manifest")
     c.add_argument("--base", type=_base, default=None, metavar="BASE",
                    help="the specimens as layers of their thickness on a rigid plate: 'free' "
                         "(lying on it without friction, the default), 'bonded', a partial bond "
@@ -135,9 +144,9 @@ def register(subparsers) -> argparse.ArgumentParser:
 _MAP_ONLY = ("grid", "step", "background_e", "tip", "lump_ratio", "lump_radius", "lump_depth",
              "lump_x", "lump_y", "heterogeneity", "workers")
 _LUMP = ("lump_ratio", "lump_radius", "lump_depth", "lump_x", "lump_y")
-_CAMPAIGN_ONLY = ("repetitions", "ar1", "gt_specimens", "base")
+_CAMPAIGN_ONLY = ("repetitions", "ar1", "gt_specimens", "base", "platens", "layer_only")
 _VISCO_ONLY = ("speeds", "hold", "depth", "rate", "materials", "tips")
-_ELASTIC_ONLY = ("gt_specimens", "base")
+_ELASTIC_ONLY = ("gt_specimens", "base", "platens", "layer_only")
 #: How the campaign's specimens rest on their plate unless --base says otherwise.
 DEFAULT_BASE = "free"
 
@@ -215,7 +224,7 @@ def run(args: argparse.Namespace) -> int:
     if args.rheology:
         return _run_visco(args)
     for name, default in (("repetitions", 3), ("ar1", 0.0), ("gt_specimens", 5),
-                          ("base", DEFAULT_BASE)):
+                          ("base", DEFAULT_BASE), ("platens", "bonded")):
         if getattr(args, name) is None:
             setattr(args, name, default)
     out = simulate_campaign(
@@ -227,6 +236,7 @@ def run(args: argparse.Namespace) -> int:
         noise_ar1=args.ar1,
         gt_specimens=args.gt_specimens,
         base=None if args.base == "none" else args.base,
+        blocks=not args.layer_only, platens=args.platens,
     )
     n_mat, n_tip = len(PAPER_MATERIALS), len(PAPER_TIPS)
     noise = f"{format_force(args.noise_pp, 6)} p-p"
@@ -234,14 +244,16 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote a synthetic campaign to {out} (seed {args.seed}, noise {noise}):")
     print(f"  {n_mat * n_tip * args.repetitions} traces ({n_mat} materials x {n_tip} tips x "
           f"{args.repetitions} repetitions) in traces/, listed in manifest.csv")
-    names = {"none": "half-spaces", "free": "layers lying free on a rigid plate",
-             "bonded": "layers bonded to a rigid plate"}
+    what = ("layers" if args.layer_only else
+            "50 x 50 mm blocks (finite-element twins, footprint in the manifest)")
+    names = {"none": "half-spaces", "free": f"{what} lying free on a rigid plate",
+             "bonded": f"{what} bonded to a rigid plate"}
     rest = (names[args.base] if isinstance(args.base, str)
-            else f"layers partly bonded ({args.base:g}) to a rigid plate")
+            else f"{what} partly bonded ({args.base:g}) to a rigid plate")
     print(f"  specimens simulated as {rest}")
     if args.gt_specimens:
         print(f"  {n_mat * args.gt_specimens} Instron-style compression exports in "
-              "groundtruth/ (listed in groundtruth/manifest.csv)")
+              f"groundtruth/ (listed in groundtruth/manifest.csv), {args.platens} platens")
     print("  true values in truth.csv, truth_groundtruth.csv and truth_materials.csv")
     return 0
 

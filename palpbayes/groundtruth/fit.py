@@ -61,7 +61,7 @@ _MAX_ITERATIONS = 100
 #: Columns of the per-file table, in order.
 PER_FILE_COLUMNS = ["file", "specimen", "material", "E_pa", "E_sd_pa", "strain_lo", "strain_hi",
                     "strain_toe", "r2", "n_points", "E_ols_sd_pa", "resid_acf1", "hac_lags",
-                    "E_plain_pa", "E_plain_sd_pa", "E_window_spread_pa"]
+                    "E_plain_pa", "E_plain_sd_pa", "E_window_spread_pa", "area_m2", "height_m"]
 
 
 @dataclass(frozen=True)

@@ -197,7 +197,8 @@ def analyse(
         *measured* strain (the dataset authors' convention; equal to ``E_pa`` when
         ``toe_compensation`` is False), and ``E_window_spread_pa``, max - min of E over
         :func:`sensitivity_windows` with the same options (NaN when the test does not reach
-        one of them, or the plain fit is impossible).
+        one of them, or the plain fit is impossible); ``area_m2`` and ``height_m``, the
+        block's cross-section [m²] and height [m] used.
     summary : pandas.DataFrame
         One row per material, :data:`SUMMARY_COLUMNS` (see :func:`summarise`).
     """
@@ -212,7 +213,8 @@ def analyse(
                            material=mat if mat is not None else test.material)
         fit = fit_modulus(test, window, toe_compensation, skip_toe=skip_toe)
         rows.append({**fit.as_row(),
-                     **_variants(test, fit, window, toe_compensation, skip_toe)})
+                     **_variants(test, fit, window, toe_compensation, skip_toe),
+                     "area_m2": test.area_m2, "height_m": test.height_m})
     per_file = pd.DataFrame(rows, columns=PER_FILE_COLUMNS)
     per_file["n_points"] = per_file["n_points"].astype(int)
     per_file["hac_lags"] = per_file["hac_lags"].astype(int)

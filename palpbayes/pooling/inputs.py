@@ -72,7 +72,8 @@ def fitdata_from_posterior(idata, model: ModelSpec) -> FitData:
 
 
 def systematic_factor(data: FitData, z_surf: float, estar: float, spec: BudgetSpec, n: int,
-                      rng: np.random.Generator) -> tuple[np.ndarray, pd.DataFrame]:
+                      rng: np.random.Generator
+                      ) -> tuple[np.ndarray, pd.DataFrame, np.ndarray | None]:
     """Draws of the shared systematic factor f = E_budget / E_stat and its input table.
 
     :func:`palpbayes.bayes.budget.propagate` is run with the E* draws held at ``estar`` (the
@@ -101,9 +102,11 @@ def systematic_factor(data: FitData, z_surf: float, estar: float, spec: BudgetSp
         (n,) draws of f [-].
     table : DataFrame
         One row per systematic input: ``input, distribution, var_log`` (variance of log f_k).
+    nu : ndarray
+        (n,) the Poisson ratio of each draw [-] (for the Instron-equivalent modulus).
     """
     bud = propagate(np.full(n, float(estar)), data, float(z_surf), spec, rng)
     factor = bud.E / (float(estar) * (1.0 - data.model.nu ** 2))
     tab = bud.table[bud.table["input"] != "E* (posterior)"].copy()
     tab["var_log"] = (tab["rel_sd_pct"] / 100.0) ** 2
-    return factor, tab[["input", "distribution", "var_log"]].reset_index(drop=True)
+    return factor, tab[["input", "distribution", "var_log"]].reset_index(drop=True), bud.nu

@@ -285,6 +285,8 @@ class PooledEstimate:
         [Pa] Posterior-predictive draws for a new specimen, exp(mu + tau·z)·f.
     budget
         Variance shares of log E: ``input, distribution, rel_sd_pct, share_pct``.
+    nu
+        The Poisson ratio of each draw [-] (the budget's), None without a budget.
     """
 
     material: str
@@ -294,6 +296,7 @@ class PooledEstimate:
     E: np.ndarray
     E_new: np.ndarray
     budget: pd.DataFrame
+    nu: np.ndarray | None = None
 
     @property
     def E_stat(self) -> np.ndarray:
@@ -373,11 +376,11 @@ def pool_group(m, s, *, material: str = "", tip: str = "", data: FitData | None 
     if data is not None and budget is not None:
         if z_surf is None or estar is None:
             raise InputError("the budget needs the representative trace's z_surf and E*")
-        factor, tab = systematic_factor(data, z_surf, estar, budget, n,
-                                        np.random.default_rng(factor_ss))
+        factor, tab, nu = systematic_factor(data, z_surf, estar, budget, n,
+                                            np.random.default_rng(factor_ss))
         rows += tab.to_dict("records")
     else:
-        factor = np.ones(n)
+        factor, nu = np.ones(n), None
     if p_bonded is not None:
         free = np.random.default_rng(factor_ss.spawn(1)[0]).random(n) >= p_bonded
         f_base = np.where(free, base_ratio, 1.0)
@@ -395,4 +398,4 @@ def pool_group(m, s, *, material: str = "", tip: str = "", data: FitData | None 
     E = np.exp(post.mu) * factor
     E_new = np.exp(post.log_predictive(rng)) * factor
     return PooledEstimate(material=material, tip=tip, posterior=post, factor=factor, E=E,
-                          E_new=E_new, budget=table)
+                          E_new=E_new, budget=table, nu=nu)

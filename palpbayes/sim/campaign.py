@@ -3,7 +3,8 @@
 :func:`simulate_campaign` writes the layout of docs/design.md §5::
 
     OUT_DIR/
-      manifest.csv                 one row per trace (palpbayes.io.manifest columns)
+      manifest.csv                 one row per trace (palpbayes.io.manifest columns, the
+                                   blocks' footprint length_m, width_m among them)
       traces/<trace_id>.csv        time_s, z_m, force_n   (trace ids like White_flat_r01)
       groundtruth/manifest.csv     file, specimen, material, area_m2, height_m
       groundtruth/<Material>_S<k>.csv   Instron-like compression exports
@@ -34,6 +35,7 @@ from ..io.trace_csv import write_trace
 from ..noise import PAPER_NOISE_PP
 from ..paper import PAPER_MATERIALS, PAPER_TIPS, Material
 from ..trace import IndentationTrace
+from ..twin import Specimen, compression_factor
 from ..units import format_pressure
 from .compression import simulate_compression_test, write_compression_export
 from .trace import simulate_trace
@@ -102,8 +104,11 @@ def prepare_out_dir(out: Path, overwrite: bool) -> None:
 
 
 def manifest_row(trace_id: str, file: str, specimen: str, material: str, tip: Tip,
-                 thickness: float, repetition: int, rest_time: float | None) -> dict:
-    """One row of a simulated campaign's ``manifest.csv`` (tip geometry columns included)."""
+                 thickness: float, repetition: int, rest_time: float | None,
+                 block: Specimen | None = None) -> dict:
+    """One row of a simulated campaign's ``manifest.csv`` (tip geometry columns included; a
+    block's footprint when given)."""
+    footprint = {} if block is None else {"length_m": block.length, "width_m": block.width}
     return {
         "trace_id": trace_id,
         "file": file,
@@ -114,11 +119,15 @@ def manifest_row(trace_id: str, file: str, specimen: str, material: str, tip: Ti
         "thickness_m": thickness,
         "repetition": repetition,
         "rest_time_s": np.nan if rest_time is None else rest_time,
+        **footprint,
     }
 
 
-def _truth_row(trace: IndentationTrace, tip_name: str) -> dict:
+def _truth_row(trace: IndentationTrace, tip_name: str, block: Specimen | None,
+               platens: str) -> dict:
     m = trace.metadata
+    c = 1.0 if block is None or platens == "lubricated" else compression_factor(
+        block, m["nu_true"], platens)
     return {
         "trace_id": trace.trace_id,
         "material": trace.material,
@@ -145,6 +154,9 @@ def _truth_row(trace: IndentationTrace, tip_name: str) -> dict:
         "depth_m": m["depth_true"],
         "max_force_true_n": m["max_force_true"],
         "n_points": trace.n_points,
+        # what a compression test of this location's block would read (the fits' E_instron)
+        "platens": platens if block is not None else "",
+        "E_instron_true_pa": m["E_true"] * c if block is not None else np.nan,
     }
 
 
@@ -172,6 +184,8 @@ def simulate_campaign(
     z_surf: float = 0.1,
     z_surf_halfwidth: float = 1e-3,
     rest_time: float | None = 60.0,
+    blocks: bool = True,
+    platens: str = "bonded",
     overwrite: bool = False,
     float_format: str = "%.10g",
     **trace_options,
@@ -182,11 +196,13 @@ def simulate_campaign(
     new specimen location with its own modulus E_i ~ Normal(E_m, sd_m), surface height
     z_surf_i ~ Uniform(z_surf ± z_surf_halfwidth) and force offset F0_i ~ Normal(0,
     force_offset_sd); depth 10 % of the thickness, approach 1 mm, 50 mm/min, 800 Hz, Gaussian
-    noise ``noise_pp`` p-p (sigma = pp/6), each specimen a layer of its thickness lying free on
-    a rigid plate (``base="free"``; ``base=None``: half-spaces, the paper's model).  The
-    defaults match the package's default model (a layer of known thickness, base unknown),
-    which is therefore well specified.  ``gt_specimens``
-    compression blocks per material are drawn from the same Normal(E_m, sd_m).
+    noise ``noise_pp`` p-p (sigma = pp/6), each specimen the material's block (its footprint
+    and thickness, the force its finite-element twin's, :mod:`palpbayes.twin`) lying free on a
+    rigid plate (``base="free"``; ``blocks=False``: a layer of infinite width; ``base=None``:
+    half-spaces, the paper's model).  The manifest gives each block's footprint, so the
+    package's default model (the block's twin, base unknown) is well specified.
+    ``gt_specimens`` compression blocks per material are drawn from the same Normal(E_m,
+    sd_m) and tested between ``platens`` (default bonded: the Instron reads c·E, c > 1).
 
     Each trace and block has its own random stream, :func:`child_seed` (seed, kind, material,
     tip, repetition): the same seed gives byte-identical files (no timestamps), and changing
@@ -214,6 +230,14 @@ def simulate_campaign(
         [m] Centre and half-width of the uniform surface height.
     rest_time
         [s] Rest time recorded before every trace (manifest ``rest_time_s``).
+    blocks
+        The specimens as tested: each material's block of ``width_m`` × ``length_m`` ×
+        ``thickness_m`` (its twin's force, its footprint in the manifest); False: layers of
+        infinite width, no footprint.
+    platens
+        The compression tests' platens, ``"bonded"`` (default: a foam on dry steel does not
+        slide) or ``"lubricated"``; truth.csv's ``E_instron_true_pa`` is what such a test of
+        each palpated location's block would read.
     overwrite
         Write into a non-empty folder (a previous campaign's traces are removed first).
     float_format
@@ -253,6 +277,9 @@ def simulate_campaign(
         check_file_name(name, "tip")
     if force_offset_sd < 0 or z_surf_halfwidth < 0:
         raise InputError("force_offset_sd and z_surf_halfwidth must be non-negative")
+    if platens not in ("lubricated", "bonded"):
+        raise InputError(f"platens {platens!r}: use 'lubricated' or 'bonded'")
+    layered = trace_options.get("base", "free") is not None
 
     out = Path(out_dir)
     traces, manifest, truth = [], [], []  # simulate first: bad options fail before any write
@@ -264,16 +291,18 @@ def simulate_campaign(
                 zs = z_surf + z_surf_halfwidth * gen.uniform(-1.0, 1.0)
                 f0 = force_offset_sd * gen.standard_normal()
                 tid = f"{mname}_{tname}_r{rep:02d}"
+                block = (Specimen(mat.thickness_m, length=mat.length_m, width=mat.width_m)
+                         if blocks and layered else None)
                 trace = simulate_trace(
                     E_i, tip, nu=nu, z_surf=zs, thickness=mat.thickness_m, noise_pp=noise_pp,
                     noise_ar1=noise_ar1, force_offset=f0, rng=gen, trace_id=tid,
                     specimen=mname, material=mname, repetition=rep, rest_time=rest_time,
-                    **trace_options)
+                    block=block, **trace_options)
                 traces.append(trace)
                 manifest.append(manifest_row(tid, f"traces/{tid}.csv", mname, mname, tip,
-                                              mat.thickness_m, rep, rest_time))
-                truth.append(_truth_row(trace, tname))
-    tests = _simulate_groundtruth(seed, materials, gt_specimens)
+                                              mat.thickness_m, rep, rest_time, block))
+                truth.append(_truth_row(trace, tname, block, platens))
+    tests = _simulate_groundtruth(seed, materials, gt_specimens, platens, nu)
     prepare_out_dir(out, overwrite)
     for trace in traces:
         write_trace(trace, out / "traces" / f"{trace.trace_id}.csv", float_format=float_format)
@@ -288,9 +317,10 @@ def simulate_campaign(
     return out
 
 
-def _simulate_groundtruth(seed: int, materials: Mapping[str, Material],
-                          n: int) -> list[tuple[str, pd.DataFrame, float]]:
-    """(specimen name, compression table, true E) for ``n`` blocks per material."""
+def _simulate_groundtruth(seed: int, materials: Mapping[str, Material], n: int,
+                          platens: str, nu: float) -> list[tuple[str, pd.DataFrame, float]]:
+    """(specimen name, compression table, true E) for ``n`` blocks per material, tested
+    between ``platens``."""
     tests = []
     for mname, mat in materials.items():
         for k in range(1, n + 1):
@@ -299,7 +329,7 @@ def _simulate_groundtruth(seed: int, materials: Mapping[str, Material],
             name = f"{mname}_S{k}"
             df = simulate_compression_test(E, width=mat.width_m, length=mat.length_m,
                                            height=mat.thickness_m, rng=gen, specimen=name,
-                                           material=mname)
+                                           material=mname, platens=platens, nu=nu)
             tests.append((name, df, E))
     return tests
 
@@ -315,7 +345,9 @@ def _write_groundtruth(out: Path, tests: list[tuple[str, pd.DataFrame, float]]) 
                      "area_m2": a["area_m2"], "height_m": a["height_m"]})
         truth.append({"file": f"groundtruth/{name}.csv", "specimen": name,
                       "material": a["material"], "E_true_pa": E, "toe_m": a["toe_m"],
-                      "noise_n": a["noise_n"]})
+                      "noise_n": a["noise_n"], "platens": a["platens"],
+                      "platen_factor": a["platen_factor"],
+                      "E_apparent_pa": a["E_apparent_pa"]})
     write_csv_atomic(pd.DataFrame(rows), out / "groundtruth" / "manifest.csv",
                      float_format="%.10g")
     write_csv_atomic(pd.DataFrame(truth), out / "truth_groundtruth.csv")

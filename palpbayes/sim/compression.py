@@ -17,9 +17,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..contact import check_nu
 from ..errors import InputError
 from ..groundtruth.window import toe_compression
 from ..io.atomic import write_text_atomic
+from ..twin import Specimen, compression_factor
 from ._checks import nonneg, positive
 
 __all__ = ["toe_compression", "simulate_compression_test", "write_compression_export"]
@@ -40,6 +42,8 @@ def simulate_compression_test(
     rng: np.random.Generator | int | None = None,
     specimen: str = "",
     material: str = "",
+    platens: str = "lubricated",
+    nu: float | None = None,
 ) -> pd.DataFrame:
     """Simulate an unconfined uniaxial compression test (Instron 4502 style).
 
@@ -47,9 +51,12 @@ def simulate_compression_test(
     sampled at ``rate`` at t_k = k/rate, k = 0..N.  Load (linear elastic, frictionless
     platens)::
 
-        F(x) = E·A/h·u(x) + noise,   A = width·length,   u = toe_compression(x, toe)
+        F(x) = c·E·A/h·u(x) + noise,   A = width·length,   u = toe_compression(x, toe)
 
-    so beyond x = 2·toe the curve is a line of slope E·A/h [N/m] through (toe, 0).  A
+    so beyond x = 2·toe the curve is a line of slope c·E·A/h [N/m] through (toe, 0); c = 1
+    between lubricated platens, c(nu, block) > 1 between bonded ones, whose friction holds
+    the faces' lateral expansion (the block's finite-element twin,
+    :func:`palpbayes.twin.compression_factor`): what an Instron reports as E is then c·E.  A
     viscoelastic block (``kernel``, its uniaxial relaxation modulus E(t)) carries the load of
     the same strain history through the hereditary integral (Boltzmann),
 
@@ -82,6 +89,11 @@ def simulate_compression_test(
         numpy Generator or seed.
     specimen, material
         Labels, stored in ``df.attrs``.
+    platens
+        ``"lubricated"`` (frictionless: the block in uniaxial stress) or ``"bonded"`` (the
+        faces cannot slide; needs ``nu``; an elastic block only).
+    nu
+        Poisson ratio [-] of the block (bonded platens).
 
     Returns
     -------
@@ -90,7 +102,8 @@ def simulate_compression_test(
         ``attrs`` holds the truth (``E_true_pa``, NaN for a ``kernel``, then ``kernel``
         its repr; ``area_m2``, ``height_m``, ``width_m``,
         ``length_m``, ``stiffness_n_per_m``, ``toe_m``, ``noise_n``, ``speed_m_per_s``,
-        ``specimen``, ``material``).
+        ``specimen``, ``material``, ``platens``, ``nu``, ``platen_factor`` (c) and
+        ``E_apparent_pa``, c·E: what the test reads).
     """
     if (E is None) == (kernel is None):
         raise InputError("give the block's Young's modulus E [Pa] or its relaxation modulus "
@@ -111,6 +124,16 @@ def simulate_compression_test(
         raise InputError(f"maximum compression {max_compression} m must be below the block "
                          f"height {height} m")
     toe = nonneg(toe, "toe length [m]")
+    if platens not in ("lubricated", "bonded"):
+        raise InputError(f"platens {platens!r}: use 'lubricated' or 'bonded'")
+    c = 1.0
+    if platens == "bonded":
+        if kernel is not None:
+            raise InputError("bonded platens are simulated for an elastic block (E=) only")
+        if nu is None:
+            raise InputError("bonded platens need the block's Poisson ratio (nu=)")
+        c = compression_factor(Specimen(height, length=length, width=width), check_nu(nu),
+                               "bonded")
     noise_n = nonneg(noise_n, "load-cell noise sd [N]")
     gen = np.random.default_rng(rng)
     n = math.ceil(max_compression / speed * rate - 1e-6)
@@ -118,7 +141,7 @@ def simulate_compression_test(
     x = np.minimum(speed * t, max_compression)
     area = width * length
     if kernel is None:
-        k = E * area / height
+        k = c * E * area / height
         load = k * toe_compression(x, toe)
     else:
         from ..contact.viscoelastic import hereditary_force
@@ -132,6 +155,8 @@ def simulate_compression_test(
         "E_true_pa": E, "area_m2": area, "height_m": height, "width_m": width,
         "length_m": length, "stiffness_n_per_m": k, "toe_m": toe, "noise_n": noise_n,
         "speed_m_per_s": speed, "specimen": specimen, "material": material,
+        "platens": platens, "nu": math.nan if nu is None else float(nu), "platen_factor": c,
+        "E_apparent_pa": c * E,
     })
     return df
 

@@ -121,7 +121,7 @@ def sphere_data():
 
 def test_systematic_factor_matches_budget_inputs(sphere_data):
     spec = BudgetSpec()
-    f, tab = systematic_factor(sphere_data, 0.1, 1.2e5, spec, 20000, np.random.default_rng(0))
+    f, tab, _ = systematic_factor(sphere_data, 0.1, 1.2e5, spec, 20000, np.random.default_rng(0))
     assert list(tab["input"]) == ["Poisson ratio", "tip radius", "force gain", "compliance"]
     # Poisson ratio Uniform(0.25, 0.35): sd of log(1 - nu²) relative to nu = 0.3
     nu = np.random.default_rng(1).uniform(0.25, 0.35, 200000)

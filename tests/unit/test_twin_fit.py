@@ -73,7 +73,7 @@ def test_specimen_option_checks():
     for kw, match in (({"thickness": "0.03"}, "differs from the height"),
                       ({"thickness": "unknown"}, "contradicts --thickness unknown"),
                       ({"half_space": True}, "contradict each other"),
-                      ({"specimen": "5,5"}, "--specimen: specimen height 5 m is implausible")):
+                      ({"specimen": "5,5"}, "--specimen: specimen height 5 m is implausibl")):
         with pytest.raises(InputError, match=match):
             specimen_from_args(args(**kw))
 
