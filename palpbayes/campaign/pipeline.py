@@ -153,7 +153,8 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
 def write_gap(out_dir: str | os.PathLike) -> Path | None:
     """Write the paper's robot-vs-Instron gap, decomposed (:func:`palpbayes.gap.gap_table`),
     as ``gap.csv`` when the results hold one of the paper's materials; return its path (None
-    otherwise, and a stale table is removed).  About 10 s on one core."""
+    otherwise, and a stale table is removed).  About 10 s on one core, plus ~25 s the first
+    time to solve the blocks' twins (cached on disk after)."""
     import pandas as pd
 
     from ..gap import gap_table

@@ -22,9 +22,11 @@ def plot_gap(gap: pd.DataFrame, *, ax: Axes | None = None) -> Figure:
     """The paper's robot estimate against the Instron, and what the tool's models predict.
 
     Per material × tip (grouped by tip): the published ratio E_robot/E_Instron − 1 with its
-    90 % interval (the two published sd's), the layer's prediction at nu 0.3 from a free to a
-    bonded base (dark bar) and the whole modelled range (base × nu 0.1–0.35 × compliance, Hertz
-    for the sphere; light bar).
+    90 % interval (the two published sd's); the block as tested, its finite-element twin at
+    nu 0.3 from a free to a bonded base between lubricated platens (dark bar), and the whole
+    modelled range (base × nu 0.1–0.35 × compliance × lubricated or bonded platens, Hertz for
+    the sphere; light bar); beside it, outlined, that range for a layer of infinite width and
+    an exact Instron (the prediction before the twin).
 
     Parameters
     ----------
@@ -44,31 +46,42 @@ def plot_gap(gap: pd.DataFrame, *, ax: Axes | None = None) -> Figure:
             if r.empty:
                 continue
             r = r.iloc[0]
+            ax.bar(x + 0.32, r["layer_hi_pct"] - r["layer_lo_pct"], bottom=r["layer_lo_pct"],
+                   width=0.16, facecolor="none", edgecolor="0.45", lw=0.8)
             ax.bar(x, r["predicted_hi_pct"] - r["predicted_lo_pct"],
                    bottom=r["predicted_lo_pct"], width=0.55, color=_LAYER, alpha=0.25, lw=0)
-            lo = min(r["thickness_free_pct"], r["thickness_bonded_pct"])
-            hi = max(r["thickness_free_pct"], r["thickness_bonded_pct"])
+            twin = [100 * ((1 + r[f"thickness_{b}_pct"] / 100) * (1 + r[f"width_{b}_pct"] / 100)
+                           - 1) for b in ("free", "bonded")]
+            lo, hi = min(twin), max(twin)
             ax.bar(x, max(hi - lo, 0.4), bottom=lo, width=0.3, color=_LAYER, lw=0)
             ax.errorbar([x], [r["observed_pct"]],
                         yerr=[[r["observed_pct"] - r["observed_lo_pct"]],
                               [r["observed_hi_pct"] - r["observed_pct"]]],
-                        fmt="o", ms=5, color=METHOD_COLORS["paper"], capsize=3, zorder=3)
+                        fmt="o", ms=5, color=METHOD_COLORS["paper"], capsize=3, zorder=3,
+                        mfc=METHOD_COLORS["paper"] if r["explained"] else "white")
             xt.append(x)
             xl.append(f"{mat}\n{tip}")
             x += 1.0
         x += 0.6
     ax.axhline(0.0, color="0.3", lw=0.7)
+    top = float(np.nanmax(gap[["layer_hi_pct", "predicted_hi_pct", "observed_hi_pct"]]))
+    bottom = float(np.nanmin(gap[["predicted_lo_pct", "observed_lo_pct"]]))
+    ax.set_ylim(bottom - 5.0, top + 0.45 * (top - bottom))  # room for the legend
     ax.set_xticks(xt, xl, fontsize="small")
     ax.set_ylabel("robot ÷ Instron − 1 [%]")
-    ax.set_title("The paper's robot estimates against its Instron, and what the block's "
-                 "thickness predicts", fontsize="medium")
+    n_ok, n_layer = int(gap["explained"].sum()), int(gap["explained_layer"].sum())
+    ax.set_title(f"The paper's robot estimates against its Instron: the specimen as tested "
+                 f"explains {n_ok} of {len(gap)} (the infinite layer {n_layer})",
+                 fontsize="medium")
     ax.legend(handles=[
         Line2D([], [], marker="o", ls="", color=METHOD_COLORS["paper"],
-               label="published (90 % interval from both sd's)"),
-        Patch(color=_LAYER, label="layer, free to bonded base (nu 0.3)"),
+               label="published (90 % interval from both sd's; filled: inside the prediction)"),
+        Patch(color=_LAYER, label="the block's twin, free to bonded base (nu 0.3)"),
         Patch(color=_LAYER, alpha=0.25,
-              label="everything modelled (base, nu 0.1–0.35, compliance, Hertz)")],
-        fontsize="x-small", frameon=False, loc="upper right")
+              label="everything modelled (twin, base, nu 0.1–0.35, compliance, platens, Hertz)"),
+        Patch(facecolor="none", edgecolor="0.45",
+              label="the same with an infinite layer and an exact Instron")],
+        fontsize="x-small", frameon=False, loc="upper center", ncol=2)
     return fig
 
 

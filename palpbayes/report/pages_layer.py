@@ -47,11 +47,12 @@ def layer_pages(res: ResultsFolder) -> list[Page]:
         verdicts = gap_verdicts(res.gap)
         lines = [("t", ln) for ln in wrap(
             "The paper's robot estimates against its Instron (the published numbers), beside "
-            "what palpbayes' models predict its half-space least squares reads on elastic "
-            "blocks of the paper's geometry with the Instron's E: the block as a layer on its "
-            "plate (exact layer solution, free to bonded base), the foam's nu (0.1-0.35 "
-            "against the 0.3 assumed), series compliance (0-2 µm/N), Hertz for the sphere. "
-            "Not modelled: the blocks' finite width, foam nonlinearity and rate.", _W_SMALL)]
+            "what palpbayes' models predict its two tests read on elastic blocks of the "
+            "paper's geometry with the Instron's E: the 50 x 50 mm block as tested, its "
+            "finite-element twin on its plate (free to bonded base), compressed between "
+            "lubricated or bonded platens, the foam's nu (0.1-0.35 against the 0.3 assumed), "
+            "series compliance (0-2 µm/N), Hertz for the sphere. Not modelled: foam "
+            "nonlinearity and rate.", _W_SMALL)]
         for v in verdicts.values():
             lines += [("", "")] + [("t", ln) for ln in wrap(v, _W_SMALL)]
 

@@ -74,7 +74,8 @@ SIM_RESOLUTION = "fine"
 
 
 def layer_factor(depth: ArrayLike, tip: Tip, thickness: float | None, nu: float,
-                 base: str | float | None, block: Specimen | None = None) -> np.ndarray:
+                 base: str | float | None, block: Specimen | None = None,
+                 twin_resolution: str = SIM_RESOLUTION) -> np.ndarray:
     """The bottom effect of the simulated specimen: F_layer/F_half-space [-].
 
     Parameters
@@ -108,7 +109,7 @@ def layer_factor(depth: ArrayLike, tip: Tip, thickness: float | None, nu: float,
     def factor(b: str) -> np.ndarray:
         if block is None:
             return thickness_factor(d, tip, thickness, nu, b)
-        return twin_factor(d, tip, block, nu, b, resolution=SIM_RESOLUTION)
+        return twin_factor(d, tip, block, nu, b, resolution=twin_resolution)
 
     if isinstance(base, str):
         if base not in SIM_BASES:
@@ -167,6 +168,7 @@ def true_force(
     stiffening: float = 0.0,
     apex_flat_radius: float = 0.0,
     block: Specimen | None = None,
+    twin_resolution: str = SIM_RESOLUTION,
 ) -> np.ndarray:
     """The simulator's noise-free force F = E*·s(d)·f(d)·xi(d) [N] (0 for d <= 0).
 
@@ -188,7 +190,7 @@ def true_force(
     else:
         s = shape(d, tip)
     if base is not None:
-        s = s * layer_factor(d, tip, thickness, nu, base, block)
+        s = s * layer_factor(d, tip, thickness, nu, base, block, twin_resolution)
     f = effective_modulus(E, nu) * s
     if stiffening != 0:
         f = f * stiffening_factor(d, thickness, stiffening)

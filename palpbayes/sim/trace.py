@@ -113,6 +113,7 @@ def simulate_trace(
     stiffening: float = 0.0,
     apex_flat_radius: float = 0.0,
     block: Specimen | None = None,
+    twin_resolution: str = "fine",
     rng: np.random.Generator | int | None = None,
     trace_id: str = "sim",
     specimen: str = "",
@@ -199,6 +200,9 @@ def simulate_trace(
         (a half-space with ``base=None`` is refused); its height is the ``thickness`` (given
         or not), and the trace's metadata carry its footprint (``length_m``, ``width_m`` or
         ``diameter_m``), so that a fit of the trace uses the twin too.
+    twin_resolution
+        The block's twin's mesh (default ``fine``, finer than the fits'; ``default`` for a
+        quick prediction whose fit is no twin, e.g. :mod:`palpbayes.gap`).
     rng
         numpy Generator or seed.  The draws are made in a fixed order whatever the options
         (one uniform for b, N normals for the force, N normals for z), so the same seed gives
@@ -271,7 +275,8 @@ def simulate_trace(
     if thickness is None:
         base = None
     law = {"nu": nu, "tip": tip, "thickness": thickness, "base": base,
-           "stiffening": stiffening, "apex_flat_radius": apex_flat_radius, "block": block}
+           "stiffening": stiffening, "apex_flat_radius": apex_flat_radius, "block": block,
+           "twin_resolution": twin_resolution}
     true_force(np.array([depth]), E, **law)  # validate geometry before drawing anything
 
     gen = np.random.default_rng(rng)
