@@ -101,6 +101,8 @@ def run(args: argparse.Namespace) -> int:
         BAYES_NEW_COL,
         GT_COL,
         HERTZ_COL,
+        INSTRON_COL,
+        INSTRON_COVER_COL,
         LS_E_COL,
         build_report,
         coverage_counts,
@@ -133,15 +135,20 @@ def run(args: argparse.Namespace) -> int:
     info = build_report(res, args.output, seed=args.seed)
     table = summary_table(res)
     keep = [c for c in ("Material", "Tip", GT_COL, LS_E_COL, BAYES_E_COL, BAYES_NEW_COL,
-                        "Bayes covers GT", HERTZ_COL, "LS mean E ± sd over traces [kPa]",
+                        "Bayes covers GT", INSTRON_COL, INSTRON_COVER_COL, HERTZ_COL,
+                        "LS mean E ± sd over traces [kPa]",
                         "Bayes mean E ± sd over traces [kPa]") if c in table.columns]
     if len(table):
         print(table[keep].to_string(index=False))
     cover = coverage_counts(res)
+    inst = cover.pop("instron", None)
     if cover:
         print("new-specimen 90 % interval covers the ground truth: "
               + ", ".join(f"{'Bayes' if m == 'bayes' else 'LS'} {k}/{n}"
                           for m, (k, n) in cover.items()))
+    if inst is not None:
+        print(f"like for like, the Bayesian Instron-equivalent interval of a new specimen (the "
+              f"block's twin, its platens) covers the Instron in {inst[0]}/{inst[1]}")
     flagged = f"{info.n_flagged} flagged" if info.n_flagged else "all converged"
     line = f"report: {info.n_pages} pages, {info.n_traces} traces, Bayesian fits {flagged}"
     if info.n_pooled_flagged:

@@ -26,6 +26,7 @@ Functions
 :func:`plot_stiffening`      modulus vs rest time with the fitted stiffening law and its band
 :func:`plot_gap`             the paper's robot-vs-Instron gap against the layer's prediction
 :func:`plot_halfspace_vs_layer` a campaign's half-space and layer estimates side by side
+:func:`plot_specimen_as_tested` palpation (the block's twin) and compression like for like
 :func:`plot_cycle_fit`       a viscoelastic fit: force against time with its band
 :func:`plot_relaxation`      the relaxation modulus E*(t) with its band, one or more fits
 :func:`plot_hysteresis`      force against depth per segment (approach, hold, retract)
@@ -46,6 +47,7 @@ from .rheology import plot_cycle_fit, plot_hysteresis, plot_relaxation
 from .stiffening import plot_stiffening
 from .style import INPUT_COLORS, METHOD_COLORS, METHOD_LABELS
 from .trace import plot_force_depth, plot_residuals
+from .twin import plot_specimen_as_tested
 from .walkers import plot_walkers
 
 __all__ = [
@@ -65,6 +67,7 @@ __all__ = [
     "plot_stiffening",
     "plot_gap",
     "plot_halfspace_vs_layer",
+    "plot_specimen_as_tested",
     "plot_cycle_fit",
     "plot_relaxation",
     "plot_hysteresis",

@@ -74,6 +74,8 @@ from .tables import (
     BAYES_NEW_COL,
     GT_COL,
     HERTZ_COL,
+    INSTRON_COL,
+    INSTRON_COVER_COL,
     LS_E_COL,
     coverage_counts,
     summary_table,
@@ -94,6 +96,8 @@ __all__ = [
     "LS_E_COL",
     "BAYES_E_COL",
     "BAYES_NEW_COL",
+    "INSTRON_COL",
+    "INSTRON_COVER_COL",
     "HERTZ_COL",
     "build_report",
     # re-exported from palpbayes.campaign.results and .pipeline (notebooks import them here)

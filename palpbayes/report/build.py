@@ -24,6 +24,7 @@ from .pages_rheology import rheology_pages, rheology_title_page, row_failed
 from .pages_stiffening import stiffening_groups, stiffening_page, stiffening_table_pages
 from .pages_summary import comparison_pages, summary_pages
 from .pages_title import title_page
+from .pages_twin import twin_pages
 from .tables import flagged_rows
 
 __all__ = ["REPORT_NAME", "RASTER_DPI", "ReportInfo", "build_report"]
@@ -121,6 +122,7 @@ def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathL
     if res.comparison is not None and not res.comparison.empty:
         pages += comparison_pages(res)
     pages += layer_pages(res)
+    pages += twin_pages(res)
     pages += [group_page(res, m, t, seed) for m, t in res.groups()]
     pages += diagnostics_page(res)
     pages += budget_pages(res)

@@ -14,6 +14,7 @@ from .format import KPA, wrap
 from .layout import CHART_GROUPS_PER_PAGE, Page, text_lines
 from .tables import (
     HERTZ_COL,
+    INSTRON_COL,
     comparison_groups,
     continued,
     coverage_counts,
@@ -26,9 +27,12 @@ from .tables import (
 
 def _coverage_line(res: ResultsFolder) -> str:
     cov = coverage_counts(res)
+    inst = cov.pop("instron", None)
     if not cov:
         return ""
     parts = [f"{'Bayes' if m == 'bayes' else 'LS'}: {k}/{n}" for m, (k, n) in cov.items()]
+    if inst is not None:
+        parts.append(f"Bayes Instron-equivalent: {inst[0]}/{inst[1]}")
     return ("New-specimen 90 % interval covers the ground truth in " + ", ".join(parts)
             + " material × tip groups.")
 
@@ -64,6 +68,12 @@ def summary_pages(res: ResultsFolder) -> list[Page]:
             "estimates; 'Paper err' is relative to the PAPER's own Instron ground truth"
             + (f" ({paper_gt})" if paper_gt else "") + ", not to the GT column, recomputed "
             "from the printed E. (!) marks a group with a non-converged or flagged fit.")
+        if INSTRON_COL in table.columns:
+            note += (" Instron-equiv.: with the specimen's footprint known, what a "
+                     "compression test of a new specimen's block would read between the "
+                     "run's platens (lubricated: E; bonded: c(nu)·E, c > 1; unknown: the "
+                     "interval spans both), from the block's finite-element twin: the number "
+                     "to set beside an Instron, like for like.")
         if HERTZ_COL in table.columns:
             note += (" Hertz LS: the paper's choice for a sphere — least squares with the "
                      "paraboloid (Hertz) law at the sphere's radius on the same traces, mean "

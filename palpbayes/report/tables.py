@@ -18,7 +18,8 @@ from .format import KPA, fmt, interval, isnum, pm, yesno
 from .layout import PAGE_SIZE, TABLE_ROWS_PER_PAGE
 
 __all__ = ["summary_table", "coverage_counts", "GT_COL", "LS_E_COL", "BAYES_E_COL", "BAYES_NEW_COL",
-           "HERTZ_COL", "hertz_of_group", "comparison_groups", "pooled_of", "flagged_rows",
+           "INSTRON_COL", "INSTRON_COVER_COL", "HERTZ_COL", "hertz_of_group", "comparison_groups",
+           "pooled_of", "flagged_rows",
            "draw_table", "page_chunks", "continued", "material_pages"]
 
 #: Column headers of the comparison-based summary table (units in the headers).
@@ -27,6 +28,9 @@ LS_E_COL = "LS E ± sd [kPa]"
 BAYES_E_COL = "Bayes material E ± sd [kPa]"
 BAYES_NEW_COL = "Bayes new specimen 90 % [kPa]"
 HERTZ_COL = "Hertz LS E [kPa] (Δ vs LS)"
+#: The specimen's twin: a new specimen's Instron-equivalent reading, like for like with GT.
+INSTRON_COL = "Bayes Instron-equiv. 90 % [kPa]"
+INSTRON_COVER_COL = "Instron-equiv. covers GT"
 
 
 def hertz_of_group(results: ResultsFolder, mat: str, tip: str
@@ -88,6 +92,10 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
                 row[f"{label} err [%]"] = "–" if r is None else fmt(r.get("rel_err_pct"))
                 row[f"{label} covers GT"] = ("–" if r is None
                                              else yesno(r.get("gt_in_new_interval")))
+            if bay is not None and isnum(bay.get("E_instron_new_lo_pa")):
+                row[INSTRON_COL] = interval(bay.get("E_instron_new_lo_pa"),
+                                            bay.get("E_instron_new_hi_pa"))
+                row[INSTRON_COVER_COL] = yesno(bay.get("gt_in_instron_interval"))
             row["Paper E ± sd [kPa]"] = pm(any_row.get("paper_E_pa"),
                                             any_row.get("paper_sd_pa"))
             row["Paper err [%] (vs paper's GT)"] = fmt(any_row.get("paper_err_pct"))
@@ -114,7 +122,8 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
 
 def coverage_counts(results: ResultsFolder) -> dict[str, tuple[int, int]]:
     """Per method, (groups whose new-specimen interval covers the ground truth, groups with a
-    ground truth), from ``comparison.csv`` ({} without it)."""
+    ground truth), from ``comparison.csv`` ({} without it); under ``"instron"`` the Bayesian
+    groups whose Instron-equivalent interval covers it (the specimen's twin: like for like)."""
     comp = results.comparison
     out: dict[str, tuple[int, int]] = {}
     if comp is None or comp.empty or "gt_in_new_interval" not in comp:
@@ -125,6 +134,14 @@ def coverage_counts(results: ResultsFolder) -> dict[str, tuple[int, int]]:
             sub = sub[pd.to_numeric(sub["gt_E_pa"], errors="coerce").notna()]
         if len(sub):
             out[method] = (int(sub["gt_in_new_interval"].map(parse_bool).sum()), int(len(sub)))
+    if "gt_in_instron_interval" in comp:
+        sub = comp[(comp["method"] == "bayes")
+                   & pd.to_numeric(comp["E_instron_pa"], errors="coerce").notna()]
+        if "gt_E_pa" in sub:
+            sub = sub[pd.to_numeric(sub["gt_E_pa"], errors="coerce").notna()]
+        if len(sub):
+            out["instron"] = (int(sub["gt_in_instron_interval"].map(parse_bool).sum()),
+                              int(len(sub)))
     return out
 
 

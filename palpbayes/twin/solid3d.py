@@ -66,8 +66,8 @@ from ..errors import GeometryError
 from .mesh import graded
 
 __all__ = ["Resolution3D", "RESOLUTIONS_3D", "MAX_NU_3D", "Solid3D", "Palpation3D",
-           "palpation_force_3d", "compression_factor_3d", "footprint_mesh",
-           "compression_mesh"]
+           "Compression3D", "palpation_force_3d", "compression_factor_3d",
+           "solve_compression_3d", "footprint_mesh", "compression_mesh"]
 
 #: Largest Poisson ratio of the pure displacement formulation (locking beyond).
 MAX_NU_3D = 0.45
@@ -106,27 +106,29 @@ class Resolution3D:
         Compression: growth of the cells away from the platen's edges.
     """
 
-    per_radius: float = 8.0
-    angular: int = 6
+    per_radius: float = 12.0
+    angular: int = 4
     core: float = 0.4
-    outer: float = 1.45
-    top: float = 0.1
-    vertical: float = 1.35
-    punch_first: float = 0.01
-    punch_growth: float = 1.45
+    outer: float = 1.6
+    top: float = 0.15
+    vertical: float = 1.5
+    punch_first: float = 0.02
+    punch_growth: float = 1.6
     platen_first: float = 0.01
     platen_growth: float = 1.4
 
 
-#: Named resolutions (``bench_twin_3d.py`` measures their cost and accuracy).
+#: Named resolutions (``benchmarks/bench_twin_3d.py`` measures their cost and accuracy):
+#: ``default`` for the measurements, ``fine`` finer where the results move (the contact
+#: zone's rings, the punch's edge, the platen's edges; the other parameters were found
+#: converged at ``default``), ``coarse`` for quick checks.
 RESOLUTIONS_3D = {
-    "coarse": Resolution3D(per_radius=5.0, angular=4, outer=1.6, top=0.15, vertical=1.5,
-                           punch_first=0.02, punch_growth=1.6, platen_first=0.03,
+    "coarse": Resolution3D(per_radius=8.0, angular=3, outer=1.8, top=0.2, vertical=1.6,
+                           punch_first=0.03, punch_growth=1.7, platen_first=0.03,
                            platen_growth=1.6),
     "default": Resolution3D(),
-    "fine": Resolution3D(per_radius=11.0, angular=8, outer=1.35, top=0.07, vertical=1.25,
-                         punch_first=0.005, punch_growth=1.35, platen_first=0.004,
-                         platen_growth=1.3),
+    "fine": Resolution3D(per_radius=18.0, punch_first=0.01, punch_growth=1.45,
+                         platen_first=0.005, platen_growth=1.3),
 }
 
 
@@ -463,7 +465,7 @@ class Solid3D:
     @property
     def size(self) -> int:
         """Number of unknowns (three displacements per node)."""
-        return 3 * self.n_nodes
+        return 3 * int(self.n_nodes)
 
     def dofs(self, component: int, where: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
         """Global indices of displacement ``component`` (0, 1, 2: x, y, z) at the nodes whose
@@ -687,6 +689,25 @@ def palpation_force_3d(length: float, width: float, height: float, tip: Tip, nu:
 # compression
 
 
+@dataclass(frozen=True)
+class Compression3D:
+    """A 3-D compression test's result.
+
+    Attributes
+    ----------
+    factor
+        E_app/E [-].
+    dofs
+        Unknowns of the finite-element model.
+    seconds
+        Wall time of the solve (mesh, assembly, factorization) [s].
+    """
+
+    factor: float
+    dofs: int
+    seconds: float
+
+
 def compression_factor_3d(length: float, width: float, height: float, nu: float,
                           platens: str, resolution: str | Resolution3D = "default") -> float:
     """E_app/E [-] of the block ``length`` × ``width`` × ``height`` [L] compressed between
@@ -709,12 +730,15 @@ def compression_factor_3d(length: float, width: float, height: float, nu: float,
     GeometryError
         An unknown platen condition, nu out of range, or a non-positive size.
     """
-    return _compression(length, width, height, nu, platens, resolution)[0]
+    return solve_compression_3d(length, width, height, nu, platens, resolution).factor
 
 
-def _compression(length: float, width: float, height: float, nu: float, platens: str,
-                 resolution: str | Resolution3D = "default") -> tuple[float, int]:
-    """(E_app/E, number of unknowns) of :func:`compression_factor_3d`."""
+def solve_compression_3d(length: float, width: float, height: float, nu: float,
+                         platens: str, resolution: str | Resolution3D = "default"
+                         ) -> Compression3D:
+    """:func:`compression_factor_3d` with the model's size and wall time
+    (:class:`Compression3D`)."""
+    t0 = time.perf_counter()
     _check(nu, length, width, height)
     if platens not in ("bonded", "lubricated"):
         raise GeometryError(f"platens {platens!r}: use 'bonded' or 'lubricated'")
@@ -732,4 +756,5 @@ def _compression(length: float, width: float, height: float, nu: float, platens:
     prescribed[np.isin(fac.fixed, platen)] = -half  # a unit strain over the half height
     u = fac.solve(prescribed)
     force = -4.0 * fac.reaction(u, platen).sum()
-    return float(force / (length * width)), solid.size
+    return Compression3D(float(force / (length * width)), solid.size,
+                         time.perf_counter() - t0)
