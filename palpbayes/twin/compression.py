@@ -43,7 +43,9 @@ PLATENS = ("lubricated", "bonded", "unknown")
 def platen_factor(radius_over_height: float, nu: float, platens: str,
                   resolution: str | Resolution = "default") -> float:
     """E_app/E [-] of a cylinder of radius/height ``radius_over_height`` compressed between
-    ``platens`` (``"lubricated"`` or ``"bonded"``) (module docstring).
+    ``platens`` (``"lubricated"`` or ``"bonded"``) (module docstring).  Lubricated platens give
+    1 exactly (uniaxial stress; the finite elements reproduce it to 1e-12,
+    ``tests/unit/test_twin.py``).
 
     Raises
     ------
@@ -55,6 +57,8 @@ def platen_factor(radius_over_height: float, nu: float, platens: str,
                             "(an unknown condition spans both)")
     if not (math.isfinite(radius_over_height) and radius_over_height > 0):
         raise GeometryError(f"radius/height {radius_over_height!r} must be positive")
+    if platens == "lubricated":
+        return 1.0
     key = resolution if isinstance(resolution, str) else None
     if key is not None:
         return _cached(round(float(radius_over_height), 9), round(float(nu), 9), platens, key)

@@ -43,7 +43,8 @@ GROUP_TITLES = ["White · sphere", "Pink · sphere"]
 FIXED_TITLES = ["Summary: ground truth vs least squares vs Bayes",
                 "Comparison per material and tip", "Convergence diagnostics",
                 "Uncertainty budget", "Methods", "Finite thickness: half-space and layer",
-                "Why does the robot read stiffer than the Instron?"]
+                "Why does the robot read stiffer than the Instron?",
+                "The specimen as tested: palpation and compression like for like"]
 
 
 def _pdf_pages(path: Path) -> list[str]:
@@ -100,6 +101,16 @@ def test_campaign_report_pipeline_writes_every_table(fitted):
     lsq = summ[summ["method"] == "lsq"]  # (the Bayesian rows model the layer, Hertz does not)
     assert ((lsq["E_hertz_rel_diff"] < 0) & (lsq["E_hertz_rel_diff"] > -0.06)).all()
     assert comp["gt_E_pa"].notna().all()
+    # the blocks' footprints reach the fits (their twins) and the comparison sets their
+    # compression reading beside the Instron's, like for like (the GT blocks were tested
+    # between bonded platens; the run's platens are unknown: the interval spans both)
+    bayes = summ[summ["method"] == "bayes"]
+    assert bayes["layer"].str.contains("50 × 50 × (?:30|20) mm block").all()
+    assert (bayes["E_instron_lo_pa"] <= bayes["E_pa"]).all()
+    assert (bayes["E_instron_hi_pa"] > bayes["E_hi_pa"]).all()
+    cb = comp[comp["method"] == "bayes"]
+    assert (cb["platens"] == "unknown").all() and cb["gt_in_instron_interval"].all()
+    assert "like for like" in stdout and "covers the Instron in 2/2" in stdout
     assert pdf.is_file()
     assert f"wrote {pdf}" in stdout
     assert "report: " in stdout and "pages" in stdout
@@ -108,9 +119,9 @@ def test_campaign_report_pipeline_writes_every_table(fitted):
 def test_pdf_pages_and_titles(fitted):
     out, pdf, _ = fitted
     pages = _pdf_pages(pdf)
-    # title, summary, comparison, finite thickness, the paper's gap, 2 groups, diagnostics,
-    # walkers, budget, methods (1-2 pages)
-    assert 11 <= len(pages) <= 13
+    # title, summary, comparison, finite thickness, the paper's gap, the specimen as tested,
+    # 2 groups, diagnostics, walkers, budget, methods (1-2 pages)
+    assert 12 <= len(pages) <= 14
     if not any(pages):
         pytest.skip("pypdf not installed: page count checked, titles not")
     text = "\n".join(pages)
