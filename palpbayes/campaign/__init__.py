@@ -8,8 +8,10 @@ Modules, one job each
 :mod:`~palpbayes.campaign.layout`
     The name of every file of a results folder (no other module spells one).
 :mod:`~palpbayes.campaign.fitjob`
-    One trace's fit (least squares and/or Bayes) and its ``summary.csv`` rows;
-    :class:`FitOptions`.
+    One trace's fit (least squares and/or Bayes) and its ``summary.csv`` rows.
+:mod:`~palpbayes.campaign.options`, :mod:`~palpbayes.campaign.tracemodel`
+    :class:`FitOptions`; the contact model a trace is fitted with (its tip, nu and specimen:
+    a half-space, a layer or the block's twin) and the twin's tables built before the fit.
 :mod:`~palpbayes.campaign.source`
     Reading a campaign's traces (manifest or list) and ``traces.csv``.
 :mod:`~palpbayes.campaign.settings`
@@ -27,6 +29,8 @@ Modules, one job each
 :mod:`~palpbayes.campaign.compare`, :mod:`~palpbayes.campaign.compare_text`
     Pooling per material × tip (:mod:`palpbayes.pooling`) and the comparison with the ground
     truth and the paper (``palpbayes compare``), and its text table.
+:mod:`~palpbayes.campaign.instron`
+    A pooled group's Instron-equivalent modulus beside the Instron, like for like.
 :mod:`~palpbayes.campaign.stiffening_tables`, :mod:`~palpbayes.campaign.indentation`
     The compare step's stiffening law per group (parameters, E(t) band) and each trace
     replayed through the online estimator: the tables the report draws.
@@ -46,13 +50,14 @@ from typing import TYPE_CHECKING, Any
 
 #: Submodules whose ``__all__`` make up the package's public names.
 API_MODULES = ("fitjob", "source", "settings", "run", "results", "compare", "compare_text",
-               "pipeline", "stiffening_tables", "indentation")
+               "instron", "pipeline", "stiffening_tables", "indentation")
 
 if TYPE_CHECKING:  # the same names, for static tools
     from .compare import *  # noqa: F403
     from .compare_text import *  # noqa: F403
     from .fitjob import *  # noqa: F403
     from .indentation import *  # noqa: F403
+    from .instron import *  # noqa: F403
     from .pipeline import *  # noqa: F403
     from .results import *  # noqa: F403
     from .run import *  # noqa: F403

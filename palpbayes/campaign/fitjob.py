@@ -8,31 +8,31 @@ the per-trace netCDF when ``posterior_dir`` is given (written atomically).
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from ..bayes import BayesResult, BudgetSpec, PriorSpec, SamplerSettings, fit_bayes_data
-from ..bayes.budget import nu_nodes
-from ..bayes.layers import default_thickness_range
+from ..bayes import BayesResult, fit_bayes_data
 from ..checks import CheckResult, check_fit, checks_summary
-from ..contact import DEFAULT_NU, check_tip_plausible, get_law
-from ..errors import ConvergenceWarning, FitError, GeometryError, InputError
-from ..fitdata import BONDINGS, FitData, ModelSpec, prepare
+from ..contact import get_law
+from ..errors import ConvergenceWarning, FitError, GeometryError
+from ..fitdata import FitData, prepare
 from ..flagcodes import flag_columns
 from ..lsq import LSQResult, fit_lsq_data
 from ..refit import layer_alternatives
 from ..trace import IndentationTrace
-from ..twin import PLATENS, Specimen, prepare_tables, specimen_from_sizes, twin_depth_limit
-from ..twin.specimen import FOOTPRINT_COLUMNS
+from ..twin import twin_depth_limit
 from .layout import posterior_file
+from .options import LAYER_MODES, METHODS, FitOptions
+from .tracemodel import nu_source, prepare_twin, trace_model, trace_seed, trace_specimen
 
+# FitOptions, METHODS and LAYER_MODES (.options), trace_model and its helpers (.tracemodel) are
+# imported from here too
 __all__ = ["FitOptions", "FitOutcome", "fit_trace", "check_fittable", "trace_model", "nu_source",
-           "trace_specimen", "prepare_twin",
-           "SUMMARY_COLUMNS", "METHODS", "LAYER_MODES"]
+           "trace_specimen", "prepare_twin", "trace_seed", "SUMMARY_COLUMNS", "METHODS",
+           "LAYER_MODES"]
 
-METHODS = ("bayes", "lsq", "both")
 
 #: Columns of ``summary.csv`` in order (docs/design.md §7 first, then extras).
 SUMMARY_COLUMNS = [
@@ -77,114 +77,6 @@ SUMMARY_COLUMNS = [
     "platens", "E_instron_pa", "E_instron_lo_pa", "E_instron_hi_pa",
 ]
 
-#: How a fit treats the specimen's thickness: ``auto`` a layer on a rigid base wherever the
-#: trace's thickness is known (else a half-space), ``off`` a half-space everywhere (the
-#: paper's model), ``unknown`` a layer of unknown thickness (or none) everywhere.
-LAYER_MODES = ("auto", "off", "unknown")
-
-
-@dataclass(frozen=True)
-class FitOptions:
-    """Everything a fit needs besides the trace (picklable, for worker processes).
-
-    Parameters
-    ----------
-    method
-        ``"bayes"``, ``"lsq"`` or ``"both"``.
-    nu
-        Poisson ratio used for E = E*·(1 − nu²); None: a manifest row's own ``nu``, else
-        :data:`~palpbayes.contact.DEFAULT_NU` (0.3, a foam value), and summary.csv says so
-        (``nu_source``: ``option``, ``manifest`` or ``default``).
-    layer
-        How the specimen's thickness enters the Bayesian model (:data:`LAYER_MODES`):
-        ``"auto"`` (default) a layer on a rigid base wherever the trace's thickness is known,
-        ``"off"`` a half-space (the paper's model, ``--half-space``), ``"unknown"`` a layer
-        of unknown thickness, or none (``--thickness unknown``).  The least-squares baseline
-        is always the paper's half-space; its row says what the layer would change.
-    bonding
-        Base of the layer: ``"bonded"``, ``"free"`` or ``"unknown"`` (default: both, weighted
-        by the data).
-    thickness_range
-        [m] (lo, hi) of the log-uniform prior of an unknown thickness; None: 1.5 to 1,000 times
-        the indentation depth (:func:`palpbayes.bayes.layers.default_thickness_range`).
-    f_unc
-        [N] Sensor uncertainty (surface constraint, contact onset and F0 prior scale); None:
-        the pre-contact baseline's noise as a peak-to-peak spec.
-    fit_fraction
-        Fraction of the penetration skipped (None: 0.2 for flat, 0 otherwise).
-    max_depth
-        [m] Only fit samples shallower than this below the contact onset.
-    noise
-        Noise model of the Bayesian fit.
-    baseline
-        Baseline of the Bayesian model: ``"constant"`` (F0) or ``"linear"`` (F0 + F1·(z −
-        z_ref), drift or a tilted baseline).
-    tare
-        Subtract the pre-contact baseline level from the force before both fits (the paper's
-        least squares has no offset term).
-    priors, budget, settings
-        Bayesian settings.
-    seed
-        Base seed; each trace's seed is derived from it and the trace id.
-    strict
-        Make non-convergence an error.
-    engine
-        Posterior engine of the Bayesian fit: ``"emcee"`` or ``"exact"``
-        (:mod:`palpbayes.bayes.exact`: Gaussian or AR(1) noise only).
-    model_form
-        Widen a Bayesian fit's interval by the model form when a check finds a material
-        misfit (:mod:`palpbayes.bayes.modelform`; default True).
-    specimen
-        The block as tested (:class:`~palpbayes.twin.Specimen`, ``--specimen``) for every
-        trace whose manifest row gives no footprint of its own: the Bayesian model is then its
-        finite-element twin (:mod:`palpbayes.twin`).
-    platens
-        The compression test's platens the Bayesian rows' Instron-equivalent modulus is for
-        (``E_instron_pa``): ``"lubricated"``, ``"bonded"`` or ``"unknown"`` (default: an
-        interval spanning both); used with a specimen only.
-    """
-
-    method: str = "bayes"
-    nu: float | None = None
-    layer: str = "auto"
-    bonding: str = "unknown"
-    thickness_range: tuple[float, float] | None = None
-    f_unc: float | None = None
-    fit_fraction: float | None = None
-    max_depth: float | None = None
-    noise: str = "gaussian"
-    baseline: str = "constant"
-    tare: bool = False
-    priors: PriorSpec = field(default_factory=PriorSpec)
-    budget: BudgetSpec = field(default_factory=BudgetSpec)
-    settings: SamplerSettings = field(default_factory=SamplerSettings)
-    seed: int = 0
-    strict: bool = False
-    engine: str = "emcee"
-    model_form: bool = True
-    specimen: Specimen | None = None
-    platens: str = "unknown"
-
-    def __post_init__(self) -> None:
-        if self.platens not in PLATENS:
-            raise InputError(f"unknown platens {self.platens!r}; use one of "
-                             f"{', '.join(PLATENS)}")
-        if self.layer not in LAYER_MODES:
-            raise InputError(f"unknown layer mode {self.layer!r}; use one of "
-                             f"{', '.join(LAYER_MODES)}")
-        if self.bonding not in BONDINGS:
-            raise InputError(f"unknown bonding {self.bonding!r}; use one of "
-                             f"{', '.join(BONDINGS)}")
-        if self.thickness_range is not None:
-            lo, hi = self.thickness_range
-            if not (0 < lo < hi and np.isfinite(hi)):
-                raise InputError(f"thickness range {self.thickness_range!r} m must satisfy "
-                                 "0 < LO < HI")
-
-    def with_progress(self, progress: bool | None) -> FitOptions:
-        return replace(self, settings=replace(self.settings, progress=progress))
-
-
 @dataclass
 class FitOutcome:
     """Rows for ``summary.csv`` and the result objects of one trace."""
@@ -193,108 +85,6 @@ class FitOutcome:
     lsq: LSQResult | None = None
     bayes: BayesResult | None = None
     posterior_path: Path | None = None
-
-
-def nu_source(trace: IndentationTrace, options: FitOptions) -> str:
-    """Where a trace's Poisson ratio came from: ``"manifest"`` (its row's ``nu``),
-    ``"option"`` (the run's ``nu``) or ``"default"`` (:data:`~palpbayes.contact.DEFAULT_NU`)."""
-    if "nu" in (trace.metadata or {}):
-        return "manifest"
-    return "default" if options.nu is None else "option"
-
-
-def trace_seed(base: int, trace_id: str) -> int:
-    """A per-trace seed from the base seed and the trace id (independent of trace order)."""
-    words = np.frombuffer(trace_id.encode("utf-8"), dtype=np.uint8).astype(np.uint32)
-    return int(np.random.SeedSequence([int(base), *words.tolist()]).generate_state(1)[0])
-
-
-def trace_model(trace: IndentationTrace, options: FitOptions,
-                depth: float | None = None) -> ModelSpec:
-    """The contact model a Bayesian fit of ``trace`` uses: its tip (checked for
-    plausibility), the run's ``nu`` unless the manifest row gives its own
-    (``trace.metadata["nu"]``), and its layer (``options.layer``, ``options.bonding``).
-
-    Parameters
-    ----------
-    trace
-        The trace.
-    options
-        The fit options.
-    depth
-        [m] Indentation depth, for the default range of an unknown thickness.
-
-    Raises
-    ------
-    GeometryError
-        No tip or an implausible tip size.
-    """
-    src = trace.source or trace.trace_id
-    tip = trace.tip
-    if tip is None:
-        raise GeometryError(f"{src}: no tip geometry; give --tip and its size")
-    try:
-        check_tip_plausible(tip)
-    except GeometryError as exc:
-        raise GeometryError(f"{src}: {exc}") from None
-    # a manifest's per-row nu (trace.metadata["nu"]) overrides the run's option
-    nu = trace.metadata.get("nu", DEFAULT_NU if options.nu is None else options.nu)
-    block = trace_specimen(trace, options)
-    if options.layer == "off" or (options.layer == "auto" and trace.thickness is None
-                                  and block is None):
-        return ModelSpec(tip, nu=nu, bonding=options.bonding)
-    if block is not None:
-        if options.layer == "unknown":
-            raise InputError(f"{src}: the specimen {block.describe()} has a known height; an "
-                             "unknown thickness (--thickness unknown) contradicts it")
-        return ModelSpec(tip, nu=nu, bonding=options.bonding, specimen=block)
-    if options.layer == "auto":
-        return ModelSpec(tip, nu=nu, thickness=trace.thickness, bonding=options.bonding)
-    rng = options.thickness_range
-    if rng is None:
-        rng = default_thickness_range(np.nan if depth is None else depth)
-    return ModelSpec(tip, nu=nu, bonding=options.bonding, thickness_range=tuple(rng))
-
-
-def trace_specimen(trace: IndentationTrace, options: FitOptions) -> Specimen | None:
-    """The block a trace was pressed into: its manifest row's footprint (``length_m``,
-    ``width_m`` or ``diameter_m`` with ``thickness_m``), else the run's ``specimen`` option;
-    None without either.
-
-    Raises
-    ------
-    GeometryError
-        An incomplete footprint, or a ``specimen`` option whose height differs from the
-        trace's own thickness.
-    """
-    meta = trace.metadata or {}
-    src = trace.source or trace.trace_id
-    try:
-        block = specimen_from_sizes(trace.thickness, *(meta.get(c) for c in FOOTPRINT_COLUMNS))
-    except GeometryError as exc:
-        raise GeometryError(f"{src}: {exc}") from None
-    if block is not None or options.specimen is None:
-        return block
-    if trace.thickness is not None and not np.isclose(trace.thickness,
-                                                      options.specimen.height, rtol=1e-9):
-        raise GeometryError(
-            f"{src}: the specimen's height {options.specimen.height:g} m (--specimen) differs "
-            f"from the trace's thickness {trace.thickness:g} m (--thickness or thickness_m): "
-            "give one of the two")
-    return options.specimen
-
-
-def prepare_twin(model: ModelSpec, options: FitOptions) -> int:
-    """Build (or load from the cache) the twin's tables a fit of ``model`` needs: its nu and
-    the budget's nodes of nu (a Bayesian fit), for each base it allows; 0 without a
-    specimen.  A progress bar shows on stderr while new tables are solved."""
-    if model.specimen is None:
-        return 0
-    nus = [model.nu]
-    if options.method in ("bayes", "both"):
-        nus += list(nu_nodes(options.budget, model.nu))
-    return prepare_tables(model.specimen, model.tip, nus, model.bases,
-                          progress=options.settings.progress)
 
 
 def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
