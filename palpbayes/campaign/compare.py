@@ -72,6 +72,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from scipy import stats
+from scipy.special import expit
 
 from ..bayes.budget import BudgetSpec
 from ..bayes.result import saved_fitted_model, saved_model
@@ -296,7 +297,7 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None,
     if sampled_base:
         p0 = models[i_rep].p_bonded
         odds = np.log(p0 / (1 - p0)) + float(np.sum(log_bf))
-        p_bonded = float(1.0 / (1.0 + np.exp(-odds)))
+        p_bonded = float(expit(odds))  # no overflow at decisive evidence
         base_ratio = float(np.median(ratios))
     pooled = pool_group(ms, ss, material=material, tip=tip, data=data, z_surf=z_med,
                         estar=e_med, budget=spec, tau_prior_sd=tau_prior_sd,
