@@ -8,10 +8,12 @@ Prints, for the paper's three tips on its 50 × 50 mm blocks (nu 0.3):
 * the shape function on the twin against the infinite layer's (per evaluation, 10^6 depths);
 * the whole Bayesian fit of a 3,840-point trace (3 mm into the 30 mm block; checks and budget
   included, the model form not), with the twin against the same fit with the infinite layer:
-  exact engine and emcee, the target a ratio <= 1 ("no slower than today's layer fit");
+  exact engine and emcee, base known (free) and unknown, the target a ratio <= 1 ("no slower
+  than today's layer fit"); for emcee its steps and the time per step, which separate the
+  cost of an evaluation from the posterior's geometry;
 * the compression factor of the block (bonded platens), per nu.
 
-Run: ``python benchmarks/bench_twin.py`` (about 2 minutes; the tables go to a temporary cache
+Run: ``python benchmarks/bench_twin.py`` (about 4 minutes; the tables go to a temporary cache
 folder, so the cold build is measured whatever the user's cache holds).
 """
 
@@ -42,11 +44,11 @@ def _tables() -> None:
     print(f"tables one fit needs (nu {sorted(set(nus))} x bonded/free), cold cache, s "
           "(target <= 60 s):")
     for name, tip in TIPS.items():
-        twin_tables._MEMORY.clear()
+        twin_tables.clear_memory()
         t0 = time.perf_counter()
         n = prepare_tables(BLOCK, tip, nus, ("bonded", "free"), progress=False)
         cold = time.perf_counter() - t0
-        twin_tables._MEMORY.clear()
+        twin_tables.clear_memory()
         t0 = time.perf_counter()
         prepare_tables(BLOCK, tip, nus, ("bonded", "free"), progress=False)
         warm = time.perf_counter() - t0
@@ -68,25 +70,39 @@ def _shape_cost() -> None:
 
 
 def _fits() -> None:
-    print("Bayesian fit of one 3,840-point trace (base unknown), median of 3, s: "
-          "infinite layer -> twin (target ratio <= 1)")
+    print("Bayesian fit of a 3,840-point trace, infinite layer -> twin (target ratio <= 1): "
+          "median over 3 traces (seeds), s; emcee also its steps and time per step")
     budget = BudgetSpec()
     for engine in ("exact", "emcee"):
-        for name, tip in TIPS.items():
-            tr = simulate_trace(E_TRUE, tip, nu=NU, block=BLOCK, base="free", rng=0)
-            assert tr.n_points == 3840, tr.n_points
-            times = {}
-            for label, model in (("layer", ModelSpec(tip, nu=NU, thickness=BLOCK.height)),
-                                 ("twin", ModelSpec(tip, nu=NU, specimen=BLOCK))):
-                def run(model=model, tr=tr, engine=engine):
-                    with warnings.catch_warnings():
-                        warnings.simplefilter("ignore", ConvergenceWarning)
-                        fit_bayes(tr, model, engine=engine, budget=budget,
-                                  with_model_form=False, seed=1)
-                run()  # warm: tables in memory, as in a campaign's second trace
-                times[label] = median_time(run, 3)
-            print(f"  {engine:<5} {name:<11} {times['layer']:6.2f} -> {times['twin']:6.2f} "
-                  f"({times['twin'] / times['layer']:4.2f}x)")
+        for bonding in ("free", "unknown"):
+            for name, tip in TIPS.items():
+                runs = {"layer": [], "twin": []}
+                for seed in range(3):
+                    tr = simulate_trace(E_TRUE, tip, nu=NU, block=BLOCK, base="free", rng=seed)
+                    assert tr.n_points == 3840, tr.n_points
+                    for label, model in (
+                            ("layer", ModelSpec(tip, nu=NU, thickness=BLOCK.height,
+                                                bonding=bonding)),
+                            ("twin", ModelSpec(tip, nu=NU, specimen=BLOCK, bonding=bonding))):
+                        with warnings.catch_warnings():
+                            warnings.simplefilter("ignore", ConvergenceWarning)
+                            fit_bayes(tr, model, engine=engine, budget=budget,  # warm
+                                      with_model_form=False, seed=seed)
+                            t0 = time.perf_counter()
+                            r = fit_bayes(tr, model, engine=engine, budget=budget,
+                                          with_model_form=False, seed=seed)
+                            runs[label].append((time.perf_counter() - t0,
+                                                r.diagnostics.n_steps))
+                t = {k: float(np.median([x[0] for x in v])) for k, v in runs.items()}
+                line = (f"  {engine:<5} base {bonding:<7} {name:<11} {t['layer']:5.2f} -> "
+                        f"{t['twin']:5.2f} ({t['twin'] / t['layer']:4.2f}x)")
+                if engine == "emcee":
+                    steps = {k: int(np.median([x[1] for x in v])) for k, v in runs.items()}
+                    per = {k: 1e3 * float(np.median([x[0] / x[1] for x in v]))
+                           for k, v in runs.items()}
+                    line += (f"  steps {steps['layer']} -> {steps['twin']}, per step "
+                             f"{per['layer']:.2f} -> {per['twin']:.2f} ms")
+                print(line)
 
 
 def _compression() -> None:

@@ -175,13 +175,13 @@ def test_table_is_dimensionless():
 
 def test_tables_are_cached_on_disk_and_rebuilt_when_wrong(tmp_path, monkeypatch):
     monkeypatch.setenv("PALPBAYES_CACHE_DIR", str(tmp_path))
-    monkeypatch.setattr(twin_tables, "_MEMORY", {})
+    twin_tables.clear_memory()
     cone = Tip("cone", half_angle=math.radians(70.0))
     block = Specimen(0.01, diameter=0.04)
     first = twin_table(block, cone, 0.25, "bonded", resolution="coarse")
     files = list(tmp_path.glob("*/*.npz"))
     assert len(files) == 1
-    monkeypatch.setattr(twin_tables, "_MEMORY", {})
+    twin_tables.clear_memory()
     calls = []
     solve = twin_tables._solve_table
     monkeypatch.setattr(twin_tables, "_solve_table", lambda *a: calls.append(a) or solve(*a))
@@ -189,7 +189,7 @@ def test_tables_are_cached_on_disk_and_rebuilt_when_wrong(tmp_path, monkeypatch)
     assert not calls  # read from disk
     np.testing.assert_array_equal(again.log_factor, first.log_factor)
     files[0].write_bytes(b"not a zip file")  # a damaged file is rebuilt, not trusted
-    monkeypatch.setattr(twin_tables, "_MEMORY", {})
+    twin_tables.clear_memory()
     third = twin_table(block, cone, 0.25, "bonded", resolution="coarse")
     assert len(calls) == 1
     np.testing.assert_array_equal(third.log_factor, first.log_factor)
@@ -236,3 +236,17 @@ def test_modelspec_with_a_specimen():
         ModelSpec(SPHERE, thickness=0.03, specimen=BLOCK)
     with pytest.raises(InputError, match="not both"):
         ModelSpec(SPHERE, thickness_range=(0.01, 0.1), specimen=BLOCK)
+
+
+def test_table_lookup_interpolates_its_grid_linearly():
+    """The index-arithmetic lookup equals numpy.interp on the grid (to 1 ulp), 1 at chi <= 0,
+    the power-law tail beyond, NaN for NaN."""
+    tab = twin_table(BLOCK, SPHERE, 0.3, "bonded")
+    c = np.r_[np.linspace(-0.1, 3.0 * tab.chi[-1], 20001), np.nan]
+    ref = np.exp(np.interp(c, tab.chi, tab.log_factor, left=0.0))
+    tail = c > tab.chi[-1]
+    ref[tail] = np.exp(tab.log_factor[-1] + tab.tail_slope * np.log(c[tail] / tab.chi[-1]))
+    got = tab.factor(c)
+    np.testing.assert_allclose(got[:-1], ref[:-1], rtol=1e-14)
+    assert np.isnan(got[-1]) and got[0] == 1.0
+    assert tab.factor(np.array(0.0)) == 1.0
