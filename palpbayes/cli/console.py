@@ -29,6 +29,24 @@ def _interval_part_lines(summary) -> list[str]:
     return lines
 
 
+def _instron_lines(summary) -> list[str]:
+    """Under the table, for Bayesian rows fitted with the specimen's twin: what a compression
+    test of the block would read (``E_instron_pa`` and its 90 % interval)."""
+    if "E_instron_pa" not in summary:
+        return []
+    rows = summary[(summary["method"] == "bayes") & summary["E_instron_pa"].notna()]
+    if rows.empty:
+        return []
+    lines = ["E_instron: what a compression test of the block would read (the block's twin; "
+             "set it beside your Instron, like for like):"]
+    for _, r in rows.iterrows():
+        lines.append(f"  {r['trace_id']}: {format_pressure(r['E_instron_pa'])} "
+                     f"[{format_pressure(r['E_instron_lo_pa'])}, "
+                     f"{format_pressure(r['E_instron_hi_pa'])}] ({r['platens']} platens; "
+                     f"{r['layer']})")
+    return lines
+
+
 def flag_headlines(text: str, width: int = 110) -> list[str]:
     """The flags of a summary row (``notes``: messages joined by "; ") as one short line each:
     a message up to its first parenthesis or bracket (the explanation and the effect on E stay
@@ -55,6 +73,7 @@ def console_lines(summary) -> list[str]:
              "E: the Bayesian posterior median or the least-squares estimate; E_sd its sd; "
              "E_lo..E_hi its 90 % interval"]
     lines += _interval_part_lines(summary)
+    lines += _instron_lines(summary)
     bad = summary[(summary["converged"] == False)  # noqa: E712
                   | (summary.get("model_ok", True) == False)]  # noqa: E712
     for _, r in bad.iterrows():

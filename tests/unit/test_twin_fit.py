@@ -115,3 +115,21 @@ def test_twin_refuses_an_unknown_thickness_and_a_deep_window(trace):
                           base="free", depth=6e-3, rng=2)
     with pytest.raises(GeometryError, match="the twin of the 50 × 50 × 20 mm block is solved"):
         check_fittable(deep, FitOptions(bonding="free"))
+
+
+def test_console_says_what_the_compression_test_would_read():
+    from palpbayes.cli.console import console_lines
+
+    rows = pd.DataFrame([
+        {"trace_id": "a", "method": "bayes", "E_pa": 120e3, "E_sd_pa": 2e3, "E_lo_pa": 116e3,
+         "E_hi_pa": 124e3, "converged": True, "model_ok": True, "E_stat_lo_pa": 119e3,
+         "E_stat_hi_pa": 121e3, "E_budget_lo_pa": 116e3, "E_budget_hi_pa": 124e3,
+         "platens": "bonded", "E_instron_pa": 140e3, "E_instron_lo_pa": 135e3,
+         "E_instron_hi_pa": 145e3, "layer": "50 × 50 × 20 mm block, free base"},
+        {"trace_id": "a", "method": "lsq", "E_pa": 144e3, "E_sd_pa": 1e2, "E_lo_pa": 143e3,
+         "E_hi_pa": 145e3, "converged": float("nan"), "model_ok": True,
+         "E_instron_pa": float("nan")}])
+    text = "\n".join(console_lines(rows))
+    assert "E_instron: what a compression test of the block would read" in text
+    assert "a: 140 kPa [135 kPa, 145 kPa] (bonded platens; 50 × 50 × 20 mm block" in text
+    assert "E_instron" not in "\n".join(console_lines(rows.drop(columns=["E_instron_pa"])))
