@@ -70,7 +70,8 @@ INSTRON_REACH_M = 5e-3
 
 #: Columns of :func:`gap_table`; ratios are in per cent, ``x_pct`` = 100·(ratio − 1).
 GAP_COLUMNS = [
-    "material", "tip", "thickness_m", "depth_m", "contact_radius_m", "E_instron_pa",
+    "material", "tip", "thickness_m", "length_m", "width_m", "nu_fit", "nu_true_lo",
+    "nu_true_hi", "depth_m", "contact_radius_m", "E_instron_pa",
     "E_robot_pa", "observed_pct", "observed_lo_pct", "observed_hi_pct",
     "thickness_bonded_pct", "thickness_free_pct", "width_bonded_pct", "width_free_pct",
     "platens_bonded_pct", "nu_lo_pct", "nu_hi_pct", "hertz_pct", "compliance_pct",
@@ -185,7 +186,9 @@ def _group_row(material: str, tip_name: str, settings: GapSettings) -> dict:
     curved = law.contact_radius is not None and not math.isinf(n)
     a = float(law.contact_radius(np.array([0.1 * h]), tip)[0])
     return {
-        "material": material, "tip": tip_name, "thickness_m": h, "depth_m": 0.1 * h,
+        "material": material, "tip": tip_name, "thickness_m": h, "length_m": mat.length_m,
+        "width_m": mat.width_m, "nu_fit": nu0, "nu_true_lo": min(settings.nu_range),
+        "nu_true_hi": max(settings.nu_range), "depth_m": 0.1 * h,
         "contact_radius_m": a, "E_instron_pa": E, "E_robot_pa": e_rob,
         "observed_pct": _pct(ratio), "observed_lo_pct": _pct(o_lo), "observed_hi_pct": _pct(o_hi),
         "thickness_bonded_pct": _pct(layer["bonded"] / half),

@@ -24,6 +24,16 @@ def _span(g: pd.DataFrame, *cols: str, sign: str = "+") -> str:
     return _range(values.min(), values.max(), sign)
 
 
+def _mm(values: pd.Series) -> str:
+    lo, hi = 1e3 * values.min(), 1e3 * values.max()
+    return f"{lo:.3g} mm" if round(lo, 3) == round(hi, 3) else f"{lo:.3g}-{hi:.3g} mm"
+
+
+def _plain(lo: float, hi: float, digits: int = 2) -> str:
+    a, b = f"{lo:.{digits}f}", f"{hi:.{digits}f}"
+    return a if a == b else f"{a}-{b}"
+
+
 def gap_verdicts(table: pd.DataFrame) -> dict[str, str]:
     """One plain paragraph per tip: what the block as tested (thickness, width, the Instron's
     platens, nu, Hertz, compliance) predicts against the published ratios, how many it
@@ -31,28 +41,35 @@ def gap_verdicts(table: pd.DataFrame) -> dict[str, str]:
     out = {}
     for tip, g in table.groupby("tip", sort=False):
         n, n_ok = len(g), int(g["explained"].sum())
+        nu_fit = _plain(g["nu_fit"].min(), g["nu_fit"].max())
+        nu_true = _plain(g["nu_true_lo"].min(), g["nu_true_hi"].max())
+        width = _mm(pd.concat([g["length_m"], g["width_m"]]))
         head = (
             f"{tip}: the paper reads {_span(g, 'observed_pct')} against its Instron. A layer "
             f"of the block's thickness alone predicts "
             f"{_span(g, 'thickness_free_pct', 'thickness_bonded_pct')} (free to bonded base, "
-            f"nu 0.3); the block's 50 mm width changes that by "
+            f"nu {nu_fit}); the block's {width} width changes that by "
             f"{_span(g, 'width_free_pct', 'width_bonded_pct')}, and bonded platens "
             f"make the Instron read stiffer, moving the ratio by "
-            f"{_span(g, 'platens_bonded_pct')}. With nu 0.1-0.35 and compliance, everything "
+            f"{_span(g, 'platens_bonded_pct')}. With nu {nu_true} and compliance, everything "
             f"modelled predicts {_range(g['predicted_lo_pct'].min(), g['predicted_hi_pct'].max())}"
             f": {n_ok} of {n} published values lie inside (the infinite layer with an exact "
             f"Instron: {int(g['explained_layer'].sum())}; {int(g['consistent'].sum())} of {n} "
             "within their sd).")
         below = g["observed_pct"] < g["predicted_lo_pct"]
+        softer_than_any_block = (
+            below.all() and (g["observed_pct"] < 0).all() and (g["predicted_lo_pct"] > 0).all()
+            and g["radius_factor"].notna().all() and (g["sharper_tip_pct"] < 0).all()
+            and (g["blunter_tip_pct"] > 0).all())
         if n_ok == n:
             rest = (" The specimen as tested explains the paper's errors: the plate's bottom "
-                    "effect, less the free sides of a 50 mm block and the friction at the "
+                    f"effect, less the free sides of a {width} block and the friction at the "
                     "Instron's platens.")
-        elif below.all() and (g["observed_pct"] < 0).all() and g["radius_factor"].notna().all():
+        elif softer_than_any_block:
             rest = (
                 " Every elastic block reads this tip stiffer, not softer: the softer published "
                 "values need a tip sharper than its nominal profile, "
-                f"R_true/R = {g['radius_factor'].min():.2f}-{g['radius_factor'].max():.2f} on "
+                f"R_true/R = {_plain(g['radius_factor'].min(), g['radius_factor'].max())} on "
                 "the free block (Hertz: E_read/E = sqrt(R_true/R); tested here, a tip of R/2 "
                 f"reads {_span(g, 'sharper_tip_pct')} and one of 2R "
                 f"{_span(g, 'blunter_tip_pct')}), e.g. a profile printed as z = r²/R where "
@@ -69,9 +86,9 @@ def gap_verdicts(table: pd.DataFrame) -> dict[str, str]:
                              "prediction's lower end")
             if len(high):
                 gaps = high["observed_pct"] - high["predicted_hi_pct"]
-                parts.append(f"{' and '.join(high['material'])} "
-                             f"{' and '.join(f'{v:.1f}' for v in gaps)} points above its "
-                             "upper end")
+                parts.append(f"{' and '.join(high['material'])} read "
+                             f"{' and '.join(f'{v:.1f}' for v in gaps)} points above the "
+                             "prediction's upper end")
             rest = (" " + "; ".join(parts) + "." if parts
                     else " Part of the error is left unexplained.")
         strain = (

@@ -39,8 +39,9 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 # The specimen twin's tables (palpbayes.twin.cache) of this test run in a folder of its own,
 # not the user's ~/.cache: every run starts without them, as CI does (xdist workers inherit the
 # controller's folder).
-os.environ.setdefault("PALPBAYES_CACHE_DIR", os.path.join(
-    __import__("tempfile").gettempdir(), f"palpbayes-test-cache-{os.getpid()}"))
+_OWN_CACHE = os.path.join(__import__("tempfile").gettempdir(),
+                          f"palpbayes-test-cache-{os.getpid()}")
+os.environ.setdefault("PALPBAYES_CACHE_DIR", _OWN_CACHE)
 
 import pytest  # noqa: E402
 from hypothesis import settings  # noqa: E402
@@ -121,3 +122,12 @@ def spot3(shared_data) -> Path:
     """afmformats' real JPK force-distance curve ``fmt-jpk-fd_spot3-0192.jpk-force`` (approach
     and retract, 2000 points each; MIT), read from ``../shared/data/afm-files``."""
     return shared_data("afm-files/fmt-jpk-fd_spot3-0192.jpk-force")
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """Remove this run's twin-table folder (the controller's, after its workers are done)."""
+    import shutil
+
+    if (os.environ.get("PYTEST_XDIST_WORKER") is None
+            and os.environ.get("PALPBAYES_CACHE_DIR") == _OWN_CACHE):
+        shutil.rmtree(_OWN_CACHE, ignore_errors=True)

@@ -22,7 +22,7 @@ from ..flagcodes import flag_columns
 from ..lsq import LSQResult, fit_lsq_data
 from ..refit import layer_alternatives
 from ..trace import IndentationTrace
-from ..twin import twin_depth_limit
+from ..twin import twin_depth_limit, twin_depth_limit_reason
 from .layout import posterior_file
 from .options import LAYER_MODES, METHODS, FitOptions
 from .tracemodel import nu_source, prepare_twin, trace_model, trace_seed, trace_specimen
@@ -127,11 +127,6 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     data = replace(data, model=model)
 
     depth = data.z_contact - data.z_min
-    if model.specimen is not None:
-        try:
-            prepare_twin(model, options)
-        except GeometryError as exc:
-            raise GeometryError(f"{src}: {exc}") from None
     known = trace.thickness if trace.thickness is not None else (
         None if model.specimen is None else model.specimen.height)
     if known is not None and depth > known:
@@ -146,9 +141,14 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
         raise GeometryError(
             f"{src}: the indentation depth {fitted * 1e3:.4g} mm (contact onset to deepest "
             f"fitted point) exceeds the {twin_depth_limit(model.specimen, tip) * 1e3:.4g} mm "
-            f"the twin of the {model.specimen.describe()} is solved to (half its height, a "
-            "contact radius at most half its footprint's); fit a shallower window "
+            f"the twin of the {model.specimen.describe()} is solved to "
+            f"({twin_depth_limit_reason(model.specimen, tip)}); fit a shallower window "
             "(--max-depth M)")
+    if model.specimen is not None:  # the finite elements, after every cheap check
+        try:
+            prepare_twin(model, options)
+        except GeometryError as exc:
+            raise GeometryError(f"{src}: {exc}") from None
     law = get_law(tip)
     if law.max_depth is not None and fitted > law.max_depth(tip):
         raise GeometryError(

@@ -23,6 +23,7 @@ from ..errors import FitError, InputError
 from ..flagcodes import flag_columns
 from ..io.atomic import write_text_atomic
 from ..trace import IndentationTrace
+from ..twin.specimen import FOOTPRINT_COLUMNS
 from . import layout
 from .fitjob import FitOptions, fit_trace
 from .settings import options_record
@@ -55,12 +56,17 @@ def _methods(options: FitOptions) -> list[str]:
 
 def trace_fingerprint(trace: IndentationTrace) -> str:
     """SHA-256 of what a fit of ``trace`` depends on: the time, z and force arrays, the tip,
-    the thickness and a manifest's per-row nu.  ``--resume`` refits a trace whose fingerprint
-    changed (an edited file) instead of reusing its recorded rows."""
+    the thickness, a manifest's per-row nu and the specimen's footprint (``length_m``,
+    ``width_m``, ``diameter_m``).  ``--resume`` refits a trace whose fingerprint changed (an
+    edited file or row) instead of reusing its recorded rows."""
     h = hashlib.sha256()
     for a in (trace.time, trace.z, trace.force):
         h.update(np.ascontiguousarray(a, dtype=float).tobytes())
-    h.update(repr((trace.tip, trace.thickness, trace.metadata.get("nu"))).encode("utf-8"))
+    meta = trace.metadata or {}
+    footprint = tuple(meta.get(c) for c in FOOTPRINT_COLUMNS)
+    h.update(repr((trace.tip, trace.thickness, meta.get("nu"))).encode("utf-8"))
+    if any(v is not None for v in footprint):  # traces without one keep their old fingerprint
+        h.update(repr(footprint).encode("utf-8"))
     return h.hexdigest()
 
 

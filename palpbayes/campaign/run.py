@@ -273,9 +273,10 @@ def fit_campaign(
         raise InputError(
             f"cannot resume {out}: its traces were read with other column/unit/sign options "
             f"({old.get('read_options', {})}); use --force to refit everything with the new ones")
+    checking = options.with_progress(progress)  # the twin's first tables show a bar
     for t in traces:  # bad input (geometry, nu, no contact) fails before anything is written
         try:
-            check_fittable(t, options)
+            check_fittable(t, checking)
         except InputError as exc:
             if t.trace_id in str(exc):
                 raise

@@ -111,12 +111,13 @@ def trace_specimen(trace: IndentationTrace, options: FitOptions) -> Specimen | N
 
 def prepare_twin(model: ModelSpec, options: FitOptions) -> int:
     """Build (or load from the cache) the twin's tables a fit of ``model`` needs: its nu and
-    the budget's nodes of nu (a Bayesian fit), for each base it allows; 0 without a
-    specimen.  A progress bar shows on stderr while new tables are solved."""
+    the budget's nodes of nu (a Bayesian fit), for both bases (the least-squares row reads its
+    curve with each); 0 without a specimen.  A progress bar shows on stderr while new tables
+    are solved (``options.settings.progress``; None: when stderr is a terminal)."""
     if model.specimen is None:
         return 0
     nus = [model.nu]
     if options.method in ("bayes", "both"):
         nus += list(nu_nodes(options.budget, model.nu))
-    return prepare_tables(model.specimen, model.tip, nus, model.bases,
+    return prepare_tables(model.specimen, model.tip, nus, ("bonded", "free"),
                           progress=options.settings.progress)

@@ -47,8 +47,9 @@ def twin_pages(res: ResultsFolder) -> list[Page]:
         "of the block (the cylinder of equal footprint area) under the tip, its contact radius "
         "solved, so that E is the material's, not a half-space's or an infinitely wide "
         "layer's. A compression test does not read E either: between bonded platens the "
-        "block's faces cannot expand and it reads c(nu)·E, c > 1 (+11-17 % at nu 0.3 for "
-        "these blocks), between lubricated ones E. The diamonds are what a compression test "
+        "block's faces cannot expand and it reads c(nu)·E, c > 1, growing with nu and with the "
+        "block's width over its height; between lubricated ones E. The diamonds are what a "
+        "compression test "
         f"of a new specimen's block would read with the run's platens ({platens}"
         + ("; the interval spans lubricated to bonded" if platens == "unknown" else "")
         + f"; median E_instron/E = {np.nanmin(ratio):.3f}-{np.nanmax(ratio):.3f}): the "

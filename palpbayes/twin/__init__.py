@@ -26,11 +26,14 @@ from .specimen import (
     specimen_from_sizes,
 )
 from .table import (
+    MAX_ASPECT,
     TWIN_SOLVER_VERSION,
     TwinTable,
+    clear_memory,
     prepare_tables,
     table_key,
     twin_depth_limit,
+    twin_depth_limit_reason,
     twin_factor,
     twin_shape,
     twin_table,
@@ -42,5 +45,6 @@ __all__ = [
     "FOOTPRINT_COLUMNS", "SPECIMEN_KINDS", "Specimen", "check_specimen_plausible",
     "parse_specimen", "specimen_from_sizes",
     "TWIN_SOLVER_VERSION", "TwinTable", "prepare_tables", "table_key", "twin_depth_limit",
-    "twin_factor", "twin_shape", "twin_table",
+    "twin_depth_limit_reason", "twin_factor", "twin_shape", "twin_table", "clear_memory",
+    "MAX_ASPECT",
 ]

@@ -103,9 +103,21 @@ def oedometric_factor(nu: float) -> float:
 def pressure_solution_factor(shape_factor: float, nu: float) -> float:
     """Chalhoub & Kelly (1990)'s thin bonded cylinder, E_app/E [-] (E = 1): K·[1 −
     2·I1(x)/(x·I0(x))], x² = 48·G·S²/K; 2·S² at nu = 0.5 (the incompressible pressure
-    solution).  Valid for S >> 1."""
+    solution).  Valid for S >> 1 and a nearly incompressible material: it takes the axial
+    stress as the pressure alone, leaving out the shear's part (~4G/3, small only when
+    K >> G).
+
+    Raises
+    ------
+    ValueError
+        For nu < 0.45, where that term is not small (at nu 0.3 the form falls below 1).
+    """
     from scipy.special import ive
 
+    if nu < 0.45:
+        raise ValueError(f"the pressure solution holds for nearly incompressible layers "
+                         f"(nu >= 0.45), not nu = {nu!r}; use oedometric_factor for a wide "
+                         "compressible block")
     s = float(shape_factor)
     if nu >= 0.5:
         return 2.0 * s * s

@@ -117,6 +117,13 @@ class Specimen:
         return min(self.length, self.width) / 2.0
 
     @property
+    def aspect(self) -> float:
+        """Longest over shortest side of the footprint [-] (1 for a cylinder or a square)."""
+        if self.diameter is not None:
+            return 1.0
+        return max(self.length, self.width) / min(self.length, self.width)
+
+    @property
     def shape_factor(self) -> float:
         """S = loaded area / free lateral area [-] (D/(4H) for a cylinder, L·W/(2H·(L+W))
         for a cuboid): what sets how much bonded platens stiffen a compression test."""

@@ -13,9 +13,17 @@ depth w is held at its last value.  A flat punch's factor is one number (its con
 grow).
 
 Everything is solved in units of the specimen's height: the table's key (the tip's and the
-footprint's sizes over H, nu, base, the mesh resolution and the solver's version) is
-dimensionless, so a table serves any specimen of the same proportions, and is cached on disk
-(:mod:`palpbayes.twin.cache`).
+footprint's sizes over H, nu, base, the mesh's parameters, the depths' rule and the solver's
+version) is dimensionless, so a table serves any specimen of the same proportions.  The disk
+cache (:mod:`palpbayes.twin.cache`) keeps the finite elements' points only; the infinite layer's
+factor and the lookup grid are rebuilt from them when read, so a change of
+:mod:`palpbayes.contact.layer` never meets a stale table.
+
+A block L × W is modelled as the cylinder of equal footprint area.  Against the block itself
+in 3-D (``benchmarks/bench_twin_3d.py``, the sphere and flat punch of the paper at 10 % depth,
+free base, nu 0.3) the width effect of that cylinder is within 0.2-0.4 % for a square, 0.4-1.0 %
+at 1.5:1, 0.9-2.5 % at 2:1 and 2.1-6.4 % at 3:1 (the cylinder too stiff); footprints longer
+than :data:`MAX_ASPECT` are refused, those beyond 1.5:1 carry a note.
 """
 
 from __future__ import annotations
@@ -32,12 +40,15 @@ from scipy.interpolate import PchipInterpolator
 from ..contact import Tip, get_law
 from ..contact import layer as layer_solution
 from ..errors import GeometryError
+from ..units import format_length
 from .cache import key_text, load_arrays, save_arrays
+from .mesh import RESOLUTIONS
 from .palpation import TWIN_BASES, solve_palpation
 from .specimen import Specimen
 
 __all__ = ["TwinTable", "twin_table", "twin_shape", "twin_factor", "prepare_tables",
-           "table_key", "TWIN_SOLVER_VERSION", "twin_depth_limit", "clear_memory"]
+           "table_key", "TWIN_SOLVER_VERSION", "twin_depth_limit", "twin_depth_limit_reason",
+           "clear_memory", "MAX_ASPECT"]
 
 #: Changes whenever the solver, the mesh or the table's construction does (part of the key).
 TWIN_SOLVER_VERSION = 1
@@ -47,6 +58,11 @@ _POINTS = 24
 _A_MIN = 0.1
 #: Uniform grid of the lookup table.
 _GRID = 2049
+#: Arrays of a table on disk: the finite elements' output only (the layer's factor and the
+#: lookup grid are rebuilt from them when read).
+_POINT_ARRAYS = {"punch", "points_chi", "points_factor", "dofs"}
+#: Longest footprint (length/width) the equal-area cylinder stands for (module docstring).
+MAX_ASPECT = 3.0
 
 
 @dataclass(frozen=True)
@@ -79,6 +95,24 @@ class TwinTable:
     points_layer: np.ndarray
     dofs: int
 
+    @classmethod
+    def from_points(cls, punch: bool, points_chi: np.ndarray, points_factor: np.ndarray,
+                    dofs: int, n: float, nu: float, base: str) -> TwinTable:
+        """The table of the finite elements' points (chi, f = F_twin/F_hs) of a profile of
+        exponent ``n`` (module docstring: f = f_layer·w, w interpolated, held beyond)."""
+        chi = np.asarray(points_chi, dtype=float)
+        f = np.asarray(points_factor, dtype=float)
+        if punch:
+            f_layer = np.array([layer_solution.flat_punch_factor(float(chi[0]), nu, base)])
+            return cls(True, chi, np.log(f), 0.0, float(chi[0]), chi, f, f_layer, int(dofs))
+        f_layer = layer_solution.profile_factor(chi, n, nu, base)
+        w = PchipInterpolator(np.r_[0.0, chi], np.r_[1.0, f / f_layer])
+        grid = np.linspace(0.0, 2.0 * chi[-1], _GRID)
+        logf = (np.log(layer_solution.profile_factor(grid, n, nu, base))
+                + np.log(w(np.minimum(grid, chi[-1]))))
+        slope = float((logf[-1] - logf[-9]) / math.log(grid[-1] / grid[-9]))
+        return cls(False, grid, logf, slope, float(chi[-1]), chi, f, f_layer, int(dofs))
+
     def factor(self, chi: np.ndarray) -> np.ndarray:
         """f(chi) [-] (1 at chi <= 0; a flat punch's constant at chi > 0).
 
@@ -108,21 +142,9 @@ class TwinTable:
         """w = f/f_layer [-] at the solved points: what the finite width changes."""
         return self.points_factor / self.points_layer
 
-    def to_arrays(self) -> dict[str, np.ndarray]:
-        return {"punch": np.array(self.punch), "chi": self.chi, "log_factor": self.log_factor,
-                "tail_slope": np.array(self.tail_slope), "chi_top": np.array(self.chi_top),
-                "points_chi": self.points_chi, "points_factor": self.points_factor,
-                "points_layer": self.points_layer, "dofs": np.array(self.dofs)}
-
-    @classmethod
-    def from_arrays(cls, a: dict[str, np.ndarray]) -> TwinTable:
-        return cls(punch=bool(a["punch"]), chi=a["chi"], log_factor=a["log_factor"],
-                   tail_slope=float(a["tail_slope"]), chi_top=float(a["chi_top"]),
-                   points_chi=a["points_chi"], points_factor=a["points_factor"],
-                   points_layer=a["points_layer"], dofs=int(a["dofs"]))
-
 
 def _check(specimen: Specimen, tip: Tip, nu: float, base: str) -> None:
+    """The twin's domain, in the user's units (metres)."""
     if base not in TWIN_BASES:
         raise GeometryError(f"unknown base {base!r}; use one of {', '.join(TWIN_BASES)}")
     law = get_law(tip)
@@ -131,6 +153,18 @@ def _check(specimen: Specimen, tip: Tip, nu: float, base: str) -> None:
                             "specimen twin")
     if not 0.0 <= nu <= 0.5:
         raise GeometryError(f"Poisson ratio {nu!r} outside [0, 0.5]")
+    if specimen.aspect > MAX_ASPECT:
+        raise GeometryError(
+            f"the {specimen.describe()} is {specimen.aspect:.1f} times as long as wide: the "
+            "twin models a block as the cylinder of equal footprint area, measured within 1 % "
+            "of the block itself up to 1.5:1, 0.9-2.5 % at 2:1 and 2-6 % at 3:1 "
+            f"(benchmarks/bench_twin_3d.py); beyond {MAX_ASPECT:g}:1 it is not a model of "
+            "the block. Fit it as a layer instead (--thickness H without --specimen)")
+    if math.isinf(law.profile_exponent(tip)) and tip.radius >= specimen.half_width:
+        raise GeometryError(
+            f"a flat punch of radius {format_length(tip.radius)} does not fit on the "
+            f"{specimen.describe()} (half its narrowest side is "
+            f"{format_length(specimen.half_width)})")
 
 
 def _unit_tip(tip: Tip, height: float) -> Tip:
@@ -140,18 +174,23 @@ def _unit_tip(tip: Tip, height: float) -> Tip:
 
 def table_key(specimen: Specimen, tip: Tip, nu: float, base: str,
               resolution: str = "default") -> dict:
-    """The dimensionless key of a table (module docstring)."""
+    """The dimensionless key of a table (module docstring): everything the finite elements'
+    points depend on, the mesh's parameters and the depths' rule among them."""
     unit = _unit_tip(tip, specimen.height)
     sizes = {name: float(getattr(unit, name)) for name in get_law(tip).parameters}
+    mesh = RESOLUTIONS[resolution]
     return {"kind": "palpation", "version": TWIN_SOLVER_VERSION, "tip": tip.kind, **sizes,
             "radius_over_height": specimen.radius / specimen.height,
-            "nu": round(float(nu), 6), "base": base, "resolution": resolution}
+            "half_width_over_height": specimen.half_width / specimen.height,
+            "nu": round(float(nu), 6), "base": base, "resolution": resolution,
+            "mesh": repr(mesh), "points": _POINTS, "a_min": _A_MIN}
 
 
 def twin_depth_limit(specimen: Specimen, tip: Tip) -> float:
     """[m] The deepest depth the twin's table solves: half the specimen's height, half the
     tip's depth limit (a sphere's radius), and a half-space contact radius at most half the
-    footprint's equal-area radius, whichever is least (deeper, the table is continued)."""
+    footprint's narrowest half-width (and its equal-area radius), whichever is least
+    (deeper, the table is continued)."""
     law = get_law(tip)
     h = specimen.height
     limit = 0.5 * h
@@ -159,12 +198,23 @@ def twin_depth_limit(specimen: Specimen, tip: Tip) -> float:
         limit = min(limit, 0.5 * law.max_depth(tip))
     if math.isinf(law.profile_exponent(tip)):
         return limit
-    a_max = 0.5 * specimen.radius
+    a_max = 0.5 * min(specimen.radius, specimen.half_width)
     d = np.geomspace(limit * 1e-6, limit, 2000)
     a = law.contact_radius(d, tip)
     if a[-1] > a_max:
         limit = float(np.interp(a_max, a, d))
     return limit
+
+
+def twin_depth_limit_reason(specimen: Specimen, tip: Tip) -> str:
+    """Which of :func:`twin_depth_limit`'s bounds binds, in words."""
+    law = get_law(tip)
+    limit = twin_depth_limit(specimen, tip)
+    if math.isclose(limit, 0.5 * specimen.height):
+        return "half its height"
+    if law.max_depth is not None and math.isclose(limit, 0.5 * law.max_depth(tip)):
+        return f"half the {law.max_depth_name}"
+    return "a contact radius at most half the footprint's narrowest half-width"
 
 
 def _depths_for_radii(tip: Tip, radii: np.ndarray, d_top: float) -> np.ndarray:
@@ -173,37 +223,27 @@ def _depths_for_radii(tip: Tip, radii: np.ndarray, d_top: float) -> np.ndarray:
     return np.interp(radii, law.contact_radius(d, tip), d)
 
 
-def _solve_table(specimen: Specimen, tip: Tip, nu: float, base: str, resolution: str
-                 ) -> TwinTable:
-    h = specimen.height
-    unit = _unit_tip(tip, h)
-    radius = specimen.radius / h
+def _solve_points(specimen: Specimen, tip: Tip, nu: float, base: str, resolution: str
+                  ) -> dict[str, np.ndarray]:
+    """The finite elements' points of a table (``specimen`` and ``tip`` at unit height): what
+    the disk cache keeps."""
+    radius = specimen.radius
     law = get_law(tip)
-    n = law.profile_exponent(tip)
-    if math.isinf(n):
-        curve = solve_palpation(radius, 1.0, unit, nu, base, np.array([1.0]), resolution)
-        a = float(unit.radius)
-        f = float(curve.shape[0] / (2.0 * a))
-        f_layer = float(layer_solution.flat_punch_factor(a, nu, base))
-        one = np.array([a])
-        return TwinTable(True, one, np.log([f]), 0.0, a, one, np.array([f]),
-                         np.array([f_layer]), curve.dofs)
-    d_top = twin_depth_limit(specimen, tip) / h
-    a_top = float(law.contact_radius(np.array([d_top]), unit)[0])
+    if math.isinf(law.profile_exponent(tip)):
+        curve = solve_palpation(radius, 1.0, tip, nu, base, np.array([1.0]), resolution)
+        a = float(tip.radius)
+        return {"punch": np.array(True), "points_chi": np.array([a]),
+                "points_factor": np.array([curve.shape[0] / (2.0 * a)]),
+                "dofs": np.array(curve.dofs)}
+    d_top = twin_depth_limit(specimen, tip)
+    a_top = float(law.contact_radius(np.array([d_top]), tip)[0])
     radii = a_top * np.geomspace(_A_MIN, 1.0, _POINTS)
-    depths = _depths_for_radii(unit, radii, d_top)
+    depths = _depths_for_radii(tip, radii, d_top)
     depths[-1] = d_top
-    curve = solve_palpation(radius, 1.0, unit, nu, base, depths, resolution)
-    chi = law.contact_radius(depths, unit)
-    half = law.shape(depths, unit)
-    f_layer = layer_solution.profile_factor(chi, n, nu, base)
-    f = curve.shape / half
-    w = PchipInterpolator(np.r_[0.0, chi], np.r_[1.0, f / f_layer])
-    grid = np.linspace(0.0, 2.0 * chi[-1], _GRID)
-    logf = (np.log(layer_solution.profile_factor(grid, n, nu, base))
-            + np.log(w(np.minimum(grid, chi[-1]))))
-    slope = float((logf[-1] - logf[-9]) / math.log(grid[-1] / grid[-9]))
-    return TwinTable(False, grid, logf, slope, float(chi[-1]), chi, f, f_layer, curve.dofs)
+    curve = solve_palpation(radius, 1.0, tip, nu, base, depths, resolution)
+    return {"punch": np.array(False), "points_chi": law.contact_radius(depths, tip),
+            "points_factor": curve.shape / law.shape(depths, tip),
+            "dofs": np.array(curve.dofs)}
 
 
 #: Tables of this process, by the text of their key.
@@ -215,12 +255,13 @@ def _table(key: dict, specimen: Specimen, tip: Tip, nu: float, base: str,
     text = key_text(key)
     table = _MEMORY.get(text)
     if table is None:
-        stored = load_arrays(key)
-        if stored is not None:
-            table = TwinTable.from_arrays(stored)
-        else:
-            table = _solve_table(specimen, tip, nu, base, resolution)
-            save_arrays(key, table.to_arrays())
+        points = load_arrays(key)
+        if points is None or not _POINT_ARRAYS <= set(points):
+            points = _solve_points(specimen, tip, nu, base, resolution)
+            save_arrays(key, points)
+        table = TwinTable.from_points(bool(points["punch"]), points["points_chi"],
+                                      points["points_factor"], int(points["dofs"]),
+                                      get_law(tip).profile_exponent(tip), nu, base)
         _MEMORY[text] = table
     return table
 
@@ -230,8 +271,7 @@ def _normalized(specimen: Specimen, tip: Tip, nu: float, base: str, resolution: 
     so equal keys give one table)."""
     h = specimen.height
     key = table_key(specimen, tip, nu, base, resolution)
-    unit_specimen = Specimen(1.0, diameter=2.0 * specimen.radius / h)
-    return key, unit_specimen, _unit_tip(tip, h), key["nu"], base
+    return key, specimen.scaled(1.0 / h), _unit_tip(tip, h), key["nu"], base
 
 
 @functools.lru_cache(maxsize=1024)

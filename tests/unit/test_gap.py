@@ -105,3 +105,20 @@ def test_verdicts_say_it_tip_by_tip(table):
     assert "blunter or wider tip reads stiffer: the wrong way" in v["paraboloid"]
     assert "White and Pink read" in v["flat"] and "below the prediction's lower end" in v["flat"]
     assert all("17 to 25 % nominal strain" in t for t in v.values())
+
+
+def test_verdicts_follow_the_table_not_the_paper(table):
+    """A tip whose softer readings lie inside what an elastic block can read (the prediction
+    reaching below 0) gets no 'sharper tip' verdict; values above the prediction are said."""
+    par = table[table["tip"] == "paraboloid"].copy()
+    par["predicted_lo_pct"] = -5.0  # an elastic block could read softer: not the tip's fault
+    par["explained"] = False
+    v = gap_verdicts(par)["paraboloid"]
+    assert "sharper than its nominal profile" not in v
+    assert "White and Pink and Grey read" in v and "below the prediction's lower end" in v
+    high = table[table["tip"] == "flat"].copy()
+    high["predicted_hi_pct"] = 5.0
+    high["predicted_lo_pct"] = -5.0
+    high["explained"] = False
+    v = gap_verdicts(high)["flat"]
+    assert "White and Pink and Grey read" in v and "above the prediction's upper end" in v

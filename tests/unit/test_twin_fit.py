@@ -133,3 +133,77 @@ def test_console_says_what_the_compression_test_would_read():
     assert "E_instron: what a compression test of the block would read" in text
     assert "a: 140 kPa [135 kPa, 145 kPa] (bonded platens; 50 × 50 × 20 mm block" in text
     assert "E_instron" not in "\n".join(console_lines(rows.drop(columns=["E_instron_pa"])))
+
+
+def test_instron_columns_by_platens_and_model_form():
+    """Lubricated: E's own draws; bonded: the c(nu) draws; unknown: the pooled median and the
+    envelope from the lubricated 5 % to the bonded 95 % quantile; a model-form widening moves
+    both ends by E's own factors."""
+    from palpbayes.bayes.instron import instron_columns
+    from palpbayes.intervals import central
+
+    rng = np.random.default_rng(0)
+    E = rng.normal(100e3, 3e3, 4000)
+    Eb = 1.15 * E
+    lub = instron_columns(E, Eb, "lubricated")
+    assert (lub["E_instron_lo_pa"], lub["E_instron_hi_pa"]) == pytest.approx(central(E))
+    bon = instron_columns(E, Eb, "bonded")
+    assert bon["E_instron_pa"] == pytest.approx(np.median(Eb))
+    unk = instron_columns(E, Eb, "unknown", widen=(0.9, 1.2))
+    assert unk["E_instron_lo_pa"] == pytest.approx(0.9 * central(E)[0])
+    assert unk["E_instron_hi_pa"] == pytest.approx(1.2 * central(Eb)[1])
+    assert unk["E_instron_pa"] == pytest.approx(np.median(np.r_[E, Eb]))
+    assert np.isnan(instron_columns(E, None, "bonded")["E_instron_pa"])
+
+
+def test_budget_refits_nu_on_the_twin_for_either_base():
+    """A free layer's bottom effect does not depend on nu (no refit); a free block's twin does
+    (its sides): the budget's Poisson-ratio term differs from the plain 1 - nu² factor."""
+    from palpbayes.bayes import BudgetSpec
+    from palpbayes.bayes.budget import propagate
+    from palpbayes.fitdata import prepare
+
+    tr = simulate_trace(120e3, SPHERE, nu=0.3, block=BLOCK, base="free", depth=2e-3, rng=3)
+    spec = BudgetSpec(radius_tolerance=0, gain_sd=0, compliance_max=0, thickness_tolerance=0)
+    estar = np.full(4000, 120e3 / 0.91)
+    out = {}
+    for label, model in (("layer", ModelSpec(SPHERE, nu=0.3, thickness=0.02, bonding="free")),
+                         ("twin", ModelSpec(SPHERE, nu=0.3, specimen=BLOCK, bonding="free"))):
+        data = prepare(tr, model)
+        b = propagate(estar, data, data.z_contact, spec, np.random.default_rng(1))
+        out[label] = b
+        plain = np.log(estar * (1 - b.nu ** 2))
+        out[label + "_shift"] = np.abs(np.log(b.E) - plain).max()
+    assert out["layer_shift"] < 1e-12  # the free layer: 1 - nu² alone
+    assert 1e-4 < out["twin_shift"] < 0.02  # the free block: its sides feel nu
+    np.testing.assert_array_equal(out["layer"].nu, out["twin"].nu)
+
+
+def test_an_elongated_block_carries_a_note():
+    from palpbayes.bayes.layer_fit import layer_notes
+
+    long_block = Specimen(0.02, length=0.08, width=0.04)
+    model = ModelSpec(SPHERE, nu=0.3, specimen=long_block, bonding="free")
+    tr = simulate_trace(120e3, SPHERE, nu=0.3, block=long_block, base="free", depth=2e-3,
+                        rng=3)
+    from palpbayes.fitdata import prepare
+
+    data = prepare(tr, model)
+    post = {"E": np.full(100, 120e3), "z_surf": np.full(100, data.z_contact)}
+    notes = layer_notes(post, data, model)
+    assert any("2.0 times as long as wide" in n and "E may read" in n for n in notes)
+    square = ModelSpec(SPHERE, nu=0.3, specimen=BLOCK, bonding="free")
+    assert not any("as long as wide" in n for n in layer_notes(post, prepare(tr, square),
+                                                               square))
+
+
+def test_resume_sees_an_edited_footprint(trace):
+    """--resume refits a trace whose manifest row's footprint changed."""
+    import dataclasses
+
+    from palpbayes.campaign.partial import trace_fingerprint
+
+    edited = dataclasses.replace(trace, metadata={**trace.metadata, "width_m": 0.04})
+    assert trace_fingerprint(edited) != trace_fingerprint(trace)
+    no_footprint = dataclasses.replace(trace, metadata={})
+    assert trace_fingerprint(no_footprint) != trace_fingerprint(trace)
