@@ -53,9 +53,17 @@ def layer_setting_text(o: dict) -> str:
     if layer == "unknown":
         return (f"a layer of unknown thickness (log-uniform prior) or none, {base} (Bayesian "
                 "rows; least squares: the paper's half-space)")
+    specimen = o.get("specimen")
+    block = ""
+    if specimen:
+        block = (" (the --specimen block's finite-element twin for every trace without a "
+                 "footprint of its own)")
+    platens = o.get("platens", "unknown")
     return (f"a layer on a rigid base wherever the thickness is known (exact layer solution: "
-            f"Hayes et al. 1972, Dimitriadis et al. 2002), {base} (Bayesian rows; least "
-            "squares: the paper's half-space, with the layer's effect in E_bonded/E_free)")
+            f"Hayes et al. 1972, Dimitriadis et al. 2002), and the block's finite-element twin "
+            f"wherever its footprint is known as well (docs/design.md §9; E_instron for "
+            f"{platens} platens){block}, {base} (Bayesian rows; least squares: the paper's "
+            "half-space, with the layer's or twin's effect in E_bonded/E_free)")
 
 
 def sampler_settings(recorded: dict | None) -> tuple[dict, bool]:
