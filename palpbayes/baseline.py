@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .noise import MAD_TO_SIGMA, mad_sd, pp_from_sigma
+from .noise import MAD_TO_SIGMA, acf1, mad_sd, pp_from_sigma
 
 __all__ = ["Baseline", "estimate_baseline", "sign_flipped", "MIN_BASELINE_POINTS"]
 
@@ -129,11 +129,7 @@ def estimate_baseline(z: np.ndarray, force: np.ndarray) -> Baseline:
     resid = fb - fb.mean() - slope * dz
     level = float(np.median(fb - slope * dz))
     sd = mad_sd(resid) if n_base >= 3 else s0
-    if resid.size >= 3 and resid.std() > 0:
-        r = resid - resid.mean()
-        lag1 = float(r[1:] @ r[:-1] / (r @ r))
-    else:
-        lag1 = 0.0
+    lag1 = acf1(resid) if resid.size >= 3 else 0.0
     return Baseline(level=level, slope=slope, z_ref=z_ref, sd=sd, lag1=lag1, n=n_base,
                     z_low=float(zb.min()) if n_base else float(z[0]),
                     reliable=bool(n_base >= MIN_BASELINE_POINTS and sd > 0))

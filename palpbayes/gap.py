@@ -52,8 +52,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .contact import Tip, get_law
+from .contact import DEFAULT_NU, Tip, get_law, youngs_factor
 from .fitdata import ModelSpec
+from .intervals import Z_LEVEL
 from .lsq import fit_lsq
 from .noise import PAPER_NOISE_PP
 from .paper import PAPER_MATERIALS, PAPER_ROBOT_ESTIMATES, PAPER_TIPS
@@ -63,8 +64,6 @@ from .twin import Specimen, compression_factor
 __all__ = ["GapSettings", "gap_table", "GAP_COLUMNS", "paper_fit_ratio", "gap_verdicts",
            "INSTRON_REACH_M"]
 
-#: z-value of a central 90 % interval.
-_Z90 = 1.6448536269514722
 #: [m] How far the paper's Instron compressed its blocks (design.md §2: up to 5 mm).
 INSTRON_REACH_M = 5e-3
 
@@ -105,7 +104,7 @@ class GapSettings:
         Mesh of the blocks' twins (:data:`palpbayes.twin.mesh.RESOLUTIONS`).
     """
 
-    nu_fit: float = 0.3
+    nu_fit: float = DEFAULT_NU
     nu_range: tuple[float, ...] = (0.1, 0.2, 0.3, 0.35)
     compliance_max: float = 2e-6
     platens: tuple[str, ...] = ("lubricated", "bonded")
@@ -178,9 +177,9 @@ def _group_row(material: str, tip_name: str, settings: GapSettings) -> dict:
     joint_layer = [fit(base=b, nu=nu, compliance=c) for b, nu, c in cases]
     joint = [fit(base=b, nu=nu, compliance=c, block=block) / platen(nu, p)
              for b, nu, c in cases for p in settings.platens]
-    nu_terms = [(1 - nu0**2) / (1 - nu**2) for nu in settings.nu_range]
+    nu_terms = [youngs_factor(nu0) / youngs_factor(nu) for nu in settings.nu_range]
     lo, hi = min(joint), max(joint)
-    o_lo, o_hi = ratio * math.exp(-_Z90 * s_log), ratio * math.exp(_Z90 * s_log)
+    o_lo, o_hi = ratio * math.exp(-Z_LEVEL * s_log), ratio * math.exp(Z_LEVEL * s_log)
     res_lo, res_hi = o_lo / hi, o_hi / lo  # what the models leave over
     n = law.profile_exponent(tip)
     curved = law.contact_radius is not None and not math.isinf(n)

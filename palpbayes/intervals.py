@@ -9,10 +9,22 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LEVEL", "central", "central_band"]
+__all__ = ["LEVEL", "Z_LEVEL", "normal_z", "central", "central_band"]
 
 #: Probability content of the reported central intervals.
 LEVEL = 0.9
+
+
+def normal_z(level: float = LEVEL) -> float:
+    """z with P(|N(0, 1)| <= z) = ``level`` (1.645 at 90 %): the half-width in sd of a
+    normal central interval."""
+    from scipy.stats import norm
+
+    return float(norm.ppf(0.5 + level / 2.0))
+
+
+#: :func:`normal_z` of :data:`LEVEL`.
+Z_LEVEL = normal_z()
 
 
 def central(x, level: float = LEVEL) -> tuple[float, float]:

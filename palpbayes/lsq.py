@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize, stats
 
+from .contact import youngs_factor
 from .errors import FitError
 from .fitdata import FitData, ModelSpec, prepare_trace
 from .flagcodes import flag_columns
@@ -195,7 +196,7 @@ def fit_lsq_data(data: FitData, *, level: float = LEVEL, trace_id: str = "") -> 
     except np.linalg.LinAlgError:
         cov = np.full((2, 2), np.nan)
     estar_sd = float(np.sqrt(cov[0, 0]))
-    scale = 1.0 - model.nu**2
+    scale = youngs_factor(model.nu)
     E, E_sd = estar * scale, estar_sd * scale
     t = stats.t.ppf(0.5 + level / 2, max(n - 2, 1))
     m = model.exponent

@@ -10,7 +10,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .contact import Tip, check_nu, exponent, shape
+from .contact import DEFAULT_NU, Tip, check_nu, exponent, shape, youngs_modulus
 from .errors import FitError, InputError
 from .twin import Specimen, twin_shape
 from .units import format_length
@@ -59,7 +59,7 @@ class ModelSpec:
     """
 
     tip: Tip
-    nu: float = 0.3
+    nu: float = DEFAULT_NU
     thickness: float | None = None
     bonding: str = "unknown"
     thickness_range: tuple[float, float] | None = None
@@ -230,7 +230,7 @@ class ModelSpec:
 
     def to_E(self, Estar):
         """Young's modulus E = E*·(1 − nu²) [Pa]."""
-        return Estar * (1.0 - self.nu**2)
+        return youngs_modulus(Estar, self.nu)
 
     def describe_layer(self) -> str:
         """The layer in words: ``half-space``, ``h=20 mm, base unknown``, ``50 × 50 × 20 mm

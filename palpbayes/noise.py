@@ -16,7 +16,7 @@ import numpy as np
 from .errors import InputError
 
 __all__ = ["PP_TO_SIGMA", "PAPER_NOISE_PP", "MAD_TO_SIGMA", "sigma_from_pp", "pp_from_sigma",
-           "mad_sd"]
+           "mad_sd", "acf1"]
 
 #: 1/Phi^-1(3/4): the median absolute deviation of normal values times this is their sd.
 MAD_TO_SIGMA = 1.4826
@@ -59,3 +59,23 @@ def mad_sd(x) -> float:
     normal values, insensitive to a minority of outliers: a lump, a step, an onset)."""
     x = np.asarray(x, dtype=float)
     return float(MAD_TO_SIGMA * np.median(np.abs(x - np.median(x))))
+
+
+def acf1(x, undefined: float = 0.0) -> float:
+    """Lag-1 sample autocorrelation of ``x`` about its mean, Σ x_t·x_(t−1) / Σ x_t² (x centred)
+    [-]: the one estimate of the package (residuals, baselines, the AR(1) start, the
+    ground truth's residuals).  ``undefined`` for fewer than 2 samples or a constant series:
+    0 where a number is needed to go on (an AR(1) coefficient), NaN where a table should say
+    "not defined" (``groundtruth.csv``'s ``resid_acf1``).
+
+    >>> round(acf1([1.0, 2.0, 3.0, 4.0]), 3)
+    0.25
+    >>> acf1([5.0, 5.0, 5.0]), acf1([2.0], undefined=float("nan"))
+    (0.0, nan)
+    """
+    x = np.asarray(x, dtype=float)
+    if x.size < 2:
+        return float(undefined)
+    x = x - x.mean()
+    den = float(x @ x)
+    return float(x[1:] @ x[:-1]) / den if den > 0 else float(undefined)

@@ -40,6 +40,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
+from ..contact import youngs_factor
 from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
 from ..refit import refit_factor
@@ -158,7 +159,7 @@ def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
 
     lo, hi = spec.nu_bounds(model.nu)
     nu = rng.uniform(lo, hi, n) if hi > lo else np.full(n, model.nu)
-    log_nu = np.log1p(-nu**2)
+    log_nu = np.log(youngs_factor(nu))
     layered = model.has_layer and np.isfinite(model.thickness)
     twin = model.specimen is not None
     # the bases whose shape depends on nu: a bonded layer's; a twin's, both

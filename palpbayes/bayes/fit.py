@@ -13,6 +13,7 @@ from ..checks import check_fit
 from ..contact import youngs_modulus
 from ..errors import ConvergenceError, ConvergenceWarning, FitError, InputError, PalpbayesError
 from ..fitdata import FitData, ModelSpec, prepare_trace
+from ..intervals import central
 from ..lsq import LSQResult, fit_lsq_data
 from ..trace import IndentationTrace
 from .budget import BudgetSpec, nu_nodes, propagate
@@ -231,7 +232,7 @@ def _model_checks(post: dict, data: FitData, like, seed: int) -> list:
         mine[:] = True
     med = {n: float(np.median(x[mine])) for n, x in draws.items()
            if n not in ("thickness", "bonded")}
-    lo, hi = np.quantile(draws["E_star"][mine], [0.05, 0.95])
+    lo, hi = central(draws["E_star"][mine])
     return check_fit(data, z_surf=med["z_surf"], estar=med["E_star"], f0=med["F0"],
                      f1=med.get("F1", 0.0), sigma=med["sigma"], baseline=like.baseline,
                      z_ref=like.z_ref, draws=draws, seed=seed,
@@ -290,7 +291,7 @@ def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
                          trace_id=trace_id, lsq=lsq, warnings=flags,
                          baseline=like.baseline, z_ref=like.z_ref, checks=checks,
                          notes=notes, fitted_model=best,
-                         layer=layer_columns(post, data), model_form=form)
+                         layer=layer_columns(post, data, best), model_form=form)
     if not result.converged:
         problems = "; ".join(result.warnings + diag.problems())
         msg = f"{trace_id}: Bayesian fit flagged as not converged: {problems}"

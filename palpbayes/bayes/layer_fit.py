@@ -168,7 +168,8 @@ def layer_notes(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> 
     holds no '; ' (the separator of the ``flags`` column)."""
     model = data.model
     notes: list[str] = []
-    E = np.ravel(post["E"])
+    # E with the budget, as the row's E_bonded_pa/E_free_pa (result._alternatives) report it
+    E = np.ravel(post["E_total"] if "E_total" in post else post["E"])
     if "bonded" in post and model.bonding == "unknown":
         b = np.ravel(post["bonded"])
         layer = ~np.isnan(b)
@@ -237,9 +238,13 @@ def _contact_radius(model: ModelSpec, depth: float) -> float:
     return float(law.contact_radius(np.array([depth]), model.tip)[0])
 
 
-def layer_columns(post: dict[str, np.ndarray], data: FitData) -> dict:
+def layer_columns(post: dict[str, np.ndarray], data: FitData,
+                  best: ModelSpec | None = None) -> dict:
     """``summary.csv`` columns of the layer: ``layer``, ``thickness_m`` (and its interval when
-    sampled), ``p_bonded``, ``p_halfspace``."""
+    sampled), ``p_bonded``, ``p_halfspace``.  A sampled thickness is reported as the fitted
+    model's, ``best`` (:func:`best_model`: the median of the layer draws, ``inf`` when most
+    draws have no layer), so that ``thickness_m`` and ``model_fitted`` say one thing; its
+    interval runs over every draw."""
     model = data.model
     out = {"layer": model.describe_layer(), "thickness_m": model.thickness,
            "thickness_lo_m": np.nan, "thickness_hi_m": np.nan, "p_bonded": np.nan,
@@ -252,7 +257,10 @@ def layer_columns(post: dict[str, np.ndarray], data: FitData) -> dict:
             out["p_bonded"] = float(np.nanmean(b))
     if "thickness" in post and model.thickness_unknown:
         h = np.ravel(post["thickness"])
-        out["thickness_m"] = float(np.median(h))
+        if best is None:
+            out["thickness_m"] = float(np.median(h))
+        else:
+            out["thickness_m"] = float(best.thickness) if best.has_layer else np.inf
         out["thickness_lo_m"], out["thickness_hi_m"] = _h_interval(h)
         out["p_halfspace"] = float(np.mean(~np.isfinite(h)))
     elif model.thickness is None:

@@ -114,23 +114,31 @@ class BayesResult:
         return self.diagnostics.converged and not self.warnings
 
     def summary(self) -> pd.DataFrame:
-        """Per-parameter table: mean, sd, median, central 90 % interval, 90 % HDI, R-hat, ESS."""
+        """Per-parameter table: mean, sd, median, central 90 % interval of the draws
+        (``q05``, ``q95``), 90 % HDI, R-hat, ESS, and ``lo``/``hi``, the interval the fit
+        reports: the central one, except for ``E_total`` (E with the budget) after a material
+        misfit, where it is the model form's envelope — the summary row's ``E_lo_pa`` and
+        ``E_hi_pa``, so that a notebook and the command line quote one interval."""
         az = import_arviz()
         names = [n for n in ("E_total", "E", "E_star", "z_surf", "sigma", "F0", "F1", "phi",
                              "nu_t", "thickness", "bonded")
                  if n in self.idata.posterior]
         rows = []
+        form = self.model_form
         for n in names:
             x = self.draws(n)
             x = x[np.isfinite(x)]  # no layer (h = inf) has no thickness and no base
             if x.size < 2:
                 continue
             lo, hi = central(x)
+            reported = (form.lo_pa, form.hi_pa) if n == "E_total" and form is not None else (
+                lo, hi)
             hdi = np.asarray(az.hdi(x, hdi_prob=LEVEL))
             rows.append({
                 "parameter": n, "unit": _UNITS[n], "mean": float(x.mean()),
                 "sd": float(x.std(ddof=1)), "median": float(np.median(x)),
-                "q05": lo, "q95": hi, "hdi90_lo": float(hdi[0]), "hdi90_hi": float(hdi[1]),
+                "q05": lo, "q95": hi, "lo": float(reported[0]), "hi": float(reported[1]),
+                "hdi90_lo": float(hdi[0]), "hdi90_hi": float(hdi[1]),
                 "rhat": self.diagnostics.rhat.get(_SAMPLED.get(n, n), np.nan),
                 "ess_bulk": self.diagnostics.ess_bulk.get(_SAMPLED.get(n, n), np.nan),
                 "ess_tail": self.diagnostics.ess_tail.get(_SAMPLED.get(n, n), np.nan),

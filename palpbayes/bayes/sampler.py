@@ -45,7 +45,7 @@ from scipy.stats import chi2
 
 from ..errors import InputError
 
-__all__ = ["SamplerSettings", "ChainResult", "run_emcee", "stuck_walkers", "MOVES",
+__all__ = ["seed_sampler", "SamplerSettings", "ChainResult", "run_emcee", "stuck_walkers", "MOVES",
            "MAX_RESTARTS"]
 
 #: Most restarts of a chain after stuck walkers were moved (module docstring).
@@ -173,6 +173,16 @@ def _with_extra(moves, extra: list | None):
     return [(m, w * rest) for m, w in base] + list(extra)
 
 
+def seed_sampler(sampler: emcee.EnsembleSampler, seed: int) -> None:
+    """Seed an emcee sampler through its public ``random_state`` (emcee has no seed argument,
+    docs/design.md §8): the state of a Mersenne Twister seeded by
+    ``SeedSequence(seed)``."""
+    rs = np.random.RandomState(np.random.MT19937(np.random.SeedSequence(seed)))
+    sampler.random_state = rs.get_state()
+    if sampler.random_state[1][0] != rs.get_state()[1][0]:  # emcee's setter fails silently
+        raise RuntimeError("emcee did not take the sampler's random state")
+
+
 def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | None,
               accept: Callable[[np.ndarray, np.ndarray], bool] | None = None,
               extra_moves: list | None = None) -> ChainResult:
@@ -199,7 +209,7 @@ def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | N
     n_walkers, ndim = p0.shape
     sampler = emcee.EnsembleSampler(n_walkers, ndim, log_prob, vectorize=True,
                                     moves=_with_extra(_moves(settings.moves), extra_moves))
-    sampler._random = np.random.RandomState(np.random.MT19937(np.random.SeedSequence(seed)))
+    seed_sampler(sampler, seed)
     progress = settings.progress
     if progress is None:
         progress = sys.stderr.isatty()
@@ -221,8 +231,10 @@ def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | N
                                       sampler.get_chain()[window])
                 if stuck.any():  # move them onto the others, restart: all this is burn-in
                     again = state.coords.copy()
-                    again[stuck] = again[sampler._random.choice(np.flatnonzero(~stuck),
-                                                                int(stuck.sum()))]
+                    rs = np.random.RandomState()  # the sampler's stream, drawn on and put back
+                    rs.set_state(sampler.random_state)
+                    again[stuck] = again[rs.choice(np.flatnonzero(~stuck), int(stuck.sum()))]
+                    sampler.random_state = rs.get_state()
                     moved += int(stuck.sum())
                     break
             tau = sampler.get_autocorr_time(tol=0)

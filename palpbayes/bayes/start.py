@@ -30,6 +30,7 @@ import numpy as np
 from scipy import optimize
 
 from ..fitdata import FitData
+from ..noise import acf1
 from .priors import TracePrior
 
 __all__ = ["Mode", "find_modes", "modes_from_exact", "initial_ensemble", "SCAN_POINTS",
@@ -230,8 +231,7 @@ def find_modes(data: FitData, prior: TracePrior, max_drop: float = 20.0) -> list
                else np.full((3 + linear,) * 2, np.nan))
         X = _design(data, z, u)
         res = data.force - X @ beta
-        rc = res - res.mean()
-        lag1 = float(rc[1:] @ rc[:-1] / (rc @ rc)) if rc @ rc > 0 else 0.0
+        lag1 = acf1(res)
         modes.append(Mode(z_surf=z, beta=beta, rss=r, loglik=float(ll), cov=cov, lag1=lag1))
     best = max(m.loglik for m in modes)
     modes = [m for m in modes if m.loglik > best - max_drop]

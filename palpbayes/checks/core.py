@@ -13,6 +13,7 @@ import numpy as np
 
 from ..errors import FitError, InputError
 from ..fitdata import ModelSpec
+from ..noise import acf1
 
 #: Pass/fail thresholds (statistical and physical) of the checks; see :mod:`palpbayes.checks`.
 THRESHOLDS: dict[str, float] = {
@@ -77,13 +78,6 @@ def validated_arrays(z, force) -> tuple[np.ndarray, np.ndarray]:
     if not (np.all(np.isfinite(z)) and np.all(np.isfinite(f))):
         raise InputError("z and force must be finite")
     return z, f
-
-
-def acf1(x: np.ndarray) -> float:
-    """Lag-1 sample autocorrelation of ``x`` about its mean (0 for a constant series)."""
-    x = np.asarray(x, dtype=float) - np.mean(x)
-    den = float(np.dot(x, x))
-    return float(np.dot(x[1:], x[:-1]) / den) if den > 0 else 0.0
 
 
 def clip_phi(phi: float) -> float:

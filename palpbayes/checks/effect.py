@@ -38,6 +38,7 @@ import numpy as np
 
 from ..errors import FitError
 from ..fitdata import ModelSpec
+from ..intervals import Z_LEVEL
 from .core import CheckResult, ShapeTable
 from .depth import profile_law_fit
 
@@ -50,8 +51,6 @@ EFFECT_REL = 0.02
 #: Severity of a check: "" (passed), "negligible" or "material".
 SEVERITIES = ("", "negligible", "material")
 
-#: z of a two-sided 90 % normal interval.
-_Z90 = 1.6448536269514722
 
 
 def free_exponent_effect(check: CheckResult, z, model: ModelSpec, z_surf: float,
@@ -160,7 +159,7 @@ def grade_checks(checks: list[CheckResult], z, force, model: ModelSpec, *, z_sur
     if stat_rel_halfwidth is None:
         dc = by.get("depth_consistency")
         se = dc.details.get("estar_all_se", float("nan")) if dc is not None else float("nan")
-        stat_rel_halfwidth = _Z90 * se / estar if estar > 0 else float("nan")
+        stat_rel_halfwidth = Z_LEVEL * se / estar if estar > 0 else float("nan")
     limit = max(EFFECT_REL, stat_rel_halfwidth if math.isfinite(stat_rel_halfwidth) else 0.0)
     out = []
     for c in checks:

@@ -9,11 +9,11 @@ import numpy as np
 from scipy import stats
 
 from ..errors import FitError, InputError
+from ..noise import acf1
 from .core import (
     MIN_BIN,
     THRESHOLDS,
     CheckResult,
-    acf1,
     ar1_mean_variance_factor,
     clip_phi,
     phi_from_differences,

@@ -6,6 +6,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
+from ..intervals import central
 from .core import CheckResult, ShapeTable, noise_lag1, validated_arrays
 from .depth import depth_consistency_check
 from .effect import grade_checks
@@ -105,7 +106,7 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
             out.append(rate)
     half = stat_rel_halfwidth
     if half is None and draws is not None:
-        lo, hi = np.quantile(np.asarray(draws["E_star"], dtype=float), [0.05, 0.95])
+        lo, hi = central(draws["E_star"])
         half = 0.5 * (hi - lo) / estar if estar > 0 else None
     return grade_checks(out, z, f, model, z_surf=z_surf, estar=estar, f0=f0, f1=f1,
                         stat_rel_halfwidth=half,

@@ -81,6 +81,7 @@ __all__ = [
     "prefactor",
     "effective_modulus",
     "youngs_modulus",
+    "youngs_factor",
     "k_from_modulus",
     "modulus_from_k",
     "check_nu",
@@ -179,14 +180,20 @@ def check_tip_plausible(tip: Tip) -> None:
         )
 
 
+def youngs_factor(nu):
+    """E/E* = 1 − nu² [-]: the one place the package writes the plane-strain factor (a
+    number or an array of nu)."""
+    return 1.0 - np.square(nu) if isinstance(nu, np.ndarray) else 1.0 - nu * nu
+
+
 def effective_modulus(E, nu: float):
     """E* = E/(1-nu²) [Pa]."""
-    return E / (1.0 - nu * nu)
+    return E / youngs_factor(nu)
 
 
 def youngs_modulus(Estar, nu: float):
     """E = E*·(1-nu²) [Pa]."""
-    return Estar * (1.0 - nu * nu)
+    return Estar * youngs_factor(nu)
 
 
 def thickness_factor(

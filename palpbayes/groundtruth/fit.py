@@ -49,7 +49,7 @@ import numpy as np
 from ..errors import DataFileError, FitError
 from ..io.instron import CompressionTest
 from ..units import format_pressure
-from .hac import acf1, hac_slope_se, linfit
+from .hac import hac_slope_se, linfit, resid_acf1
 from .window import DEFAULT_STRAIN_WINDOW, check_strain_window
 
 __all__ = ["MIN_POINTS", "PER_FILE_COLUMNS", "GroundTruthFit", "fit_modulus"]
@@ -212,7 +212,7 @@ def fit_modulus(
         strain_toe=float(eps0), r2=float(r2), n_points=n,
         file=test.source, specimen=test.specimen, material=test.material,
         window_lo=lo, window_hi=hi, toe_compensation=bool(toe_compensation),
-        skip_toe=bool(skip_toe), E_ols_sd_pa=float(se), resid_acf1=acf1(resid),
+        skip_toe=bool(skip_toe), E_ols_sd_pa=float(se), resid_acf1=resid_acf1(resid),
         hac_lags=int(lags),
     )
 

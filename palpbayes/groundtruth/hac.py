@@ -53,7 +53,9 @@ import math
 
 import numpy as np
 
-__all__ = ["hac_slope_se", "acf1", "linfit"]
+from ..noise import acf1
+
+__all__ = ["hac_slope_se", "resid_acf1", "linfit"]
 
 #: Bound on the AR(1) prewhitening coefficient and the bandwidth's autocorrelation.
 _RHO_MAX = 0.97
@@ -69,11 +71,10 @@ def _lag1(a: np.ndarray) -> float:
     return float(a[1:] @ a[:-1]) / den if den > 0 else 0.0
 
 
-def acf1(u: np.ndarray) -> float:
-    """Lag-1 sample autocorrelation sum u_t u_(t-1) / sum u_t² of a mean-zero series."""
-    u = u - u.mean()
-    den = float(u @ u)
-    return float(u[1:] @ u[:-1]) / den if den > 0 and u.size > 1 else math.nan
+def resid_acf1(u: np.ndarray) -> float:
+    """Lag-1 autocorrelation of residuals (:func:`palpbayes.noise.acf1`), NaN where it is not
+    defined (a table column)."""
+    return acf1(u, undefined=math.nan)
 
 
 def hac_slope_se(x: np.ndarray, resid: np.ndarray) -> tuple[float, int]:

@@ -303,6 +303,7 @@ def fit_lump(x: np.ndarray, y: np.ndarray, mean: np.ndarray, sd: np.ndarray, *,
     import emcee
 
     from ..bayes.diagnostics import chain_passes
+    from ..bayes.sampler import seed_sampler
 
     x, y, mean, sd = (np.asarray(a, dtype=float) for a in (x, y, mean, sd))
     if not (x.size == y.size == mean.size == sd.size) or x.size < 10:
@@ -326,8 +327,7 @@ def fit_lump(x: np.ndarray, y: np.ndarray, mean: np.ndarray, sd: np.ndarray, *,
     moves = [(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)]
     sampler = emcee.EnsembleSampler(_WALKERS, len(LUMP_PARAMS), lambda t: p.batch(t)[0],
                                     moves=moves, vectorize=True)
-    # emcee has no seed argument (docs/design.md §8): its RandomState is replaced
-    sampler._random = np.random.RandomState(np.random.MT19937(np.random.SeedSequence(seed)))
+    seed_sampler(sampler, seed)
     passed = False
     while sampler.iteration < max_steps:
         n = min_steps if sampler.iteration == 0 else check_every

@@ -52,6 +52,7 @@ from ..bayes.exact import (
 )
 from ..bayes.mixture import MixtureSummary
 from ..bayes.priors import PriorSpec, TracePrior, param_names
+from ..contact import youngs_factor
 from ..errors import InputError
 from ..fitdata import ModelSpec
 from ..intervals import LEVEL, central
@@ -421,7 +422,7 @@ class OnlineEstimator:
         post = self.posterior()
         estar = post.estar_summary(self.level)
         zs = post.z_summary(self.level)
-        E = _scaled(estar, 1.0 - self.model.nu ** 2)
+        E = _scaled(estar, youngs_factor(self.model.nu))
         flags = []
         span = self._z_top - self._z_lo
         if zs.lo - self._z_lo < 0.01 * span:

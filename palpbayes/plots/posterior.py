@@ -9,6 +9,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from ..contact import youngs_factor
 from ..intervals import LEVEL, central
 from .style import (
     KPA,
@@ -221,7 +222,7 @@ def plot_pair(
     if lsq is not None and np.all(np.isfinite(lsq.cov)):
         from scipy import stats
 
-        scale = 1.0 - lsq.model.nu ** 2
+        scale = youngs_factor(lsq.model.nu)
         # cov of (E* [Pa], z_s [m]) -> (E [kPa], z [µm])
         J = np.diag([scale * KPA, UM])
         cov = J @ np.asarray(lsq.cov) @ J

@@ -14,6 +14,7 @@ import pandas as pd
 
 from ..bayes.budget import BudgetSpec, propagate
 from ..bayes.diagnostics import import_arviz
+from ..contact import youngs_modulus
 from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
 from ..trace import IndentationTrace
@@ -106,7 +107,7 @@ def systematic_factor(data: FitData, z_surf: float, estar: float, spec: BudgetSp
         (n,) the Poisson ratio of each draw [-] (for the Instron-equivalent modulus).
     """
     bud = propagate(np.full(n, float(estar)), data, float(z_surf), spec, rng)
-    factor = bud.E / (float(estar) * (1.0 - data.model.nu ** 2))
+    factor = bud.E / youngs_modulus(float(estar), data.model.nu)
     tab = bud.table[bud.table["input"] != "E* (posterior)"].copy()
     tab["var_log"] = (tab["rel_sd_pct"] / 100.0) ** 2
     return factor, tab[["input", "distribution", "var_log"]].reset_index(drop=True), bud.nu

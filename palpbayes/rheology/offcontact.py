@@ -35,6 +35,7 @@ import math
 
 import numpy as np
 
+from ..noise import acf1
 from .cycle import CycleData
 
 __all__ = ["drag_gap", "baseline_tilt", "adhesion_dip", "N_SE", "ADHESION_WINDOW",
@@ -61,7 +62,7 @@ def _long_run(res: np.ndarray) -> float:
     """AR(1) long-run variance factor (1 + φ)/(1 − φ) of residuals ``res``."""
     if res.size < 3 or not np.std(res) > 0:
         return 1.0
-    phi = float(np.clip(np.corrcoef(res[1:], res[:-1])[0, 1], 0.0, _PHI_MAX))
+    phi = float(np.clip(acf1(res), 0.0, _PHI_MAX))
     return (1 + phi) / (1 - phi)
 
 

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..contact import Tip, check_nu
+from ..contact import DEFAULT_NU, Tip, check_nu
 from ..errors import InputError, OutputExistsError
 from ..io.atomic import write_csv_atomic
 from ..io.manifest import tip_columns, write_manifest
@@ -176,7 +176,7 @@ def simulate_campaign(
     repetitions: int = 3,
     materials: Mapping[str, Material] = PAPER_MATERIALS,
     tips: Mapping[str, Tip] = PAPER_TIPS,
-    nu: float = 0.3,
+    nu: float = DEFAULT_NU,
     gt_specimens: int = 5,
     noise_pp: float = PAPER_NOISE_PP,
     noise_ar1: float = 0.0,

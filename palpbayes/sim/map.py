@@ -33,7 +33,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import brentq
 
-from ..contact import Tip, check_nu
+from ..contact import DEFAULT_NU, Tip, check_nu
 from ..errors import DataFileError, InputError
 from ..io.atomic import write_csv_atomic, write_text_atomic
 from ..io.manifest import tip_columns, write_manifest
@@ -125,7 +125,7 @@ def simulate_map(
     ny: int = 15,
     step: float = 3e-3,
     E_background: float = 50e3,
-    nu: float = 0.3,
+    nu: float = DEFAULT_NU,
     tip: Tip = PAPER_TIPS["paraboloid"],
     thickness: float = 0.02,
     depth: float | None = None,

@@ -30,7 +30,7 @@ import math
 import numpy as np
 from scipy.signal import lfilter
 
-from ..contact import Tip, check_nu, effective_modulus
+from ..contact import DEFAULT_NU, Tip, check_nu, effective_modulus
 from ..errors import InputError
 from ..noise import PAPER_NOISE_PP, sigma_from_pp
 from ..trace import IndentationTrace
@@ -91,7 +91,7 @@ def simulate_trace(
     E: float,
     tip: Tip,
     *,
-    nu: float = 0.3,
+    nu: float = DEFAULT_NU,
     z_surf: float = 0.1,
     thickness: float | None = None,
     depth: float | None = None,

@@ -38,7 +38,14 @@ from types import MappingProxyType
 import numpy as np
 import pandas as pd
 
-from ..contact import PowerLawKernel, PronyKernel, Tip, check_nu, standard_linear_solid
+from ..contact import (
+    DEFAULT_NU,
+    PowerLawKernel,
+    PronyKernel,
+    Tip,
+    check_nu,
+    standard_linear_solid,
+)
 from ..errors import InputError
 from ..io.atomic import write_csv_atomic
 from ..io.manifest import write_manifest
@@ -177,7 +184,7 @@ def simulate_visco_campaign(
     hold: float = 5.0,
     rate: float = 800.0,
     retract: bool = True,
-    nu: float = 0.3,
+    nu: float = DEFAULT_NU,
     noise_pp: float = PAPER_NOISE_PP,
     noise_ar1: float = 0.0,
     force_offset_sd: float = 5e-3,

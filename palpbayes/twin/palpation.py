@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import nnls
 
-from ..contact import Tip, get_law
+from ..contact import Tip, get_law, youngs_modulus
 from ..errors import GeometryError
 from .mesh import RESOLUTIONS, Resolution, contact_grid, depth_grid, punch_grid
 
@@ -155,7 +155,7 @@ def _curved(radius: float, height: float, tip: Tip, nu: float, base: str, depths
         touching = np.flatnonzero(f > 0)
         if touching.size and touching[-1] >= cand.size - 2:
             return None
-        shape[i] = 2.0 * math.pi * f.sum() * (1.0 - nu * nu)
+        shape[i] = youngs_modulus(2.0 * math.pi * f.sum(), nu)  # F/E* of F at E = 1
         a[i] = r_c[touching[-1]] if touching.size else 0.0
     return PalpationCurve(depths, shape, a, solid.size)
 
@@ -173,5 +173,5 @@ def _punch(radius: float, height: float, tip: Tip, nu: float, base: str, depths:
     prescribed = np.zeros(fac.fixed.size)
     prescribed[np.isin(fac.fixed, face)] = -1.0  # the face pushed down by a unit depth
     x = fac.solve(np.zeros(solid.size), prescribed)
-    s1 = -2.0 * math.pi * fac.reaction(x, face).sum() * (1.0 - nu * nu)
+    s1 = youngs_modulus(-2.0 * math.pi * fac.reaction(x, face).sum(), nu)
     return PalpationCurve(depths, s1 * depths, np.full(depths.size, a), solid.size)

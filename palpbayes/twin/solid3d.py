@@ -64,7 +64,7 @@ from scipy.optimize import nnls
 from skfem import Basis, BilinearForm, ElementHex2, MeshHex, asm
 from skfem.models.elasticity import lame_parameters
 
-from ..contact import Tip, get_law
+from ..contact import Tip, get_law, youngs_modulus
 from ..errors import GeometryError
 from .mesh import graded
 from .mesh3d import (
@@ -327,7 +327,7 @@ class Palpation3D:
             prescribed = np.zeros(fac.fixed.size)
             prescribed[np.isin(fac.fixed, self.face)] = -1.0
             u = fac.solve(prescribed)
-            self._per_depth = -4.0 * fac.reaction(u, self.face).sum() * (1.0 - nu * nu)
+            self._per_depth = youngs_modulus(-4.0 * fac.reaction(u, self.face).sum(), nu)
         else:
             nodes = np.flatnonzero(top & (r <= self.zone * (1 + 1e-9)))
             nodes = nodes[np.argsort(r[nodes], kind="stable")]
@@ -376,7 +376,7 @@ class Palpation3D:
         if a > self._r_limit:
             raise GeometryError(f"the contact (radius {a:.4g}) reaches the edge of the mesh's "
                                 f"contact zone ({self.zone:.4g}): mesh a wider one")
-        return float(4.0 * f.sum() * (1.0 - self.nu ** 2)), a
+        return float(youngs_modulus(4.0 * f.sum(), self.nu)), a
 
 
 def palpation_force_3d(length: float, width: float, height: float, tip: Tip, nu: float,

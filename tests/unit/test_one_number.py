@@ -1,0 +1,65 @@
+"""One number per quantity (issue 45): what the summary row, the notes, the model's
+description and the parameter table say about one fit agree."""
+
+from __future__ import annotations
+
+import re
+import warnings
+
+import numpy as np
+import pytest
+
+from palpbayes.bayes import fit_bayes
+from palpbayes.contact import Tip
+from palpbayes.errors import ConvergenceWarning
+from palpbayes.fitdata import ModelSpec
+from palpbayes.sim import simulate_trace
+from palpbayes.units import format_pressure
+
+
+def _fit(tr, model, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        return fit_bayes(tr, model, engine="exact", seed=1, **kw)
+
+
+def test_parameter_table_quotes_the_rows_interval():
+    """A material misfit (a 20 mm layer fitted as a half-space): the table's E_total interval
+    is the row's full interval (the model form's envelope), not the narrower budget one."""
+    tip = Tip("paraboloid", radius=0.0117)
+    tr = simulate_trace(120e3, tip, thickness=0.02, base="bonded", rng=2)
+    res = _fit(tr, ModelSpec(tip, nu=0.3))
+    row = res.summary_row()
+    assert res.model_form is not None and row["modelform_share_pct"] > 0
+    table = res.summary()
+    assert (table.loc["E_total", "lo"], table.loc["E_total", "hi"]) == pytest.approx(
+        (row["E_lo_pa"], row["E_hi_pa"]), rel=1e-12)
+    assert table.loc["E_total", "hi"] - table.loc["E_total", "lo"] > (
+        table.loc["E_total", "q95"] - table.loc["E_total", "q05"])
+    assert (table.loc["E_star", "lo"], table.loc["E_star", "hi"]) == (
+        table.loc["E_star", "q05"], table.loc["E_star", "q95"])
+
+
+def test_base_note_quotes_the_rows_bonded_and_free_E():
+    """A flat punch on a 20 mm layer, base unknown (its curve cannot tell the bases): the note's
+    'E is X if bonded, Y if free' are the row's E_bonded_pa and E_free_pa."""
+    tip = Tip("flat", radius=0.01)
+    tr = simulate_trace(120e3, tip, thickness=0.02, base="free", rng=3)
+    row = _fit(tr, ModelSpec(tip, nu=0.3, thickness=0.02)).summary_row()
+    note = next(n for n in row["notes"].split("; ") if "base not identified" in n)
+    bonded, free = re.search(r"E is (.+?) if the specimen is bonded.*?, (.+?) if it lies",
+                             note).groups()
+    assert bonded == format_pressure(row["E_bonded_pa"])
+    assert free == format_pressure(row["E_free_pa"])
+
+
+def test_fitted_models_thickness_is_the_rows():
+    """--thickness unknown: model_fitted's h and thickness_m are one number."""
+    tip = Tip("paraboloid", radius=0.0117)
+    tr = simulate_trace(120e3, tip, thickness=0.02, base="bonded", rng=4)
+    res = _fit(tr, ModelSpec(tip, nu=0.3, thickness_range=(4e-3, 0.5)), with_model_form=False)
+    row = res.summary_row()
+    h = float(re.search(r"h=([0-9.]+) mm", row["model_fitted"]).group(1))
+    assert row["thickness_m"] * 1e3 == pytest.approx(h, abs=0.051)
+    assert row["thickness_lo_m"] <= row["thickness_m"] <= row["thickness_hi_m"]
+    assert np.isfinite(row["thickness_m"])
