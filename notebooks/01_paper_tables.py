@@ -62,7 +62,7 @@ from palpbayes.campaign import (
     paper_estimates,
     run_pipeline,
 )
-from palpbayes.report import summary_table
+from palpbayes.reporting import summary_table
 
 from tqdm import TqdmWarning
 

@@ -3,9 +3,27 @@
 The contact force of a rigid tip pressed into a soft specimen follows F = E*·s(z_surf - z); the
 package fits E (and the unknown surface height z_surf) by the paper's least-squares baseline
 (:mod:`palpbayes.lsq`) and by a Bayesian model sampled with emcee (:mod:`palpbayes.bayes`).
+
+The public names, with examples, are in docs/api.md::
+
+    import palpbayes as pb
+    f = pb.fit("press.csv", tip="sphere", radius=0.01, nu=0.45, seed=1)
+
+Reading and fitting: :func:`read`, :func:`fit` (a :class:`Fit`), :func:`fit_options`,
+:func:`fit_campaign`, :func:`compare`, :func:`run_pipeline`, :func:`load_results`,
+:func:`report` (the PDF); the model: :class:`Tip`, :class:`Specimen`, :class:`ModelSpec`,
+:class:`BudgetSpec`, :func:`force`; simulating: :func:`simulate` (a campaign folder),
+:func:`simulate_trace`; online: :class:`OnlineEstimator`, :class:`StoppingRule`; maps:
+:func:`make_map`; viscoelastic fits: :func:`fit_rheology`; the example campaign:
+:func:`example_campaign_dir`; the subpackages :mod:`plots`, :mod:`paper`, :mod:`gap`,
+:mod:`twin`, :mod:`sim`, :mod:`groundtruth` (compression tests), :mod:`reporting` (the
+report's tables and pages).  They are imported when first used (``import palpbayes`` stays
+quick).
 """
 
 from __future__ import annotations
+
+import importlib
 
 __version__ = "0.1.0"
 
@@ -13,4 +31,51 @@ from .contact import Tip, force
 from .errors import PalpbayesError
 from .trace import IndentationTrace
 
-__all__ = ["__version__", "Tip", "force", "IndentationTrace", "PalpbayesError"]
+#: Public name -> (module, attribute); None: the module itself.
+_LAZY = {
+    "read": ("api", "read"),
+    "write_trace": ("io.trace_csv", "write_trace"),
+    "fit": ("api", "fit"),
+    "Fit": ("api", "Fit"),
+    "fit_options": ("api", "fit_options"),
+    "fit_campaign": ("campaign.run", "fit_campaign"),
+    "compare": ("campaign.compare", "compare_campaign"),
+    "run_pipeline": ("campaign.pipeline", "run_pipeline"),
+    "load_results": ("campaign.results", "load_results"),
+    "example_campaign_dir": ("campaign.pipeline", "example_campaign_dir"),
+    "report": ("reporting.build", "build_report"),
+    "BudgetSpec": ("bayes.budget", "BudgetSpec"),
+    "ModelSpec": ("modelspec", "ModelSpec"),
+    "Specimen": ("twin.specimen", "Specimen"),
+    "simulate": ("sim.campaign", "simulate_campaign"),
+    "simulate_trace": ("sim.trace", "simulate_trace"),
+    "OnlineEstimator": ("online.estimator", "OnlineEstimator"),
+    "StoppingRule": ("online.estimator", "StoppingRule"),
+    "make_map": ("maps.run", "make_map"),
+    "fit_rheology": ("rheology.fit", "fit_rheology"),
+    "plots": ("plots", None),
+    "paper": ("paper", None),
+    "gap": ("gap", None),
+    "twin": ("twin", None),
+    "sim": ("sim", None),
+    "groundtruth": ("groundtruth", None),
+    "reporting": ("reporting", None),
+}
+
+__all__ = ["__version__", "Tip", "force", "IndentationTrace", "PalpbayesError", *_LAZY]
+
+
+def __getattr__(name: str):
+    """The public names of :data:`_LAZY`, imported on first use."""
+    try:
+        module, attr = _LAZY[name]
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    mod = importlib.import_module(f"{__name__}.{module}")
+    value = mod if attr is None else getattr(mod, attr)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

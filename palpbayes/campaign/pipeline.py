@@ -11,7 +11,7 @@ locates the campaign shipped with a source checkout.
 
 This module and the command line are the only writers of a results folder's ground-truth
 tables; reading a results folder is :mod:`palpbayes.campaign.results`, the PDF
-:mod:`palpbayes.report`.
+:mod:`palpbayes.reporting`.
 """
 
 from __future__ import annotations

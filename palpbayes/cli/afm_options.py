@@ -9,14 +9,14 @@ import argparse
 import math
 
 from ..errors import InputError
+from ..io.recording import AFM_META_KEYS
 
 __all__ = ["AFM_META_OPTIONS", "add_afm_meta_options", "afm_meta_from_args"]
 
 #: Option -> (argparse attribute, afmformats metadata key) of the calibration an AFM file may
 #: lack (AFM Workshop: no spring constant, sensitivity nor time column).
-AFM_META_OPTIONS = {"--spring-constant": ("spring_constant", "spring constant"),
-                    "--sensitivity": ("sensitivity", "sensitivity"),
-                    "--sample-rate": ("sample_rate", "rate approach")}
+AFM_META_OPTIONS = {"--" + attr.replace("_", "-"): (attr, key)
+                    for attr, key in AFM_META_KEYS.items()}
 
 
 def add_afm_meta_options(g) -> None:

@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
         write_map(res, stage, extra={("afm_file" if afm else "manifest"):
                                      str(Path(args.input).resolve()), "elapsed_s": elapsed})
         if not args.no_report:
-            from ..report.map_pages import write_map_figure, write_map_report
+            from ..reporting.map_pages import write_map_figure, write_map_report
 
             write_map_figure(res, stage / FIGURE, truth=truth)
             write_map_report(res, stage / REPORT, name=(Path(args.input).name if afm

@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
+from ..api import check_specimen, fit_options
 from ..bayes.fit import ENGINES
 from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
 from ..campaign.fitjob import METHODS, FitOptions
@@ -16,13 +16,12 @@ from ..contact import (
     DEFAULT_NU,
     TIP_PARAMETERS,
     Tip,
-    check_nu,
     default_fit_fraction_text,
     registered_kinds,
 )
-from ..errors import GeometryError, InputError
+from ..errors import InputError
 from ..fitdata import BONDINGS
-from ..twin import PLATENS, parse_specimen
+from ..twin import PLATENS
 from .afm_options import AFM_META_OPTIONS, add_afm_meta_options, afm_meta_from_args
 
 __all__ = ["add_nu_option", "add_f_unc_option", "positive_force", "add_model_options",
@@ -215,67 +214,29 @@ def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -
 
 
 def options_from_args(args: argparse.Namespace) -> FitOptions:
-    """Build :class:`FitOptions` from parsed arguments (validated)."""
-    if args.nu_range is not None:
-        lo, hi = args.nu_range
-        check_nu(lo), check_nu(hi)
-        if hi < lo:
-            raise InputError(f"--nu-range {lo} {hi}: LO must not exceed HI")
-        nu, budget_nu = 0.5 * (lo + hi), (lo, hi)
-    else:
-        nu, budget_nu = (None if args.nu is None else check_nu(args.nu)), None
-    for name in ("radius_tolerance", "gain_sd", "compliance_max"):
-        v = getattr(args, name)
-        if not (math.isfinite(v) and v >= 0):
-            raise InputError(f"--{name.replace('_', '-')} {v!r} must be a non-negative number")
-    for name in ("noise_pp", "f_unc"):
-        positive_force(f"--{name.replace('_', '-')}", getattr(args, name))
-    if args.engine == "exact" and (args.noise == "student" or args.surface_prior == "soft"):
-        what = ("--noise student" if args.noise == "student" else "--surface-prior soft")
-        raise InputError(f"--engine exact takes --noise gaussian or ar1 and --surface-prior "
-                         f"loading, not {what}: use --engine emcee for it")
+    """Build :class:`FitOptions` from parsed arguments (validated) by
+    :func:`palpbayes.api.fit_options`, the function :func:`palpbayes.fit` uses too."""
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers {args.workers} must be at least 1")
-    budget = BudgetSpec(nu_range=budget_nu, radius_tolerance=args.radius_tolerance,
-                        gain_sd=args.gain_sd, compliance_max=args.compliance_max)
-    settings = SamplerSettings(max_steps=args.max_steps, progress=args.progress)
     layer, bonding = layer_from_args(args)
-    specimen = specimen_from_args(args)
-    return FitOptions(
-        method=args.method, nu=nu, layer=layer, bonding=bonding,
-        thickness_range=(None if args.thickness_range is None
-                         else tuple(args.thickness_range)),
-        f_unc=args.f_unc if args.f_unc is not None else args.noise_pp,
-        fit_fraction=args.fit_fraction, max_depth=args.max_depth, noise=args.noise,
-        baseline=args.baseline, tare=args.tare,
-        priors=PriorSpec(noise_pp=args.noise_pp, surface=args.surface_prior), budget=budget,
-        settings=settings,
-        seed=args.seed, strict=args.strict, engine=args.engine,
-        model_form=getattr(args, "model_form", True),
-        specimen=specimen, platens=getattr(args, "platens", "unknown"),
-    )
+    return fit_options(
+        method=args.method, nu=args.nu, nu_range=args.nu_range, layer=layer, bonding=bonding,
+        thickness_range=args.thickness_range, specimen=specimen_from_args(args),
+        platens=getattr(args, "platens", "unknown"), engine=args.engine, noise=args.noise,
+        noise_pp=args.noise_pp, f_unc=args.f_unc, baseline=args.baseline, tare=args.tare,
+        surface_prior=args.surface_prior, fit_fraction=args.fit_fraction,
+        max_depth=args.max_depth, radius_tolerance=args.radius_tolerance,
+        gain_sd=args.gain_sd, compliance_max=args.compliance_max,
+        model_form=getattr(args, "model_form", True), max_steps=args.max_steps,
+        seed=args.seed, strict=args.strict, progress=args.progress)
 
 
 def specimen_from_args(args: argparse.Namespace):
     """The :class:`~palpbayes.twin.Specimen` of ``--specimen`` (None when absent), checked
-    against ``--thickness`` and ``--half-space``."""
-    text = getattr(args, "specimen", None)
-    if text is None:
-        return None
-    try:
-        spec = parse_specimen(text)
-    except GeometryError as exc:
-        raise InputError(f"--specimen: {exc}") from None
-    h = thickness_from_args(args)
-    if h is not None and not math.isclose(h, spec.height, rel_tol=1e-9):
-        raise InputError(f"--thickness {h:g} m differs from the height {spec.height:g} m of "
-                         f"--specimen {text}: give the specimen alone")
-    if str(getattr(args, "thickness", None) or "").strip().lower() == "unknown":
-        raise InputError("--specimen gives the thickness: it contradicts --thickness unknown")
-    if getattr(args, "half_space", False):
-        raise InputError("--specimen and --half-space contradict each other: the specimen's "
-                         "twin models the block, the half-space the paper's model")
-    return spec
+    against ``--thickness`` and ``--half-space`` (:func:`palpbayes.api.check_specimen`)."""
+    thickness_from_args(args)  # a number, or 'unknown'
+    return check_specimen(getattr(args, "specimen", None), getattr(args, "thickness", None),
+                          getattr(args, "half_space", False))
 
 
 def thickness_from_args(args: argparse.Namespace) -> float | None:

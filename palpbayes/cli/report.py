@@ -13,7 +13,7 @@ INPUT is one of
 * nothing: the shipped example campaign ``data/example-campaign`` of a source checkout.
 
 The PDF goes to ``-o FILE.pdf`` (default ``report.pdf`` in the results folder).  See
-:mod:`palpbayes.report` for the pages and :mod:`palpbayes.campaign.pipeline` for the fitting.
+:mod:`palpbayes.reporting` for the pages and :mod:`palpbayes.campaign.pipeline` for the fitting.
 """
 
 from __future__ import annotations
@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
     """Fit if needed, build the report, print a short summary and the PDF's path."""
     from ..campaign.pipeline import run_pipeline
     from ..campaign.results import load_results
-    from ..report import (
+    from ..reporting import (
         BAYES_E_COL,
         BAYES_NEW_COL,
         GT_COL,

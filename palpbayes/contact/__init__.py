@@ -42,6 +42,7 @@ from .registry import (
     unregister,
 )
 from .soe import SOE_TOLERANCE
+from .thickness import dimitriadis_factor, garcia_factor
 from .viscoelastic import (
     HereditaryContact,
     PowerLawKernel,
@@ -89,6 +90,8 @@ __all__ = [
     "MAX_TIP_RADIUS_M",
     "half_angle_from_degrees",
     "thickness_factor",
+    "dimitriadis_factor",
+    "garcia_factor",
     "PowerLawKernel",
     "PronyKernel",
     "standard_linear_solid",

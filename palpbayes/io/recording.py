@@ -27,7 +27,7 @@ from .bagfile import is_bag
 from .rosbag import read_bag
 from .trace_csv import read_trace
 
-__all__ = ["recording_kind", "read_recording", "READER_OPTIONS", "KIND_NAMES"]
+__all__ = ["AFM_META_KEYS", "recording_kind", "read_recording", "READER_OPTIONS", "KIND_NAMES"]
 
 #: Reader options each kind of recording accepts (besides ``tip`` and trace metadata).
 READER_OPTIONS = {
@@ -36,6 +36,11 @@ READER_OPTIONS = {
     "afm": {"curves", "force_sign", "z_sign", "check", "segments", "meta_override"},
     "table": {"columns", "units", "force_sign", "z_sign", "check", "delimiter"},
 }
+#: The calibration an AFM file may lack, by Python name -> afmformats' metadata key (SI): the
+#: ``meta_override`` of :func:`~palpbayes.io.afm.read_afm` (``--spring-constant``,
+#: ``--sensitivity``, ``--sample-rate``).
+AFM_META_KEYS = {"spring_constant": "spring constant", "sensitivity": "sensitivity",
+                 "sample_rate": "rate approach"}
 #: How messages name each kind.
 KIND_NAMES = {"bag": "a ROS 2 bag", "afm": "an AFM file", "table": "a trace CSV"}
 

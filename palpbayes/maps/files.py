@@ -12,7 +12,7 @@
                       hyperparameters; observed_data the per-point summaries
       lump.nc         arviz InferenceData of the lump sampler (walkers as chains)
       settings.json   options, versions, flags, detection score
-      map.png         heat map, uncertainty, probability, profile (palpbayes.report.map_pages)
+      map.png         heat map, uncertainty, probability, profile (palpbayes.reporting.map_pages)
       map-report.pdf  the report pages
 
 The files are written into a staging folder beside ``DIR`` and moved into it only when the
@@ -148,7 +148,7 @@ def _settings(res: MapResult, extra: dict) -> dict:
 
 def write_map(res: MapResult, out: str | os.PathLike, *, extra: dict | None = None) -> list[Path]:
     """Write the tables, netCDF files and settings of a map into ``out`` (figures and the
-    report: :func:`palpbayes.report.map_pages.write_map_report`); return the paths."""
+    report: :func:`palpbayes.reporting.map_pages.write_map_report`); return the paths."""
     out = Path(out)
     paths = [write_csv_atomic(res.points, out / POINTS, index=False),
              write_csv_atomic(res.nodes, out / MAP, index=False),

@@ -457,7 +457,7 @@ def test_compare_fits_the_stiffening_law_when_rest_times_vary(tmp_path, monkeypa
     assert ((curve["lo_pa"] <= curve["median_pa"]) & (curve["median_pa"] <= curve["hi_pa"])).all()
     # the report draws the page from these tables and fits nothing
     from palpbayes.campaign.results import load_results
-    from palpbayes.report import build_report
+    from palpbayes.reporting import build_report
 
     def refit(*a, **k):
         raise AssertionError("the report fitted the stiffening law")

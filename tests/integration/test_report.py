@@ -24,7 +24,7 @@ from palpbayes import plots
 from palpbayes.campaign.results import ResultsFolder
 from palpbayes.cli import main
 from palpbayes.paper import PAPER_MATERIALS, PAPER_TIPS
-from palpbayes.report import (
+from palpbayes.reporting import (
     BUDGET_GROUPS_PER_PAGE,
     CHART_GROUPS_PER_PAGE,
     REPORT_NAME,
@@ -34,9 +34,9 @@ from palpbayes.report import (
     load_results,
     summary_table,
 )
-from palpbayes.report.format import fmt_range, shown_path
-from palpbayes.report.methods import methods_lines
-from palpbayes.report.pages_title import _settings_lines
+from palpbayes.reporting.format import fmt_range, shown_path
+from palpbayes.reporting.methods import methods_lines
+from palpbayes.reporting.pages_title import _settings_lines
 from palpbayes.sim import simulate_campaign
 
 GROUP_TITLES = ["White · sphere", "Pink · sphere"]
@@ -332,12 +332,12 @@ def test_settings_and_methods_print_forces_and_depths_with_a_prefix(fitted):
 
 
 def test_methods_priors_table_matches_the_priors_module():
-    """The priors on the methods page are written out in palpbayes.report.methods; they must
+    """The priors on the methods page are written out in palpbayes.reporting.methods; they must
     name every sampled parameter and state PriorSpec's default numbers."""
     import math
 
     from palpbayes.bayes.priors import NOISE_MODELS, PriorSpec, param_names
-    from palpbayes.report.methods import PRIORS_TABLE
+    from palpbayes.reporting.methods import PRIORS_TABLE
 
     rows = {ln.split()[0] for ln in PRIORS_TABLE if ln.strip() and not ln.startswith(" ")}
     for noise in NOISE_MODELS:
@@ -415,7 +415,7 @@ def test_small_formatting_helpers(tmp_path, monkeypatch):
 
 
 def test_plotting_modules_do_not_use_pyplot():
-    code = ("import sys, palpbayes.plots, palpbayes.report, palpbayes.cli.report; "
+    code = ("import sys, palpbayes.plots, palpbayes.reporting, palpbayes.cli.report; "
             "print('matplotlib.pyplot' in sys.modules)")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
@@ -586,7 +586,7 @@ def test_stiffening_plot_with_a_fit_object():
 
 def test_diagnostics_page_counts_failed_model_checks(fitted):
     """The diagnostics page counts failed model checks per method (Bayesian, least squares)."""
-    from palpbayes.report.pages_diagnostics import _model_check_line
+    from palpbayes.reporting.pages_diagnostics import _model_check_line
 
     out, _, _ = fitted
     res = load_results(out)
@@ -608,7 +608,7 @@ def test_indentation_page_replays_every_trace_file(fitted, tmp_path):
     trace files are gone gets no table (and no error), and a report without the table no
     such page."""
     from palpbayes.campaign.indentation import indentation_study
-    from palpbayes.report.pages_online import online_pages
+    from palpbayes.reporting.pages_online import online_pages
 
     out, _, _ = fitted
     res = load_results(out)

@@ -29,7 +29,7 @@ from palpbayes.errors import DataFileError, InputError
 from palpbayes.intervals import central_band
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.plots import plot_cycle_fit, plot_hysteresis, plot_relaxation
-from palpbayes.report import build_report
+from palpbayes.reporting import build_report
 from palpbayes.rheology import (
     STORED_DRAWS,
     clear_rheology_outputs,

@@ -76,10 +76,10 @@ class ReportInfo:
 
 def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathLike | None = None,
                  *, seed: int = 0, created: str | None = None) -> ReportInfo:
-    """Write the PDF report of a results folder (pages listed in :mod:`palpbayes.report`).
+    """Write the PDF report of a results folder (pages listed in :mod:`palpbayes.reporting`).
 
     A folder with viscoelastic fits (``rheology.csv``, ``palpbayes fit --rheology``) gets their
-    pages (:mod:`~palpbayes.report.pages_rheology`) before the methods; one with only those is
+    pages (:mod:`~palpbayes.reporting.pages_rheology`) before the methods; one with only those is
     reported with a title page and those pages.
 
     Parameters

@@ -32,7 +32,7 @@
    the compare step (``indentation.csv``); the median depth and peak force at the stop per
    material × tip, against the recorded indentation;
 9. viscoelastic fits, when the folder has ``rheology.csv`` (``palpbayes fit --rheology``;
-   :mod:`~palpbayes.report.pages_rheology`): a table of every trace × relaxation model (the
+   :mod:`~palpbayes.reporting.pages_rheology`): a table of every trace × relaxation model (the
    parameters with 90 % intervals, the model check, flag codes and, with several models,
    PSIS-LOO's ``elpd_diff`` ± se and the preferred model), then per trace and model force against
    time with the fit's band and the segments, E*(t) with its band (every model of the trace),
@@ -55,10 +55,10 @@ Both modules' public names used by notebooks (``load_results``, ``load_fit``, ``
 Matplotlib is used through its object API only (figures are rendered by the PDF backend;
 :mod:`matplotlib.pyplot` is never imported), so the report works under any backend.
 
-Modules: :mod:`~palpbayes.report.build` (:func:`build_report`, page order),
-:mod:`~palpbayes.report.format` (numbers and cells), :mod:`~palpbayes.report.tables` (the
-summary table, drawn tables, pagination), :mod:`~palpbayes.report.layout` (page geometry),
-:mod:`~palpbayes.report.methods` (the methods text) and one ``pages_*`` module per page kind
+Modules: :mod:`~palpbayes.reporting.build` (:func:`build_report`, page order),
+:mod:`~palpbayes.reporting.format` (numbers and cells), :mod:`~palpbayes.reporting.tables` (the
+summary table, drawn tables, pagination), :mod:`~palpbayes.reporting.layout` (page geometry),
+:mod:`~palpbayes.reporting.methods` (the methods text) and one ``pages_*`` module per page kind
 (title, summary, layer, group, diagnostics, budget, stiffening, online, rheology, methods).
 """
 

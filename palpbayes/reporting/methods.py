@@ -2,8 +2,8 @@
 the budget, pooling and the ground truth, with the numbers of the run (``settings.json``,
 ``pooled.csv``, ``groundtruth_summary.csv``) and of the package.
 
-Text only (lines of (style, text), see :func:`palpbayes.report.layout._text_lines`); the page
-that draws it is :mod:`palpbayes.report.pages_methods`.
+Text only (lines of (style, text), see :func:`palpbayes.reporting.layout._text_lines`); the page
+that draws it is :mod:`palpbayes.reporting.pages_methods`.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The methods pages (text of :mod:`palpbayes.report.methods`)."""
+"""The methods pages (text of :mod:`palpbayes.reporting.methods`)."""
 
 from __future__ import annotations
 

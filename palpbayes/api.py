@@ -1,0 +1,446 @@
+"""The front door: palpbayes from Python, by the code path the command line takes.
+
+>>> import palpbayes as pb                                              # doctest: +SKIP
+>>> f = pb.fit("press.csv", tip="sphere", radius=0.01, nu=0.45, seed=1)  # doctest: +SKIP
+>>> f.E, f.interval                                                     # doctest: +SKIP
+
+:func:`fit` builds its options with :func:`fit_options`, the function ``palpbayes fit`` builds
+its own with (:func:`palpbayes.cli.options.options_from_args` calls it), reads a file with the
+reader ``fit`` uses (:func:`palpbayes.io.recording.read_recording`), and fits with
+:func:`palpbayes.campaign.fitjob.fit_trace`, the fit of every trace of a run: the same file,
+options and seed give the same numbers in a notebook and on the command line
+(``Fit.summary()`` equals ``summary.csv``, field by field; ``tests/integration/test_api.py``).
+docs/api.md shows every public name with examples that the test suite runs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .bayes import BudgetSpec, PriorSpec, SamplerSettings
+from .campaign.fitjob import SUMMARY_COLUMNS, FitOutcome, fit_trace
+from .campaign.layout import SUMMARY, posterior_file
+from .campaign.options import LAYER_MODES, FitOptions
+from .contact import TIP_PARAMETERS, Tip, check_nu
+from .errors import GeometryError, InputError
+from .io.atomic import write_csv_atomic
+from .trace import IndentationTrace
+from .twin import Specimen, parse_specimen
+
+__all__ = ["read", "fit", "Fit", "fit_options", "make_tip", "check_specimen"]
+
+#: Reader options :func:`fit` passes to :func:`read` (columns, units and signs of a table;
+#: a bag's or an AFM file's own options).
+READER_KEYS = frozenset({
+    "columns", "units", "force_sign", "z_sign", "force_topic", "pose_topic", "force_axis",
+    "time_offset", "tool_offset", "spring_constant", "sensitivity", "sample_rate", "curve",
+    "trace_id", "material",
+})
+
+
+def make_tip(tip: str | Tip | None, *, radius: float | None = None,
+             half_angle: float | None = None, c: float | None = None,
+             n: float | None = None) -> Tip | None:
+    """A :class:`~palpbayes.contact.Tip` from a kind and its sizes in the command line's units
+    (``radius`` [m], ``half_angle`` [deg], ``c``, ``n``), or ``tip`` itself; None without one.
+
+    Raises
+    ------
+    GeometryError
+        An unknown kind, a missing or bad size, or sizes given with a :class:`Tip`.
+    """
+    sizes = {"radius": radius, "half_angle": half_angle, "c": c, "n": n}
+    if isinstance(tip, Tip):
+        if any(v is not None for v in sizes.values()):
+            raise GeometryError("give the tip's sizes in the Tip, or a kind with its sizes, "
+                                "not both")
+        return tip
+    if tip is None:
+        if any(v is not None for v in sizes.values()):
+            raise GeometryError("tip sizes given without a tip kind (tip='sphere', ...)")
+        return None
+    values = {name: None if sizes.get(name) is None else TIP_PARAMETERS[name].from_user(
+        sizes[name]) for name in TIP_PARAMETERS}
+    return Tip(str(tip), **values)
+
+
+def check_specimen(specimen: Specimen | str | None, thickness: float | str | None = None,
+                   half_space: bool = False) -> Specimen | None:
+    """The block as tested (a :class:`~palpbayes.twin.Specimen` or its ``"L,W,H"``/``"D,H"``
+    text), checked against the thickness and the half-space option (``--specimen``'s rules).
+
+    Raises
+    ------
+    InputError
+        A thickness that differs from the block's height, an unknown thickness or the
+        half-space with a block, or a bad specimen text.
+    """
+    if specimen is None:
+        return None
+    if isinstance(specimen, str):
+        try:
+            specimen = parse_specimen(specimen)
+        except GeometryError as exc:
+            raise InputError(f"--specimen: {exc}") from None
+    if str(thickness).strip().lower() == "unknown":
+        raise InputError("--specimen gives the thickness: it contradicts --thickness unknown")
+    if thickness is not None and not math.isclose(float(thickness), specimen.height,
+                                                  rel_tol=1e-9):
+        raise InputError(f"--thickness {float(thickness):g} m differs from the height "
+                         f"{specimen.height:g} m of --specimen {specimen.as_text()}: give "
+                         "the specimen alone")
+    if half_space:
+        raise InputError("--specimen and --half-space contradict each other: the specimen's "
+                         "twin models the block, the half-space the paper's model")
+    return specimen
+
+
+def fit_options(*, method: str = "bayes", nu: float | None = None,
+                nu_range: tuple[float, float] | None = None, layer: str = "auto",
+                bonding: str = "unknown", thickness_range: tuple[float, float] | None = None,
+                specimen: Specimen | None = None, platens: str = "unknown",
+                engine: str = "emcee", noise: str = "gaussian", noise_pp: float | None = None,
+                f_unc: float | None = None, baseline: str = "constant", tare: bool = False,
+                surface_prior: str = "loading", fit_fraction: float | None = None,
+                max_depth: float | None = None, radius_tolerance: float = 0.01,
+                gain_sd: float = 0.01, compliance_max: float = 2e-6, model_form: bool = True,
+                max_steps: int = 20000, seed: int = 0, strict: bool = False,
+                progress: bool | None = None, budget: BudgetSpec | None = None) -> FitOptions:
+    """The :class:`~palpbayes.campaign.options.FitOptions` of a fit, from the command line's
+    options by their Python names and defaults (``palpbayes fit --help``): the one place both
+    ways in build them.
+
+    Parameters
+    ----------
+    nu, nu_range
+        Poisson ratio [-] (None: a manifest row's, else 0.3 with a note), or a uniform range
+        for the budget (the fit at its midpoint); not both.
+    layer
+        ``"auto"`` (a layer wherever the thickness is known), ``"off"`` (``--half-space``)
+        or ``"unknown"`` (``--thickness unknown``).
+    noise_pp, f_unc
+        [N] Sensor peak-to-peak noise (the sigma prior) and the contact threshold (default:
+        the noise spec, else 6 sd of the baseline).
+    radius_tolerance, gain_sd, compliance_max
+        The uncertainty budget's inputs.
+    budget
+        A whole :class:`~palpbayes.bayes.BudgetSpec` instead (e.g. ``BudgetSpec.none()``:
+        the statistical interval alone); then ``nu_range`` only sets the fit's nu.
+    max_steps, progress
+        emcee's step cap and progress bars (None: on a terminal).
+
+    Raises
+    ------
+    InputError
+        A value out of range or options that contradict each other.
+    """
+    if nu is not None and nu_range is not None:
+        raise InputError("give --nu or --nu-range, not both")
+    if nu_range is not None:
+        lo, hi = (check_nu(v) for v in nu_range)
+        if hi < lo:
+            raise InputError(f"--nu-range {lo} {hi}: LO must not exceed HI")
+        nu, budget_nu = 0.5 * (lo + hi), (lo, hi)
+    else:
+        nu, budget_nu = (None if nu is None else check_nu(nu)), None
+    for name, v in (("radius_tolerance", radius_tolerance), ("gain_sd", gain_sd),
+                    ("compliance_max", compliance_max)):
+        if not (math.isfinite(v) and v >= 0):
+            raise InputError(f"--{name.replace('_', '-')} {v!r} must be a non-negative number")
+    for name, v in (("noise_pp", noise_pp), ("f_unc", f_unc)):
+        if v is not None and not (math.isfinite(v) and v > 0):
+            raise InputError(f"--{name.replace('_', '-')} {v!r} must be a positive force in "
+                             "newtons (the sensor's peak-to-peak noise)")
+    if engine == "exact" and (noise == "student" or surface_prior == "soft"):
+        what = "--noise student" if noise == "student" else "--surface-prior soft"
+        raise InputError(f"--engine exact takes --noise gaussian or ar1 and --surface-prior "
+                         f"loading, not {what}: use --engine emcee for it")
+    if layer not in LAYER_MODES:
+        raise InputError(f"unknown layer mode {layer!r}; use one of {', '.join(LAYER_MODES)}")
+    if budget is None:
+        budget = BudgetSpec(nu_range=budget_nu, radius_tolerance=radius_tolerance,
+                            gain_sd=gain_sd, compliance_max=compliance_max)
+    return FitOptions(
+        method=method, nu=nu, layer=layer, bonding=bonding,
+        thickness_range=None if thickness_range is None else tuple(thickness_range),
+        f_unc=f_unc if f_unc is not None else noise_pp, fit_fraction=fit_fraction,
+        max_depth=max_depth, noise=noise, baseline=baseline, tare=tare,
+        priors=PriorSpec(noise_pp=noise_pp, surface=surface_prior), budget=budget,
+        settings=SamplerSettings(max_steps=max_steps, progress=progress), seed=seed,
+        strict=strict, engine=engine, model_form=model_form, specimen=specimen,
+        platens=platens)
+
+
+def read(path: str | os.PathLike, *, tip: str | Tip | None = None,
+         radius: float | None = None, half_angle: float | None = None, c: float | None = None,
+         n: float | None = None, thickness: float | None = None, material: str = "",
+         curve: int | None = None, **reader_options) -> IndentationTrace:
+    """One trace from a file, as ``palpbayes fit FILE`` reads it: a trace CSV (``columns``,
+    ``units``, ``force_sign``, ``z_sign``), a ROS 2 bag or an AFM file (every segment; a force
+    map needs ``curve``), in SI units.
+
+    Parameters
+    ----------
+    path
+        The recording.
+    tip, radius, half_angle, c, n
+        The tip (:func:`make_tip`; stored in the trace).
+    thickness
+        [m] Specimen thickness, stored in the trace.
+    material
+        Material label.
+    curve
+        Which curve of an AFM force map.
+    **reader_options
+        The reader's options (:func:`palpbayes.io.recording.read_recording`).
+
+    Raises
+    ------
+    InputError, DataFileError
+        As the readers; a force map without ``curve``.
+    """
+    from .io.recording import AFM_META_KEYS, read_recording, recording_kind
+
+    opts = dict(reader_options)
+    meta = {}
+    for attr, key in AFM_META_KEYS.items():  # --spring-constant, ... by their Python names
+        value = opts.pop(attr, None)
+        if value is not None:
+            if not (math.isfinite(value) and value > 0):
+                raise InputError(f"{attr} {value!r} must be a positive number")
+            meta[key] = float(value)
+    if meta:
+        opts["meta_override"] = meta
+    if recording_kind(path) == "afm":
+        opts.setdefault("segments", "all")
+        if curve is not None:
+            opts["curves"] = [int(curve)]
+    elif curve is not None:
+        raise InputError(f"{path}: curve= picks a curve of an AFM force map")
+    traces = read_recording(path, tip=make_tip(tip, radius=radius, half_angle=half_angle,
+                                               c=c, n=n),
+                            thickness=thickness, material=material, **opts)
+    if len(traces) != 1:
+        raise InputError(f"{path} holds {len(traces)} curves; pick one with curve=I "
+                         f"(0 to {len(traces) - 1})")
+    return traces[0]
+
+
+def _trace_of(source, tip: Tip | None, thickness, reader_options: dict) -> IndentationTrace:
+    h = None if thickness is None or str(thickness).strip().lower() == "unknown" else float(
+        thickness)
+    if isinstance(source, IndentationTrace):
+        if reader_options:
+            raise InputError(f"reader options {sorted(reader_options)} apply to a file, not "
+                             "to a trace")
+        changes = {}
+        if tip is not None:
+            changes["tip"] = tip
+        if h is not None:
+            changes["thickness"] = h
+        return dataclasses.replace(source, **changes) if changes else source
+    if isinstance(source, pd.DataFrame):
+        from .io.trace_csv import trace_from_frame
+
+        opts = dict(reader_options)
+        opts.setdefault("trace_id", "frame")
+        return trace_from_frame(source, "a DataFrame", tip=tip, thickness=h, **opts)
+    if isinstance(source, str | os.PathLike):
+        return read(source, tip=tip, thickness=h, **reader_options)
+    raise InputError(f"fit takes a path, an IndentationTrace or a DataFrame, not "
+                     f"{type(source).__name__}")
+
+
+def fit(source, *, tip: str | Tip | None = None, radius: float | None = None,
+        half_angle: float | None = None, c: float | None = None, n: float | None = None,
+        nu: float | None = None, thickness: float | str | None = None,
+        specimen: Specimen | str | None = None, method: str = "bayes", engine: str = "emcee",
+        seed: int | None = None, half_space: bool = False, **options) -> Fit:
+    """Fit one trace, as ``palpbayes fit`` does (docs/api.md).
+
+    Parameters
+    ----------
+    source
+        A file (trace CSV, ROS 2 bag, AFM file), an :class:`~palpbayes.trace.IndentationTrace`
+        or a DataFrame with ``time_s, z_m, force_n`` (or ``columns``/``units``).
+    tip, radius, half_angle, c, n
+        The tip (:func:`make_tip`; a trace's own when None).
+    nu
+        Poisson ratio [-] (None: 0.3, a foam value, said in ``nu_source``).
+    thickness
+        [m] Specimen thickness (a layer on its plate), ``"unknown"`` (sampled) or None.
+    specimen
+        The block as tested (a :class:`~palpbayes.twin.Specimen` or ``"L,W,H"``/``"D,H"``):
+        its finite-element twin, and ``E_instron``.
+    method, engine
+        ``"bayes"``, ``"lsq"`` or ``"both"``; ``"emcee"`` or ``"exact"``.
+    seed
+        Base seed (None: 0, the command line's default: the same numbers as ``palpbayes
+        fit`` without ``--seed``).
+    half_space
+        Fit a half-space even with a thickness (``--half-space``).
+    **options
+        :func:`fit_options`' keywords (``bonding``, ``platens``, ``noise``, ``baseline``,
+        ``tare``, ``f_unc``, ``model_form``, ...) and the reader's (``columns``, ``units``,
+        ``force_sign``, ``z_sign``, ``curve``, ...).
+
+    Returns
+    -------
+    Fit
+
+    Raises
+    ------
+    InputError, GeometryError, DataFileError
+        Bad input, named as the command line names it.
+    """
+    reader = {k: options.pop(k) for k in list(options) if k in READER_KEYS}
+    unknown = thickness is not None and str(thickness).strip().lower() == "unknown"
+    if half_space and unknown:
+        raise InputError("--half-space and --thickness unknown contradict each other; give "
+                         "one of them")
+    block = check_specimen(specimen, thickness, half_space)
+    layer = "off" if half_space else "unknown" if unknown else "auto"
+    opts = fit_options(method=method, nu=nu, layer=layer, specimen=block, engine=engine,
+                       seed=0 if seed is None else int(seed), **options)
+    trace = _trace_of(source, make_tip(tip, radius=radius, half_angle=half_angle, c=c, n=n),
+                      thickness, reader)
+    return Fit(trace=trace, options=opts, outcome=fit_trace(trace, opts))
+
+
+@dataclass
+class Fit:
+    """One trace's fit (:func:`fit`): its rows, its results and what a reader needs.
+
+    Attributes
+    ----------
+    trace
+        The trace fitted.
+    options
+        The fit's options.
+    outcome
+        Its ``summary.csv`` rows and result objects
+        (:class:`~palpbayes.campaign.fitjob.FitOutcome`).
+    """
+
+    trace: IndentationTrace
+    options: FitOptions
+    outcome: FitOutcome
+
+    @property
+    def bayes(self):
+        """The Bayesian result (:class:`~palpbayes.bayes.BayesResult`), None for ``lsq``."""
+        return self.outcome.bayes
+
+    @property
+    def lsq(self):
+        """The paper's least squares (:class:`~palpbayes.lsq.LSQResult`), None if it failed."""
+        return self.outcome.lsq
+
+    @property
+    def row(self) -> dict:
+        """The main ``summary.csv`` row: the Bayesian one, else the least-squares one."""
+        rows = {r["method"]: r for r in self.outcome.rows}
+        return rows.get("bayes", rows.get("lsq"))
+
+    @property
+    def E(self) -> float:
+        """[Pa] Young's modulus: the posterior median with the budget (the row's ``E_pa``)."""
+        return float(self.row["E_pa"])
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """[Pa] E's 90 % interval (the row's full ``E_lo_pa``, ``E_hi_pa``: statistical,
+        budget and, after a material misfit, the model form)."""
+        return float(self.row["E_lo_pa"]), float(self.row["E_hi_pa"])
+
+    @property
+    def E_stat(self) -> tuple[float, float, float]:
+        """[Pa] The statistical part alone: median and 90 % interval (``E_stat_*``); least
+        squares: its E and interval."""
+        r = self.row
+        if r["method"] == "bayes":
+            return float(r["E_stat_pa"]), float(r["E_stat_lo_pa"]), float(r["E_stat_hi_pa"])
+        return float(r["E_pa"]), float(r["E_lo_pa"]), float(r["E_hi_pa"])
+
+    @property
+    def E_instron(self) -> tuple[float, float, float] | None:
+        """[Pa] With a specimen: what a compression test of the block would read, median and
+        90 % interval (``E_instron_*``); None otherwise."""
+        r = self.row
+        v = r.get("E_instron_pa")
+        if v is None or not np.isfinite(v):
+            return None
+        return float(v), float(r["E_instron_lo_pa"]), float(r["E_instron_hi_pa"])
+
+    def summary(self) -> pd.DataFrame:
+        """The ``summary.csv`` of this fit: exactly its rows and columns
+        (:data:`~palpbayes.campaign.fitjob.SUMMARY_COLUMNS`), sorted by method."""
+        df = pd.DataFrame(self.outcome.rows, columns=SUMMARY_COLUMNS)
+        return df.sort_values(["trace_id", "method"], kind="stable").reset_index(drop=True)
+
+    @property
+    def posterior(self):
+        """The arviz ``InferenceData`` of the Bayesian fit (None for ``lsq``)."""
+        return None if self.bayes is None else self.bayes.idata
+
+    @property
+    def checks(self) -> list:
+        """The model checks of the Bayesian fit (:class:`~palpbayes.checks.CheckResult`)."""
+        return [] if self.bayes is None else list(self.bayes.checks)
+
+    @property
+    def notes(self) -> list[str]:
+        """The main row's flags in words, one per item."""
+        from .flagcodes import split_flags
+
+        text = self.row.get("notes")
+        return split_flags(text) if isinstance(text, str) else []
+
+    def plot(self):
+        """A matplotlib Figure: the data with the fit (force against depth) and the
+        residuals."""
+        from matplotlib.figure import Figure
+
+        from . import plots
+
+        fig = Figure(figsize=(8.0, 6.5), layout="constrained")
+        top, bottom = fig.subplots(2, 1, height_ratios=(2, 1))
+        result = self.bayes if self.bayes is not None else self.lsq
+        lsq = self.lsq if self.bayes is not None else None
+        if self.bayes is None:
+            raise InputError("plot() draws a Bayesian fit; fit with method='bayes' or 'both'")
+        plots.plot_force_depth(result, lsq, ax=top)
+        plots.plot_residuals(result, lsq, ax=bottom)
+        return fig
+
+    def save(self, out: str | os.PathLike) -> Path:
+        """Write ``summary.csv`` and the posterior netCDF into the folder ``out`` (created),
+        as ``palpbayes fit --out`` names them; the folder's path."""
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        write_csv_atomic(self.summary(), out / SUMMARY)
+        if self.bayes is not None:
+            self.bayes.to_netcdf(posterior_file(out, self.trace.trace_id))
+        return out
+
+    def __repr__(self) -> str:
+        from .units import format_pressure
+
+        r = self.row
+        lo, hi = self.interval
+        state = []
+        if r["method"] == "bayes":
+            state.append("converged" if bool(r["converged"]) else "NOT converged")
+        ok = r.get("model_ok")
+        if ok is True or ok is False:
+            state.append("model ok" if ok else "model check failed")
+        return (f"Fit({self.trace.trace_id!r}, {r['method']}: E {format_pressure(self.E)} "
+                f"[{format_pressure(lo)}, {format_pressure(hi)}] (90 %)"
+                + (f", {', '.join(state)}" if state else "") + ")")

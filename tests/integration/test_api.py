@@ -1,0 +1,85 @@
+"""The Python front door (palpbayes.api) against the command line: one code path, the same
+numbers; what a Fit carries; bad sources and options named."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import palpbayes as pb
+from palpbayes.cli import main
+from palpbayes.errors import GeometryError, InputError
+
+
+@pytest.fixture(scope="module")
+def trace_file(tmp_path_factory):
+    root = tmp_path_factory.mktemp("api")
+    tr = pb.simulate_trace(120e3, pb.Tip("sphere", radius=0.01), nu=0.45, thickness=0.02,
+                           rng=5, trace_id="trace")
+    return pb.write_trace(tr, root / "trace.csv")
+
+
+def test_fit_equals_the_command_line_field_by_field(trace_file, tmp_path):
+    """The issue's case: pb.fit(path, tip, radius, nu, seed) and `palpbayes fit` with the same
+    options (default engine, emcee) write byte-identical summary.csv files."""
+    f = pb.fit(trace_file, tip="sphere", radius=0.01, nu=0.45, seed=1, method="both")
+    f.save(tmp_path / "api")
+    assert main(["fit", str(trace_file), "--tip", "sphere", "--radius", "0.01", "--nu", "0.45",
+                 "--seed", "1", "--method", "both", "--out", str(tmp_path / "cli")]) == 0
+    api = (tmp_path / "api" / "summary.csv").read_text()
+    cli = (tmp_path / "cli" / "summary.csv").read_text()
+    assert api == cli
+    df = pd.read_csv(tmp_path / "cli" / "summary.csv")
+    assert list(f.summary()["method"]) == list(df["method"]) == ["bayes", "lsq"]
+    assert f.E == df.loc[0, "E_pa"] and f.interval == (df.loc[0, "E_lo_pa"],
+                                                       df.loc[0, "E_hi_pa"])
+
+
+def test_a_fit_carries_its_posterior_plot_and_words(trace_file):
+    import arviz as az
+    from matplotlib.figure import Figure
+
+    f = pb.fit(trace_file, tip="sphere", radius=0.01, nu=0.45, engine="exact", seed=2)
+    assert isinstance(f.plot(), Figure)
+    s = az.summary(f.posterior, var_names=["E_star"])
+    assert s.loc["E_star", "r_hat"] < 1.01
+    assert repr(f).startswith("Fit('trace', bayes: E ")
+    assert f.bayes is not None and f.lsq is not None and f.E_instron is None
+    assert {c.name for c in f.checks} >= {"exponent", "ppc"}
+    assert all(isinstance(n, str) and "; " not in n for n in f.notes)
+
+
+def test_sources_a_trace_and_a_dataframe_give_the_file_s_numbers(trace_file):
+    ref = pb.fit(trace_file, tip="sphere", radius=0.01, nu=0.45, engine="exact", seed=3)
+    trace = pb.read(trace_file, tip="sphere", radius=0.01)
+    frame = pd.read_csv(trace_file)
+    for source in (trace, frame):
+        other = pb.fit(source, tip="sphere", radius=0.01, nu=0.45, engine="exact", seed=3,
+                       trace_id="trace") if isinstance(source, pd.DataFrame) else pb.fit(
+            source, nu=0.45, engine="exact", seed=3)
+        assert other.E == pytest.approx(ref.E, rel=1e-12)
+        assert other.interval == pytest.approx(ref.interval, rel=1e-12)
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    ({"radius": 0.01}, GeometryError, "tip sizes given without a tip kind"),
+    ({"tip": "sphere", "radius": 0.01, "curve": 2}, InputError, "curve= picks a curve"),
+    ({"tip": "sphere", "radius": 0.01, "thickness": "unknown", "specimen": "0.05,0.05,0.02"},
+     InputError, "contradicts --thickness unknown"),
+    ({"tip": "sphere", "radius": 0.01, "nu": 0.3, "nu_range": (0.2, 0.4)}, InputError,
+     "--nu or --nu-range"),
+    ({"tip": "sphere", "radius": 0.01, "engine": "exact", "noise": "student"}, InputError,
+     "--engine exact takes"),
+])
+def test_bad_options_are_named(trace_file, kwargs, error, match):
+    with pytest.raises(error, match=match):
+        pb.fit(trace_file, **kwargs)
+    with pytest.raises(InputError, match="takes a path, an IndentationTrace or a DataFrame"):
+        pb.fit(np.zeros(3), tip="sphere", radius=0.01)
+
+
+def test_top_level_names_resolve():
+    for name in pb.__all__:
+        assert getattr(pb, name) is not None, name
+    assert "fit" in dir(pb) and pb.report.__name__ == "build_report"
