@@ -229,27 +229,44 @@ def thickness_factor(
     GeometryError
         For a tip whose law has no layer solution, a non-positive thickness or an unknown base.
     """
-    h = np.asarray(thickness_m, dtype=float)
+    h = _checked_thickness(np.asarray(thickness_m, dtype=float), thickness_m)
+    return _layer_factor(get_law(tip), depth, tip, h, nu, _checked_base(base))
+
+
+def _checked_thickness(h: np.ndarray, given) -> np.ndarray:
     if not (h.size and np.all(h > 0)):  # inf: no layer (the half-space limit), factor 1
-        raise GeometryError(f"specimen thickness {thickness_m!r} m must be positive")
+        raise GeometryError(f"specimen thickness {given!r} m must be positive")
+    return h
+
+
+def _checked_base(base: str) -> str:
     if base not in layer.BASES:
         raise GeometryError(f"unknown base condition {base!r}; use one of "
                             f"{', '.join(layer.BASES)}")
-    law = get_law(tip)
+    return base
+
+
+def _layer_factor(law: ContactLaw, depth, tip: Tip, h: np.ndarray, nu: float, base: str
+                  ) -> np.ndarray:
+    """:func:`thickness_factor` for a law already looked up (h and base checked)."""
+    _require_layer_solution(law, tip)
+    return _factor_at_radius(law, law.contact_radius(np.asarray(depth, dtype=float), tip),
+                             tip, h, nu, base)
+
+
+def _require_layer_solution(law: ContactLaw, tip: Tip) -> None:
     if law.contact_radius is None:
         have = [x.kind for x in registered_laws() if x.contact_radius is not None]
         raise GeometryError(
             f"no layer (finite-thickness) solution for tip '{tip.kind}' (only "
             f"{', '.join(have)} have one); fit it as a half-space: --half-space on the "
             "command line (thickness=None in the API)")
-    return _factor_at_radius(law.contact_radius(np.asarray(depth, dtype=float), tip), tip, h,
-                             nu, base)
 
 
-def _factor_at_radius(a: np.ndarray, tip: Tip, h: np.ndarray, nu: float, base: str
-                      ) -> np.ndarray:
+def _factor_at_radius(law: ContactLaw, a: np.ndarray, tip: Tip, h: np.ndarray, nu: float,
+                      base: str) -> np.ndarray:
     """The layer factor at half-space contact radii ``a`` [m] (:func:`thickness_factor`)."""
-    n = get_law(tip).profile_exponent(tip)
+    n = law.profile_exponent(tip)
     if math.isinf(n):  # flat punch: a is the punch radius at every depth
         return layer.flat_table(nu, base).factor(a / h)
     return layer.profile_factor(a / h, n, nu, base)
@@ -284,11 +301,13 @@ def shape(
         return law.shape(depth, tip)
     if nu is None:
         raise GeometryError("the finite-thickness correction needs the Poisson ratio nu")
+    h = _checked_thickness(np.asarray(thickness_m, dtype=float), thickness_m)
+    base = _checked_base(base)
     if law.shape_and_radius is None:
-        return law.shape(depth, tip) * thickness_factor(depth, tip, thickness_m, nu, base)
-    thickness_factor(np.zeros(1), tip, thickness_m, nu, base)  # checks h, base, the law
+        return law.shape(depth, tip) * _layer_factor(law, depth, tip, h, nu, base)
+    _require_layer_solution(law, tip)
     s, a = law.shape_and_radius(np.asarray(depth, dtype=float), tip)  # one solve for both
-    return s * _factor_at_radius(a, tip, np.asarray(thickness_m, dtype=float), nu, base)
+    return s * _factor_at_radius(law, a, tip, h, nu, base)
 
 
 def touching(shape: Callable[[np.ndarray], np.ndarray], depth: np.ndarray) -> np.ndarray:
