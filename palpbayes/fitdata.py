@@ -39,7 +39,7 @@ from .noise import PAPER_NOISE_PP
 from .trace import IndentationTrace
 from .units import format_force
 
-__all__ = ["ModelSpec", "BONDINGS", "FitData", "prepare", "prepare_trace", "first_passage",
+__all__ = ["ModelSpec", "BONDINGS", "FitData", "prepare", "tared", "prepare_trace", "first_passage",
            "DEFAULT_F_UNC", "default_fit_fraction", "noise_from_baseline", "onset_reference"]
 
 #: The paper's sensor uncertainty F_unc [N]: 48 mN peak-to-peak
@@ -82,6 +82,8 @@ class FitData:
     cycle
         The whole recording (the tare subtracted) when it goes on past the loading (a hold,
         a retract: the rate check of :mod:`palpbayes.checks.rate`); None otherwise.
+    max_depth
+        [m] The window's depth limit below the contact onset (None: all samples).
     """
 
     z: np.ndarray
@@ -96,6 +98,7 @@ class FitData:
     baseline: Baseline | None = None
     tare: float = 0.0
     cycle: IndentationTrace | None = None
+    max_depth: float | None = None
 
     @property
     def z_prior(self) -> tuple[float, float]:
@@ -269,6 +272,28 @@ def prepare(
             raise NoContactError(f"{source}: no contact: the force never leaves its constant "
                                  f"value ({format_force(f[0])}) over the whole loading")
         f_unc = noise_from_baseline(base, source)
+    return _window(loading, base, float(f_unc), model, fit_fraction, max_depth, tare, source,
+                   trace if trace.n_points > loading.n_points else None)
+
+
+def tared(data: FitData) -> FitData:
+    """``data`` with the baseline level subtracted from the force: what :func:`prepare` gives
+    with ``tare=True`` on the same trace and options, from the loading, baseline and F_unc
+    already read (the trace is prepared once per fit; the contact onset is read again against
+    the tared baseline).  ``data`` itself when it is tared already."""
+    if data.tare != 0.0 or data.baseline is None:
+        return data
+    return _window(data.loading, data.baseline, data.f_unc, data.model, data.fit_fraction,
+                   data.max_depth, True, data.loading.source or data.loading.trace_id,
+                   data.cycle)
+
+
+def _window(loading: IndentationTrace, base: Baseline, f_unc: float, model: ModelSpec,
+            fit_fraction: float, max_depth: float | None, tare: bool, source: str,
+            whole: IndentationTrace | None) -> FitData:
+    """The contact onset and the fit window of a loading segment (:func:`prepare`); ``whole``
+    is the untared recording when it goes on past the loading."""
+    z, f = loading.z, loading.force
     z_c = _contact_onset(*first_passage(z, f - (base.level if tare else 0.0)), f_unc,
                          base.shifted(-base.level) if tare else base, source)
     z_min = float(z.min())
@@ -299,6 +324,6 @@ def prepare(
         model=model,
         baseline=base,
         tare=float(offset),
-        cycle=(trace.replace(force=trace.force - offset)
-               if trace.n_points > loading.n_points else None),
+        cycle=None if whole is None else whole.replace(force=whole.force - offset),
+        max_depth=max_depth,
     )

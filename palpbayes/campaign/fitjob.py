@@ -18,6 +18,7 @@ from ..checks import CheckResult, check_fit, checks_summary
 from ..contact import get_law
 from ..errors import ConvergenceWarning, FitError, GeometryError
 from ..fitdata import FitData, prepare
+from ..fitdata import tared as tared_data
 from ..flagcodes import flag_columns
 from ..lsq import LSQResult, fit_lsq_data
 from ..refit import layer_alternatives
@@ -200,8 +201,13 @@ def check_columns(checks: list[CheckResult], notes: str) -> dict:
 
 
 def fit_trace(trace: IndentationTrace, options: FitOptions,
-              posterior_dir: str | Path | None = None) -> FitOutcome:
+              posterior_dir: str | Path | None = None, *,
+              data: FitData | None = None) -> FitOutcome:
     """Fit one trace with the requested method(s).
+
+    ``data`` are the trace's fit data from :func:`check_fittable` with the same options, when
+    the caller has checked it already (:func:`palpbayes.campaign.run.fit_campaign`): the trace
+    is prepared once per fit.
 
     The least-squares fit always runs (its E is recorded beside the posterior); its row is
     returned for ``method`` "lsq" or "both", with the model checks (:mod:`palpbayes.checks`)
@@ -220,7 +226,8 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     overestimates the force at a given E, so E_hertz is a few per cent *below* E at the
     paper's depths (about −3 % at d/R ≈ 0.3).  Other tips, or a failed fit: NaN.
     """
-    data = check_fittable(trace, options)
+    if data is None:
+        data = check_fittable(trace, options)
     paper = replace(data, model=data.model.half_space())  # the least-squares baseline's
     try:
         lsq = fit_lsq_data(paper, trace_id=trace.trace_id)
@@ -238,12 +245,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     ratio = float("nan")  # E_hertz / E of the paper's least squares on the tared force
     approximation = get_law(data.model.tip).hertz_approximation
     if approximation is not None:
-        tared = paper
-        if not options.tare:  # the paper's model has no offset: an untared one biases E
-            tared = replace(prepare(trace, paper.model, f_unc=options.f_unc,
-                                    fit_fraction=options.fit_fraction,
-                                    max_depth=options.max_depth, tare=True),
-                            model=paper.model)
+        tared = tared_data(paper)  # the paper's model has no offset: an untared one biases E
         hertz = replace(tared, model=replace(tared.model, tip=approximation(tared.model.tip)))
         try:
             ratio = float(fit_lsq_data(hertz, trace_id=trace.trace_id).E

@@ -20,6 +20,7 @@ import numpy as np
 
 from .. import errors as _errors
 from ..errors import FitError, InputError
+from ..fitdata import FitData
 from ..flagcodes import flag_columns
 from ..io.atomic import write_text_atomic
 from ..trace import IndentationTrace
@@ -70,8 +71,12 @@ def trace_fingerprint(trace: IndentationTrace) -> str:
     return h.hexdigest()
 
 
-def fit_and_record(trace: IndentationTrace, options: FitOptions, out: str) -> dict:
+def fit_and_record(trace: IndentationTrace, options: FitOptions, out: str,
+                   data: FitData | None = None) -> dict:
     """Fit one trace, write its posterior and partial JSON; never raises PalpbayesErrors.
+
+    ``data``: the trace's fit data from :func:`~palpbayes.campaign.fitjob.check_fittable`
+    (prepared once; None: prepared here).
 
     Returns ``{"rows": [...]}`` or, for bad input, ``{"error": (class name, message)}`` (custom
     exception classes do not all survive pickling between processes).
@@ -79,12 +84,12 @@ def fit_and_record(trace: IndentationTrace, options: FitOptions, out: str) -> di
     post_dir = Path(out) / layout.POSTERIOR_DIR
     try:
         try:
-            rows = fit_trace(trace, options, post_dir).rows
+            rows = fit_trace(trace, options, post_dir, data=data).rows
         except FitError as exc:
             rows = None
             if options.method == "both":
                 try:
-                    rows = fit_trace(trace, replace(options, method="lsq")).rows
+                    rows = fit_trace(trace, replace(options, method="lsq"), data=data).rows
                     rows += _failed_rows(trace, ["bayes"], exc)
                 except FitError:
                     rows = None

@@ -50,6 +50,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..errors import FitError, InputError, OutputExistsError
+from ..fitdata import FitData
 from ..io.atomic import write_csv_atomic, write_text_atomic
 from ..trace import IndentationTrace
 from . import layout
@@ -114,17 +115,18 @@ def _mp_context():
 
 
 def _run(todo: list[IndentationTrace], options: FitOptions, out: Path, workers: int,
-         on_done: Callable[[], None]) -> None:
+         on_done: Callable[[], None], prepared: dict[str, FitData]) -> None:
     if workers <= 1 or len(todo) <= 1:
         for t in todo:
-            res = fit_and_record(t, options, str(out))
+            res = fit_and_record(t, options, str(out), prepared.get(t.trace_id))
             if "error" in res:
                 raise_input(res["error"])
             on_done()
         return
     pool = cf.ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=_mp_context())
     try:
-        futures = [pool.submit(fit_and_record, t, options, str(out)) for t in todo]
+        futures = [pool.submit(fit_and_record, t, options, str(out), prepared.get(t.trace_id))
+                   for t in todo]
         for fut in cf.as_completed(futures):
             res = fut.result()
             if "error" in res:
@@ -135,7 +137,7 @@ def _run(todo: list[IndentationTrace], options: FitOptions, out: Path, workers: 
 
 
 def _run_dask(todo: list[IndentationTrace], options: FitOptions, out: Path, client,
-              on_done: Callable[[], None]) -> None:
+              on_done: Callable[[], None], prepared: dict[str, FitData]) -> None:
     """:func:`fit_and_record` of every trace on a Dask ``client``
     (:func:`palpbayes.cluster.dask_client`): a few traces per worker in flight, so memory
     does not grow with the campaign; each worker writes the trace's records into ``out`` as
@@ -150,7 +152,8 @@ def _run_dask(todo: list[IndentationTrace], options: FitOptions, out: Path, clie
     opts = client.scatter(options, broadcast=True)
     pending = as_completed()
     for t in islice(jobs, 2 * n_workers):
-        pending.add(client.submit(fit_and_record, t, opts, where, pure=False))
+        pending.add(client.submit(fit_and_record, t, opts, where, prepared.get(t.trace_id),
+                                  pure=False))
     for fut in pending:
         res = fut.result()
         fut.release()
@@ -158,14 +161,16 @@ def _run_dask(todo: list[IndentationTrace], options: FitOptions, out: Path, clie
             raise_input(res["error"])
         on_done()
         for t in islice(jobs, 1):
-            pending.add(client.submit(fit_and_record, t, opts, where, pure=False))
+            pending.add(client.submit(fit_and_record, t, opts, where, prepared.get(t.trace_id),
+                                      pure=False))
 
 
 def _write_and_fit(traces: list[IndentationTrace], options: FitOptions, out: Path,
                    settings: dict, force: bool, resume: bool, workers: int | None, client,
-                   progress: bool | None) -> None:
+                   progress: bool | None, prepared: dict[str, FitData]) -> None:
     """Create the results folder, write the settings and the traces' table, fit what is not
-    recorded yet (on the Dask ``client`` or the local pool)."""
+    recorded yet (on the Dask ``client`` or the local pool) from the traces' ``prepared``
+    fit data."""
     try:
         out.mkdir(parents=True, exist_ok=True)
         (out / layout.PARTIAL_DIR).mkdir(exist_ok=True)
@@ -182,9 +187,9 @@ def _write_and_fit(traces: list[IndentationTrace], options: FitOptions, out: Pat
     todo = [t for t in traces if t.trace_id not in done]
     with progress_bar(len(traces), progress, initial=len(done)) as bar:
         if client is not None:
-            _run_dask(todo, options, out, client, lambda: bar.update(1))
+            _run_dask(todo, options, out, client, lambda: bar.update(1), prepared)
         elif todo:
-            _run(todo, options, out, workers, lambda: bar.update(1))
+            _run(todo, options, out, workers, lambda: bar.update(1), prepared)
 
 
 def fit_campaign(
@@ -274,9 +279,10 @@ def fit_campaign(
             f"cannot resume {out}: its traces were read with other column/unit/sign options "
             f"({old.get('read_options', {})}); use --force to refit everything with the new ones")
     checking = options.with_progress(progress)  # the twin's first tables show a bar
+    prepared: dict[str, FitData] = {}  # each trace prepared once: checked here, fitted below
     for t in traces:  # bad input (geometry, nu, no contact) fails before anything is written
         try:
-            check_fittable(t, checking)
+            prepared[t.trace_id] = check_fittable(t, checking)
         except InputError as exc:
             if t.trace_id in str(exc):
                 raise
@@ -290,7 +296,8 @@ def fit_campaign(
 
         client = dask_client(None if scheduler == "local" else scheduler, workers)
     try:
-        _write_and_fit(traces, options, out, settings, force, resume, workers, client, progress)
+        _write_and_fit(traces, options, out, settings, force, resume, workers, client, progress,
+                       prepared)
     finally:  # on an error or Ctrl-C the cluster's queued traces go with the client
         if client is not None:
             from ..cluster import close_client

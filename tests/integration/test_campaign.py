@@ -123,11 +123,11 @@ class _Counter:
     def __init__(self, real, stop_after=None):
         self.real, self.stop_after, self.ids = real, stop_after, []
 
-    def __call__(self, trace, options, posterior_dir=None):
+    def __call__(self, trace, options, posterior_dir=None, **kwargs):
         if self.stop_after is not None and len(self.ids) >= self.stop_after:
             raise KeyboardInterrupt
         self.ids.append(trace.trace_id)
-        return self.real(trace, options, posterior_dir)
+        return self.real(trace, options, posterior_dir, **kwargs)
 
 
 def test_resume_fits_only_unfinished_traces(traces, tmp_path, monkeypatch):
@@ -209,10 +209,10 @@ def test_fit_error_is_recorded_and_does_not_stop_the_campaign(traces, tmp_path, 
     real = partial.fit_trace
     bad_id = traces[1].trace_id
 
-    def flaky(trace, options, posterior_dir=None):
+    def flaky(trace, options, posterior_dir=None, **kwargs):
         if trace.trace_id == bad_id and options.method != "lsq":
             raise FitError(f"{trace.trace_id}: walkers start outside the prior")
-        return real(trace, options, posterior_dir)
+        return real(trace, options, posterior_dir, **kwargs)
 
     monkeypatch.setattr(partial, "fit_trace", flaky)
     summary = campaign.fit_campaign(traces[:3], tmp_path / "res", OPTS, workers=1)

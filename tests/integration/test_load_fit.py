@@ -75,8 +75,8 @@ def _fit_and_keep(monkeypatch, source, out, options):
     kept = {}
     real = partial.fit_trace
 
-    def keep(trace, opts, posterior_dir=None):
-        outcome = real(trace, opts, posterior_dir)
+    def keep(trace, opts, posterior_dir=None, **kwargs):
+        outcome = real(trace, opts, posterior_dir, **kwargs)
         kept[trace.trace_id] = outcome.bayes
         return outcome
 
