@@ -44,7 +44,8 @@ __all__ = ["PointOptions", "POINT_COLUMNS", "check_positions", "fit_point", "fit
 #: Columns of the per-point table (``points.csv``), in order.
 POINT_COLUMNS = [
     "trace_id", "x_m", "y_m", "logE_mean", "logE_sd", "E_median_pa", "E_lo_pa", "E_hi_pa",
-    "E_lsq_pa", "z_surf_m", "depth_m", "n_nodes", "notes", "flag_codes", "flag_level", "error",
+    "E_lsq_pa", "z_surf_m", "depth_m", "n_nodes", "nu", "notes", "flag_codes", "flag_level",
+    "error",
 ]
 
 
@@ -137,7 +138,7 @@ def fit_point(row: pd.Series, options: PointOptions, index: int = 0) -> dict:
                E_median_pa=float(np.median(E)), E_lo_pa=float(lo), E_hi_pa=float(hi),
                E_lsq_pa=e_lsq, z_surf_m=float(np.median(d["z_surf"])),
                depth_m=float(np.median(d["z_surf"])) - data.z_min,
-               n_nodes=post.n_nodes, **flag_columns("; ".join(flags)))
+               n_nodes=post.n_nodes, nu=float(data.model.nu), **flag_columns("; ".join(flags)))
     return out
 
 

@@ -25,7 +25,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..contact import DEFAULT_NU, Tip
+from ..contact import Tip
 from ..errors import InputError
 from ..flagcodes import scoped
 from ..intervals import LEVEL, central, central_band
@@ -41,7 +41,7 @@ from .pertrace import PointOptions, check_positions, fit_points
 _NO_DATA_SD = 1e3
 
 __all__ = ["MapOptions", "MapResult", "NODE_COLUMNS", "check_map_manifest", "make_map",
-           "map_from_points"]
+           "map_from_points", "nu_used"]
 
 #: Columns of the node table (``map.csv``), one row per lattice node.
 NODE_COLUMNS = [
@@ -337,6 +337,17 @@ def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True, min_points:
     return tip, (float(th[0]) if len(th) else None)
 
 
+def nu_used(points: pd.DataFrame, given: float | None) -> float | list[float] | None:
+    """The Poisson ratio the points were fitted with (``points``' ``nu``: ``--nu``, else each
+    manifest row's, else :data:`~palpbayes.contact.DEFAULT_NU`): one number, or the sorted
+    values when the rows differ; ``given`` when no point was fitted."""
+    if "nu" in points:
+        used = sorted({float(v) for v in points["nu"].dropna()})
+        if used:
+            return used[0] if len(used) == 1 else used
+    return given
+
+
 def make_map(manifest: pd.DataFrame, *, point_options: PointOptions | None = None,
              options: MapOptions | None = None, scheduler: str | None = None,
              workers: int | None = None, progress: bool | None = None) -> MapResult:
@@ -351,9 +362,8 @@ def make_map(manifest: pd.DataFrame, *, point_options: PointOptions | None = Non
                         progress=progress)
     result = map_from_points(points, tip=tip, thickness=thickness, options=options,
                              progress=bool(progress))
-    nu = point_options.fit.nu
     result.settings["points"] = {"noise": point_options.fit.noise,
-                                 "nu": DEFAULT_NU if nu is None else nu,
+                                 "nu": nu_used(points, point_options.fit.nu),
                                  "draws": point_options.draws, "seed": point_options.seed,
                                  "scheduler": scheduler or "local", "workers": workers}
     return result

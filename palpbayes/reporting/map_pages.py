@@ -31,7 +31,8 @@ _QUANTITIES = {
     "ratio": ("stiffness ratio E_lump / E_background", "ratio"),
     "apparent_ratio": ("apparent peak ratio at the surface", "ratio"),
     "apparent_fwhm_m": ("apparent FWHM diameter", "length"),
-    "E_background_pa": ("background E", "pressure"), "tau": ("nugget sd of log E", "ratio"),
+    "E_background_pa": ("background E away from the lump", "pressure"),
+    "tau": ("nugget sd of log E", "ratio"),
 }
 
 
@@ -62,8 +63,11 @@ def lump_lines(res: MapResult, truth: dict | None = None) -> list[tuple[str, str
                    f"{res.p_lump:.3f}" + ("." if res.lump_found else
                                           " — below the detection level: no lump found.")))]
     med, lo, hi = res.background_interval()
-    lines.append(("t", f"Background (median of the field): {format_pressure(med, 4)}, 90 % "
-                       f"interval [{format_pressure(lo, 4)}, {format_pressure(hi, 4)}]."))
+    lines.append(("t", f"Map median E (the field's median over every node, a lump's included: "
+                       f"what P(E > k × median) compares with): {format_pressure(med, 4)}, "
+                       f"90 % interval [{format_pressure(lo, 4)}, {format_pressure(hi, 4)}]."
+                       + ("" if res.lump is None else "  The block's modulus away from a lump "
+                          "is the lump model's background E below.")))
     lines.append(("h", "The lump (one spherical inclusion, 90 % intervals)" if res.lump_found
                   else "The largest bump the data allow (no lump found; 90 % intervals)"))
     if res.lump is None:

@@ -101,6 +101,27 @@ def test_map_writes_every_file_a_user_opens(mapped):
                  "apparent peak ratio"):
         assert any(want in t for t in pages), want
     assert (mapped / "map.png").stat().st_size > 20_000
+    # one name per number: the field's median is called that, the lump model's E_b background
+    summary = " ".join(pages[0].split())
+    assert "Background (median of the field)" not in summary
+    assert "Map median E (the field's median over every node" in summary
+    assert "background E away from the lump" in summary
+
+
+def test_settings_record_the_poisson_ratio_the_points_used(phantom, tmp_path):
+    """The manifest's nu (0.45 here) is the one every point is fitted with, and settings.json
+    says so (it said the default 0.3)."""
+    manifest = pd.read_csv(phantom / "manifest.csv")
+    manifest["nu"] = 0.45
+    path = phantom / "manifest-nu045.csv"  # beside the traces: the files are relative
+    manifest.to_csv(path, index=False)
+    out = tmp_path / "map"
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["map", str(path), "--out", str(out), "--workers", "2", "--no-lump",
+                     "--no-report", "--no-progress"]) == 0
+    settings = json.loads((out / "settings.json").read_text())
+    assert settings["points"]["nu"] == 0.45
+    assert (pd.read_csv(out / "points.csv")["nu"] == 0.45).all()
 
 
 def test_the_lump_is_found_where_it_is(mapped, phantom):
