@@ -51,24 +51,15 @@ from pathlib import Path
 import pandas as pd
 from IPython.display import display
 
-import palpbayes
+import palpbayes as pb
 from palpbayes import plots
-from palpbayes.cli import build_parser
-from palpbayes.cli.fit import options_from_args
-from palpbayes.campaign import (
-    example_campaign_dir,
-    format_comparison,
-    load_results,
-    paper_estimates,
-    run_pipeline,
-)
-from palpbayes.reporting import summary_table
+from palpbayes.reporting import format_comparison, paper_estimates, summary_table
 
 from tqdm import TqdmWarning
 
 pd.set_option("display.width", 160)
 warnings.simplefilter("ignore", TqdmWarning)  # tqdm.auto without ipywidgets; bars are off
-print("palpbayes", palpbayes.__version__)
+print("palpbayes", pb.__version__)
 
 # %% [markdown]
 # ## Settings
@@ -79,12 +70,12 @@ print("palpbayes", palpbayes.__version__)
 # %%
 SEED = 0
 WORKERS = int(os.environ.get("PALPBAYES_NB_WORKERS", "2"))
-CAMPAIGN = example_campaign_dir()
+CAMPAIGN = pb.example_campaign_dir()
 OUT = Path(os.environ.get("PALPBAYES_NB_OUT") or tempfile.mkdtemp(prefix="palpbayes-nb01-"))
 
-# exactly the options of `palpbayes report --seed 0` (both methods, package defaults)
-args = build_parser().parse_args(["report", "--seed", str(SEED)])
-options = options_from_args(args)
+# the options of `palpbayes report --seed 0` (both methods, package defaults): the command
+# line builds its options with the same function
+options = pb.fit_options(method="both", seed=SEED)
 print(options)
 
 # %% [markdown]
@@ -96,9 +87,9 @@ print(options)
 
 # %%
 t0 = time.perf_counter()
-run_pipeline(CAMPAIGN / "manifest.csv", OUT, options, workers=WORKERS, progress=False)
+pb.run_pipeline(CAMPAIGN / "manifest.csv", OUT, options, workers=WORKERS, progress=False)
 print(f"fitted, pooled and compared in {time.perf_counter() - t0:.0f} s; results in {OUT}")
-res = load_results(OUT)
+res = pb.load_results(OUT)
 
 # %% [markdown]
 # ## Ground truth

@@ -16,8 +16,8 @@
 # %% [markdown]
 # # 02 · Least squares vs Bayes on the same traces, and what misspecification does
 #
-# Three simulated traces, each fitted by the paper's least squares (`palpbayes.lsq`) and by the
-# Bayesian model (`palpbayes.bayes`):
+# Three simulated traces, each fitted by the paper's least squares and by the Bayesian model
+# (`pb.fit(..., method="both")`, what `palpbayes fit --method both` runs):
 #
 # 1. a well-specified trace (white noise, Hertz paraboloid): both agree, and the intervals are
 #    honest about the noise;
@@ -31,7 +31,7 @@
 # radius, gain and compliance fixed), because that is the part misspecification distorts; the
 # budget adds a few per cent on top (notebook 01).
 #
-# **Runtime** about 2 min on one core: the AR(1) study uses only **4 replicate traces** (small on
+# **Runtime** under a minute on one core: the AR(1) study uses only **4 replicate traces** (small on
 # purpose, enough to show the effect, not to estimate a coverage probability; the calibration
 # tests in `tests/statistical/test_calibration.py` do that properly).
 
@@ -44,30 +44,24 @@ import numpy as np
 import pandas as pd
 from IPython.display import display
 
+import palpbayes as pb
 from palpbayes import plots
-from palpbayes.bayes import BudgetSpec, fit_bayes_data
-from palpbayes.contact import Tip
-from palpbayes.errors import ConvergenceWarning
-from palpbayes.fitdata import ModelSpec, prepare
-from palpbayes.lsq import fit_lsq_data
 from palpbayes.paper import PAPER_TIPS
-from palpbayes.sim import simulate_trace
 
 pd.set_option("display.width", 160)
-NO_BUDGET = BudgetSpec.none()
+NO_BUDGET = pb.BudgetSpec.none()
 
 
 def fit_both(trace, tip, noise="gaussian", seed=0, model_form=False):
-    """Least squares and Bayes on the same fitted points; returns (lsq, bayes).  The model
-    form (E's interval widened over the alternatives a material misfit points to) is off
-    unless asked for: this notebook compares the statistical intervals."""
-    data = prepare(trace, ModelSpec(tip))
-    lsq = fit_lsq_data(data, trace_id=trace.trace_id)
+    """Least squares and Bayes on the same fitted points, as a half-space (the traces are
+    simulated on one); returns (lsq, bayes).  The model form (E's interval widened over the
+    alternatives a material misfit points to) is off unless asked for: this notebook compares
+    the statistical intervals."""
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ConvergenceWarning)  # reported in the table instead
-        bayes = fit_bayes_data(data, noise=noise, budget=NO_BUDGET, seed=seed, lsq=lsq,
-                               trace_id=trace.trace_id, with_model_form=model_form)
-    return lsq, bayes
+        warnings.simplefilter("ignore", pb.errors.ConvergenceWarning)  # in the table instead
+        f = pb.fit(trace, tip=tip, method="both", noise=noise, budget=NO_BUDGET, seed=seed,
+                   model_form=model_form, half_space=True)
+    return f.lsq, f.bayes
 
 
 def row(label, E_true, E, lo, hi, converged=None):
@@ -87,7 +81,7 @@ def row(label, E_true, E, lo, hi, converged=None):
 # %%
 E_TRUE = 136e3
 tip = PAPER_TIPS["paraboloid"]
-trace = simulate_trace(E_TRUE, tip, thickness=0.020, base=None, rng=1,
+trace = pb.simulate_trace(E_TRUE, tip, thickness=0.020, base=None, rng=1,
                        trace_id="pink_paraboloid")
 lsq, bayes = fit_both(trace, tip, seed=1)
 s = bayes.summary_row()
@@ -122,11 +116,11 @@ N_REP = 4   # small on purpose (runtime); not a coverage estimate
 rows = []
 t0 = time.perf_counter()
 for k in range(N_REP):
-    tr = simulate_trace(E_TRUE, tip, thickness=0.020, base=None, noise_ar1=PHI, rng=100 + k,
+    tr = pb.simulate_trace(E_TRUE, tip, thickness=0.020, base=None, noise_ar1=PHI, rng=100 + k,
                         trace_id=f"ar1_{k}")
     lsq_k, iid = fit_both(tr, tip, "gaussian", seed=k)
     _, ar1 = fit_both(tr, tip, "ar1", seed=k)
-    data_k = prepare(tr, ModelSpec(tip))
+    data_k = iid.data  # the fitted points (the same for both methods)
     resid = data_k.force - lsq_k.Estar * data_k.shape(lsq_k.z_surf - data_k.z)
     rows.append({"trace": k, **row("least squares", E_TRUE, lsq_k.E, lsq_k.E_lo, lsq_k.E_hi),
                  "lag-1 residual corr.": np.corrcoef(resid[1:], resid[:-1])[0, 1]})
@@ -161,9 +155,9 @@ display(summary.round(3))
 # low.  Simulated with the exact law, fitted with both:
 
 # %%
-sphere = Tip("sphere", radius=0.010)
-hertz = Tip("paraboloid", radius=0.010)
-tr = simulate_trace(E_TRUE, sphere, thickness=0.020, base=None, rng=7, trace_id="sphere")
+sphere = pb.Tip("sphere", radius=0.010)
+hertz = pb.Tip("paraboloid", radius=0.010)
+tr = pb.simulate_trace(E_TRUE, sphere, thickness=0.020, base=None, rng=7, trace_id="sphere")
 rows = []
 fits = {}
 for label, model_tip in (("exact sphere (Sneddon)", sphere), ("Hertz, as the paper", hertz)):

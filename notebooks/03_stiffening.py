@@ -40,8 +40,8 @@ import numpy as np
 import pandas as pd
 from IPython.display import display
 
+import palpbayes as pb
 from palpbayes import plots
-from palpbayes.campaign import FitOptions, fit_campaign
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.sim import rest_modulus, simulate_palpation_series
 from palpbayes.stiffening import fit_stiffening_summary
@@ -63,7 +63,7 @@ pd.DataFrame({"trace": [t.trace_id for t in traces], "rest [s]": [t.rest_time fo
 # %%
 OUT = tempfile.mkdtemp(prefix="palpbayes-nb03-")
 t0 = time.perf_counter()
-summary = fit_campaign(traces, OUT, FitOptions(method="bayes", seed=0),
+summary = pb.fit_campaign(traces, OUT, pb.fit_options(method="bayes", seed=0),
                        workers=int(os.environ.get("PALPBAYES_NB_WORKERS", "2")), progress=False)
 print(f"{len(traces)} Bayesian fits in {time.perf_counter() - t0:.0f} s; "
       f"all converged: {bool(summary['converged'].all())}")

@@ -51,19 +51,17 @@ from IPython.display import display
 from matplotlib.figure import Figure
 from tqdm import TqdmWarning
 
-import palpbayes
+import palpbayes as pb
 from palpbayes import plots
-from palpbayes.campaign import example_campaign_dir, load_results, run_pipeline
-from palpbayes.campaign.fitjob import FitOptions
-from palpbayes.contact import Tip, thickness_factor
-from palpbayes.contact.thickness import dimitriadis_factor, garcia_factor
+from palpbayes.contact import dimitriadis_factor, garcia_factor, shape, thickness_factor
 from palpbayes.gap import gap_table, gap_verdicts
+from palpbayes.paper import PAPER_TIPS
 from palpbayes.twin import Specimen, compression_factor, twin_shape
 
 pd.set_option("display.width", 160)
 pd.set_option("display.precision", 3)
 warnings.simplefilter("ignore", TqdmWarning)
-print("palpbayes", palpbayes.__version__)
+print("palpbayes", pb.__version__)
 
 # %% [markdown]
 # ## 1 · How much does a layer stiffen the reading?
@@ -75,7 +73,7 @@ print("palpbayes", palpbayes.__version__)
 
 # %%
 rows = []
-for name, tip in palpbayes.paper.PAPER_TIPS.items():
+for name, tip in PAPER_TIPS.items():
     for h in (0.02, 0.03):
         d = np.array([0.1 * h])
         for nu in (0.3, 0.5):
@@ -93,7 +91,7 @@ display(pd.DataFrame(rows))
 R, h = 0.0117, 0.02
 chi = np.linspace(0.0, 0.6, 121)
 d = (chi * h) ** 2 / R
-para = Tip("paraboloid", radius=R)
+para = pb.Tip("paraboloid", radius=R)
 fig = Figure(figsize=(7, 3.6), layout="constrained")
 ax = fig.add_subplot()
 for nu, ls in ((0.5, "-"), (0.3, "--")):
@@ -170,10 +168,10 @@ for verdict in gap_verdicts(gap).values():
 
 # %%
 out = Path(os.environ.get("PALPBAYES_NB04_OUT") or tempfile.mkdtemp(prefix="palpbayes-nb04-"))
-options = FitOptions(method="both", seed=0, engine="exact")
-run_pipeline(example_campaign_dir() / "manifest.csv", out, options,
+options = pb.fit_options(method="both", seed=0, engine="exact")
+pb.run_pipeline(pb.example_campaign_dir() / "manifest.csv", out, options,
              workers=int(os.environ.get("PALPBAYES_NB_WORKERS", "2")), progress=False)
-res = load_results(out)
+res = pb.load_results(out)
 cmp_ = res.comparison
 show = cmp_[["material", "tip", "method", "E_pa", "E_new_lo_pa", "E_new_hi_pa", "gt_E_pa",
              "gt_in_new_interval", "E_free_pa", "E_bonded_pa", "p_bonded"]].copy()
@@ -210,14 +208,14 @@ plots.plot_halfspace_vs_layer(cmp_)
 # %%
 fig = Figure(figsize=(9, 3.4), layout="constrained")
 ax1, ax2 = fig.subplots(1, 2)
-for (name, tip), color in zip(palpbayes.paper.PAPER_TIPS.items(), ("C0", "C1", "C2"),
+for (name, tip), color in zip(PAPER_TIPS.items(), ("C0", "C1", "C2"),
                               strict=True):
     for h, ls in ((0.02, "-"), (0.03, "--")):
         block = Specimen(h, length=0.05, width=0.05)
         d = np.linspace(0.002, 0.12, 40) * h
         for base, lw in (("free", 1.6), ("bonded", 0.8)):
             w = (twin_shape(d, tip, block, 0.3, base)
-                 / (thickness_factor(d, tip, h, 0.3, base) * palpbayes.contact.shape(d, tip)))
+                 / (thickness_factor(d, tip, h, 0.3, base) * shape(d, tip)))
             ax1.plot(100 * d / h, w, color=color, ls=ls, lw=lw,
                      label=f"{name}, {1e3 * h:g} mm" if base == "free" else None)
 ax1.set_xlabel("depth / thickness [%]")
@@ -251,7 +249,7 @@ for c in ("E_pa", "E_instron_pa", "E_instron_new_lo_pa", "E_instron_new_hi_pa", 
 like.columns = [c.replace("_pa", " [kPa]") for c in like.columns]
 display(like.round(1))
 summ = res.summary
-truth = pd.read_csv(example_campaign_dir() / "truth.csv")
+truth = pd.read_csv(pb.example_campaign_dir() / "truth.csv")
 rows = summ[summ["method"] == "bayes"].merge(truth, on="trace_id")
 cover_E = rows["E_true_pa"].between(rows["E_lo_pa"], rows["E_hi_pa"]).sum()
 cover_i = rows["E_instron_true_pa"].between(rows["E_instron_lo_pa"], rows["E_instron_hi_pa"]).sum()

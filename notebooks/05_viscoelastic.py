@@ -46,27 +46,17 @@ import pandas as pd
 from IPython.display import display
 from matplotlib.figure import Figure
 
-import palpbayes
+import palpbayes as pb
 from palpbayes import plots
-from palpbayes.bayes import fit_bayes
-from palpbayes.checks import checks_summary
-from palpbayes.contact import Tip
-from palpbayes.contact.viscoelastic import PowerLawKernel
-from palpbayes.fitdata import ModelSpec
-from palpbayes.groundtruth import fit_modulus
-from palpbayes.io.afm import read_afm
-from palpbayes.io.instron import CompressionTest
+from palpbayes.contact import PowerLawKernel
+from palpbayes.groundtruth import CompressionTest, fit_modulus
 from palpbayes.paper import PAPER_TIPS
-from palpbayes.rheology import fit_rheology
-from palpbayes.rheology.choice import compare_fits
-from palpbayes.rheology.pool import pool_power_law
-from palpbayes.sim import simulate_viscoelastic
-from palpbayes.sim.compression import simulate_compression_test
+from palpbayes.sim import simulate_compression_test, simulate_viscoelastic
 
 pd.set_option("display.width", 160)
 pd.set_option("display.precision", 4)
 warnings.simplefilter("ignore")  # convergence notes are in each fit's flags
-print("palpbayes", palpbayes.__version__)
+print("palpbayes", pb.__version__)
 
 # %% [markdown]
 # ## 1 · A foam that relaxes, palpated as in the paper
@@ -93,8 +83,8 @@ print(record, "segments:", record.segment_names)
 # change, and the retract reads a far softer E* than the approach.
 
 # %%
-elastic = fit_bayes(record, ModelSpec(PARA, nu=NU), engine="exact", seed=0)
-row = elastic.summary_row()
+elastic = pb.fit(record, nu=NU, engine="exact", seed=0)
+row = elastic.row
 print(f"elastic E = {row['E_pa'] / 1e3:.1f} kPa [{row['E_lo_pa'] / 1e3:.1f}, "
       f"{row['E_hi_pa'] / 1e3:.1f}], model_ok = {row['model_ok']}")
 rate = next(c for c in elastic.checks if c.name == "rate")
@@ -118,12 +108,12 @@ fig
 # block means.  Both relaxation models are fitted and compared by PSIS-LOO.
 
 # %%
-fits = {name: fit_rheology(record, name, nu=NU, rng=0) for name in ("power-law", "sls")}
+fits = {name: pb.fit_rheology(record, name, nu=NU, rng=0) for name in ("power-law", "sls")}
 for name, fit in fits.items():
     print(f"{name}: {fit.summary_line()}  (model check "
           f"{'passed' if fit.model_ok else 'FAILED'}, {fit.seconds:.1f} s)")
 display(fits["power-law"].table())
-display(compare_fits(fits))
+display(pb.compare_rheology(fits))
 
 # %%
 fig = Figure(figsize=(11.0, 4.0), layout="constrained")
@@ -162,8 +152,8 @@ for i, mm_min in enumerate((5.0, 50.0, 500.0)):
     rec = simulate_viscoelastic(TRUE, PARA, depth=3e-3, speed=mm_min / 6e4, hold_time=5.0,
                                 rate=200.0, z_surf=1e-4, phi=0.3, rng=40 + i,
                                 trace_id=f"{mm_min:g} mm/min")
-    el = fit_bayes(rec, ModelSpec(PARA, nu=NU), engine="exact", seed=i).summary_row()
-    fit = speed_fits[mm_min] = fit_rheology(rec, "power-law", nu=NU, rng=i)
+    el = pb.fit(rec, nu=NU, engine="exact", seed=i).row
+    fit = speed_fits[mm_min] = pb.fit_rheology(rec, "power-law", nu=NU, rng=i)
     med, lo, hi = fit.compression_modulus(HEIGHT, toe=TOE)
     rows.append({"speed [mm/min]": mm_min, "elastic E [kPa]": el["E_pa"] / 1e3,
                  "elastic model_ok": el["model_ok"],
@@ -183,7 +173,7 @@ print(f"largest difference from the Instron: {worst:.2f} %")
 # into one posterior of (E0*, alpha):
 
 # %%
-pooled = pool_power_law(list(speed_fits.values()))
+pooled = pb.pool_rheology(list(speed_fits.values()))
 display(pooled.table())
 print("flags:", pooled.flags or "none")
 
@@ -192,27 +182,32 @@ print("flags:", pooled.flags or "none")
 #
 # afmformats' test file of a cell (JPK, MIT licence; in `../shared/data/afm-files/`): a
 # 2 µm/s approach, a 30 s hold at constant height, and the retract; paraboloid R = 5 µm,
-# nu = 0.5 as PyFMRheo's example uses.
+# nu = 0.5 as PyFMRheo's example uses.  The tip goes about 19 µm deep, beyond the 5 µm where
+# Hertz's law holds: `pb.fit`, like `palpbayes fit`, refuses the whole approach and reads the
+# elastic modulus over the first 5 µm (`max_depth=5e-6`); the checks still read the hold and
+# the retract.
 
 # %%
-repo = Path(palpbayes.__file__).resolve().parents[1]  # ../shared sits beside the checkout
+repo = Path(pb.__file__).resolve().parents[1]  # ../shared sits beside the checkout
 shared = Path(os.environ.get("PALPBAYES_SHARED", repo.parent / "shared")) / "data" / "afm-files"
-tip = Tip("paraboloid", radius=5e-6)
-(cell,) = read_afm(shared / "fmt-jpk-sr_cell1-0008.jpk-force", segments="all", tip=tip)
-el = fit_bayes(cell, ModelSpec(tip, nu=0.5), engine="exact", seed=0)
-summary = checks_summary(el.checks)
-print(f"elastic E = {el.summary_row()['E_pa']:.0f} Pa; material misfit: "
-      f"{summary['misfit_checks']}")
+tip = pb.Tip("paraboloid", radius=5e-6)
+cell = pb.read(shared / "fmt-jpk-sr_cell1-0008.jpk-force", tip=tip)  # every segment
+try:  # the whole approach, as PyFMRheo's example fits it
+    pb.fit(cell, nu=0.5, engine="exact", seed=0)
+except pb.errors.GeometryError as exc:
+    print("refused:", exc)
+el = pb.fit(cell, nu=0.5, engine="exact", seed=0, max_depth=5e-6)  # Hertz: depth <= R
+print(f"elastic E = {el.E:.0f} Pa; material misfit: {el.row['misfit_checks']}")
 print(next(c for c in el.checks if c.name == "rate").flag)
 
 # %%
-cell_fits = {name: fit_rheology(cell, name, nu=0.5, rng=0)
+cell_fits = {name: pb.fit_rheology(cell, name, nu=0.5, rng=0)
              for name in ("elastic", "power-law", "sls")}
 for name, fit in cell_fits.items():
     print(f"{name}: {fit.summary_line()}")
     for flag in fit.flags:
         print("   flag:", flag)
-display(compare_fits(cell_fits))
+display(pb.compare_rheology(cell_fits))
 
 # %%
 fig = Figure(figsize=(11.0, 4.0), layout="constrained")
@@ -245,9 +240,9 @@ fig
 # the baseline): Ting's rule has no adhesion, so that is flagged too.
 
 # %%
-(spot,) = read_afm(shared / "fmt-jpk-fd_spot3-0192.jpk-force", segments="all", tip=tip)
+spot = pb.read(shared / "fmt-jpk-fd_spot3-0192.jpk-force", tip=tip)
 for drag in (False, True):
-    fit = fit_rheology(spot, "power-law", segments="approach,retract", drag=drag, nu=0.5, rng=0)
+    fit = pb.fit_rheology(spot, "power-law", segments="approach,retract", drag=drag, nu=0.5, rng=0)
     print(f"drag fitted: {drag}: {fit.summary_line()}; model check "
           f"{'passed' if fit.model_ok else 'failed'}")
     for flag in fit.flags:

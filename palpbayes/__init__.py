@@ -14,8 +14,10 @@ Reading and fitting: :func:`read`, :func:`fit` (a :class:`Fit`), :func:`fit_opti
 :func:`report` (the PDF); the model: :class:`Tip`, :class:`Specimen`, :class:`ModelSpec`,
 :class:`BudgetSpec`, :func:`force`; simulating: :func:`simulate` (a campaign folder),
 :func:`simulate_trace`; online: :class:`OnlineEstimator`, :class:`StoppingRule`; maps:
-:func:`make_map`; viscoelastic fits: :func:`fit_rheology`; the example campaign:
-:func:`example_campaign_dir`; the subpackages :mod:`plots`, :mod:`paper`, :mod:`gap`,
+:func:`make_map`; viscoelastic fits: :func:`fit_rheology`, :func:`compare_rheology`
+(PSIS-LOO), :func:`pool_rheology` (one power law over speeds); the example campaign:
+:func:`example_campaign_dir`; the subpackages :mod:`contact` (the contact laws and their
+formulas), :mod:`errors`, :mod:`stiffening`, :mod:`plots`, :mod:`paper`, :mod:`gap`,
 :mod:`twin`, :mod:`sim`, :mod:`groundtruth` (compression tests), :mod:`reporting` (the
 report's tables and pages).  They are imported when first used (``import palpbayes`` stays
 quick).
@@ -53,6 +55,11 @@ _LAZY = {
     "StoppingRule": ("online.estimator", "StoppingRule"),
     "make_map": ("maps.run", "make_map"),
     "fit_rheology": ("rheology.fit", "fit_rheology"),
+    "compare_rheology": ("rheology.choice", "compare_fits"),
+    "pool_rheology": ("rheology.pool", "pool_power_law"),
+    "contact": ("contact", None),
+    "errors": ("errors", None),
+    "stiffening": ("stiffening", None),
     "plots": ("plots", None),
     "paper": ("paper", None),
     "gap": ("gap", None),

@@ -16,6 +16,7 @@ Reading the exports is :mod:`palpbayes.io.instron`, finding them
 :mod:`palpbayes.io.groundtruth_inputs`. The public names of each module are imported here.
 """
 
+from ..io.instron import CompressionTest  # the input of fit_modulus
 from . import fit, hac, platens, tables, window
 from .fit import *  # noqa: F403 - the names in fit.__all__
 from .hac import *  # noqa: F403
@@ -23,4 +24,5 @@ from .platens import *  # noqa: F403
 from .tables import *  # noqa: F403
 from .window import *  # noqa: F403
 
-__all__ = [*window.__all__, *fit.__all__, *hac.__all__, *tables.__all__, *platens.__all__]
+__all__ = ["CompressionTest", *window.__all__, *fit.__all__, *hac.__all__, *tables.__all__,
+           *platens.__all__]

@@ -64,7 +64,9 @@ summary table, drawn tables, pagination), :mod:`~palpbayes.reporting.layout` (pa
 
 from __future__ import annotations
 
+from ..campaign.compare_text import format_comparison
 from ..campaign.pipeline import example_campaign_dir, run_pipeline
+from ..campaign.reference import paper_estimates
 from ..campaign.results import ResultsFolder, load_fit, load_results
 from .build import RASTER_DPI, REPORT_NAME, ReportInfo, build_report
 from .layout import BUDGET_GROUPS_PER_PAGE, CHART_GROUPS_PER_PAGE, PAGE_SIZE, TABLE_ROWS_PER_PAGE
@@ -100,7 +102,10 @@ __all__ = [
     "INSTRON_COVER_COL",
     "HERTZ_COL",
     "build_report",
-    # re-exported from palpbayes.campaign.results and .pipeline (notebooks import them here)
+    # re-exported from palpbayes.campaign (results, pipeline, compare_text, reference): the
+    # report's inputs and its comparison text, for notebooks
+    "format_comparison",
+    "paper_estimates",
     "ResultsFolder",
     "load_results",
     "load_fit",

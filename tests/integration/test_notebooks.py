@@ -90,8 +90,8 @@ def test_notebook_01_names_its_ground_truth_and_the_two_bayes_quantities():
     src = "\n".join(c.source for c in _script("01_paper_tables").cells)
     assert "format_comparison(res.comparison, groundtruth_source=" in src
     assert "Bayes material E ± sd [kPa]" in src and "Bayes new specimen E ± sd [kPa]" in src
-    assert "from palpbayes.campaign import" in src
-    assert "run_pipeline" in src and "load_results" in src
+    assert "import palpbayes as pb" in src
+    assert "pb.run_pipeline(" in src and "pb.load_results(" in src
 
 
 def _execute(name: str, cwd: Path, timeout: int = 900):
