@@ -11,6 +11,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from ..campaign.results import MATERIAL_ORDER, TIP_ORDER, ordered
+from .groups import material_tip_columns
 from .style import KPA, METHOD_COLORS, METHOD_LABELS, fig_ax
 
 __all__ = ["plot_gap", "plot_halfspace_vs_layer"]
@@ -98,38 +99,22 @@ def plot_halfspace_vs_layer(comparison: pd.DataFrame, *, ax: Axes | None = None)
         Axes to draw on (default: a new 10 × 4.5 in figure).
     """
     fig, ax = fig_ax(ax, (10.0, 4.5))
-    mats = ordered(comparison["material"], MATERIAL_ORDER)
-    tips = ordered(comparison["tip"], TIP_ORDER)
-    xt, xl = [], []
-    x = 0.0
-    for mat in mats:
-        sub = comparison[comparison["material"] == mat]
-        group = [t for t in tips if t in set(sub["tip"])]
-        if "gt_E_pa" in sub and sub["gt_E_pa"].notna().any():
-            gt = float(sub["gt_E_pa"].dropna().iloc[0]) * KPA
-            sd = float(sub["gt_sd_pa"].fillna(0).iloc[0]) * KPA if "gt_sd_pa" in sub else 0.0
-            ax.fill_between([x - 0.5, x + len(group) - 0.5], gt - sd, gt + sd, color="0.88",
-                            lw=0, zorder=0)
-            ax.hlines(gt, x - 0.5, x + len(group) - 0.5, color=METHOD_COLORS["gt"], lw=1.2)
-        for tip in group:
-            g = sub[sub["tip"] == tip].set_index("method")
-            if "lsq" in g.index:
-                r = g.loc["lsq"]
-                ax.plot([x - 0.2], [r["E_pa"] * KPA], "s", ms=5, color=METHOD_COLORS["lsq"])
-                alt = [r.get(c, np.nan) for c in ("E_free_pa", "E_bonded_pa")]
-                if np.all(np.isfinite(alt)):
-                    ax.vlines(x - 0.05, min(alt) * KPA, max(alt) * KPA, color=_LAYER, lw=4)
-            if "bayes" in g.index:
-                r = g.loc["bayes"]
-                ax.errorbar([x + 0.15], [r["E_new_pa"] * KPA],
-                            yerr=[[(r["E_new_pa"] - r["E_new_lo_pa"]) * KPA],
-                                  [(r["E_new_hi_pa"] - r["E_new_pa"]) * KPA]],
-                            fmt="o", ms=5, color=METHOD_COLORS["bayes"], capsize=3)
-            xt.append(x)
-            xl.append(f"{mat}\n{tip}")
-            x += 1.0
-        x += 0.5
-    ax.set_xticks(xt, xl, fontsize="small")
+
+    def draw(x: float, g: pd.DataFrame) -> None:
+        if "lsq" in g.index:
+            r = g.loc["lsq"]
+            ax.plot([x - 0.2], [r["E_pa"] * KPA], "s", ms=5, color=METHOD_COLORS["lsq"])
+            alt = [r.get(c, np.nan) for c in ("E_free_pa", "E_bonded_pa")]
+            if np.all(np.isfinite(alt)):
+                ax.vlines(x - 0.05, min(alt) * KPA, max(alt) * KPA, color=_LAYER, lw=4)
+        if "bayes" in g.index:
+            r = g.loc["bayes"]
+            ax.errorbar([x + 0.15], [r["E_new_pa"] * KPA],
+                        yerr=[[(r["E_new_pa"] - r["E_new_lo_pa"]) * KPA],
+                              [(r["E_new_hi_pa"] - r["E_new_pa"]) * KPA]],
+                        fmt="o", ms=5, color=METHOD_COLORS["bayes"], capsize=3)
+
+    material_tip_columns(ax, comparison, draw)
     ax.set_ylabel("E [kPa]")
     ax.set_title("Half-space (the paper's) and layer estimates against the Instron",
                  fontsize="medium")

@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from ..campaign.results import MATERIAL_ORDER, TIP_ORDER, ordered
+from .groups import material_tip_columns
 from .style import KPA, METHOD_COLORS, METHOD_LABELS, fig_ax
 
 __all__ = ["plot_specimen_as_tested"]
@@ -32,42 +32,26 @@ def plot_specimen_as_tested(comparison: pd.DataFrame, *, ax: Axes | None = None)
         Axes to draw on (default: a new 10 × 4.5 in figure).
     """
     fig, ax = fig_ax(ax, (10.0, 4.5))
-    mats = ordered(comparison["material"], MATERIAL_ORDER)
-    tips = ordered(comparison["tip"], TIP_ORDER)
-    xt, xl = [], []
-    x = 0.0
-    for mat in mats:
-        sub = comparison[comparison["material"] == mat]
-        group = [t for t in tips if t in set(sub["tip"])]
-        if "gt_E_pa" in sub and sub["gt_E_pa"].notna().any():
-            gt = float(sub["gt_E_pa"].dropna().iloc[0]) * KPA
-            sd = float(sub["gt_sd_pa"].fillna(0).iloc[0]) * KPA
-            ax.fill_between([x - 0.5, x + len(group) - 0.5], gt - sd, gt + sd, color="0.88",
-                            lw=0, zorder=0)
-            ax.hlines(gt, x - 0.5, x + len(group) - 0.5, color=METHOD_COLORS["gt"], lw=1.2)
-        for tip in group:
-            g = sub[sub["tip"] == tip].set_index("method")
-            if "lsq" in g.index and np.isfinite(g.loc["lsq", "E_pa"]):
-                ax.plot([x - 0.25], [g.loc["lsq", "E_pa"] * KPA], "s", ms=5,
-                        color=METHOD_COLORS["lsq"])
-            if "bayes" in g.index:
-                r = g.loc["bayes"]
-                ax.errorbar([x - 0.05], [r["E_new_pa"] * KPA],
-                            yerr=[[(r["E_new_pa"] - r["E_new_lo_pa"]) * KPA],
-                                  [(r["E_new_hi_pa"] - r["E_new_pa"]) * KPA]],
-                            fmt="o", ms=5, color=METHOD_COLORS["bayes"], capsize=3)
-                if np.isfinite(r.get("E_instron_pa", np.nan)):
-                    ax.errorbar([x + 0.2], [r["E_instron_pa"] * KPA],
-                                yerr=[[(r["E_instron_pa"] - r["E_instron_new_lo_pa"]) * KPA],
-                                      [(r["E_instron_new_hi_pa"] - r["E_instron_pa"]) * KPA]],
-                                fmt="D", ms=5, color=_INSTRON, capsize=3)
-            xt.append(x)
-            xl.append(f"{mat}\n{tip}")
-            x += 1.0
-        x += 0.5
+
+    def draw(x: float, g: pd.DataFrame) -> None:
+        if "lsq" in g.index and np.isfinite(g.loc["lsq", "E_pa"]):
+            ax.plot([x - 0.25], [g.loc["lsq", "E_pa"] * KPA], "s", ms=5,
+                    color=METHOD_COLORS["lsq"])
+        if "bayes" in g.index:
+            r = g.loc["bayes"]
+            ax.errorbar([x - 0.05], [r["E_new_pa"] * KPA],
+                        yerr=[[(r["E_new_pa"] - r["E_new_lo_pa"]) * KPA],
+                              [(r["E_new_hi_pa"] - r["E_new_pa"]) * KPA]],
+                        fmt="o", ms=5, color=METHOD_COLORS["bayes"], capsize=3)
+            if np.isfinite(r.get("E_instron_pa", np.nan)):
+                ax.errorbar([x + 0.2], [r["E_instron_pa"] * KPA],
+                            yerr=[[(r["E_instron_pa"] - r["E_instron_new_lo_pa"]) * KPA],
+                                  [(r["E_instron_new_hi_pa"] - r["E_instron_pa"]) * KPA]],
+                            fmt="D", ms=5, color=_INSTRON, capsize=3)
+
+    material_tip_columns(ax, comparison, draw)
     lo, hi = ax.get_ylim()
     ax.set_ylim(lo, hi + 0.3 * (hi - lo))  # room for the legend above the bars
-    ax.set_xticks(xt, xl, fontsize="small")
     ax.set_ylabel("E [kPa]")
     ax.set_title("The specimen as tested: palpation and compression like for like",
                  fontsize="medium")
