@@ -44,6 +44,7 @@ import concurrent.futures as cf
 import json
 import os
 import sys
+import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -194,7 +195,7 @@ def _write_and_fit(traces: list[IndentationTrace], options: FitOptions, out: Pat
 
 def fit_campaign(
     source: str | os.PathLike | Sequence[IndentationTrace],
-    out_dir: str | os.PathLike,
+    out_dir: str | os.PathLike | None = None,
     options: FitOptions | None = None,
     *,
     workers: int | None = None,
@@ -216,7 +217,8 @@ def fit_campaign(
     source
         Campaign manifest (:mod:`palpbayes.io.manifest`) or a sequence of traces with tips.
     out_dir
-        Results folder; created if needed.
+        Results folder; created if needed.  None: a temporary folder, removed when the fits
+        are done (only the summary table is kept: give a folder to keep the posteriors).
     options
         Fit options shared by every trace (default :class:`~palpbayes.campaign.fitjob.FitOptions`).
     workers
@@ -254,6 +256,17 @@ def fit_campaign(
     FitError
         Only with ``options.strict``: some traces failed (after ``summary.csv`` is written).
     """
+    if out_dir is None:
+        if resume:
+            raise InputError("resume needs the results folder of the interrupted run: give "
+                             "out_dir")
+        if scheduler not in (None, "local"):
+            raise InputError(f"the Dask cluster at {scheduler!r} writes each trace's records "
+                             "into the results folder: give an out_dir its workers see")
+        with tempfile.TemporaryDirectory(prefix="palpbayes-") as tmp:
+            return fit_campaign(source, Path(tmp) / "results", options, workers=workers,
+                                progress=progress, read_options=read_options,
+                                scheduler=scheduler)
     options = options or FitOptions()
     out = Path(out_dir)
     _check_out_dir(out, resume, force)

@@ -83,3 +83,13 @@ def test_top_level_names_resolve():
     for name in pb.__all__:
         assert getattr(pb, name) is not None, name
     assert "fit" in dir(pb) and pb.report.__name__ == "build_report"
+
+
+def test_fit_campaign_without_a_folder_refuses_what_needs_one():
+    import palpbayes as pb
+    from palpbayes.errors import InputError
+
+    with pytest.raises(InputError, match="resume needs the results folder"):
+        pb.fit_campaign([], resume=True)
+    with pytest.raises(InputError, match="give an out_dir its workers see"):
+        pb.fit_campaign([], scheduler="tcp://127.0.0.1:8786")
