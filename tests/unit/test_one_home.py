@@ -61,8 +61,9 @@ def test_the_default_nu_is_one_constant():
             pairs = []
             if isinstance(n, ast.arguments):
                 args = n.posonlyargs + n.args
-                pairs += list(zip(args[len(args) - len(n.defaults):], n.defaults))
-                pairs += [(a, d) for a, d in zip(n.kwonlyargs, n.kw_defaults) if d is not None]
+                pairs += list(zip(args[len(args) - len(n.defaults):], n.defaults, strict=True))
+                pairs += [(a, d) for a, d in zip(n.kwonlyargs, n.kw_defaults, strict=True)
+                          if d is not None]
                 pairs = [(ast.Name(id=a.arg), d) for a, d in pairs]
             elif isinstance(n, ast.Call):
                 pairs += [(ast.Name(id=k.arg or ""), k.value) for k in n.keywords]
