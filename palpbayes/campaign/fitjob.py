@@ -248,8 +248,9 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
         tared = tared_data(paper)  # the paper's model has no offset: an untared one biases E
         hertz = replace(tared, model=replace(tared.model, tip=approximation(tared.model.tip)))
         try:
-            ratio = float(fit_lsq_data(hertz, trace_id=trace.trace_id).E
-                          / fit_lsq_data(tared, trace_id=trace.trace_id).E)
+            exact = (lsq.E if tared is paper and lsq is not None  # tared already: the row's
+                     else fit_lsq_data(tared, trace_id=trace.trace_id).E)
+            ratio = float(fit_lsq_data(hertz, trace_id=trace.trace_id).E / exact)
         except (FitError, ZeroDivisionError):
             ratio = float("nan")
 
