@@ -25,24 +25,29 @@ import numpy as np
 import pandas as pd
 
 from .bayes import BudgetSpec, PriorSpec, SamplerSettings
-from .campaign.fitjob import SUMMARY_COLUMNS, FitOutcome, fit_trace
-from .campaign.layout import SUMMARY, posterior_file
+from .campaign.fitjob import SUMMARY_COLUMNS, FitOutcome, fit_trace_rows
+from .campaign.layout import SUMMARY, posterior_path
 from .campaign.options import LAYER_MODES, FitOptions
 from .contact import TIP_PARAMETERS, Tip, check_nu
-from .errors import GeometryError, InputError
+from .errors import FitError, GeometryError, InputError
 from .io.atomic import write_csv_atomic
+from .io.recording import AFM_META_KEYS, READER_OPTIONS
 from .trace import IndentationTrace
 from .twin import Specimen, parse_specimen
 
 __all__ = ["read", "fit", "Fit", "fit_options", "make_tip", "check_specimen"]
 
-#: Reader options :func:`fit` passes to :func:`read` (columns, units and signs of a table;
-#: a bag's or an AFM file's own options).
-READER_KEYS = frozenset({
-    "columns", "units", "force_sign", "z_sign", "force_topic", "pose_topic", "force_axis",
-    "time_offset", "tool_offset", "spring_constant", "sensitivity", "sample_rate", "curve",
-    "trace_id", "material",
-})
+#: Reader options :func:`fit` passes to :func:`read`: every reader's own
+#: (:data:`~palpbayes.io.recording.READER_OPTIONS`: a table's columns, units and signs, a
+#: bag's topics, an AFM file's segments), an AFM file's calibration by its Python name, the
+#: curve of a force map, and the trace's labels.
+READER_KEYS = frozenset(
+    (set().union(*READER_OPTIONS.values()) - {"curves", "meta_override"})
+    | set(AFM_META_KEYS) | {"curve", "trace_id", "material", "specimen", "repetition",
+                            "rest_time"})
+#: The reader options a DataFrame takes (:func:`~palpbayes.io.trace_csv.trace_from_frame`).
+FRAME_KEYS = frozenset(READER_OPTIONS["table"] - {"delimiter"}
+                       | {"trace_id", "material", "specimen", "repetition", "rest_time"})
 
 
 def make_tip(tip: str | Tip | None, *, radius: float | None = None,
@@ -156,8 +161,10 @@ def fit_options(*, method: str = "bayes", nu: float | None = None,
             raise InputError(f"--{name.replace('_', '-')} {v!r} must be a non-negative number")
     for name, v in (("noise_pp", noise_pp), ("f_unc", f_unc)):
         if v is not None and not (math.isfinite(v) and v > 0):
+            what = ("the sensor's peak-to-peak noise" if name == "noise_pp"
+                    else "the contact threshold")
             raise InputError(f"--{name.replace('_', '-')} {v!r} must be a positive force in "
-                             "newtons (the sensor's peak-to-peak noise)")
+                             f"newtons ({what})")
     if engine == "exact" and (noise == "student" or surface_prior == "soft"):
         what = "--noise student" if noise == "student" else "--surface-prior soft"
         raise InputError(f"--engine exact takes --noise gaussian or ar1 and --surface-prior "
@@ -206,7 +213,7 @@ def read(path: str | os.PathLike, *, tip: str | Tip | None = None,
     InputError, DataFileError
         As the readers; a force map without ``curve``.
     """
-    from .io.recording import AFM_META_KEYS, read_recording, recording_kind
+    from .io.recording import read_recording, recording_kind
 
     opts = dict(reader_options)
     meta = {}
@@ -233,9 +240,22 @@ def read(path: str | os.PathLike, *, tip: str | Tip | None = None,
     return traces[0]
 
 
+def _thickness(thickness) -> float | None:
+    """[m] A thickness given as a number (None and ``"unknown"``: None), or an InputError."""
+    if thickness is None or str(thickness).strip().lower() == "unknown":
+        return None
+    try:
+        h = float(thickness)
+    except (TypeError, ValueError):
+        raise InputError(f"thickness {thickness!r} must be a number of metres or "
+                         "'unknown'") from None
+    if not (math.isfinite(h) and h > 0):
+        raise InputError(f"thickness {thickness!r} m must be positive (or 'unknown')")
+    return h
+
+
 def _trace_of(source, tip: Tip | None, thickness, reader_options: dict) -> IndentationTrace:
-    h = None if thickness is None or str(thickness).strip().lower() == "unknown" else float(
-        thickness)
+    h = _thickness(thickness)
     if isinstance(source, IndentationTrace):
         if reader_options:
             raise InputError(f"reader options {sorted(reader_options)} apply to a file, not "
@@ -249,6 +269,10 @@ def _trace_of(source, tip: Tip | None, thickness, reader_options: dict) -> Inden
     if isinstance(source, pd.DataFrame):
         from .io.trace_csv import trace_from_frame
 
+        wrong = sorted(set(reader_options) - FRAME_KEYS)
+        if wrong:
+            raise InputError(f"reader option(s) {wrong} apply to a file, not to a DataFrame "
+                             f"(a DataFrame takes {', '.join(sorted(FRAME_KEYS))})")
         opts = dict(reader_options)
         opts.setdefault("trace_id", "frame")
         return trace_from_frame(source, "a DataFrame", tip=tip, thickness=h, **opts)
@@ -299,19 +323,38 @@ def fit(source, *, tip: str | Tip | None = None, radius: float | None = None,
     ------
     InputError, GeometryError, DataFileError
         Bad input, named as the command line names it.
+    FitError
+        Only with ``strict=True``: a fit failed (otherwise its row says why, as in
+        ``summary.csv``).
+
+    Notes
+    -----
+    Each trace's seed derives from ``seed`` and the trace's id, as on the command line: a
+    DataFrame's trace is called ``trace_id`` (default ``"frame"``); give the file's stem to
+    reproduce ``palpbayes fit FILE.csv`` number for number.
     """
     reader = {k: options.pop(k) for k in list(options) if k in READER_KEYS}
     unknown = thickness is not None and str(thickness).strip().lower() == "unknown"
     if half_space and unknown:
         raise InputError("--half-space and --thickness unknown contradict each other; give "
                          "one of them")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int | np.integer)
+                             or seed < 0):
+        raise InputError(f"seed {seed!r} must be a non-negative whole number")
     block = check_specimen(specimen, thickness, half_space)
     layer = "off" if half_space else "unknown" if unknown else "auto"
     opts = fit_options(method=method, nu=nu, layer=layer, specimen=block, engine=engine,
                        seed=0 if seed is None else int(seed), **options)
     trace = _trace_of(source, make_tip(tip, radius=radius, half_angle=half_angle, c=c, n=n),
                       thickness, reader)
-    return Fit(trace=trace, options=opts, outcome=fit_trace(trace, opts))
+    outcome = fit_trace_rows(trace, opts)  # a failed fit is a row, as on the command line
+    if opts.strict:
+        failed = [r for r in outcome.rows
+                  if "fit_failed" in str(r.get("flag_codes") or "").split(";")]
+        if failed:
+            raise FitError(f"{trace.trace_id}: the {' and '.join(r['method'] for r in failed)} "
+                           f"fit failed in strict mode: {failed[0].get('notes', '')}")
+    return Fit(trace=trace, options=opts, outcome=outcome)
 
 
 @dataclass
@@ -345,9 +388,11 @@ class Fit:
 
     @property
     def row(self) -> dict:
-        """The main ``summary.csv`` row: the Bayesian one, else the least-squares one."""
+        """The main ``summary.csv`` row: the Bayesian one, else the least-squares one, with
+        every column (NaN where the row has none: a failed fit's)."""
         rows = {r["method"]: r for r in self.outcome.rows}
-        return rows.get("bayes", rows.get("lsq"))
+        r = rows.get("bayes", rows.get("lsq"))
+        return {c: r.get(c, float("nan")) for c in SUMMARY_COLUMNS}
 
     @property
     def E(self) -> float:
@@ -421,13 +466,15 @@ class Fit:
         return fig
 
     def save(self, out: str | os.PathLike) -> Path:
-        """Write ``summary.csv`` and the posterior netCDF into the folder ``out`` (created),
-        as ``palpbayes fit --out`` names them; the folder's path."""
+        """Write ``summary.csv`` and the posterior netCDF (``posterior/<trace_id>.nc``) into
+        the folder ``out`` (created), as ``palpbayes fit --out`` lays them out; the folder's
+        path."""
         out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
+        path = posterior_path(out, self.trace.trace_id)
+        path.parent.mkdir(parents=True, exist_ok=True)
         write_csv_atomic(self.summary(), out / SUMMARY)
         if self.bayes is not None:
-            self.bayes.to_netcdf(posterior_file(out, self.trace.trace_id))
+            self.bayes.to_netcdf(path)
         return out
 
     def __repr__(self) -> str:

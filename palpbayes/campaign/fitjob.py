@@ -16,7 +16,7 @@ import numpy as np
 from ..bayes import BayesResult, fit_bayes_data
 from ..checks import CheckResult, check_fit, checks_summary
 from ..contact import get_law
-from ..errors import ConvergenceWarning, FitError, GeometryError
+from ..errors import ConvergenceWarning, FitError, GeometryError, InputError, NoContactError
 from ..fitdata import FitData, prepare
 from ..fitdata import tared as tared_data
 from ..flagcodes import flag_columns
@@ -30,8 +30,9 @@ from .tracemodel import nu_source, prepare_twin, trace_model, trace_seed, trace_
 
 # FitOptions, METHODS and LAYER_MODES (.options), trace_model and its helpers (.tracemodel) are
 # imported from here too
-__all__ = ["FitOptions", "FitOutcome", "fit_trace", "check_fittable", "trace_model", "nu_source",
-           "trace_specimen", "prepare_twin", "trace_seed", "SUMMARY_COLUMNS", "METHODS",
+__all__ = ["FitOptions", "FitOutcome", "fit_trace", "fit_trace_rows", "check_fittable",
+           "trace_model", "nu_source", "fitted_methods", "failed_rows", "trace_specimen",
+           "prepare_twin", "trace_seed", "SUMMARY_COLUMNS", "METHODS",
            "LAYER_MODES"]
 
 
@@ -191,6 +192,19 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     return data
 
 
+def _check_prepared(data: FitData, trace: IndentationTrace, options: FitOptions) -> None:
+    """``data`` were prepared from ``trace`` with ``options``' window (else an InputError
+    naming the mismatch, raised, never recorded as a failed fit)."""
+    same = (data.loading.n_points <= trace.n_points
+            and data.max_depth == options.max_depth
+            and (options.f_unc is None or data.f_unc == options.f_unc)
+            and (options.fit_fraction is None or data.fit_fraction == options.fit_fraction)
+            and (data.tare != 0.0) <= options.tare)
+    if not same:
+        raise InputError(f"{trace.trace_id}: the fit data given were prepared with other "
+                         "options or from another trace; prepare them with check_fittable")
+
+
 def check_columns(checks: list[CheckResult], notes: str) -> dict:
     """``model_ok``, ``m_free``, ``misfit_effect``, ``misfit_checks`` and the failed checks'
     flags appended to ``notes`` (:func:`palpbayes.checks.checks_summary`), as ``notes``,
@@ -228,6 +242,8 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     """
     if data is None:
         data = check_fittable(trace, options)
+    else:
+        _check_prepared(data, trace, options)
     paper = replace(data, model=data.model.half_space())  # the least-squares baseline's
     try:
         lsq = fit_lsq_data(paper, trace_id=trace.trace_id)
@@ -245,14 +261,15 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
     ratio = float("nan")  # E_hertz / E of the paper's least squares on the tared force
     approximation = get_law(data.model.tip).hertz_approximation
     if approximation is not None:
-        tared = tared_data(paper)  # the paper's model has no offset: an untared one biases E
-        hertz = replace(tared, model=replace(tared.model, tip=approximation(tared.model.tip)))
-        try:
+        try:  # the paper's model has no offset: an untared one biases E
+            tared = tared_data(paper)  # NoContactError: the tared window is too narrow
+            hertz = replace(tared, model=replace(tared.model,
+                                                 tip=approximation(tared.model.tip)))
             exact = (lsq.E if tared is paper and lsq is not None  # tared already: the row's
                      else fit_lsq_data(tared, trace_id=trace.trace_id).E)
             ratio = float(fit_lsq_data(hertz, trace_id=trace.trace_id).E / exact)
-        except (FitError, ZeroDivisionError):
-            ratio = float("nan")
+        except (FitError, NoContactError, ZeroDivisionError):
+            ratio = float("nan")  # the Hertz column says NaN; the fits stand
 
     def with_hertz(row: dict) -> dict:
         e = row.get("E_pa")
@@ -290,3 +307,45 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
         if posterior_dir is not None:
             path = bayes.to_netcdf(posterior_file(posterior_dir, trace.trace_id))
     return FitOutcome(rows=rows, lsq=lsq, bayes=bayes, posterior_path=path)
+
+
+def failed_rows(trace: IndentationTrace, methods: list[str], exc: Exception) -> list[dict]:
+    """``summary.csv`` rows saying why ``methods`` failed on ``trace`` (flag ``fit_failed``)."""
+    return [{
+        "trace_id": trace.trace_id, "method": m, "tip": trace.tip.kind,
+        "converged": False, **flag_columns(f"fit failed: {exc}"), "material": trace.material,
+        "specimen": trace.specimen, "repetition": trace.repetition,
+        "rest_time_s": trace.rest_time,
+    } for m in methods]
+
+
+def fit_trace_rows(trace: IndentationTrace, options: FitOptions,
+                   posterior_dir: str | Path | None = None, *,
+                   data: FitData | None = None) -> FitOutcome:
+    """:func:`fit_trace`, with a :class:`~palpbayes.errors.FitError` recorded in the rows
+    instead of raised: what ``palpbayes fit`` (every trace of a campaign) and
+    :func:`palpbayes.fit` run.
+
+    With ``method="both"`` a failed Bayesian fit keeps the least-squares row and adds a
+    ``fit_failed`` row for it; otherwise every method's row says why it failed.  Bad input
+    (:class:`~palpbayes.errors.InputError`) is raised.
+    """
+    try:
+        return fit_trace(trace, options, posterior_dir, data=data)
+    except InputError:
+        raise
+    except FitError as exc:
+        if options.method == "both":
+            try:
+                out = fit_trace(trace, replace(options, method="lsq"), data=data)
+                return replace(out, rows=out.rows + failed_rows(trace, ["bayes"], exc))
+            except InputError:
+                raise
+            except FitError:
+                pass
+        return FitOutcome(rows=failed_rows(trace, fitted_methods(options), exc))
+
+
+def fitted_methods(options: FitOptions) -> list[str]:
+    """The ``method`` values of a trace's rows under ``options``."""
+    return ["bayes", "lsq"] if options.method == "both" else [options.method]

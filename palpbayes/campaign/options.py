@@ -8,6 +8,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
+from ..bayes.fit import ENGINES
+from ..bayes.priors import BASELINES, NOISE_MODELS
 from ..errors import InputError
 from ..fitdata import BONDINGS
 from ..twin import PLATENS, Specimen
@@ -105,6 +107,15 @@ class FitOptions:
     platens: str = "unknown"
 
     def __post_init__(self) -> None:
+        for what, value, allowed in (("method", self.method, METHODS),
+                                     ("engine", self.engine, ENGINES),
+                                     ("noise model", self.noise, NOISE_MODELS),
+                                     ("baseline", self.baseline, BASELINES)):
+            if value not in allowed:
+                raise InputError(f"unknown {what} {value!r}; use one of {', '.join(allowed)}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int | np.integer) or (
+                self.seed < 0):
+            raise InputError(f"seed {self.seed!r} must be a non-negative whole number")
         if self.platens not in PLATENS:
             raise InputError(f"unknown platens {self.platens!r}; use one of "
                              f"{', '.join(PLATENS)}")

@@ -13,20 +13,18 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from .. import errors as _errors
-from ..errors import FitError, InputError
+from ..errors import InputError
 from ..fitdata import FitData
-from ..flagcodes import flag_columns
 from ..io.atomic import write_text_atomic
 from ..trace import IndentationTrace
 from ..twin.specimen import FOOTPRINT_COLUMNS
 from . import layout
-from .fitjob import FitOptions, fit_trace
+from .fitjob import FitOptions, fit_trace_rows, fitted_methods
 from .settings import options_record
 
 __all__ = ["fit_and_record", "read_partial", "raise_input", "trace_fingerprint"]
@@ -40,19 +38,6 @@ def _jsonable(v):
     if isinstance(v, float):
         return v
     return str(v)
-
-
-def _failed_rows(trace: IndentationTrace, methods: list[str], exc: Exception) -> list[dict]:
-    return [{
-        "trace_id": trace.trace_id, "method": m, "tip": trace.tip.kind,
-        "converged": False, **flag_columns(f"fit failed: {exc}"), "material": trace.material,
-        "specimen": trace.specimen, "repetition": trace.repetition,
-        "rest_time_s": trace.rest_time,
-    } for m in methods]
-
-
-def _methods(options: FitOptions) -> list[str]:
-    return ["bayes", "lsq"] if options.method == "both" else [options.method]
 
 
 def trace_fingerprint(trace: IndentationTrace) -> str:
@@ -83,18 +68,7 @@ def fit_and_record(trace: IndentationTrace, options: FitOptions, out: str,
     """
     post_dir = Path(out) / layout.POSTERIOR_DIR
     try:
-        try:
-            rows = fit_trace(trace, options, post_dir, data=data).rows
-        except FitError as exc:
-            rows = None
-            if options.method == "both":
-                try:
-                    rows = fit_trace(trace, replace(options, method="lsq"), data=data).rows
-                    rows += _failed_rows(trace, ["bayes"], exc)
-                except FitError:
-                    rows = None
-            if rows is None:
-                rows = _failed_rows(trace, _methods(options), exc)
+        rows = fit_trace_rows(trace, options, post_dir, data=data).rows
     except InputError as exc:
         msg = str(exc)
         if trace.trace_id not in msg:
@@ -134,7 +108,7 @@ def read_partial(out: Path, trace: IndentationTrace, options: FitOptions) -> lis
         return None
     if rec.get("data_sha256") != trace_fingerprint(trace):
         return None
-    if sorted(r.get("method") for r in rows) != sorted(_methods(options)):
+    if sorted(r.get("method") for r in rows) != sorted(fitted_methods(options)):
         return None
     for r in rows:
         ok = r.get("E_pa") is not None and not (isinstance(r["E_pa"], float)

@@ -46,6 +46,7 @@ import os
 import sys
 import tempfile
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import pandas as pd
@@ -119,15 +120,15 @@ def _run(todo: list[IndentationTrace], options: FitOptions, out: Path, workers: 
          on_done: Callable[[], None], prepared: dict[str, FitData]) -> None:
     if workers <= 1 or len(todo) <= 1:
         for t in todo:
-            res = fit_and_record(t, options, str(out), prepared.get(t.trace_id))
+            res = fit_and_record(t, options, str(out), prepared.pop(t.trace_id, None))
             if "error" in res:
                 raise_input(res["error"])
             on_done()
         return
     pool = cf.ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=_mp_context())
     try:
-        futures = [pool.submit(fit_and_record, t, options, str(out), prepared.get(t.trace_id))
-                   for t in todo]
+        futures = [pool.submit(fit_and_record, t, options, str(out),
+                               prepared.pop(t.trace_id, None)) for t in todo]
         for fut in cf.as_completed(futures):
             res = fut.result()
             if "error" in res:
@@ -153,8 +154,8 @@ def _run_dask(todo: list[IndentationTrace], options: FitOptions, out: Path, clie
     opts = client.scatter(options, broadcast=True)
     pending = as_completed()
     for t in islice(jobs, 2 * n_workers):
-        pending.add(client.submit(fit_and_record, t, opts, where, prepared.get(t.trace_id),
-                                  pure=False))
+        pending.add(client.submit(fit_and_record, t, opts, where,
+                                  prepared.pop(t.trace_id, None), pure=False))
     for fut in pending:
         res = fut.result()
         fut.release()
@@ -162,8 +163,8 @@ def _run_dask(todo: list[IndentationTrace], options: FitOptions, out: Path, clie
             raise_input(res["error"])
         on_done()
         for t in islice(jobs, 1):
-            pending.add(client.submit(fit_and_record, t, opts, where, prepared.get(t.trace_id),
-                                      pure=False))
+            pending.add(client.submit(fit_and_record, t, opts, where,
+                                      prepared.pop(t.trace_id, None), pure=False))
 
 
 def _write_and_fit(traces: list[IndentationTrace], options: FitOptions, out: Path,
@@ -186,6 +187,8 @@ def _write_and_fit(traces: list[IndentationTrace], options: FitOptions, out: Pat
 
     done = {t.trace_id for t in traces if resume and read_partial(out, t, options) is not None}
     todo = [t for t in traces if t.trace_id not in done]
+    for trace_id in done:  # each FitData goes with its trace's task, none is kept
+        prepared.pop(trace_id, None)
     with progress_bar(len(traces), progress, initial=len(done)) as bar:
         if client is not None:
             _run_dask(todo, options, out, client, lambda: bar.update(1), prepared)
@@ -263,10 +266,14 @@ def fit_campaign(
         if scheduler not in (None, "local"):
             raise InputError(f"the Dask cluster at {scheduler!r} writes each trace's records "
                              "into the results folder: give an out_dir its workers see")
+        options = options or FitOptions()
         with tempfile.TemporaryDirectory(prefix="palpbayes-") as tmp:
-            return fit_campaign(source, Path(tmp) / "results", options, workers=workers,
-                                progress=progress, read_options=read_options,
-                                scheduler=scheduler)
+            summary = fit_campaign(source, Path(tmp) / "results", replace(options, strict=False),
+                                   workers=workers, progress=progress,
+                                   read_options=read_options, scheduler=scheduler)
+        if options.strict:
+            _raise_strict(summary.to_dict("records"), "the table a run without strict returns")
+        return summary
     options = options or FitOptions()
     out = Path(out_dir)
     _check_out_dir(out, resume, force)
@@ -326,9 +333,14 @@ def fit_campaign(
     summary = summary.sort_values(["trace_id", "method"], kind="stable").reset_index(drop=True)
     write_csv_atomic(summary, out / layout.SUMMARY)
     if options.strict:
-        failed = sorted({r["trace_id"] for r in rows
-                         if "fit_failed" in str(r.get("flag_codes") or "").split(";")})
-        if failed:
-            raise FitError(f"{len(failed)} trace(s) failed in strict mode: {', '.join(failed)} "
-                           f"(see {out / layout.SUMMARY})")
+        _raise_strict(rows, str(out / layout.SUMMARY))
     return summary
+
+
+def _raise_strict(rows: list[dict], where: str) -> None:
+    """The FitError of a strict run whose ``rows`` hold failed fits (see ``where``)."""
+    failed = sorted({r["trace_id"] for r in rows
+                     if "fit_failed" in str(r.get("flag_codes") or "").split(";")})
+    if failed:
+        raise FitError(f"{len(failed)} trace(s) failed in strict mode: {', '.join(failed)} "
+                       f"(see {where})")

@@ -71,12 +71,60 @@ def test_sources_a_trace_and_a_dataframe_give_the_file_s_numbers(trace_file):
      "--nu or --nu-range"),
     ({"tip": "sphere", "radius": 0.01, "engine": "exact", "noise": "student"}, InputError,
      "--engine exact takes"),
+    ({"tip": "sphere", "radius": 0.01, "method": "bayse"}, InputError,
+     "unknown method 'bayse'; use one of bayes, lsq, both"),
+    ({"tip": "sphere", "radius": 0.01, "method": "lsq", "engine": "emcees"}, InputError,
+     "unknown engine 'emcees'"),
+    ({"tip": "sphere", "radius": 0.01, "thickness": "abc"}, InputError,
+     "thickness 'abc' must be a number of metres or 'unknown'"),
+    ({"tip": "sphere", "radius": 0.01, "seed": -1}, InputError,
+     "seed -1 must be a non-negative whole number"),
+    ({"tip": "sphere", "radius": 0.01, "delimiter": ";", "nu": 0.45}, InputError, None),
 ])
 def test_bad_options_are_named(trace_file, kwargs, error, match):
+    if match is None:  # a reader option of a CSV reaches the reader (the file is comma-separated)
+        with pytest.raises(error):
+            pb.fit(trace_file, **kwargs)
+        return
     with pytest.raises(error, match=match):
         pb.fit(trace_file, **kwargs)
+
+
+def test_bad_sources_are_named(trace_file):
     with pytest.raises(InputError, match="takes a path, an IndentationTrace or a DataFrame"):
         pb.fit(np.zeros(3), tip="sphere", radius=0.01)
+    frame = pd.read_csv(trace_file)
+    for option in ({"curve": 1}, {"force_topic": "/ft"}, {"spring_constant": 0.1}):
+        with pytest.raises(InputError, match="apply to a file, not to a DataFrame"):
+            pb.fit(frame, tip="sphere", radius=0.01, **option)
+
+
+def test_a_failed_fit_is_a_row_as_on_the_command_line(tmp_path):
+    """The paper's least squares has no offset: a sensor reading -2 N before contact fails it.
+    pb.fit records the failure in its row, as palpbayes fit does; strict=True raises."""
+    from palpbayes.errors import FitError
+
+    tr = pb.simulate_trace(120e3, pb.Tip("sphere", radius=0.01), nu=0.45, rng=6,
+                           depth=2e-3, force_offset=-2.0, trace_id="offset")
+    path = pb.write_trace(tr, tmp_path / "offset.csv")
+    f = pb.fit(path, tip="sphere", radius=0.01, nu=0.45, method="lsq")
+    assert np.isnan(f.E) and "fit_failed" in f.row["flag_codes"]
+    assert repr(f).startswith("Fit('offset', lsq: E ")
+    assert main(["fit", str(path), "--tip", "sphere", "--radius", "0.01", "--nu", "0.45",
+                 "--method", "lsq", "--out", str(tmp_path / "cli")]) == 0
+    f.save(tmp_path / "api")
+    assert ((tmp_path / "api" / "summary.csv").read_text()
+            == (tmp_path / "cli" / "summary.csv").read_text())
+    with pytest.raises(FitError, match="the lsq fit failed in strict mode"):
+        pb.fit(path, tip="sphere", radius=0.01, nu=0.45, method="lsq", strict=True)
+
+
+def test_a_saved_fit_reads_back_as_a_results_folder(trace_file, tmp_path):
+    f = pb.fit(trace_file, tip="sphere", radius=0.01, nu=0.45, engine="exact", seed=4)
+    res = pb.load_results(f.save(tmp_path / "saved"))
+    back = pb.reporting.load_fit(res, "trace")
+    assert back.summary_row()["E_pa"] == f.E
+    assert (tmp_path / "saved" / "posterior" / "trace.nc").is_file()
 
 
 def test_top_level_names_resolve():
@@ -93,3 +141,15 @@ def test_fit_campaign_without_a_folder_refuses_what_needs_one():
         pb.fit_campaign([], resume=True)
     with pytest.raises(InputError, match="give an out_dir its workers see"):
         pb.fit_campaign([], scheduler="tcp://127.0.0.1:8786")
+
+
+def test_fit_campaign_without_a_folder_strict_names_the_failed_traces(tmp_path):
+    from palpbayes.errors import FitError
+
+    tr = pb.simulate_trace(120e3, pb.Tip("sphere", radius=0.01), nu=0.45, rng=6,
+                           depth=2e-3, force_offset=-2.0, trace_id="offset")
+    with pytest.raises(FitError, match=r"1 trace\(s\) failed in strict mode: offset \(see the "
+                                       r"table a run without strict returns\)"):
+        pb.fit_campaign([tr], options=pb.fit_options(method="lsq", strict=True), workers=1)
+    table = pb.fit_campaign([tr], options=pb.fit_options(method="lsq"), workers=1)
+    assert "fit_failed" in table.loc[0, "flag_codes"]

@@ -11,7 +11,7 @@ import pytest
 from presets import POOL_FAST, TINY
 
 import palpbayes.campaign as campaign
-import palpbayes.campaign.partial as partial
+import palpbayes.campaign.fitjob as fitjob
 import palpbayes.pooling.model as pooling_model
 from palpbayes.bayes import SamplerSettings
 from palpbayes.campaign.compare import COMPARISON_COLUMNS, compare_campaign
@@ -133,8 +133,8 @@ class _Counter:
 def test_resume_fits_only_unfinished_traces(traces, tmp_path, monkeypatch):
     subset = traces[:4]
     out = tmp_path / "res"
-    counter = _Counter(partial.fit_trace, stop_after=2)
-    monkeypatch.setattr(partial, "fit_trace", counter)
+    counter = _Counter(fitjob.fit_trace, stop_after=2)
+    monkeypatch.setattr(fitjob, "fit_trace", counter)
     with pytest.raises(KeyboardInterrupt):  # an interrupted run
         campaign.fit_campaign(subset, out, OPTS, workers=1)
     assert len(list((out / ".partial").glob("*.json"))) == 2
@@ -143,13 +143,13 @@ def test_resume_fits_only_unfinished_traces(traces, tmp_path, monkeypatch):
         campaign.fit_campaign(subset, out, OPTS, workers=1)
 
     counter2 = _Counter(counter.real)
-    monkeypatch.setattr(partial, "fit_trace", counter2)
+    monkeypatch.setattr(fitjob, "fit_trace", counter2)
     summary = campaign.fit_campaign(subset, out, OPTS, workers=1, resume=True)
     assert counter2.ids == [t.trace_id for t in subset[2:]]
     assert len(summary) == 2 * len(subset)
 
     counter3 = _Counter(counter.real)
-    monkeypatch.setattr(partial, "fit_trace", counter3)
+    monkeypatch.setattr(fitjob, "fit_trace", counter3)
     again = campaign.fit_campaign(subset, out, OPTS, workers=1, resume=True)
     assert counter3.ids == []  # everything recorded: nothing refitted
     pd.testing.assert_frame_equal(again, summary)
@@ -157,7 +157,7 @@ def test_resume_fits_only_unfinished_traces(traces, tmp_path, monkeypatch):
     # a missing posterior makes the trace unfinished
     (out / "posterior" / f"{subset[0].trace_id}.nc").unlink()
     counter4 = _Counter(counter.real)
-    monkeypatch.setattr(partial, "fit_trace", counter4)
+    monkeypatch.setattr(fitjob, "fit_trace", counter4)
     campaign.fit_campaign(subset, out, OPTS, workers=1, resume=True)
     assert counter4.ids == [subset[0].trace_id]
 
@@ -166,12 +166,12 @@ def test_resume_fits_only_unfinished_traces(traces, tmp_path, monkeypatch):
     edited[1] = subset[1].replace(force=subset[1].force * 1.05)
     for source in (edited, subset):
         counter5 = _Counter(counter.real)
-        monkeypatch.setattr(partial, "fit_trace", counter5)
+        monkeypatch.setattr(fitjob, "fit_trace", counter5)
         campaign.fit_campaign(source, out, OPTS, workers=1, resume=True)
         assert counter5.ids == [subset[1].trace_id]
 
     # the result matches an uninterrupted run
-    monkeypatch.setattr(partial, "fit_trace", counter.real)
+    monkeypatch.setattr(fitjob, "fit_trace", counter.real)
     campaign.fit_campaign(subset, tmp_path / "straight", OPTS, workers=1)
     assert (out / "summary.csv").read_bytes() == \
         (tmp_path / "straight" / "summary.csv").read_bytes()
@@ -206,7 +206,7 @@ def test_duplicate_ids_and_bad_sources(traces, tmp_path):
 
 
 def test_fit_error_is_recorded_and_does_not_stop_the_campaign(traces, tmp_path, monkeypatch):
-    real = partial.fit_trace
+    real = fitjob.fit_trace
     bad_id = traces[1].trace_id
 
     def flaky(trace, options, posterior_dir=None, **kwargs):
@@ -214,7 +214,7 @@ def test_fit_error_is_recorded_and_does_not_stop_the_campaign(traces, tmp_path, 
             raise FitError(f"{trace.trace_id}: walkers start outside the prior")
         return real(trace, options, posterior_dir, **kwargs)
 
-    monkeypatch.setattr(partial, "fit_trace", flaky)
+    monkeypatch.setattr(fitjob, "fit_trace", flaky)
     summary = campaign.fit_campaign(traces[:3], tmp_path / "res", OPTS, workers=1)
     bad = summary[summary["trace_id"] == bad_id].set_index("method")
     assert np.isnan(bad.loc["bayes", "E_pa"]) and not bad.loc["bayes", "converged"]

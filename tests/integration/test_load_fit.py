@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 from presets import TINY
 
-import palpbayes.campaign.partial as partial
+import palpbayes.campaign.fitjob as fitjob
 from palpbayes.bayes import PriorSpec
 from palpbayes.campaign import FitOptions, fit_campaign, load_fit
 from palpbayes.contact import Tip
@@ -73,14 +73,14 @@ def assert_same_fit(back, saved, *, loading: bool = True) -> None:
 def _fit_and_keep(monkeypatch, source, out, options):
     """Fit through fit_campaign (one worker) and keep the BayesResult that was saved."""
     kept = {}
-    real = partial.fit_trace
+    real = fitjob.fit_trace
 
     def keep(trace, opts, posterior_dir=None, **kwargs):
         outcome = real(trace, opts, posterior_dir, **kwargs)
         kept[trace.trace_id] = outcome.bayes
         return outcome
 
-    monkeypatch.setattr(partial, "fit_trace", keep)
+    monkeypatch.setattr(fitjob, "fit_trace", keep)
     summary = fit_campaign(source, out, options, workers=1)
     return summary, kept
 

@@ -75,3 +75,20 @@ def test_tared_equals_a_tared_prepare(name, max_depth):
     assert got.tare == want.tare == pytest.approx(data.baseline.level)
     _same(got, want, "data")
     assert tared(got) is got  # tared already
+
+
+def test_fit_data_prepared_with_other_options_are_refused():
+    from dataclasses import replace
+
+    import palpbayes as pb
+    from palpbayes.campaign.fitjob import check_fittable, fit_trace
+    from palpbayes.errors import InputError
+
+    trace = pb.read(EXAMPLE / "Grey_sphere_r01.csv", tip="sphere", radius=0.01)
+    options = pb.fit_options(method="lsq")
+    data = check_fittable(trace, options)
+    assert fit_trace(trace, options, data=data).rows[0]["E_pa"] > 0
+    for other in (replace(options, max_depth=1e-3), replace(options, f_unc=0.5),
+                  replace(options, fit_fraction=0.3)):
+        with pytest.raises(InputError, match="prepared with other options"):
+            fit_trace(trace, other, data=data)
