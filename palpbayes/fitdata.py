@@ -156,7 +156,8 @@ def _contact_onset(z: np.ndarray, f: np.ndarray, f_unc: float, base: Baseline,
             f"{source}: no contact: the force never leaves ±{format_force(f_unc)} around its "
             f"pre-contact level ({format_force(reference)}; largest rise "
             f"{format_force(excess.max())}), so the tip never reaches the surface; check the "
-            "recording, or lower --f-unc/--noise-pp"
+            "recording and the force's unit (--force-unit: a force in N read as mN is 1,000 "
+            "times too small), or lower --f-unc/--noise-pp"
         )
     if not inside.any():
         raise InputError(

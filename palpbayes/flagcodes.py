@@ -15,7 +15,8 @@ Codes (:data:`CODES`): the model checks by their names (``exponent``, ``residual
 ``depth_consistency``, ``ppc``, ``rate``); the sampler's diagnostics (``rhat``, ``ess``,
 ``step_cap``); the posterior's shape (``bimodal_surface``, ``prior_dominated_surface``,
 ``prior_bound``); the least squares (``lsq_failed``; ``offset``: an untared sensor biases
-the paper's model); a fit that did not run (``fit_failed``); the layer (``layer``: base or
+the paper's model); the force's scale against the declared sensor noise (``force_scale``: a
+wrong ``--force-unit``); a fit that did not run (``fit_failed``); the layer (``layer``: base or
 thickness not identified, outside the layer solution's range); ``other`` for anything else.
 A flag that starts with ``info:`` is information, every other one a warning.
 
@@ -46,6 +47,7 @@ CODES = (
     ("prior-dominated", "prior_dominated_surface"),
     ("least squares failed", "lsq_failed"),
     ("untared sensor", "offset"),
+    ("force scale", "force_scale"),
     ("fit failed", "fit_failed"),
     ("no Bayesian posterior", "fit_failed"),
     ("base not identified", "layer"),

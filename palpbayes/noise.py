@@ -15,8 +15,8 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["PP_TO_SIGMA", "PAPER_NOISE_PP", "MAD_TO_SIGMA", "sigma_from_pp", "pp_from_sigma",
-           "mad_sd", "acf1"]
+__all__ = ["PP_TO_SIGMA", "PAPER_NOISE_PP", "MAD_TO_SIGMA", "NOISE_SCALE_FACTOR", "sigma_from_pp",
+           "pp_from_sigma", "noise_scale_mismatch", "mad_sd", "acf1"]
 
 #: 1/Phi^-1(3/4): the median absolute deviation of normal values times this is their sd.
 MAD_TO_SIGMA = 1.4826
@@ -52,6 +52,28 @@ def sigma_from_pp(pp: float) -> float:
 def pp_from_sigma(sigma: float) -> float:
     """Peak-to-peak spec [N] of a Gaussian noise with standard deviation ``sigma`` [N]."""
     return float(sigma) * PP_TO_SIGMA
+
+
+#: How far the measured noise may lie from the declared one before the force's scale is
+#: doubted: a sensor's data sheet states a worst case (quieter data are normal, a factor of a
+#: few) and a noisier room adds some; a wrong force unit is a factor of 1,000 (N read as mN).
+NOISE_SCALE_FACTOR = 30.0
+
+
+def noise_scale_mismatch(measured_pp: float, declared_pp: float | None) -> float | None:
+    """The ratio measured/declared of two peak-to-peak noises [N] when it lies outside
+    [1/:data:`NOISE_SCALE_FACTOR`, :data:`NOISE_SCALE_FACTOR`] (a force in another unit than
+    the one given, or a wrong noise spec), else None (also when either is unknown).
+
+    >>> noise_scale_mismatch(48e-6, 48e-3)  # a force in N read as mN: 1,000 times too small
+    0.001
+    >>> noise_scale_mismatch(10e-3, 48e-3) is None  # a sensor quieter than its data sheet
+    True
+    """
+    if declared_pp is None or not (math.isfinite(measured_pp) and measured_pp > 0):
+        return None
+    ratio = float(measured_pp) / float(declared_pp)
+    return ratio if not 1.0 / NOISE_SCALE_FACTOR <= ratio <= NOISE_SCALE_FACTOR else None
 
 
 def mad_sd(x) -> float:

@@ -21,9 +21,11 @@ from ..fitdata import FitData, prepare
 from ..fitdata import tared as tared_data
 from ..flagcodes import flag_columns
 from ..lsq import LSQResult, fit_lsq_data
+from ..noise import noise_scale_mismatch
 from ..refit import layer_alternatives
 from ..trace import IndentationTrace
 from ..twin import twin_depth_limit, twin_depth_limit_reason
+from ..units import format_force
 from .layout import posterior_file
 from .options import LAYER_MODES, METHODS, FitOptions
 from .tracemodel import nu_source, prepare_twin, trace_model, trace_seed, trace_specimen
@@ -31,6 +33,7 @@ from .tracemodel import nu_source, prepare_twin, trace_model, trace_seed, trace_
 # FitOptions, METHODS and LAYER_MODES (.options), trace_model and its helpers (.tracemodel) are
 # imported from here too
 __all__ = ["FitOptions", "FitOutcome", "fit_trace", "fit_trace_rows", "check_fittable",
+           "force_scale_flag",
            "trace_model", "nu_source", "fitted_methods", "failed_rows", "trace_specimen",
            "prepare_twin", "trace_seed", "SUMMARY_COLUMNS", "METHODS",
            "LAYER_MODES"]
@@ -127,6 +130,9 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
                    max_depth=options.max_depth, tare=options.tare)
     model = trace_model(trace, options, depth=data.z_contact - data.z_min)
     data = replace(data, model=model)
+    flag = force_scale_flag(data, options)
+    if flag is not None and options.strict:
+        raise InputError(f"{src}: {flag} (an error with --strict)")
 
     depth = data.z_contact - data.z_min
     known = trace.thickness if trace.thickness is not None else (
@@ -190,6 +196,41 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
                     f"depth {d * 1e3:.4g} mm{note}; check the tip geometry and thickness{where}"
                 )
     return data
+
+
+def force_scale_flag(data: FitData, options: FitOptions) -> str | None:
+    """The ``force scale`` warning of a trace whose force noise before contact lies more than
+    :data:`palpbayes.noise.NOISE_SCALE_FACTOR` times from the declared sensor noise, else None.
+
+    The declared noise is ``--noise-pp`` (``options.priors.noise_pp``), else ``--f-unc``
+    (``options.f_unc``, the paper's sensor uncertainty F_unc = 48 mN).  A force in another
+    unit than the one given (N read as mN) scales the data, their noise and E by the same
+    factor: the fit itself cannot see it, and the noise the user declared for the sensor is the
+    one number in the other unit.  Without a declared noise there is nothing to compare, and
+    None is returned.
+    """
+    declared, option = ((options.priors.noise_pp, "--noise-pp")
+                        if options.priors.noise_pp is not None else (options.f_unc, "--f-unc"))
+    base = data.baseline
+    if declared is None or base is None or not base.reliable:
+        return None
+    ratio = noise_scale_mismatch(base.noise_pp, declared)
+    if ratio is None:
+        return None
+    how = f"{1 / ratio:,.0f} times below" if ratio < 1 else f"{ratio:,.0f} times above"
+    return (f"force scale: the noise before contact is {how} the declared {option}, check "
+            f"--force-unit (the sensor noise: {format_force(base.noise_pp)} peak-to-peak, 6 sd "
+            f"of the baseline, against {format_force(declared)}; a force in N read as mN makes "
+            "the force, and E, 1,000 times too small)")
+
+
+def with_flag(row: dict, flag: str | None) -> dict:
+    """``row`` with ``flag`` first among its flags (``notes``, ``flag_codes``, ``flag_level``)."""
+    if flag is None:
+        return row
+    text = row.get("notes")
+    return {**row, **flag_columns("; ".join(
+        [flag] + ([text] if isinstance(text, str) and text else [])))}
 
 
 def _check_prepared(data: FitData, trace: IndentationTrace, options: FitOptions) -> None:
@@ -306,6 +347,8 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
         rows.append(with_hertz({**bayes.summary_row(), **meta}))
         if posterior_dir is not None:
             path = bayes.to_netcdf(posterior_file(posterior_dir, trace.trace_id))
+    flag = force_scale_flag(data, options)
+    rows = [with_flag(r, flag) for r in rows]
     return FitOutcome(rows=rows, lsq=lsq, bayes=bayes, posterior_path=path)
 
 

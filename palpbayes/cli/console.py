@@ -60,26 +60,59 @@ def flag_headlines(text: str, width: int = 110) -> list[str]:
     return out
 
 
+def _table(summary):
+    """The run's table: E with its 90 % interval, the Hertz law's E for a sphere (the paper's
+    choice, ``E_hertz_pa``), convergence (``n/a`` for a least-squares row: nothing is sampled)
+    and the model check."""
+    cols = ["trace_id", "method", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa", "E_hertz_pa",
+            "converged", "model_ok"]
+    show = summary[[c for c in cols if c in summary]].copy()
+    if "E_hertz_pa" in show and show["E_hertz_pa"].isna().all():
+        show = show.drop(columns="E_hertz_pa")
+    for c in ("E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa", "E_hertz_pa"):
+        if c in show:
+            show[c.removesuffix("_pa")] = [format_pressure(v) if v == v else "n/a"
+                                           for v in show.pop(c)]
+    if "converged" in show:
+        sampled = summary["method"] != "lsq"
+        show["converged"] = [str(bool(c)) if s and c == c else "n/a"
+                             for c, s in zip(show.pop("converged"), sampled, strict=True)]
+        if "model_ok" in show:
+            show["model_ok"] = show.pop("model_ok")
+    return show
+
+
+def _warned(summary):
+    """Rows flagged with a warning outside the model checks and convergence: the force's
+    scale against the declared sensor noise (``force_scale``)."""
+    if "flag_codes" not in summary:
+        return summary["method"] != summary["method"]
+    codes = summary["flag_codes"].fillna("").astype(str).str.split(";")
+    return codes.map(lambda c: "force_scale" in c)
+
+
 def console_lines(summary) -> list[str]:
     """What ``fit`` prints under a run: the table (E with its 90 % interval, convergence and
     the model check), what each Bayesian interval is made of, one line per flag of a fit that
-    failed a model check or did not converge, and the Poisson ratio when it was assumed."""
-    cols = ["trace_id", "method", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa", "converged",
-            "model_ok"]
-    show = summary[[c for c in cols if c in summary]].copy()
-    for c in ("E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa"):
-        show[c.removesuffix("_pa")] = show.pop(c).map(format_pressure)
-    lines = [show.to_string(index=False),
+    failed a model check, did not converge or carries a warning on its input, and the Poisson
+    ratio when it was assumed."""
+    lines = [_table(summary).to_string(index=False),
              "E: the Bayesian posterior median or the least-squares estimate; E_sd its sd; "
-             "E_lo..E_hi its 90 % interval"]
+             "E_lo..E_hi its 90 % interval"
+             + ("; E_hertz: E with the Hertz (paraboloid) law, the paper's choice for a sphere"
+                if "E_hertz_pa" in summary and summary["E_hertz_pa"].notna().any() else "")]
     lines += _interval_part_lines(summary)
     lines += _instron_lines(summary)
-    bad = summary[(summary["converged"] == False)  # noqa: E712
-                  | (summary.get("model_ok", True) == False)]  # noqa: E712
-    for _, r in bad.iterrows():
-        what = ("did not converge" if not r["converged"] else "failed a model check")
+    not_converged = summary["converged"] == False  # noqa: E712
+    misfit = summary.get("model_ok", True) == False  # noqa: E712
+    bad = summary[not_converged | misfit | _warned(summary)]
+    for i, r in bad.iterrows():
+        what = ("did not converge" if not_converged[i] else "failed a model check"
+                if misfit[i] else "carries a warning on its input")
         lines.append(f"{r['trace_id']} ({r['method']}): {what}; E may be biased by what the "
-                     "model leaves out:")
+                     "model leaves out:" if what != "carries a warning on its input" else
+                     f"{r['trace_id']} ({r['method']}): {what}; E may be off by the factor "
+                     "it names:")
         notes = r.get("notes")
         lines += [f"  - {h}" for h in flag_headlines(notes if isinstance(notes, str) else "")]
     if len(bad):

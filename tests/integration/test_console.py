@@ -94,3 +94,30 @@ def test_fit_without_nu_says_so_on_screen_and_in_the_summary(tmp_path, capsys, n
     # E = E*(1 - nu^2) with the ratio the row reports
     np.testing.assert_allclose(row["E_pa"], row["Estar_pa"] * (1 - row["nu"]**2),
                                rtol=0.02)
+
+
+def test_a_warning_on_the_input_is_printed_even_when_the_checks_pass():
+    # issue 46: a force in the wrong unit fitted with model_ok True printed nothing
+    flag = ("force scale: the noise before contact is 1,000 times below the declared "
+            "--noise-pp, check --force-unit (the sensor noise: 48 µN peak-to-peak)")
+    summary = pd.DataFrame([_row(notes=flag, flag_codes="force_scale")])
+    text = "\n".join(console_lines(summary))
+    assert "t1 (bayes): carries a warning on its input" in text
+    assert ("  - force scale: the noise before contact is 1,000 times below the declared "
+            "--noise-pp, check --force-unit") in text
+    assert "warning: 1 fit(s)" in text
+
+
+def test_least_squares_row_says_converged_n_a_and_a_sphere_shows_its_hertz_e():
+    # issue 46: "converged NaN" on the least-squares row; E_hertz was missing from the console
+    summary = pd.DataFrame([_row(E_hertz_pa=4.85e4),
+                            _row(method="lsq", converged=float("nan"), E_sd_pa=float("nan"),
+                                 E_hertz_pa=4.8e4)])
+    lines = console_lines(summary)
+    header, bayes, lsq = lines[0].splitlines()
+    assert "E_hertz" in header and "48.5 kPa" in bayes and "48 kPa" in lsq
+    assert lsq.split()[-2:] == ["n/a", "True"] and bayes.split()[-2:] == ["True", "True"]
+    assert "NaN" not in lines[0] and "nan" not in lines[0]
+    assert "Hertz" in lines[1]
+    other = console_lines(pd.DataFrame([_row(E_hertz_pa=float("nan"))]))
+    assert "E_hertz" not in other[0] and "Hertz" not in other[1]
