@@ -168,8 +168,9 @@ def layer_notes(post: dict[str, np.ndarray], data: FitData, best: ModelSpec) -> 
     holds no '; ' (the separator of the ``flags`` column)."""
     model = data.model
     notes: list[str] = []
-    # E with the budget, as the row's E_bonded_pa/E_free_pa (result._alternatives) report it
-    E = np.ravel(post["E_total"] if "E_total" in post else post["E"])
+    # E at the stated inputs (the statistical draws), as the row's E_pa and its
+    # E_bonded_pa/E_free_pa (result._alternatives) report it
+    E = np.ravel(post["E"])
     if "bonded" in post and model.bonding == "unknown":
         b = np.ravel(post["bonded"])
         layer = ~np.isnan(b)

@@ -116,23 +116,22 @@ class BayesResult:
     def summary(self) -> pd.DataFrame:
         """Per-parameter table: mean, sd, median, central 90 % interval of the draws
         (``q05``, ``q95``), 90 % HDI, R-hat, ESS, and ``lo``/``hi``, the interval the fit
-        reports: the central one, except for ``E_total`` (E with the budget) after a material
-        misfit, where it is the model form's envelope — the summary row's ``E_lo_pa`` and
-        ``E_hi_pa``, so that a notebook and the command line quote one interval."""
+        reports: the central one, except for ``E_total`` (E with the budget), where it is the
+        full interval (:meth:`intervals`: the budget's, widened to hold the statistical one,
+        or after a material misfit the model form's envelope) — the summary row's ``E_lo_pa``
+        and ``E_hi_pa``, so that a notebook and the command line quote one interval."""
         az = import_arviz()
         names = [n for n in ("E_total", "E", "E_star", "z_surf", "sigma", "F0", "F1", "phi",
                              "nu_t", "thickness", "bonded")
                  if n in self.idata.posterior]
         rows = []
-        form = self.model_form
         for n in names:
             x = self.draws(n)
             x = x[np.isfinite(x)]  # no layer (h = inf) has no thickness and no base
             if x.size < 2:
                 continue
             lo, hi = central(x)
-            reported = (form.lo_pa, form.hi_pa) if n == "E_total" and form is not None else (
-                lo, hi)
+            reported = self.intervals()["full"] if n == "E_total" else (lo, hi)
             hdi = np.asarray(az.hdi(x, hdi_prob=LEVEL))
             rows.append({
                 "parameter": n, "unit": _UNITS[n], "mean": float(x.mean()),
@@ -146,20 +145,41 @@ class BayesResult:
             })
         return pd.DataFrame(rows).set_index("parameter")
 
+    def intervals(self) -> dict[str, tuple[float, float]]:
+        """[Pa] The three nested 90 % intervals of E the row reports (:meth:`summary_row`):
+        ``stat`` the central interval of the statistical draws ``E`` (at the stated inputs),
+        ``budget`` that of the ``E_total`` draws (the budget's inputs sampled) widened where
+        needed to hold ``stat``, ``full`` the budget's or after a material misfit the model
+        form's envelope (:mod:`palpbayes.bayes.modelform`), widened to hold ``budget``."""
+        stat = central(self.draws("E"))
+        blo, bhi = central(self.draws("E_total"))
+        budget = (min(blo, stat[0]), max(bhi, stat[1]))
+        form = self.model_form
+        full = budget if form is None else (min(form.lo_pa, budget[0]),
+                                            max(form.hi_pa, budget[1]))
+        return {"stat": stat, "budget": budget, "full": full}
+
     def summary_row(self) -> dict:
-        """One row of ``summary.csv`` (docs/design.md §7): E with the full budget;
-        ``E_lo_pa``/``E_hi_pa`` the full interval (the budget's central 90 % interval, or with
-        a material misfit the envelope of the model-form alternatives',
-        :mod:`palpbayes.bayes.modelform`)."""
+        """One row of ``summary.csv`` (docs/design.md §7).
+
+        ``E_pa`` is the estimate at the inputs the user stated (nu, tip, no compliance): the
+        median of the statistical posterior ``E``, the same number as ``E_stat_pa``.  The
+        budget widens the interval around it and does not move it: ``E_budget_lo/hi_pa`` is
+        the central 90 % interval of the ``E_total`` draws (the budget's inputs sampled),
+        widened where needed to hold the statistical one; ``E_lo_pa``/``E_hi_pa`` the full
+        interval (the budget's, or with a material misfit the envelope of the model-form
+        alternatives', :mod:`palpbayes.bayes.modelform`), which holds both.  A one-sided
+        budget (nu ± 0.05 at nu 0.5, compliance that only stiffens) shifts the ``E_total``
+        draws: their median is not the headline.
+        """
         E = self.draws("E_total")
         Es = self.draws("E")
         z = self.draws("z_surf")
-        blo, bhi = central(E)
-        slo, shi = central(Es)
+        iv = self.intervals()
+        (slo, shi), (blo, bhi), (lo, hi) = iv["stat"], iv["budget"], iv["full"]
         form = self.model_form
-        lo, hi = (blo, bhi) if form is None else (form.lo_pa, form.hi_pa)
         d = self.diagnostics
-        E_med = float(np.median(E))
+        E_med = float(np.median(Es))
         z_med = float(np.median(z))
         best = self.fitted_model
         sampled = {k: self.draws(k) for k in ("thickness", "bonded")
@@ -167,7 +187,7 @@ class BayesResult:
         if sampled:  # the E of the fitted model's own draws (its base, layer or none)
             sel = concrete_draws(best, E.size, sampled.get("thickness"), sampled.get("bonded"))
             if sel.any():
-                E_med = float(np.median(E[sel]))
+                E_med = float(np.median(Es[sel]))
         checks = checks_summary(self.checks)
         bonded_draws = (self.draws("E_instron_bonded")
                         if "E_instron_bonded" in self.idata.posterior else None)
@@ -179,7 +199,7 @@ class BayesResult:
             "method": "bayes",
             "tip": self.data.model.tip.kind,
             "n_points": self.data.n_points,
-            "E_pa": float(np.median(E)),
+            "E_pa": float(np.median(Es)),
             "E_sd_pa": float(E.std(ddof=1)),
             "E_lo_pa": lo,
             "E_hi_pa": hi,
@@ -214,7 +234,7 @@ class BayesResult:
             "engine": self.idata.posterior.attrs.get("engine", "emcee"),
             "model_fitted": best.describe_layer(),
             **self.layer,
-            **self._alternatives(E, E_med, z_med, best),
+            **self._alternatives(Es, E_med, z_med, best),
             **instron,
         }
 

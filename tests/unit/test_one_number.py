@@ -63,3 +63,29 @@ def test_fitted_models_thickness_is_the_rows():
     assert row["thickness_m"] * 1e3 == pytest.approx(h, abs=0.051)
     assert row["thickness_lo_m"] <= row["thickness_m"] <= row["thickness_hi_m"]
     assert np.isfinite(row["thickness_m"])
+
+
+@pytest.mark.parametrize("nu", [0.5, 0.3])
+def test_headline_E_is_the_estimate_at_the_stated_inputs_inside_every_interval(nu):
+    """Issue 46: at nu 0.5 the budget's nu range is one-sided (0.45..0.5), so the E_total
+    draws sit ~3 % above E at the stated nu; the headline was their median, outside its own
+    statistical interval.  It is now the estimate at the stated inputs; the budget widens the
+    interval around it."""
+    tip = Tip("sphere", radius=0.01)
+    tr = simulate_trace(20e3, tip, nu=nu, depth=2e-3, rng=4)
+    res = _fit(tr, ModelSpec(tip, nu=nu))
+    row = res.summary_row()
+    assert row["E_pa"] == row["E_stat_pa"]
+    assert row["E_stat_lo_pa"] <= row["E_pa"] <= row["E_stat_hi_pa"]
+    assert row["E_budget_lo_pa"] <= row["E_stat_lo_pa"] < row["E_stat_hi_pa"] <= (
+        row["E_budget_hi_pa"])
+    assert row["E_lo_pa"] <= row["E_budget_lo_pa"] and row["E_budget_hi_pa"] <= row["E_hi_pa"]
+    table = res.summary()
+    assert (table.loc["E_total", "lo"], table.loc["E_total", "hi"]) == (
+        row["E_lo_pa"], row["E_hi_pa"])
+    shift = np.median(res.draws("E_total")) / row["E_pa"] - 1
+    if nu == 0.5:  # the one-sided budget: what the headline used to be
+        assert shift > 0.01
+        assert np.median(res.draws("E_total")) > row["E_stat_hi_pa"]
+    else:
+        assert abs(shift) < 0.01
