@@ -1,10 +1,14 @@
 """``palpbayes map MANIFEST|AFMMAP --out DIR``: a stiffness map with its uncertainty and the lump.
 
 The manifest's rows carry the palpation position (``x_m``, ``y_m`` in metres) on a regular
-grid.  An AFM force map (``.jpk-force-map``, ``.jpk-qi-data``, an AFM Workshop zip: any map
-afmformats reads) is mapped directly: positions from the file, the tip from ``--tip`` and its
-size (no AFM file records it), grid nodes without a curve kept as holes
-(:mod:`palpbayes.maps.afm_source`).  The lump model is off by default for an AFM map: a map
+grid (``material`` is optional: a map is one block).  Its trace files are read as ``palpbayes
+fit`` reads a manifest's: a robot log's columns, units and signs are given with fit's own
+options (``--time-column timestamp --z-column tcp_z_mm --z-unit mm --force-sign -1``,
+:func:`palpbayes.cli.options.add_column_options`), and every file's header is checked with
+them before a cluster starts.  An AFM force map (``.jpk-force-map``, ``.jpk-qi-data``, an
+AFM Workshop zip: any map afmformats reads) is mapped directly: positions from the file, the
+tip from ``--tip`` and its size (no AFM file records it), grid nodes without a curve kept as
+holes (:mod:`palpbayes.maps.afm_source`).  The lump model is off by default for an AFM map: a map
 of cells has no buried sphere and no block thickness; the field and P(E > k × median) are the
 answer (``--lump`` turns it on).  Per-point fits run on Dask (a LocalCluster by default,
 ``--scheduler ADDRESS`` for a cluster whose workers see the same files); then the spatial
@@ -13,6 +17,8 @@ Try it with::
 
     palpbayes simulate phantom --map
     palpbayes map phantom/manifest.csv --out phantom-map
+    palpbayes map robot/manifest.csv --time-column timestamp --z-column tcp_z_mm \
+        --force-column fz --z-unit mm --force-sign -1 --out robot-map
     palpbayes map cells.jpk-force-map --tip paraboloid --radius 5e-6 --nu 0.5 --out cells-map
 """
 
@@ -31,7 +37,15 @@ from ..io.afm import is_afm_file
 from ..io.manifest import read_manifest
 from ..units import format_length, format_pressure
 from .afm_options import add_afm_meta_options, afm_meta_from_args
-from .options import add_f_unc_option, add_nu_option, add_tip_options, positive_force, tip_from_args
+from .options import (
+    add_column_options,
+    add_f_unc_option,
+    add_nu_option,
+    add_tip_options,
+    positive_force,
+    read_options_from_args,
+    tip_from_args,
+)
 
 __all__ = ["register", "run"]
 
@@ -46,14 +60,19 @@ def register(subparsers) -> argparse.ArgumentParser:
             "Fit every trace of MANIFEST (columns x_m, y_m: palpation position in metres) with "
             "the exact engine on Dask, fit the stiff lump (one spherical inclusion), then a "
             "spatial GMRF field to what it leaves; write map.csv, points.csv, lump.csv, map.nc, "
-            "map.png and map-report.pdf into --out.  An AFM force map is read directly "
-            "(positions from the file; the tip from --tip; the lump model off unless --lump)."),
+            "map.png and map-report.pdf into --out.  The trace files take fit's column, unit "
+            "and sign options (a robot log: --time-column timestamp --z-unit mm "
+            "--force-sign -1 ...).  An AFM force map is read directly (positions from the "
+            "file; the tip from --tip; the lump model off unless --lump)."),
     )
     p.add_argument("input", metavar="INPUT",
-                   help="manifest CSV with x_m and y_m columns, or an AFM force map "
-                        "(.jpk-force-map, .jpk-qi-data, AFM Workshop .zip)")
+                   help="manifest CSV with trace_id, file, tip (and its size), x_m and y_m "
+                        "columns (material optional), or an AFM force map (.jpk-force-map, "
+                        ".jpk-qi-data, AFM Workshop .zip)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.add_argument("--force", action="store_true", help="replace the map files in DIR")
+    add_column_options(p, "columns, units and signs of the manifest's trace files (as "
+                          "palpbayes fit; --force-sign and --z-sign also for an AFM map)")
     a = p.add_argument_group("AFM force maps (no AFM file records the tip)")
     add_tip_options(a)
     add_afm_meta_options(a)
@@ -110,8 +129,16 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"{', '.join(given)}: for an AFM force map; a manifest gives the "
                              "tip and the thickness in its columns (tip, radius_m ..., "
                              "thickness_m)")
+    else:
+        given = [f"--{q}-{w}" for q in ("time", "z", "force") for w in ("column", "unit")
+                 if getattr(args, f"{q}_{w}")]
+        if given:
+            raise InputError(f"{args.input} is an AFM force map: {', '.join(given)} apply to "
+                             "a manifest's trace CSVs (an AFM file names its own channels)")
     lump = (not afm) if args.lump is None else bool(args.lump)
-    manifest = _afm_rows(args) if afm else read_manifest(args.input)
+    # a map is one block: a manifest's material label is optional (it pools nothing here)
+    manifest = _afm_rows(args) if afm else read_manifest(args.input, default_material="")
+    read_options = read_options_from_args(args)  # columns, units, signs: only those given
     # each point a half-space: the lump's forward model (palpbayes.sim.inclusion) reads the
     # block's thickness itself, and the map's per-point fits compare points with each other
     nu = None if args.nu is None else check_nu(args.nu)
@@ -123,11 +150,12 @@ def run(args: argparse.Namespace) -> int:
     map_opts = MapOptions(threshold=args.threshold, detect=args.detect, seed=args.seed,
                           lump=lump, lump_max_steps=args.lump_max_steps,
                           min_points=4 if afm else 10, line=afm)
-    if afm:
-        point_opts = replace(point_opts, read_options=_afm_override(args))
-    try:
+    point_opts = replace(point_opts, read_options={**(_afm_override(args) if afm else {}),
+                                                   **read_options})
+    try:  # every trace file's header too: a bad column is reported before a cluster starts
         check_map_manifest(manifest, lump=lump, min_points=map_opts.min_points,
-                           line=map_opts.line)
+                           line=map_opts.line, read_options=point_opts.read_options,
+                           source=args.input)
     except InputError as exc:
         if not afm:
             raise

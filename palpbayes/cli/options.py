@@ -1,7 +1,7 @@
 """The command line's shared options: model, fitted points, layer, budget, run (``fit``,
-``report``), the trace file's tip, columns, units and signs (``fit``, ``replay``), ``--nu``
-(also ``map``), and what they become: :class:`~palpbayes.campaign.fitjob.FitOptions`,
-reader options and the traces themselves."""
+``report``), the trace file's tip, columns, units and signs (``fit``, ``replay``; the
+columns, units and signs also ``map``), ``--nu`` (also ``map``), and what they become:
+:class:`~palpbayes.campaign.fitjob.FitOptions`, reader options and the traces themselves."""
 
 from __future__ import annotations
 
@@ -178,7 +178,7 @@ def add_column_options(p: argparse.ArgumentParser,
                        title: str = "columns, units and signs (every trace, also of a "
                                     "manifest)") -> None:
     """Column names, units and signs of a text table or stream (``fit``, ``replay``,
-    ``follow``)."""
+    ``follow``, ``map``; read back by :func:`read_options_from_args`)."""
     c = p.add_argument_group(title)
     for q, unit in (("time", "s"), ("z", "m"), ("force", "N")):
         c.add_argument(f"--{q}-column", metavar="NAME", help=f"column holding {q}")

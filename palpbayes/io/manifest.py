@@ -6,7 +6,8 @@ Columns (SI units; file paths relative to the manifest's folder):
 ``trace_id``       unique identifier (used for output file names)
 ``file``           trace CSV (canonical ``time_s, z_m, force_n``)
 ``specimen``       specimen label
-``material``       material label (pooling group together with ``tip``)
+``material``       material label (pooling group together with ``tip``; a map's
+                   manifest may leave it out, ``read_manifest(default_material=...)``)
 ``tip``            a registered tip kind: flat | sphere | paraboloid | cone | power
 ``radius_m``       tip radius [m] (flat, paraboloid, sphere)
 ``half_angle_deg`` cone half-opening angle [deg] (cone only)
@@ -28,7 +29,9 @@ A manifest is recognised by its ``file`` and ``tip`` columns.
 :func:`read_manifest` validates every row before any trace is read: ``trace_id``, ``file``,
 ``material`` and ``tip`` must not be empty, the numeric columns (:data:`NUMERIC_COLUMNS`) must
 hold plain numbers in the units above (``0.02``, not ``2cm``), ``repetition`` a whole number.
-Errors name the manifest, the row, the column and the value.
+Errors name the manifest, the row, the column and the value.  :func:`check_trace_headers`
+checks that every trace file's header holds the columns the reader options ask for, reading
+no data (``palpbayes map`` runs it before starting a cluster).
 """
 
 from __future__ import annotations
@@ -47,7 +50,7 @@ from ..trace import IndentationTrace
 from ..twin.specimen import FOOTPRINT_COLUMNS, check_specimen_plausible, specimen_from_sizes
 from .atomic import write_csv_atomic
 from .tabular import sniff_delimiter
-from .trace_csv import read_trace
+from .trace_csv import read_trace, trace_from_frame
 
 __all__ = [
     "MANIFEST_COLUMNS",
@@ -62,6 +65,7 @@ __all__ = [
     "footprint_metadata",
     "iter_traces",
     "load_trace",
+    "check_trace_headers",
 ]
 
 MANIFEST_COLUMNS = [
@@ -129,11 +133,21 @@ def _numeric_columns(df: pd.DataFrame, path: Path) -> None:
         df[col] = values.astype(float)
 
 
-def read_manifest(path: str | os.PathLike) -> pd.DataFrame:
+def read_manifest(path: str | os.PathLike, *,
+                  default_material: str | None = None) -> pd.DataFrame:
     """Read and validate a manifest; ``file`` becomes an absolute path.
 
     The separator (comma, semicolon or tab) is detected from the header line.  The numeric
     columns (:data:`NUMERIC_COLUMNS`) are returned as float.
+
+    Parameters
+    ----------
+    path
+        The manifest CSV.
+    default_material
+        The ``material`` of rows without one (no such column, or an empty cell), e.g. ``""``
+        for a stiffness map (one block, no pooling); None (default): the column is required
+        (a campaign pools its traces by material and tip).
 
     Raises
     ------
@@ -159,14 +173,20 @@ def read_manifest(path: str | os.PathLike) -> pd.DataFrame:
     except (pd.errors.ParserError, UnicodeDecodeError) as exc:
         raise DataFileError(path, f"not a readable CSV ({exc})".replace("\n", " ")) from None
     df.columns = [str(c).strip() for c in df.columns]
-    missing = [c for c in REQUIRED_COLUMNS if c not in df.columns]
+    required = [c for c in REQUIRED_COLUMNS
+                if not (c == "material" and default_material is not None)]
+    missing = [c for c in required if c not in df.columns]
     if missing:
         raise DataFileError(path, f"manifest lacks column(s) {', '.join(missing)}",
-                            f"a manifest needs {', '.join(REQUIRED_COLUMNS)}")
+                            f"a manifest needs {', '.join(required)}")
     if df.empty:
         raise DataFileError(path, "manifest has no rows")
+    if default_material is not None:
+        if "material" not in df.columns:
+            df["material"] = default_material
+        df["material"] = [default_material if _blank(v) else v for v in df["material"]]
     for i in range(len(df)):
-        for col in REQUIRED_COLUMNS:
+        for col in required:
             if _blank(df[col].iloc[i]):
                 tid = df["trace_id"].iloc[i]
                 who = "" if _blank(tid) else f" (trace {str(tid).strip()!r})"
@@ -299,6 +319,97 @@ def iter_traces(manifest: str | os.PathLike | pd.DataFrame,
     df = manifest if isinstance(manifest, pd.DataFrame) else read_manifest(manifest)
     for _, row in df.iterrows():
         yield load_trace(row, **read_options)
+
+
+#: Options of :func:`palpbayes.io.trace_csv.trace_from_frame` that decide how a file's columns
+#: are read (``delimiter`` is the other; ``tip``, ``check`` ... do not concern the header).
+_COLUMN_OPTIONS = ("columns", "units", "force_sign", "z_sign", "tool_offset")
+
+
+def _header_line(path: Path) -> str:
+    """The first line of ``path`` that is neither blank nor a ``#`` comment ('' if none)."""
+    with open(path, encoding="utf-8", newline="") as fh:
+        for line in fh:
+            if line.strip() and not line.lstrip().startswith("#"):
+                return line.rstrip("\r\n")
+    return ""
+
+
+def _check_header(path: Path, read_options: dict) -> None:
+    """Read the header of the trace CSV ``path`` and resolve its time, z (or joint angles)
+    and force columns with ``read_options`` on three made-up rows: the reader's own column,
+    unit and joint-angle logic, no data read."""
+    source = str(path)
+    delimiter = read_options.get("delimiter", "auto")
+    try:
+        sep = sniff_delimiter(path) if delimiter == "auto" else delimiter
+        header = pd.read_csv(path, comment="#", sep=sep, nrows=0, skipinitialspace=True,
+                             engine="c" if sep else "python")
+    except pd.errors.EmptyDataError:
+        raise DataFileError(source, "file is empty", "check that the recording was saved") \
+            from None
+    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise DataFileError(source, f"not a readable CSV ({exc})".replace("\n", " ")) from None
+    # made-up rows (0, 1, 2 in every column: increasing time, segment codes in order) so that
+    # only the header and the options can fail
+    frame = pd.DataFrame({c: [0.0, 1.0, 2.0] for c in header.columns})
+    opts = {k: v for k, v in read_options.items() if k in _COLUMN_OPTIONS}
+    trace_from_frame(frame, source, check=False, **opts)
+
+
+def check_trace_headers(manifest: pd.DataFrame, *, source: str | os.PathLike | None = None,
+                        **read_options) -> None:
+    """Check, from headers alone, that every trace file of a manifest can be read with
+    ``read_options``: its columns exist and the units given are known.
+
+    Reads the first non-comment line of every file and parses each distinct header once, so
+    it takes some 30 ms per thousand files; the data rows are not read (a file whose
+    data are bad is reported when its trace is read).
+
+    Parameters
+    ----------
+    manifest
+        Validated manifest (:func:`read_manifest`; ``file`` holds absolute paths).
+    source
+        The manifest's path, named in the error.
+    **read_options
+        The options of :func:`palpbayes.io.trace_csv.read_trace` the traces will be read with
+        (``columns``, ``units``, ``force_sign``, ``z_sign``, ...; others are ignored here).
+
+    Raises
+    ------
+    DataFileError
+        Naming the first trace file whose header fails, its manifest row and trace, how many
+        other files share that header, what is missing (with the option that maps a robot
+        log's column) and the columns the file has.
+    """
+    groups: dict[str, list[int]] = {}
+    for i, f in enumerate(manifest["file"]):
+        path = Path(str(f))
+        try:
+            line = _header_line(path)
+        except UnicodeDecodeError:
+            raise DataFileError(path, "is not a text CSV (it does not start as UTF-8 text)",
+                                "give trace CSVs in the manifest's 'file' column") from None
+        except OSError as exc:
+            raise DataFileError(path, f"cannot be read ({exc.strerror or exc})",
+                                "fix the 'file' column or restore the file") from None
+        groups.setdefault(line, []).append(i)
+    where = f" of {source}" if source is not None else ""
+    for rows in groups.values():
+        i = rows[0]
+        path = Path(str(manifest["file"].iloc[i]))
+        try:
+            _check_header(path, read_options)
+        except DataFileError as exc:
+            label = manifest.index[i]  # read_manifest's row number, also of a subset
+            row = label + 1 if isinstance(label, (int, np.integer)) else i + 1
+            tid = manifest["trace_id"].iloc[i] if "trace_id" in manifest else None
+            trace = "" if tid is None else f" (trace {str(tid)!r})"
+            more = (f", and {len(rows) - 1} other trace file(s) with the same header"
+                    if len(rows) > 1 else "")
+            raise DataFileError(exc.path, f"{exc.problem} [row {row}{trace}{where}{more}]",
+                                exc.fix) from None
 
 
 def write_manifest(df: pd.DataFrame, path: str | os.PathLike) -> Path:

@@ -109,8 +109,7 @@ def _field_idata(res: MapResult):
                            "logE_sd": pts["logE_sd"].to_numpy()},
             constant_data={"point_x_m": pts["x_m"].to_numpy(),
                            "point_y_m": pts["y_m"].to_numpy()},
-            coords={"x": lat.x0 + lat.step * np.arange(lat.nx),
-                    "y": lat.y0 + lat.step * np.arange(lat.ny)},
+            coords={"x": lat.xs, "y": lat.ys},
             dims={"log_E": ["y", "x"], "logE_mean": ["point"], "logE_sd": ["point"],
                   "point_x_m": ["point"], "point_y_m": ["point"]},
         )

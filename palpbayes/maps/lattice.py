@@ -15,6 +15,7 @@ with a margin of nodes without data.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,11 +25,39 @@ from scipy.spatial import cKDTree
 from ..errors import InputError
 
 __all__ = ["Lattice", "lattice_from_positions", "laplacian", "laplacian_eigenvalues", "pad",
-           "MAX_NODES"]
+           "MAX_NODES", "COORDINATE_DIGITS", "clean_coordinates"]
 
 #: Largest lattice :func:`lattice_from_positions` builds (an outlying position or a wrong
 #: ``step`` otherwise asks for an absurd grid).
 MAX_NODES = 1_000_000
+
+#: Digits kept below the lattice step in node coordinates: a coordinate is rounded to
+#: 10**-COORDINATE_DIGITS of the step's order of magnitude (1e-12 m for a 3 mm step, 1e-15 m
+#: for a 5 µm AFM step), far below any palpation's positioning and far above the
+#: floating-point residue of ``x0 + ix·step`` (a node at 0 written as -2.7e-18).
+COORDINATE_DIGITS = 9
+
+
+def clean_coordinates(v, step: float) -> np.ndarray:
+    """Coordinates ``v`` [m] rounded to :data:`COORDINATE_DIGITS` digits below ``step`` [m].
+
+    Removes the floating-point residue of the grid arithmetic, so a node at 0 is 0.0 (not
+    -2.7e-18, nor -0.0) and one at 9 mm is 0.009 (not 0.009000000000000001).
+
+    Parameters
+    ----------
+    v
+        Coordinates [m] (a number or an array).
+    step
+        The lattice step [m] (positive, finite).
+
+    Returns
+    -------
+    numpy.ndarray
+        The rounded coordinates [m], float, the shape of ``v``.
+    """
+    decimals = COORDINATE_DIGITS - math.floor(math.log10(step))
+    return np.round(np.asarray(v, dtype=float), decimals) + 0.0  # + 0.0: -0.0 becomes 0.0
 
 
 @dataclass(frozen=True)
@@ -63,14 +92,24 @@ class Lattice:
         return self.nx * self.ny
 
     @property
+    def xs(self) -> np.ndarray:
+        """x of the lattice's columns [m] (length ``nx``; :func:`clean_coordinates`)."""
+        return clean_coordinates(self.x0 + self.step * np.arange(self.nx), self.step)
+
+    @property
+    def ys(self) -> np.ndarray:
+        """y of the lattice's rows [m] (length ``ny``; :func:`clean_coordinates`)."""
+        return clean_coordinates(self.y0 + self.step * np.arange(self.ny), self.step)
+
+    @property
     def node_x(self) -> np.ndarray:
         """x of every node [m], in node order (length ``n_nodes``)."""
-        return np.tile(self.x0 + self.step * np.arange(self.nx), self.ny)
+        return np.tile(self.xs, self.ny)
 
     @property
     def node_y(self) -> np.ndarray:
         """y of every node [m], in node order (length ``n_nodes``)."""
-        return np.repeat(self.y0 + self.step * np.arange(self.ny), self.nx)
+        return np.repeat(self.ys, self.nx)
 
     def index(self, ix, iy):
         """Node number(s) ``iy·nx + ix`` of column ``ix`` and row ``iy`` (ints or arrays)."""
@@ -136,7 +175,9 @@ def lattice_from_positions(x, y, *, step: float | None = None, tol: float = 0.25
     Returns
     -------
     lattice
-        The smallest lattice holding every position.
+        The smallest lattice holding every position; an inferred step and the origin are
+        rounded by :func:`clean_coordinates` (a grid starting at 0 starts at 0.0, not at the
+        circular mean's residue of -2.7e-18 m).
     node
         Node number of each observation (int array, same length as ``x``).
 
@@ -176,6 +217,9 @@ def lattice_from_positions(x, y, *, step: float | None = None, tol: float = 0.25
             "positions, pass step= explicitly (e.g. a common divisor of the x and y spacings), "
             "or raise tol")
     ox, oy = ox + h * ix.min(), oy + h * iy.min()
+    if step is None:  # an inferred step: its least-squares residue too (a given one as is)
+        h = float(clean_coordinates(h, h))
+    ox, oy = (float(clean_coordinates(o, h)) for o in (ox, oy))
     ix, iy = ix - ix.min(), iy - iy.min()
     nx, ny = int(ix.max()) + 1, int(iy.max()) + 1
     for name, n in (("x", nx), ("y", ny)):

@@ -29,9 +29,9 @@ from ..contact import Tip
 from ..errors import InputError
 from ..flagcodes import scoped
 from ..intervals import LEVEL, central, central_band
-from ..io.manifest import tip_from_row
+from ..io.manifest import check_trace_headers, tip_from_row
 from ..sim.inclusion import contact_radius as tip_contact_radius
-from .afm_source import NO_CURVE
+from .afm_source import NO_CURVE, is_afm_row
 from .gmrf import FieldPosterior, FieldPrior, fit_field, robust_spread
 from .lattice import lattice_from_positions
 from .lump import LumpPosterior, fit_lump
@@ -301,18 +301,35 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
 
 
 def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True, min_points: int = 10,
-                       line: bool = False) -> tuple[Tip, float | None]:
+                       line: bool = False, read_options: dict | None = None,
+                       source: str | None = None) -> tuple[Tip, float | None]:
     """The map's one tip and its block thickness (None if the manifest has none).
 
-    Everything that can be checked before the fits is: positions on a regular lattice
-    (:func:`palpbayes.maps.lattice.lattice_from_positions`; on one line only with ``line``),
-    at least ``min_points`` rows, one tip, one thickness, and a tip kind whose contact radius
-    the lump model knows (``lump``).
+    Everything that can be checked before the fits (and before a Dask cluster starts) is:
+    positions on a regular lattice (:func:`palpbayes.maps.lattice.lattice_from_positions`; on
+    one line only with ``line``), at least ``min_points`` rows, one tip, one thickness, a tip
+    kind whose contact radius the lump model knows (``lump``), and every trace file's header:
+    its time, z and force columns found with ``read_options``
+    (:func:`palpbayes.io.manifest.check_trace_headers`; rows of an AFM map and holes are not
+    trace files).
+
+    Parameters
+    ----------
+    manifest
+        Validated map manifest with ``x_m``, ``y_m`` [m], or the rows of an AFM map.
+    lump, min_points, line
+        As :class:`MapOptions`.
+    read_options
+        The trace reader's options (``columns``, ``units``, ``force_sign``, ``z_sign``):
+        :attr:`PointOptions.read_options <palpbayes.maps.pertrace.PointOptions.read_options>`.
+    source
+        The manifest's path, named in a header error.
 
     Raises
     ------
     InputError
-        Naming what is wrong and what to do.
+        Naming what is wrong and what to do (:class:`~palpbayes.errors.DataFileError` for a
+        trace file, naming the file, its row and the missing column).
     """
     check_positions(manifest)
     n = int((manifest["error"].fillna("") == "").sum()) if "error" in manifest else len(manifest)
@@ -334,6 +351,10 @@ def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True, min_points:
             tip_contact_radius(tip, 1e-3)
         except InputError as exc:
             raise InputError(f"the lump model: {exc}; map with --no-lump") from None
+    files = [not is_afm_row(r) and not (isinstance(r.get("error"), str) and r["error"])
+             for _, r in manifest.iterrows()]
+    if any(files):
+        check_trace_headers(manifest[files], source=source, **(read_options or {}))
     return tip, (float(th[0]) if len(th) else None)
 
 
@@ -357,7 +378,8 @@ def make_map(manifest: pd.DataFrame, *, point_options: PointOptions | None = Non
     point_options = point_options or PointOptions()
     options = options or MapOptions()
     tip, thickness = check_map_manifest(manifest, lump=options.lump,
-                                        min_points=options.min_points, line=options.line)
+                                        min_points=options.min_points, line=options.line,
+                                        read_options=point_options.read_options)
     points = fit_points(manifest, point_options, scheduler=scheduler, workers=workers,
                         progress=progress)
     result = map_from_points(points, tip=tip, thickness=thickness, options=options,

@@ -168,3 +168,115 @@ def test_a_failed_rerun_leaves_the_previous_map_as_it_was(phantom, mapped, monke
     assert main(["map", str(phantom / "manifest.csv"), "--out", str(mapped), "--force"]) == 1
     assert {p.name: p.read_bytes() for p in mapped.iterdir()} == before
     assert not [p for p in mapped.parent.iterdir() if "-partial-" in p.name]
+
+
+# --- a robot log's manifest (issue 46 item 2) ------------------------------------------------
+
+#: fit's options for the UR-style logs of _robot_log_map: time, TCP z in mm, force in N that
+#: reads pressing as negative.
+ROBOT_OPTIONS = ["--time-column", "timestamp", "--z-column", "actual_TCP_pose_2",
+                 "--force-column", "fz", "--z-unit", "mm", "--force-sign", "-1"]
+ROBOT_E = 60e3  # [Pa]
+
+
+def _robot_log_map(folder, *, n=12, nx=4, step=2e-3, material=None):
+    """A map manifest of n UR RTDE-style logs (timestamp [s], actual_TCP_pose_2 [mm], fz [N],
+    pressing negative) on an nx-column grid starting at (0, 0), without a material column
+    unless ``material`` is given (as a user writes one for a robot); returns its path."""
+    from palpbayes.io.manifest import tip_columns
+    from palpbayes.paper import PAPER_TIPS
+    from palpbayes.sim import simulate_trace
+
+    tip = PAPER_TIPS["paraboloid"]
+    folder.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for k in range(n):
+        tid = f"press{k:02d}"
+        tr = simulate_trace(ROBOT_E, tip, thickness=0.02, rng=200 + k, approach=5e-4,
+                            trace_id=tid, base=None)
+        pd.DataFrame({"timestamp": tr.time, "actual_TCP_pose_2": tr.z * 1e3,
+                      "fz": -tr.force}).to_csv(folder / f"{tid}.csv", index=False)
+        rows.append({"trace_id": tid, "file": f"{tid}.csv", "tip": tip.kind,
+                     **{c: v for c, v in tip_columns(tip).items() if not np.isnan(v)},
+                     "x_m": (k % nx) * step, "y_m": (k // nx) * step,
+                     **({} if material is None else {"material": material})})
+    path = folder / "manifest.csv"
+    pd.DataFrame(rows).to_csv(path, index=False)
+    return path
+
+
+def test_map_takes_fits_column_unit_and_sign_options():
+    """One argparse group serves both commands: the same flags, defaults, choices and help."""
+    from palpbayes.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if hasattr(a, "choices")
+               and isinstance(a.choices, dict) and "map" in a.choices).choices
+
+    def column_options(parser):
+        return {a.option_strings[0]: (a.dest, a.default, a.choices, a.help)
+                for a in parser._actions
+                if a.option_strings and a.option_strings[0].endswith(("-column", "-unit",
+                                                                      "-sign"))}
+
+    fit, mapped = column_options(sub["fit"]), column_options(sub["map"])
+    assert set(fit) == {f"--{q}-{w}" for q in ("time", "z", "force") for w in ("column", "unit")
+                        } | {"--force-sign", "--z-sign"}
+    assert mapped == fit
+
+
+def test_a_robot_log_manifest_maps_with_the_options_fit_takes(tmp_path, capsys):
+    """A manifest of UR-style logs (no material column) maps with fit's --time-column,
+    --z-unit and --force-sign, and map.csv writes the node at 0 as 0.0 (it wrote -2.7e-18)."""
+    manifest = _robot_log_map(tmp_path / "robot")
+    out = tmp_path / "robot-map"
+    rc = main(["map", str(manifest), "--out", str(out), *ROBOT_OPTIONS, "--scheduler",
+               "synchronous", "--no-lump", "--no-report", "--no-progress"])
+    captured = capsys.readouterr()
+    assert rc == 0, captured.err
+    points = pd.read_csv(out / "points.csv")
+    assert points["error"].isna().all() and len(points) == 12
+    assert np.all(np.abs(points["E_median_pa"] / ROBOT_E - 1) < 0.05), points["E_median_pa"]
+    nodes = pd.read_csv(out / "map.csv")
+    assert sorted(set(nodes["x_m"])) == [0.0, 0.002, 0.004, 0.006]
+    assert sorted(set(nodes["y_m"])) == [0.0, 0.002, 0.004]
+    text = (out / "map.csv").read_text().splitlines()
+    first = dict(zip(text[0].split(","), text[1].split(","), strict=True))
+    assert (first["x_m"], first["y_m"]) == ("0.0", "0.0"), first
+    settings = json.loads((out / "settings.json").read_text())["lattice"]
+    assert (settings["x0_m"], settings["y0_m"], settings["step_m"]) == (0.0, 0.0, 0.002)
+    import arviz as az
+
+    post = az.from_netcdf(out / "map.nc").posterior
+    assert post["x"].values.tolist() == [0.0, 0.002, 0.004, 0.006]
+    assert post["y"].values.tolist() == [0.0, 0.002, 0.004]
+
+
+def test_a_bad_column_is_reported_before_any_cluster_starts(tmp_path, capsys, monkeypatch):
+    """Without the options, or with a misspelled column, map stops on the first file's header
+    (naming the file, its row, the column and the option) before Dask is asked for a client,
+    and makes no output folder (the manifest has a material column: only the columns are wrong)."""
+    import palpbayes.cluster
+    import palpbayes.maps.pertrace
+
+    calls = []
+
+    def no_cluster(*args, **kwargs):
+        calls.append(args)
+        raise AssertionError("a Dask client was asked for")
+
+    monkeypatch.setattr(palpbayes.maps.pertrace, "dask_client", no_cluster)
+    monkeypatch.setattr(palpbayes.cluster, "dask_client", no_cluster)
+    manifest = _robot_log_map(tmp_path / "robot", material="silicone")
+    out = tmp_path / "robot-map"
+    rc = main(["map", str(manifest), "--out", str(out), "--workers", "2", "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2 and len(err.strip().splitlines()) == 1, err
+    assert str(manifest.parent / "press00.csv") in err and "row 1 (trace 'press00')" in err
+    assert "11 other trace file(s) with the same header" in err
+    assert "--time-column timestamp" in err and "--force-column fz" in err
+    bad = [o if o != "fz" else "Fz" for o in ROBOT_OPTIONS]
+    rc = main(["map", str(manifest), "--out", str(out), *bad, "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "column 'Fz' (given for force) is missing" in err, err
+    assert "the file has timestamp, actual_TCP_pose_2, fz" in err
+    assert calls == [] and not out.exists()
