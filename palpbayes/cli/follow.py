@@ -1,4 +1,4 @@
-"""``palpbayes follow --tip ... --target 2%``: E live, from samples as they arrive.
+"""``palpbayes follow --tip ... --target 5%``: E live, from samples as they arrive.
 
 Reads samples (time, z, force) from stdin or a TCP connection, as CSV lines with a header or
 JSON lines (:mod:`palpbayes.online.stream`), feeds them to the online estimator in chunks as
@@ -8,6 +8,13 @@ is used (``replay`` keeps a recording's loading segment): the sender stops at th
 point.  With ``--timeout`` a pause in the stream gives a partial chunk, so the updates (and
 the sample the rule fires at) can then differ from ``replay``'s; ``--timeout 0`` keeps them
 equal.
+
+Each update gives E with its statistical interval and its full interval (with the uncertainty
+budget); ``--target`` is tested on the full one unless ``--target-on stat``.  When the run
+ends (the stop, or the end of the stream) the model checks of the offline fit are run on the
+samples received, after the update that carries the stop has been printed, and the last line
+says how they came out (with ``--json``, every line is one JSON object, the last with
+``"event": "stop"`` or ``"end"`` and the checks).
 """
 
 from __future__ import annotations
@@ -16,9 +23,11 @@ import argparse
 import json
 import math
 import sys
+import textwrap
 import time
 from collections.abc import Callable, Iterable
 
+from ..checks import CheckResult, checks_summary
 from ..contact import DEFAULT_NU_NOTE
 from ..errors import InputError
 from ..online import OnlineEstimator, OnlineState
@@ -33,8 +42,8 @@ from .options import (
     tip_from_args,
 )
 
-__all__ = ["register", "run", "follow", "update_text", "update_json", "EXIT_STATUS",
-           "EXIT_ENDED", "EXIT_BAD_INPUT"]
+__all__ = ["register", "run", "follow", "update_text", "update_json", "final_json",
+           "final_text", "EXIT_STATUS", "EXIT_ENDED", "EXIT_BAD_INPUT", "HELP_WIDTH"]
 
 #: Exit status when the stopping rule fires, per reason.
 EXIT_STATUS = {"target precision": 0, "max force": 3, "max depth": 4}
@@ -53,24 +62,34 @@ exit status:
        going backwards (stderr names the line), or a bad option
   1    failed otherwise;  130  interrupted
 
-Every update is one line on stdout, flushed at once; the last line starts with 'stop:'
-(the rule fired) or 'end:' (the stream ended).  The target precision is judged after every
-chunk; the max force and max depth at every sample as it arrives: a sample that reaches one
-ends its chunk, and the update on it is the stop.  Input is parsed as numbers only (float,
-json.loads): nothing is evaluated or unpickled."""
+Every update is one line on stdout, flushed at once: E with its statistical interval and
+its full one (with the budget).  The last line starts with 'stop:' (the rule fired) or
+'end:' (the stream ended) and says how the model checks of 'palpbayes fit', run on the
+samples received after the stop was printed, came out (failures on stderr).  With --json
+every line is one JSON object; the last has "event": "stop" or "end" and the checks.  The
+target precision is judged after every chunk; the max force and max depth at every sample
+as it arrives: a sample that reaches one ends its chunk, and the update on it is the stop.
+Input is parsed as numbers only (float, json.loads): nothing is evaluated or unpickled."""
+
+#: Width the description of ``follow --help`` is wrapped to (the epilog's layout is kept, so
+#: the formatter does not wrap the description).
+HELP_WIDTH = 90
+
+DESCRIPTION = textwrap.fill(
+    "Read samples (time_s, z_m, force_n) as they arrive, as CSV lines with a header or JSON "
+    "lines, from stdin or TCP; print E with its 90 % interval (statistical, and full: with "
+    "the uncertainty budget) after every chunk and exit the moment the stopping rule fires, "
+    "with a status that says why (below), so that a robot script can stop the motion. The "
+    "estimator and its options are replay's; unlike replay, which keeps a recording's "
+    "loading segment, follow uses every sample it is sent, so send the approach and the "
+    "indentation only (not the hold or retract).", HELP_WIDTH)
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "follow", help="E live from samples as they arrive; exit when the rule fires",
-        description="Read samples (time_s, z_m, force_n) as they arrive, as CSV lines with a "
-        "header or JSON lines, from stdin or TCP; print E with its 90 %% interval after "
-        "every chunk and exit the moment the stopping rule fires, with a status that says "
-        "why (below), so that a robot script can stop the motion. The estimator and its "
-        "options are replay's; unlike replay, which keeps a recording's loading segment, "
-        "follow uses every sample it is sent, so send the approach and the indentation only "
-        "(not the hold or retract).",
-        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=DESCRIPTION, epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     src = p.add_mutually_exclusive_group()
     src.add_argument("--listen", metavar="[HOST:]PORT", default=None,
@@ -83,7 +102,8 @@ def register(subparsers) -> None:
                    help="update with a partial chunk when no sample has arrived for S "
                         "seconds (default 0.5; 0: wait for full chunks)")
     p.add_argument("--json", action="store_true",
-                   help="print each update as one JSON object instead of text")
+                   help="print each update as one JSON object instead of text, and the "
+                        "last line (the stop or the end, with the model checks) too")
     add_online_options(p)
     add_specimen_options(p, "tip and specimen")
     add_column_options(p, "columns, units and signs of the samples")
@@ -95,19 +115,76 @@ def _value(x) -> float | None:
 
 
 def update_json(state: OnlineState, batch: Batch) -> str:
-    """One update as a JSON object (NaN as null)."""
-    E = state.E
-    row = {"n": state.n, "line": batch.last_line, "t_s": _value(state.t),
+    """One update as a JSON object (NaN as null): ``E_lo_pa``/``E_hi_pa``/``rel_half_width``
+    the statistical interval, ``E_total_*``/``total_rel_half_width`` the full one (with the
+    budget), ``budget_floor`` the budget's own relative half-width, ``flags`` the state's."""
+    E, T = state.E, state.E_total
+    row = {"event": "update", "n": state.n, "line": batch.last_line, "t_s": _value(state.t),
            "z_m": _value(state.z), "in_contact": state.in_contact,
            "depth_m": _value(state.depth), "peak_force_n": _value(state.peak_force),
            "E_pa": _value(E.median) if E else None, "E_lo_pa": _value(E.lo) if E else None,
            "E_hi_pa": _value(E.hi) if E else None,
-           "rel_half_width": _value(E.rel_half_width) if E else None, "stop": state.stop}
+           "rel_half_width": _value(E.rel_half_width) if E else None,
+           "E_total_lo_pa": _value(T.lo) if T else None,
+           "E_total_hi_pa": _value(T.hi) if T else None,
+           "total_rel_half_width": _value(T.rel_half_width) if T else None,
+           "budget_floor": _value(state.floor), "stop": state.stop,
+           "flags": list(state.flags)}
     return json.dumps(row)
 
 
+def _checks_json(checks: list[CheckResult]) -> list[dict]:
+    return [{"name": c.name, "passed": bool(c.passed), "statistic": _value(c.statistic),
+             "severity": c.details.get("severity", "" if c.passed else "material"),
+             "effect": _value(c.details.get("effect")), "flag": c.flag} for c in checks]
+
+
+def final_json(state: OnlineState | None, checks: list[CheckResult]) -> str:
+    """The last line of ``--json``: ``event`` "stop" (the rule fired) or "end" (the stream
+    ended), where, E with both intervals, and the model checks on the samples received
+    (``model_ok`` null when none could run)."""
+    stopped = state is not None and state.should_stop
+    E = None if state is None else state.E
+    T = None if state is None else state.E_total
+    summary = checks_summary(checks)
+    row = {"event": "stop" if stopped else "end",
+           "stop": state.stop if stopped else "", "n": 0 if state is None else state.n,
+           "t_s": None if state is None else _value(state.t),
+           "in_contact": bool(state is not None and state.in_contact),
+           "E_pa": _value(E.median) if E else None, "E_lo_pa": _value(E.lo) if E else None,
+           "E_hi_pa": _value(E.hi) if E else None,
+           "E_total_lo_pa": _value(T.lo) if T else None,
+           "E_total_hi_pa": _value(T.hi) if T else None,
+           "model_ok": (None if not checks else bool(summary["model_ok"])),
+           "misfit_checks": summary["misfit_checks"], "checks": _checks_json(checks),
+           "check_flags": summary["flags"]}
+    return json.dumps(row)
+
+
+def final_text(state: OnlineState | None, checks: list[CheckResult]) -> str:
+    """The last line of text: 'stop: REASON at n N (t T s)' or 'end: ...', then how the model
+    checks came out."""
+    if state is not None and state.should_stop:
+        head = f"stop: {state.stop} at n {state.n} (t {state.t:.4f} s)"
+    else:
+        n = 0 if state is None else state.n
+        why = "" if state is not None and state.in_contact else ", no contact detected"
+        head = f"end: the stream ended after {n} samples without a stop{why}"
+    if state is None or state.E is None:
+        return head
+    if not checks:
+        return f"{head}; model checks: too few samples"
+    summary = checks_summary(checks)
+    if summary["model_ok"]:
+        info = sum(not c.passed for c in checks)
+        return (f"{head}; model checks: no material misfit ({len(checks) - info} of "
+                f"{len(checks)} passed)")
+    return f"{head}; model checks: MATERIAL MISFIT ({summary['misfit_checks']}; see stderr)"
+
+
 def update_text(state: OnlineState, batch: Batch) -> str:
-    """One update as a line of text: where, then E [90 % interval] and its half-width."""
+    """One update as a line of text: where, then E [90 % interval] and its half-width, and
+    the full interval (with the budget) and its half-width."""
     head = f"n {state.n:6d}  t {state.t:8.3f} s"
     if not state.in_contact:
         return f"{head}  no contact yet"
@@ -115,9 +192,13 @@ def update_text(state: OnlineState, batch: Batch) -> str:
              f"{format_force(state.peak_force):>9}")
     if state.E is None:
         return f"{where}  in contact, no estimate yet"
-    E = state.E
-    return (f"{where}  E = {format_pressure(E.median)} [{format_pressure(E.lo)}, "
+    E, T = state.E, state.E_total
+    line = (f"{where}  E = {format_pressure(E.median)} [{format_pressure(E.lo)}, "
             f"{format_pressure(E.hi)}]  (±{100 * E.rel_half_width:.2g} %)")
+    if T is None:
+        return line
+    return (f"{line}  budget [{format_pressure(T.lo)}, {format_pressure(T.hi)}]  "
+            f"(±{100 * T.rel_half_width:.2g} %)")
 
 
 def follow(stream: Iterable[Batch], estimator: OnlineEstimator,
@@ -133,10 +214,16 @@ def follow(stream: Iterable[Batch], estimator: OnlineEstimator,
         [s] Per update, from the arrival of the batch's last sample to the return of ``emit``.
     """
     fmt = update_json if as_json else update_text
-    state, latencies = None, []
+    state, latencies, said = None, [], set()
     for batch in stream:
         state = estimator.update(batch.t, batch.z, batch.force)
         emit(fmt(state, batch))
+        if not as_json:  # a flag once, on stderr, when it first appears
+            for flag in state.flags:
+                key = " ".join(flag.split()[:4])
+                if key not in said:
+                    said.add(key)
+                    print(f"warning: {flag}", file=sys.stderr, flush=True)
         latencies.append(time.perf_counter() - batch.arrived)
         if state.should_stop:
             break
@@ -153,6 +240,7 @@ def run(args: argparse.Namespace) -> int:
     opts = read_options_from_args(args)
     if not (math.isfinite(args.timeout) and args.timeout >= 0):
         raise InputError(f"--timeout {args.timeout!r} must be a time >= 0 [s]")
+    estimator.warm_up()  # a layer's budget tables, before the robot starts
     if args.nu is None:
         print(f"note: {DEFAULT_NU_NOTE.replace(', or a nu column in the manifest', '')}",
               file=sys.stderr, flush=True)
@@ -181,11 +269,14 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if lines is not sys.stdin:
             lines.close()
+    # the update carrying the stop is out: now the checks, on the samples received
+    checks = estimator.model_checks() if state is not None and state.E is not None else []
+    if args.json:
+        _say(final_json(state, checks))
+    else:
+        for flag in checks_summary(checks)["flags"]:
+            print(f"model check: {flag}", file=sys.stderr, flush=True)
+        _say(final_text(state, checks))
     if state is not None and state.should_stop:
-        _say(f"stop: {state.stop} at n {state.n} (t {state.t:.4f} s)")
         return EXIT_STATUS[state.stop]
-    n = 0 if state is None else state.n
-    why = ("" if state is not None and state.in_contact
-           else ", no contact detected")
-    _say(f"end: the stream ended after {n} samples without a stop{why}")
     return EXIT_ENDED

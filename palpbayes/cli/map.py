@@ -71,8 +71,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                         ".jpk-qi-data, AFM Workshop .zip)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.add_argument("--force", action="store_true", help="replace the map files in DIR")
-    add_column_options(p, "columns, units and signs of the manifest's trace files (as "
-                          "palpbayes fit; --force-sign and --z-sign also for an AFM map)")
+    add_column_options(p, "columns, units and signs of the trace files (as fit; the signs "
+                          "also for an AFM map)")
     a = p.add_argument_group("AFM force maps (no AFM file records the tip)")
     add_tip_options(a)
     add_afm_meta_options(a)

@@ -1,4 +1,10 @@
-"""``palpbayes replay TRACE --target 2%``: where would online estimation have stopped?"""
+"""``palpbayes replay TRACE --target 5%``: where would online estimation have stopped?
+
+The target is tested on the full interval of E (with the uncertainty budget) unless
+``--target-on stat`` (:data:`~palpbayes.cli.online_options.DEFAULT_TARGET_ON`); both
+intervals are printed, and the model checks of the offline fit are run on the samples up to
+the stop.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +14,7 @@ from pathlib import Path
 import pandas as pd
 
 from ..campaign import layout
+from ..checks import checks_summary
 from ..contact import DEFAULT_NU_NOTE
 from ..io.atomic import write_csv_atomic, write_with
 from ..online import replay
@@ -15,7 +22,7 @@ from ..units import format_force, format_length, format_pressure
 from .online_options import add_online_options, model_from_args, parse_fraction, rule_from_args
 from .options import add_trace_options, trace_from_args
 
-__all__ = ["register", "run", "parse_fraction"]
+__all__ = ["register", "run", "parse_fraction", "check_lines"]
 
 
 def register(subparsers) -> None:
@@ -23,7 +30,8 @@ def register(subparsers) -> None:
         "replay", help="replay a recorded trace as if live: where would it have stopped?",
         description="Feed a recorded trace to the online estimator in chunks, as a robot "
         "would stream it, and show where the stopping rule fires: time, depth and peak force, "
-        "E then against E from the whole trace, and the interval narrowing with depth.",
+        "E then against E from the whole trace, and the interval narrowing with depth; "
+        "the model checks of 'palpbayes fit' are run on the samples up to the stop.",
     )
     p.add_argument("input", metavar="TRACE", help="trace CSV")
     add_online_options(p)
@@ -37,15 +45,31 @@ def register(subparsers) -> None:
 
 def _show(label: str, s, budget) -> str:
     """Two lines: where (time, depth, peak force), E with its statistical 90 % interval and
-    half-width (what --target tests), then the budget's 90 % interval and its half-width."""
+    half-width, then the full 90 % interval (with the budget) and its half-width, both
+    (hi − lo)/(2·median) as --target tests them."""
     med = s.E.median
-    rel = 100 * max(med - budget.lo, budget.hi - med) / med
     return (f"{label:<14} t = {s.t:7.3f} s  depth {format_length(s.depth):>9}  peak force "
             f"{format_force(s.peak_force):>9}  E = {format_pressure(med)} "
             f"[{format_pressure(s.E.lo)}, {format_pressure(s.E.hi)}]  "
             f"(statistical ±{100 * s.E.rel_half_width:.2g} %)\n"
             f"{'':<14} with the budget: [{format_pressure(budget.lo)}, "
-            f"{format_pressure(budget.hi)}]  (±{rel:.2g} %)")
+            f"{format_pressure(budget.hi)}]  (±{100 * budget.rel_half_width:.2g} %)")
+
+
+def check_lines(checks, where: str) -> list[str]:
+    """The model checks run at ``where`` in words: one line when all pass, else a line per
+    failure (material ones as warnings, negligible ones as info)."""
+    if not checks:
+        return [f"model checks {where}: too few samples to run them"]
+    summary = checks_summary(checks)
+    names = ", ".join(c.name for c in checks)
+    if not summary["flags"]:
+        return [f"model checks {where}: all {len(checks)} passed ({names})"]
+    head = ("model checks {where}: material misfit ({bad})" if not summary["model_ok"]
+            else "model checks {where}: no material misfit")
+    return [head.format(where=where, bad=summary["misfit_checks"])] + [
+        f"  {'info' if flag.startswith('info: ') else 'warning'}: "
+        f"{flag.removeprefix('info: ')}" for flag in summary["flags"]]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -53,16 +77,22 @@ def run(args: argparse.Namespace) -> int:
     trace = trace_from_args(args)
     model = model_from_args(args, trace.tip)
     res = replay(trace, model, rule=rule, chunk=args.chunk, noise=args.noise,
-                 noise_pp=args.noise_pp)
+                 noise_pp=args.noise_pp, total=True)
     s, f = res.at_stop, res.final
-    print("E: median [90 % interval]; statistical: from the data alone (what --target tests); "
-          "with the budget: also nu, tip radius, gain and compliance")
+    tested = ("the full one, with the budget" if rule.target_on == "full"
+              else "the statistical one")
+    print("E: median [90 % interval]; statistical: from the data alone; with the budget: also "
+          "nu, tip radius, gain and compliance (the full interval, as 'fit' reports E)")
+    if rule.target is not None:
+        print(f"--target ±{100 * rule.target:.3g} % is tested on {tested} (--target-on)")
     if model.has_layer:
         print(f"layer: {format_length(model.thickness)} thick on a {model.bonding} base")
     if s is None:
         print("the stopping rule never fired: the whole trace was needed")
     else:
         print(_show(f"stop ({s.stop})", s, res.budget_at_stop))
+        for line in check_lines(res.checks_at_stop, "at the stop"):
+            print(line)
     print(_show("whole trace", f, res.budget_final))
     summary = res.summary()
     if s is not None:

@@ -28,6 +28,18 @@ force of the last window lies more than :data:`RELAX_N_SE` standard errors (AR(1
 factor of the baseline's lag-one correlation) and 1 % of the contact force below the first,
 the state carries a relaxation flag naming the viscoelastic fit
 (``palpbayes fit --rheology``).
+
+**Two intervals.**  ``OnlineState.E`` is statistical (the data's noise and surface, what the
+offline fit calls ``E_stat``); ``OnlineState.E_total`` adds the uncertainty budget
+(:mod:`palpbayes.bayes.budget`: nu ± 0.05, tip radius, force gain, compliance, a layer's
+thickness), the full interval of the offline summary row (``E_lo_pa``/``E_hi_pa``, without the
+model-form envelope of a failed check): the budget draws' central interval widened to hold the
+statistical one, around the statistical median.  The budget does not shrink as the tip goes
+deeper, so the full interval has a floor (``OnlineState.floor``, the budget's width at an
+exact E*: ~±3.5 % for a half-space at nu 0.3, ~±7 % for a bonded layer at nu 0.45).  A
+:class:`StoppingRule` tests its target on either (``target_on``); a full target below the
+floor cannot fire, and the state says so.  :meth:`OnlineEstimator.model_checks` runs the
+offline fit's adequacy checks (:mod:`palpbayes.checks`) on the samples so far.
 """
 
 from __future__ import annotations
@@ -52,6 +64,7 @@ from ..bayes.exact import (
 )
 from ..bayes.mixture import MixtureSummary
 from ..bayes.priors import PriorSpec, TracePrior, param_names
+from ..checks import CheckResult, run_checks
 from ..contact import youngs_factor
 from ..errors import InputError
 from ..fitdata import ModelSpec
@@ -59,7 +72,7 @@ from ..intervals import LEVEL, central
 from ..noise import sigma_from_pp
 
 __all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE", "HOLD_WINDOW",
-           "HOLD_TOLERANCE", "RELAX_N_SE"]
+           "HOLD_TOLERANCE", "RELAX_N_SE", "TARGET_ON", "BUDGET_DRAWS"]
 
 #: Nodes whose log density falls this far below the best are no longer updated.
 PRUNE = 28.0
@@ -69,6 +82,10 @@ HOLD_WINDOW = 20
 HOLD_TOLERANCE = 0.01
 #: Standard errors by which the force must fall over a hold to be flagged.
 RELAX_N_SE = 5.0
+#: The intervals a precision target can be tested on: with the budget, or statistical only.
+TARGET_ON = ("full", "stat")
+#: Posterior draws (and budget input draws) behind the full interval of an update.
+BUDGET_DRAWS = 4000
 
 
 @dataclass(frozen=True)
@@ -78,26 +95,39 @@ class StoppingRule:
     Parameters
     ----------
     target
-        Relative half-width of the E interval (statistical, at the estimator's level) to reach,
-        e.g. 0.02 for ±2 %; None: no precision target.
+        Relative half-width (hi − lo)/(2·median) of the E interval (at the estimator's level)
+        to reach, e.g. 0.02 for ±2 %; None: no precision target.
     max_force
         [N] Largest force above the baseline.
     max_depth
         [m] Largest depth below the estimated surface.
     min_contact
         Fewest samples in contact before the precision target may stop the run.
+    target_on
+        The interval the target is tested on: ``"stat"`` (statistical, ``OnlineState.E``;
+        the library's default, as before) or ``"full"`` (with the uncertainty budget,
+        ``OnlineState.E_total``; ``palpbayes replay`` and ``follow`` default to it).
     """
 
     target: float | None = None
     max_force: float | None = None
     max_depth: float | None = None
     min_contact: int = 20
+    target_on: str = "stat"
 
     def __post_init__(self) -> None:
         for name in ("target", "max_force", "max_depth"):
             v = getattr(self, name)
             if v is not None and not (math.isfinite(v) and v > 0):
                 raise InputError(f"stopping rule: {name} = {v!r} must be a positive number")
+        if self.target_on not in TARGET_ON:
+            raise InputError(f"stopping rule: target_on = {self.target_on!r} must be one of "
+                             f"{', '.join(TARGET_ON)}")
+
+    @property
+    def full(self) -> bool:
+        """A precision target tested on the full interval (it needs the budget)."""
+        return self.target is not None and self.target_on == "full"
 
     def reason(self, state: OnlineState) -> str:
         """Why to stop now ('' to go on)."""
@@ -105,8 +135,9 @@ class StoppingRule:
             return "max force"
         if self.max_depth is not None and state.depth >= self.max_depth:
             return "max depth"
+        E = state.E_total if self.target_on == "full" else state.E
         if (self.target is not None and state.n_contact >= self.min_contact
-                and state.E is not None and state.E.rel_half_width <= self.target):
+                and E is not None and E.rel_half_width <= self.target):
             return "target precision"
         return ""
 
@@ -130,7 +161,14 @@ class OnlineState:
     stop
         The stopping rule's reason ('' to go on).
     flags
-        Posterior at a bound of the online surface prior, refinement cut short.
+        Posterior at a bound of the online surface prior, refinement cut short, a full
+        target below the budget's floor.
+    E_total
+        E [Pa] with the uncertainty budget (the full interval); None when the estimator does
+        not compute it (:attr:`OnlineEstimator.total`) or before the first estimate.
+    floor
+        [-] Relative half-width of the budget alone (E* exact): the narrowest the full
+        interval can get at this depth; NaN with ``E_total`` None.
     """
 
     n: int
@@ -144,6 +182,8 @@ class OnlineState:
     z_surf: MixtureSummary | None
     stop: str
     flags: tuple[str, ...] = ()
+    E_total: MixtureSummary | None = None
+    floor: float = float("nan")
 
     @property
     def should_stop(self) -> bool:
@@ -177,6 +217,16 @@ class OnlineEstimator:
         Probability content of the intervals.
     persist
         Consecutive samples above the threshold that make a contact.
+    total
+        Compute E with the budget (``OnlineState.E_total``, ~50 ms an update for a
+        half-space) at every update; always done when the rule's target is on the full
+        interval.
+    budget
+        The budget's input distributions (None: :class:`BudgetSpec` defaults, the offline
+        fit's).
+    seed
+        Seed of the posterior and budget draws (the same at every update, so that the full
+        interval moves with the data only).
     """
 
     model: ModelSpec
@@ -187,6 +237,9 @@ class OnlineEstimator:
     priors: PriorSpec = field(default_factory=PriorSpec)
     level: float = LEVEL
     persist: int = 5
+    total: bool = False
+    budget: BudgetSpec | None = None
+    seed: int = 0
 
     def __post_init__(self) -> None:
         for name in ("noise_pp", "f_unc"):
@@ -212,6 +265,8 @@ class OnlineEstimator:
         self._active: np.ndarray | None = None
         self._phi = phi_grid(self.priors.phi_bounds) if self.noise == "ar1" else np.zeros(1)
         self.state: OnlineState | None = None
+        if self.rule.full:
+            self.total = True
 
     @property
     def baseline_level(self) -> float:
@@ -437,22 +492,93 @@ class OnlineEstimator:
             if w_phi[[0, -1]].max() > 0.5 * w_phi.sum():
                 flags.append("noise correlation phi at the end of its grid: the residuals wander "
                              "like drift, or the noise is correlated beyond the prior's ±0.99")
+        total, floor = (self._total(post, E) if self.total
+                        else (None, float("nan")))
+        rule = self.rule
+        if rule.full and floor > rule.target:
+            flags.append(f"the target ±{100 * rule.target:.3g} % is below the ±{100 * floor:.2g} "
+                         "% the uncertainty budget alone gives here (nu, tip radius, gain, "
+                         "compliance): the precision target cannot stop the run on the full "
+                         "interval; give a wider target or test it on the statistical one")
         partial = OnlineState(n, t, z, True, n - self._contact, max(zs.median - z, 0.0),
-                              peak, E, zs, "", tuple(flags))
-        return replace(partial, stop=self.rule.reason(partial))
+                              peak, E, zs, "", tuple(flags), total, floor)
+        return replace(partial, stop=rule.reason(partial))
 
-    def budget_interval(self, budget: BudgetSpec | None = None, n_draws: int = 4000,
-                        seed: int = 0) -> MixtureSummary:
-        """E [Pa] with the uncertainty budget (:mod:`palpbayes.bayes.budget`) at this point."""
-        post = self.posterior()
+    def _summary(self, x: np.ndarray) -> MixtureSummary:
+        lo, hi = central(x, self.level)
+        return MixtureSummary(float(x.mean()), float(x.std()), float(np.median(x)), lo, hi,
+                              self.level)
+
+    def _propagate(self, post: ExactPosterior, budget: BudgetSpec | None, n_draws: int,
+                   seed: int) -> tuple[np.ndarray, np.ndarray]:
+        """Draws of E* [Pa] and of E with the budget [Pa], one budget input draw each."""
         rng = np.random.default_rng(seed)
         d = post.draws(rng, n_draws)
-        n = self._n
-
-        seen = SimpleNamespace(model=self.model, z=self._z[:n])  # what propagate reads
+        seen = SimpleNamespace(model=self.model, z=self._z[:self._n])  # what propagate reads
         bud = propagate(d["E_star"], seen, float(np.median(d["z_surf"])),
-                        budget or BudgetSpec(), rng)
-        E = bud.E
-        lo, hi = central(E, self.level)
-        return MixtureSummary(float(E.mean()), float(E.std()), float(np.median(E)), lo, hi,
-                              self.level)
+                        budget or self.budget or BudgetSpec(), rng)
+        return d["E_star"], bud.E
+
+    def _full(self, stat: MixtureSummary, E: np.ndarray) -> MixtureSummary:
+        """The full interval as the offline fit reports it
+        (:meth:`palpbayes.bayes.result.BayesResult.intervals`): the central interval of the
+        budget's draws ``E`` [Pa] widened where needed to hold the statistical one, around
+        the statistical median (the estimate at the stated inputs: the budget widens the
+        interval and does not move it)."""
+        b = self._summary(E)
+        return MixtureSummary(b.mean, b.sd, stat.median, min(b.lo, stat.lo),
+                              max(b.hi, stat.hi), self.level)
+
+    def _total(self, post: ExactPosterior, stat: MixtureSummary
+               ) -> tuple[MixtureSummary, float]:
+        """The full interval of E [Pa] and the budget's floor [-] (the relative half-width
+        of the budget's factors alone: E / E* of the same draws)."""
+        estar, E = self._propagate(post, None, BUDGET_DRAWS, self.seed)
+        return self._full(stat, E), self._summary(E / estar).rel_half_width
+
+    def budget_interval(self, budget: BudgetSpec | None = None, n_draws: int = BUDGET_DRAWS,
+                        seed: int = 0) -> MixtureSummary:
+        """E [Pa] with the uncertainty budget (:mod:`palpbayes.bayes.budget`) at this point
+        (``budget`` None: the estimator's): the full interval of :meth:`_full`."""
+        post = self.posterior()
+        stat = _scaled(post.estar_summary(self.level), youngs_factor(self.model.nu))
+        return self._full(stat, self._propagate(post, budget, n_draws, seed)[1])
+
+    def warm_up(self) -> None:
+        """Build what the budget of a layered model needs once per process (its profile
+        tables at the Poisson ratios of the budget: seconds), so that the first update in
+        contact does not pay for it.  Nothing to do for a half-space."""
+        if not self.model.has_layer:
+            return
+        h = float(self.model.thickness)
+        depth = np.geomspace(1e-4, 0.2, 32) * h
+        seen = SimpleNamespace(model=self.model, z=-depth)
+        propagate(np.ones(8), seen, 0.0, self.budget or BudgetSpec(),
+                  np.random.default_rng(0))
+
+    def model_checks(self, seed: int = 0) -> list[CheckResult]:
+        """The offline fit's adequacy checks (:func:`palpbayes.checks.run_checks`: exponent,
+        residual structure, depth consistency, posterior-predictive) on every sample so far,
+        at the posterior medians, graded against the statistical interval of E*.
+
+        Returns
+        -------
+        list of CheckResult
+            Empty before an estimate, or when the samples are too few for the checks.
+        """
+        if self.state is None or self.state.E is None:
+            return []
+        post = self.posterior()
+        draws = post.draws(np.random.default_rng(seed), 1000)
+        med = {k: float(np.median(v)) for k, v in draws.items()}
+        lo, hi = central(draws["E_star"], self.level)
+        lag1 = self._base.lag1 if self._base.reliable else None
+        n = self._n
+        try:
+            return run_checks(self._z[:n], self._f[:n], self.model, z_surf=med["z_surf"],
+                              estar=med["E_star"], f0=med["F0"], sigma=med["sigma"],
+                              draws=draws, baseline_lag1=lag1, baseline="constant",
+                              z_ref=self._z_top, rng=seed,
+                              stat_rel_halfwidth=0.5 * (hi - lo) / med["E_star"])
+        except InputError:
+            return []

@@ -5,18 +5,21 @@ of ``chunk`` samples (100 by default: 0.125 s at the paper's 800 Hz, 0.2 s at a 
 500 Hz).  The run goes on to the end of the recording after the rule fires, so that the
 estimate at the stop can be set beside the estimate from the whole trace, and the depth and
 peak force saved against the recorded protocol (the paper's fixed 10 % indentation) measured.
+The model checks of the offline fit (:mod:`palpbayes.checks`) are run on the samples up to the
+stop (:attr:`ReplayResult.checks_at_stop`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
 from ..bayes.budget import BudgetSpec
 from ..bayes.mixture import MixtureSummary
+from ..checks import CheckResult, checks_summary
 from ..errors import InputError, PalpbayesError
 from ..fitdata import ModelSpec
 from ..trace import IndentationTrace
@@ -27,7 +30,8 @@ __all__ = ["ReplayResult", "replay", "run_to_stop", "chunks", "needed_indentatio
 
 #: Columns of :attr:`ReplayResult.history` (one row per update after contact).
 HISTORY_COLUMNS = ("n", "t_s", "z_m", "depth_m", "peak_force_n", "E_pa", "E_lo_pa", "E_hi_pa",
-                   "rel_half_width", "z_surf_m", "z_surf_sd_m", "stop")
+                   "rel_half_width", "z_surf_m", "z_surf_sd_m", "stop", "E_total_lo_pa",
+                   "E_total_hi_pa", "total_rel_half_width")
 
 
 @dataclass
@@ -46,6 +50,9 @@ class ReplayResult:
         The stopping rule.
     model
         The contact model replayed (its nu and layer go into :meth:`summary`).
+    checks_at_stop
+        The model checks (:meth:`OnlineEstimator.model_checks`) on the samples up to the stop;
+        empty when the rule never fired.
     """
 
     history: pd.DataFrame
@@ -55,11 +62,14 @@ class ReplayResult:
     budget_final: MixtureSummary
     rule: StoppingRule
     model: ModelSpec | None = None
+    checks_at_stop: list[CheckResult] = field(default_factory=list)
 
     def summary(self) -> dict:
-        """Stop time, depth, peak force, E then and from the whole trace, savings [%]."""
+        """Stop time, depth, peak force, E then and from the whole trace, savings [%], the
+        interval the target was tested on and the model checks at the stop."""
         f, s = self.final, self.at_stop
         row = {"stopped": s is not None, "reason": s.stop if s else "",
+               "target_on": self.rule.target_on,
                "E_final_pa": f.E.median, "E_final_lo_pa": f.E.lo, "E_final_hi_pa": f.E.hi,
                "E_total_final_lo_pa": self.budget_final.lo,
                "E_total_final_hi_pa": self.budget_final.hi,
@@ -79,6 +89,11 @@ class ReplayResult:
                 "force_saved_pct": (100 * (1 - s.peak_force / f.peak_force)
                                     if f.peak_force > 0 else np.nan),
             })
+            checks = checks_summary(self.checks_at_stop)
+            row.update({"model_ok_stop": checks["model_ok"],
+                        "misfit_checks_stop": checks["misfit_checks"],
+                        "misfit_effect_stop": checks["misfit_effect"],
+                        "check_flags_stop": "; ".join(checks["flags"])})
         return row
 
 
@@ -136,10 +151,13 @@ def needed_indentation(traces, models, rule: StoppingRule, *, chunk: int = 100,
 
 
 def _row(s: OnlineState) -> dict:
+    T = s.E_total
     return {"n": s.n, "t_s": s.t, "z_m": s.z, "depth_m": s.depth, "peak_force_n": s.peak_force,
             "E_pa": s.E.median, "E_lo_pa": s.E.lo, "E_hi_pa": s.E.hi,
             "rel_half_width": s.E.rel_half_width, "z_surf_m": s.z_surf.median,
-            "z_surf_sd_m": s.z_surf.sd, "stop": s.stop}
+            "z_surf_sd_m": s.z_surf.sd, "stop": s.stop,
+            "E_total_lo_pa": T.lo if T else np.nan, "E_total_hi_pa": T.hi if T else np.nan,
+            "total_rel_half_width": T.rel_half_width if T else np.nan}
 
 
 def chunks(trace: IndentationTrace, chunk: int,
@@ -179,8 +197,13 @@ def run_to_stop(trace: IndentationTrace, estimator: OnlineEstimator,
 def replay(trace: IndentationTrace, model: ModelSpec | None = None, *,
            rule: StoppingRule | None = None, chunk: int = 100, noise: str = "gaussian",
            noise_pp: float | None = None, f_unc: float | None = None,
-           budget: BudgetSpec | None = None, seed: int = 0) -> ReplayResult:
+           budget: BudgetSpec | None = None, seed: int = 0, total: bool = False,
+           checks: bool = True) -> ReplayResult:
     """Feed ``trace``'s loading segment to an online estimator, ``chunk`` samples at a time.
+
+    ``total`` computes E with the budget at every update (the history's ``E_total_*``
+    columns; always when the rule's target is on the full interval, NaN otherwise);
+    ``checks`` runs the model checks on the samples up to the stop.
 
     Raises
     ------
@@ -193,20 +216,23 @@ def replay(trace: IndentationTrace, model: ModelSpec | None = None, *,
             raise InputError(f"{trace.trace_id}: no tip geometry; give the tip (--tip ...)")
         model = ModelSpec(trace.tip)
     rule = rule or StoppingRule()
-    est = OnlineEstimator(model, noise=noise, noise_pp=noise_pp, f_unc=f_unc, rule=rule)
-    rows, at_stop, budget_at_stop = [], None, None
+    est = OnlineEstimator(model, noise=noise, noise_pp=noise_pp, f_unc=f_unc, rule=rule,
+                          total=total, budget=budget, seed=seed)
+    rows, at_stop, budget_at_stop, found = [], None, None, []
     for t, z, f in chunks(trace, chunk, est.limit):
         state = est.update(t, z, f)
-        if state.in_contact:
+        if state.in_contact and state.E is not None:
             rows.append(_row(state))
-            if at_stop is None and state.should_stop:
-                at_stop = state
-                budget_at_stop = est.budget_interval(budget, seed=seed)
+        if state.in_contact and at_stop is None and state.should_stop:
+            at_stop = state
+            if state.E is not None:
+                budget_at_stop = state.E_total or est.budget_interval(seed=seed)
+                found = est.model_checks(seed) if checks else []
     if est.state is None or not est.state.in_contact:
         raise InputError(f"{trace.source or trace.trace_id}: no contact detected (the force "
                          "never stays above the baseline noise); check the recording")
     history = pd.DataFrame(rows, columns=list(HISTORY_COLUMNS))
     return ReplayResult(history=history, at_stop=at_stop, final=est.state,
                         budget_at_stop=budget_at_stop,
-                        budget_final=est.budget_interval(budget, seed=seed), rule=rule,
-                        model=model)
+                        budget_final=est.state.E_total or est.budget_interval(seed=seed),
+                        rule=rule, model=model, checks_at_stop=found)

@@ -25,7 +25,8 @@ from palpbayes.sim import simulate_trace
 E_TRUE = 1.25e5
 TIP = ["--tip", "paraboloid", "--radius", "0.0117"]
 RULES = {  # CLI options, the StoppingRule, the exit status
-    "target precision": (["--target", "2%"], StoppingRule(target=0.02), 0),
+    "target precision": (["--target", "2%", "--target-on", "stat"], StoppingRule(target=0.02),
+                         0),
     "max force": (["--max-force", "0.1"], StoppingRule(max_force=0.1), 3),
     "max depth": (["--max-depth", "3e-4"], StoppingRule(max_depth=3e-4), 4),
     "": (["--max-force", "50"], StoppingRule(max_force=50.0), 5),
@@ -50,8 +51,9 @@ def run_follow(monkeypatch, capsys, text: str, *args: str):
     monkeypatch.setattr(sys, "stdin", io.StringIO(text))
     rc = main(["follow", *TIP, "--json", "--nu", "0.3", *args])
     out = capsys.readouterr()
-    updates = [json.loads(ln) for ln in out.out.splitlines() if ln.startswith("{")]
-    return rc, updates, out
+    rows = [json.loads(ln) for ln in out.out.splitlines()]  # every line is JSON
+    assert rows[-1]["event"] in ("stop", "end")
+    return rc, [r for r in rows if r["event"] == "update"], out
 
 
 @pytest.mark.parametrize("reason", list(RULES))
@@ -70,20 +72,23 @@ def test_follow_stops_at_the_sample_replay_stops_at(recorded, monkeypatch, capsy
         assert s.stop == reason
         assert (last["n"], last["t_s"], last["E_pa"], last["E_lo_pa"], last["E_hi_pa"]) == (
             s.n, s.t, s.E.median, s.E.lo, s.E.hi)
-        assert out.out.splitlines()[-1] == f"stop: {reason} at n {s.n} (t {s.t:.4f} s)"
+        final = json.loads(out.out.splitlines()[-1])
+        assert (final["event"], final["stop"], final["n"]) == ("stop", reason, s.n)
         # every update replay made up to the stop, in order, and none after it
         assert [u["n"] for u in updates if u["in_contact"]] == res.history["n"].tolist()[
             : res.history["n"].tolist().index(s.n) + 1]
     else:
         assert res.at_stop is None
         assert last["n"] == res.final.n == trace.n_points and last["E_pa"] == res.final.E.median
-        assert out.out.splitlines()[-1].startswith("end: the stream ended after 3840 samples")
+        final = json.loads(out.out.splitlines()[-1])
+        assert (final["event"], final["n"]) == ("end", 3840)
 
 
 def test_csv_and_json_lines_give_identical_updates(recorded, monkeypatch, capsys):
     _, text, jsonl = recorded
-    rc_csv, from_csv, _ = run_follow(monkeypatch, capsys, text, "--target", "2%")
-    rc_json, from_json, _ = run_follow(monkeypatch, capsys, jsonl, "--target", "2%")
+    stat = ("--target", "2%", "--target-on", "stat")
+    rc_csv, from_csv, _ = run_follow(monkeypatch, capsys, text, *stat)
+    rc_json, from_json, _ = run_follow(monkeypatch, capsys, jsonl, *stat)
     assert rc_csv == rc_json == 0
     # the same updates, the line numbers one apart (the CSV header is line 1)
     assert [u["line"] for u in from_csv] == [u["line"] + 1 for u in from_json]
@@ -120,8 +125,8 @@ def test_tcp_connect_on_loopback_with_an_ephemeral_port(recorded, monkeypatch, c
     threading.Thread(target=serve, daemon=True).start()
     rc = main(["follow", *TIP, "--json", "--nu", "0.3", "--max-force", "0.1", "--connect",
                f"127.0.0.1:{port}"])
-    updates = [json.loads(ln) for ln in capsys.readouterr().out.splitlines()
-               if ln.startswith("{")]
+    updates = [r for r in map(json.loads, capsys.readouterr().out.splitlines())
+               if r["event"] == "update"]
     rc_stdin, from_stdin, _ = run_follow(monkeypatch, capsys, text, "--max-force", "0.1")
     assert rc == rc_stdin == 3 and updates == from_stdin
 
