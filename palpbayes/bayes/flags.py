@@ -11,10 +11,13 @@ from ..noise import mad_sd
 from ..units import format_length, format_pressure
 from .priors import TracePrior
 
-__all__ = ["BOUND_SDS", "is_bimodal", "bound_flags", "posterior_flags"]
+__all__ = ["BOUND_SDS", "BASELINE_HINT", "is_bimodal", "bound_flags", "posterior_flags"]
 
 #: A posterior whose median lies within this many posterior sd of a hard prior bound is flagged.
 BOUND_SDS = 3.0
+#: The hint of a flag that a tilted or drifting baseline may explain; ``palpbayes fit`` tries
+#: it before it is given (:func:`palpbayes.campaign.fitjob.tried_baseline_hint`).
+BASELINE_HINT = "try --baseline linear"
 
 
 def is_bimodal(x: np.ndarray, gap: float = 6.0, min_mass: float = 0.05) -> bool:
@@ -45,13 +48,13 @@ def bound_flags(post_theta: dict[str, np.ndarray], prior: TracePrior) -> list[st
     out = []
     causes = {
         ("z_surf", "upper"): "the surface sits at the top of the recorded approach: the trace "
-                             "may start in contact, or the baseline is not flat (try --baseline "
-                             "linear), or record a longer approach",
+                             f"may start in contact, or the baseline is not flat ({BASELINE_HINT}"
+                             "), or record a longer approach",
         ("z_surf", "lower"): "the surface sits at the deepest point: no contact is resolved",
         ("log_Estar", "lower"): "E* at the lower end of its prior range (check units)",
         ("log_Estar", "upper"): "E* at the upper end of its prior range (check units)",
         ("phi", "upper"): "noise correlation phi at its bound: the residuals wander like drift "
-                          "(try --baseline linear) or the model misfits",
+                          f"({BASELINE_HINT}) or the model misfits",
         ("phi", "lower"): "noise correlation phi at its lower bound",
         ("log_nu_t", "lower"): "Student-t degrees of freedom at 2: heavy outliers",
         ("log_nu_t", "upper"): "Student-t degrees of freedom at 200: the noise is Gaussian",

@@ -14,18 +14,19 @@ from pathlib import Path
 import numpy as np
 
 from ..bayes import BayesResult, fit_bayes_data
+from ..bayes.flags import BASELINE_HINT
 from ..checks import CheckResult, check_fit, checks_summary
 from ..contact import get_law
 from ..errors import ConvergenceWarning, FitError, GeometryError, InputError, NoContactError
 from ..fitdata import FitData, prepare
 from ..fitdata import tared as tared_data
-from ..flagcodes import flag_columns
+from ..flagcodes import flag_columns, split_flags
 from ..lsq import LSQResult, fit_lsq_data
 from ..noise import noise_scale_mismatch
 from ..refit import layer_alternatives
 from ..trace import IndentationTrace
 from ..twin import twin_depth_limit, twin_depth_limit_reason
-from ..units import format_force
+from ..units import format_force, format_pressure
 from .layout import posterior_file
 from .options import LAYER_MODES, METHODS, FitOptions
 from .tracemodel import nu_source, prepare_twin, trace_model, trace_seed, trace_specimen
@@ -33,7 +34,7 @@ from .tracemodel import nu_source, prepare_twin, trace_model, trace_seed, trace_
 # FitOptions, METHODS and LAYER_MODES (.options), trace_model and its helpers (.tracemodel) are
 # imported from here too
 __all__ = ["FitOptions", "FitOutcome", "fit_trace", "fit_trace_rows", "check_fittable",
-           "force_scale_flag",
+           "force_scale_flag", "tried_baseline_hint",
            "trace_model", "nu_source", "fitted_methods", "failed_rows", "trace_specimen",
            "prepare_twin", "trace_seed", "SUMMARY_COLUMNS", "METHODS",
            "LAYER_MODES"]
@@ -224,6 +225,47 @@ def force_scale_flag(data: FitData, options: FitOptions) -> str | None:
             "the force, and E, 1,000 times too small)")
 
 
+def tried_baseline_hint(row: dict, data: FitData, options: FitOptions, seed: int,
+                        trace_id: str, lsq: LSQResult | None) -> str:
+    """``row``'s notes with each :data:`~palpbayes.bayes.flags.BASELINE_HINT` ("try
+    --baseline linear") replaced by what trying it gave: a hint is tried before it is given.
+
+    The Bayesian fit is run again with ``baseline="linear"`` (the exact engine where the noise
+    model allows, without the model form: the question is only whether the flag goes away).
+    The hint stays, with the E it gives, when that fit converges, none of the flags that carried
+    the hint comes back and its model checks pass where the row's did; otherwise the notes say
+    it was tried and why it does not help (a fit that fails, a flag that stays, a model check
+    it fails), with its E, so that nobody follows a hint that makes the answer worse.
+    """
+    notes = str(row["notes"])
+    heads = [f[:f.find(" (")] if " (" in f else f
+             for f in split_flags(notes) if BASELINE_HINT in f]
+    engine = ("exact" if options.noise in ("gaussian", "ar1")
+              and options.priors.surface == "loading" else options.engine)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            alt = fit_bayes_data(
+                data, noise=options.noise, baseline="linear", priors=options.priors,
+                budget=options.budget, settings=options.settings, seed=seed, strict=False,
+                trace_id=trace_id, lsq=lsq, engine=engine, with_model_form=False,
+                platens=options.platens).summary_row()
+    except (FitError, NoContactError) as exc:
+        return notes.replace(BASELINE_HINT, f"--baseline linear was tried and its fit fails: "
+                                            f"{str(exc).replace('; ', ', ')}")
+    shift = f"E {format_pressure(alt['E_pa'])}, {alt['E_pa'] / row['E_pa'] - 1:+.1%} " \
+            "against this row"
+    stays = [h for h in heads if h in str(alt["notes"])]
+    why = ("the same flag comes back" if stays else "its fit does not converge"
+           if not alt["converged"] else "its model checks fail where this row's pass"
+           if alt["model_ok"] is False and row["model_ok"] is True else None)
+    if why is None:
+        return notes.replace(BASELINE_HINT, f"{BASELINE_HINT}: tried, the flag goes away, "
+                                            f"{shift}")
+    return notes.replace(BASELINE_HINT, f"--baseline linear was tried and does not help, {why}, "
+                                        f"{shift}")
+
+
 def with_flag(row: dict, flag: str | None) -> dict:
     """``row`` with ``flag`` first among its flags (``notes``, ``flag_codes``, ``flag_level``)."""
     if flag is None:
@@ -344,7 +386,11 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
                 engine=options.engine, with_model_form=options.model_form,
                 platens=options.platens,
             )
-        rows.append(with_hertz({**bayes.summary_row(), **meta}))
+        row = bayes.summary_row()
+        if options.baseline == "constant" and BASELINE_HINT in str(row["notes"]):
+            row = {**row, **flag_columns(tried_baseline_hint(row, data, options, seed,
+                                                             trace.trace_id, lsq))}
+        rows.append(with_hertz({**row, **meta}))
         if posterior_dir is not None:
             path = bayes.to_netcdf(posterior_file(posterior_dir, trace.trace_id))
     flag = force_scale_flag(data, options)
