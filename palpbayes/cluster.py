@@ -25,7 +25,11 @@ CONNECT_TIMEOUT = "20s"
 def dask_client(scheduler: str | None = None, workers: int | None = None) -> Client:
     """A ``dask.distributed`` client: a new LocalCluster (``scheduler`` None or ``"local"``:
     ``workers`` single-threaded processes, default one per core) or the scheduler at an
-    address.  The caller closes it (and its cluster) with ``client.close()``."""
+    address.  The caller closes it (and its cluster) with ``client.close()``.
+
+    The LocalCluster's worker processes end when this process dies, even killed: distributed
+    gives each a pipe to its nanny (here, in this process) and ends it when the pipe closes
+    (tests/integration/test_orphans.py)."""
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError as exc:  # pragma: no cover - dask is a dependency

@@ -54,6 +54,7 @@ import pandas as pd
 from ..errors import FitError, InputError, OutputExistsError
 from ..fitdata import FitData
 from ..io.atomic import write_csv_atomic, write_text_atomic
+from ..procs import lifeline
 from ..trace import IndentationTrace
 from . import layout
 from .fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable
@@ -125,7 +126,11 @@ def _run(todo: list[IndentationTrace], options: FitOptions, out: Path, workers: 
                 raise_input(res["error"])
             on_done()
         return
-    pool = cf.ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=_mp_context())
+    # the workers end with this process, even when it is killed (else each waits for work
+    # forever, holding its memory)
+    ctx = _mp_context()
+    pool = cf.ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx,
+                                  **lifeline(ctx))
     try:
         futures = [pool.submit(fit_and_record, t, options, str(out),
                                prepared.pop(t.trace_id, None)) for t in todo]

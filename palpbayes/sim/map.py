@@ -40,6 +40,7 @@ from ..io.manifest import tip_columns, write_manifest
 from ..io.trace_csv import write_trace
 from ..noise import PAPER_NOISE_PP, sigma_from_pp
 from ..paper import PAPER_TIPS
+from ..procs import lifeline
 from ._checks import finite, nonneg, positive
 from .campaign import check_count, check_seed, child_seed, prepare_out_dir
 from .inclusion import Inclusion, apparent_ratio, contact_radius, sensitivity
@@ -262,7 +263,8 @@ def simulate_map(
     else:
         methods = mp.get_all_start_methods()
         ctx = mp.get_context("forkserver" if "forkserver" in methods else "spawn")
-        with cf.ProcessPoolExecutor(min(workers, len(jobs)), mp_context=ctx) as pool:
+        with cf.ProcessPoolExecutor(min(workers, len(jobs)), mp_context=ctx,
+                                    **lifeline(ctx)) as pool:
             for rows in pool.map(_write_rows, jobs):
                 truth += rows
 
