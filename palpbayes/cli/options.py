@@ -9,6 +9,7 @@ import argparse
 import math
 
 from ..api import check_specimen, fit_options
+from ..bayes.budget import BudgetSpec
 from ..bayes.fit import ENGINES
 from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
 from ..campaign.fitjob import METHODS, FitOptions
@@ -64,6 +65,10 @@ def positive_force(option: str, value: float | None) -> float | None:
     return value
 
 
+#: The budget's defaults, said in the help (one home: :class:`~palpbayes.bayes.budget.BudgetSpec`).
+_BUDGET = BudgetSpec()
+
+
 def add_model_options(p: argparse.ArgumentParser) -> None:
     """Options shared by ``fit`` and ``report``, in the groups of their help: the model,
     the data it fits, the layer, the uncertainty budget and model form, the run."""
@@ -74,7 +79,8 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
     nu = g.add_mutually_exclusive_group()
     add_nu_option(nu)
     nu.add_argument("--nu-range", type=float, nargs=2, metavar=("LO", "HI"),
-                    help="uniform Poisson-ratio range for the budget (fit at its midpoint)")
+                    help="uniform Poisson-ratio range for the budget (fit at its midpoint; "
+                         f"default: nu ± {_BUDGET.nu_half_width:g}, cut at 0.5)")
     g.add_argument("--noise", choices=NOISE_MODELS, default="gaussian",
                    help="noise model of the Bayesian fit (default gaussian)")
     g.add_argument("--noise-pp", type=float, default=None, metavar="N",
@@ -127,13 +133,21 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                         "manifest's footprint")
     t.add_argument("--finite-thickness", action="store_true", help=argparse.SUPPRESS)
     t.add_argument("--non-bonded", action="store_true", help=argparse.SUPPRESS)
-    b = p.add_argument_group("uncertainty budget and model form")
-    b.add_argument("--radius-tolerance", type=float, default=0.01,
-                   help="relative tip-radius tolerance of the budget (default 0.01)")
-    b.add_argument("--gain-sd", type=float, default=0.01,
-                   help="relative force-gain sd of the budget (default 0.01)")
-    b.add_argument("--compliance-max", type=float, default=2e-6, metavar="M_PER_N",
-                   help="upper bound of the series compliance of the budget [m/N]")
+    b = p.add_argument_group(
+        "uncertainty budget and model form",
+        f"the budget: nu ± {_BUDGET.nu_half_width:g} (--nu-range), tip radius "
+        f"± {_BUDGET.radius_tolerance:.0%}, force gain sd {_BUDGET.gain_sd:.0%}, series "
+        f"compliance 0 to {_BUDGET.compliance_max * 1e6:g} µm/N, a known thickness "
+        f"± {_BUDGET.thickness_tolerance:.0%}")
+    b.add_argument("--radius-tolerance", type=float, default=_BUDGET.radius_tolerance,
+                   metavar="REL", help="relative tip-radius tolerance of the budget "
+                                       "(default %(default)g)")
+    b.add_argument("--gain-sd", type=float, default=_BUDGET.gain_sd, metavar="REL",
+                   help="relative force-gain sd of the budget (default %(default)g)")
+    b.add_argument("--compliance-max", type=float, default=_BUDGET.compliance_max,
+                   metavar="M_PER_N",
+                   help="upper bound of the series compliance of the budget [m/N] "
+                        f"(default %(default)g = {_BUDGET.compliance_max * 1e6:g} µm/N)")
     b.add_argument("--model-form", action=argparse.BooleanOptionalAction, default=True,
                    help="widen E's interval to the envelope of the alternatives a material "
                         "misfit points to: shallow half, deep half, a layer of unknown "

@@ -173,6 +173,16 @@ def check_file(path: Path, source: str) -> None:
         raise DataFileError(source, "file not found", "check the path")
     if path.stat().st_size == 0:
         raise DataFileError(source, "file is empty", "check that the recording was saved")
+    with open(path, "rb") as fh:
+        head = fh.read(4096).lstrip(b"\xef\xbb\xbf \t\r\n")
+    # '{"' or '[' then '{', '[', '"' or a number: JSON (an INI-like '[Data]' section is not)
+    if re.match(rb'\{\s*"|\[\s*[\[{"\d.-]', head):
+        raise DataFileError(
+            source, "is JSON, not a delimited table (it opens with "
+            f"{head[:1].decode()!r})",
+            "palpbayes reads trace CSVs (columns time_s, z_m, force_n or mapped with "
+            "--time-column ...), ROS 2 bags and AFM files: write the recording as CSV, e.g. "
+            f"pandas.read_json({path.name!r}).to_csv('trace.csv', index=False)")
 
 
 def read_table(path: str | os.PathLike, delimiter: str | None) -> tuple[pd.DataFrame, str]:

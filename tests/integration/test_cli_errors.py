@@ -320,3 +320,37 @@ def test_million_row_trace(tmp_path, capsys):
     summary = pd.read_csv(out / "summary.csv")
     assert set(summary["method"]) == {"lsq", "bayes"}
     assert np.all(np.abs(summary["E_pa"] / 111e3 - 1) < 0.01)
+
+
+@pytest.mark.parametrize("payload", [
+    {"time_s": [0.0, 0.1, 0.2], "z_m": [0.1, 0.099, 0.098], "force_n": [0.0, 0.5, 1.0]},
+    [{"time_s": 0.1 * i, "z_m": 0.1 - 1e-3 * i, "force_n": 0.5 * i} for i in range(4)],
+])
+def test_a_json_file_is_named_json_not_decimal_commas(tmp_path, capsys, payload):
+    """Issue 46: a JSON recording given as a trace got a hint about decimal commas."""
+    import json
+
+    path = tmp_path / "press.json"
+    path.write_text(json.dumps(payload, indent=2))
+    rc, err, _ = _run(tmp_path, capsys, [str(path), *TIP])
+    assert rc == 2 and "press.json" in err
+    assert "is JSON, not a delimited table" in err and "to_csv" in err
+    assert "decimal comma" not in err
+    # an INI-like section header is not taken for JSON
+    ini = tmp_path / "section.csv"
+    ini.write_text("[Data]\ntime_s,z_m,force_n\n")
+    rc, err, _ = _run(tmp_path, capsys, [str(ini), *TIP])
+    assert "JSON" not in err
+
+
+def test_fit_help_states_the_budget_defaults(capsys):
+    """Issue 46: the budget's defaults (nu ± 0.05, compliance 2 µm/N) were not in --help."""
+    from palpbayes.bayes.budget import BudgetSpec
+
+    with pytest.raises(SystemExit):
+        main(["fit", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    b = BudgetSpec()
+    assert f"nu ± {b.nu_half_width:g}" in text
+    assert f"{b.compliance_max * 1e6:g} µm/N" in text
+    assert "tip radius ± 1%" in text and "a known thickness ± 2%" in text
