@@ -9,6 +9,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..intervals import LEVEL
+from ..units import format_force
 from .style import METHOD_COLORS, MM, MN, decorate, fig_ax, level_label, lsq_of, median
 
 __all__ = ["plot_force_depth", "plot_residuals"]
@@ -185,7 +186,7 @@ def plot_residuals(
     sigma = median(result, "sigma")
     rb = (data.force - _posterior_median_curve(result, data.z)) * MN
     ax.axhspan(-2 * sigma * MN, 2 * sigma * MN, color="0.85", lw=0,
-               label=f"±2 sigma (sigma = {sigma * MN:.3g} mN)")
+               label=f"±2 sigma (sigma = {format_force(sigma)})")
     ax.plot(depth, rb, ".", ms=1.5, color=METHOD_COLORS["bayes"], alpha=0.3, rasterized=True,
             label="Bayes residuals")
     x, m = _binned_mean(depth, rb, bins)

@@ -20,8 +20,9 @@
    posterior-predictive band and the least-squares curve, residuals, posterior of E and of
    (E, z_surf), per-trace intervals with the pooled result; sphere pages also state the
    paper's Hertz fit (``summary.csv`` ``E_hertz_pa``) against the exact Sneddon law;
-5. convergence diagnostics (every non-converged or flagged fit, or the statement that all
-   converged with the largest R-hat and smallest ESS) and the walkers of the worst fit;
+5. convergence diagnostics (the fits that did not converge and, counted apart, the converged
+   fits with a warning, each with its notes in full; or the statement that all converged with
+   the largest R-hat and smallest ESS) and the walkers of the worst fit;
 6. the uncertainty budget (table and chart);
 7. the stiffening law E(t) vs rest time (:mod:`palpbayes.stiffening`) for every material × tip
    whose palpations have at least
@@ -58,8 +59,10 @@ Matplotlib is used through its object API only (figures are rendered by the PDF 
 Modules: :mod:`~palpbayes.reporting.build` (:func:`build_report`, page order),
 :mod:`~palpbayes.reporting.format` (numbers and cells), :mod:`~palpbayes.reporting.tables` (the
 summary table, drawn tables, pagination), :mod:`~palpbayes.reporting.layout` (page geometry),
-:mod:`~palpbayes.reporting.methods` (the methods text) and one ``pages_*`` module per page kind
-(title, summary, layer, group, diagnostics, budget, stiffening, online, rheology, methods).
+:mod:`~palpbayes.reporting.methods` (the methods text), one ``pages_*`` module per page kind
+(title, summary, layer, group, diagnostics, budget, stiffening, online, rheology, methods) and
+:mod:`~palpbayes.reporting.layout_check` (every page checked before it is saved: no text over
+text, off the page or wider than its table cell; ``tests/integration/test_report_layout.py``).
 """
 
 from __future__ import annotations

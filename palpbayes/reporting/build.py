@@ -46,7 +46,7 @@ class ReportInfo:
     n_traces
         Traces in the results folder (``summary.csv``'s, else ``rheology.csv``'s).
     n_flagged
-        Bayesian fits not converged or flagged.
+        Bayesian fits not converged or with a warning (the diagnostics page's table).
     n_pooled_flagged
         Pooled (hierarchical) groups whose chain did not converge.
     table_rows

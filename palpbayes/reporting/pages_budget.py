@@ -46,16 +46,17 @@ def budget_pages(res: ResultsFolder) -> list[Page]:
         def build(fig: Figure, part: pd.DataFrame = part, bpart: pd.DataFrame = bpart) -> None:
             h = row_h * (len(part) + 1)
             ax = fig.add_axes((0.03, 0.88 - h, 0.58, h))
-            draw_table(ax, part, fontsize=7.5, row_height=1.0 / (len(part) + 1))
+            h1 = draw_table(ax, part, fontsize=7.5, row_height=1.0 / (len(part) + 1))
             ax2 = fig.add_axes((0.64, 0.88 - row_h * (len(dtab) + 1), 0.34,
                                 row_h * (len(dtab) + 1)))
-            draw_table(ax2, dtab, fontsize=7.5, row_height=1.0 / (len(dtab) + 1),
-                        col_weights=[1.0, 1.6])
-            fig.text(0.03, 0.885 - hgt - 0.035, "Cells: share of the variance of ln E "
+            h2 = draw_table(ax2, dtab, fontsize=7.5, row_height=1.0 / (len(dtab) + 1))
+            # the caption under the taller table (rows grow when a cell wraps)
+            cap = min(0.885 - hgt - 0.035, 0.88 - max(h1, h2) - 0.01)
+            fig.text(0.03, cap, "Cells: share of the variance of ln E "
                      "(relative sd of E from that input, %). Systematic inputs are shared by "
                      "the traces of a group and applied once to the pooled estimate.",
-                     fontsize=8, color="0.25")
-            ax3 = fig.add_axes((0.15, 0.1, 0.62, 0.88 - hgt - 0.22))
+                     fontsize=8, color="0.25", va="top")
+            ax3 = fig.add_axes((0.15, 0.1, 0.62, cap - 0.045 - 0.1 - 0.06))
             plots.plot_budget(bpart, ax=ax3)
         pages.append(Page(continued("Uncertainty budget", k, len(chunks)), build,
                            rows=len(part)))

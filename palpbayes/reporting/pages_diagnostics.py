@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import textwrap
 from collections.abc import Callable
 
 import pandas as pd
@@ -12,9 +11,16 @@ from .. import plots
 from ..campaign.layout import posterior_path
 from ..campaign.results import ResultsFolder, load_fit
 from ..io.tabular import parse_bool
-from .format import fmt, fmt_range, wrap, yesno
-from .layout import TABLE_ROWS_PER_PAGE, Page, text_lines
-from .tables import continued, draw_table, flagged_rows, page_chunks, pooled_of
+from .format import fmt, fmt_range, yesno
+from .layout import PAGE_SIZE, Page, text_height, text_lines
+from .tables import (
+    continued,
+    draw_table,
+    flagged_rows,
+    page_chunks,
+    pooled_of,
+    table_layout,
+)
 
 
 def _diag_highlight(gtab: pd.DataFrame) -> Callable[[int, str, str], str | None]:
@@ -52,9 +58,10 @@ def _model_check_line(res: ResultsFolder) -> str:
         return "Model checks: none ran."
     return ("Model checks (free exponent, residual structure, depth consistency, posterior "
             f"predictive) find a material misfit (one that moves E by more than 2 % and more "
-            f"than the statistical interval) in {' and '.join(parts)}; each names its likely "
-            "cause and its effect on E in the flags column of summary.csv, and negligible "
-            "failures are info lines."
+            f"than the statistical interval) in {' and '.join(parts)}; summary.csv names the "
+            "checks (misfit_checks) and the effect on E (misfit_effect), and gives each "
+            "failure's likely cause in words in notes (codes in flag_codes, the level in "
+            "flag_level); negligible failures are info lines there."
             + _model_form_sentence(s[s["method"] == "bayes"], n_material))
 
 
@@ -73,11 +80,72 @@ def _model_form_sentence(b: pd.DataFrame, n_material: int) -> str:
         return text + (": none (no Bayesian fit has a material misfit)." if n_material == 0
                        else f": none (the {n_material} fits with a material misfit were run "
                        "without it, or their alternatives fall inside the budget interval).")
-    return (text + f": of the {n_material} fits with a material misfit, {len(widened)} have "
-            "an interval widened to the envelope of the fitted model's and its plausible "
+    of = ("of the fit with a material misfit" if n_material == 1
+          else f"of the {n_material} fits with a material misfit")
+    return (text + f": {of}, {len(widened)} " + ("has" if len(widened) == 1 else "have")
+            + " an interval widened to the envelope of the fitted model's and its plausible "
             "alternatives' (shallow half, deep half, a layer of unknown thickness), the model "
             f"form taking a median {widened.median():.0f} % of its width (summary.csv: "
             "modelform_models).")
+
+
+def _fits(n: int) -> str:
+    return f"{n} Bayesian fit" + ("" if n == 1 else "s")
+
+
+def convergence_head(res: ResultsFolder) -> str:
+    """The diagnostics page's first paragraph: fits not converged, and, separately, converged
+    fits with a warning (a failed model check or a posterior flag), then the pooled chains and
+    the model checks."""
+    b = res.bayes_rows()
+    rmax = float(b["rhat_max"].max()) if len(b) else float("nan")
+    emin = float(b["ess_min"].min()) if len(b) else float("nan")
+    conv = b["converged"].map(parse_bool) if len(b) else b.get("converged")
+    warned = (b["flag_level"].fillna("").astype(str) == "warning") if "flag_level" in b \
+        else pd.Series(False, index=b.index)
+    stats = f"largest R-hat {rmax:.4f}, smallest ESS {emin:.0f}"
+    if len(b) == 0:
+        head = "No Bayesian fits in this folder."
+    else:
+        n_bad = int((~conv).sum())
+        n_ok = len(b) - n_bad
+        if n_bad == 0:
+            head = (f"The Bayesian fit converged ({stats})." if len(b) == 1
+                    else f"All {len(b)} Bayesian fits converged ({stats}).")
+        else:
+            head = (f"{n_bad} of {_fits(len(b))} did NOT converge ({stats}); the table "
+                    "below lists them.")
+        n_warn = int((conv & warned).sum())
+        if n_warn:
+            which = ("It carries" if n_ok == 1 else
+                     f"{n_warn} of the {n_ok} converged fits carry" if n_bad else
+                     f"{n_warn} of them carry")
+            head += (f" {which} a warning (a failed model check or a posterior flag): listed "
+                     "below with every note.")
+    pooled_bad: list[str] = []
+    if res.pooled is not None and "converged" in res.pooled:
+        pooled_bad = [f"{r['material']} {r['tip']}" for _, r in res.pooled.iterrows()
+                      if not parse_bool(r["converged"])]
+    if pooled_bad:
+        head += (f" Pooled (hierarchical) chain not converged for: {', '.join(pooled_bad)} "
+                 "(marked (!) in the summary table).")
+    elif res.pooled is not None and len(res.pooled):
+        head += f" All {len(res.pooled)} pooled (hierarchical) chains converged."
+    return head + " " + _model_check_line(res)
+
+
+def _notes(value) -> str:
+    """A fit's notes, one flag a line (warnings first, then information), in full."""
+    text = str(value) if pd.notna(value) else ""
+    flags = [f.strip() for f in text.split("; ") if f.strip()]
+    warn = [f for f in flags if not f.startswith("info:")]
+    return "\n".join("• " + f for f in warn + [f for f in flags if f.startswith("info:")])
+
+
+#: Layout of the diagnostics pages [figure fraction]: the text's top, the tables' bottom,
+#: the row height of a table, the gap below a text or table.
+_TOP, _BOTTOM, _ROW, _GAP = 0.9, 0.06, 0.042, 0.03
+_SIZE = 9.5  # [pt] the page's text
 
 
 def diagnostics_page(res: ResultsFolder) -> list[Page]:
@@ -85,30 +153,10 @@ def diagnostics_page(res: ResultsFolder) -> list[Page]:
 
     b = res.bayes_rows()
     flagged = flagged_rows(res)
-    rmax = float(b["rhat_max"].max()) if len(b) else float("nan")
-    emin = float(b["ess_min"].min()) if len(b) else float("nan")
-    crit = (f"criteria: R-hat ≤ {RHAT_MAX}, bulk and tail ESS ≥ {ESS_MIN:.0f}, autocorrelation "
+    crit = (f"Criteria: R-hat ≤ {RHAT_MAX}, bulk and tail ESS ≥ {ESS_MIN:.0f}, autocorrelation "
             "time stable before the step cap, no bimodal or prior-dominated surface, no "
-            "posterior at a prior bound")
-    pooled_bad: list[str] = []
-    if res.pooled is not None and "converged" in res.pooled:
-        pooled_bad = [f"{r['material']} {r['tip']}" for _, r in res.pooled.iterrows()
-                      if not parse_bool(r["converged"])]
-    if len(b) == 0:
-        head = "No Bayesian fits in this folder."
-    elif flagged.empty:
-        head = (f"All {len(b)} Bayesian fits converged: largest R-hat {rmax:.4f}, smallest ESS "
-                f"{emin:.0f}.")
-    else:
-        head = (f"{len(flagged)} of {len(b)} Bayesian fits are NOT converged or are flagged "
-                f"(largest R-hat {rmax:.4f}, smallest ESS {emin:.0f}); their numbers are "
-                "marked in every table.")
-    if pooled_bad:
-        head += (f" Pooled (hierarchical) chain not converged for: {', '.join(pooled_bad)} "
-                 "(marked (!) in the summary table).")
-    elif res.pooled is not None and len(res.pooled):
-        head += f" All {len(res.pooled)} pooled (hierarchical) chains converged."
-    head += " " + _model_check_line(res)
+            "posterior at a prior bound.")
+    head = convergence_head(res)
     groups = []
     for mat, tip in res.groups():
         g = b[(b["material"].fillna("").astype(str) == mat) & (b["tip"].astype(str) == tip)]
@@ -130,45 +178,91 @@ def diagnostics_page(res: ResultsFolder) -> list[Page]:
     ftab = pd.DataFrame([{
         "Trace": r["trace_id"], "converged": yesno(r["converged"]),
         "R-hat": fmt(r["rhat_max"], 4), "ESS": fmt(r["ess_min"], 0),
-        "steps": fmt(r["n_steps"], 0),
-        "notes": textwrap.shorten(str(r["notes"]) if pd.notna(r.get("notes")) else "", 95),
+        "steps": fmt(r["n_steps"], 0), "notes (summary.csv)": _notes(r.get("notes")),
     } for _, r in flagged.iterrows()])
-    # pages: the group table in chunks, then the flagged fits in chunks; the first flagged
-    # chunk shares the last group page when both fit in TABLE_ROWS_PER_PAGE rows
-    layout: list[tuple[pd.DataFrame | None, pd.DataFrame | None]] = \
-        [(gtab.iloc[sl], None) for sl in page_chunks(len(gtab))] if len(gtab) else [(None, None)]
-    fchunks = [ftab.iloc[sl] for sl in page_chunks(len(ftab))] if len(ftab) else []
-    if fchunks:
-        last_g = layout[-1][0]
-        if last_g is None or len(last_g) + len(fchunks[0]) <= TABLE_ROWS_PER_PAGE:
-            layout[-1] = (last_g, fchunks.pop(0))
-        layout += [(None, f) for f in fchunks]
-    row_h = 0.042
+    first = [("t", head), ("t", crit)]
+    later = [("t", "Convergence diagnostics continued: " + _fits(len(b)) + " in all.")]
+    return _pages(gtab, ftab, first, later) + _walker_pages(res, b)
+
+
+def _flag_rows_height(ftab: pd.DataFrame) -> list[float]:
+    """Height of each flagged-fit row as drawn [figure fraction] (its notes wrapped, in
+    full)."""
+    if ftab.empty:
+        return []
+    w, h = PAGE_SIZE
+    lay = table_layout(ftab, 0.92 * w * 72, fontsize=7.5, one_row=_ROW * h * 72,
+                       min_fontsize=7.5)
+    return [x / 72 / h for x in lay.heights[1:]]
+
+
+def _pages(gtab: pd.DataFrame, ftab: pd.DataFrame, first: list[tuple[str, str]],
+           later: list[tuple[str, str]]) -> list[Page]:
+    """The group table in chunks, then the flagged fits, as many rows a page as fit below the
+    text (a fit's notes are never cut: its row grows)."""
+    head_h = {True: text_height(first, size=_SIZE, left=0.04),
+              False: text_height(later, size=_SIZE, left=0.04)}
+    items: list[tuple[str, pd.DataFrame]] = [("g", gtab.iloc[sl])
+                                            for sl in page_chunks(len(gtab))] if len(gtab) \
+        else []
+    heights = _flag_rows_height(ftab)
+    pages_spec: list[list[tuple[str, pd.DataFrame]]] = []
+    cur: list[tuple[str, pd.DataFrame]] = []
+    room = _TOP - head_h[True] - _GAP - _BOTTOM
+    for kind, part in items:
+        need = _ROW * (len(part) + 1) + _GAP
+        if cur and need > room:
+            pages_spec.append(cur)
+            cur, room = [], _TOP - head_h[False] - _GAP - _BOTTOM
+        cur.append((kind, part))
+        room -= need
+    i = 0
+    while i < len(ftab):
+        title_h = 0.045 + _ROW  # the heading and the table's header row
+        j = i
+        used = title_h
+        while j < len(ftab) and (j == i and not cur or used + heights[j] <= room):
+            used += heights[j]
+            j += 1
+        if j == i:  # not one row fits below what is on the page: a new page
+            pages_spec.append(cur)
+            cur, room = [], _TOP - head_h[False] - _GAP - _BOTTOM
+            continue
+        cur.append(("f", ftab.iloc[i:j]))
+        room -= used + _GAP
+        i = j
+    if cur or not pages_spec:
+        pages_spec.append(cur)
+
     pages = []
-    for k, (gpart, fpart) in enumerate(layout):
-        def build(fig: Figure, gpart=gpart, fpart=fpart, first=(k == 0)) -> None:
-            lines = [("t", ln) for ln in wrap(head, 150)]
-            lines += [("t", crit)] if first else []
-            text_lines(fig, lines, top=0.9, left=0.04, size=10)
-            top = 0.8
-            if gpart is not None and len(gpart):
-                hgt = row_h * (len(gpart) + 1)
-                ax = fig.add_axes((0.04, top - hgt, 0.92, hgt))
-                draw_table(ax, gpart, fontsize=8, row_height=1.0 / (len(gpart) + 1),
-                            highlight=_diag_highlight(gpart))
-                top -= hgt + 0.05
-            if fpart is not None and len(fpart):
-                fig.text(0.04, top, "Non-converged or flagged fits", fontsize=11,
-                         fontweight="bold")
-                top -= 0.02
-                hgt = min(top - 0.06, row_h * (len(fpart) + 1))
-                ax = fig.add_axes((0.04, top - hgt, 0.92, hgt))
-                draw_table(ax, fpart, fontsize=7.5, row_height=1.0 / (len(fpart) + 1),
-                            highlight=lambda _r, c, t: "#fde0dc" if c == "converged" and
-                            t == "NO" else None)
-        rows = max(0 if gpart is None else len(gpart), 0 if fpart is None else len(fpart))
-        pages.append(Page(continued("Convergence diagnostics", k, len(layout)), build,
-                           rows=rows))
+    for k, spec in enumerate(pages_spec):
+        def build(fig: Figure, spec=spec, lines=first if k == 0 else later) -> None:
+            top = text_lines(fig, lines, top=_TOP, left=0.04, size=_SIZE) - _GAP
+            for kind, part in spec:
+                if kind == "g":
+                    hgt = _ROW * (len(part) + 1)
+                    ax = fig.add_axes((0.04, top - hgt, 0.92, hgt))
+                    top -= draw_table(ax, part, fontsize=8, row_height=1.0 / (len(part) + 1),
+                                      highlight=_diag_highlight(part)) + _GAP
+                else:
+                    fig.text(0.04, top, "Fits not converged or with a warning", fontsize=11,
+                             fontweight="bold", va="top")
+                    top -= 0.045
+                    hgt = max(top - _BOTTOM, _ROW)
+                    ax = fig.add_axes((0.04, top - hgt, 0.92, hgt))
+                    top -= draw_table(ax, part, fontsize=7.5, row_height=_ROW / hgt,
+                                      left=("notes (summary.csv)",), min_fontsize=7.5,
+                                      highlight=lambda _r, c, t: "#fde0dc"
+                                      if c == "converged" and t == "NO" else None) + _GAP
+        rows = max([len(p) for _, p in spec] or [0])
+        pages.append(Page(continued("Convergence diagnostics", k, len(pages_spec)), build,
+                          rows=rows))
+    return pages
+
+
+def _walker_pages(res: ResultsFolder, b: pd.DataFrame) -> list[Page]:
+    """The walkers of the least converged fit with a stored posterior (none without one)."""
+    pages: list[Page] = []
     worst = None
     if len(b) and b["rhat_max"].notna().any():
         cand = b[b["trace_id"].map(lambda t: posterior_path(res.path, t).is_file())]

@@ -13,7 +13,7 @@ from .. import plots
 from ..campaign.layout import posterior_path
 from ..campaign.results import ResultsFolder, load_fit
 from .format import KPA, fmt, interval
-from .layout import Page
+from .layout import Page, text_lines, wrap_to
 from .tables import hertz_of_group, pooled_of
 
 
@@ -59,30 +59,6 @@ def group_page(res: ResultsFolder, mat: str, tip: str, seed: int) -> Page:
         sub = s[(s["material"].fillna("").astype(str) == mat) & (s["tip"].astype(str) == tip)]
         gt = _gt_of(res, mat)
         pooled = pooled_of(res, mat, tip)
-        gs = fig.add_gridspec(2, 3, left=0.06, right=0.98, top=0.84, bottom=0.1, wspace=0.32,
-                              hspace=0.42)
-        ax_fd = fig.add_subplot(gs[0, 0:2])
-        ax_forest = fig.add_subplot(gs[0, 2])
-        # room for the forest plot's trace-id tick labels (they would run into the force panel)
-        x0, y0, w, h = ax_forest.get_position().bounds
-        ax_forest.set_position([x0 + 0.045, y0, w - 0.045, h])
-        ax_res = fig.add_subplot(gs[1, 0])
-        ax_e = fig.add_subplot(gs[1, 1])
-        ax_pair = fig.add_subplot(gs[1, 2])
-        plots.plot_forest(sub[sub["E_pa"].notna()], pooled, gt=gt, ax=ax_forest,
-                          title="Per trace and pooled (90 % intervals)")
-        if tid is None:
-            for a in (ax_fd, ax_res, ax_e, ax_pair):
-                a.set_axis_off()
-            ax_fd.text(0.5, 0.5, "no Bayesian posterior for this group", ha="center")
-        else:
-            fit = load_fit(res, tid)
-            plots.plot_force_depth(fit, ax=ax_fd, seed=seed)
-            ax_fd.set_title(f"Representative trace {tid} ({fit.data.model.describe()})",
-                            fontsize="medium")
-            plots.plot_residuals(fit, ax=ax_res)
-            plots.plot_posterior_E(fit, ax=ax_e)
-            plots.plot_pair(fit, ax=ax_pair, seed=seed)
         txt = []
         if pooled is not None:
             txt.append(f"Pooled ({int(pooled['n_traces'])} traces): E = "
@@ -92,10 +68,46 @@ def group_page(res: ResultsFolder, mat: str, tip: str, seed: int) -> Page:
                        f"between-trace sd of log E tau = {fmt(pooled.get('tau'), 3)}")
         if gt is not None:
             txt.append(f"Ground truth: {fmt(gt[0] * KPA)} ± {fmt(gt[1] * KPA)} kPa")
-        fig.text(0.06, 0.905, "    ".join(txt), fontsize=8.5, color="0.2")
+        # the group's numbers under the page title, wrapped; the panels below them
+        top = 0.925
+        if txt:
+            top = text_lines(fig, [("t", "    ".join(txt))], top=top, left=0.06, size=8.5,
+                             width=0.92)
         hz = _hertz_line(res, mat, tip)
         if hz:
-            fig.text(0.06, 0.882, hz, fontsize=8.5, color="#8a3b00")
+            y0 = len(fig.texts)
+            top = text_lines(fig, [("t", hz)], top=top, left=0.06, size=8.5, width=0.92)
+            for t in fig.texts[y0:]:
+                t.set_color("#8a3b00")
+        fit = load_fit(res, tid) if tid is not None else None
+        gs = fig.add_gridspec(2, 3, left=0.06, right=0.98, top=min(0.84, top - 0.04),
+                              bottom=0.1, wspace=0.32, hspace=0.42)
+        ax_fd = fig.add_subplot(gs[0, 0:2])
+        title = ("" if fit is None
+                 else f"Representative trace {tid} ({fit.data.model.describe()})")
+        width = ax_fd.get_position().width * fig.get_figwidth() * 72
+        title_lines = wrap_to(title, width, 10.0)
+        if len(title_lines) > 1:  # a long model description: room for its lines
+            gs.update(top=min(0.84, top - 0.04) - 0.02 * (len(title_lines) - 1))
+        ax_forest = fig.add_subplot(gs[0, 2])
+        # room for the forest plot's trace-id tick labels (they would run into the force panel)
+        x0, y0, w, h = ax_forest.get_position().bounds
+        ax_forest.set_position([x0 + 0.045, y0, w - 0.045, h])
+        ax_res = fig.add_subplot(gs[1, 0])
+        ax_e = fig.add_subplot(gs[1, 1])
+        ax_pair = fig.add_subplot(gs[1, 2])
+        plots.plot_forest(sub[sub["E_pa"].notna()], pooled, gt=gt, ax=ax_forest,
+                          title="Per trace and pooled (90 % intervals)")
+        if fit is None:
+            for a in (ax_fd, ax_res, ax_e, ax_pair):
+                a.set_axis_off()
+            ax_fd.text(0.5, 0.5, "no Bayesian posterior for this group", ha="center")
+        else:
+            plots.plot_force_depth(fit, ax=ax_fd, seed=seed)
+            ax_fd.set_title("\n".join(title_lines), fontsize=10.0)
+            plots.plot_residuals(fit, ax=ax_res)
+            plots.plot_posterior_E(fit, ax=ax_e)
+            plots.plot_pair(fit, ax=ax_pair, seed=seed)
     return Page(f"{mat} · {tip}" if mat else tip, build)
 
 

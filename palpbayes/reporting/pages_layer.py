@@ -9,7 +9,7 @@ from .. import plots
 from ..campaign.results import ResultsFolder
 from ..gap import gap_verdicts
 from .format import wrap
-from .layout import Page, text_lines
+from .layout import Page, text_height, text_lines
 
 _W = 150  # characters per line of the page text at 9 pt
 _W_SMALL = 185  # at 8 pt
@@ -57,8 +57,10 @@ def layer_pages(res: ResultsFolder) -> list[Page]:
             lines += [("", "")] + [("t", ln) for ln in wrap(v, _W_SMALL)]
 
         def build_gap(fig: Figure, lines=lines) -> None:
-            ax = fig.add_axes((0.08, 0.56, 0.86, 0.35))
+            # the text above the footer, the chart above the text
+            text_top = max(0.45, 0.05 + text_height(lines, size=8.0, left=0.04))
+            ax = fig.add_axes((0.08, text_top + 0.11, 0.86, 0.91 - text_top - 0.11))
             plots.plot_gap(res.gap, ax=ax)
-            text_lines(fig, lines, top=0.45, left=0.04, size=8.0)
+            text_lines(fig, lines, top=text_top, left=0.04, size=8.0)
         pages.append(Page("Why does the robot read stiffer than the Instron?", build_gap))
     return pages

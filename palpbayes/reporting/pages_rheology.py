@@ -25,7 +25,7 @@ from ..rheology.results import UNIT_SUFFIXES
 from ..rheology.store import StoredRheologyFit, load_rheology_fit
 from ..units import FORCE_PREFIXES, LENGTH_PREFIXES, PRESSURE_PREFIXES, si_scale
 from .format import isnum, shown_path, wrap, yesno
-from .layout import PAGE_SIZE, Page, text_lines
+from .layout import PAGE_SIZE, Page, fit_text_lines, text_lines
 from .pages_title import toc_lines
 from .tables import continued, draw_table, page_chunks
 
@@ -208,7 +208,7 @@ def _page_fit(results: Path, row, rows: pd.DataFrame) -> Page:
                                    f"{100 * fit.level:g} % band")
         plots.plot_relaxation({label: fit, **others}, fig.add_axes((0.71, 0.53, 0.26, 0.36)),
                               level=fit.level, title="Relaxation modulus E*(t)")
-        plots.plot_hysteresis(fit, fig.add_axes((0.07, 0.08, 0.36, 0.35)),
+        plots.plot_hysteresis(fit, fig.add_axes((0.07, 0.1, 0.36, 0.33)),
                               title="Force against depth per segment (hysteresis)")
         tab = _fit_table(row)
         height = min(0.022 * (len(tab) + 1), 0.22)
@@ -257,7 +257,7 @@ def rheology_title_page(results: str | os.PathLike, table: pd.DataFrame, created
                       f"passed: {int(ok['model_ok'].map(parse_bool).sum())} of {len(ok)}"),
                 ("t", f"Fitted segments: {segs.replace(',', ', ') or '–'}; bands: central "
                       f"{100 * LEVEL:g} %")]
-        text_lines(fig, info, top=0.56, left=0.06, size=10)
+        fit_text_lines(fig, info, top=0.56, bottom=0.06, left=0.06, width=0.58, size=10)
         size = 8.5
         fits = int((0.56 - 0.06) * PAGE_SIZE[1] * 72 / (size * 1.45)) - 2
         text_lines(fig, [("h", "Contents"), *toc_lines(contents, fits)], top=0.56,

@@ -11,7 +11,7 @@ from .. import plots
 from ..campaign.results import ResultsFolder
 from ..contact import registered_laws
 from .format import KPA, wrap
-from .layout import CHART_GROUPS_PER_PAGE, Page, text_lines
+from .layout import CHART_GROUPS_PER_PAGE, Page, text_height, text_lines
 from .tables import (
     HERTZ_COL,
     INSTRON_COL,
@@ -94,11 +94,13 @@ def summary_pages(res: ResultsFolder) -> list[Page]:
             top = 0.9
             if cover:
                 fig.text(0.03, 0.905, cover, fontsize=10, fontweight="bold", va="bottom")
-            ax = fig.add_axes((0.03, 0.2, 0.94, top - 0.2))
+            # the note at the foot of the page, the table above it
+            note_top = 0.05 + text_height([("t", note)], size=8, left=0.03, width=0.94)
+            bottom = max(0.2, note_top + 0.02)
+            ax = fig.add_axes((0.03, bottom, 0.94, top - bottom))
             draw_table(ax, part, fontsize=7.5 if part.shape[1] > 10 else 9.0, highlight=hl,
-                        row_height=h, wrap_header=12)
-            text_lines(fig, [("t", ln) for ln in wrap(note, 185)], top=0.175, left=0.03,
-                        size=8)
+                       row_height=h * 0.7 / (top - bottom), wrap_header=12)
+            text_lines(fig, [("t", note)], top=note_top, left=0.03, size=8, width=0.94)
         pages.append(Page(continued(title, k, len(chunks)), build, rows=len(part)))
     return pages
 

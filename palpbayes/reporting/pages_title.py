@@ -12,8 +12,8 @@ from ..campaign.results import ResultsFolder
 from ..contact import DEFAULT_NU
 from ..noise import PAPER_NOISE_PP
 from ..units import format_length
-from .format import fmt, fmt_range, force_setting, shown_path, wrap
-from .layout import PAGE_SIZE, Page, text_lines
+from .format import fmt, fmt_range, force_setting, shown_path
+from .layout import PAGE_SIZE, Page, fit_text_lines, text_lines
 from .methods import MOVES_TEXT, layer_setting_text, sampler_settings
 
 
@@ -83,9 +83,9 @@ def title_page(res: ResultsFolder, created: str, contents: list[str]) -> Page:
                   f"{'yes' if _has_gt(res) else 'none'}"),
             ("", ""),
             ("h", "Settings"),
-            *[("t", ln) for _, txt in _settings_lines(res) for ln in wrap(txt, 92)],
+            *_settings_lines(res),
         ]
-        text_lines(fig, info, top=0.56, left=0.06, size=10)
+        fit_text_lines(fig, info, top=0.56, bottom=0.06, left=0.06, width=0.58, size=10)
         size = 8.5
         fits = int((0.56 - 0.06) * PAGE_SIZE[1] * 72 / (size * 1.45)) - 2
         toc = [("h", "Contents")] + toc_lines(contents, fits)

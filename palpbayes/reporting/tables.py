@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import textwrap
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -15,12 +16,14 @@ from matplotlib.axes import Axes
 from ..campaign.results import MATERIAL_ORDER, TIP_ORDER, ResultsFolder, ordered
 from ..io.tabular import parse_bool
 from .format import KPA, fmt, interval, isnum, pm, yesno
-from .layout import PAGE_SIZE, TABLE_ROWS_PER_PAGE
+from .layout import PAGE_SIZE, TABLE_ROWS_PER_PAGE, text_width, wrap_to
 
 __all__ = ["summary_table", "coverage_counts", "GT_COL", "LS_E_COL", "BAYES_E_COL", "BAYES_NEW_COL",
            "INSTRON_COL", "INSTRON_COVER_COL", "HERTZ_COL", "hertz_of_group", "comparison_groups",
            "pooled_of", "flagged_rows",
-           "draw_table", "page_chunks", "continued", "material_pages"]
+           "draw_table", "table_layout", "TableLayout", "page_chunks", "continued",
+           "material_pages", "CELL_MARGIN_PT",
+           "MIN_TABLE_FONT"]
 
 #: Column headers of the comparison-based summary table (units in the headers).
 GT_COL = "GT E ± sd [kPa]"
@@ -173,53 +176,172 @@ def flagged_rows(res: ResultsFolder) -> pd.DataFrame:
 # ----------------------------------------------------------------------------- drawing, pages
 
 
-def draw_table(ax: Axes, df: pd.DataFrame, *, fontsize: float = 8.0,
-                highlight: Callable[[int, str, str], str | None] | None = None,
-                col_weights: Sequence[float] | None = None, row_height: float | None = None,
-                wrap_header: int | None = None) -> None:
-    """A real table (matplotlib ``table``) filling ``ax`` from the top, header shaded.
+#: Space between a cell's text and its border, each side [points].
+CELL_MARGIN_PT = 3.0
+#: Tables shrink their font down to this size [points] before they wrap cells.
+MIN_TABLE_FONT = 6.0
 
-    Column widths follow the longest string (or header line) of each column, or
-    ``col_weights``.  ``wrap_header``: wrap the headers to lines of this many characters; the
-    header row grows to fit them.  ``highlight(row, column, text)`` may return a cell colour
-    (``column`` is the unwrapped header).
+
+def _col_widths(heads: list[str], text: list[list[str]], size: float) -> list[float]:
+    """Each column's natural width at ``size``: its widest header line (bold) or cell line,
+    with the margins [points]."""
+    out = []
+    for j, h in enumerate(heads):
+        w = [text_width(x, size, weight="bold") for x in h.split("\n")]
+        w += [text_width(x, size) for r in text for x in r[j].split("\n")]
+        out.append(max(w) + 2 * CELL_MARGIN_PT)
+    return out
+
+
+def _share(natural: list[float], least: list[float], total: float) -> list[float]:
+    """Column widths summing to ``total``: every column its natural width when they fit;
+    otherwise the narrow columns keep theirs and the wide ones share what is left, each at
+    least its ``least`` width."""
+    nat = np.asarray(natural, dtype=float)
+    if nat.sum() <= total:
+        return list(nat * total / nat.sum())
+    low = np.asarray(least, dtype=float)
+    fixed = np.zeros(len(nat), dtype=bool)
+    w = nat.copy()
+    for _ in range(len(nat)):
+        free = total - w[fixed].sum()
+        share = free * nat[~fixed] / nat[~fixed].sum()
+        w[~fixed] = np.maximum(share, low[~fixed])
+        newly = (~fixed) & (nat <= w)
+        w[newly] = nat[newly]
+        if not newly.any() and w.sum() <= total + 1e-9:
+            break
+        fixed |= newly | ((~fixed) & (w <= low))
+        if fixed.all():
+            break
+    return list(w)
+
+
+@dataclass
+class TableLayout:
+    """Where :func:`draw_table` puts a table's text (every size in points).
+
+    Attributes
+    ----------
+    fontsize
+        The font, shrunk from the one asked for when the columns did not fit.
+    widths
+        Each column's width.
+    heads, cells
+        The header and the cells' text, wrapped to their columns.
+    heights
+        Each row's height, the header's first.
     """
-    ax.set_axis_off()
+
+    fontsize: float
+    widths: list[float]
+    heads: list[str]
+    cells: list[list[str]]
+    heights: list[float]
+
+    @property
+    def height(self) -> float:
+        return float(sum(self.heights))
+
+
+def table_layout(df: pd.DataFrame, width: float, *, fontsize: float = 8.0,
+                 one_row: float = 0.0, col_weights: Sequence[float] | None = None,
+                 wrap_header: int | None = None,
+                 min_fontsize: float = MIN_TABLE_FONT) -> TableLayout:
+    """The layout of ``df`` as a table ``width`` points wide (see :func:`draw_table`); a row
+    of one line is ``one_row`` points high, or what the font needs if more."""
     cols = [str(c) for c in df.columns]
     heads = ["\n".join(textwrap.wrap(c, wrap_header) or [c]) if wrap_header else c
              for c in cols]
-    text = [[str(v) for v in row] for row in df.itertuples(index=False)]
-    if col_weights is None:
-        # bold header text is ~15 % wider than the cells' regular text
-        col_weights = [max([1.15 * len(x) for x in heads[j].split("\n")]
-                           + [len(r[j]) for r in text]) + 2 for j in range(len(cols))]
-    w = np.asarray(col_weights, dtype=float)
-    w = w / w.sum()
-    n = len(text) + 1
-    h = row_height if row_height is not None else min(1.0 / n, 0.06)
-    lines = max(x.count("\n") + 1 for x in heads) if heads else 1
-    fig_h = ax.figure.get_size_inches()[1] if ax.figure is not None else PAGE_SIZE[1]
-    ax_pt = fig_h * ax.get_position().height * 72.0
-    hh = max(h, (1.25 * lines + 0.9) * fontsize / ax_pt) if ax_pt > 0 else h
-    total = hh + h * (n - 1)
-    tab = ax.table(cellText=text or [[""] * len(cols)], colLabels=heads, colWidths=list(w),
-                   cellLoc="center", colLoc="center", bbox=[0.0, 1.0 - total, 1.0, total])
+    text = [[str(v) for v in row] for row in df.itertuples(index=False)] or [[""] * len(cols)]
+    size = fontsize
+    natural = _col_widths(heads, text, size)
+    while sum(natural) > width and size > min_fontsize:
+        size = max(min_fontsize, size - 0.25)
+        natural = _col_widths(heads, text, size)
+    if col_weights is not None:
+        w = np.asarray(col_weights, dtype=float)
+        widths = list(w / w.sum() * width)
+    else:
+        words = [max([text_width(x, size, weight="bold") for x in heads[j].split()]
+                     + [text_width(x, size) for r in text for x in r[j].split()] + [0.0])
+                 + 2 * CELL_MARGIN_PT for j in range(len(cols))]
+        widths = _share(natural, words, width)
+    for r in text:  # wrap what does not fit its column
+        for j, cell in enumerate(r):
+            room = widths[j] - 2 * CELL_MARGIN_PT
+            if any(text_width(x, size) > room for x in cell.split("\n")):
+                r[j] = "\n".join(wrap_to(cell, room, size))
+    heads = ["\n".join(ln for x in h.split("\n")
+                       for ln in wrap_to(x, widths[j] - 2 * CELL_MARGIN_PT, size,
+                                         weight="bold"))
+             for j, h in enumerate(heads)]
+    one = max(one_row, 1.6 * size)
+    head_lines = max(x.count("\n") + 1 for x in heads)
+    heights = [max(one, (1.25 * head_lines + 0.9) * size)]
+    heights += [one + 1.2 * size * max(c.count("\n") for c in r) for r in text]
+    return TableLayout(size, widths, heads, text, heights)
+
+
+def draw_table(ax: Axes, df: pd.DataFrame, *, fontsize: float = 8.0,
+               highlight: Callable[[int, str, str], str | None] | None = None,
+               col_weights: Sequence[float] | None = None, row_height: float | None = None,
+               wrap_header: int | None = None, left: Sequence[str] = (),
+               min_fontsize: float = MIN_TABLE_FONT) -> float:
+    """A real table (matplotlib ``table``) filling ``ax``'s width from its top, header shaded.
+
+    Every cell's text fits its cell.  Column widths follow the widest text of each column
+    (measured at the font; ``col_weights`` instead fixes their proportions); when the natural
+    widths exceed the axes, the font shrinks, down to ``min_fontsize``, and then the widest
+    columns wrap their cells at spaces onto more lines (an interval '872.9 [857.6, 887.2]'
+    becomes two lines), the row growing to hold them.  ``wrap_header``: wrap the headers to
+    lines of this many characters first; the header row grows to fit them.  ``left``: columns
+    whose text is left-aligned (long notes).  ``highlight(row, column, text)`` may return a
+    cell colour (``column`` is the unwrapped header, ``text`` the unwrapped cell).
+
+    Returns
+    -------
+    float
+        The table's height [figure fraction]: a row of one line is ``row_height`` (a fraction
+        of the axes' height; default min(1/rows, 0.06)) or the font's need if more, a row of
+        k lines k − 1 lines taller (:func:`table_layout`).
+    """
+    ax.set_axis_off()
+    cols = [str(c) for c in df.columns]
+    fig = ax.figure
+    fig_w, fig_h = (fig.get_size_inches() if fig is not None else PAGE_SIZE)
+    pos = ax.get_position()
+    ax_w, ax_h = fig_w * pos.width * 72.0, fig_h * pos.height * 72.0
+    n = len(df) + 1
+    lay = table_layout(df, ax_w, fontsize=fontsize,
+                       one_row=(row_height if row_height is not None
+                                else min(1.0 / n, 0.06)) * ax_h,
+                       col_weights=col_weights, wrap_header=wrap_header,
+                       min_fontsize=min_fontsize)
+    total = lay.height
+    tab = ax.table(cellText=lay.cells, colLabels=lay.heads,
+                   colWidths=[x / ax_w for x in lay.widths], cellLoc="center", colLoc="center",
+                   bbox=[0.0, 1.0 - total / ax_h, 1.0, total / ax_h])
     tab.auto_set_font_size(False)
-    tab.set_fontsize(fontsize)
+    tab.set_fontsize(lay.fontsize)
+    lefts = {cols.index(c) for c in left if c in cols}
     for (r, c), cell in tab.get_celld().items():
         cell.set_edgecolor("0.75")
         cell.set_linewidth(0.5)
-        cell.PAD = 0.04  # of the cell width, each side (matplotlib's 0.1 wastes a fifth)
+        cell.PAD = CELL_MARGIN_PT / lay.widths[c]
+        cell.set_height(lay.heights[r] / ax_h)
+        if c in lefts and r > 0:
+            cell.set_text_props(ha="left")
         if r == 0:
-            cell.set_height(cell.get_height() * hh / h)
             cell.set_facecolor("#e8eef4")
             cell.get_text().set_fontweight("bold")
         elif r % 2 == 0:
             cell.set_facecolor("#f7f7f7")
-        if r > 0 and highlight is not None and r - 1 < len(text):
-            color = highlight(r - 1, cols[c], text[r - 1][c])
+        if r > 0 and highlight is not None and r - 1 < len(df):
+            color = highlight(r - 1, cols[c], str(df.iat[r - 1, c]))
             if color:
                 cell.set_facecolor(color)
+    return total / 72.0 / fig_h
 
 
 def page_chunks(n: int, per_page: int = 0) -> list[slice]:
