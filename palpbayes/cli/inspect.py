@@ -1,23 +1,51 @@
 """``palpbayes inspect PATH``: what a recording holds, before fitting it.
 
 A ROS 2 bag: its topics with message type, count, rate and time span, and the topics ``fit``
-would take.  An AFM file: its curves with modality, columns, points per segment and position.
-A text table: its columns and number of rows.
+would take.  An AFM file: its curves with modality, columns, points per segment and position,
+the calibration and approach settings the file records, and a ``palpbayes fit`` command for
+it with the tip left to fill in (no AFM file records the tip).  A text table: its columns and
+number of rows.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
+import shlex
+from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
 
 from ..errors import DataFileError
-from ..units import format_length
+from ..units import LENGTH_PREFIXES, format_force, format_length, format_si
 
-__all__ = ["register", "run"]
+__all__ = ["register", "run", "fit_command", "RADIUS_PLACEHOLDER"]
 
 #: Curves of a force map listed one by one (the rest are summarised).
 MAX_CURVES_SHOWN = 20
+
+#: A position [m] smaller than this is shown as 0: far below an AFM stage's resolution, it is
+#: the rounding residue of a stage at its origin (a JPK header's ``-1.434313216631226E-15``),
+#: which :func:`~palpbayes.units.format_length` would write as ``-0.0014343 pm``.
+POSITION_RESOLUTION_M = 1e-9
+
+#: What the printed ``fit`` command has in place of the tip radius, for the user to fill in.
+RADIUS_PLACEHOLDER = "R"
+
+#: Prefixes of a sampling rate: Hz, kHz, MHz.
+RATE_PREFIXES: dict[int, str] = {0: "", 3: "k", 6: "M"}
+
+#: How :func:`_calibration_lines` writes each of :data:`palpbayes.io.afm.CALIBRATION_KEYS`
+#: (label, formatter of the SI value).
+_CALIBRATION_FORMAT: dict[str, tuple[str, Callable[[float], str]]] = {
+    "spring constant": ("spring constant", lambda v: f"{v:.4g} N/m"),
+    "sensitivity": ("deflection sensitivity", lambda v: format_si(v, "m/V", LENGTH_PREFIXES, 4)),
+    "setpoint": ("setpoint", lambda v: format_force(v, 4)),
+    "speed approach": ("speed", lambda v: format_si(v, "m/s", LENGTH_PREFIXES, 4)),
+    "rate approach": ("sampled at", lambda v: format_si(v, "Hz", RATE_PREFIXES, 4)),
+    "duration approach": ("duration", lambda v: f"{v:.4g} s"),
+    "duration intermediate": ("hold", lambda v: f"{v:.4g} s"),
+}
 
 
 def register(subparsers) -> None:
@@ -78,18 +106,133 @@ def _segment_counts(counts: dict[int, int], names: dict[int, str]) -> str:
     return ", ".join(f"{name} {' + '.join(map(str, ns))}" for name, ns in parts)
 
 
+def _position(x_m: float) -> str:
+    """A curve's position [m] to 5 digits, 0 below :data:`POSITION_RESOLUTION_M`."""
+    return format_length(0.0 if abs(x_m) < POSITION_RESOLUTION_M else x_m, 5)
+
+
+def _value_range(values: Sequence[float], fmt: Callable[[float], str]) -> str:
+    """``fmt`` of the one value the curves share, else ``'fmt(min) to fmt(max)'``."""
+    lo, hi = min(values), max(values)
+    if math.isclose(lo, hi, rel_tol=1e-9, abs_tol=0.0):
+        return fmt(lo)
+    return f"{fmt(lo)} to {fmt(hi)}"
+
+
+def _calibration_lines(calibration: Sequence[dict[str, float]]) -> list[str]:
+    """The calibration and approach settings of the curves, as ``inspect`` prints them.
+
+    Parameters
+    ----------
+    calibration
+        Per curve, afmformats metadata in SI units
+        (:func:`palpbayes.io.afm.afm_calibration`).
+
+    Returns
+    -------
+    list of str
+        ``calibration: ...`` (spring constant, deflection sensitivity) and ``approach: ...``
+        (setpoint, speed, sampling rate, duration, hold), each left out when the file records
+        none of its values; a value that differs between curves is given as a range.
+    """
+    shown = {}
+    for key, (label, fmt) in _CALIBRATION_FORMAT.items():
+        values = [c[key] for c in calibration if key in c]
+        if values:
+            shown[key] = f"{label} {_value_range(values, fmt)}"
+    lines = []
+    for title, keys in (("calibration", ("spring constant", "sensitivity")),
+                        ("approach", ("setpoint", "speed approach", "rate approach",
+                                      "duration approach", "duration intermediate"))):
+        parts = [shown[k] for k in keys if k in shown]
+        if parts:
+            lines.append(f"{title}: {', '.join(parts)}")
+    return lines
+
+
+def _stem(path: Path) -> str:
+    """The file name without its AFM suffix (``.jpk-force-map``, ``.zip`` ...)."""
+    from ..io.afm_load import AFM_SUFFIXES
+
+    name = path.name
+    suffix = next((s for s in sorted(AFM_SUFFIXES, key=len, reverse=True)
+                   if name.lower().endswith(s)), path.suffix)
+    return name[: len(name) - len(suffix)] or name
+
+
+def fit_command(path: str | Path, n_curves: int, *, uncalibrated: bool = False,
+                command: str = "fit") -> str:
+    """The ``palpbayes fit`` (or ``map``) command ``inspect`` prints for an AFM file.
+
+    Parameters
+    ----------
+    path
+        The AFM file, as the user named it.
+    n_curves
+        Its number of curves: a force map's ``fit`` command fits curve 0 (``--curve 0``).
+    uncalibrated
+        True for a file without spring constant and sensitivity (AFM Workshop): the command
+        then has ``--spring-constant K --sensitivity S`` to fill in too.
+    command
+        ``"fit"`` or ``"map"`` (every curve of a force map, positions from the file).
+
+    Returns
+    -------
+    str
+        A shell command line, e.g. ``palpbayes fit spot.jpk-force --out spot-fit --tip
+        paraboloid --radius R --nu 0.5``, where :data:`RADIUS_PLACEHOLDER` stands for the tip
+        radius [m] the user must give.
+    """
+    path = Path(path)
+    stem = _stem(path)
+    words = ["palpbayes", command, str(path)]
+    if command == "fit" and n_curves > 1:
+        words += ["--curve", "0"]
+        stem += "-curve0"
+    words += ["--out", f"{stem}-{command}", "--tip", "paraboloid", "--radius",
+              RADIUS_PLACEHOLDER, "--nu", "0.5"]
+    if uncalibrated:
+        words += ["--spring-constant", "K", "--sensitivity", "S"]
+    return " ".join(w if w in (RADIUS_PLACEHOLDER, "K", "S") else shlex.quote(w)
+                    for w in words)
+
+
+def _fit_lines(path: Path, curves: Sequence, uncalibrated: bool) -> list[str]:
+    """What ``inspect`` prints after an AFM file's curves: the ``fit`` (and, for a map with
+    positions, ``map``) command to run, with what to fill in and when to add options."""
+    many = len(curves) > 1
+    fill = (f"replace {RADIUS_PLACEHOLDER} by the tip radius in metres (e.g. 5e-6), or give "
+            "another --tip with its size (sphere --radius, cone --half-angle); --nu 0.5 is "
+            "for cells and gels")
+    if uncalibrated:
+        fill += "; K and S: the spring constant [N/m] and deflection sensitivity [m/V]"
+    lines = [f"to fit {'curve 0' if many else 'it'} (no AFM file records the tip: {fill}):",
+             "  " + fit_command(path, len(curves), uncalibrated=uncalibrated)]
+    if many and all(c.x_m is not None for c in curves):
+        lines += ["to map every curve (positions from the file):",
+                  "  " + fit_command(path, len(curves), uncalibrated=uncalibrated,
+                                     command="map")]
+    lines.append("the tip's contact law holds to a depth of about its radius: if fit says "
+                 "the indentation is deeper, add --max-depth M (e.g. the radius) to fit the "
+                 "shallower part")
+    if any(c.modality != "force-distance" for c in curves):
+        lines.append("fit takes the approach; --rheology power-law,sls fits the hold too")
+    return lines
+
+
 def _afm(path: Path) -> None:
-    from ..io.afm import describe_afm
+    from ..io.afm import afm_calibration, describe_afm
     from ..io.afm_workshop import is_afm_workshop_zip
 
-    note = ""
+    note, override = "", None
     try:
         curves = describe_afm(path)
     except DataFileError:
         if not is_afm_workshop_zip(path):
             raise
         # the structure does not need the force's scale: read it with placeholders
-        curves = describe_afm(path, {"spring constant": 1.0, "sensitivity": 1.0})
+        override = {"spring constant": 1.0, "sensitivity": 1.0}
+        curves = describe_afm(path, override)
         note = ("AFM Workshop map without spring constant and sensitivity (nor a time "
                 "column): give palpbayes map (or fit, replay) --spring-constant N/m "
                 "--sensitivity m/V --sample-rate HZ")
@@ -100,14 +243,21 @@ def _afm(path: Path) -> None:
     for c in curves[:MAX_CURVES_SHOWN]:
         segs = _segment_counts(c.segments, c.segment_names)
         where = ("" if c.x_m is None else
-                 f"  at x = {format_length(c.x_m, 5)}, y = {format_length(c.y_m or 0.0, 5)}")
+                 f"  at x = {_position(c.x_m)}, y = {_position(c.y_m or 0.0)}")
         print(f"  curve {c.index}: {segs} points{where}")
     if len(curves) > MAX_CURVES_SHOWN:
         print(f"  ... {len(curves) - MAX_CURVES_SHOWN} more")
+    calibration = _calibration_lines(afm_calibration(path, override))
+    for line in calibration:
+        print(f"  {line}")
+    if override is not None:
+        print("  calibration: none recorded (no spring constant nor deflection sensitivity)")
     if len(curves) > 1:
         print("fit makes one trace per curve (a campaign); --curve I fits one of them")
     if len(curves) > 1 and all(c.x_m is not None for c in curves):
         print("map FILE --tip ... maps them (positions from the file)")
+    for line in _fit_lines(path, curves, uncalibrated=override is not None):
+        print(line)
     if note:
         print(f"note: {note}")
 

@@ -81,7 +81,7 @@ from .tabular import check_plausible, split_trace_metadata, validate_force_sign
 
 __all__ = ["AFM_SUFFIXES", "AFM_MODALITIES", "MOTION_FRACTION", "IGNORED", "AFMCurveInfo",
            "is_afm_file", "read_afm", "describe_afm", "classify_segments", "parse_segments",
-           "load_afm_curves", "curve_metadata"]
+           "load_afm_curves", "curve_metadata", "CALIBRATION_KEYS", "afm_calibration"]
 
 #: afmformats modalities read: each starts with a force-distance approach.
 AFM_MODALITIES = ("force-distance", "stress-relaxation", "creep-compliance")
@@ -421,4 +421,48 @@ def describe_afm(path: str | os.PathLike, meta_override: dict | None = None
                                 {int(v): int(n) for v, n in zip(values, counts, strict=True)},
                                 meta.get("x_m"), meta.get("y_m"),
                                 classify_segments(seg, _height(c), c.modality)))
+    return out
+
+
+#: afmformats metadata keys of a curve's calibration and acquisition settings (SI units):
+#: what :func:`afm_calibration` reads and ``palpbayes inspect`` shows.
+CALIBRATION_KEYS = ("spring constant", "sensitivity", "setpoint", "speed approach",
+                    "rate approach", "duration approach", "duration intermediate")
+
+
+def afm_calibration(path: str | os.PathLike, meta_override: dict | None = None
+                    ) -> list[dict[str, float]]:
+    """The calibration and settings the file records, per curve (read only).
+
+    Parameters
+    ----------
+    path
+        An AFM file afmformats reads.
+    meta_override
+        afmformats metadata filling what the file lacks (as for :func:`describe_afm`); its
+        keys are left out of the result, since they are not the file's.
+
+    Returns
+    -------
+    list of dict
+        One dict per curve, in file order: the keys of :data:`CALIBRATION_KEYS` the curve
+        has with a finite value, in afmformats' SI units (spring constant [N/m], sensitivity
+        [m/V], setpoint [N], speed approach [m/s], rate approach [Hz], durations [s]).
+    """
+    data, _ = load_afm_curves(path, meta_override)
+    given = set(meta_override or {})
+    out = []
+    for c in data:
+        have = dict.keys(c.metadata)  # its __getitem__ raises for keys it lacks
+        values = {}
+        for key in CALIBRATION_KEYS:
+            if key in given or key not in have:
+                continue
+            try:
+                value = float(c.metadata[key])
+            except (TypeError, ValueError):
+                continue
+            if np.isfinite(value):
+                values[key] = value
+        out.append(values)
     return out
