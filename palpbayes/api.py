@@ -396,7 +396,8 @@ class Fit:
 
     @property
     def E(self) -> float:
-        """[Pa] Young's modulus: the posterior median with the budget (the row's ``E_pa``)."""
+        """[Pa] Young's modulus: the posterior median at the stated inputs (the row's ``E_pa``,
+        inside :attr:`interval`, which adds the budget)."""
         return float(self.row["E_pa"])
 
     @property

@@ -47,10 +47,13 @@ def instron_bonded_draws(E_total: np.ndarray, nu: np.ndarray, specimen: Specimen
 
 
 def instron_columns(E_total: np.ndarray, E_bonded: np.ndarray | None, platens: str,
-                    widen: tuple[float, float] = (1.0, 1.0)) -> dict:
+                    widen: tuple[float, float] = (1.0, 1.0), center: float = 1.0) -> dict:
     """``platens``, ``E_instron_pa`` and its interval ``E_instron_lo_pa``..``_hi_pa`` [Pa]
     (module docstring); NaN without bonded draws (no specimen).  ``widen`` = (full lower end
-    / budget lower end, full upper end / budget upper end) of E."""
+    / budget lower end, full upper end / budget upper end) of E; ``center`` = the row's E at
+    the stated inputs / the median of the ``E_total`` draws: the headline is moved by it as
+    the row's E is (a one-sided budget moves the draws, not the headline; with lubricated
+    platens ``E_instron_pa`` is then the row's ``E_pa``), and the interval holds it."""
     nan = {"platens": "", "E_instron_pa": math.nan, "E_instron_lo_pa": math.nan,
            "E_instron_hi_pa": math.nan}
     if E_bonded is None:
@@ -64,5 +67,7 @@ def instron_columns(E_total: np.ndarray, E_bonded: np.ndarray | None, platens: s
     else:
         pool = np.concatenate([lub, bond])
         lo, hi = central(lub)[0], central(bond)[1]
-    return {"platens": platens, "E_instron_pa": float(np.median(pool)),
-            "E_instron_lo_pa": float(lo) * widen[0], "E_instron_hi_pa": float(hi) * widen[1]}
+    mid = float(np.median(pool)) * center
+    return {"platens": platens, "E_instron_pa": mid,
+            "E_instron_lo_pa": min(float(lo) * widen[0], mid),
+            "E_instron_hi_pa": max(float(hi) * widen[1], mid)}

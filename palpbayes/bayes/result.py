@@ -193,7 +193,7 @@ class BayesResult:
                         if "E_instron_bonded" in self.idata.posterior else None)
         instron = instron_columns(E, bonded_draws,
                                   str(self.idata.posterior.attrs.get("platens", "unknown")),
-                                  (lo / blo, hi / bhi))
+                                  (lo / blo, hi / bhi), float(np.median(Es) / np.median(E)))
         return {
             "trace_id": self.trace_id,
             "method": "bayes",

@@ -80,7 +80,7 @@ from ..contact import DEFAULT_NU, registered_kinds
 from ..errors import DataFileError, FitError, InputError
 from ..fitdata import ModelSpec
 from ..flagcodes import flag_columns
-from ..intervals import LEVEL, central
+from ..intervals import LEVEL
 from ..io.atomic import write_csv_atomic
 from ..io.manifest import tip_from_row
 from ..io.tabular import parse_bool
@@ -309,13 +309,13 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None,
     n_conv = int(conv[g["trace_id"].isin(ids)].sum())
     if n_conv < len(ids):
         flags.append(f"{len(ids) - n_conv} trace fit(s) not converged")
-    lo, hi = central(pooled.E, level)
-    nlo, nhi = central(pooled.E_new, level)
+    # as a trace's row: the median at the stated inputs, the budget's interval around it
+    h = pooled.headline(level)
     row.update({
-        "E_pa": float(np.median(pooled.E)), "E_sd_pa": float(np.std(pooled.E, ddof=1)),
-        "E_lo_pa": lo, "E_hi_pa": hi, "E_new_pa": float(np.median(pooled.E_new)),
-        "E_new_sd_pa": float(np.std(pooled.E_new, ddof=1)), "E_new_lo_pa": nlo,
-        "E_new_hi_pa": nhi, "tau": float(np.median(pooled.posterior.tau)),
+        "E_pa": h["E"], "E_sd_pa": float(np.std(pooled.E, ddof=1)),
+        "E_lo_pa": h["E_lo"], "E_hi_pa": h["E_hi"], "E_new_pa": h["E_new"],
+        "E_new_sd_pa": float(np.std(pooled.E_new, ddof=1)), "E_new_lo_pa": h["E_new_lo"],
+        "E_new_hi_pa": h["E_new_hi"], "tau": float(np.median(pooled.posterior.tau)),
         "tau_prior_sd": pooled.posterior.tau_prior_sd,
         "converged_all": bool(n_conv == len(g) and pooled.posterior.converged),
         **flag_columns("; ".join(flags)), "p_bonded": np.nan if p_bonded is None else p_bonded,

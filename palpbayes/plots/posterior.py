@@ -99,8 +99,16 @@ def plot_posterior_E(
     _hist(ax, e_tot, c, "E with budget", True, bins, peak=True)
     # the trace-only posterior is often 100x narrower: its own bins, scaled to the same peak
     _hist(ax, e_stat, c, "E, trace only (fixed nu)", False, bins, peak=True)
-    lo, hi = central(e_tot, level)
-    med = float(np.median(e_tot))
+    # the row's numbers (BayesResult.intervals): E at the stated inputs, the budget interval
+    # widened to hold the statistical one; at another level, the draws' own
+    intervals = getattr(result, "intervals", None)
+    med = float(np.median(e_stat))
+    if intervals is not None and level == LEVEL:
+        lo, hi = (v * KPA for v in intervals()["budget"])
+    else:
+        lo, hi = central(e_tot, level)
+        lo, hi = min(lo, float(np.quantile(e_stat, (1 - level) / 2))), max(
+            hi, float(np.quantile(e_stat, (1 + level) / 2)))
     mark_interval(ax, med, lo, hi, c)
     if lsq is not None:
         lsq_errorbar(ax, lsq.E * KPA, 1.1, (lsq.E - lsq.E_lo) * KPA, (lsq.E_hi - lsq.E) * KPA,

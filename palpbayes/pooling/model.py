@@ -287,6 +287,9 @@ class PooledEstimate:
         Variance shares of log E: ``input, distribution, rel_sd_pct, share_pct``.
     nu
         The Poisson ratio of each draw [-] (the budget's), None without a budget.
+    base
+        The sampled base's factor of each draw (``base_ratio`` where it is free, else 1), None
+        without a sampled base; part of ``factor``.
     """
 
     material: str
@@ -297,6 +300,30 @@ class PooledEstimate:
     E_new: np.ndarray
     budget: pd.DataFrame
     nu: np.ndarray | None = None
+    base: np.ndarray | None = None
+
+    @property
+    def stated(self) -> np.ndarray:
+        """The factor of each draw at the inputs the user stated: the sampled base's (E × the
+        free/bonded ratio where the base drawn is free), ones without one; the budget's share
+        of ``factor`` is ``factor / stated``."""
+        return np.ones_like(self.factor) if self.base is None else self.base
+
+    def headline(self, level: float = LEVEL) -> dict[str, float]:
+        """[Pa] The group's E and a new specimen's E as the per-trace rows report theirs
+        (:meth:`palpbayes.bayes.result.BayesResult.intervals`): the median at the stated inputs
+        (exp(mu) and exp(mu + tau·z) times :attr:`stated`, no budget) and the budget's central
+        ``level`` interval widened where needed to hold that of the stated draws.  Keys
+        ``E``, ``E_lo``, ``E_hi``, ``E_new``, ``E_new_lo``, ``E_new_hi``."""
+        out = {}
+        budget_part = self.factor / self.stated
+        for key, with_budget in (("E", self.E), ("E_new", self.E_new)):
+            at_inputs = with_budget / budget_part
+            lo, hi = central(with_budget, level)
+            slo, shi = central(at_inputs, level)
+            out.update({key: float(np.median(at_inputs)), f"{key}_lo": min(lo, slo),
+                        f"{key}_hi": max(hi, shi)})
+        return out
 
     @property
     def E_stat(self) -> np.ndarray:
@@ -381,6 +408,7 @@ def pool_group(m, s, *, material: str = "", tip: str = "", data: FitData | None 
         rows += tab.to_dict("records")
     else:
         factor, nu = np.ones(n), None
+    f_base = None
     if p_bonded is not None:
         free = np.random.default_rng(factor_ss.spawn(1)[0]).random(n) >= p_bonded
         f_base = np.where(free, base_ratio, 1.0)
@@ -398,4 +426,4 @@ def pool_group(m, s, *, material: str = "", tip: str = "", data: FitData | None 
     E = np.exp(post.mu) * factor
     E_new = np.exp(post.log_predictive(rng)) * factor
     return PooledEstimate(material=material, tip=tip, posterior=post, factor=factor, E=E,
-                          E_new=E_new, budget=table, nu=nu)
+                          E_new=E_new, budget=table, nu=nu, base=f_base)

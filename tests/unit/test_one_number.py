@@ -89,3 +89,68 @@ def test_headline_E_is_the_estimate_at_the_stated_inputs_inside_every_interval(n
         assert np.median(res.draws("E_total")) > row["E_stat_hi_pa"]
     else:
         assert abs(shift) < 0.01
+
+
+def test_plot_title_quotes_the_rows_E_and_budget_interval():
+    """Issue 46 review: the report's posterior plot titled itself with the E_total median, 3 %
+    above the row's E_pa at nu 0.5."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot as plt
+
+    from palpbayes.plots.posterior import plot_posterior_E
+
+    tip = Tip("sphere", radius=0.01)
+    tr = simulate_trace(20e3, tip, nu=0.5, depth=2e-3, rng=4)
+    res = _fit(tr, ModelSpec(tip, nu=0.5))
+    row = res.summary_row()
+    fig = plot_posterior_E(res)
+    title = fig.axes[0].get_title()
+    plt.close(fig)
+    e, lo, hi = (float(v) for v in re.search(
+        r"E = ([\d.]+) kPa, 90 % interval \[([\d.]+), ([\d.]+)\]", title).groups())
+    assert e == pytest.approx(row["E_pa"] / 1e3, abs=0.051)
+    assert (lo, hi) == pytest.approx((row["E_budget_lo_pa"] / 1e3, row["E_budget_hi_pa"] / 1e3),
+                                     abs=0.051)
+
+
+def test_instron_headline_moves_with_the_rows_E():
+    """With lubricated platens the compression test reads E itself: E_instron_pa = E_pa, and
+    the interval holds it, whatever the budget does to the E_total draws."""
+    from palpbayes.bayes.instron import instron_columns
+
+    rng = np.random.default_rng(1)
+    stat = rng.normal(100e3, 1e3, 4000)
+    total = stat * rng.uniform(1.0, 1.07, stat.size)  # a one-sided budget
+    center = np.median(stat) / np.median(total)
+    lub = instron_columns(total, 1.15 * total, "lubricated", center=center)
+    assert lub["E_instron_pa"] == pytest.approx(np.median(stat), rel=1e-12)
+    assert lub["E_instron_lo_pa"] <= lub["E_instron_pa"] <= lub["E_instron_hi_pa"]
+    bon = instron_columns(total, 1.15 * total, "bonded", center=center)
+    assert bon["E_instron_pa"] == pytest.approx(1.15 * np.median(stat), rel=1e-3)
+
+
+def test_pooled_headline_is_at_the_stated_inputs_like_a_traces():
+    """A group's E_pa and E_new_pa follow the per-trace rule: the median without the budget's
+    factor (the sampled base's kept), the interval the budget's, widened to hold it."""
+    from palpbayes.pooling.model import PooledEstimate
+
+    rng = np.random.default_rng(2)
+    n = 8000
+    post = type("P", (), {"mu": np.log(100e3) + rng.normal(0, 0.01, n),
+                          "tau": np.full(n, 0.05)})()
+    budget = rng.uniform(1.0, 1.07, n)  # one-sided, as nu 0.5's
+    base = np.where(rng.random(n) < 0.3, 0.9, 1.0)
+    z = rng.standard_normal(n)
+    est = PooledEstimate(material="m", tip="t", posterior=post, factor=budget * base,
+                         E=np.exp(post.mu) * budget * base,
+                         E_new=np.exp(post.mu + post.tau * z) * budget * base,
+                         budget=None, base=base)
+    h = est.headline()
+    assert h["E"] == pytest.approx(np.median(np.exp(post.mu) * base), rel=1e-12)
+    assert h["E_new"] == pytest.approx(np.median(np.exp(post.mu + post.tau * z) * base),
+                                       rel=1e-12)
+    for k in ("E", "E_new"):
+        assert h[f"{k}_lo"] <= h[k] <= h[f"{k}_hi"]
+    assert np.median(est.E) / h["E"] - 1 > 0.02  # what the headline used to be: shifted
