@@ -17,7 +17,14 @@ from ..bayes import BayesResult, fit_bayes_data
 from ..bayes.flags import BASELINE_HINT
 from ..checks import CheckResult, check_fit, checks_summary
 from ..contact import get_law
-from ..errors import ConvergenceWarning, FitError, GeometryError, InputError, NoContactError
+from ..errors import (
+    ConvergenceWarning,
+    FitError,
+    GeometryError,
+    InputError,
+    NoContactError,
+    PalpbayesError,
+)
 from ..fitdata import FitData, prepare
 from ..fitdata import tared as tared_data
 from ..flagcodes import flag_columns, split_flags
@@ -203,15 +210,15 @@ def force_scale_flag(data: FitData, options: FitOptions) -> str | None:
     """The ``force scale`` warning of a trace whose force noise before contact lies more than
     :data:`palpbayes.noise.NOISE_SCALE_FACTOR` times from the declared sensor noise, else None.
 
-    The declared noise is ``--noise-pp`` (``options.priors.noise_pp``), else ``--f-unc``
-    (``options.f_unc``, the paper's sensor uncertainty F_unc = 48 mN).  A force in another
+    The declared noise is ``--noise-pp`` (``options.priors.noise_pp``, the sensor's
+    peak-to-peak noise).  ``--f-unc`` is not compared: it is a contact threshold, which a user
+    may set far above the noise on purpose.  A force in another
     unit than the one given (N read as mN) scales the data, their noise and E by the same
     factor: the fit itself cannot see it, and the noise the user declared for the sensor is the
     one number in the other unit.  Without a declared noise there is nothing to compare, and
     None is returned.
     """
-    declared, option = ((options.priors.noise_pp, "--noise-pp")
-                        if options.priors.noise_pp is not None else (options.f_unc, "--f-unc"))
+    declared, option = options.priors.noise_pp, "--noise-pp"
     base = data.baseline
     if declared is None or base is None or not base.reliable:
         return None
@@ -250,7 +257,7 @@ def tried_baseline_hint(row: dict, data: FitData, options: FitOptions, seed: int
                 budget=options.budget, settings=options.settings, seed=seed, strict=False,
                 trace_id=trace_id, lsq=lsq, engine=engine, with_model_form=False,
                 platens=options.platens).summary_row()
-    except (FitError, NoContactError) as exc:
+    except (PalpbayesError, ValueError, ArithmeticError) as exc:  # InputError: no mass, ...
         return notes.replace(BASELINE_HINT, f"--baseline linear was tried and its fit fails: "
                                             f"{str(exc).replace('; ', ', ')}")
     shift = f"E {format_pressure(alt['E_pa'])}, {alt['E_pa'] / row['E_pa'] - 1:+.1%} " \

@@ -34,14 +34,15 @@ from ..checks import posterior_predictive_check
 from ..checks.core import CheckResult
 from ..contact import Tip, check_nu, youngs_modulus
 from ..contact.viscoelastic import PowerLawKernel, PronyKernel, ramp_apparent_modulus
-from ..errors import InputError
+from ..errors import InputError, PalpbayesError
 from ..groundtruth import DEFAULT_STRAIN_WINDOW
 from ..intervals import LEVEL, central_band
 from ..trace import IndentationTrace
+from ..units import format_pressure
 from .compression import PAPER_COMPRESSION_SPEED, compression_moduli
 from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
 from .design import lee_radok_columns
-from .flags import fit_flags, offcontact_flags
+from .flags import TILT_HINT, fit_flags, offcontact_flags
 from .posterior import PHI_BOUNDS, RHEOLOGIES, GridPosterior, grid_posterior
 from .sampler import EmceeRheology, sample_emcee
 from .ting import RETRACT, RetractDesign, with_retract
@@ -362,9 +363,35 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
                                      n_bins=12)
     fit = RheologyFit(rheology, data, grid, draws, ppc, sampler=sampler, nu=nu, nodes=nodes)
     fit.offcontact = offcontact_flags(fit, data.force - np.median(curves, axis=0))
+    if baseline == "constant" and any(TILT_HINT in f for f in fit.offcontact):
+        tried = _tried_tilt(fit, trace, rheology, tip=tip, segments=segments, t0=t0, nu=nu,
+                            drag=drag, engine=engine, n_draws=n_draws, max_points=max_points,
+                            rng=int(gen.integers(2**62)))
+        fit.offcontact = [f.replace(TILT_HINT, tried) for f in fit.offcontact]
     fit.flags = fit_flags(fit)
     fit.seconds = _time.perf_counter() - start
     return fit
+
+
+def _tried_tilt(fit: RheologyFit, trace: IndentationTrace, rheology: str, **kw) -> str:
+    """What the tilt flag's hint (:data:`~palpbayes.rheology.flags.TILT_HINT`) gives when it is
+    tried: the same fit with a linear baseline.  The hint is kept, with the moduli it gives,
+    when that fit's model check passes; otherwise the words say it was tried and why it does
+    not help (a fit that fails, a model check that still fails) with the first modulus it
+    reads, so that nobody follows a hint that makes the answer worse (issue 46: on the real
+    stress-relaxation cell the SLS failed and the power law's E0* moved +52 %)."""
+    name = PARAMETERS[rheology][0][0]
+    try:
+        alt = fit_rheology(trace, rheology, baseline="linear", **kw)
+    except PalpbayesError as exc:
+        return (f"--baseline linear was tried and its fit fails: "
+                f"{str(exc).replace('; ', ', ')}")
+    before = float(np.median(fit.draws[name]))
+    after = float(np.median(alt.draws[name]))
+    moved = f"{name}* {format_pressure(after)}, {after / before - 1:+.1%} against this fit"
+    if alt.model_ok:
+        return f"{TILT_HINT}: tried, its model check passes, {moved}"
+    return f"--baseline linear was tried and does not help, its model check still fails, {moved}"
 
 
 def _contact_times(data: CycleData, z_surf: np.ndarray) -> np.ndarray:

@@ -27,7 +27,8 @@ from .cycle import CycleData
 from .offcontact import N_SE, adhesion_dip, baseline_tilt, drag_gap
 from .posterior import ALPHA_MAX, PHI_BOUNDS, GridPosterior
 
-__all__ = ["offcontact_flags", "fit_flags", "SHRINK_FLAG", "THIN_FLAG", "MIN_ESS", "DRAG_N_SE"]
+__all__ = ["offcontact_flags", "fit_flags", "SHRINK_FLAG", "THIN_FLAG", "MIN_ESS", "DRAG_N_SE",
+           "TILT_HINT"]
 
 
 class RheologyFit(Protocol):
@@ -45,6 +46,9 @@ class RheologyFit(Protocol):
     @property
     def phi_at_bound(self) -> bool: ...
 
+#: The tilt flag's hint; :func:`palpbayes.rheology.fit.fit_rheology` tries it before it is
+#: given and replaces it by what the fit with a linear baseline gave.
+TILT_HINT = "fit it: baseline='linear', --baseline linear"
 #: Largest relative loss of depth during the hold before the shrinking contact is flagged.
 SHRINK_FLAG = 0.02
 #: Depth / specimen thickness above which the half-space assumption is flagged.
@@ -76,7 +80,7 @@ def offcontact_flags(fit: RheologyFit, residual: np.ndarray) -> list[str]:
                        f"({f1 / se:.1f} se; {format_force(f1 * span)} over "
                        f"{span * 1e6:.3g} µm above the surface): a tilted or drifting "
                        "baseline (an AFM's virtual deflection, a sensor drifting) that the fit "
-                       "reads as contact force (fit it: baseline='linear', --baseline linear)")
+                       f"reads as contact force ({TILT_HINT})")
     d = fit.draws
     trend = sum((float(np.median(d[k])) * col for k, col in (
         ("drag", data.speed), ("tilt", data.z - data.z_ref)) if k in d), np.zeros(data.n_points))

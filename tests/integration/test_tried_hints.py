@@ -57,3 +57,23 @@ def test_the_real_stress_relaxation_curve_is_told_the_hint_does_not_help(shared_
     flag = next(f for f in row["notes"].split("; ") if "z_surf posterior at its upper" in f)
     assert "--baseline linear was tried and does not help" in flag
     assert re.search(r"E [\d.]+ \w?Pa, [-+][\d.]+% against this row", flag)
+
+
+def test_the_rheology_tilt_hint_is_tried_on_the_real_stress_relaxation_curve(shared_data):
+    """The issue's own case: the elastic viscoelastic fit of the stress-relaxation cell flags
+    a tilted baseline; with --baseline linear the fit fails ('no posterior draw has positive
+    moduli'), so the hint is replaced by that finding."""
+    import warnings
+
+    from palpbayes.rheology.fit import fit_rheology
+    from palpbayes.rheology.flags import TILT_HINT
+
+    path = shared_data("afm-files/fmt-jpk-sr_cell1-0008.jpk-force")
+    tr = read_trace(path, tip=Tip("paraboloid", radius=5e-6))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = fit_rheology(tr, "elastic", nu=0.5)
+    (flag,) = [f for f in fit.flags if "tilt with the height" in f]
+    assert TILT_HINT not in flag
+    assert "--baseline linear was tried and its fit fails: no posterior draw" in flag
+    assert flag in fit.offcontact and not fit.model_ok

@@ -178,6 +178,8 @@ def test_a_tilted_baseline_is_flagged_and_fitted_with_baseline_linear(clean_fit)
                             baseline="linear", rng=1)
     (flag,) = [f for f in flat.flags if "tilt with the height" in f]
     assert not flat.model_ok and flag in flat.offcontact
+    # the hint was tried (the same fit with baseline="linear") and kept, with what it gives
+    assert "--baseline linear: tried, its model check passes, E0* " in flag, flag
     assert float(flag.split("F1 = ")[1].split(" N/m")[0]) == pytest.approx(40.0, rel=0.3)
     assert line.table().set_index("parameter").loc["tilt", "unit"] == "N/m"
     _within_3_sd(line, {"tilt": 40.0, "E0": 60e3, "alpha": 0.15, "z_surf": 2e-4})
