@@ -2,8 +2,9 @@
 
 Reads samples (time, z, force) from stdin or a TCP connection, as CSV lines with a header or
 JSON lines (:mod:`palpbayes.online.stream`), feeds them to the online estimator in chunks as
-``replay`` does, prints one line per update (flushed at once) and exits the moment the
-stopping rule fires, with a status that says why (:data:`EXIT_STATUS`).  Every sample sent
+``replay`` does, prints one line per update (flushed at once) and its stop line the moment
+the stopping rule fires, then runs the model checks and exits with a status that says why
+(:data:`EXIT_STATUS`).  Every sample sent
 is used (``replay`` keeps a recording's loading segment): the sender stops at the deepest
 point.  With ``--timeout`` a pause in the stream gives a partial chunk, so the updates (and
 the sample the rule fires at) can then differ from ``replay``'s; ``--timeout 0`` keeps them
@@ -78,8 +79,9 @@ HELP_WIDTH = 90
 DESCRIPTION = textwrap.fill(
     "Read samples (time_s, z_m, force_n) as they arrive, as CSV lines with a header or JSON "
     "lines, from stdin or TCP; print E with its 90 % interval (statistical, and full: with "
-    "the uncertainty budget) after every chunk and exit the moment the stopping rule fires, "
-    "with a status that says why (below), so that a robot script can stop the motion. The "
+    "the uncertainty budget) after every chunk and the stop line the moment the stopping rule "
+    "fires, so that a robot script can stop the motion; then run the model checks and exit "
+    "with a status that says why (below). The "
     "estimator and its options are replay's; unlike replay, which keeps a recording's "
     "loading segment, follow uses every sample it is sent, so send the approach and the "
     "indentation only (not the hold or retract).", HELP_WIDTH)
@@ -269,8 +271,15 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if lines is not sys.stdin:
             lines.close()
-    # the update carrying the stop is out: now the checks, on the samples received
-    checks = estimator.model_checks() if state is not None and state.E is not None else []
+    # the update carrying the stop is out: now the checks, on the samples received; a check
+    # that cannot run is said, and the exit status stays the rule's (robot scripts read it)
+    try:
+        checks = (estimator.model_checks() if state is not None and state.E is not None
+                  else [])
+    except Exception as exc:  # noqa: BLE001 - after the stop, nothing may turn into a crash
+        print(f"model check: could not run ({type(exc).__name__}: {exc})", file=sys.stderr,
+              flush=True)
+        checks = []
     if args.json:
         _say(final_json(state, checks))
     else:

@@ -11,6 +11,7 @@ from ..contact import DEFAULT_NU, Tip, check_nu
 from ..errors import InputError
 from ..fitdata import ModelSpec
 from ..online import TARGET_ON, OnlineEstimator, StoppingRule
+from ..online.estimator import SHOWN_BUDGET_DRAWS
 from .options import add_nu_option, thickness_from_args
 
 __all__ = ["parse_fraction", "add_online_options", "rule_from_args", "layer_from_online_args",
@@ -104,7 +105,10 @@ def model_from_args(args: argparse.Namespace, tip: Tip) -> ModelSpec:
 
 def estimator_from_args(args: argparse.Namespace, tip: Tip,
                         rule: StoppingRule) -> OnlineEstimator:
-    """The online estimator ``replay`` would build for ``tip`` and ``rule``, with the full
-    interval (E with the budget) at every update."""
+    """The online estimator ``follow`` runs for ``tip`` and ``rule``, with the full interval
+    (E with the budget) at every update: from :data:`~palpbayes.online.estimator.
+    SHOWN_BUDGET_DRAWS` draws where it is only shown, from all of them where a target on it
+    may fire."""
     return OnlineEstimator(model_from_args(args, tip), noise=args.noise,
-                           noise_pp=args.noise_pp, rule=rule, total=True)
+                           noise_pp=args.noise_pp, rule=rule, total=True,
+                           budget_draws=SHOWN_BUDGET_DRAWS)

@@ -91,3 +91,24 @@ def test_replay_keeps_the_checks_and_the_full_interval_at_the_stop(trace):
         == pytest.approx(s.E_total.rel_half_width * s.E_total.median / s.E.median)
     h = res.history
     assert h["total_rel_half_width"].notna().all()
+
+
+def test_fewer_draws_where_the_full_interval_is_only_shown_leave_the_decision_alone(trace):
+    """follow shows the full interval from SHOWN_BUDGET_DRAWS draws (the draws cost ~5 ms per
+    1,000); where a full target may fire (the statistical interval within it) the update takes
+    all BUDGET_DRAWS: the stop and its interval are those of the full run."""
+    from palpbayes.online.estimator import BUDGET_DRAWS, SHOWN_BUDGET_DRAWS
+
+    rule = StoppingRule(target=0.04, target_on="full")
+    _, full = _run(trace, rule)
+    _, shown = _run(trace, rule, budget_draws=SHOWN_BUDGET_DRAWS)
+    assert SHOWN_BUDGET_DRAWS < BUDGET_DRAWS
+    assert [s.n for s in shown] == [s.n for s in full]
+    assert shown[-1].stop == "target precision"
+    assert shown[-1].E_total == full[-1].E_total  # the deciding update: the same draws
+    # elsewhere the shown interval is close to the full-draw one (quantiles of 1,000 draws)
+    for a, b in zip(shown[:-1], full[:-1], strict=True):
+        assert a.E_total.lo == pytest.approx(b.E_total.lo, rel=0.01)
+        assert a.E_total.hi == pytest.approx(b.E_total.hi, rel=0.01)
+    with pytest.raises(InputError, match="budget_draws"):
+        OnlineEstimator(ModelSpec(TIP, nu=0.3), budget_draws=10)
