@@ -172,7 +172,8 @@ def fit_command(path: str | Path, n_curves: int, *, uncalibrated: bool = False,
         Its number of curves: a force map's ``fit`` command fits curve 0 (``--curve 0``).
     uncalibrated
         True for a file without spring constant and sensitivity (AFM Workshop): the command
-        then has ``--spring-constant K --sensitivity S`` to fill in too.
+        then has ``--spring-constant K --sensitivity S --sample-rate HZ`` to fill in too (it
+        has no time column either).
     command
         ``"fit"`` or ``"map"`` (every curve of a force map, positions from the file).
 
@@ -192,8 +193,8 @@ def fit_command(path: str | Path, n_curves: int, *, uncalibrated: bool = False,
     words += ["--out", f"{stem}-{command}", "--tip", "paraboloid", "--radius",
               RADIUS_PLACEHOLDER, "--nu", "0.5"]
     if uncalibrated:
-        words += ["--spring-constant", "K", "--sensitivity", "S"]
-    return " ".join(w if w in (RADIUS_PLACEHOLDER, "K", "S") else shlex.quote(w)
+        words += ["--spring-constant", "K", "--sensitivity", "S", "--sample-rate", "HZ"]
+    return " ".join(w if w in (RADIUS_PLACEHOLDER, "K", "S", "HZ") else shlex.quote(w)
                     for w in words)
 
 
@@ -205,7 +206,8 @@ def _fit_lines(path: Path, curves: Sequence, uncalibrated: bool) -> list[str]:
             "another --tip with its size (sphere --radius, cone --half-angle); --nu 0.5 is "
             "for cells and gels")
     if uncalibrated:
-        fill += "; K and S: the spring constant [N/m] and deflection sensitivity [m/V]"
+        fill += ("; K, S and HZ: the spring constant [N/m], deflection sensitivity [m/V] and "
+                 "sample rate [Hz]")
     lines = [f"to fit {'curve 0' if many else 'it'} (no AFM file records the tip: {fill}):",
              "  " + fit_command(path, len(curves), uncalibrated=uncalibrated)]
     if many and all(c.x_m is not None for c in curves):

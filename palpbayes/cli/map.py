@@ -155,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
     try:  # every trace file's header too: a bad column is reported before a cluster starts
         check_map_manifest(manifest, lump=lump, min_points=map_opts.min_points,
                            line=map_opts.line, read_options=point_opts.read_options,
-                           source=args.input)
+                           source=args.input, remote=args.scheduler not in (None, "local"))
     except InputError as exc:
         if not afm:
             raise

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -302,7 +303,8 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
 
 def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True, min_points: int = 10,
                        line: bool = False, read_options: dict | None = None,
-                       source: str | None = None) -> tuple[Tip, float | None]:
+                       source: str | None = None,
+                       remote: bool = False) -> tuple[Tip, float | None]:
     """The map's one tip and its block thickness (None if the manifest has none).
 
     Everything that can be checked before the fits (and before a Dask cluster starts) is:
@@ -324,6 +326,9 @@ def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True, min_points:
         :attr:`PointOptions.read_options <palpbayes.maps.pertrace.PointOptions.read_options>`.
     source
         The manifest's path, named in a header error.
+    remote
+        The fits run on a remote Dask cluster (``--scheduler ADDRESS``), whose workers may see
+        files this machine does not: only the headers of files present here are checked.
 
     Raises
     ------
@@ -352,6 +357,7 @@ def check_map_manifest(manifest: pd.DataFrame, *, lump: bool = True, min_points:
         except InputError as exc:
             raise InputError(f"the lump model: {exc}; map with --no-lump") from None
     files = [not is_afm_row(r) and not (isinstance(r.get("error"), str) and r["error"])
+             and not (remote and not Path(str(r["file"])).is_file())
              for _, r in manifest.iterrows()]
     if any(files):
         check_trace_headers(manifest[files], source=source, **(read_options or {}))
@@ -379,7 +385,8 @@ def make_map(manifest: pd.DataFrame, *, point_options: PointOptions | None = Non
     options = options or MapOptions()
     tip, thickness = check_map_manifest(manifest, lump=options.lump,
                                         min_points=options.min_points, line=options.line,
-                                        read_options=point_options.read_options)
+                                        read_options=point_options.read_options,
+                                        remote=scheduler not in (None, "local"))
     points = fit_points(manifest, point_options, scheduler=scheduler, workers=workers,
                         progress=progress)
     result = map_from_points(points, tip=tip, thickness=thickness, options=options,

@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 from .. import plots
 from ..campaign.layout import posterior_path
 from ..campaign.results import ResultsFolder, load_fit
+from ..flagcodes import flag_level, split_flags
 from ..io.tabular import parse_bool
 from .format import fmt, fmt_range, yesno
 from .layout import PAGE_SIZE, Page, text_height, text_lines
@@ -137,9 +138,9 @@ def convergence_head(res: ResultsFolder) -> str:
 def _notes(value) -> str:
     """A fit's notes, one flag a line (warnings first, then information), in full."""
     text = str(value) if pd.notna(value) else ""
-    flags = [f.strip() for f in text.split("; ") if f.strip()]
-    warn = [f for f in flags if not f.startswith("info:")]
-    return "\n".join("• " + f for f in warn + [f for f in flags if f.startswith("info:")])
+    flags = [f.strip() for f in split_flags(text) if f.strip()]  # "; " inside brackets stays
+    order = sorted(flags, key=lambda f: flag_level(f) != "warning")  # stable: warnings first
+    return "\n".join("• " + f for f in order)
 
 
 #: Layout of the diagnostics pages [figure fraction]: the text's top, the tables' bottom,

@@ -22,7 +22,7 @@ WORKSHOP = "fmt-afm-workshop-fd_mapping_16_2018-08-01_13.07.zip"
 
 #: What the test fills in for the placeholders of the printed command (tip radius R [m],
 #: spring constant K [N/m], sensitivity S [m/V]).
-FILL = {"R": "5e-6", "K": "0.05", "S": "5e-8"}
+FILL = {"R": "5e-6", "K": "0.05", "S": "5e-8", "HZ": "1000"}
 
 
 @pytest.fixture(scope="module")
@@ -127,7 +127,21 @@ def test_a_force_map_gets_a_one_curve_fit_and_a_map_command(
     (mapped,) = _commands(out, "map")
     assert fit[fit.index("--curve") + 1] == "0"
     assert ("--spring-constant" in fit and "--sensitivity" in mapped) == (name == WORKSHOP)
+    assert ("--sample-rate" in fit) == (name == WORKSHOP)
     parser = build_parser()
     for argv in (fit, mapped):
         args = parser.parse_args(argv)
         assert args.tip == "paraboloid" and args.radius == 5e-6 and args.nu == 0.5
+
+
+def test_the_workshop_zips_fit_command_runs_once_filled_in(
+        afm_dir: Path, capsys: pytest.CaptureFixture[str], tmp_path: Path,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The AFM Workshop zip has no calibration and no time column: its printed command asks
+    for K, S and HZ, and runs once they are filled in (review of issue 46: without
+    --sample-rate it could not)."""
+    (fit,) = _commands(_inspect(afm_dir / WORKSHOP, capsys))
+    monkeypatch.chdir(tmp_path)
+    assert main([*fit, "--method", "lsq"]) == 0, capsys.readouterr().err
+    out = tmp_path / fit[fit.index("--out") + 1]
+    assert (out / "summary.csv").is_file()

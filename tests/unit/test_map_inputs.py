@@ -92,3 +92,19 @@ def test_make_map_checks_the_headers_before_fitting(tmp_path, monkeypatch):
     with pytest.raises(AssertionError, match="fit_points was called"):
         run.make_map(m, point_options=PointOptions(read_options=UR),
                      options=run.MapOptions(lump=False))
+
+
+def test_a_remote_cluster_checks_only_the_headers_this_machine_sees(tmp_path):
+    """Review of issue 46: with --scheduler ADDRESS the workers may see files the client does
+    not; the header check then skips files absent here (a local run still names them)."""
+    from palpbayes.errors import DataFileError
+    from palpbayes.maps.run import check_map_manifest
+
+    rows = [{"trace_id": f"p{i}{j}", "file": str(tmp_path / f"absent-{i}{j}.csv"),
+             "tip": "sphere", "radius_m": 0.01, "x_m": 3e-3 * i, "y_m": 3e-3 * j}
+            for i in range(4) for j in range(3)]
+    manifest = pd.DataFrame(rows)
+    tip, thickness = check_map_manifest(manifest, lump=False, remote=True)
+    assert tip.kind == "sphere" and thickness is None
+    with pytest.raises(DataFileError, match="absent-00.csv"):
+        check_map_manifest(manifest, lump=False)
