@@ -31,6 +31,7 @@ idle cores: two worker processes of at most 2.6 GB each).
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 
 for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -47,6 +48,7 @@ from common import TIPS  # noqa: E402
 
 from palpbayes.contact import get_law, shape  # noqa: E402
 from palpbayes.errors import GeometryError  # noqa: E402
+from palpbayes.procs import lifeline  # noqa: E402
 from palpbayes.twin.compression import platen_factor  # noqa: E402
 from palpbayes.twin.palpation import solve_palpation  # noqa: E402
 from palpbayes.twin.solid3d import Palpation3D, solve_compression_3d  # noqa: E402
@@ -152,7 +154,8 @@ def _run(tasks: dict, workers: int) -> dict:
     order = sorted(tasks, key=lambda k: -tasks[k][0])
     if workers <= 1:
         return {k: tasks[k][1](*tasks[k][2]) for k in order}
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    ctx = multiprocessing.get_context()  # workers end with this process (procs.lifeline)
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, **lifeline(ctx)) as pool:
         futures = {k: pool.submit(tasks[k][1], *tasks[k][2]) for k in order}
         return {k: f.result() for k, f in futures.items()}
 

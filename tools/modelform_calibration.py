@@ -16,6 +16,7 @@ The slow suite runs this script (``tests/statistical/test_modelform_calibration.
 from __future__ import annotations
 
 import argparse
+import multiprocessing
 import warnings
 from concurrent.futures import ProcessPoolExecutor
 
@@ -23,6 +24,7 @@ import pandas as pd
 
 from palpbayes.bayes import fit_bayes
 from palpbayes.fitdata import ModelSpec
+from palpbayes.procs import lifeline
 from palpbayes.sim.misfit import MISFIT_NU, MISFIT_SCENARIOS, misfit_trace
 
 
@@ -45,7 +47,8 @@ def run(scenarios, n: int, workers: int, n_well: int | None = None) -> pd.DataFr
     jobs = [(s, i) for s in scenarios
             for i in range(n_well if s == "well" and n_well is not None else n)]
     if workers > 1:
-        with ProcessPoolExecutor(workers) as pool:
+        ctx = multiprocessing.get_context()  # workers end with this process (procs.lifeline)
+        with ProcessPoolExecutor(workers, mp_context=ctx, **lifeline(ctx)) as pool:
             rows = list(pool.map(fit_one, jobs, chunksize=4))
     else:
         rows = [fit_one(j) for j in jobs]

@@ -34,6 +34,7 @@ The slow suite runs this (``tests/statistical/test_rheology_calibration.py``).
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 
 if __name__ == "__main__":
@@ -55,6 +56,7 @@ from palpbayes.checks import material
 from palpbayes.contact.viscoelastic import PowerLawKernel, standard_linear_solid
 from palpbayes.fitdata import ModelSpec
 from palpbayes.paper import PAPER_TIPS
+from palpbayes.procs import lifeline
 from palpbayes.rheology import fit_rheology
 from palpbayes.rheology.choice import compare_fits
 from palpbayes.sim import simulate_viscoelastic
@@ -148,7 +150,8 @@ def run(n: int, workers: int, models=tuple(PARAMETERS), start: int = 0,
     model alone)."""
     jobs = [(m, i, coverage_only) for m in models for i in range(start, start + n)]
     if workers > 1:
-        with ProcessPoolExecutor(workers) as pool:
+        ctx = multiprocessing.get_context()  # workers end with this process (procs.lifeline)
+        with ProcessPoolExecutor(workers, mp_context=ctx, **lifeline(ctx)) as pool:
             rows = list(pool.map(fit_one, jobs, chunksize=2))
     else:
         rows = [fit_one(j) for j in jobs]
