@@ -68,20 +68,54 @@ def campaign(tmp_path_factory) -> Path:
         tips={"sphere": PAPER_TIPS["sphere"]})
 
 
+#: The layout of the fixture's pages, as the layout check saw them before they were saved
+#: (:func:`palpbayes.reporting.layout_check.watch_pages`): problems, and page -> its text.
+_LAYOUT: dict = {}
+
+
 @pytest.fixture(scope="module")
 def fitted(campaign, tmp_path_factory):
-    """``palpbayes report CAMPAIGN --out RES -o PDF`` run once; (results dir, pdf, stdout)."""
+    """``palpbayes report CAMPAIGN --out RES -o PDF`` run once, every page's layout checked
+    (:data:`_LAYOUT`); (results dir, pdf, stdout)."""
     out = tmp_path_factory.mktemp("results") / "res"
     pdf = out.parent / "campaign-report.pdf"
     import contextlib
     import io
 
+    from palpbayes.reporting.layout_check import page_observers, text_boxes, watch_pages
+
+    texts: dict[str, str] = {}
+
+    def keep(title, fig) -> None:
+        texts[title] = " ".join(b.text for b in text_boxes(fig))  # the painted texts
+
     buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        rc = main(["report", str(campaign), "--out", str(out), "-o", str(pdf),
-                   "--workers", "1", "--seed", "3"])
+    page_observers.append(keep)
+    try:
+        with watch_pages() as problems, contextlib.redirect_stdout(buf):
+            rc = main(["report", str(campaign), "--out", str(out), "-o", str(pdf),
+                       "--workers", "1", "--seed", "3"])
+    finally:
+        page_observers.remove(keep)
     assert rc == 0
+    _LAYOUT.update(problems=list(problems), texts=texts)
     return out, pdf, buf.getvalue()
+
+
+def test_campaign_report_pages_do_not_overprint_or_clip(fitted):
+    """Issue 46: no text over text, off the page or wider than its table cell, on every page
+    of the campaign report (title, summary, comparison, layer, gap, twin, group, diagnostics,
+    walkers, budget, indentation, methods); the single-fit, rheology and map reports are
+    checked in test_report_layout.py."""
+    problems, texts = _LAYOUT["problems"], _LAYOUT["texts"]
+    assert len(texts) >= 12, list(texts)
+    assert not problems, "\n".join(map(str, problems))
+
+
+def test_campaign_diagnostics_count_only_what_failed(fitted):
+    diag = re.sub(r"\s+", " ", " ".join(t for name, t in _LAYOUT["texts"].items()
+                                        if "Convergence diagnostics" in name))
+    assert "All 4 Bayesian fits converged" in diag and "NOT converge" not in diag
 
 
 # ----------------------------------------------------------------------------- report
