@@ -90,6 +90,11 @@ def _survivors(procs: dict[int, str]) -> dict[int, str]:
     return alive
 
 
+def _default_sigint() -> None:
+    """In the child before exec: SIGINT's default action (Python's KeyboardInterrupt)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.fixture
 def launch(tmp_path: Path) -> Iterator[Callable[..., subprocess.Popen]]:
     """Start ``python ARGS`` in ``tmp_path`` (output to a log file; ``session``: in a session
@@ -99,8 +104,12 @@ def launch(tmp_path: Path) -> Iterator[Callable[..., subprocess.Popen]]:
 
     def start(*args: str, session: bool = False) -> subprocess.Popen:
         log = open(tmp_path / f"log{len(started)}.txt", "wb")  # noqa: SIM115 - closed below
+        # SIGINT as a terminal gives it: a test run started in the background (a shell's '&'
+        # without job control) ignores SIGINT, which its children would inherit, and Python
+        # then installs no KeyboardInterrupt handler
         proc = subprocess.Popen([sys.executable, *args], cwd=tmp_path, stdin=subprocess.DEVNULL,
-                                stdout=log, stderr=subprocess.STDOUT, start_new_session=session)
+                                stdout=log, stderr=subprocess.STDOUT, start_new_session=session,
+                                preexec_fn=_default_sigint)
         proc._log = log  # type: ignore[attr-defined]
         proc._seen = {}  # type: ignore[attr-defined]
         started.append(proc)
