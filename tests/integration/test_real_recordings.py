@@ -168,7 +168,9 @@ def test_paraboloid_in_a_30_mm_layer_is_modelled_where_the_thickness_is_known():
     assert bayes["E_lo_pa"] <= 111e3 <= bayes["E_hi_pa"]
     assert bayes["p_bonded"] > 0.99 and bayes["layer"] == "h=30 mm, base unknown"
     assert bayes["model_ok"] and "finite thickness" not in bayes["notes"], bayes["notes"]
-    assert bayes["E_halfspace_pa"] > 1.25 * 111e3
+    # the fitted curve read as a half-space, at the stated nu (the row's E, issue 46: no longer
+    # the one-sided budget's median, ~2 % higher at nu 0.49): +24.7 % here
+    assert bayes["E_halfspace_pa"] > 1.2 * 111e3
     for change in ({"layer": "off"}, {}):
         trace = tr if change else tr.replace(thickness=None)
         row = fit_trace(trace, FitOptions(method="bayes", seed=1, nu=0.49, engine="exact",
