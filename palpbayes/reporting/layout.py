@@ -90,6 +90,30 @@ def line_step(size: float) -> float:
     return size * 1.45 / 72 / PAGE_SIZE[1]
 
 
+def _placed(lines: Sequence[tuple[str, str]], avail: float, size: float
+            ) -> tuple[list[tuple[float, float, str, dict]], float]:
+    """Where :func:`text_lines` puts each line of ``lines`` (wrapped to ``avail`` points):
+    (drop below the top, indent [figure fraction], text, its font keywords) per drawn line,
+    and the height below the last one [figure fraction]."""
+    step = line_step(size)
+    y, out = 0.0, []
+    for style, txt in lines:
+        if style == "h":
+            y += 0.4 * step
+            for ln in wrap_to(txt, avail, size + 2, weight="bold"):
+                out.append((y, 0.0, ln, {"fontsize": size + 2, "fontweight": "bold"}))
+                y += 1.25 * step
+        elif style == "m":
+            out.append((y, 0.01, txt, {"fontsize": size - 1, "family": _MONO}))
+            y += 0.95 * step
+        else:
+            indent = "   " if txt.startswith("• ") else ""
+            for ln in wrap_to(txt, avail, size, indent=indent) if txt else [""]:
+                out.append((y, 0.0, ln, {"fontsize": size}))
+                y += step
+    return out, y
+
+
 def text_lines(fig: Figure, lines: Sequence[tuple[str, str]], *, top: float = 0.9,
                left: float = 0.05, size: float = 9.0, width: float | None = None) -> float:
     """Lines of (style, text); style 'h' heading, 'm' monospace, 't' text, '' blank.
@@ -98,40 +122,19 @@ def text_lines(fig: Figure, lines: Sequence[tuple[str, str]], *, top: float = 0.
     page's right edge) are wrapped there, measured at their font, so that a paragraph may be
     given as one line.  Returns the height below the last line [figure fraction].
     """
-    y = top
-    step = line_step(size)
     avail = (width if width is not None else 0.97 - left) * fig.get_figwidth() * 72
-    for style, txt in lines:
-        if style == "h":
-            y -= 0.4 * step
-            for ln in wrap_to(txt, avail, size + 2, weight="bold"):
-                fig.text(left, y, ln, fontsize=size + 2, fontweight="bold", va="top")
-                y -= 1.25 * step
-        elif style == "m":
-            fig.text(left + 0.01, y, txt, fontsize=size - 1, family=_MONO, va="top")
-            y -= 0.95 * step
-        else:
-            indent = "   " if txt.startswith("• ") else ""
-            for ln in wrap_to(txt, avail, size, indent=indent) if txt else [""]:
-                fig.text(left, y, ln, fontsize=size, va="top")
-                y -= step
-    return y
+    placed, height = _placed(lines, avail, size)
+    for drop, dx, ln, font in placed:
+        fig.text(left + dx, top - drop, ln, va="top", **font)
+    return top - height
 
 
 def text_height(lines: Sequence[tuple[str, str]], *, size: float = 9.0, left: float = 0.05,
                 width: float | None = None) -> float:
-    """Height :func:`text_lines` takes for ``lines`` [figure fraction] (wrapped alike)."""
-    step = line_step(size)
+    """Height :func:`text_lines` takes for ``lines`` on a page [figure fraction] (wrapped
+    alike: the same placement, :func:`_placed`)."""
     avail = (width if width is not None else 0.97 - left) * PAGE_SIZE[0] * 72
-    h = 0.0
-    for style, txt in lines:
-        if style == "h":
-            h += (0.4 + 1.25 * len(wrap_to(txt, avail, size + 2, weight="bold"))) * step
-        elif style == "m":
-            h += 0.95 * step
-        else:
-            h += step * (len(wrap_to(txt, avail, size)) if txt else 1)
-    return h
+    return _placed(lines, avail, size)[1]
 
 
 def fit_text_lines(fig: Figure, lines: Sequence[tuple[str, str]], *, top: float,
