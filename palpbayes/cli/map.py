@@ -153,9 +153,10 @@ def run(args: argparse.Namespace) -> int:
     point_opts = replace(point_opts, read_options={**(_afm_override(args) if afm else {}),
                                                    **read_options})
     try:  # every trace file's header too: a bad column is reported before a cluster starts
-        check_map_manifest(manifest, lump=lump, min_points=map_opts.min_points,
-                           line=map_opts.line, read_options=point_opts.read_options,
-                           source=args.input, remote=args.scheduler not in (None, "local"))
+        checked = check_map_manifest(
+            manifest, lump=lump, min_points=map_opts.min_points, line=map_opts.line,
+            read_options=point_opts.read_options, source=args.input,
+            remote=args.scheduler not in (None, "local"))
     except InputError as exc:
         if not afm:
             raise
@@ -166,7 +167,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         t0 = time.perf_counter()
         res = make_map(manifest, point_options=point_opts, options=map_opts,
-                       scheduler=args.scheduler, workers=args.workers, progress=args.progress)
+                       scheduler=args.scheduler, workers=args.workers, progress=args.progress,
+                       checked=checked)
         elapsed = time.perf_counter() - t0
         truth = None if afm else _truth(Path(args.input).parent)
         write_map(res, stage, extra={("afm_file" if afm else "manifest"):

@@ -377,16 +377,20 @@ def nu_used(points: pd.DataFrame, given: float | None) -> float | list[float] | 
 
 def make_map(manifest: pd.DataFrame, *, point_options: PointOptions | None = None,
              options: MapOptions | None = None, scheduler: str | None = None,
-             workers: int | None = None, progress: bool | None = None) -> MapResult:
+             workers: int | None = None, progress: bool | None = None,
+             checked: tuple[Tip, float | None] | None = None) -> MapResult:
     """The whole map of a validated manifest (:func:`palpbayes.io.manifest.read_manifest`)
     whose rows carry ``x_m`` and ``y_m``: per-point fits on Dask, then
-    :func:`map_from_points`.  Every trace must use the same tip."""
+    :func:`map_from_points`.  Every trace must use the same tip.
+
+    ``checked`` is what :func:`check_map_manifest` returned for this manifest and these
+    options, when the caller has run it already (``palpbayes map`` does, before it makes the
+    output folder): the manifest and every trace file's header are then not checked again."""
     point_options = point_options or PointOptions()
     options = options or MapOptions()
-    tip, thickness = check_map_manifest(manifest, lump=options.lump,
-                                        min_points=options.min_points, line=options.line,
-                                        read_options=point_options.read_options,
-                                        remote=scheduler not in (None, "local"))
+    tip, thickness = checked if checked is not None else check_map_manifest(
+        manifest, lump=options.lump, min_points=options.min_points, line=options.line,
+        read_options=point_options.read_options, remote=scheduler not in (None, "local"))
     points = fit_points(manifest, point_options, scheduler=scheduler, workers=workers,
                         progress=progress)
     result = map_from_points(points, tip=tip, thickness=thickness, options=options,
