@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LEVEL", "Z_LEVEL", "normal_z", "central", "central_band"]
+__all__ = ["LEVEL", "Z_LEVEL", "normal_z", "central", "central_band", "hull"]
 
 #: Probability content of the reported central intervals.
 LEVEL = 0.9
@@ -41,3 +41,15 @@ def central_band(x, level: float = LEVEL, axis: int = 0
     a = (1.0 - level) / 2.0
     lo, med, hi = np.quantile(np.asarray(x, dtype=float), [a, 0.5, 1.0 - a], axis=axis)
     return lo, med, hi
+
+
+def hull(*intervals: tuple[float, float]) -> tuple[float, float]:
+    """The smallest interval holding every one of ``intervals`` (lo, hi): how a wider interval
+    of E is made to hold a narrower one it must contain (the budget's holds the statistical
+    one, the full one the budget's: :meth:`palpbayes.bayes.result.BayesResult.intervals`).
+
+    >>> hull((1.0, 3.0), (0.5, 2.0))
+    (0.5, 3.0)
+    """
+    return (float(min(lo for lo, _ in intervals)), float(max(hi for _, hi in intervals)))
+

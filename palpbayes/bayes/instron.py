@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from ..intervals import central
+from ..intervals import central, hull
 from ..twin import Specimen, compression_factor
 
 __all__ = ["instron_bonded_draws", "instron_columns", "INSTRON_COLUMNS"]
@@ -68,6 +68,6 @@ def instron_columns(E_total: np.ndarray, E_bonded: np.ndarray | None, platens: s
         pool = np.concatenate([lub, bond])
         lo, hi = central(lub)[0], central(bond)[1]
     mid = float(np.median(pool)) * center
-    return {"platens": platens, "E_instron_pa": mid,
-            "E_instron_lo_pa": min(float(lo) * widen[0], mid),
-            "E_instron_hi_pa": max(float(hi) * widen[1], mid)}
+    lo, hi = hull((float(lo) * widen[0], float(hi) * widen[1]), (mid, mid))
+    return {"platens": platens, "E_instron_pa": mid, "E_instron_lo_pa": lo,
+            "E_instron_hi_pa": hi}

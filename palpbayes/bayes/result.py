@@ -24,7 +24,7 @@ from ..contact import Tip
 from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
 from ..flagcodes import flag_columns
-from ..intervals import LEVEL, central, central_band
+from ..intervals import LEVEL, central, central_band, hull
 from ..io.atomic import write_netcdf_atomic
 from ..refit import layer_alternatives
 from ..twin import Specimen
@@ -152,11 +152,9 @@ class BayesResult:
         needed to hold ``stat``, ``full`` the budget's or after a material misfit the model
         form's envelope (:mod:`palpbayes.bayes.modelform`), widened to hold ``budget``."""
         stat = central(self.draws("E"))
-        blo, bhi = central(self.draws("E_total"))
-        budget = (min(blo, stat[0]), max(bhi, stat[1]))
+        budget = hull(central(self.draws("E_total")), stat)
         form = self.model_form
-        full = budget if form is None else (min(form.lo_pa, budget[0]),
-                                            max(form.hi_pa, budget[1]))
+        full = budget if form is None else hull((form.lo_pa, form.hi_pa), budget)
         return {"stat": stat, "budget": budget, "full": full}
 
     def summary_row(self) -> dict:

@@ -68,7 +68,7 @@ from ..checks import CheckResult, run_checks
 from ..contact import youngs_factor
 from ..errors import InputError
 from ..fitdata import ModelSpec
-from ..intervals import LEVEL, central
+from ..intervals import LEVEL, central, hull
 from ..noise import sigma_from_pp
 
 __all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE", "HOLD_WINDOW",
@@ -544,8 +544,8 @@ class OnlineEstimator:
         the statistical median (the estimate at the stated inputs: the budget widens the
         interval and does not move it)."""
         b = self._summary(E)
-        return MixtureSummary(b.mean, b.sd, stat.median, min(b.lo, stat.lo),
-                              max(b.hi, stat.hi), self.level)
+        return MixtureSummary(b.mean, b.sd, stat.median,
+                              *hull((b.lo, b.hi), (stat.lo, stat.hi)), self.level)
 
     def _total(self, post: ExactPosterior, stat: MixtureSummary, n_draws: int = BUDGET_DRAWS
                ) -> tuple[MixtureSummary, float]:

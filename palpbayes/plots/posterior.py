@@ -10,7 +10,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from ..contact import youngs_factor
-from ..intervals import LEVEL, central
+from ..intervals import LEVEL, central, hull
 from .style import (
     KPA,
     METHOD_COLORS,
@@ -106,9 +106,7 @@ def plot_posterior_E(
     if intervals is not None and level == LEVEL:
         lo, hi = (v * KPA for v in intervals()["budget"])
     else:
-        lo, hi = central(e_tot, level)
-        lo, hi = min(lo, float(np.quantile(e_stat, (1 - level) / 2))), max(
-            hi, float(np.quantile(e_stat, (1 + level) / 2)))
+        lo, hi = hull(central(e_tot, level), central(e_stat, level))
     mark_interval(ax, med, lo, hi, c)
     if lsq is not None:
         lsq_errorbar(ax, lsq.E * KPA, 1.1, (lsq.E - lsq.E_lo) * KPA, (lsq.E_hi - lsq.E) * KPA,

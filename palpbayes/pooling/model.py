@@ -96,7 +96,7 @@ from ..bayes.sampler import SamplerSettings, run_emcee
 from ..errors import FitError, InputError
 from ..fitdata import FitData
 from ..flagcodes import flag_columns
-from ..intervals import LEVEL, central
+from ..intervals import LEVEL, central, hull
 from .inputs import systematic_factor
 
 __all__ = [
@@ -319,10 +319,8 @@ class PooledEstimate:
         budget_part = self.factor / self.stated
         for key, with_budget in (("E", self.E), ("E_new", self.E_new)):
             at_inputs = with_budget / budget_part
-            lo, hi = central(with_budget, level)
-            slo, shi = central(at_inputs, level)
-            out.update({key: float(np.median(at_inputs)), f"{key}_lo": min(lo, slo),
-                        f"{key}_hi": max(hi, shi)})
+            lo, hi = hull(central(with_budget, level), central(at_inputs, level))
+            out.update({key: float(np.median(at_inputs)), f"{key}_lo": lo, f"{key}_hi": hi})
         return out
 
     @property
