@@ -124,15 +124,23 @@ def update_json(state: OnlineState, batch: Batch) -> str:
     row = {"event": "update", "n": state.n, "line": batch.last_line, "t_s": _value(state.t),
            "z_m": _value(state.z), "in_contact": state.in_contact,
            "depth_m": _value(state.depth), "peak_force_n": _value(state.peak_force),
-           "E_pa": _value(E.median) if E else None, "E_lo_pa": _value(E.lo) if E else None,
-           "E_hi_pa": _value(E.hi) if E else None,
+           **_E_fields(state),
            "rel_half_width": _value(E.rel_half_width) if E else None,
-           "E_total_lo_pa": _value(T.lo) if T else None,
-           "E_total_hi_pa": _value(T.hi) if T else None,
            "total_rel_half_width": _value(T.rel_half_width) if T else None,
            "budget_floor": _value(state.floor), "stop": state.stop,
            "flags": list(state.flags)}
     return json.dumps(row)
+
+
+def _E_fields(state: OnlineState | None) -> dict[str, float | None]:
+    """E [Pa] with its statistical interval and the full one's ends (null where not known),
+    the keys an update and the last line share."""
+    E = None if state is None else state.E
+    T = None if state is None else state.E_total
+    return {"E_pa": _value(E.median) if E else None, "E_lo_pa": _value(E.lo) if E else None,
+            "E_hi_pa": _value(E.hi) if E else None,
+            "E_total_lo_pa": _value(T.lo) if T else None,
+            "E_total_hi_pa": _value(T.hi) if T else None}
 
 
 def _checks_json(checks: list[CheckResult]) -> list[dict]:
@@ -146,17 +154,12 @@ def final_json(state: OnlineState | None, checks: list[CheckResult]) -> str:
     ended), where, E with both intervals, and the model checks on the samples received
     (``model_ok`` null when none could run)."""
     stopped = state is not None and state.should_stop
-    E = None if state is None else state.E
-    T = None if state is None else state.E_total
     summary = checks_summary(checks)
     row = {"event": "stop" if stopped else "end",
            "stop": state.stop if stopped else "", "n": 0 if state is None else state.n,
            "t_s": None if state is None else _value(state.t),
            "in_contact": bool(state is not None and state.in_contact),
-           "E_pa": _value(E.median) if E else None, "E_lo_pa": _value(E.lo) if E else None,
-           "E_hi_pa": _value(E.hi) if E else None,
-           "E_total_lo_pa": _value(T.lo) if T else None,
-           "E_total_hi_pa": _value(T.hi) if T else None,
+           **_E_fields(state),
            "model_ok": (None if not checks else bool(summary["model_ok"])),
            "misfit_checks": summary["misfit_checks"], "checks": _checks_json(checks),
            "check_flags": summary["flags"]}
