@@ -50,7 +50,7 @@ from ..trace import IndentationTrace
 from ..twin.specimen import FOOTPRINT_COLUMNS, check_specimen_plausible, specimen_from_sizes
 from .atomic import write_csv_atomic
 from .tabular import sniff_delimiter
-from .trace_csv import read_trace, trace_from_frame
+from .trace_csv import read_frame, read_trace, trace_from_frame
 
 __all__ = [
     "MANIFEST_COLUMNS",
@@ -340,16 +340,7 @@ def _check_header(path: Path, read_options: dict) -> None:
     and force columns with ``read_options`` on three made-up rows: the reader's own column,
     unit and joint-angle logic, no data read."""
     source = str(path)
-    delimiter = read_options.get("delimiter", "auto")
-    try:
-        sep = sniff_delimiter(path) if delimiter == "auto" else delimiter
-        header = pd.read_csv(path, comment="#", sep=sep, nrows=0, skipinitialspace=True,
-                             engine="c" if sep else "python")
-    except pd.errors.EmptyDataError:
-        raise DataFileError(source, "file is empty", "check that the recording was saved") \
-            from None
-    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
-        raise DataFileError(source, f"not a readable CSV ({exc})".replace("\n", " ")) from None
+    header, _ = read_frame(path, read_options.get("delimiter", "auto"), nrows=0)
     # made-up rows (0, 1, 2 in every column: increasing time, segment codes in order) so that
     # only the header and the options can fail
     frame = pd.DataFrame({c: [0.0, 1.0, 2.0] for c in header.columns})

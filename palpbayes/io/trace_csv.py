@@ -43,7 +43,7 @@ from .tabular import (
 )
 from .units import FORCE_UNITS, LENGTH_UNITS, TIME_UNITS, force_factor, length_factor, time_factor
 
-__all__ = ["read_trace", "write_trace", "trace_from_frame", "check_plausible",
+__all__ = ["read_trace", "read_frame", "write_trace", "trace_from_frame", "check_plausible",
            "sniff_delimiter", "MAX_Z_SPAN_M", "MAX_FORCE_N"]
 
 _QUANTITIES = {"time": TIME_UNITS, "z": LENGTH_UNITS, "force": FORCE_UNITS}
@@ -237,16 +237,7 @@ def read_trace(
                             f"did you mean {manifest}?" if manifest.is_file()
                             else "give the path of a trace CSV")
     check_file(path, source)
-    try:
-        if delimiter == "auto":
-            delimiter = sniff_delimiter(path)
-        df = pd.read_csv(path, comment="#", sep=delimiter,
-                         engine="c" if delimiter else "python", skipinitialspace=True)
-    except pd.errors.EmptyDataError:
-        raise DataFileError(source, "file is empty", "check that the recording was saved") from None
-    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
-        raise DataFileError(source, f"not a readable CSV ({exc})".replace("\n", " ")
-                            + _extra_fields_hint(delimiter)) from None
+    df, delimiter = read_frame(path, delimiter)
     if not isinstance(df.index, pd.RangeIndex):  # rows longer than the header became an index
         raise DataFileError(
             source, f"the data rows have {df.index.nlevels} more field(s) than the header "
@@ -256,6 +247,30 @@ def read_trace(
     metadata.setdefault("trace_id", path.stem)
     return trace_from_frame(df, source, columns=columns, units=units, force_sign=force_sign,
                             z_sign=z_sign, check=check, tip=tip, **metadata)
+
+
+def read_frame(path: Path, delimiter: str | None = "auto", nrows: int | None = None
+               ) -> tuple[pd.DataFrame, str | None]:
+    """The delimited table of a trace file as :func:`read_trace` reads it (``#`` comments,
+    blanks after separators; ``nrows=0``: the header alone), and the delimiter used.
+
+    Raises
+    ------
+    DataFileError
+        An empty or unparsable file, naming it.
+    """
+    source = str(path)
+    try:
+        if delimiter == "auto":
+            delimiter = sniff_delimiter(path)
+        df = pd.read_csv(path, comment="#", sep=delimiter, nrows=nrows,
+                         engine="c" if delimiter else "python", skipinitialspace=True)
+    except pd.errors.EmptyDataError:
+        raise DataFileError(source, "file is empty", "check that the recording was saved") from None
+    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise DataFileError(source, f"not a readable CSV ({exc})".replace("\n", " ")
+                            + _extra_fields_hint(delimiter)) from None
+    return df, delimiter
 
 
 def _extra_fields_hint(delimiter: str | None) -> str:
