@@ -36,6 +36,7 @@ from .errors import FitError
 from .fitdata import FitData, ModelSpec, prepare_trace
 from .flagcodes import flag_columns
 from .intervals import LEVEL
+from .shapekernel import scale_rss
 from .trace import IndentationTrace
 from .units import format_force
 
@@ -129,30 +130,16 @@ class LSQResult:
 def profile_rss(data: FitData, z_surf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Profile objective L(z_s) [N²] and the closed-form E*(z_s) [Pa] for each trial z_s.
 
-    Vectorised: ``z_surf`` of shape (M,) gives arrays of shape (M,).
+    Vectorised: ``z_surf`` of shape (M,) gives arrays of shape (M,).  L is summed from the
+    residuals themselves (no cancellation near a perfect fit), by the compiled loop of
+    :func:`palpbayes.shapekernel.scale_rss` (no (M × n) array is formed).
     """
-    zs = np.atleast_1d(np.asarray(z_surf, dtype=float))
-    sf = np.empty(zs.size)
-    ss = np.empty(zs.size)
-    for rows in data.blocks(zs.size):  # bounded memory for very long traces
-        s = data.shape(zs[rows, None] - data.z[None, :])
-        sf[rows] = s @ data.force
-        ss[rows] = np.einsum("ij,ij->i", s, s)
-    ff = float(data.force @ data.force)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        estar = np.where(ss > 0, sf / ss, 0.0)
-        rss = np.where(ss > 0, ff - sf * estar, ff)
-    return rss, estar
+    return scale_rss(z_surf, data.z, data.force, data.model)
 
 
 def _scalar_rss(data: FitData, z: float) -> float:
-    """L(z_s) summed from the residuals themselves (no cancellation near a perfect fit)."""
-    s = data.shape(z - data.z)
-    ss = float(s @ s)
-    if ss <= 0:
-        return float(data.force @ data.force)
-    r = data.force - (float(s @ data.force) / ss) * s
-    return float(r @ r)
+    """L(z_s) [N²] at one trial surface height z [m]."""
+    return float(profile_rss(data, np.array([z]))[0][0])
 
 
 def _minimise(data: FitData, lo: float, hi: float) -> float:

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import touching
+from ..modelspec import ModelSpec
+from ..shapekernel import cross_sums
 
 __all__ = ["Gram", "gram", "fixed_columns", "NodePosterior", "node_posterior"]
 
@@ -42,59 +43,44 @@ class Gram:
                    np.zeros((G, q, q)) if ar1 else None, np.zeros((G, q)), np.zeros((G, q)),
                    np.zeros(G, dtype=int), 0)
 
-    def extend(self, z: np.ndarray, C: np.ndarray, shape,
-               max_elements: int = 1 << 21) -> Gram:
+    def extend(self, z: np.ndarray, C: np.ndarray, model: ModelSpec,
+               d_max: float | None = None) -> Gram:
         """Add samples (heights ``z`` [m] and fixed columns ``C`` (k, q − 1), in time order,
         following those already summed) to every node's sums, in place; returns self.
 
-        ``shape`` maps depth [m] to F/E* and is 0 at non-positive depth (every contact law
-        is), so it is evaluated only on the span of samples below a node.  Cost: at most
-        (nodes × k) shape evaluations — an online update does not revisit old samples.
+        ``model`` is the concrete contact model whose shape s(z_s − z) is the first column
+        (its bound :meth:`ModelSpec.shape` is taken as well); ``d_max`` [m] as in
+        :func:`~palpbayes.shapekernel.cross_sums`.  The (nodes × k) shape
+        evaluations are summed by the compiled loop of :func:`palpbayes.shapekernel.cross_sums`
+        without forming that array — an online update does not revisit old samples.
         """
+        model = getattr(model, "__self__", model)  # ModelSpec.shape bound to its model
         k = z.size
         if k == 0:
             return self
-        G = self.z.size
+        lag = self.m1 is not None
+        ss, sc, l00, l0c, lc0, s_first, s_last, n_contact = cross_sums(self.z, z, C, model, lag,
+                                                                        d_max)
         self.m0[:, 1:, 1:] += C.T @ C
-        if self.m1 is not None:
+        self.m0[:, 0, 0] += ss
+        self.m0[:, 0, 1:] += sc
+        self.m0[:, 1:, 0] += sc
+        if lag:
             self.m1[:, 1:, 1:] += C[1:].T @ C[:-1]
-            if self.n:
+            self.m1[:, 0, 0] += l00
+            self.m1[:, 0, 1:] += l0c
+            self.m1[:, 1:, 0] += lc0
+            if self.n:  # the pair (first new sample, last old one)
                 self.m1[:, 1:, 1:] += np.outer(C[0], self.last[0, 1:])
-        step = max(1, max_elements // k)
-        for a in range(0, G, step):
-            r = slice(a, min(a + step, G))
-            # s = 0 wherever z >= the chunk's highest node (no depth): the shape is evaluated
-            # on the span of samples some node touches, widened by one sample on each side so
-            # that the lag-one pairs across its ends (where s = 0) are summed as well
-            inside = np.flatnonzero(z < self.z[r].max())
-            if inside.size == 0:
-                span = slice(0, 0)
-            else:
-                span = slice(max(int(inside[0]) - 1, 0), min(int(inside[-1]) + 2, k))
-            s = touching(shape, self.z[r, None] - z[None, span])
-            Cs = C[span]
-            self.m0[r, 0, 0] += np.einsum("ij,ij->i", s, s)
-            sc = s @ Cs
-            self.m0[r, 0, 1:] += sc
-            self.m0[r, 1:, 0] += sc
-            none = np.zeros(s.shape[0])
-            s_first = s[:, 0] if span.start == 0 and s.shape[1] else none
-            s_last = s[:, -1] if span.stop == k and s.shape[1] else none
-            if self.m1 is not None:
-                self.m1[r, 0, 0] += np.einsum("ij,ij->i", s[:, 1:], s[:, :-1])
-                self.m1[r, 0, 1:] += s[:, 1:] @ Cs[:-1]
-                self.m1[r, 1:, 0] += s[:, :-1] @ Cs[1:]
-                if self.n:  # the pair (first new sample, last old one)
-                    self.m1[r, 0, 0] += s_first * self.last[r, 0]
-                    self.m1[r, 0, 1:] += s_first[:, None] * self.last[r, 1:]
-                    self.m1[r, 1:, 0] += C[0][None, :] * self.last[r, :1]
-            if self.n == 0:
-                self.first[r, 0] = s_first
-            self.last[r, 0] = s_last
-            self.n_contact[r] += np.count_nonzero(s > 0, axis=1)
+                self.m1[:, 0, 0] += s_first * self.last[:, 0]
+                self.m1[:, 0, 1:] += s_first[:, None] * self.last[:, 1:]
+                self.m1[:, 1:, 0] += C[0][None, :] * self.last[:, :1]
         if self.n == 0:
+            self.first[:, 0] = s_first
             self.first[:, 1:] = C[0]
+        self.last[:, 0] = s_last
         self.last[:, 1:] = C[-1]
+        self.n_contact += n_contact
         self.n += k
         return self
 
@@ -119,12 +105,14 @@ def fixed_columns(y: np.ndarray, u: np.ndarray | None) -> np.ndarray:
     return np.column_stack([np.ones(y.size)] + ([u] if u is not None else []) + [y])
 
 
-def gram(data_z: np.ndarray, y: np.ndarray, nodes: np.ndarray, shape, u: np.ndarray | None,
-         ar1: bool) -> Gram:
+def gram(data_z: np.ndarray, y: np.ndarray, nodes: np.ndarray, model: ModelSpec,
+         u: np.ndarray | None, ar1: bool, d_max: float | None = None) -> Gram:
     """Sums of :class:`Gram` at ``nodes`` [m] for samples (``data_z`` [m], ``y`` [N], in time
-    order), shape function ``shape`` (depth [m] -> F/E* [m²]) and baseline column ``u``."""
+    order), the concrete contact ``model`` (its shape F/E* [m²] of the depth) and baseline
+    column ``u``; ``d_max`` [m] as in :func:`~palpbayes.shapekernel.cross_sums`."""
     C = fixed_columns(y, u)
-    return Gram.empty(nodes, C.shape[1], ar1).extend(np.asarray(data_z, dtype=float), C, shape)
+    return Gram.empty(nodes, C.shape[1], ar1).extend(np.asarray(data_z, dtype=float), C, model,
+                                                     d_max)
 
 
 def _whitened(g: Gram, phi: np.ndarray) -> np.ndarray:

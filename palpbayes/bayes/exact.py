@@ -58,7 +58,7 @@ from .priors import TracePrior
 __all__ = ["ExactPosterior", "exact_posterior", "refine_grid", "cell_widths", "phi_grid",
            "phi_moments", "phi_nodes_around", "node_log_mass", "sampled_coordinates",
            "log_marginal_phi", "COARSE_NODES",
-           "MAX_STEP", "KEEP", "PHI_NODES"]
+           "MAX_STEP", "KEEP", "PHI_NODES", "truncated_standard_normal"]
 
 #: Nodes of the first, uniform grid over the surface prior's support.
 COARSE_NODES = 129
@@ -129,6 +129,25 @@ def _log_normal_mass(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     lb, la = special.log_ndtr(b2), special.log_ndtr(a2)
     with np.errstate(divide="ignore", invalid="ignore"):
         return lb + np.log1p(-np.exp(la - lb))
+
+
+def truncated_standard_normal(rng: np.random.Generator, a: np.ndarray, b: np.ndarray
+                              ) -> np.ndarray:
+    """One draw per element of the standard normal truncated to [a, b] (a < b), by inverting
+    its CDF in log space: x = Phi⁻¹(Phi(a) + u·(Phi(b) − Phi(a))), u uniform, on the mirror
+    image [−b, −a] where a > 0, so that both ends lie in the lower tail, where log Phi keeps
+    its precision (``scipy.special.log_ndtr``, ``ndtri_exp``).  The distribution of
+    ``scipy.stats.truncnorm.rvs``, without its per-call overhead."""
+    a, b = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+    flip = a > 0
+    lo, hi = np.where(flip, -b, a), np.where(flip, -a, b)
+    l_lo, l_hi = special.log_ndtr(lo), special.log_ndtr(hi)
+    u = rng.random(a.shape)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        r = np.exp(l_lo - l_hi)  # Phi(lo)/Phi(hi) in [0, 1)
+        x = special.ndtri_exp(l_hi + np.log(r + u * (1.0 - r)))
+    x = np.clip(x, lo, hi)
+    return np.where(flip, -x, x)
 
 
 def cell_widths(x: np.ndarray) -> np.ndarray:
@@ -284,7 +303,7 @@ class ExactPosterior:
         lo, hi = np.exp(self.prior.bounds["log_Estar"])
         mu0, sd0 = centre[:, 0], np.sqrt(cov[:, 0, 0])
         a, b = (lo - mu0) / sd0, (hi - mu0) / sd0
-        estar = stats.truncnorm.rvs(a, b, loc=mu0, scale=sd0, random_state=rng)
+        estar = mu0 + sd0 * truncated_standard_normal(rng, a, b)
         c_r0 = cov[:, 1:, 0]
         rest_mean = centre[:, 1:] + c_r0 / cov[:, :1, 0] * (estar - mu0)[:, None]
         rest_cov = cov[:, 1:, 1:] - np.einsum("mi,mj->mij", c_r0, c_r0) / cov[:, 0, 0, None, None]
@@ -349,10 +368,14 @@ def phi_nodes_around(values: np.ndarray, logp_phi: np.ndarray, bounds) -> np.nda
     return np.linspace(lo, hi, k)
 
 
-def exact_posterior(data: FitData, prior: TracePrior, coarse: int = COARSE_NODES
-                    ) -> ExactPosterior:
+def exact_posterior(data: FitData, prior: TracePrior, coarse: int = COARSE_NODES,
+                    nodes: np.ndarray | None = None) -> ExactPosterior:
     """The exact posterior of one prepared trace (module docstring); ``coarse`` uniform
-    surface nodes to start the refinement from (:func:`refine_grid`).
+    surface nodes to start the refinement from (:func:`refine_grid`), or the surface
+    ``nodes`` [m] given (e.g. those a similar model's posterior refined to, as the layer
+    mixture's neighbouring thicknesses do, :mod:`palpbayes.bayes.layers`): the refinement
+    rule then adds nodes wherever this posterior needs them, so that the result meets the
+    same tolerances with fewer refinement rounds.
 
     Raises
     ------
@@ -375,14 +398,20 @@ def exact_posterior(data: FitData, prior: TracePrior, coarse: int = COARSE_NODES
     phi = phi_grid(prior.spec.phi_bounds) if ar1 else np.zeros(1)
     grams: list[Gram] = []
 
+    lo, hi = prior.z_bounds
+    d_max = hi - float(np.min(data.z))  # one shape table for every round of the refinement
+
     def evaluate(nodes: np.ndarray) -> np.ndarray:
-        g = gram(data.z, y, nodes, data.shape, u, ar1)
+        g = gram(data.z, y, nodes, data.model, u, ar1, d_max)
         grams.append(g)
         lp = node_posterior(g, phi, weights, centers).logp
         return log_marginal_phi(lp, phi)
 
-    lo, hi = prior.z_bounds
-    nodes, _, complete = refine_grid(lo, hi, evaluate, coarse=coarse)
+    start = None
+    if nodes is not None:
+        first = np.unique(np.clip(np.asarray(nodes, dtype=float), lo, hi))
+        start = (first, evaluate(first))
+    nodes, _, complete = refine_grid(lo, hi, evaluate, coarse=coarse, start=start)
     g = grams[0]
     for other in grams[1:]:
         g = g.concat(other)

@@ -262,8 +262,8 @@ class LayerPosterior:
 
 
 def _component(data: FitData, prior: TracePrior, model: ModelSpec,
-               coarse: int = COARSE_NODES) -> ExactPosterior:
-    return exact_posterior(replace(data, model=model), prior, coarse)
+               coarse: int = COARSE_NODES, nodes: np.ndarray | None = None) -> ExactPosterior:
+    return exact_posterior(replace(data, model=model), prior, coarse, nodes)
 
 
 def layer_posterior(data: FitData, prior: TracePrior) -> LayerPosterior:
@@ -302,8 +302,11 @@ def layer_posterior(data: FitData, prior: TracePrior) -> LayerPosterior:
         def evaluate(nodes: np.ndarray, base=base, posts=posts) -> np.ndarray:
             out = np.empty(nodes.size)
             for i, lh in enumerate(nodes):
+                # the surface nodes of the nearest thickness fitted so far, if any: the
+                # posterior changes little from one thickness node to the next
+                near = min(posts, key=lambda h: abs(h - lh)) if posts else None
                 p = _component(data, prior, model.variant(thickness=math.exp(lh), base=base),
-                               THICKNESS_COARSE)
+                               THICKNESS_COARSE, None if near is None else posts[near].z)
                 posts[float(lh)] = p
                 out[i] = log_evidence(p)
             return out

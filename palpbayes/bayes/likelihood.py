@@ -27,6 +27,7 @@ from scipy.interpolate import CubicSpline
 from scipy.special import gammaln
 
 from ..fitdata import FitData
+from ..shapekernel import cross_sums
 
 __all__ = ["TraceLikelihood", "COARSE_POINTS", "FINE_POINTS", "FINE_HALF_WIDTH"]
 
@@ -151,11 +152,25 @@ class TraceLikelihood:
         return np.unique(np.concatenate(parts))
 
     def _direct_stats(self, z_surf: np.ndarray) -> np.ndarray:
-        out = np.empty((z_surf.size, self._n_stats))
-        for rows in self.data.blocks(z_surf.size):  # bounded memory for long traces
-            s = self.data.shape(z_surf[rows, None] - self._z[None, :])
-            out[rows] = _quad_forms(s, self._F, self._u, self._ar1)
-        return out
+        """The statistics of :func:`_quad_forms` at each z_s, from the compiled loop's sums
+        (:func:`palpbayes.shapekernel.cross_sums`, no (z_s × sample) array): with the columns
+        c = (F, 1[, u]), s'c is Σ s·c; for AR(1) the lag-one form is half of
+        Σ s_t·c_(t−1) + Σ s_(t−1)·c_t and the interior one Σ s·c less the first and last
+        samples' terms."""
+        z_surf = np.ascontiguousarray(z_surf, dtype=float)
+        cols = [self._F, np.ones(self._F.size)] + ([self._u] if self._linear else [])
+        C = np.column_stack(cols)
+        ss, sc, l00, l0c, lc0, s0, s1, _ = cross_sums(z_surf, self._z, C, self.data.model,
+                                                      self._ar1)
+        # rows: s, then each column of C (F, 1, u), as _quad_forms orders them
+        plain = [ss] + [sc[:, j] for j in range(C.shape[1])]
+        if not self._ar1:
+            return np.column_stack(plain)
+        lag = [l00] + [0.5 * (l0c[:, j] + lc0[:, j]) for j in range(C.shape[1])]
+        inner = [ss - s0 * s0 - s1 * s1] + [sc[:, j] - s0 * C[0, j] - s1 * C[-1, j]
+                                             for j in range(C.shape[1])]
+        return np.column_stack([x for trio in zip(plain, lag, inner, strict=True)
+                                for x in trio])
 
     def _build_table(self) -> CubicSpline:
         grid = self.grid()

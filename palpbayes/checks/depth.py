@@ -10,6 +10,7 @@ from scipy import optimize
 
 from ..errors import FitError
 from ..fitdata import ModelSpec
+from ..shapekernel import cross_sums
 from .core import (
     FINITE_THICKNESS,
     THRESHOLDS,
@@ -24,16 +25,38 @@ from .core import (
 
 def profile_law_fit(z, f, model, z_surf0: float, half_width: float,
                      baseline: str, z_ref: float, phi: float | None) -> dict:
-    """F = E*·s(z_surf - z) + F0 (+F1·(z - z_ref)): Brent over z_surf, E*/F0/F1 linear."""
+    """F = E*·s(z_surf - z) + F0 (+F1·(z - z_ref)): Brent over z_surf, E*/F0/F1 linear.
+
+    ``model`` is the contact model or its :class:`~.core.ShapeTable`.  Brent's objective, the
+    residual sum of squares at a trial surface, comes from the compiled loop's sums
+    (:func:`palpbayes.shapekernel.cross_sums`: Σ s², Σ s·c over the columns c = 1[, u], F
+    less its mean) and the normal equations; the fit at the optimum is the least squares of
+    :func:`~.core.lstsq`."""
+    law = getattr(model, "model", model)
+
     def fit_at(zs):
         s = model.shape(zs - z)
         X = design_matrix(z, s, baseline, z_ref)
         beta, r = lstsq(X, f)
         return beta, r, X
 
+    fixed = [np.ones(z.size)] + ([z - z_ref] if baseline == "linear" else [])
+    C = np.column_stack(fixed + [f - float(np.mean(f))])
+    CC = C.T @ C
+    p = C.shape[1]  # parameters: E*, F0[, F1]
+
     def rss(zs):
-        r = fit_at(zs)[1]
-        return float(np.dot(r, r))
+        ss, sc = cross_sums(np.array([zs]), z, C, law, False)[:2]
+        A = np.empty((p, p))
+        A[0, 0], A[0, 1:], A[1:, 0] = ss[0], sc[0, :-1], sc[0, :-1]
+        A[1:, 1:] = CC[:-1, :-1]
+        b = np.r_[sc[0, -1], CC[:-1, -1]]
+        d = 1.0 / np.sqrt(np.where(np.diag(A) > 0, np.diag(A), 1.0))  # equilibrated
+        try:
+            beta = np.linalg.solve(A * d[:, None] * d[None, :], b * d) * d
+        except np.linalg.LinAlgError:
+            return float(CC[-1, -1])
+        return float(CC[-1, -1] - b @ beta)
 
     res = optimize.minimize_scalar(rss, bounds=(z_surf0 - half_width, z_surf0 + half_width),
                                    method="bounded", options={"xatol": 1e-6 * half_width})

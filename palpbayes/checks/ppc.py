@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.signal import lfilter
 
 from ..errors import InputError
 from .core import THRESHOLDS, CheckResult, clip_phi, validated_arrays
@@ -22,7 +21,9 @@ def posterior_predictive_check(z, force, mean_curves, sigmas, *, phi=None,
 
     For each posterior draw i with model curve mu_i, noise sd sigma_i (and AR(1) phi_i):
     T_obs,i = chi² of the binned y - mu_i; T_rep,i = the same for y_rep = mu_i + e_i, e_i
-    drawn from the noise model (iid N(0, sigma_i²), or stationary AR(1)).  The discrepancy
+    drawn from the noise model (iid N(0, sigma_i²), or stationary AR(1)).  For iid noise
+    T_rep,i is exactly chi² with as many degrees of freedom as bins (independent bin means of
+    variance sigma_i²/n_b) and is drawn as such.  The discrepancy
     uses the draw's own sigma_i and phi_i (:func:`binned_residuals`).  p = mean(T_rep >=
     T_obs); the check fails when p < ``alpha``.
 
@@ -65,18 +66,25 @@ def posterior_predictive_check(z, force, mean_curves, sigmas, *, phi=None,
         mu, sig, ph = mu[keep], sig[keep], ph[keep]
     nd, n = mu.shape
     gen = np.random.default_rng(rng)
-    w = gen.standard_normal((nd, n))
-    e = np.empty_like(w)
-    for i in range(nd):
-        p_i = clip_phi(ph[i])
-        if p_i == 0:
-            e[i] = sig[i] * w[i]
-        else:
-            e[i, 0] = sig[i] * w[i, 0]
-            e[i, 1:] = lfilter([math.sqrt(1 - p_i * p_i) * sig[i]], [1.0, -p_i], w[i, 1:],
-                               zi=[p_i * e[i, 0]])[0]
     t_obs = binned_residuals(z, y[None, :] - mu, z_surf, sig, phi=ph, n_bins=n_bins)
-    t_rep = binned_residuals(z, e, z_surf, sig, phi=ph, n_bins=n_bins)
+    if not np.any(ph):
+        # iid noise: the bin means of e_i ~ N(0, sigma_i²) are independent N(0, sigma_i²/n_b),
+        # so T_rep,i is exactly chi²(B) (B bins): drawn as such, not from n·n_draws normals
+        t_rep = {"chi2": gen.chisquare(t_obs["dof"], nd)}
+    else:
+        from scipy.signal import lfilter  # AR(1) only (scipy.signal is slow to import)
+
+        w = gen.standard_normal((nd, n))
+        e = np.empty_like(w)
+        for i in range(nd):
+            p_i = clip_phi(ph[i])
+            if p_i == 0:
+                e[i] = sig[i] * w[i]
+            else:
+                e[i, 0] = sig[i] * w[i, 0]
+                e[i, 1:] = lfilter([math.sqrt(1 - p_i * p_i) * sig[i]], [1.0, -p_i], w[i, 1:],
+                                   zi=[p_i * e[i, 0]])[0]
+        t_rep = binned_residuals(z, e, z_surf, sig, phi=ph, n_bins=n_bins)
     p = float(np.mean(t_rep["chi2"] >= t_obs["chi2"]))
     failed = p < alpha
     details = {"p": p, "T_obs_median": float(np.median(t_obs["chi2"])),

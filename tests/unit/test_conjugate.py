@@ -63,7 +63,7 @@ def test_sums_over_the_contact_span_equal_the_sums_over_every_sample(path):
     for chunks in ([(0, n)], [(0, 10), (10, 150), (150, 151), (151, n)]):
         g = Gram.empty(nodes, C.shape[1], True)
         for a, b in chunks:
-            g.extend(z[a:b], C[a:b], MODEL.shape, max_elements=2000)  # several node chunks
+            g.extend(z[a:b], C[a:b], MODEL)
         for i, zs in enumerate(nodes):
             X = np.column_stack([MODEL.shape(zs - z), C])
             np.testing.assert_allclose(g.m0[i], X.T @ X, rtol=1e-12, atol=1e-300)
