@@ -7,9 +7,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..bayes import BudgetSpec, PriorSpec, SamplerSettings
-from ..bayes.fit import ENGINES
-from ..bayes.priors import BASELINES, NOISE_MODELS
+from ..bayes.budget import BudgetSpec
+from ..bayes.priors import BASELINES, NOISE_MODELS, PriorSpec
+from ..bayes.sampler import SamplerSettings
 from ..errors import InputError
 from ..fitdata import BONDINGS
 from ..twin import PLATENS, Specimen
@@ -107,6 +107,8 @@ class FitOptions:
     platens: str = "unknown"
 
     def __post_init__(self) -> None:
+        from ..bayes.fit import ENGINES  # here: the options alone do not load the fitting code
+
         for what, value, allowed in (("method", self.method, METHODS),
                                      ("engine", self.engine, ENGINES),
                                      ("noise model", self.noise, NOISE_MODELS),

@@ -65,14 +65,42 @@ Modules: :mod:`.core` (result type, thresholds, AR(1) factors, least-squares hel
 
 from __future__ import annotations
 
-from .core import THRESHOLDS, CheckResult, ar1_mean_variance_factor, noise_lag1
-from .depth import depth_consistency_check
-from .effect import EFFECT_REL, checks_summary, grade_checks, material
-from .exponent import exponent_check, free_exponent_fit, law_exponent
-from .ppc import posterior_predictive_check
-from .rate import rate_dependence_check
-from .residuals import binned_residuals, residual_structure_check
-from .run import check_fit, run_checks
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_exports
+
+if TYPE_CHECKING:  # the same names, for static tools
+    from .core import THRESHOLDS, CheckResult, ar1_mean_variance_factor, noise_lag1
+    from .depth import depth_consistency_check
+    from .effect import EFFECT_REL, checks_summary, grade_checks, material
+    from .exponent import exponent_check, free_exponent_fit, law_exponent
+    from .ppc import posterior_predictive_check
+    from .rate import rate_dependence_check
+    from .residuals import binned_residuals, residual_structure_check
+    from .run import check_fit, run_checks
+
+#: Public name -> the submodule that defines it; imported on first use (PEP 562), so that
+#: e.g. :func:`checks_summary` does not load the posterior-predictive check (scipy.signal).
+_LAZY = {
+    "THRESHOLDS": "core",
+    "CheckResult": "core",
+    "ar1_mean_variance_factor": "core",
+    "noise_lag1": "core",
+    "depth_consistency_check": "depth",
+    "EFFECT_REL": "effect",
+    "checks_summary": "effect",
+    "grade_checks": "effect",
+    "material": "effect",
+    "exponent_check": "exponent",
+    "free_exponent_fit": "exponent",
+    "law_exponent": "exponent",
+    "posterior_predictive_check": "ppc",
+    "rate_dependence_check": "rate",
+    "binned_residuals": "residuals",
+    "residual_structure_check": "residuals",
+    "check_fit": "run",
+    "run_checks": "run",
+}
 
 __all__ = [
     "CheckResult",
@@ -94,3 +122,6 @@ __all__ = [
     "material",
     "checks_summary",
 ]
+
+
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)

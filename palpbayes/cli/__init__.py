@@ -28,14 +28,15 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"palpbayes: error: {message} (see 'palpbayes --help')\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(commands: tuple[str, ...] = SUBCOMMANDS) -> argparse.ArgumentParser:
+    """The ``palpbayes`` parser with the subcommands ``commands`` (default: all of them)."""
     parser = _Parser(
         prog="palpbayes",
         description="Elastic modulus with an honest uncertainty from robotic palpation data.",
     )
     parser.add_argument("--version", action="version", version=f"palpbayes {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for name in SUBCOMMANDS:
+    for name in commands:
         try:
             module = importlib.import_module(f".{name}", __name__)
         except ModuleNotFoundError as exc:  # a subcommand not built yet in this checkout
@@ -47,9 +48,20 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _parser_for(argv: list[str]) -> argparse.ArgumentParser:
+    """The parser for ``argv``: with a subcommand first, only that subcommand's (the other
+    subcommands' modules are not imported: ``palpbayes fit ...`` parses, helps and fails
+    exactly as with all of them); else the whole parser (``--help``, ``--version``, a typo)."""
+    if argv and argv[0] in SUBCOMMANDS:
+        return build_parser((argv[0],))
+    return build_parser()
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``palpbayes`` console script; returns the exit status."""
-    parser = build_parser()
+    if argv is None:
+        argv = sys.argv[1:]
+    parser = _parser_for(argv)
     args = parser.parse_args(argv)
     if not getattr(args, "command", None):
         parser.print_help()

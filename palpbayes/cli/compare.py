@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 
 from ..campaign import layout
-from ..campaign.compare import compare_campaign
 
 __all__ = ["register", "run"]
 
@@ -42,6 +41,8 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``palpbayes compare``; return 0.  Bad input raises InputError (exit status 2)."""
+    from ..campaign.compare import compare_campaign  # here: building the parser stays quick
+
     result = compare_campaign(args.results_dir, groundtruth=args.groundtruth, seed=args.seed)
     print(result.format())
     if "bayes" in set(result.comparison["method"].astype(str)):

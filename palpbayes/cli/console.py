@@ -3,7 +3,6 @@ failed checks in one line each, and the Poisson ratio when it was assumed."""
 
 from __future__ import annotations
 
-from ..bayes.modelform import interval_parts
 from ..contact import DEFAULT_NU_NOTE
 from ..flagcodes import split_flags
 from ..units import format_pressure
@@ -14,6 +13,8 @@ __all__ = ["console_lines", "flag_headlines"]
 def _interval_part_lines(summary) -> list[str]:
     """Under the table: what E_lo..E_hi of each Bayesian row is made of (90 %: statistical,
     + budget, + model form where a model check found a material misfit)."""
+    from ..bayes.modelform import interval_parts  # here: the parser does not load it
+
     rows = summary[summary["method"] == "bayes"]
     if rows.empty or "E_budget_lo_pa" not in rows:
         return []

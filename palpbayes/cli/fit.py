@@ -8,7 +8,6 @@ from pathlib import Path
 
 from ..campaign import layout
 from ..errors import DataFileError, InputError
-from ..io.manifest import is_manifest
 from .console import console_lines
 from .options import (
     RECORDING_FLAGS,
@@ -67,7 +66,7 @@ def _check_input_path(path: Path) -> None:
 
 def _run_rheology(args: argparse.Namespace) -> int:
     """``fit --rheology power-law|sls``: the viscoelastic fit of every trace, one table."""
-    from ..io.manifest import load_trace, read_manifest
+    from ..io.manifest import is_manifest, load_trace, read_manifest
     from ..rheology.campaign import RHEOLOGY_POOLED, SpeedPools, pooled_lines
     from ..rheology.results import RHEOLOGY_TABLE, fit_traces
 
@@ -101,7 +100,8 @@ def _run_rheology(args: argparse.Namespace) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..campaign.run import fit_campaign
+    from ..campaign.run import fit_campaign  # here: building the parser stays quick
+    from ..io.manifest import is_manifest
 
     if getattr(args, "rheology", ("elastic",)) != ("elastic",):
         return _run_rheology(args)

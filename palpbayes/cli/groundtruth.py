@@ -17,16 +17,9 @@ import math
 from pathlib import Path
 
 from ..campaign import layout
-from ..campaign.pipeline import write_groundtruth
 from ..contact import check_nu
 from ..errors import InputError
-from ..groundtruth import (
-    DEFAULT_STRAIN_WINDOW,
-    analyse,
-    correct_for_platens,
-    summarise_corrected,
-)
-from ..io.groundtruth_inputs import scan_inputs
+from ..groundtruth import DEFAULT_STRAIN_WINDOW
 
 __all__ = ["register", "run"]
 
@@ -85,6 +78,10 @@ def run(args: argparse.Namespace) -> int:
     InputError
         Bad options or input files (the caller maps it to exit status 2).
     """
+    from ..campaign.pipeline import write_groundtruth  # here: building the parser stays quick
+    from ..groundtruth import analyse, correct_for_platens, summarise_corrected
+    from ..io.groundtruth_inputs import scan_inputs
+
     lo_pct, hi_pct = args.strain_window
     if not (math.isfinite(lo_pct) and math.isfinite(hi_pct) and 0 <= lo_pct < hi_pct <= 100):
         raise InputError(f"--strain-window takes percent with 0 <= LO < HI <= 100, got "

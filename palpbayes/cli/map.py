@@ -29,7 +29,7 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from ..campaign.fitjob import FitOptions
+from ..campaign.options import FitOptions
 from ..contact import DEFAULT_NU_NOTE, check_nu
 from ..errors import InputError
 from ..flagcodes import level_and_text

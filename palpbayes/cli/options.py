@@ -8,11 +8,9 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..api import check_specimen, fit_options
 from ..bayes.budget import BudgetSpec
-from ..bayes.fit import ENGINES
 from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
-from ..campaign.fitjob import METHODS, FitOptions
+from ..campaign.options import METHODS, FitOptions
 from ..contact import (
     DEFAULT_NU,
     TIP_PARAMETERS,
@@ -64,6 +62,10 @@ def positive_force(option: str, value: float | None) -> float | None:
                          "sensor's peak-to-peak noise)")
     return value
 
+
+#: The posterior engines, the choices of --engine: :data:`palpbayes.bayes.fit.ENGINES`, written
+#: out so that building the parser does not import the fitting code (a test holds them equal).
+ENGINES = ("emcee", "exact")
 
 #: The budget's defaults, said in the help (one home: :class:`~palpbayes.bayes.budget.BudgetSpec`).
 _BUDGET = BudgetSpec()
@@ -230,6 +232,8 @@ def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -
 def options_from_args(args: argparse.Namespace) -> FitOptions:
     """Build :class:`FitOptions` from parsed arguments (validated) by
     :func:`palpbayes.api.fit_options`, the function :func:`palpbayes.fit` uses too."""
+    from ..api import fit_options  # here: building the parser does not load the fitting code
+
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers {args.workers} must be at least 1")
     layer, bonding = layer_from_args(args)
@@ -248,6 +252,8 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
 def specimen_from_args(args: argparse.Namespace):
     """The :class:`~palpbayes.twin.Specimen` of ``--specimen`` (None when absent), checked
     against ``--thickness`` and ``--half-space`` (:func:`palpbayes.api.check_specimen`)."""
+    from ..api import check_specimen
+
     thickness_from_args(args)  # a number, or 'unknown'
     return check_specimen(getattr(args, "specimen", None), getattr(args, "thickness", None),
                           getattr(args, "half_space", False))

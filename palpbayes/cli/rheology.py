@@ -15,10 +15,6 @@ import numpy as np
 
 from ..contact import check_nu
 from ..errors import InputError
-from ..rheology.choice import K_WARN
-from ..rheology.cycle import check_segments
-from ..rheology.posterior import RHEOLOGIES
-from ..rheology.results import RHEOLOGY_TABLE
 
 __all__ = ["ELASTIC_ONLY", "VISCO_ONLY", "add_rheology_options", "given_options",
            "parse_rheologies", "check_rheology_args", "print_rheology"]
@@ -48,6 +44,8 @@ def parse_rheologies(text: str) -> tuple[str, ...]:
     """--rheology: one model, or several separated by commas to compare them (``elastic``
     alone is the elastic fit of the loading; in a list, the constant modulus fitted to the same
     cycle as the others)."""
+    from ..rheology.posterior import RHEOLOGIES  # here: the parser does not load rheology
+
     names = tuple(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
     bad = [n for n in names if n not in RHEOLOGIES]
     if bad or not names:
@@ -102,6 +100,9 @@ def check_rheology_args(args: argparse.Namespace) -> tuple[float | None, str]:
         An option of the elastic fit, a bad t0, compression speed or segment list, or an
         existing table without ``--force`` (one line each).
     """
+    from ..rheology.cycle import check_segments
+    from ..rheology.results import RHEOLOGY_TABLE
+
     out = Path(args.out)
     given = given_options(args, ELASTIC_ONLY)
     if given:
@@ -177,6 +178,8 @@ def _rheology_line(r) -> str:
 
 
 def _choice_line(rows) -> str:
+    from ..rheology.choice import K_WARN
+
     best = rows.loc[rows["elpd_diff"].idxmax()]
     others = ", ".join(f"{r['rheology']} by {-r['elpd_diff']:.1f} ± {r['elpd_diff_se']:.1f}"
                        for _, r in rows.iterrows() if r["rheology"] != best["rheology"])

@@ -30,21 +30,13 @@ import re
 
 from ..errors import InputError
 from ..noise import PAPER_NOISE_PP
-from ..paper import PAPER_MATERIALS, PAPER_TIPS
-from ..sim import (
-    POWER_LAW_FOAMS,
-    SLS_FOAMS,
-    VISCO_TIPS,
-    Inclusion,
-    default_inclusion,
-    read_map_truth,
-    simulate_campaign,
-    simulate_map,
-    simulate_visco_campaign,
-)
 from ..units import format_force, format_length, format_pressure
 
 __all__ = ["register", "run"]
+
+#: The paper's tips (the keys of :data:`palpbayes.paper.PAPER_TIPS`, sorted), the choices of
+#: --tip: written out so that building the parser imports neither the simulator nor pandas.
+PAPER_TIP_NAMES = ("flat", "paraboloid", "sphere")
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -122,7 +114,7 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="grid spacing (default 3e-3)")
     m.add_argument("--background-e", type=float, default=None, metavar="PA",
                    help="background Young's modulus (default 50e3)")
-    m.add_argument("--tip", choices=sorted(PAPER_TIPS), default=None,
+    m.add_argument("--tip", choices=PAPER_TIP_NAMES, default=None,
                    help="the paper's tip (default paraboloid)")
     m.add_argument("--lump-ratio", type=float, default=None, metavar="R",
                    help="lump modulus / background (default 10)")
@@ -223,6 +215,9 @@ def run(args: argparse.Namespace) -> int:
                          "phantom); add --map or drop them")
     if args.rheology:
         return _run_visco(args)
+    from ..paper import PAPER_MATERIALS, PAPER_TIPS
+    from ..sim import simulate_campaign
+
     for name, default in (("repetitions", 3), ("ar1", 0.0), ("gt_specimens", 5),
                           ("base", DEFAULT_BASE), ("platens", "bonded")):
         if getattr(args, name) is None:
@@ -272,6 +267,8 @@ def _names(text: str | None, known, what: str) -> list[str]:
 
 def _run_visco(args: argparse.Namespace) -> int:
     """The ``--rheology`` branch of :func:`run`."""
+    from ..sim import POWER_LAW_FOAMS, SLS_FOAMS, VISCO_TIPS, simulate_visco_campaign
+
     wrong = _given(args, _ELASTIC_ONLY)
     if wrong:
         raise InputError(f"{', '.join(wrong)} only apply to the elastic campaign; a "
@@ -308,6 +305,9 @@ def _run_visco(args: argparse.Namespace) -> int:
 
 def _run_map(args: argparse.Namespace) -> int:
     """The ``--map`` branch of :func:`run`."""
+    from ..paper import PAPER_TIPS
+    from ..sim import Inclusion, default_inclusion, read_map_truth, simulate_map
+
     nx, ny = args.grid or (15, 15)
     step = 3e-3 if args.step is None else args.step
     lump_given = _given(args, _LUMP)

@@ -61,7 +61,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.polynomial.legendre import leggauss
-from scipy.interpolate import CubicSpline, PchipInterpolator
 
 __all__ = [
     "BASES",
@@ -149,6 +148,8 @@ class _UniformCubic:
 
 @functools.lru_cache(maxsize=64)
 def _transform_spline(nu: float, base: str) -> _UniformCubic:
+    from scipy.interpolate import CubicSpline  # here: importing palpbayes stays quick
+
     x, w = leggauss(_U_ORDER)
     edges = np.linspace(0.0, _U_MAX, _U_PANELS + 1)
     half = 0.5 * np.diff(edges)[:, None]
@@ -264,6 +265,8 @@ class _LogTable:
 
 
 def _log_table(x: np.ndarray, logf: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    from scipy.interpolate import PchipInterpolator  # here: importing palpbayes stays quick
+
     grid = np.linspace(0.0, x[-1], _CHI_POINTS)
     slope = (logf[-1] - logf[-6]) / math.log(x[-1] / x[-6])
     return grid, PchipInterpolator(x, logf)(grid), float(slope)
@@ -325,6 +328,8 @@ class ProfileTable:
 
 @functools.lru_cache(maxsize=128)
 def _profile_table(n: float, nu: float, base: str) -> ProfileTable:
+    from scipy.interpolate import PchipInterpolator
+
     lams = _LAMBDA_GRID[1:]
     edge, integ = _solve_many(lams, nu, base, (0.0, n))
     rho = edge[:, 1] / edge[:, 0]          # depth = kappa_n·c·a^n·rho

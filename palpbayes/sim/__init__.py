@@ -33,41 +33,55 @@ noise convention in :mod:`palpbayes.noise` (both are shared with the fitting sid
 
 from __future__ import annotations
 
-from . import (
-    campaign,
-    compression,
-    force,
-    inclusion,
-    map,
-    misfit,
-    sensitivity_table,
-    series,
-    trace,
-    visco_campaign,
-    viscoelastic,
-)
-from .campaign import *  # noqa: F403
-from .compression import *  # noqa: F403
-from .force import *  # noqa: F403
-from .inclusion import *  # noqa: F403
-from .map import *  # noqa: F403
-from .misfit import *  # noqa: F403
-from .sensitivity_table import *  # noqa: F403
-from .series import *  # noqa: F403
-from .trace import *  # noqa: F403
-from .visco_campaign import *  # noqa: F403
-from .viscoelastic import *  # noqa: F403
+import importlib
+from typing import TYPE_CHECKING, Any
 
-# built from the submodules' own lists (the form static checkers follow), never re-typed
-__all__: list[str] = []
-__all__ += force.__all__
-__all__ += trace.__all__
-__all__ += compression.__all__
-__all__ += series.__all__
-__all__ += campaign.__all__
-__all__ += inclusion.__all__
-__all__ += map.__all__
-__all__ += misfit.__all__
-__all__ += sensitivity_table.__all__
-__all__ += viscoelastic.__all__
-__all__ += visco_campaign.__all__
+#: Submodules whose ``__all__`` make up the package's public names, in the order of
+#: ``__all__``; they are imported on first use (PEP 562), so that importing one submodule, or
+#: building the command line's parser, does not load the whole simulator (and scipy.signal).
+API_MODULES = ("force", "trace", "compression", "series", "campaign", "inclusion", "map",
+               "misfit", "sensitivity_table", "viscoelastic", "visco_campaign")
+
+if TYPE_CHECKING:  # the same names, for static tools
+    from .campaign import *  # noqa: F403
+    from .compression import *  # noqa: F403
+    from .force import *  # noqa: F403
+    from .inclusion import *  # noqa: F403
+    from .map import *  # noqa: F403
+    from .misfit import *  # noqa: F403
+    from .sensitivity_table import *  # noqa: F403
+    from .series import *  # noqa: F403
+    from .trace import *  # noqa: F403
+    from .visco_campaign import *  # noqa: F403
+    from .viscoelastic import *  # noqa: F403
+
+
+def _public_names() -> dict[str, str]:
+    """Public name -> the submodule that defines it (imports every API module)."""
+    owner: dict[str, str] = {}
+    for sub in API_MODULES:
+        for name in importlib.import_module(f"{__name__}.{sub}").__all__:
+            if name in owner:
+                raise ImportError(f"{__name__}: {name!r} is exported by both {owner[name]} and "
+                                  f"{sub}; export it from one module")
+            owner[name] = sub
+    return owner
+
+
+def __getattr__(name: str) -> Any:
+    if name == "__all__":
+        return list(_public_names())
+    if name.startswith("__"):  # e.g. __wrapped__, looked up by tools: never a public name
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    if name in API_MODULES:  # a submodule (``palpbayes.sim.trace``): import only that one
+        return importlib.import_module(f"{__name__}.{name}")
+    sub = _public_names().get(name)
+    if sub is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{sub}"), name)
+    globals()[name] = value  # later look-ups skip __getattr__
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_public_names()})

@@ -9,35 +9,72 @@ footprint area: :mod:`.specimen`; linear elasticity with mixed elements up to nu
 tip × nu × base and cached on disk (:mod:`.table`, :mod:`.cache`).
 """
 
-from .compression import (
-    PLATENS,
-    compression_factor,
-    oedometric_factor,
-    platen_factor,
-    pressure_solution_factor,
-)
-from .palpation import TWIN_BASES, PalpationCurve, solve_palpation
-from .specimen import (
-    FOOTPRINT_COLUMNS,
-    SPECIMEN_KINDS,
-    Specimen,
-    check_specimen_plausible,
-    parse_specimen,
-    specimen_from_sizes,
-)
-from .table import (
-    MAX_ASPECT,
-    TWIN_SOLVER_VERSION,
-    TwinTable,
-    clear_memory,
-    prepare_tables,
-    table_key,
-    twin_depth_limit,
-    twin_depth_limit_reason,
-    twin_factor,
-    twin_shape,
-    twin_table,
-)
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_exports
+
+if TYPE_CHECKING:  # the same names, for static tools
+    from .compression import (
+        PLATENS,
+        compression_factor,
+        oedometric_factor,
+        platen_factor,
+        pressure_solution_factor,
+    )
+    from .palpation import TWIN_BASES, PalpationCurve, solve_palpation
+    from .specimen import (
+        FOOTPRINT_COLUMNS,
+        SPECIMEN_KINDS,
+        Specimen,
+        check_specimen_plausible,
+        parse_specimen,
+        specimen_from_sizes,
+    )
+    from .table import (
+        MAX_ASPECT,
+        TWIN_SOLVER_VERSION,
+        TwinTable,
+        clear_memory,
+        prepare_tables,
+        table_key,
+        twin_depth_limit,
+        twin_depth_limit_reason,
+        twin_factor,
+        twin_shape,
+        twin_table,
+    )
+
+#: Public name -> the submodule that defines it; imported on first use (PEP 562), so that
+#: importing one submodule (e.g. :mod:`.specimen`) does not load the finite elements.
+_LAZY = {
+    "PLATENS": "compression",
+    "compression_factor": "compression",
+    "oedometric_factor": "compression",
+    "platen_factor": "compression",
+    "pressure_solution_factor": "compression",
+    "TWIN_BASES": "palpation",
+    "PalpationCurve": "palpation",
+    "solve_palpation": "palpation",
+    "FOOTPRINT_COLUMNS": "specimen",
+    "SPECIMEN_KINDS": "specimen",
+    "Specimen": "specimen",
+    "check_specimen_plausible": "specimen",
+    "parse_specimen": "specimen",
+    "specimen_from_sizes": "specimen",
+    "MAX_ASPECT": "table",
+    "TWIN_SOLVER_VERSION": "table",
+    "TwinTable": "table",
+    "clear_memory": "table",
+    "prepare_tables": "table",
+    "table_key": "table",
+    "twin_depth_limit": "table",
+    "twin_depth_limit_reason": "table",
+    "twin_factor": "table",
+    "twin_shape": "table",
+    "twin_table": "table",
+}
 
 __all__ = [
     "PLATENS", "compression_factor", "oedometric_factor", "platen_factor",
@@ -48,3 +85,6 @@ __all__ = [
     "twin_depth_limit_reason", "twin_factor", "twin_shape", "twin_table", "clear_memory",
     "MAX_ASPECT",
 ]
+
+
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)
