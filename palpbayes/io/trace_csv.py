@@ -31,7 +31,7 @@ import pandas as pd
 from ..contact import Tip
 from ..errors import DataFileError, InputError
 from ..trace import SEGMENTS, IndentationTrace
-from .atomic import write_csv_atomic
+from .atomic import write_text_atomic
 from .joint_trace import trace_from_joint_frame
 from .tabular import (
     MAX_FORCE_N,
@@ -289,7 +289,13 @@ def write_trace(trace: IndentationTrace, path: str | os.PathLike, *,
     ``float_format`` "%.10g" keeps z to 1e-10 m and force to 10 significant digits; use
     "%.17g" for a bit-exact round trip.
     """
-    df = pd.DataFrame({"time_s": trace.time, "z_m": trace.z, "force_n": trace.force})
+    cols = [trace.time, trace.z, trace.force]
+    header, fmt = "time_s,z_m,force_n", [float_format] * 3
     if trace.segment is not None:
-        df[SEGMENT_COLUMN] = np.asarray(SEGMENTS, dtype=object)[trace.segment]
-    return write_csv_atomic(df, path, float_format=float_format)
+        cols.append(np.asarray(SEGMENTS, dtype=object)[trace.segment])
+        header, fmt = header + f",{SEGMENT_COLUMN}", fmt + ["%s"]
+    # one %-format of the whole table (a trace's samples are finite): the bytes pandas'
+    # to_csv wrote, without its value-by-value formatter (~45 ms of a 2,400-sample trace's 50)
+    rows = np.column_stack([np.asarray(c, dtype=object) for c in cols]).ravel().tolist()
+    text = ((",".join(fmt) + "\n") * trace.n_points) % tuple(rows)
+    return write_text_atomic(f"{header}\n{text}", path)

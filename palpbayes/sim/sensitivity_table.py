@@ -173,9 +173,14 @@ class SensitivityTable:
         u = s / ell[:, None]
         nS, um = self._n[2], self.u_max
         iu, tu = _cell(np.minimum(u, um), 0.0, self._du, nS)
-        out = sum(wk * np.take_along_axis(lines, iu + k, axis=1)
-                  for k, wk in enumerate(_catmull_rom(tu)))
-        cc = (c * c)[:, None]
-        tail = lines[:, nS][:, None] * ((cc + um * um) / (cc + u * u)) ** 2.5
-        out = np.where(u > um, tail, out)
+        # gather from the flat lines (row offset added once): the values take_along_axis
+        # gives, without its per-call index broadcasting
+        flat = lines.ravel()
+        iu += (np.arange(lines.shape[0]) * lines.shape[1])[:, None]
+        out = sum(wk * flat[iu + k] for k, wk in enumerate(_catmull_rom(tu)))
+        far = u > um
+        if far.any():  # the tail only where it applies (its power is the costly part)
+            row = np.nonzero(far)[0]
+            cc, uf = (c * c)[row], u[far]
+            out[far] = lines[row, nS] * ((cc + um * um) / (cc + uf * uf)) ** 2.5
         return np.where(below[:, None], 0.0, np.clip(out, 0.0, 1.0))
