@@ -87,9 +87,9 @@ def compiled_shape(model: ModelSpec, d_max: float) -> CompiledShape:
     d_max
         [m] Deepest depth the caller will ask for (a table covers it; a power law any depth).
     """
-    m = model.exponent
-    if m is not None:
-        return _power(model)
+    power = _power(model)
+    if power is not None:
+        return power
     d_max = float(d_max)
     if not (d_max > 0 and math.isfinite(d_max)):
         d_max = 1e-12
@@ -97,8 +97,11 @@ def compiled_shape(model: ModelSpec, d_max: float) -> CompiledShape:
     return _table(model, d_top)
 
 
-@lru_cache(maxsize=64)
-def _power(model: ModelSpec) -> CompiledShape:
+@lru_cache(maxsize=256)
+def _power(model: ModelSpec) -> CompiledShape | None:
+    """The model's power law, None when its law is none (looked up once per model)."""
+    if model.exponent is None:
+        return None
     return CompiledShape(0, float(prefactor(model.tip)), float(model.exponent), np.zeros(2),
                          math.inf)
 
@@ -112,6 +115,9 @@ def _table(model: ModelSpec, d_top: float) -> CompiledShape:
 
 def _law_for(model: ModelSpec, nodes: np.ndarray, z: np.ndarray,
              d_max: float | None = None) -> CompiledShape:
+    power = _power(model)
+    if power is not None:  # any depth: no need to know the deepest
+        return power
     need = float(np.max(nodes)) - float(np.min(z)) if nodes.size and z.size else 0.0
     return compiled_shape(model, need if d_max is None else max(need, float(d_max)))
 

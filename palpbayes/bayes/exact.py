@@ -292,8 +292,13 @@ class ExactPosterior:
             left = np.r_[0.0, np.diff(self.phi)][hj] / 2
             right = np.r_[np.diff(self.phi), 0.0][hj] / 2
             phi = phi_node - left + rng.random(m) * (left + right)
-        lerp = lambda x: (1 - t)[(...,) + (None,) * (x.ndim - 2)] * x[gi, hj] + (  # noqa: E731
-            t[(...,) + (None,) * (x.ndim - 2)] * x[gi + 1, hj])
+        at, above = gi * self.phi.size + hj, (gi + 1) * self.phi.size + hj  # flat (G·H) rows
+
+        def lerp(x: np.ndarray) -> np.ndarray:  # x (G, H, ...) at z, linear between nodes
+            flat = x.reshape((-1,) + x.shape[2:])
+            a, b = flat.take(at, axis=0), flat.take(above, axis=0)
+            return a + t.reshape((-1,) + (1,) * (x.ndim - 2)) * (b - a)
+
         centre, cov, S = lerp(self.post.beta), lerp(self.post.scale), lerp(self.post.S)
         nu = self.post.nu
         chi = rng.chisquare(nu, m) / nu  # multivariate t: normal / sqrt(chi²/nu)
