@@ -412,9 +412,13 @@ def lee_radok_columns(win: Windows, z_nodes: np.ndarray, z_edges: np.ndarray, m:
     a2[:, 1:] += b2
     if kernel is None:  # the same for every theta of a fit: once per record
         if win._constant is None:
-            win._constant = (*step_kernel_means(win, None), *band_corrections(win, None))
-        D1, D2, d1, d2 = win._constant
-        prod = a1 @ D1.T + a2 @ D2.T
+            dense = step_kernel_means(win, None) if win.lattice is None else ()
+            win._constant = (*band_corrections(win, None), *dense)
+        d1, d2, *dense = win._constant
+        # on a lattice by FFT, as every kernel: two dense K × K products cost 40-80 ms per
+        # call on shared cores, most of the SLS's grid search (issue 47)
+        prod = (knot_products(win, a1, a2, None) if not dense
+                else a1 @ dense[0].T + a2 @ dense[1].T)
     else:
         prod = knot_products(win, a1, a2, kernel, theta, t0)
         d1, d2 = band_corrections(win, kernel, theta, t0)

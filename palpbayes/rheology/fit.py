@@ -39,6 +39,7 @@ from ..groundtruth import DEFAULT_STRAIN_WINDOW
 from ..intervals import LEVEL, central_band
 from ..trace import IndentationTrace
 from ..units import format_pressure
+from .column_table import ColumnTable
 from .compression import PAPER_COMPRESSION_SPEED, compression_moduli
 from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
 from .design import lee_radok_columns
@@ -189,7 +190,8 @@ class RheologyFit:
     def force_curves(self, n: int = _BAND_DRAWS) -> np.ndarray:
         """[N] Model force at the block means for ``n`` draws (n, points), offset, drag and
         tilt included: the draws :func:`curve_draws` picks."""
-        return _force_curves(self.data, self.rheology, self.draws, self.t0, n, self.nodes)
+        return _force_curves(self.data, self.rheology, self.draws, self.t0, n, self.nodes,
+                             None if self.sampler is None else self.sampler.table)
 
     def compression_modulus(self, height: float, speed: float = PAPER_COMPRESSION_SPEED,
                             strain_window=DEFAULT_STRAIN_WINDOW, level: float = LEVEL,
@@ -231,15 +233,23 @@ def curve_draws(n_total: int, n: int) -> np.ndarray:
 
 
 def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int,
-                  nodes: dict | None = None) -> np.ndarray:
+                  nodes: dict | None = None, table: ColumnTable | None = None) -> np.ndarray:
     """[N] Model force at the block means for the ``n`` draws :func:`curve_draws` picks.
 
     The columns cost one hereditary matrix per distinct theta, so the draws are grouped by
     theta: a grid draw's moduli are conditional on its node (:meth:`~palpbayes.rheology.
     posterior.GridPosterior.draws`), and its curve is taken at the node's (theta, z_surf)
     (``nodes``: ``_theta_node``, ``_z_node``) — at most one matrix per theta node; emcee's
-    draws (and a fit read back from disk) use each draw's own values."""
+    draws (and a fit read back from disk) use each draw's own values, from emcee's column
+    ``table`` when given (:class:`~palpbayes.rheology.column_table.ColumnTable`: the columns
+    the chain itself used, one interpolation for all the draws instead of a hereditary
+    matrix per draw)."""
     idx = curve_draws(len(draws["z_surf"]), n)
+    if table is not None and not nodes and rheology != "elastic":
+        theta = draws["alpha" if rheology == "power-law" else "tau"][idx]
+        X = table.columns(np.log(theta) if table.log_theta else theta, draws["z_surf"][idx])
+        moduli = np.column_stack([draws[table.ev.names[i]][idx] for i in table.moduli])
+        return _baseline_terms(data, draws, idx, np.einsum("wnk,wk->wn", X, moduli))
     win = data.windows()
     ret = data.segment == RETRACT
     design = (RetractDesign(data.edges, data.z_edges, data.sample_time[ret], data.m, t0)
@@ -265,6 +275,13 @@ def _force_curves(data: CycleData, rheology: str, draws: dict, t0: float, n: int
             out += draws["E_inf"][idx, None] * lee_radok_columns(win, z, data.z_edges, data.m,
                                                                  None)
     out *= data.C
+    return _baseline_terms(data, draws, idx, out)
+
+
+def _baseline_terms(data: CycleData, draws: dict, idx: np.ndarray, out: np.ndarray
+                    ) -> np.ndarray:
+    """``out`` (n, points) [N], the contact force of the draws ``idx``, plus their offset,
+    drag b·(−dz/dt) and tilt F1·(z − z_ref) (those in ``draws``), in place."""
     out += draws["offset"][idx, None]
     if "drag" in draws:
         out += draws["drag"][idx, None] * data.speed[None, :]
@@ -354,7 +371,8 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
     else:
         draws = grid.draws(gen, int(n_draws))
     nodes = {k: draws.pop(k) for k in ("_theta_node", "_z_node") if k in draws}
-    curves = _force_curves(data, rheology, draws, t0, _BAND_DRAWS, nodes)
+    curves = _force_curves(data, rheology, draws, t0, _BAND_DRAWS, nodes,
+                           None if sampler is None else sampler.table)
     sub = curve_draws(n_draws, _BAND_DRAWS)
     t_contact = float(np.median(_contact_times(data, draws["z_surf"][sub])))
     # residuals binned in time: -time as the "height", the contact time as the "surface"

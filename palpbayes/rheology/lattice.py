@@ -16,7 +16,7 @@ from scipy import fft as sp_fft
 
 __all__ = ["KnotLattice", "LatticeGroup", "knot_lattice", "LATTICE_MIN_KNOTS",
            "LATTICE_MAX_OFF", "LATTICE_MAX_SPAN", "LATTICE_MAX_GROUPS", "LATTICE_TOL",
-           "LATTICE_MIN_RUN"]
+           "LATTICE_MIN_RUN", "LATTICE_MAX_REFINE"]
 
 
 class LatticeGroup:
@@ -99,6 +99,9 @@ LATTICE_MAX_GROUPS = 4
 LATTICE_TOL = 1e-9
 #: Fewest knots of a stretch of equal steps that starts a group of its own.
 LATTICE_MIN_RUN = 8
+#: Finest division q of a group's step h onto which a later stretch may join it (h/q): a
+#: stretch off the group's lattice by a fraction p/q of h, q <= this, shares the finer one.
+LATTICE_MAX_REFINE = 4
 
 
 def _on(e: np.ndarray, origin: float, h: float) -> np.ndarray:
@@ -106,13 +109,31 @@ def _on(e: np.ndarray, origin: float, h: float) -> np.ndarray:
     return np.abs(x - np.rint(x)) <= LATTICE_TOL
 
 
+def _common_step(knots: np.ndarray, origin: float, h: float, members: np.ndarray
+                 ) -> float | None:
+    """The step [s] of the lattice ``origin`` + n·h/q (q = 1 ... :data:`LATTICE_MAX_REFINE`,
+    the smallest) that holds every one of ``knots``, or None when none does or when the group
+    (its ``members`` and the knots) would span more than :data:`LATTICE_MAX_SPAN` of its
+    points per knot.  A retract whose blocks are the approach's length but start a third of a
+    block off its lattice (the hold's corner) shares a lattice of a third of the step with it:
+    one FFT instead of a dense product of every approach knot into every retract step."""
+    both = np.r_[members, knots]
+    for q in range(1, LATTICE_MAX_REFINE + 1):
+        if _on(knots, origin, h / q).all():
+            points = (both.max() - both.min()) / (h / q) + 1
+            return h / q if q == 1 or points <= LATTICE_MAX_SPAN * both.size else None
+    return None
+
+
 def knot_lattice(e: np.ndarray) -> KnotLattice | None:
     """The knots' :class:`KnotLattice`, or None when too few lie on lattices (dense path).
 
     Stretches of at least :data:`LATTICE_MIN_RUN` knots with one recurring step (>= 2 % of
-    the steps) are placed, longest first, on the lattice of an earlier group they lie on, or
-    start a group of their own (step: the stretch's mean step; members: its knots within
-    :data:`LATTICE_TOL` of that lattice, so a drifting clock leaves knots off it); a knot
+    the steps) are placed, longest first, on the lattice of an earlier group they lie on
+    (refined to a step h/q, q <= :data:`LATTICE_MAX_REFINE`, where that holds them:
+    :func:`_common_step`), or start a group of their own (step: the stretch's mean step;
+    members: its knots within :data:`LATTICE_TOL` of that lattice, so a drifting clock
+    leaves knots off it); a knot
     outside every stretch joins a group whose lattice it lies on, within that group's span.
     The path is taken when at most :data:`LATTICE_MAX_OFF` of the knots are left on no
     lattice, with at most
@@ -144,7 +165,9 @@ def knot_lattice(e: np.ndarray) -> KnotLattice | None:
     for a, b, _h in runs:
         knots = e[a:b + 1]
         for gi, (o, hg) in enumerate(lattices):
-            if _on(knots, o, hg).all():
+            h = _common_step(knots, o, hg, e[group == gi])
+            if h is not None:
+                lattices[gi] = (o, h)
                 group[a:b + 1] = gi
                 break
         else:  # a lattice of its own: the run's mean step, and only the knots that lie on it

@@ -52,11 +52,10 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import emcee
 import numpy as np
-from scipy.special import logsumexp
 
 from ..bayes.diagnostics import Diagnostics, chain_passes, compute_diagnostics, import_arviz
 from ..bayes.sampler import SamplerSettings, run_emcee
@@ -156,22 +155,27 @@ def _independence_move(start: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> emc
     mu, d = start.mean(axis=0), start.shape[1]
     S = np.atleast_2d(np.cov(start, rowvar=False)) * T_INFLATE**2
     L = np.linalg.cholesky(S + 1e-12 * np.trace(S) * np.eye(d))
-    mirrors = [(j, b) for j in range(d) for b in (lo[j], hi[j]) if np.isfinite(b)]
-
-    def mirrored(y: np.ndarray, j: int, b: float) -> np.ndarray:
-        m = y.copy()
-        m[:, j] = 2 * b - y[:, j]
-        return m
+    L_inv = np.linalg.inv(L)  # triangular: the Mahalanobis coordinates by one product
+    # the mirror images of x as sign·x + shift, one row per image: each coordinate as it is
+    # or reflected at one of its finite bounds, every combination
+    sign, shift = np.ones((1, d)), np.zeros((1, d))
+    for j in range(d):
+        n = sign.shape[0]  # the images so far, each reflected at each bound of j
+        for b in (lo[j], hi[j]):
+            if np.isfinite(b):
+                s_j, c_j = sign[:n].copy(), shift[:n].copy()
+                s_j[:, j], c_j[:, j] = -s_j[:, j], 2 * b - c_j[:, j]
+                sign, shift = np.r_[sign, s_j], np.r_[shift, c_j]
+    sign, shift = sign[:, None, :], (shift - mu)[:, None, :]
+    scale = -0.5 * (T_DF + d)
 
     def log_g(x):
-        ys = [x]
-        for j in range(d):  # each coordinate: as it is, or mirrored at one of its bounds
-            ys += [mirrored(y, j, b) for y in ys for jj, b in mirrors if jj == j]
-        Y = np.stack(ys)  # (images, walkers, ndim)
-        q = np.linalg.solve(L, (Y - mu).reshape(-1, d).T)
-        lt = (-0.5 * (T_DF + d) * np.log1p((q * q).sum(axis=0) / T_DF)).reshape(Y.shape[:2])
+        q = (sign * x[None] + shift) @ L_inv.T  # (images, walkers, ndim), standardised
+        lt = scale * np.log1p(np.einsum("iwk,iwk->iw", q, q) / T_DF)
+        top = lt.max(axis=0)  # log-sum-exp over the images (scipy's costs 10x the rest)
+        total = top + np.log(np.exp(lt - top).sum(axis=0))
         inside = np.all((x >= lo) & (x <= hi), axis=1)
-        return np.where(inside, logsumexp(lt, axis=0), -np.inf)
+        return np.where(inside, total, -np.inf)
 
     def propose(coords, random):
         z = random.standard_normal(coords.shape) @ L.T
@@ -216,6 +220,9 @@ class EmceeRheology:
         Evaluations outside the column table; largest |Δ log L| of the table at the checks.
     seconds, seconds_start
         [s] Wall time of the call, and of it the grid start (~0 with ``grid`` given).
+    table
+        The column table the chain used (:class:`~palpbayes.rheology.column_table.
+        ColumnTable`): the fit's force curves of the draws come from it.
     """
 
     rheology: str
@@ -231,6 +238,7 @@ class EmceeRheology:
     table_error: float
     seconds: float
     seconds_start: float
+    table: ColumnTable | None = field(default=None, repr=False)
 
     @property
     def rhat(self) -> dict[str, float]:
@@ -402,4 +410,4 @@ def sample_emcee(data: CycleData, rheology: str = "power-law", *, t0: float = 1.
     return EmceeRheology(rheology, _natural(flat[keep], names, data.f0_center), chains, diag,
                          idata, grid, int(n_walkers), res.burn, res.thin,
                          table.n_direct, table_error, time.perf_counter() - start,
-                         seconds_start)
+                         seconds_start, table)
