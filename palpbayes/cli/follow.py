@@ -2,20 +2,29 @@
 
 Reads samples (time, z, force) from stdin or a TCP connection, as CSV lines with a header or
 JSON lines (:mod:`palpbayes.online.stream`), feeds them to the online estimator in chunks as
-``replay`` does, prints one line per update (flushed at once) and its stop line the moment
+``replay`` does, prints one line per update (flushed at once), and the stop line the moment
 the stopping rule fires, then runs the model checks and exits with a status that says why
-(:data:`EXIT_STATUS`).  Every sample sent
-is used (``replay`` keeps a recording's loading segment): the sender stops at the deepest
-point.  With ``--timeout`` a pause in the stream gives a partial chunk, so the updates (and
-the sample the rule fires at) can then differ from ``replay``'s; ``--timeout 0`` keeps them
-equal.
+(:data:`EXIT_STATUS`).  Every sample sent is used (``replay`` keeps a recording's loading
+segment): the sender stops at the deepest point.  With ``--timeout`` a pause in the stream
+gives a partial chunk, so the updates (and the sample the rule fires at) can then differ from
+``replay``'s; ``--timeout 0`` keeps them equal.
 
-Each update gives E with its statistical interval and its full interval (with the uncertainty
-budget); ``--target`` is tested on the full one unless ``--target-on stat``.  When the run
-ends (the stop, or the end of the stream) the model checks of the offline fit are run on the
-samples received, after the update that carries the stop has been printed, and the last line
-says how they came out (with ``--json``, every line is one JSON object, the last with
-``"event": "stop"`` or ``"end"`` and the checks).
+What comes when, at a stop (:class:`StopLine`):
+
+1. the **stop line** (``stop: REASON at n N ...``; with ``--json`` ``"event": "stop"``,
+   ``"final": false``), flushed the moment the stop is known.  A max force or max depth is
+   judged at every sample as it arrives, in the thread that reads the stream, before any
+   posterior work (:meth:`~palpbayes.online.OnlineEstimator.limit`): its stop line gives the
+   sample (n, line, t, z), the force above the baseline and the depth below the surface of
+   the last update, and no E.  A precision target is judged after each chunk's update: its
+   stop line comes as soon as the statistical E is known (with ``--target-on full``, once the
+   full interval is), before the rest of the update;
+2. the update on the samples up to the stop (E with both intervals, ``"stop"`` set);
+3. the **last line** (``stop: ...; model checks: ...``; ``"event": "stop"``, ``"final":
+   true``), after the model checks of the offline fit have run on the samples received.
+
+When the stream ends first there is no stop line: the updates, then the last line, ``end:``
+(``"event": "end"``).
 """
 
 from __future__ import annotations
@@ -25,6 +34,7 @@ import json
 import math
 import sys
 import textwrap
+import threading
 import time
 from collections.abc import Callable, Iterable
 
@@ -32,7 +42,7 @@ from ..checks import CheckResult, checks_summary
 from ..contact import DEFAULT_NU_NOTE
 from ..errors import InputError
 from ..online import OnlineEstimator, OnlineState
-from ..online.stream import Batch, SampleParser, batches
+from ..online.stream import Batch, LimitHit, SampleParser, batches
 from ..online.tcp import DEFAULT_HOST, accept_lines, connect_lines, listen, parse_address
 from ..units import format_force, format_length, format_pressure
 from .online_options import add_online_options, estimator_from_args, rule_from_args
@@ -44,7 +54,8 @@ from .options import (
 )
 
 __all__ = ["register", "run", "follow", "update_text", "update_json", "final_json",
-           "final_text", "EXIT_STATUS", "EXIT_ENDED", "EXIT_BAD_INPUT", "HELP_WIDTH"]
+           "final_text", "StopLine", "stop_json", "stop_text", "EXIT_STATUS", "EXIT_ENDED",
+           "EXIT_BAD_INPUT", "HELP_WIDTH", "SWITCH_INTERVAL"]
 
 #: Exit status when the stopping rule fires, per reason.
 EXIT_STATUS = {"target precision": 0, "max force": 3, "max depth": 4}
@@ -64,13 +75,24 @@ exit status:
   1    failed otherwise;  130  interrupted
 
 Every update is one line on stdout, flushed at once: E with its statistical interval and
-its full one (with the budget).  The last line starts with 'stop:' (the rule fired) or
-'end:' (the stream ended) and says how the model checks of 'palpbayes fit', run on the
-samples received after the stop was printed, came out (failures on stderr).  With --json
-every line is one JSON object; the last has "event": "stop" or "end" and the checks.  The
-target precision is judged after every chunk; the max force and max depth at every sample
-as it arrives: a sample that reaches one ends its chunk, and the update on it is the stop.
+its full one (with the budget).  When the rule fires, three lines, in this order:
+  1. the stop line, 'stop: REASON at n N (t T s): ...' (--json: "event": "stop",
+     "final": false), flushed the moment the stop is known, for the robot to stop on.
+     --max-force and --max-depth are judged at every sample as it arrives, before any
+     posterior work: the line gives the sample, the force above the baseline and the
+     depth (below the surface of the last update), no E.  --target is judged after each
+     chunk's update, as soon as the interval it is tested on is known;
+  2. the update on the samples up to the stop (E with both intervals);
+  3. the last line, 'stop: ...; model checks: ...' (--json: "event": "stop",
+     "final": true, with the checks), once the model checks of 'palpbayes fit' have run
+     on the samples received (failures on stderr).
+When the stream ends first, the last line starts with 'end:' ("event": "end").
 Input is parsed as numbers only (float, json.loads): nothing is evaluated or unpickled."""
+
+#: [s] Longest a thread holds the interpreter while another waits for it, during the run
+#: (:func:`sys.setswitchinterval`; Python's default is 5 ms): the reader thread gets it within
+#: this to judge a sample that arrives while an update is running.
+SWITCH_INTERVAL = 2e-4
 
 #: Width the description of ``follow --help`` is wrapped to (the epilog's layout is kept, so
 #: the formatter does not wrap the description).
@@ -79,9 +101,10 @@ HELP_WIDTH = 90
 DESCRIPTION = textwrap.fill(
     "Read samples (time_s, z_m, force_n) as they arrive, as CSV lines with a header or JSON "
     "lines, from stdin or TCP; print E with its 90 % interval (statistical, and full: with "
-    "the uncertainty budget) after every chunk and the stop line the moment the stopping rule "
-    "fires, so that a robot script can stop the motion; then run the model checks and exit "
-    "with a status that says why (below). The "
+    "the uncertainty budget) after every chunk, and a stop line the moment the stopping rule "
+    "fires (a max force or max depth at the very sample, before any posterior work), so that "
+    "a robot script can stop the motion; then the update up to the stop, the model checks "
+    "and a last line, and exit with a status that says why (below). The "
     "estimator and its options are replay's; unlike replay, which keeps a recording's "
     "loading segment, follow uses every sample it is sent, so send the approach and the "
     "indentation only (not the hold or retract).", HELP_WIDTH)
@@ -151,11 +174,11 @@ def _checks_json(checks: list[CheckResult]) -> list[dict]:
 
 def final_json(state: OnlineState | None, checks: list[CheckResult]) -> str:
     """The last line of ``--json``: ``event`` "stop" (the rule fired) or "end" (the stream
-    ended), where, E with both intervals, and the model checks on the samples received
-    (``model_ok`` null when none could run)."""
+    ended), ``final`` true, where, E with both intervals, and the model checks on the samples
+    received (``model_ok`` null when none could run)."""
     stopped = state is not None and state.should_stop
     summary = checks_summary(checks)
-    row = {"event": "stop" if stopped else "end",
+    row = {"event": "stop" if stopped else "end", "final": True,
            "stop": state.stop if stopped else "", "n": 0 if state is None else state.n,
            "t_s": None if state is None else _value(state.t),
            "in_contact": bool(state is not None and state.in_contact),
@@ -206,10 +229,97 @@ def update_text(state: OnlineState, batch: Batch) -> str:
             f"(±{100 * T.rel_half_width:.2g} %)")
 
 
+def _stop_row(reason: str, n: int, line: int, t: float, z: float, force: float | None,
+              depth: float | None, E=None) -> dict:
+    return {"event": "stop", "final": False, "stop": reason, "n": n, "line": line,
+            "t_s": _value(t), "z_m": _value(z),
+            "force_n": None if force is None else _value(force),
+            "depth_m": None if depth is None else _value(depth),
+            "E_pa": _value(E.median) if E else None, "E_lo_pa": _value(E.lo) if E else None,
+            "E_hi_pa": _value(E.hi) if E else None,
+            "rel_half_width": _value(E.rel_half_width) if E else None}
+
+
+def stop_json(row: dict) -> str:
+    """The stop line of ``--json`` (:class:`StopLine`): ``event`` "stop", ``final`` false,
+    ``stop`` the reason, ``n``/``line``/``t_s``/``z_m`` the sample it is at, ``force_n``
+    [N] its force above the baseline, ``depth_m`` [m] its depth below the surface (of the
+    last update for a limit; null where not known), and E with its statistical interval
+    (``E_pa``, ``E_lo_pa``, ``E_hi_pa``, ``rel_half_width``), null for a limit, which is
+    judged before any posterior work."""
+    return json.dumps(row)
+
+
+def stop_text(row: dict) -> str:
+    """The stop line as text: 'stop: REASON at n N (t T s): force F, depth D[, E = ...]; the
+    update and the model checks follow'."""
+    force = "?" if row["force_n"] is None else format_force(row["force_n"])
+    depth = "not known yet" if row["depth_m"] is None else format_length(row["depth_m"])
+    E = ""
+    if row["E_pa"] is not None:
+        E = (f", E = {format_pressure(row['E_pa'])} [{format_pressure(row['E_lo_pa'])}, "
+             f"{format_pressure(row['E_hi_pa'])}]  (±{100 * row['rel_half_width']:.2g} %)")
+    return (f"stop: {row['stop']} at n {row['n']} (t {row['t_s']:.4f} s): force {force} above "
+            f"the baseline, depth {depth}{E}; the update and the model checks follow")
+
+
+class StopLine:
+    """The stop line of ``follow``: said once, flushed, the moment the stop is known.
+
+    For a max force or max depth, :meth:`limit` is the ``on_limit`` of
+    :func:`~palpbayes.online.stream.batches`, called in the reader thread at the very sample,
+    before any posterior work; for a stop an update decides (a precision target, or a limit
+    passed in the chunk where the contact is found), :meth:`state` is the ``on_stop`` of
+    :meth:`OnlineEstimator.update <palpbayes.online.OnlineEstimator.update>`, called before
+    the update's full interval is computed where the stop does not need it.
+
+    Parameters
+    ----------
+    emit
+        Prints one line (flushed; safe to call from two threads).
+    estimator
+        The estimator (its baseline and last surface give a limit's force and depth).
+    as_json
+        JSON (:func:`stop_json`) or text (:func:`stop_text`).
+    """
+
+    def __init__(self, emit: Callable[[str], None], estimator: OnlineEstimator,
+                 as_json: bool = False) -> None:
+        self.emit, self.estimator, self.as_json = emit, estimator, as_json
+        self.said: dict | None = None  # the row said
+        self._lock = threading.Lock()
+
+    def _say(self, row: dict) -> None:
+        with self._lock:
+            if self.said is not None:
+                return
+            self.said = row
+            self.emit(stop_json(row) if self.as_json else stop_text(row))
+
+    def limit(self, hit: LimitHit) -> None:
+        """The stop at the sample ``hit`` (judged against the last update)."""
+        est = self.estimator
+        state = est.limit_state  # what the limit was judged against
+        depth = (state.z_surf.median - hit.z
+                 if state is not None and state.z_surf is not None else None)
+        self._say(_stop_row(hit.reason, hit.n, hit.line, hit.t, hit.z,
+                            hit.force - est.baseline_level, depth))
+
+    def state(self, state: OnlineState, batch: Batch) -> None:
+        """The stop an update on ``batch`` fired (``state.stop``)."""
+        self._say(_stop_row(state.stop, state.n, batch.last_line, state.t, state.z,
+                            state.force, state.depth if state.z_surf is not None else None,
+                            state.E))
+
+
 def follow(stream: Iterable[Batch], estimator: OnlineEstimator,
-           emit: Callable[[str], None], as_json: bool = False
-           ) -> tuple[OnlineState | None, list[float]]:
+           emit: Callable[[str], None], as_json: bool = False,
+           stop_line: StopLine | None = None) -> tuple[OnlineState | None, list[float]]:
     """Update ``estimator`` with each batch, ``emit`` each update, stop when its rule fires.
+
+    ``stop_line`` (None: none) says the stop an update fires the moment it is known, before
+    the update's line; a limit's is said by the stream (``on_limit`` of
+    :func:`~palpbayes.online.stream.batches`).
 
     Returns
     -------
@@ -221,7 +331,9 @@ def follow(stream: Iterable[Batch], estimator: OnlineEstimator,
     fmt = update_json if as_json else update_text
     state, latencies, said = None, [], set()
     for batch in stream:
-        state = estimator.update(batch.t, batch.z, batch.force)
+        on_stop = None if stop_line is None else (
+            lambda s, b=batch: stop_line.state(s, b))
+        state = estimator.update(batch.t, batch.z, batch.force, on_stop=on_stop)
         emit(fmt(state, batch))
         if not as_json:  # a flag once, on stderr, when it first appears
             for flag in state.flags:
@@ -235,8 +347,15 @@ def follow(stream: Iterable[Batch], estimator: OnlineEstimator,
     return state, latencies
 
 
+_OUT = threading.Lock()
+
+
 def _say(line: str) -> None:
-    print(line, flush=True)
+    """Print ``line`` and flush, whole (the stop line can come from the reader thread)."""
+    with _OUT:
+        out = sys.stdout
+        out.write(line + "\n")
+        out.flush()
 
 
 def run(args: argparse.Namespace) -> int:
@@ -267,11 +386,18 @@ def run(args: argparse.Namespace) -> int:
     parser = SampleParser(source, columns=opts.get("columns"), units=opts.get("units"),
                           force_sign=opts.get("force_sign", 1.0),
                           z_sign=opts.get("z_sign", 1.0))
+    stop_line = StopLine(_say, estimator, as_json=args.json)
     stream = batches(lines, parser, chunk=args.chunk, timeout=args.timeout or None,
-                     limit=estimator.limit)
+                     limit=estimator.limit, on_limit=stop_line.limit,
+                     current=estimator.limit_current)
+    # the reader thread judges each sample as it arrives, while an update may be running in
+    # this one: hand it the interpreter within SWITCH_INTERVAL, not Python's default 5 ms
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(min(switch, SWITCH_INTERVAL))
     try:
-        state, _ = follow(stream, estimator, _say, as_json=args.json)
+        state, _ = follow(stream, estimator, _say, as_json=args.json, stop_line=stop_line)
     finally:
+        sys.setswitchinterval(switch)
         if lines is not sys.stdin:
             lines.close()
     # the update carrying the stop is out: now the checks, on the samples received; a check

@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from types import SimpleNamespace
 
@@ -174,6 +175,8 @@ class OnlineState:
     floor
         [-] Relative half-width of the budget alone (E* exact): the narrowest the full
         interval can get at this depth; NaN with ``E_total`` None.
+    force
+        [N] Force above the baseline of the last sample (NaN before contact).
     """
 
     n: int
@@ -189,6 +192,7 @@ class OnlineState:
     flags: tuple[str, ...] = ()
     E_total: MixtureSummary | None = None
     floor: float = float("nan")
+    force: float = float("nan")
 
     @property
     def should_stop(self) -> bool:
@@ -279,6 +283,10 @@ class OnlineEstimator:
         self._active: np.ndarray | None = None
         self._phi = phi_grid(self.priors.phi_bounds) if self.noise == "ar1" else np.zeros(1)
         self.state: OnlineState | None = None
+        # what limit() judges against: the last update's state, or the running update's as
+        # soon as its surface and stop are known; the updates begun, and those it is from
+        self._ref: OnlineState | None = None
+        self._updates = self._known = 0
         if self.rule.full:
             self.total = True
 
@@ -312,20 +320,23 @@ class OnlineEstimator:
 
     def limit(self, z, force) -> tuple[int, str] | None:
         """The first of these new samples (tip heights [m], forces [N]) at which the rule's
-        max force or max depth is reached, and which: (index, "max force" | "max depth").
+        max force or max depth is reached, and which: (index, "max force" | "max depth"; the
+        force first when both are reached at one sample, as :meth:`StoppingRule.reason`).
 
-        Judged sample by sample against the baseline level and the median surface height of
-        the last update (the force above the baseline, the surface minus the tip height), so
-        that a robot can be stopped at the sample itself rather than at the end of its chunk:
-        ``replay`` (:func:`~palpbayes.online.recorded.chunks`) and ``palpbayes follow``
-        (:func:`~palpbayes.online.stream.batches`) end a chunk there, and the update on it
-        decides (the force above the baseline is the state's; its depth is measured from the
-        surface the update gives, which can stop it a sample later).  None when neither
-        limit is reached, and before the contact, when the baseline and the surface are not
-        known yet (a limit passed in the chunk where the contact is found stops the run at
-        that chunk's end), and once the rule has fired.
+        Judged sample by sample, before any posterior work, against the baseline level and
+        the median surface height of the last update (:attr:`limit_state`: the force above
+        the baseline, the surface minus the tip height), so that a robot can be stopped at
+        the sample itself rather than at the end of its chunk: ``replay``
+        (:func:`~palpbayes.online.recorded.chunks`) and ``palpbayes follow``
+        (:func:`~palpbayes.online.stream.batches`, which asks it in the thread that reads the
+        samples, as each arrives) end a chunk there, and the update on that chunk stops with
+        this reason (:meth:`update`: its depth is then measured from the surface the update
+        gives, which can lie a hair under the max depth).  None when neither limit is
+        reached, before the contact, when the baseline and the surface are not known yet (a
+        limit passed in the chunk where the contact is found stops the run at that chunk's
+        end), and once the rule has fired.
         """
-        s, rule = self.state, self.rule
+        s, rule = self._ref, self.rule
         if (s is None or not s.in_contact or s.should_stop
                 or (rule.max_force is None and rule.max_depth is None)):
             return None
@@ -335,24 +346,64 @@ class OnlineEstimator:
             hits["max force"] = force - self._base.level >= rule.max_force
         if rule.max_depth is not None and s.z_surf is not None:
             hits["max depth"] = s.z_surf.median - z >= rule.max_depth
-        first = [(int(np.argmax(h)), why) for why, h in hits.items() if h.any()]
-        return min(first) if first else None
+        first = [(int(np.argmax(h)), rank, why)
+                 for rank, (why, h) in enumerate(hits.items()) if h.any()]
+        return min(first)[::2] if first else None
 
-    def update(self, t, z, force) -> OnlineState:
+    @property
+    def limit_state(self) -> OnlineState | None:
+        """The state :meth:`limit` judges against: the last update's, or the running
+        update's as soon as its surface and stop are known (None before the first)."""
+        return self._ref
+
+    def limit_current(self, updates: int) -> bool:
+        """Whether :meth:`limit` judges a new sample now as it will once ``updates`` updates
+        are done: the last of them, even if still running, has set the surface and the stop
+        :meth:`limit` judges against (midway, before the budget's draws, unless a target on
+        the full interval may still fire), or the rule is a max force alone and the contact
+        is known (only the baseline, read once at contact, judges it).
+        :func:`~palpbayes.online.stream.batches` asks this to judge a sample that arrives
+        while an update runs at once rather than after it, as ``replay`` would judge it."""
+        if self._known >= updates:
+            return True
+        s, rule = self._ref, self.rule
+        return (s is not None and s.in_contact and rule.max_force is not None
+                and rule.max_depth is None and rule.target is None)
+
+    def update(self, t, z, force,
+               on_stop: Callable[[OnlineState], None] | None = None) -> OnlineState:
         """Add samples (times [s], tip heights [m], forces [N], in time order) and return the
-        new :class:`OnlineState`."""
+        new :class:`OnlineState`.
+
+        A sample that reaches the rule's max force or max depth as :meth:`limit` judges it
+        (against the last update, as it arrived) stops the run with that reason, whatever
+        the new surface says of its depth.  ``on_stop`` is called with the state once, the
+        moment the rule fires: for a max force, a max depth or a target on the statistical
+        interval before the full interval (the budget's draws, most of an update) is
+        computed, so with ``E_total`` None (the returned state has it); for a target on the
+        full interval, with the returned state.
+        """
         t, z, force = self._arrays(t, z, force)
+        hit = self.limit(z, force)
+        self._updates += 1
         start = self._n
         self._append(t, z, force)
         if self._contact is None:
             self._detect()
         elif start < self._n:
             new = slice(start, self._n)
-            self._gram_active().extend(self._z[new], self._columns(new), self.model.shape)
+            self._gram_active().extend(self._z[new], self._columns(new), self.model)
         if self._contact is not None:
             self._refresh()
-        self.state = self._make_state()
+        self.state = self._make_state("" if hit is None else hit[1], on_stop)
+        self._publish(self.state)
         return self.state
+
+    def _publish(self, state: OnlineState) -> None:
+        """``state``'s surface and stop are what :meth:`limit` judges against from now on
+        (set before the count, which :meth:`limit_current` reads first)."""
+        self._ref = state
+        self._known = self._updates
 
     # ------------------------------------------------------------------ contact
     def _detect(self) -> None:
@@ -390,7 +441,7 @@ class OnlineEstimator:
     def _new_gram(self, nodes: np.ndarray) -> Gram:
         all_rows = slice(0, self._n)
         return Gram.empty(nodes, 2, self.noise == "ar1").extend(
-            self._z[all_rows], self._columns(all_rows), self.model.shape)
+            self._z[all_rows], self._columns(all_rows), self.model)
 
     def _gram_active(self) -> Gram:
         if self._active.size != self._gram.z.size:
@@ -476,7 +527,23 @@ class OnlineEstimator:
                 "material is viscoelastic and this E is an apparent modulus of the speed "
                 "pressed (fit the recording with palpbayes fit --rheology power-law,sls)")
 
-    def _make_state(self) -> OnlineState:
+    def _make_state(self, limit: str = "",
+                    on_stop: Callable[[OnlineState], None] | None = None) -> OnlineState:
+        """The state after an update; ``limit`` the reason :meth:`limit` gave a new sample
+        ('' for none), ``on_stop`` as :meth:`update`."""
+        said: list[OnlineState] = []
+
+        def say(state: OnlineState) -> None:
+            said.append(state)
+            if on_stop is not None:
+                on_stop(state)
+
+        state = self._state(limit, say)
+        if state.should_stop and not said:
+            say(state)
+        return state
+
+    def _state(self, limit: str, say: Callable[[OnlineState], None]) -> OnlineState:
         n = self._n
         if n == 0:  # an empty first chunk
             return OnlineState(0, float("nan"), float("nan"), False, 0, 0.0, 0.0, None, None, "")
@@ -484,10 +551,12 @@ class OnlineEstimator:
         if self._contact is None:
             return OnlineState(n, t, z, False, 0, 0.0, 0.0, None, None, "")
         peak = float(np.max(self._f[:n] - self._base.level))
+        force = float(self._f[n - 1] - self._base.level)
         if not np.isfinite(self._post.logp).any():  # no surface has enough samples in contact
             early = OnlineState(n, t, z, True, n - self._contact, 0.0, peak, None, None, "",
-                                ("no surface height has enough samples in contact yet",))
-            return replace(early, stop=self.rule.reason(early))
+                                ("no surface height has enough samples in contact yet",),
+                                force=force)
+            return replace(early, stop=limit or self.rule.reason(early))
         post = self.posterior()
         estar = post.estar_summary(self.level)
         zs = post.z_summary(self.level)
@@ -507,20 +576,29 @@ class OnlineEstimator:
                 flags.append("noise correlation phi at the end of its grid: the residuals wander "
                              "like drift, or the noise is correlated beyond the prior's ±0.99")
         rule = self.rule
+        partial = OnlineState(n, t, z, True, n - self._contact, max(zs.median - z, 0.0),
+                              peak, E, zs, "", tuple(flags), force=force)
+        # a stop that needs no full interval (a limit, a statistical target) is said before
+        # the budget's draws are made
+        early = limit or rule.reason(partial)
+        if early or not rule.full:  # the full interval changes neither the stop nor limit()
+            self._publish(replace(partial, stop=early))
+        if early and self.total:
+            say(replace(partial, stop=early))
+        if not self.total:
+            return replace(partial, stop=early)
         # the full interval is never narrower than the statistical one: a target on it can
         # only fire where the statistical one is within the target, and is judged there on
         # BUDGET_DRAWS draws; elsewhere the interval is only shown
         deciding = rule.full and E.rel_half_width <= rule.target
-        total, floor = (self._total(post, E, BUDGET_DRAWS if deciding else self.budget_draws)
-                        if self.total else (None, float("nan")))
+        total, floor = self._total(post, E, BUDGET_DRAWS if deciding else self.budget_draws)
         if rule.full and floor > rule.target:
             flags.append(f"the target ±{100 * rule.target:.3g} % is below the ±{100 * floor:.2g} "
                          "% the uncertainty budget alone gives here (nu, tip radius, gain, "
                          "compliance): the precision target cannot stop the run on the full "
                          "interval; give a wider target or test it on the statistical one")
-        partial = OnlineState(n, t, z, True, n - self._contact, max(zs.median - z, 0.0),
-                              peak, E, zs, "", tuple(flags), total, floor)
-        return replace(partial, stop=rule.reason(partial))
+        full = replace(partial, flags=tuple(flags), E_total=total, floor=floor)
+        return replace(full, stop=early or rule.reason(full))
 
     def _summary(self, x: np.ndarray) -> MixtureSummary:
         lo, hi = central(x, self.level)

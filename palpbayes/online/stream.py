@@ -14,10 +14,13 @@ to do.
 
 :func:`batches` groups the samples into chunks of ``chunk`` for the online estimator; a
 partial chunk is given when the stream ends, and when no sample has arrived for ``timeout``
-seconds, so a slow stream still gets decisions; an estimator's ``limit`` ends a chunk at the sample
-that reaches the stopping rule's max force or max depth.  The lines are read by a background thread
-that stamps each with its arrival time (:func:`time.perf_counter`), so that the latency of
-a decision can be measured from the arrival of the last sample it used.
+seconds, so a slow stream still gets decisions.  The lines are read and parsed by a background
+thread that stamps each with its arrival time (:func:`time.perf_counter`), so that the latency
+of a decision can be measured from the arrival of the last sample it used, and that asks an
+estimator's ``limit`` about every sample as it arrives, before any posterior work: the sample
+that reaches the stopping rule's max force or max depth ends its chunk at once, and
+``on_limit`` is called there (``palpbayes follow`` prints its stop line), while the update of
+the chunk before may still be running (:func:`batches`: when that cannot change the answer).
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import math
 import queue
 import threading
 import time
+from collections import deque
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
@@ -35,7 +39,7 @@ import numpy as np
 from ..errors import InputError, StreamError
 from ..io.units import force_factor, length_factor, time_factor
 
-__all__ = ["SampleParser", "Batch", "batches", "arrivals", "CANONICAL_COLUMNS"]
+__all__ = ["SampleParser", "Batch", "LimitHit", "batches", "arrivals", "CANONICAL_COLUMNS"]
 
 #: Quantity -> canonical column (key) name, as in the trace CSV.
 CANONICAL_COLUMNS = {"time": "time_s", "z": "z_m", "force": "force_n"}
@@ -210,10 +214,155 @@ def arrivals(lines: Iterable[str]) -> queue.Queue:
     return q
 
 
+@dataclass(frozen=True)
+class LimitHit:
+    """The sample at which ``limit`` of :func:`batches` said stop.
+
+    Attributes
+    ----------
+    reason
+        ``"max force"`` or ``"max depth"``.
+    n
+        Samples so far, this one included (the ``n`` of the update on its batch).
+    line
+        Its line number.
+    t, z, force
+        [s], [m], [N] The sample.
+    arrived
+        :func:`time.perf_counter` [s] when its line arrived.
+    """
+
+    reason: str
+    n: int
+    line: int
+    t: float
+    z: float
+    force: float
+    arrived: float
+
+
+#: The end of the stream, in the reader's queue of lines.
+_END = object()
+
+
+class _Feed:
+    """The samples between the reader thread and the consumer of :func:`batches`.
+
+    The reader parses each line as it arrives and *judges* it (asks ``limit``, then puts it
+    in the batch being filled, which a full chunk or a limit closes); the consumer takes the
+    closed batches.  A sample is judged once every batch before it has been used (the
+    consumer is back for more: ``limit`` then sees the state those batches made, as in
+    ``replay``), or as soon as ``current(batches closed)`` says the state ``limit`` judges
+    against is already that of all of them (the update still running has set its surface);
+    until then it waits, unjudged, and is judged by the next line's arrival or by the
+    consumer when it comes back.  All of it under one condition variable.
+    """
+
+    def __init__(self, chunk: int, limit, on_limit, current, source: str) -> None:
+        self.chunk, self.limit, self.on_limit, self.current = chunk, limit, on_limit, current
+        self.source = source
+        self.cond = threading.Condition()
+        self.unjudged: deque = deque()  # (line number, arrived, sample | _END | exception)
+        self.buf: list[tuple[float, float, float]] = []  # the batch being filled
+        self.ready: deque = deque()  # closed batches (or the exception to raise)
+        self.busy = False  # a batch is out with the consumer (its update may be running)
+        self.closed = False  # the end, an error or a limit: no batch after those ready
+        self.n = 0  # samples judged
+        self.closed_batches = 0  # batches closed (each one update)
+        self.last_line, self.last_arrival = 0, 0.0
+
+    def read(self, lines: Iterable[str], parser: SampleParser) -> None:
+        """The reader thread: parse, judge, close batches until the stream or the run ends."""
+        lineno = 0
+        try:
+            for line in lines:
+                arrived = time.perf_counter()
+                lineno += 1
+                try:
+                    sample = parser.parse(line, lineno)
+                except StreamError as exc:
+                    self.add(lineno, arrived, exc)
+                    return
+                if sample is not None and self.add(lineno, arrived, sample):
+                    # a limit stopped the run: what the sender still sends is read and
+                    # dropped, so that closing a connection with unread data does not reset it
+                    for _ in lines:
+                        pass
+                    return
+        except (OSError, ValueError, UnicodeDecodeError) as exc:  # a closed or broken stream
+            if self.closed:
+                return
+            self.add(lineno, time.perf_counter(), InputError(
+                f"{self.source}: reading the stream failed after line {lineno}: {exc}"))
+            return
+        except BaseException as exc:  # noqa: BLE001 - the consumer raises it, not this thread
+            self.add(lineno, time.perf_counter(), exc)
+            return
+        self.add(lineno, time.perf_counter(), _END)
+
+    def add(self, lineno: int, arrived: float, item) -> bool:
+        """Queue an item from the reader and judge what can be judged; True once the run is
+        over for the reader (a limit, or an error while judging)."""
+        with self.cond:
+            self.unjudged.append((lineno, arrived, item))
+            try:
+                self.judge()
+            except BaseException as exc:  # noqa: BLE001 - e.g. the stop line's broken pipe
+                self.fail(exc)
+            return self.closed
+
+    def fail(self, exc: BaseException) -> None:
+        self.unjudged.clear()
+        self.ready.append(exc)
+        self.closed = True
+        self.cond.notify_all()
+
+    def emit(self, why: str) -> Batch:
+        a = np.array(self.buf, dtype=float).reshape(-1, 3)
+        self.buf.clear()
+        self.closed_batches += 1
+        return Batch(a[:, 0], a[:, 1], a[:, 2], self.last_line, self.last_arrival, why)
+
+    def judge(self) -> None:
+        """Judge the waiting samples in order while the state is that of every batch before
+        them (or ``current`` says the state is already theirs); under the lock."""
+        judged = False
+        while self.unjudged and not self.closed:
+            if (self.limit is not None and (self.busy or self.ready)
+                    and not (self.current is not None and self.current(self.closed_batches))):
+                break
+            lineno, arrived, item = self.unjudged.popleft()
+            judged = True
+            if item is _END:
+                if self.buf:
+                    self.ready.append(self.emit("end"))
+                self.closed = True
+                break
+            if isinstance(item, BaseException):
+                self.fail(item)
+                break
+            self.buf.append(item)
+            self.n += 1
+            self.last_line, self.last_arrival = lineno, arrived
+            hit = (None if self.limit is None
+                   else self.limit(np.array(item[1:2]), np.array(item[2:3])))
+            if hit is not None:
+                self.closed = True
+                self.unjudged.clear()
+                if self.on_limit is not None:  # said before the batch is handed over
+                    self.on_limit(LimitHit(hit[1], self.n, lineno, *item, arrived))
+                self.ready.append(self.emit("limit"))
+            elif len(self.buf) >= self.chunk:
+                self.ready.append(self.emit("chunk"))
+        if judged:
+            self.cond.notify_all()
+
+
 def batches(lines: Iterable[str], parser: SampleParser, chunk: int = 100,
             timeout: float | None = 0.5,
-            limit: Callable[[np.ndarray, np.ndarray], tuple[int, str] | None] | None = None
-            ) -> Iterator[Batch]:
+            limit: Callable[[np.ndarray, np.ndarray], tuple[int, str] | None] | None = None,
+            on_limit: Callable[[LimitHit], None] | None = None,
+            current: Callable[[int], bool] | None = None) -> Iterator[Batch]:
     """Batches of ``chunk`` samples from ``lines`` as they arrive (module docstring).
 
     Parameters
@@ -225,50 +374,58 @@ def batches(lines: Iterable[str], parser: SampleParser, chunk: int = 100,
     chunk
         Samples per batch; a partial batch at the end of the stream.
     timeout
-        [s] Give a partial batch when no line has arrived for this long; None or 0: wait for
-        a full chunk.
+        [s] Give a partial batch when no sample has arrived for this long; None or 0: wait
+        for a full chunk.
     limit
         An estimator's :meth:`~palpbayes.online.OnlineEstimator.limit`, asked with every
-        sample (its z [m] and F [N], one-element arrays) as it arrives: a sample it names
-        (one that reaches the rule's max force or max depth) ends the batch at once, as
-        :func:`palpbayes.online.recorded.chunks` ends a recorded chunk.
+        sample (its z [m] and F [N], one-element arrays) in the thread that reads the
+        stream, as the sample arrives, before any posterior work: a sample it names (one
+        that reaches the rule's max force or max depth) ends the batch at once, as
+        :func:`palpbayes.online.recorded.chunks` ends a recorded chunk, and the stream is
+        read no further.  It is asked once every batch before the sample has been used (the
+        loop over the batches is back for the next one), so that it judges with the state
+        those batches made, as ``replay`` does, or earlier when ``current`` allows.
+    on_limit
+        Called with the :class:`LimitHit` the moment ``limit`` names a sample, before its
+        batch is handed over (``follow`` prints the stop line there), in the thread that
+        judged it: the reader's, or the consumer's for a sample that waited for an update.
+    current
+        An estimator's :meth:`~palpbayes.online.OnlineEstimator.limit_current`, asked with
+        the number of batches closed so far while one is still being used: True when
+        ``limit`` already judges as it will once all of them are (the update running has
+        set its surface), so that a sample arriving during an update is judged at once
+        (None: it waits for the update to end).
 
     Raises
     ------
     StreamError
         On the first bad line (its number, the column or value, what to do).
+    InputError
+        When reading the stream fails.
     """
     if chunk < 1:
         raise InputError(f"chunk = {chunk} samples must be at least 1")
-    q = arrivals(lines)
-    buf: list[tuple[float, float, float]] = []
-    lineno, last_arrival = 0, 0.0
-
-    def emit(why: str) -> Batch:
-        a = np.array(buf, dtype=float).reshape(-1, 3)
-        buf.clear()
-        return Batch(a[:, 0], a[:, 1], a[:, 2], lineno, last_arrival, why)
-
+    feed = _Feed(chunk, limit, on_limit, current, parser.source)
+    threading.Thread(target=feed.read, args=(lines, parser), name="palpbayes-stream",
+                     daemon=True).start()
+    cond = feed.cond
     while True:
-        try:
-            arrived, line = q.get(timeout=timeout if (buf and timeout) else None)
-        except queue.Empty:
-            yield emit("timeout")
-            continue
-        if line is None:
-            break
-        if isinstance(line, BaseException):
-            raise InputError(f"{parser.source}: reading the stream failed after line "
-                             f"{lineno}: {line}")
-        lineno += 1
-        sample = parser.parse(line, lineno)
-        if sample is None:
-            continue
-        buf.append(sample)
-        last_arrival = arrived
-        if len(buf) >= chunk:
-            yield emit("chunk")
-        elif limit is not None and limit(np.array(sample[1:2]), np.array(sample[2:3])):
-            yield emit("limit")
-    if buf:
-        yield emit("end")
+        with cond:
+            feed.busy = False  # the batch handed over last has been used
+            feed.judge()
+            while not feed.ready and not feed.closed:
+                if feed.buf and timeout:
+                    wait = feed.last_arrival + timeout - time.perf_counter()
+                    if wait <= 0:
+                        feed.ready.append(feed.emit("timeout"))
+                        break
+                    cond.wait(wait)
+                else:
+                    cond.wait()
+            if not feed.ready:  # closed: the stream ended
+                return
+            item = feed.ready.popleft()
+            feed.busy = True
+        if isinstance(item, BaseException):
+            raise item
+        yield item

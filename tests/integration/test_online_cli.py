@@ -186,16 +186,28 @@ def _follow(monkeypatch, capsys, text: str, *args: str):
 def test_every_line_of_follow_json_is_json(follow_csv, monkeypatch, capsys, args, status,
                                            event):
     """The last line of --json was the text 'stop: ...'; now it is an object with the event,
-    E with both intervals and the model checks on the samples received."""
+    E with both intervals and the model checks on the samples received.  Issue 47: a stop is
+    said at once by a stop line ("final": false) before the update up to it and the last
+    line ("final": true); every other line is an update."""
     rc, out = _follow(monkeypatch, capsys, follow_csv, "--json", "--timeout", "0", *args)
     assert rc == status, out.err
     rows = [json.loads(ln) for ln in out.out.splitlines()]  # every line
-    assert all(r["event"] == "update" for r in rows[:-1])
+    said = [k for k, r in enumerate(rows[:-1]) if r["event"] != "update"]
     last = rows[-1]
-    assert last["event"] == event and last["n"] == rows[-2]["n"]
+    assert last["event"] == event and last["final"] is True and last["n"] == rows[-2]["n"]
+    if event == "stop":  # one stop line, before the update on the samples up to it (a limit
+        # judged while the update before runs can be said before that one's line too)
+        assert len(said) == 1 and said[0] < len(rows) - 2
+        stop = rows[said[0]]
+        assert (stop["event"], stop["final"], stop["stop"], stop["n"]) == (
+            "stop", False, last["stop"], last["n"])
+        assert rows[-2]["stop"] == last["stop"]
+        assert all(not r["stop"] for r in rows[:-2] if r["event"] == "update")
+    else:
+        assert said == []
     assert last["model_ok"] is True and [c["name"] for c in last["checks"]] == [
         "exponent", "residual_structure", "depth_consistency", "ppc"]
-    est = [r for r in rows[:-1] if r["E_pa"] is not None]
+    est = [r for r in rows[:-1] if r["E_pa"] is not None and r["event"] == "update"]
     assert est and all(r["E_total_lo_pa"] < r["E_lo_pa"] < r["E_hi_pa"] < r["E_total_hi_pa"]
                        for r in est)
 

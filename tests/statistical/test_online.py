@@ -78,9 +78,17 @@ def test_each_stopping_rule_fires_where_it_should(rule, reason):
         assert run_to_stop(tr, est, chunk=50).n == s.n and s.n % 50 != 0
         seg = tr.loading_segment()
         assert s.n == int(np.argmax(seg.force - est.baseline_level >= 0.5)) + 1
-    elif reason == "max depth":  # within a sample or two (its surface moves with the update)
-        assert s.depth >= 5e-4 and (before["depth_m"] < 5e-4).all()
-        assert s.n % 50 != 0 and s.depth - 5e-4 < 3 * float(np.max(-np.diff(tr.z)))
+    elif reason == "max depth":
+        # at the very sample whose depth below the surface of the update before it reaches
+        # 5e-4, as it arrived (issue 47: the robot is told then); the update on it moves the
+        # surface, and the depth it gives, by a hair
+        step = float(np.max(-np.diff(tr.z)))
+        prev = before.iloc[-1]
+        seg = tr.loading_segment()
+        then = prev["z_surf_m"] - seg.z[int(prev["n"]):s.n]
+        assert then[-1] >= 5e-4 and (then[:-1] < 5e-4).all()
+        assert (before["depth_m"] < 5e-4).all()
+        assert s.n % 50 != 0 and abs(s.depth - 5e-4) < 3 * step
     else:
         assert s.E.rel_half_width <= 0.03
         assert (before["rel_half_width"] > 0.03).all()
