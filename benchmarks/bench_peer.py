@@ -150,9 +150,9 @@ def main() -> None:
           f"exact engine {med(r[:, 2]):.2f} s (without the model-form alternatives "
           f"{med(r[:, 3]):.2f} s), emcee {med(r[:, 4]):.1f} s")
     if have_nanite:
-        print(f"exact engine / nanite: median {med(r[:, 2] / r[:, 0]):.0f} (goal <= 2); "
-              f"without the model-form alternatives {med(r[:, 3] / r[:, 0]):.1f}; "
-              f"emcee / nanite: median {med(r[:, 4] / r[:, 0]):.0f} (goal <= 20)")
+        print(f"exact engine / nanite: median {med(r[:, 2] / r[:, 0]):.1f} (goal <= 10); "
+              f"without the model-form alternatives {med(r[:, 3] / r[:, 0]):.1f} (goal <= 4); "
+              f"emcee / nanite: median {med(r[:, 4] / r[:, 0]):.0f} (goal <= 30)")
 
 
 if __name__ == "__main__":

@@ -48,13 +48,12 @@ class Gram:
         """Add samples (heights ``z`` [m] and fixed columns ``C`` (k, q − 1), in time order,
         following those already summed) to every node's sums, in place; returns self.
 
-        ``model`` is the concrete contact model whose shape s(z_s − z) is the first column
-        (its bound :meth:`ModelSpec.shape` is taken as well); ``d_max`` [m] as in
+        ``model`` is the concrete contact model whose shape s(z_s − z) is the first column;
+        ``d_max`` [m] as in
         :func:`~palpbayes.shapekernel.cross_sums`.  The (nodes × k) shape
         evaluations are summed by the compiled loop of :func:`palpbayes.shapekernel.cross_sums`
         without forming that array — an online update does not revisit old samples.
         """
-        model = getattr(model, "__self__", model)  # ModelSpec.shape bound to its model
         k = z.size
         if k == 0:
             return self

@@ -27,11 +27,11 @@ def test_sums_added_in_chunks_equal_the_sums_over_all_samples(ar1, linear):
     z, F = _data()
     u = (z - z.max()) if linear else None
     nodes = np.linspace(0.0985, 0.1008, 23)
-    whole = gram(z, F, nodes, MODEL.shape, u, ar1)
+    whole = gram(z, F, nodes, MODEL, u, ar1)
     C = fixed_columns(F, u)
     parts = Gram.empty(nodes, C.shape[1], ar1)
     for a, b in [(0, 1), (1, 37), (37, 200), (200, 201), (201, 400)]:
-        parts.extend(z[a:b], C[a:b], MODEL.shape)
+        parts.extend(z[a:b], C[a:b], MODEL)
     for name in ("m0", "m1", "first", "last", "n_contact"):
         a, b = getattr(whole, name), getattr(parts, name)
         if a is None:
@@ -78,7 +78,7 @@ def test_conditional_posterior_is_the_textbook_regression():
     s² = S/nu, S the penalised residual sum of squares (Gelman et al. BDA3 §14.2)."""
     z, F = _data()
     node = 0.1000
-    g = gram(z, F, np.array([node]), MODEL.shape, None, False)
+    g = gram(z, F, np.array([node]), MODEL, None, False)
     w = np.array([0.25])
     c = np.array([0.02])
     post = node_posterior(g, np.zeros(1), w, c)
@@ -101,7 +101,7 @@ def test_marginal_of_the_surface_matches_brute_force_integration():
     is ∝ 1/tau there (the conjugate form the engine uses)."""
     z, F = _data(n=120)
     nodes = np.array([0.09995, 0.1, 0.10003])
-    g = gram(z, F, nodes, MODEL.shape, None, False)
+    g = gram(z, F, nodes, MODEL, None, False)
     lp = node_posterior(g, np.zeros(1), np.array([1e-12]), np.zeros(1)).logp[:, 0]
     brute = []
     for zs in nodes:
