@@ -44,9 +44,9 @@ imported on first use (PEP 562), so that importing :mod:`~palpbayes.campaign.lay
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_modules
 
 #: Submodules whose ``__all__`` make up the package's public names.
 API_MODULES = ("fitjob", "source", "settings", "run", "results", "compare", "compare_text",
@@ -66,33 +66,4 @@ if TYPE_CHECKING:  # the same names, for static tools
     from .stiffening_tables import *  # noqa: F403
 
 
-def _public_names() -> dict[str, str]:
-    """Public name -> the submodule that defines it (imports every API module)."""
-    owner: dict[str, str] = {}
-    for sub in API_MODULES:
-        for name in importlib.import_module(f"{__name__}.{sub}").__all__:
-            if name in owner:
-                raise ImportError(f"{__name__}: {name!r} is exported by both {owner[name]} and "
-                                  f"{sub}; export it from one module")
-            owner[name] = sub
-    return owner
-
-
-def __getattr__(name: str) -> Any:
-    if name == "__all__":
-        return list(_public_names())
-    if name.startswith("__"):  # e.g. __wrapped__, looked up by tools: never a public name
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    if importlib.util.find_spec(f"{__name__}.{name}") is not None:
-        # a submodule (``from palpbayes.campaign import layout``): import only that one
-        return importlib.import_module(f"{__name__}.{name}")
-    sub = _public_names().get(name)
-    if sub is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{sub}"), name)
-    globals()[name] = value  # later look-ups skip __getattr__
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *_public_names()})
+__getattr__, __dir__ = lazy_modules(__name__, API_MODULES)
