@@ -29,6 +29,7 @@ import numpy as np
 
 from . import _kernels
 from .contact import prefactor
+from .errors import InputError
 from .modelspec import ModelSpec
 
 __all__ = ["CompiledShape", "compiled_shape", "cross_sums", "scale_rss", "TABLE_INTERVALS"]
@@ -91,9 +92,13 @@ def compiled_shape(model: ModelSpec, d_max: float) -> CompiledShape:
     if power is not None:
         return power
     d_max = float(d_max)
-    if not (d_max > 0 and math.isfinite(d_max)):
-        d_max = 1e-12
-    d_top = _BUCKET ** math.ceil(math.log(d_max, _BUCKET) - 1e-9)
+    if not math.isfinite(d_max):
+        raise InputError(f"the depths of {model.describe()} are not finite (deepest "
+                         f"{d_max}); the heights or the surface nodes hold NaN or inf")
+    d_max = max(d_max, 1e-12)  # nothing in contact: any table serves
+    d_top = _BUCKET ** math.ceil(math.log(d_max, _BUCKET))
+    while d_top < d_max:  # rounding of the logarithm
+        d_top *= _BUCKET
     return _table(model, d_top)
 
 
@@ -111,6 +116,12 @@ def _table(model: ModelSpec, d_top: float) -> CompiledShape:
     nodes = d_top * (np.arange(TABLE_INTERVALS + 1) / TABLE_INTERVALS) ** 2
     table = np.ascontiguousarray(model.shape(nodes), dtype=float)
     return CompiledShape(1, math.nan, math.nan, table, d_top)
+
+
+def _same_rows(z: np.ndarray, x: np.ndarray, name: str) -> None:
+    """The compiled loops read ``x`` row by row with ``z``: the lengths must agree."""
+    if z.ndim != 1 or x.shape[0] != z.size:
+        raise InputError(f"{name} has {x.shape[0]} rows for {z.size} heights z")
 
 
 def _law_for(model: ModelSpec, nodes: np.ndarray, z: np.ndarray,
@@ -153,6 +164,7 @@ def cross_sums(nodes, z, C, model: ModelSpec, lag: bool, d_max: float | None = N
     nodes = np.ascontiguousarray(nodes, dtype=float)
     z = np.ascontiguousarray(z, dtype=float)
     C = np.ascontiguousarray(C, dtype=float)
+    _same_rows(z, C, "C")
     return _kernels.cross_sums(nodes, z, C, *_law_for(model, nodes, z, d_max).args(),
                                bool(lag))
 
@@ -178,4 +190,5 @@ def scale_rss(nodes, z, force, model: ModelSpec) -> tuple[np.ndarray, np.ndarray
     nodes = np.ascontiguousarray(np.atleast_1d(nodes), dtype=float)
     z = np.ascontiguousarray(z, dtype=float)
     f = np.ascontiguousarray(force, dtype=float)
+    _same_rows(z, f, "force")
     return _kernels.scale_rss(nodes, z, f, *_law_for(model, nodes, z).args())

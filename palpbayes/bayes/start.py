@@ -31,6 +31,7 @@ from scipy import optimize
 
 from ..fitdata import FitData
 from ..noise import acf1
+from ..shapekernel import cross_sums
 from .priors import TracePrior
 
 __all__ = ["Mode", "find_modes", "modes_from_exact", "initial_ensemble", "SCAN_POINTS",
@@ -116,7 +117,7 @@ def _solve(X: np.ndarray, F: np.ndarray, pen: _Penalty) -> tuple[np.ndarray, flo
 
 def _profile_grid(data: FitData, zs: np.ndarray, u: np.ndarray | None,
                   pen: _Penalty) -> np.ndarray:
-    """Penalised RSS(z_s) on a grid from the normal equations, in bounded-memory blocks."""
+    """Penalised RSS(z_s) on a grid from the normal equations."""
     F = data.force
     n = data.n_points
     one = np.ones(n)
@@ -128,26 +129,22 @@ def _profile_grid(data: FitData, zs: np.ndarray, u: np.ndarray | None,
     C = C + np.diag(pen.weights)
     cF = cF + pen.weights * pen.centers
     FF += float(pen.weights @ pen.centers**2)
-    rss = np.empty(zs.size)
-    for rows in data.blocks(zs.size):
-        s = data.shape(zs[rows, None] - data.z[None, :])
-        ss = np.einsum("ij,ij->i", s, s)
-        sF = s @ F
-        sc = np.stack([s @ c for c in cols_const], axis=-1)
-        k = 1 + len(cols_const)
-        A = np.empty((ss.size, k, k))
-        A[:, 0, 0] = ss
-        A[:, 0, 1:] = sc
-        A[:, 1:, 0] = sc
-        A[:, 1:, 1:] = C
-        b = np.concatenate([sF[:, None], np.broadcast_to(cF, (ss.size, cF.size))], axis=1)
-        with np.errstate(all="ignore"):
-            beta = np.linalg.solve(A + np.eye(k) * 1e-300, b[..., None])[..., 0]
-            full = FF - np.einsum("ij,ij->i", beta, b)
-            base = FF - cF @ np.linalg.solve(C, cF)
-        bad = ~(beta[:, 0] > 0) | ~np.isfinite(full) | (ss <= 0)
-        rss[rows] = np.where(bad, base, full)
-    return rss
+    # Σ s², Σ s·c and Σ s·F at every trial surface: the compiled loop, no (z_s × sample) array
+    ss, sums = cross_sums(zs, data.z, np.column_stack(cols_const + [F]), data.model, False)[:2]
+    sc, sF = sums[:, :-1], sums[:, -1]
+    k = 1 + len(cols_const)
+    A = np.empty((ss.size, k, k))
+    A[:, 0, 0] = ss
+    A[:, 0, 1:] = sc
+    A[:, 1:, 0] = sc
+    A[:, 1:, 1:] = C
+    b = np.concatenate([sF[:, None], np.broadcast_to(cF, (ss.size, cF.size))], axis=1)
+    with np.errstate(all="ignore"):
+        beta = np.linalg.solve(A + np.eye(k) * 1e-300, b[..., None])[..., 0]
+        full = FF - np.einsum("ij,ij->i", beta, b)
+        base = FF - cF @ np.linalg.solve(C, cF)
+    bad = ~(beta[:, 0] > 0) | ~np.isfinite(full) | (ss <= 0)
+    return np.where(bad, base, full)
 
 
 def _gauss_newton_cov(data: FitData, z_s: float, beta: np.ndarray, rss: float,

@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import FitError, InputError
 from ..fitdata import ModelSpec
 from ..noise import acf1
+from ..shapekernel import compiled_shape
 
 #: Pass/fail thresholds (statistical and physical) of the checks; see :mod:`palpbayes.checks`.
 THRESHOLDS: dict[str, float] = {
@@ -206,35 +207,37 @@ def _cov(J: np.ndarray, s2: float, infl: float) -> np.ndarray:
 
 
 class ShapeTable:
-    """s(d) and ds/dd of a model tabulated on d_i = d_top·(i/N)², linearly interpolated.
+    """s(d) and ds/dd of a model for the checks' searches and posterior draws.
 
     The exact shape function (e.g. Sneddon's sphere, solved by Halley iterations) is too slow
-    to call for every posterior draw and every step of a search; the table is exact at its
-    4097 nodes (denser near d = 0 where s is least smooth) and its interpolation error is below
-    1e-6·s(d_top) for the laws of :mod:`palpbayes.contact`.  Depths beyond d_top fall back to
-    the exact law.
+    to call for every posterior draw and every step of a search.  s(d) is the compiled core's
+    law (:func:`palpbayes.shapekernel.compiled_shape`: exact for a power law, else its cubic
+    table, error below 5e-8·s(d_top)); ds/dd is tabulated on d_i = d_top·(i/N)² (exact at its
+    4,097 nodes, denser near d = 0 where s is least smooth) and linearly interpolated.  Depths
+    beyond the tables fall back to the exact law.
     """
 
     def __init__(self, model: ModelSpec, d_top: float, n: int = 4096):
         self.model = model
         self.d_top = float(d_top)
+        self.law = compiled_shape(model, self.d_top)
         self.grid = self.d_top * (np.arange(n + 1) / n) ** 2
-        self.s = model.shape(self.grid)
         self.ds = model.shape_derivative(self.grid)
 
     def shape(self, d) -> np.ndarray:
-        return self._lookup(d, self.s, self.model.shape)
+        d = np.asarray(d, dtype=float)
+        far = d > self.law.d_top
+        out = self.law(np.where(far, 0.0, d))
+        if np.any(far):
+            out[far] = self.model.shape(d[far])
+        return out
 
     def shape_derivative(self, d) -> np.ndarray:
-        return self._lookup(d, self.ds, self.model.shape_derivative)
-
-    def _lookup(self, d, table: np.ndarray, exact) -> np.ndarray:
-        """``table`` interpolated at depths ``d``; ``exact(d)`` beyond the table's end."""
         d = np.asarray(d, dtype=float)
-        out = np.interp(d, self.grid, table, left=0.0)
+        out = np.interp(d, self.grid, self.ds, left=0.0)
         far = d > self.d_top
         if np.any(far):
-            out[far] = exact(d[far])
+            out[far] = self.model.shape_derivative(d[far])
         return out
 
 

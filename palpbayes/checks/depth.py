@@ -27,11 +27,11 @@ def profile_law_fit(z, f, model, z_surf0: float, half_width: float,
                      baseline: str, z_ref: float, phi: float | None) -> dict:
     """F = E*·s(z_surf - z) + F0 (+F1·(z - z_ref)): Brent over z_surf, E*/F0/F1 linear.
 
-    ``model`` is the contact model or its :class:`~.core.ShapeTable`.  Brent's objective, the
-    residual sum of squares at a trial surface, comes from the compiled loop's sums
-    (:func:`palpbayes.shapekernel.cross_sums`: Σ s², Σ s·c over the columns c = 1[, u], F
-    less its mean) and the normal equations; the fit at the optimum is the least squares of
-    :func:`~.core.lstsq`."""
+    ``model`` is the contact model or its :class:`~.core.ShapeTable` (the same compiled law).
+    Brent's objective, the residual sum of squares at a trial surface, comes from the compiled
+    loop's sums (:func:`palpbayes.shapekernel.cross_sums`: Σ s², Σ s·c over the columns
+    c = 1[, u], F less its mean) and the normal equations (F centred: no offset to cancel);
+    the fit at the optimum is the least squares of :func:`~.core.lstsq`."""
     law = getattr(model, "model", model)
 
     def fit_at(zs):
@@ -51,6 +51,8 @@ def profile_law_fit(z, f, model, z_surf0: float, half_width: float,
         A[0, 0], A[0, 1:], A[1:, 0] = ss[0], sc[0, :-1], sc[0, :-1]
         A[1:, 1:] = CC[:-1, :-1]
         b = np.r_[sc[0, -1], CC[:-1, -1]]
+        if not ss[0] > 0:  # no sample in contact: the fit of the fixed columns alone
+            A, b = A[1:, 1:], b[1:]
         d = 1.0 / np.sqrt(np.where(np.diag(A) > 0, np.diag(A), 1.0))  # equilibrated
         try:
             beta = np.linalg.solve(A * d[:, None] * d[None, :], b * d) * d

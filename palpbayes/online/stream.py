@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import json
 import math
-import queue
 import threading
 import time
 from collections import deque
@@ -39,7 +38,7 @@ import numpy as np
 from ..errors import InputError, StreamError
 from ..io.units import force_factor, length_factor, time_factor
 
-__all__ = ["SampleParser", "Batch", "LimitHit", "batches", "arrivals", "CANONICAL_COLUMNS"]
+__all__ = ["SampleParser", "Batch", "LimitHit", "batches", "CANONICAL_COLUMNS"]
 
 #: Quantity -> canonical column (key) name, as in the trace CSV.
 CANONICAL_COLUMNS = {"time": "time_s", "z": "z_m", "force": "force_n"}
@@ -194,24 +193,6 @@ class Batch:
     @property
     def size(self) -> int:
         return int(self.t.size)
-
-
-def arrivals(lines: Iterable[str]) -> queue.Queue:
-    """A queue of (arrival time [s, perf_counter], line) filled by a daemon thread reading
-    ``lines``; (time, None) at the end of the stream, (time, exception) if reading failed."""
-    q: queue.Queue = queue.Queue()
-
-    def read() -> None:
-        try:
-            for line in lines:
-                q.put((time.perf_counter(), line))
-        except (OSError, ValueError, UnicodeDecodeError) as exc:  # a closed or broken stream
-            q.put((time.perf_counter(), exc))
-            return
-        q.put((time.perf_counter(), None))
-
-    threading.Thread(target=read, name="palpbayes-stream", daemon=True).start()
-    return q
 
 
 @dataclass(frozen=True)

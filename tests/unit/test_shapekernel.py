@@ -24,7 +24,7 @@ HALF_SPACE = {
     "cone": ModelSpec(Tip("cone", half_angle=0.6), nu=0.4),
 }
 TABLED = {  # no power law: tabulated; (model, deepest depth [m], bound on |error|/s(d_top))
-    "sphere": (ModelSpec(Tip("sphere", radius=1e-5), nu=0.5), 8e-6, 1e-13),
+    "sphere": (ModelSpec(Tip("sphere", radius=1e-5), nu=0.5), 8e-6, 1e-14),
     "paraboloid layer": (ModelSpec(Tip("paraboloid", radius=1e-5), nu=0.5).variant(
         thickness=2.5e-5, base="bonded"), 8e-6, 5e-8),
     "sphere layer": (ModelSpec(Tip("sphere", radius=1e-2), nu=0.3).variant(
