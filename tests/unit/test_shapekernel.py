@@ -165,3 +165,19 @@ def test_iid_ppc_replicates_are_the_simulated_chi_square():
     rep = np.random.default_rng(11).chisquare(dof, 400)  # what the check drew
     assert stats.ks_2samp(rep, sim).pvalue > 1e-3
     assert 0.05 < res.statistic < 0.999  # a correct model passes
+
+
+def test_the_kernels_refuse_columns_of_another_length_and_non_finite_depths():
+    from palpbayes.errors import InputError
+
+    model = TABLED["sphere"][0]
+    z = np.linspace(1e-5, 0.0, 5)
+    with pytest.raises(InputError, match="C has 2 rows for 5 heights"):
+        cross_sums(np.array([5e-6]), z, np.ones((2, 2)), model, False)
+    with pytest.raises(InputError, match="force has 4 rows for 5 heights"):
+        scale_rss(np.array([5e-6]), z, np.ones(4), model)
+    with pytest.raises(InputError, match="not finite"):
+        cross_sums(np.array([np.nan]), z, np.ones((5, 2)), model, False)
+    # a depth just past a power of the table's bucket is covered (rounding of the logarithm)
+    d = 2.0 ** -20 * (1 + 5e-11)
+    assert compiled_shape(model, d).d_top >= d
