@@ -157,7 +157,10 @@ def test_layer_likelihood_equals_each_concrete_model():
                                                                             base=b)
             real = np.r_[np.log(d["E_star"][i]), X[i, 1:4]]
             ref = TraceLikelihood(replace(data, model=m), tabulate=False)(real)
-            assert got[i] == pytest.approx(ref[0], abs=1e-6)
+            # the concrete model's sums come from the compiled core's table of the layer law
+            # (palpbayes.shapekernel: error below 5e-8 of s(d_top)), the mixture's from the
+            # law itself: log L of ~1e4 agrees to ~5e-6 (1e-6 before the table)
+            assert got[i] == pytest.approx(ref[0], abs=2e-5)
 
 
 def test_base_swap_is_an_involution():
