@@ -116,8 +116,9 @@ class FitData:
     def blocks(self, n_rows: int, max_elements: int = 1 << 22) -> list[slice]:
         """Slices over ``n_rows`` trial surfaces so that rows × n_points <= ``max_elements``.
 
-        Keeps the (trial surface × sample) work arrays of least squares and of the likelihood
-        table below ~32 MB whatever the trace length.
+        Keeps the (walker × sample) work arrays of the Student-t likelihood and of a layer
+        whose shape differs per walker below ~32 MB whatever the trace length (the sums over
+        trial surfaces of the other fits form no such array: :mod:`palpbayes.shapekernel`).
         """
         step = max(1, max_elements // max(self.n_points, 1))
         return [slice(i, min(i + step, n_rows)) for i in range(0, n_rows, step)]
