@@ -34,7 +34,7 @@ from ..io.manifest import load_trace, tip_columns, tip_from_row
 from ..trace import IndentationTrace
 
 __all__ = ["AFM_ROW_COLUMNS", "MAX_SPAN", "NO_CURVE", "afm_map_rows", "load_point_trace",
-           "is_afm_row"]
+           "read_afm_rows", "is_afm_row"]
 
 #: [m] Largest extent of an AFM map's positions: a larger one is not in metres.
 MAX_SPAN = 0.05
@@ -148,6 +148,14 @@ def load_point_trace(row: pd.Series, **read_options) -> IndentationTrace:
     manifest row, its trace file (:func:`palpbayes.io.manifest.load_trace`)."""
     if not is_afm_row(row):
         return load_trace(row, **read_options)
-    i = int(row["curve_index"])
-    (trace,) = read_afm(row["file"], tip=tip_from_row(row), curves=[i], **read_options)
+    (trace,) = read_afm_rows([row], **read_options)
     return trace
+
+
+def read_afm_rows(rows: list[pd.Series], **read_options) -> list[IndentationTrace]:
+    """The curves of AFM map rows that name one file and one tip, the file opened once for
+    all of them (reading curve by curve re-parses its headers per curve); ``read_options`` as
+    :func:`load_point_trace`."""
+    first = rows[0]
+    return read_afm(first["file"], tip=tip_from_row(first),
+                    curves=[int(r["curve_index"]) for r in rows], **read_options)

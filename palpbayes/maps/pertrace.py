@@ -37,11 +37,10 @@ from ..cluster import close_client, dask_client
 from ..errors import FitError, InputError, PalpbayesError
 from ..flagcodes import flag_columns
 from ..intervals import LEVEL, central
-from ..io.afm import read_afm
 from ..io.manifest import tip_from_row
 from ..lsq import fit_lsq_data
 from ..trace import IndentationTrace
-from .afm_source import is_afm_row, load_point_trace
+from .afm_source import is_afm_row, load_point_trace, read_afm_rows
 
 __all__ = ["PointOptions", "POINT_COLUMNS", "check_positions", "fit_point", "fit_points"]
 
@@ -121,7 +120,7 @@ def fit_point(row: pd.Series, options: PointOptions, index: int = 0,
         file together); None reads it here (:func:`~.afm_source.load_point_trace`).
     """
     out = _empty_row(row)
-    if isinstance(row.get("error"), str) and row["error"]:  # a hole of an AFM map: no curve
+    if _is_hole(row):
         out["error"] = row["error"]
         return out
     try:
@@ -166,6 +165,11 @@ def _fit_chunk(rows: list[tuple[int, dict]], options: PointOptions) -> list[dict
                 for k, ((i, _), r) in enumerate(zip(rows, series, strict=True))]
 
 
+def _is_hole(row: pd.Series) -> bool:
+    """A grid node of an AFM map without a curve (its ``error`` says why)."""
+    return isinstance(row.get("error"), str) and bool(row["error"])
+
+
 def _read_afm_curves(rows: list[pd.Series], read_options: dict) -> dict[int, IndentationTrace]:
     """The traces of a chunk's AFM rows, each file opened once for all its curves in the
     chunk (reading curve by curve re-parses the file's headers per curve: ~15 ms of the ~25 ms
@@ -175,15 +179,14 @@ def _read_afm_curves(rows: list[pd.Series], read_options: dict) -> dict[int, Ind
     the one-by-one reads, which put each curve's own error in its row."""
     by_file: dict[tuple[str, object], list[int]] = {}
     for k, row in enumerate(rows):
-        if is_afm_row(row) and not (isinstance(row.get("error"), str) and row["error"]):
+        if is_afm_row(row) and not _is_hole(row):
             by_file.setdefault((str(row["file"]), tip_from_row(row)), []).append(k)
     out: dict[int, IndentationTrace] = {}
-    for (path, tip), ks in by_file.items():
+    for ks in by_file.values():
         if len(ks) < 2:
             continue
         try:
-            traces = read_afm(path, tip=tip, curves=[int(rows[k]["curve_index"]) for k in ks],
-                              **read_options)
+            traces = read_afm_rows([rows[k] for k in ks], **read_options)
         except (PalpbayesError, ValueError, ArithmeticError, OSError):
             continue
         out.update(zip(ks, traces, strict=True))
