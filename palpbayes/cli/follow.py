@@ -155,13 +155,18 @@ def update_json(state: OnlineState, batch: Batch) -> str:
     return json.dumps(row)
 
 
+def _stat_fields(E) -> dict[str, float | None]:
+    """E [Pa] with its statistical interval (null where not known), the keys every line
+    that gives E has."""
+    return {"E_pa": _value(E.median) if E else None, "E_lo_pa": _value(E.lo) if E else None,
+            "E_hi_pa": _value(E.hi) if E else None}
+
+
 def _E_fields(state: OnlineState | None) -> dict[str, float | None]:
     """E [Pa] with its statistical interval and the full one's ends (null where not known),
     the keys an update and the last line share."""
-    E = None if state is None else state.E
     T = None if state is None else state.E_total
-    return {"E_pa": _value(E.median) if E else None, "E_lo_pa": _value(E.lo) if E else None,
-            "E_hi_pa": _value(E.hi) if E else None,
+    return {**_stat_fields(None if state is None else state.E),
             "E_total_lo_pa": _value(T.lo) if T else None,
             "E_total_hi_pa": _value(T.hi) if T else None}
 
@@ -234,9 +239,7 @@ def _stop_row(reason: str, n: int, line: int, t: float, z: float, force: float |
     return {"event": "stop", "final": False, "stop": reason, "n": n, "line": line,
             "t_s": _value(t), "z_m": _value(z),
             "force_n": None if force is None else _value(force),
-            "depth_m": None if depth is None else _value(depth),
-            "E_pa": _value(E.median) if E else None, "E_lo_pa": _value(E.lo) if E else None,
-            "E_hi_pa": _value(E.hi) if E else None,
+            "depth_m": None if depth is None else _value(depth), **_stat_fields(E),
             "rel_half_width": _value(E.rel_half_width) if E else None}
 
 
