@@ -165,9 +165,9 @@ def fit_lsq_data(data: FitData, *, level: float = LEVEL, trace_id: str = "") -> 
     # was the constraint binding? search a little below the admissible range too
     span = hi - lo
     z_free = _minimise(data, lo - span, hi)
-    active = z_free < lo - 1e-12 and _scalar_rss(data, z_free) < _scalar_rss(data, z_best)
-    estar = float(profile_rss(data, np.array([z_best]))[1][0])
-    rss = _scalar_rss(data, z_best)
+    rss_best, estar_best = profile_rss(data, np.array([z_best]))
+    rss, estar = float(rss_best[0]), float(estar_best[0])
+    active = z_free < lo - 1e-12 and _scalar_rss(data, z_free) < rss
     if not estar > 0:
         raise FitError(
             f"{trace_id or 'trace'}: least squares gives a non-positive modulus; the force does "
