@@ -122,13 +122,35 @@ def refine_grid(lo: float, hi: float, evaluate, coarse: int = COARSE_NODES,
         nodes, logp = nodes[order], logp[order]
 
 
+def _lower_tail(a, b) -> tuple[np.ndarray, ...]:
+    """[a, b], or its mirror image [−b, −a] where a > 0, so that both ends lie in the lower
+    tail, where log Phi keeps its precision: (lo, hi, mirrored, log Phi(lo), log Phi(hi))."""
+    a, b = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+    flip = a > 0
+    lo, hi = np.where(flip, -b, a), np.where(flip, -a, b)
+    return lo, hi, flip, special.log_ndtr(lo), special.log_ndtr(hi)
+
+
 def _log_normal_mass(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """log(Phi(b) − Phi(a)) for a < b, accurate in both tails."""
-    upper = a > 0  # both in the upper tail: use the mirror image
-    a2, b2 = np.where(upper, -b, a), np.where(upper, -a, b)
-    lb, la = special.log_ndtr(b2), special.log_ndtr(a2)
+    return _mass(*_lower_tail(a, b)[3:])
+
+
+def _mass(l_lo: np.ndarray, l_hi: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
-        return lb + np.log1p(-np.exp(la - lb))
+        return l_hi + np.log1p(-np.exp(l_lo - l_hi))
+
+
+def _truncated_draws(rng: np.random.Generator, a, b) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`truncated_standard_normal` and the log of each truncation's mass
+    (:func:`_log_normal_mass`), from one evaluation of the tails."""
+    lo, hi, flip, l_lo, l_hi = _lower_tail(a, b)
+    u = rng.random(lo.shape)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        r = np.exp(l_lo - l_hi)  # Phi(lo)/Phi(hi) in [0, 1)
+        x = special.ndtri_exp(l_hi + np.log(r + u * (1.0 - r)))
+    x = np.clip(x, lo, hi)
+    return np.where(flip, -x, x), _mass(l_lo, l_hi)
 
 
 def truncated_standard_normal(rng: np.random.Generator, a: np.ndarray, b: np.ndarray
@@ -138,16 +160,7 @@ def truncated_standard_normal(rng: np.random.Generator, a: np.ndarray, b: np.nda
     image [−b, −a] where a > 0, so that both ends lie in the lower tail, where log Phi keeps
     its precision (``scipy.special.log_ndtr``, ``ndtri_exp``).  The distribution of
     ``scipy.stats.truncnorm.rvs``, without its per-call overhead."""
-    a, b = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
-    flip = a > 0
-    lo, hi = np.where(flip, -b, a), np.where(flip, -a, b)
-    l_lo, l_hi = special.log_ndtr(lo), special.log_ndtr(hi)
-    u = rng.random(a.shape)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        r = np.exp(l_lo - l_hi)  # Phi(lo)/Phi(hi) in [0, 1)
-        x = special.ndtri_exp(l_hi + np.log(r + u * (1.0 - r)))
-    x = np.clip(x, lo, hi)
-    return np.where(flip, -x, x)
+    return _truncated_draws(rng, a, b)[0]
 
 
 def cell_widths(x: np.ndarray) -> np.ndarray:
@@ -308,7 +321,8 @@ class ExactPosterior:
         lo, hi = np.exp(self.prior.bounds["log_Estar"])
         mu0, sd0 = centre[:, 0], np.sqrt(cov[:, 0, 0])
         a, b = (lo - mu0) / sd0, (hi - mu0) / sd0
-        estar = mu0 + sd0 * truncated_standard_normal(rng, a, b)
+        x, log_mass = _truncated_draws(rng, a, b)
+        estar = mu0 + sd0 * x
         c_r0 = cov[:, 1:, 0]
         rest_mean = centre[:, 1:] + c_r0 / cov[:, :1, 0] * (estar - mu0)[:, None]
         rest_cov = cov[:, 1:, 1:] - np.einsum("mi,mj->mij", c_r0, c_r0) / cov[:, 0, 0, None, None]
@@ -317,7 +331,7 @@ class ExactPosterior:
         beta = np.column_stack([estar, rest])
         # importance weight: the truncation's probability (how much of the proposal's
         # conditional lies inside the range) times the log-uniform prior's 1/E*
-        log_w = _log_normal_mass(a, b) - np.log(estar) - lerp(adj)
+        log_w = log_mass - np.log(estar) - lerp(adj)
         if not np.isfinite(log_w).any():
             raise InputError(f"exact engine: the posterior of E* has no mass inside its prior "
                              f"range [{format_pressure(lo)}, {format_pressure(hi)}]; the "
