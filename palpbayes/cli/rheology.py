@@ -30,7 +30,8 @@ ELASTIC_ONLY = {
     "workers": "--workers", "scheduler": "--scheduler"}
 #: Options only the viscoelastic fit uses.
 VISCO_ONLY = {"segments": "--segments", "t0": "--t0", "compression_speed": "--compression-speed",
-              "drag": "--drag", "rheology_engine": "--rheology-engine"}
+              "drag": "--drag", "rheology_engine": "--rheology-engine",
+              "adhesion": "--adhesion"}
 
 
 def given_options(args: argparse.Namespace, options: dict[str, str]) -> list[str]:
@@ -79,6 +80,14 @@ def add_rheology_options(p: argparse.ArgumentParser) -> None:
                         "hydrodynamic force on an AFM cantilever in liquid): auto (default) "
                         "fits it when the retract is fitted, whose out-of-contact force tells "
                         "it from the offset")
+    v.add_argument("--adhesion", choices=("keep", "cut"), default="keep",
+                   help="an adhesive pull-off on the retract (the force dips below its own "
+                        "baseline where the tip lets go, which Ting's rule does not model): "
+                        "keep (default) fits the record as it is and flags the dip; cut "
+                        "removes the retract from where its force comes down to its baseline "
+                        "to where it has recovered before the fit (needs the retract in "
+                        "--segments; rheology.csv gives the cut in adhesion_cut_from_s, "
+                        "adhesion_cut_to_s)")
     v.add_argument("--rheology-engine", choices=("grid", "emcee"), default="grid",
                    help="posterior engine of --rheology: grid (moduli, offset and noise "
                         "integrated in closed form; default) or emcee (the same posterior with "
@@ -127,6 +136,10 @@ def check_rheology_args(args: argparse.Namespace) -> tuple[float | None, str]:
     if (out / RHEOLOGY_TABLE).exists() and not args.force:
         raise InputError(f"{out / RHEOLOGY_TABLE} exists; pass --force to overwrite it")
     names = check_segments(args.segments or "approach,hold")
+    if getattr(args, "adhesion", "keep") == "cut" and "retract" not in names:
+        raise InputError(f"--adhesion cut cuts the pull-off out of the retract, which "
+                         f"--segments {','.join(names)} does not fit: add the retract (e.g. "
+                         "--segments approach,retract) or leave --adhesion at keep")
     if "retract" in names and "sls" in args.rheology:
         raise InputError("--segments with the retract is fitted with the power law only "
                          "(Ting's rule under the SLS is not linear in its moduli); use "

@@ -25,6 +25,8 @@ One module per job, imports flowing one way (``results`` -> ``store``, ``choice`
   Chebyshev grid in (theta, surface) for the chain;
 * :mod:`~palpbayes.rheology.offcontact` -- what the force out of contact shows: a drag gap,
   a tilted baseline, adhesion at pull-off;
+* :mod:`~palpbayes.rheology.adhesion` -- an adhesive pull-off found on the retract and cut
+  out before the fit (``adhesion="cut"``, ``--adhesion cut``);
 * :mod:`~palpbayes.rheology.flags` -- the flags of a fit in words;
 * :mod:`~palpbayes.rheology.fit` -- :func:`fit_rheology`, its result and table;
 * :mod:`~palpbayes.rheology.choice` -- which relaxation model a record prefers (PSIS-LOO,
@@ -47,6 +49,7 @@ is :mod:`palpbayes.contact.viscoelastic`; it checks the regression columns here.
 from __future__ import annotations
 
 from . import (
+    adhesion,
     campaign,
     choice,
     column_table,
@@ -64,6 +67,7 @@ from . import (
     store,
     ting,
 )
+from .adhesion import *  # noqa: F403
 from .campaign import *  # noqa: F403
 from .choice import *  # noqa: F403
 from .column_table import *  # noqa: F403
@@ -98,4 +102,5 @@ __all__ += sampler.__all__
 __all__ += store.__all__
 __all__ += campaign.__all__
 __all__ += ting.__all__
+__all__ += adhesion.__all__
 

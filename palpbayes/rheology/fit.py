@@ -18,6 +18,9 @@
   that shrinks during the hold, a thin specimen, a poor importance sample or an emcee chain
   that did not converge.
 
+With ``adhesion="cut"`` the adhesive pull-off of the retract is found and removed before the
+fit (:mod:`~palpbayes.rheology.adhesion`), and the checks run on what is left.
+
 Moduli are reduced moduli E* [Pa] as everywhere in palpbayes; give ``nu`` to have Young's
 moduli E = E*(1 − nu²) in the table too.
 """
@@ -39,16 +42,18 @@ from ..groundtruth import DEFAULT_STRAIN_WINDOW
 from ..intervals import LEVEL, central_band
 from ..trace import IndentationTrace
 from ..units import format_pressure
+from .adhesion import AdhesionCut, cut_adhesion
 from .column_table import ColumnTable
 from .compression import PAPER_COMPRESSION_SPEED, compression_moduli
-from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, prepare_cycle
+from .cycle import DEFAULT_SEGMENTS, MAX_POINTS, CycleData, check_segments, prepare_cycle
 from .design import lee_radok_columns
 from .flags import TILT_HINT, fit_flags, offcontact_flags
 from .posterior import PHI_BOUNDS, RHEOLOGIES, GridPosterior, grid_posterior
 from .sampler import EmceeRheology, sample_emcee
 from .ting import RETRACT, RetractDesign, with_retract
 
-__all__ = ["RheologyFit", "fit_rheology", "curve_draws", "PARAMETERS", "BASELINES", "ENGINES"]
+__all__ = ["RheologyFit", "fit_rheology", "curve_draws", "PARAMETERS", "BASELINES", "ENGINES",
+           "ADHESION"]
 
 #: Parameters of each rheology in table order: (name, unit, is a modulus).
 PARAMETERS = {
@@ -64,6 +69,9 @@ _EXTRA = (("drag", "N·s/m", False), ("tilt", "N/m", False))
 BASELINES = ("constant", "linear")
 #: Posterior engines: the collapsed grid, or emcee started from it.
 ENGINES = ("grid", "emcee")
+#: What the fit does with an adhesive pull-off on the retract: fit the record as it is, or
+#: cut the pull-off out first (:mod:`~palpbayes.rheology.adhesion`).
+ADHESION = ("keep", "cut")
 #: Draws used for the force band and the posterior-predictive check.
 _BAND_DRAWS = 100
 
@@ -101,6 +109,9 @@ class RheologyFit:
         Grid draws only: the grid node behind every draw, ``{"_theta_node", "_z_node"}``
         (:meth:`~palpbayes.rheology.posterior.GridPosterior.draws`), where the force curves
         are taken; empty for emcee's draws.
+    adhesion_cut
+        The adhesive stretch cut from the retract before the fit (``adhesion="cut"``;
+        :class:`~palpbayes.rheology.adhesion.AdhesionCut`), None when nothing was cut.
     """
 
     rheology: str
@@ -114,6 +125,7 @@ class RheologyFit:
     nu: float | None = None
     seconds: float = 0.0
     nodes: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    adhesion_cut: AdhesionCut | None = None
 
     @property
     def t0(self) -> float:
@@ -133,7 +145,9 @@ class RheologyFit:
 
     def table(self, level: float = LEVEL) -> pd.DataFrame:
         """One row per parameter: ``parameter``, ``unit``, ``median``, ``lo``, ``hi`` (the
-        central ``level`` interval) and, for moduli with ``nu`` given, ``E`` rows too."""
+        central ``level`` interval) and, for moduli with ``nu`` given, ``E`` rows too.
+        ``attrs`` hold the level, rheology, t0 [s], nu and ``adhesion_cut_s``: the (first,
+        last) time [s] cut from the retract as adhesion, None when nothing was cut."""
         rows = []
         extra = tuple(e for e in _EXTRA if e[0] in self.draws)
         for name, unit, modulus in PARAMETERS[self.rheology] + _COMMON + extra:
@@ -145,7 +159,9 @@ class RheologyFit:
                              **{k: youngs_modulus(v, self.nu) for k, v in
                                 (("median", med), ("lo", lo), ("hi", hi))}})
         out = pd.DataFrame(rows)
-        out.attrs.update(level=level, rheology=self.rheology, t0_s=self.t0, nu=self.nu)
+        cut = self.adhesion_cut
+        out.attrs.update(level=level, rheology=self.rheology, t0_s=self.t0, nu=self.nu,
+                         adhesion_cut_s=None if cut is None else (cut.t_start, cut.t_end))
         return out
 
     def relaxation(self, times, level: float = LEVEL) -> pd.DataFrame:
@@ -217,6 +233,9 @@ class RheologyFit:
                 continue
             parts.append(f"{r['parameter']} {r['median']:.4g} [{r['lo']:.4g}, {r['hi']:.4g}] "
                          f"{r['unit']}")
+        if self.adhesion_cut is not None:
+            c = self.adhesion_cut
+            parts.append(f"adhesion cut {c.t_start:.4g}-{c.t_end:.4g} s")
         return "; ".join(parts)
 
 
@@ -294,7 +313,7 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
                  tip: Tip | None = None, segments=DEFAULT_SEGMENTS, t0: float = 1.0,
                  nu: float | None = None, drag: bool | None = None,
                  baseline: str = "constant", engine: str = "grid", n_draws: int = 4000,
-                 max_points: int = MAX_POINTS,
+                 max_points: int = MAX_POINTS, adhesion: str = "keep",
                  rng: np.random.Generator | int | None = 0) -> RheologyFit:
     """Posterior of a relaxation modulus, the surface, offset and noise from one cycle.
 
@@ -335,6 +354,12 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
         Posterior draws kept.
     max_points
         Most block means fitted (:mod:`~palpbayes.rheology.cycle`).
+    adhesion
+        ``"keep"`` (default): fit the record as it is (an adhesive pull-off on the retract is
+        flagged); ``"cut"``: first remove the retract's adhesive stretch, from where its force
+        comes down to its own baseline to where it has recovered
+        (:func:`~palpbayes.rheology.adhesion.cut_adhesion`; ``RheologyFit.adhesion_cut``), and
+        check what is left.  Needs the retract in ``segments``.
     rng
         Seed or Generator of the draws and the check.
 
@@ -354,6 +379,11 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
         raise InputError(f"baseline {baseline!r}: use one of {', '.join(BASELINES)}")
     if not (isinstance(n_draws, int | np.integer) and n_draws >= 100):
         raise InputError(f"n_draws = {n_draws!r} must be a whole number >= 100")
+    if adhesion not in ADHESION:
+        raise InputError(f"adhesion {adhesion!r}: use one of {', '.join(ADHESION)}")
+    cut, uncut = None, trace
+    if adhesion == "cut":
+        trace, cut = _cut_pull_off(trace, segments)
     gen = np.random.default_rng(rng)
     data = prepare_cycle(trace, tip, segments=segments, max_points=max_points)
     if rheology == "sls" and "retract" in data.segments:
@@ -379,16 +409,34 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
     ppc = posterior_predictive_check(-data.time, data.force, curves, draws["sigma"][sub],
                                      phi=draws["phi"][sub], rng=gen, z_surf=-t_contact,
                                      n_bins=12)
-    fit = RheologyFit(rheology, data, grid, draws, ppc, sampler=sampler, nu=nu, nodes=nodes)
+    fit = RheologyFit(rheology, data, grid, draws, ppc, sampler=sampler, nu=nu, nodes=nodes,
+                      adhesion_cut=cut)
     fit.offcontact = offcontact_flags(fit, data.force - np.median(curves, axis=0))
     if baseline == "constant" and any(TILT_HINT in f for f in fit.offcontact):
-        tried = _tried_tilt(fit, trace, rheology, tip=tip, segments=segments, t0=t0, nu=nu,
+        tried = _tried_tilt(fit, uncut, rheology, tip=tip, segments=segments, t0=t0, nu=nu,
                             drag=drag, engine=engine, n_draws=n_draws, max_points=max_points,
-                            rng=int(gen.integers(2**62)))
+                            adhesion=adhesion, rng=int(gen.integers(2**62)))
         fit.offcontact = [f.replace(TILT_HINT, tried) for f in fit.offcontact]
     fit.flags = fit_flags(fit)
     fit.seconds = _time.perf_counter() - start
     return fit
+
+
+def _cut_pull_off(trace: IndentationTrace, segments) -> tuple[IndentationTrace,
+                                                               AdhesionCut | None]:
+    """``adhesion="cut"``: the trace without its retract's adhesive stretch, and the cut
+    (:func:`~palpbayes.rheology.adhesion.cut_adhesion`); InputError when the fitted segments
+    leave out the retract, where the cut is made."""
+    names = check_segments(segments)
+    if "retract" not in names:
+        raise InputError(f"adhesion='cut' (--adhesion cut) cuts the pull-off out of the "
+                         f"retract, which --segments {','.join(names)} does not fit: add the "
+                         "retract (e.g. --segments approach,retract) or leave the adhesion at "
+                         "keep")
+    if trace.segment is None:  # the segments from the motion, as prepare_cycle takes them
+        from ..io.motion_segments import segments_from_motion
+        trace = trace.replace(segment=segments_from_motion(trace.time, trace.z))
+    return cut_adhesion(trace)
 
 
 def _tried_tilt(fit: RheologyFit, trace: IndentationTrace, rheology: str, **kw) -> str:

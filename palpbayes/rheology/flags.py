@@ -6,7 +6,8 @@ Two lists, each one line per finding:
 * :func:`offcontact_flags` -- what the force out of contact shows and the model leaves out
   (:mod:`~palpbayes.rheology.offcontact`): a gap between the approach and the retract when
   the drag is not fitted, a baseline that tilts with the height when it is constant, adhesion
-  at pull-off.  These fail the model check (``RheologyFit.model_ok``);
+  at pull-off (its hint names ``adhesion="cut"``; after that cut, what is left is checked).
+  These fail the model check (``RheologyFit.model_ok``);
 * :func:`fit_flags` -- those, and what the posterior shows: alpha piling up at a bound of its
   prior, tau faster than one step or slower than the record, phi at its bound (a drift the
   noise soaks up), a surface at its prior bound, a grid that did not settle, other basins, a
@@ -28,7 +29,7 @@ from .offcontact import N_SE, adhesion_dip, baseline_tilt, drag_gap
 from .posterior import ALPHA_MAX, PHI_BOUNDS, GridPosterior
 
 __all__ = ["offcontact_flags", "fit_flags", "SHRINK_FLAG", "THIN_FLAG", "MIN_ESS", "DRAG_N_SE",
-           "TILT_HINT"]
+           "TILT_HINT", "ADHESION_HINT"]
 
 
 class RheologyFit(Protocol):
@@ -49,6 +50,10 @@ class RheologyFit(Protocol):
 #: The tilt flag's hint; :func:`palpbayes.rheology.fit.fit_rheology` tries it before it is
 #: given and replaces it by what the fit with a linear baseline gave.
 TILT_HINT = "fit it: baseline='linear', --baseline linear"
+#: The adhesion flag's hint: leave the retract out, or cut the pull-off out of it
+#: (:mod:`~palpbayes.rheology.adhesion`).
+ADHESION_HINT = ("fit --segments approach,hold, or cut the pull-off out of the retract: "
+                 "adhesion='cut', --adhesion cut")
 #: Largest relative loss of depth during the hold before the shrinking contact is flagged.
 SHRINK_FLAG = 0.02
 #: Depth / specimen thickness above which the half-space assumption is flagged.
@@ -87,11 +92,15 @@ def offcontact_flags(fit: RheologyFit, residual: np.ndarray) -> list[str]:
     dip = adhesion_dip(data, zs, trend) if "retract" in data.segments else None
     if dip is not None and dip[0] < -N_SE * dip[1]:
         depth, se, t = dip
+        cut = getattr(fit, "adhesion_cut", None)
+        hint = (ADHESION_HINT if cut is None else
+                f"it is left after the adhesion cut of {cut.t_start:.4g}-{cut.t_end:.4g} s: a "
+                "pull-off longer than the cut or a baseline that is not a line in the height; "
+                "fit --segments approach,hold")
         out.append(f"where the tip lets go, the retract's force dips "
                    f"{format_force(-depth)} below its own baseline ({-depth / se:.1f} se, "
                    f"at {t:.3g} s): adhesion, the sample holding the tip before it lets go, "
-                   "which Ting's rule does not model; it biases the fit of the retract (fit "
-                   "--segments approach,hold, or cut the retract at the pull-off)")
+                   f"which Ting's rule does not model; it biases the fit of the retract ({hint})")
     return out
 
 

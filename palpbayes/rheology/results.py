@@ -5,7 +5,9 @@ parameter's posterior median and central 90 % interval in columns named
 ``<parameter>[_lo|_hi]_<unit>`` (moduli as E* [Pa], and as E with ``nu``), whether the model
 check passed (``model_ok``), the short codes of what was flagged (``flag_codes``, ``;``
 separated; :data:`palpbayes.flagcodes.RHEOLOGY_CODES`), ``flag_level`` and the flags in words
-(``notes``), the number of block means and the fit time,
+(``notes``), the number of block means and the fit time, the stretch of the retract cut as
+an adhesive pull-off (``adhesion_cut_from_s``, ``adhesion_cut_to_s`` [s] on the trace's time
+axis; NaN when nothing was cut: :mod:`~palpbayes.rheology.adhesion`),
 the posterior ``engine`` (``grid``, or ``emcee`` with its ``rhat_max``, ``ess_min`` and
 ``converged``).
 With ``nu`` and the specimen's thickness known, ``E_compression_pa`` (``_lo``, ``_hi``) is the
@@ -88,6 +90,9 @@ def summary_row(trace: IndentationTrace, fit: RheologyFit,
     row.update(model_ok=fit.model_ok, **listed_flag_columns(list(fit.flags), RHEOLOGY_CODES),
                n_points=fit.data.n_points,
                block=fit.data.block, seconds=round(fit.seconds, 3), error="")
+    cut = fit.adhesion_cut
+    row.update(adhesion_cut_from_s=np.nan if cut is None else cut.t_start,
+               adhesion_cut_to_s=np.nan if cut is None else cut.t_end)
     return row
 
 
@@ -103,7 +108,7 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
                segments=DEFAULT_SEGMENTS, t0: float = 1.0, nu: float | None = None,
                seed: int = 0, compression_speed: float = PAPER_COMPRESSION_SPEED,
                drag: bool | None = None, baseline: str = "constant", engine: str = "grid",
-               progress: bool | None = None,
+               adhesion: str = "keep", progress: bool | None = None,
                total: int | None = None,
                on_fit: Callable[[IndentationTrace, RheologyFit], None] | None = None
                ) -> pd.DataFrame:
@@ -131,10 +136,11 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
         Results folder (created).
     segments, t0, nu, seed, compression_speed
         As above; ``segments`` as :func:`~palpbayes.rheology.fit_rheology` takes them.
-    drag, baseline, engine
+    drag, baseline, engine, adhesion
         A viscous drag term (None: when the retract is fitted), the baseline model
-        (``"constant"`` or ``"linear"``) and the posterior engine (``"grid"`` or ``"emcee"``),
-        as :func:`~palpbayes.rheology.fit_rheology` takes them.
+        (``"constant"`` or ``"linear"``), the posterior engine (``"grid"`` or ``"emcee"``) and
+        what to do with an adhesive pull-off on the retract (``"keep"`` or ``"cut"``), as
+        :func:`~palpbayes.rheology.fit_rheology` takes them.
     progress, total
         A progress bar (None: only on a terminal) and its length.
     on_fit
@@ -169,11 +175,12 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
                 continue
             trace_nu = (trace.metadata or {}).get("nu", nu)
             fits, new = {}, []
+            options = {"segments": segments, "t0": t0, "drag": drag}
             for m in models:  # one model failing keeps the others' rows
                 try:
-                    fits[m] = fit_rheology(trace, m, segments=segments, t0=t0, nu=trace_nu,
-                                           drag=drag, baseline=baseline, engine=engine,
-                                           rng=seed + i)
+                    fits[m] = fit_rheology(trace, m, nu=trace_nu, baseline=baseline,
+                                           engine=engine, adhesion=adhesion, rng=seed + i,
+                                           **options)
                     row = summary_row(trace, fits[m], compression_speed)
                     save_rheology_fit(fits[m], rheology_fit_path(out, trace.trace_id, m),
                                       trace=trace)  # the report's draws and bands

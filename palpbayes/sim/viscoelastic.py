@@ -13,6 +13,12 @@ is the kernel, Lee–Radok while the contact grows and Ting when it shrinks
     z_rec(t) = z(t) + eta(t)
     e(t)     = phi·e(t-1) + sqrt(1 - phi²)·sigma·w(t),  e(0) = sigma·w(0)
 
+Two additions to a simulated trace, each a new trace with its truth in the metadata:
+:func:`adhesive_pull_off` (the sample holding the tip after Ting's contact has ended,
+−A·(s/L)·exp(1 − s/L) over the height s travelled up since, the dip real AFM retracts show)
+and :func:`add_baseline_terms` (a viscous drag on the probe b·(−dz/dt) and a baseline that
+tilts with the height F1·(z − z_ref), as :mod:`palpbayes.rheology.posterior` models them).
+
 The kernel's moduli are **reduced** moduli E* (palpbayes works in E*; E = E*·(1 - nu²)).  The
 noise model is :mod:`palpbayes.sim.trace`'s; the default sigma is the paper's 48 mN peak-to-peak
 read as ±3 sigma (8 mN).  A paper-scale foam is E* ~ 50–150 kPa under the paper's tips
@@ -42,7 +48,8 @@ from ..trace import IndentationTrace
 from ._checks import ar1_phi, finite, nonneg, positive
 from .trace import ar1_noise
 
-__all__ = ["ramp_hold_motion", "simulate_viscoelastic", "multi_speed", "VISCO_BASELINE_TIME"]
+__all__ = ["ramp_hold_motion", "simulate_viscoelastic", "multi_speed", "adhesive_pull_off",
+           "add_baseline_terms", "noise_free_force", "VISCO_BASELINE_TIME"]
 
 #: [s] Default pre-contact baseline: the default approach is ``speed`` times this.
 VISCO_BASELINE_TIME = 0.5
@@ -307,3 +314,150 @@ def multi_speed(kernel: PowerLawKernel | PronyKernel, tip: Tip, speeds, **kwargs
             meta["seed"] = int(rng)
         out.append(replace(tr, metadata=meta))
     return out
+
+
+def _kernel_of(meta: dict) -> PowerLawKernel | PronyKernel:
+    """The relaxation kernel recorded in a simulated trace's metadata (:func:`_kernel_truth`)."""
+    kind = meta.get("kernel")
+    if kind == "power-law":
+        return PowerLawKernel(meta["E0_true"], meta["alpha_true"], meta["t0_true"])
+    if kind == "sls":
+        return PronyKernel(meta["E_inf_true"], (meta["E1_true"],), (meta["tau_true"],))
+    if kind == "prony":
+        return PronyKernel(meta["E_inf_true"], tuple(meta["E_prony_true"]),
+                           tuple(meta["tau_prony_true"]))
+    raise InputError("the trace's metadata names no relaxation kernel: give a trace of "
+                     "simulate_viscoelastic")
+
+
+def _motion(trace: IndentationTrace) -> tuple[np.ndarray, dict]:
+    """The noise-free tip height [m] of a whole :func:`simulate_viscoelastic` trace, rebuilt
+    from its metadata (:func:`ramp_hold_motion`), and the metadata; InputError otherwise."""
+    meta = trace.metadata or {}
+    need = ("simulated", "kernel", "z_surf_true", "depth_true", "speed", "rate",
+            "hold_requested", "retract", "approach", "m_true", "g_true")
+    missing = [k for k in need if k not in meta]
+    if missing:
+        raise InputError(f"{trace.trace_id}: not a trace of simulate_viscoelastic (its metadata "
+                         f"lack {missing[0]!r}); the noise-free force is rebuilt from that "
+                         "truth")
+    t, z, _ = ramp_hold_motion(depth=meta["depth_true"], speed=meta["speed"],
+                               hold_time=meta["hold_requested"], retract=meta["retract"],
+                               rate=meta["rate"], approach=meta["approach"],
+                               z_surf=meta["z_surf_true"])
+    if t.size != trace.n_points or not np.allclose(t, trace.time, rtol=0, atol=1e-9):
+        raise InputError(f"{trace.trace_id}: its {trace.n_points} samples are not the "
+                         f"{t.size} of its simulated motion (cut or resampled?); use the "
+                         "whole simulated trace")
+    return z, meta
+
+
+def noise_free_force(trace: IndentationTrace) -> np.ndarray:
+    """[N] The contact force of a :func:`simulate_viscoelastic` trace without its noise and
+    offset (nor anything added since): the hereditary force of its kernel and tip on its
+    motion, rebuilt from the metadata (:func:`ramp_hold_motion`; the recorded z may be noisy).
+
+    Raises
+    ------
+    InputError
+        A trace that is not one of :func:`simulate_viscoelastic` whole (its metadata lack the
+        truth, or its samples are not those of the motion).
+    """
+    z, meta = _motion(trace)
+    return hereditary_force(trace.time, meta["z_surf_true"] - z, meta["g_true"],
+                            meta["m_true"], _kernel_of(meta))
+
+
+def adhesive_pull_off(trace: IndentationTrace, force: float, length: float
+                      ) -> IndentationTrace:
+    """``trace`` (one of :func:`simulate_viscoelastic`, with a retract) with an adhesive
+    pull-off on its retract: from the first retract sample where the noise-free Ting force
+    has come back to zero (the contact ends, t_off), the force gains
+
+        F_adh = −A·(s/L)·exp(1 − s/L),   s = z(t) − z(t_off) >= 0 the height travelled up,
+
+    zero at t_off, a pull of A at s = L, then a decay (a sample holding the tip as it lets
+    go, which Ting's rule does not model).  The heights are the motion's, without position
+    noise.
+
+    Parameters
+    ----------
+    trace
+        A whole :func:`simulate_viscoelastic` trace with a retract (other additions, e.g.
+        :func:`add_baseline_terms`, may come before or after).
+    force
+        [N] A >= 0, the largest pull.
+    length
+        [m] L > 0, the height above t_off where the pull is largest.
+
+    Returns
+    -------
+    IndentationTrace
+        The new trace; ``metadata`` adds ``adhesion_force_true`` [N],
+        ``adhesion_length_true`` [m] and ``adhesion_start_true`` (t_off [s]).
+
+    Raises
+    ------
+    InputError
+        A negative force or non-positive length, a trace without a retract, not a whole
+        simulated trace (:func:`noise_free_force`), or a contact that never ends on the
+        retract.
+    """
+    A = nonneg(force, "adhesive force A [N]")
+    L = positive(length, "adhesion length L [m]")
+    if trace.segment is None or not np.any(trace.segment == 2):
+        raise InputError(f"{trace.trace_id}: no retract to add the pull-off to "
+                         "(simulate with retract=True)")
+    z, meta = _motion(trace)
+    free = noise_free_force(trace)
+    ret = np.flatnonzero(trace.segment == 2)
+    off = ret[free[ret] <= 0.0]
+    if off.size == 0:
+        raise InputError(f"{trace.trace_id}: the contact does not end on the retract, so "
+                         "there is no pull-off to add")
+    i0 = int(off[0])
+    s = np.zeros(trace.n_points)
+    s[i0:] = np.clip(z[i0:] - z[i0], 0.0, None)
+    adh = -A * (s / L) * np.exp(1.0 - s / L)
+    return trace.replace(force=trace.force + adh,
+                         metadata=dict(meta, adhesion_force_true=A, adhesion_length_true=L,
+                                       adhesion_start_true=float(trace.time[i0])))
+
+
+def add_baseline_terms(trace: IndentationTrace, *, drag: float = 0.0, tilt: float = 0.0,
+                       z_ref: float | None = None) -> IndentationTrace:
+    """``trace`` with a viscous drag on the probe and a tilted baseline added to its force:
+
+        F += b·(−dz/dt) + F1·(z − z_ref),
+
+    dz/dt from the recorded z (:func:`numpy.gradient`; simulate without position noise to
+    keep the drag's column exact), so the drag pushes down (+) on the way down and pulls on
+    the way up, as :mod:`palpbayes.rheology.posterior` models it.
+
+    Parameters
+    ----------
+    trace
+        Any trace.
+    drag
+        [N·s/m] b (>= 0).
+    tilt
+        [N/m] F1 (any sign).
+    z_ref
+        [m] Height where the tilt is zero (default the first sample's).
+
+    Returns
+    -------
+    IndentationTrace
+        The new trace; ``metadata`` adds ``drag_true`` [N·s/m], ``tilt_true`` [N/m] and
+        ``tilt_z_ref`` [m] (added to any earlier ones).
+    """
+    b = nonneg(drag, "viscous drag b [N·s/m]")
+    f1 = finite(tilt, "baseline tilt F1 [N/m]")
+    ref = float(trace.z[0]) if z_ref is None else finite(z_ref, "tilt reference z_ref [m]")
+    meta = dict(trace.metadata or {})
+    if meta.get("tilt_true", 0.0) and meta.get("tilt_z_ref", ref) != ref:
+        raise InputError("a tilt is already added about another z_ref; give the same z_ref")
+    force = trace.force - b * np.gradient(trace.z, trace.time) + f1 * (trace.z - ref)
+    meta.update(drag_true=meta.get("drag_true", 0.0) + b,
+                tilt_true=meta.get("tilt_true", 0.0) + f1, tilt_z_ref=ref)
+    return trace.replace(force=force, metadata=meta)
