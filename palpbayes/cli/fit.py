@@ -89,7 +89,8 @@ def _run_rheology(args: argparse.Namespace) -> int:
                        seed=args.seed, compression_speed=args.compression_speed / 6e4,
                        drag={"auto": None, "on": True, "off": False}[args.drag],
                        baseline=args.baseline, engine=args.rheology_engine,
-                       adhesion=args.adhesion, progress=args.progress, total=total,
+                       adhesion=args.adhesion, peer=args.peer_compatible,
+                       progress=args.progress, total=total,
                        on_fit=None if pools is None else pools.add)
     print_rheology(table)
     print(f"wrote {out / RHEOLOGY_TABLE}")

@@ -28,10 +28,13 @@ ELASTIC_ONLY = {
     "gain_sd": "--gain-sd", "compliance_max": "--compliance-max", "engine": "--engine",
     "model_form": "--model-form", "strict": "--strict", "max_steps": "--max-steps",
     "workers": "--workers", "scheduler": "--scheduler"}
+#: Peers ``--peer-compatible`` imitates: :data:`palpbayes.rheology.peer.PEERS`, spelled out so
+#: that building the parser does not import the viscoelastic package.
+PEER_NAMES = ("pyfmrheo",)
 #: Options only the viscoelastic fit uses.
 VISCO_ONLY = {"segments": "--segments", "t0": "--t0", "compression_speed": "--compression-speed",
               "drag": "--drag", "rheology_engine": "--rheology-engine",
-              "adhesion": "--adhesion"}
+              "adhesion": "--adhesion", "peer_compatible": "--peer-compatible"}
 
 
 def given_options(args: argparse.Namespace, options: dict[str, str]) -> list[str]:
@@ -88,6 +91,13 @@ def add_rheology_options(p: argparse.ArgumentParser) -> None:
                         "to where it has recovered before the fit (needs the retract in "
                         "--segments; rheology.csv gives the cut in adhesion_cut_from_s, "
                         "adhesion_cut_to_s)")
+    v.add_argument("--peer-compatible", choices=PEER_NAMES, default=None, metavar="PEER",
+                   help="read every trace as a peer does, to compare with its numbers like "
+                        "for like: pyfmrheo (its Ting fit as its viscoelastic notebook runs "
+                        "it: straight ramps at constant speed in place of the recorded "
+                        "heights, its drag 2.5e-6 N·s/m fixed, approach and retract, t0 1 s; "
+                        "sets --segments, --drag and --t0). Not a measurement: the tip did "
+                        "not move at constant speed")
     v.add_argument("--rheology-engine", choices=("grid", "emcee"), default="grid",
                    help="posterior engine of --rheology: grid (moduli, offset and noise "
                         "integrated in closed form; default) or emcee (the same posterior with "
@@ -135,6 +145,14 @@ def check_rheology_args(args: argparse.Namespace) -> tuple[float | None, str]:
                          "out: the table then has E* only)")
     if (out / RHEOLOGY_TABLE).exists() and not args.force:
         raise InputError(f"{out / RHEOLOGY_TABLE} exists; pass --force to overwrite it")
+    peer = getattr(args, "peer_compatible", None)
+    if peer is not None:
+        for flag, given in (("--segments", args.segments is not None), ("--t0", args.t0 != 1.0),
+                            ("--drag", args.drag != "auto")):
+            if given:
+                raise InputError(f"--peer-compatible {peer} sets {flag} as the peer does; "
+                                 f"leave {flag} out")
+        args.segments = "approach,retract"
     names = check_segments(args.segments or "approach,hold")
     if getattr(args, "adhesion", "keep") == "cut" and "retract" not in names:
         raise InputError(f"--adhesion cut cuts the pull-off out of the retract, which "

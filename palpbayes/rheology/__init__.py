@@ -27,6 +27,8 @@ One module per job, imports flowing one way (``results`` -> ``store``, ``choice`
   a tilted baseline, adhesion at pull-off;
 * :mod:`~palpbayes.rheology.adhesion` -- an adhesive pull-off found on the retract and cut
   out before the fit (``adhesion="cut"``, ``--adhesion cut``);
+* :mod:`~palpbayes.rheology.peer` -- a trace read as a peer's fit reads it
+  (``--peer-compatible pyfmrheo``: straight ramps, its fixed drag), to compare like for like;
 * :mod:`~palpbayes.rheology.flags` -- the flags of a fit in words;
 * :mod:`~palpbayes.rheology.fit` -- :func:`fit_rheology`, its result and table;
 * :mod:`~palpbayes.rheology.choice` -- which relaxation model a record prefers (PSIS-LOO,
@@ -60,6 +62,7 @@ from . import (
     flags,
     kernels,
     offcontact,
+    peer,
     pool,
     posterior,
     results,
@@ -78,6 +81,7 @@ from .fit import *  # noqa: F403
 from .flags import *  # noqa: F403
 from .kernels import *  # noqa: F403
 from .offcontact import *  # noqa: F403
+from .peer import *  # noqa: F403
 from .pool import *  # noqa: F403
 from .posterior import *  # noqa: F403
 from .results import *  # noqa: F403
@@ -103,4 +107,5 @@ __all__ += store.__all__
 __all__ += campaign.__all__
 __all__ += ting.__all__
 __all__ += adhesion.__all__
+__all__ += peer.__all__
 

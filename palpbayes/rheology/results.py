@@ -37,6 +37,7 @@ from ..trace import IndentationTrace
 from .compression import PAPER_COMPRESSION_SPEED
 from .cycle import DEFAULT_SEGMENTS
 from .fit import RheologyFit, fit_rheology
+from .peer import peer_compatible
 from .store import clear_rheology_outputs, save_rheology_fit
 
 __all__ = ["RHEOLOGY_TABLE", "summary_row", "fit_traces", "UNIT_SUFFIXES"]
@@ -108,7 +109,8 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
                segments=DEFAULT_SEGMENTS, t0: float = 1.0, nu: float | None = None,
                seed: int = 0, compression_speed: float = PAPER_COMPRESSION_SPEED,
                drag: bool | None = None, baseline: str = "constant", engine: str = "grid",
-               adhesion: str = "keep", progress: bool | None = None,
+               adhesion: str = "keep", peer: str | None = None,
+               progress: bool | None = None,
                total: int | None = None,
                on_fit: Callable[[IndentationTrace, RheologyFit], None] | None = None
                ) -> pd.DataFrame:
@@ -141,6 +143,11 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
         (``"constant"`` or ``"linear"``), the posterior engine (``"grid"`` or ``"emcee"``) and
         what to do with an adhesive pull-off on the retract (``"keep"`` or ``"cut"``), as
         :func:`~palpbayes.rheology.fit_rheology` takes them.
+    peer
+        ``"pyfmrheo"``: read every trace as PyFMRheo's notebook does
+        (:func:`~palpbayes.rheology.peer.pyfmrheo_compatible`: straight ramps, its drag fixed;
+        its segments, drag and t0 replace the ones above), for comparing with the peer's
+        numbers; each row's ``peer_compatible`` says so.  None (default): the recording.
     progress, total
         A progress bar (None: only on a terminal) and its length.
     on_fit
@@ -176,12 +183,21 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
             trace_nu = (trace.metadata or {}).get("nu", nu)
             fits, new = {}, []
             options = {"segments": segments, "t0": t0, "drag": drag}
+            if peer is not None:
+                try:
+                    trace, options = peer_compatible(trace, peer)
+                except PalpbayesError as exc:
+                    rows.extend(_error_row(trace_id, source, m, exc) for m in models)
+                    bar.update(1)
+                    continue
             for m in models:  # one model failing keeps the others' rows
                 try:
                     fits[m] = fit_rheology(trace, m, nu=trace_nu, baseline=baseline,
                                            engine=engine, adhesion=adhesion, rng=seed + i,
                                            **options)
                     row = summary_row(trace, fits[m], compression_speed)
+                    if peer is not None:
+                        row["peer_compatible"] = peer
                     save_rheology_fit(fits[m], rheology_fit_path(out, trace.trace_id, m),
                                       trace=trace)  # the report's draws and bands
                     new.append(row)

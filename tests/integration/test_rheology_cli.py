@@ -137,6 +137,10 @@ def test_a_manifest_keeps_the_row_of_a_trace_that_cannot_be_fitted(record_csv, t
     (["--rheology", "maxwell"], "unknown model 'maxwell'"),
     (["--engine", "exact"], "--engine is an option of the elastic fit"),
     (["--tare"], "--tare is an option of the elastic fit"),
+    (["--peer-compatible", "pyfmrheo", "--segments", "approach,retract"],
+     "--peer-compatible pyfmrheo sets --segments as the peer does"),
+    (["--peer-compatible", "pyfmrheo", "--drag", "on"], "sets --drag as the peer does"),
+    (["--peer-compatible", "nanite"], "invalid choice: 'nanite'"),
 ])
 def test_options_that_do_not_apply_are_one_line_errors(record_csv, tmp_path, capsys, extra,
                                                        message):
