@@ -45,7 +45,7 @@ from palpbayes.contact import PowerLawKernel, Tip
 from palpbayes.contact.viscoelastic import hereditary_force
 from palpbayes.io.afm import read_afm
 from palpbayes.rheology import fit_rheology
-from palpbayes.rheology.peer import PYFMRHEO_DRAG, pyfmrheo_compatible
+from palpbayes.rheology.peer import PYFMRHEO_DRAG, nominal_ramps, pyfmrheo_compatible
 
 ROOT = Path(__file__).resolve().parents[1]
 MAP = ROOT.parent / "shared/data/afm-files/pyfmrheo-map-data-2022.10.29-12.27.34.564.jpk-force-map"
@@ -188,11 +188,10 @@ def _smooth_motion() -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float]:
 
 
 def _ramps(t, z, seg):
-    out = z.copy()
-    for code in (0, 2):
-        m = seg == code
-        out[m] = z[m][0] + (z[m][-1] - z[m][0]) * (t[m] - t[m][0]) / np.ptp(t[m])
-    return out
+    """Straight ramps between each segment's first and last height (the peer's motion)."""
+    from palpbayes.trace import IndentationTrace
+    return nominal_ramps(IndentationTrace(time=t, z=z, force=np.zeros_like(z), tip=TIP,
+                                          segment=seg)).z
 
 
 def simulate(E0s: float, alpha: float, motion: str, seed: int, *, adhesion: float = 0.0,

@@ -77,7 +77,8 @@ def _run_rheology(args: argparse.Namespace) -> int:
         opts = read_options_from_args(args)
         manifest = read_manifest(path)
         rows = [r for _, r in manifest.iterrows()]
-        if "power-law" in args.rheology:  # one specimen x tip at several speeds: pooled
+        if "power-law" in args.rheology and args.peer_compatible is None:
+            # one specimen x tip at several speeds: pooled (a peer's reading is not pooled)
             pools = SpeedPools(manifest, seed=args.seed)
         traces = [(str(r["trace_id"]), str(r["file"]), lambda r=r: load_trace(r, **opts))
                   for r in rows]

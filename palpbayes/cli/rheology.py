@@ -152,6 +152,10 @@ def check_rheology_args(args: argparse.Namespace) -> tuple[float | None, str]:
             if given:
                 raise InputError(f"--peer-compatible {peer} sets {flag} as the peer does; "
                                  f"leave {flag} out")
+        if "sls" in args.rheology:
+            raise InputError(f"--peer-compatible {peer} fits the retract by Ting's rule, which "
+                             "palpbayes fits with the power law only: use --rheology power-law "
+                             "(or elastic,power-law)")
         args.segments = "approach,retract"
     names = check_segments(args.segments or "approach,hold")
     if getattr(args, "adhesion", "keep") == "cut" and "retract" not in names:
@@ -203,9 +207,15 @@ def _rheology_line(r) -> str:
         parts.append(f"a compression test at {r['compression_speed_mm_min']:g} mm/min "
                      f"would read E {r['E_compression_pa']:.4g} "
                      f"[{r['E_compression_lo_pa']:.4g}, {r['E_compression_hi_pa']:.4g}] Pa")
+    if np.isfinite(r.get("adhesion_cut_from_s", np.nan)):
+        parts.append(f"adhesion cut {r['adhesion_cut_from_s']:.4g}-"
+                     f"{r['adhesion_cut_to_s']:.4g} s")
     check = ("model check passed" if r["model_ok"]
              else f"model check FAILED ({r['flag_codes']})")
-    return f"{'; '.join(parts)}; {check}"
+    peer = r.get("peer_compatible")
+    read = (f"read as {peer} reads it (to compare, not to report); "
+            if isinstance(peer, str) else "")
+    return f"{read}{'; '.join(parts)}; {check}"
 
 
 def _choice_line(rows) -> str:

@@ -9,7 +9,7 @@ adhesion="cut")`` removes that stretch of the retract before the fit
 block means carry their own sample times).
 
 The window (:func:`adhesive_window`) is read from block means of the retract alone
-(:data:`BLOCKS` blocks, at least one sample each, from the retract's first sample; the
+(:data:`ADHESION_BLOCKS` blocks, at least one sample each, from the retract's first sample; the
 leftover samples at its end are not read), so that noise does not decide it:
 
 * **baseline**: a straight line in z fitted by least squares to the retract's blocks in the
@@ -17,7 +17,7 @@ leftover samples at its end are not read), so that noise does not decide it:
   is over): a constant drag b·v on the retract and a tilted baseline are both lines there.
   Its noise sd is the robust 1.4826·MAD of those blocks' residuals, sd_b [N] of one block
   mean;
-* **start**: :data:`LEAD` blocks before the first block after the force's peak whose mean
+* **start**: :data:`ADHESION_LEAD` blocks before the first block after the force's peak whose mean
   has come down to the baseline (residual <= 0), but after the peak.  The pull begins where
   the contact ends, and a block's mean reaches the baseline only once the pull outweighs the
   last of the contact force in it, so the first block below the baseline can come after the
@@ -26,10 +26,10 @@ leftover samples at its end are not read), so that noise does not decide it:
   the retract (a cut that started one block late failed the posterior-predictive check on a
   simulated pull-off, with a shorter end than the one below), while a few hundred µs more of
   a contact's last, weakest force cost the fit little;
-* **dip**: the lowest mean of :data:`WINDOW` consecutive blocks' residuals among those that
+* **dip**: the lowest mean of :data:`DIP_WINDOW` consecutive blocks' residuals among those that
   start at or after that first block below the baseline and end before the baseline's
   blocks.  It must lie :data:`N_SE` standard errors below the baseline:
-  se = sd_b·sqrt(g/w + g·h), w = :data:`WINDOW`, g the AR(1) long-run factor (1 + φ)/(1 − φ)
+  se = sd_b·sqrt(g/w + g·h), w = :data:`DIP_WINDOW`, g the AR(1) long-run factor (1 + φ)/(1 − φ)
   of the baseline's residuals (φ their lag-one correlation clipped to [0, 0.9]) and h the
   line's leverage at the dip's height (1/n + (z − z̄)²/Σ(z_i − z̄)²: the baseline
   extrapolated there is uncertain too); otherwise nothing is cut;
@@ -73,14 +73,15 @@ from ..noise import mad_sd
 from ..trace import IndentationTrace
 from .offcontact import ADHESION_WINDOW, N_SE, _long_run
 
-__all__ = ["AdhesionCut", "adhesive_window", "cut_adhesion", "BLOCKS", "WINDOW", "LEAD"]
+__all__ = ["AdhesionCut", "adhesive_window", "cut_adhesion", "ADHESION_BLOCKS", "DIP_WINDOW",
+           "ADHESION_LEAD"]
 
 #: Block means the retract is read as (its samples // this per block, at least one).
-BLOCKS = 400
+ADHESION_BLOCKS = 400
 #: Consecutive blocks whose mean measures the dip and its recovery (the fit's own check's).
-WINDOW = ADHESION_WINDOW
+DIP_WINDOW = ADHESION_WINDOW
 #: Blocks before the first below the baseline where the cut starts (module docstring).
-LEAD = 2
+ADHESION_LEAD = 2
 #: Fewest baseline blocks (upper half of the retract's heights) the line is fitted to.
 _MIN_BASELINE = 10
 #: Retract segment code (:data:`palpbayes.trace.SEGMENTS`).
@@ -99,7 +100,7 @@ class AdhesionCut:
     n_samples
         Samples removed.
     depth
-        [N] The baseline minus the lowest :data:`WINDOW`-block mean of the dip (> 0).
+        [N] The baseline minus the lowest :data:`DIP_WINDOW`-block mean of the dip (> 0).
     sd
         [N] Robust sd of one block mean about the baseline (1.4826·MAD).
     se
@@ -143,16 +144,16 @@ def adhesive_window(trace: IndentationTrace, *, n_se: float = N_SE) -> AdhesionC
     Returns
     -------
     AdhesionCut or None
-        None without a retract (or fewer than 4·:data:`WINDOW` blocks of it), without
+        None without a retract (or fewer than 4·:data:`DIP_WINDOW` blocks of it), without
         :data:`_MIN_BASELINE` blocks in the upper half of its heights, when the force never
         comes down to the baseline after its peak, or when the dip is not :data:`N_SE`
         standard errors deep.
     """
-    w = WINDOW
+    w = DIP_WINDOW
     ret = np.flatnonzero(_segment_codes(trace) == _RETRACT)
     if ret.size < 4 * w:
         return None
-    b = max(1, ret.size // BLOCKS)
+    b = max(1, ret.size // ADHESION_BLOCKS)
     nb = ret.size // b
     if nb < 4 * w:
         return None
@@ -200,7 +201,7 @@ def adhesive_window(trace: IndentationTrace, *, n_se: float = N_SE) -> AdhesionC
     lever_rest = 1.0 / n_far + (z_rest - zf.mean()) ** 2 / float(np.sum((zf - zf.mean()) ** 2))
     ok = (run[k] >= -sd * math.sqrt(g / w)) & (rest >= -sd * np.sqrt(g / n + g * lever_rest))
     end = int(k[np.argmax(ok)]) if ok.any() else first_far
-    start = max(cross - LEAD, peak + 1)
+    start = max(cross - ADHESION_LEAD, peak + 1)
     i0, i1 = int(rows[start, 0]), int(rows[end - 1, -1])
     return AdhesionCut(t_start=float(trace.time[i0]), t_end=float(trace.time[i1]),
                        n_samples=int((end - start) * b), depth=depth, sd=float(sd),
@@ -212,15 +213,28 @@ def cut_adhesion(trace: IndentationTrace, *, n_se: float = N_SE
     """``trace`` without the adhesive stretch of its retract (:func:`adhesive_window`), and
     the cut; ``trace`` itself and None when nothing is cut.
 
-    Every per-sample array (time, z, force and the segment codes, when recorded) loses the
-    same samples; the rest of the trace (tip, metadata, labels) is kept.  The samples are the
-    retract's with t_start <= t <= t_end, which are consecutive.
+    Every per-sample array (time, z, force and the segment codes, from the motion when not
+    recorded) loses the same samples; the rest of the trace (tip, metadata, labels) is kept.
+    The samples are the retract's with t_start <= t <= t_end, which are consecutive.
+
+    Parameters
+    ----------
+    trace
+        A cycle with a retract (SI; z up, pressing positive).
+    n_se
+        Standard errors below the baseline a dip must reach to be cut.
+
+    Returns
+    -------
+    trace, cut
+        The trace without the stretch, and the :class:`AdhesionCut` (or ``trace`` and None).
     """
     cut = adhesive_window(trace, n_se=n_se)
     if cut is None:
         return trace, None
-    drop = (_segment_codes(trace) == _RETRACT) & (trace.time >= cut.t_start) & (
-        trace.time <= cut.t_end)
-    keep = ~drop
+    codes = _segment_codes(trace)
+    keep = ~((codes == _RETRACT) & (trace.time >= cut.t_start) & (trace.time <= cut.t_end))
+    # the codes are kept even where they came from the motion: the motion across the cut's
+    # time gap would not give them again
     return trace.replace(time=trace.time[keep], z=trace.z[keep], force=trace.force[keep],
-                         segment=None if trace.segment is None else trace.segment[keep]), cut
+                         segment=codes[keep]), cut

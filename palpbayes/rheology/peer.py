@@ -35,35 +35,64 @@ import numpy as np
 from ..errors import InputError
 from ..trace import SEGMENTS, IndentationTrace
 
-__all__ = ["PEERS", "PYFMRHEO_DRAG", "nominal_ramps", "pyfmrheo_compatible", "peer_compatible"]
+__all__ = ["PEERS", "PYFMRHEO_DRAG", "TURN_SHARE", "nominal_ramps", "pyfmrheo_compatible",
+           "peer_compatible"]
 
 #: Peers :func:`pyfmrheo_compatible` (``--peer-compatible``) can imitate.
 PEERS = ("pyfmrheo",)
 #: [N·s/m] The viscous drag PyFMRheo's viscoelastic example notebook fixes.
 PYFMRHEO_DRAG = 2.5e-6
+#: A "hold" shorter than this share of the approach's duration is the turn of a triangle.
+TURN_SHARE = 0.01
+
+
+def _codes(trace: IndentationTrace) -> np.ndarray:
+    """The trace's segment codes, from the motion when it records none."""
+    if trace.segment is not None:
+        return np.asarray(trace.segment)
+    from ..io.motion_segments import segments_from_motion
+    return segments_from_motion(trace.time, trace.z)
+
+
+def _turn_into_ramps(trace: IndentationTrace) -> np.ndarray:
+    """The segment codes, with a "hold" of under :data:`TURN_SHARE` of the approach's duration
+    (the turn itself, as the motion classifies a trace without codes) given to the approach up
+    to the lowest height and to the retract after it."""
+    codes = np.array(_codes(trace))
+    hold, app = np.flatnonzero(codes == 1), np.flatnonzero(codes == 0)
+    if hold.size and app.size > 1:
+        span = trace.time[hold[-1]] - trace.time[hold[0]]
+        if span <= TURN_SHARE * (trace.time[app[-1]] - trace.time[app[0]]):
+            low = hold[0] + int(np.argmin(trace.z[hold]))
+            codes[hold] = np.where(hold <= low, 0, 2)
+    return codes
 
 
 def nominal_ramps(trace: IndentationTrace) -> IndentationTrace:
     """``trace`` with the heights of each segment replaced by a straight line in time from
-    the segment's first height to its last [m] (a constant speed per segment, as a
+    the segment's first height to its last (a constant speed per segment, as a
     triangular-history model assumes).
 
-    Raises
-    ------
-    InputError
-        A trace without segment codes (nothing says where the ramps turn).
+    Parameters
+    ----------
+    trace
+        SI units, z [m] up; segments from the motion when the trace records none (they are
+        then stored in the result).
+
+    Returns
+    -------
+    IndentationTrace
+        The same samples, forces and segments; the heights on the ramps [m].
     """
-    if trace.segment is None:
-        raise InputError(f"{trace.source or trace.trace_id}: the trace has no segments; "
-                         "straight ramps need to know where the approach ends")
+    codes = _codes(trace)
     z = np.array(trace.z, dtype=float)
-    for code in np.unique(trace.segment):
-        rows = np.flatnonzero(trace.segment == code)
+    for code in np.unique(codes):
+        rows = np.flatnonzero(codes == code)
         t = trace.time[rows]
         if rows.size < 2 or not t[-1] > t[0]:
             continue
         z[rows] = z[rows[0]] + (z[rows[-1]] - z[rows[0]]) * (t - t[0]) / (t[-1] - t[0])
-    return trace.replace(z=z)
+    return trace.replace(z=z, segment=codes)
 
 
 def pyfmrheo_compatible(trace: IndentationTrace, drag: float = PYFMRHEO_DRAG
@@ -74,25 +103,46 @@ def pyfmrheo_compatible(trace: IndentationTrace, drag: float = PYFMRHEO_DRAG
     Parameters
     ----------
     trace
-        Approach and retract (segment codes), SI units, z up, pressing positive.
+        Approach then retract, nothing between them (segment codes, or from the motion), SI
+        units, z up, pressing positive.
     drag
-        [N·s/m] The fixed viscous drag subtracted, b·(−dz/dt) (default PyFMRheo's notebook).
+        [N·s/m] The fixed viscous drag subtracted, b·(−dz/dt) with each ramp's own speed
+        (default PyFMRheo's notebook).
 
     Returns
     -------
     trace, options
         The nominal-ramp trace with the drag taken off, and ``segments``, ``drag``, ``t0``
         for ``fit_rheology``.
+
+    Raises
+    ------
+    InputError
+        A negative drag; a trace without an approach and a retract; a hold, or a gap in time
+        between the approach and the retract (a hold left out): the peer's closed forms are
+        for a triangle, and palpbayes would read the two ramps as if they touched.
     """
     if not (np.isfinite(drag) and drag >= 0):
         raise InputError(f"peer-compatible drag = {drag!r} N·s/m must be >= 0")
-    ramps = nominal_ramps(trace)
-    names = {SEGMENTS[c] for c in np.unique(ramps.segment)} if ramps.segment is not None else set()
+    where = trace.source or trace.trace_id
+    ramps = nominal_ramps(trace.replace(segment=_turn_into_ramps(trace)))
+    codes = ramps.segment
+    names = {SEGMENTS[c] for c in np.unique(codes)}
     if not {"approach", "retract"} <= names:
-        raise InputError(f"{trace.source or trace.trace_id}: PyFMRheo's Ting fit takes the "
-                         "approach and the retract; this trace has "
-                         f"{', '.join(sorted(names)) or 'no segments'}")
-    speed = np.gradient(ramps.z, ramps.time)
+        raise InputError(f"{where}: PyFMRheo's Ting fit takes the approach and the retract; "
+                         f"this trace has {', '.join(sorted(names)) or 'no segments'}")
+    app, ret = np.flatnonzero(codes == 0), np.flatnonzero(codes == 2)
+    gap = float(ramps.time[ret[0]] - ramps.time[app[-1]])
+    dt = float(np.median(np.diff(ramps.time)))
+    if "hold" in names or gap > 2.0 * dt:
+        raise InputError(f"{where}: a hold ({gap:.3g} s between the approach and the retract); "
+                         "PyFMRheo's Ting fit is for an approach followed at once by the "
+                         "retract, so --peer-compatible cannot read this cycle: fit it without "
+                         "that option")
+    speed = np.zeros(ramps.n_points)
+    for rows in (app, ret):
+        t, z = ramps.time[rows], ramps.z[rows]
+        speed[rows] = (z[-1] - z[0]) / (t[-1] - t[0])
     ramps = ramps.replace(force=ramps.force - drag * (-speed))
     return ramps, {"segments": "approach,retract", "drag": False, "t0": 1.0}
 

@@ -30,14 +30,14 @@ import numpy as np
 import pandas as pd
 
 from ..campaign.layout import RHEOLOGY_TABLE, rheology_fit_path
-from ..errors import PalpbayesError
+from ..errors import InputError, PalpbayesError
 from ..flagcodes import RHEOLOGY_CODES, listed_flag_columns
 from ..io.atomic import write_csv_atomic
 from ..trace import IndentationTrace
 from .compression import PAPER_COMPRESSION_SPEED
 from .cycle import DEFAULT_SEGMENTS
 from .fit import RheologyFit, fit_rheology
-from .peer import peer_compatible
+from .peer import PEERS, peer_compatible
 from .store import clear_rheology_outputs, save_rheology_fit
 
 __all__ = ["RHEOLOGY_TABLE", "summary_row", "fit_traces", "UNIT_SUFFIXES"]
@@ -163,6 +163,8 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
     from .choice import compare_fits
 
     models = (rheology,) if isinstance(rheology, str) else tuple(rheology)
+    if peer is not None and peer not in PEERS:
+        raise InputError(f"peer {peer!r}: palpbayes can read a trace as {', '.join(PEERS)} does")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     clear_rheology_outputs(out)  # the table and stored fits of a previous run (--force)

@@ -141,6 +141,7 @@ def test_a_manifest_keeps_the_row_of_a_trace_that_cannot_be_fitted(record_csv, t
      "--peer-compatible pyfmrheo sets --segments as the peer does"),
     (["--peer-compatible", "pyfmrheo", "--drag", "on"], "sets --drag as the peer does"),
     (["--peer-compatible", "nanite"], "invalid choice: 'nanite'"),
+    (["--peer-compatible", "pyfmrheo", "--rheology", "sls"], "fits the retract by Ting's rule"),
 ])
 def test_options_that_do_not_apply_are_one_line_errors(record_csv, tmp_path, capsys, extra,
                                                        message):

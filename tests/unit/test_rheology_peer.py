@@ -28,6 +28,18 @@ def _cycle(seed: int, rate: float = 5000.0):
     return tr.replace(force=tr.force + PYFMRHEO_DRAG * (-v))
 
 
+def test_a_trace_without_segment_codes_gets_them_from_the_motion():
+    """The motion calls the turn (3 samples of 1,251) a hold; the peer's reading gives it to
+    the two ramps, as the recorded codes do."""
+    tr = _cycle(3)
+    assert set(np.unique(nominal_ramps(tr.replace(segment=None)).segment)) == {0, 1, 2}
+    like, _ = pyfmrheo_compatible(tr.replace(segment=None))
+    mine, _ = pyfmrheo_compatible(tr)
+    np.testing.assert_array_equal(like.segment, tr.segment)
+    np.testing.assert_allclose(like.z, mine.z, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(like.force, mine.force, rtol=0, atol=1e-22)
+
+
 def test_nominal_ramps_are_straight_between_each_segments_ends():
     tr = _cycle(0)
     wobble = tr.replace(z=tr.z + 2e-8 * np.sin(tr.time * 300.0))
@@ -43,10 +55,15 @@ def test_nominal_ramps_are_straight_between_each_segments_ends():
 
 
 def test_the_fixed_drag_is_taken_off_the_force():
+    """b·(−dz/dt) with each ramp's own speed, (last − first height)/(last − first time), on
+    every sample of it, the two samples at the turn included."""
     tr = _cycle(1)
     like, kw = pyfmrheo_compatible(tr)
-    v = np.gradient(like.z, like.time)
-    np.testing.assert_allclose(like.force, tr.force + PYFMRHEO_DRAG * v, rtol=0, atol=1e-20)
+    for code in (0, 2):
+        m = tr.segment == code
+        v = (tr.z[m][-1] - tr.z[m][0]) / (tr.time[m][-1] - tr.time[m][0])
+        np.testing.assert_allclose(like.force[m], tr.force[m] + PYFMRHEO_DRAG * v, rtol=0,
+                                   atol=1e-22)
     assert kw == {"segments": "approach,retract", "drag": False, "t0": 1.0}
 
 
@@ -76,6 +93,8 @@ def test_the_command_line_reads_as_the_peer_and_says_so(tmp_path, capsys):
     assert main(["fit", str(path), "--rheology", "power-law", "--peer-compatible", "pyfmrheo",
                  "--tip", "paraboloid", "--radius", "5e-6", "--no-progress",
                  "--out", str(tmp_path / "r")]) == 0
+    assert "c4: read as pyfmrheo reads it (to compare, not to report); E0* " in (
+        capsys.readouterr().out)
     row = pd.read_csv(tmp_path / "r" / "rheology.csv").iloc[0]
     assert row["peer_compatible"] == "pyfmrheo" and row["segments"] == "approach,retract"
     like, kw = pyfmrheo_compatible(tr)
@@ -86,8 +105,15 @@ def test_the_command_line_reads_as_the_peer_and_says_so(tmp_path, capsys):
 
 def test_bad_input_is_named():
     tr = _cycle(2)
-    with pytest.raises(InputError, match="no segments"):
-        nominal_ramps(tr.replace(segment=None))
+    with pytest.raises(InputError, match="a hold"):  # a triangle's closed forms
+        pyfmrheo_compatible(simulate_viscoelastic(
+            PowerLawKernel(200.0, 0.3), TIP, depth=0.5e-6, speed=20e-6, hold_time=0.1,
+            rate=2000.0, approach=2e-6, noise_sd=15e-12, rng=0))
+    with pytest.raises(InputError, match="a hold"):  # the hold left out: a gap in time
+        held = simulate_viscoelastic(PowerLawKernel(200.0, 0.3), TIP, depth=0.5e-6,
+                                     speed=20e-6, hold_time=0.1, rate=2000.0, approach=2e-6,
+                                     noise_sd=15e-12, rng=0)
+        pyfmrheo_compatible(held.segments("approach,retract"))
     with pytest.raises(InputError, match="approach and the retract"):
         pyfmrheo_compatible(tr.segments("approach"))
     with pytest.raises(InputError, match="drag"):
@@ -119,3 +145,6 @@ def test_the_command_line_offers_the_peers_the_module_imitates():
     with pytest.raises(InputError, match="can read a trace as pyfmrheo"):
         from palpbayes.rheology.peer import peer_compatible
         peer_compatible(_cycle(0), "nanite")
+    with pytest.raises(InputError, match="can read a trace as pyfmrheo"):  # before any fit
+        from palpbayes.rheology.results import fit_traces
+        fit_traces([], "power-law", "unused", peer="nanite")
