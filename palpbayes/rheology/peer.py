@@ -132,6 +132,9 @@ def pyfmrheo_compatible(trace: IndentationTrace, drag: float = PYFMRHEO_DRAG
         raise InputError(f"{where}: PyFMRheo's Ting fit takes the approach and the retract; "
                          f"this trace has {', '.join(sorted(names)) or 'no segments'}")
     app, ret = np.flatnonzero(codes == 0), np.flatnonzero(codes == 2)
+    if min(app.size, ret.size) < 2:
+        raise InputError(f"{where}: {min(app.size, ret.size)} sample in the approach or the "
+                         "retract; a ramp's speed needs two")
     gap = float(ramps.time[ret[0]] - ramps.time[app[-1]])
     dt = float(np.median(np.diff(ramps.time)))
     if "hold" in names or gap > 2.0 * dt:

@@ -118,6 +118,11 @@ def test_bad_input_is_named():
         pyfmrheo_compatible(tr.segments("approach"))
     with pytest.raises(InputError, match="drag"):
         pyfmrheo_compatible(tr, drag=-1.0)
+    one = np.ones(tr.n_points, dtype=bool)
+    one[np.flatnonzero(tr.segment == 2)[1:]] = False  # a retract of one sample
+    with pytest.raises(InputError, match="a ramp's speed needs two"):
+        pyfmrheo_compatible(tr.replace(time=tr.time[one], z=tr.z[one], force=tr.force[one],
+                                       segment=tr.segment[one]))
 
 
 @pytest.mark.slow
