@@ -206,11 +206,12 @@ def simulate(E0s: float, alpha: float, motion: str, seed: int, *, adhesion: floa
         ret = np.flatnonzero((seg == 2) & (np.arange(t.size) > np.argmax(f)) & (f <= 0))
         s = np.clip(z - z[ret[0]], 0.0, None) * (np.arange(t.size) >= ret[0])
         f = f - adhesion * (s / 0.3e-6) * np.exp(1.0 - s / 0.3e-6)
-    f = f + PYFMRHEO_DRAG * (-np.gradient(z, t)) + tilt * (z - z.mean())
+    from palpbayes.sim.viscoelastic import add_baseline_terms
     from palpbayes.trace import IndentationTrace
     rng = np.random.default_rng(seed)
-    return IndentationTrace(time=t, z=z, force=f + sd * rng.standard_normal(t.size) - 9e-9,
-                            tip=TIP, trace_id=f"sim-{motion}-{seed}", segment=seg)
+    tr = IndentationTrace(time=t, z=z, force=f + sd * rng.standard_normal(t.size) - 9e-9,
+                          tip=TIP, trace_id=f"sim-{motion}-{seed}", segment=seg)
+    return add_baseline_terms(tr, drag=PYFMRHEO_DRAG, tilt=tilt, z_ref=float(z.mean()))
 
 
 def _fit_sim(args) -> dict:

@@ -69,9 +69,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks.rate import cycle_segments
 from ..noise import mad_sd
 from ..trace import IndentationTrace
 from .offcontact import ADHESION_WINDOW, N_SE, _long_run
+from .ting import RETRACT
 
 __all__ = ["AdhesionCut", "adhesive_window", "cut_adhesion", "ADHESION_BLOCKS", "DIP_WINDOW",
            "ADHESION_LEAD"]
@@ -84,8 +86,6 @@ DIP_WINDOW = ADHESION_WINDOW
 ADHESION_LEAD = 2
 #: Fewest baseline blocks (upper half of the retract's heights) the line is fitted to.
 _MIN_BASELINE = 10
-#: Retract segment code (:data:`palpbayes.trace.SEGMENTS`).
-_RETRACT = 2
 
 
 @dataclass(frozen=True)
@@ -121,15 +121,6 @@ class AdhesionCut:
     block: int
 
 
-def _segment_codes(trace: IndentationTrace) -> np.ndarray:
-    """The trace's segment codes, from the motion when it does not record them."""
-    if trace.segment is not None:
-        return np.asarray(trace.segment)
-    from ..io.motion_segments import segments_from_motion
-
-    return segments_from_motion(trace.time, trace.z)
-
-
 def adhesive_window(trace: IndentationTrace, *, n_se: float = N_SE) -> AdhesionCut | None:
     """The adhesive stretch of the retract of ``trace`` (module docstring), or None.
 
@@ -149,8 +140,13 @@ def adhesive_window(trace: IndentationTrace, *, n_se: float = N_SE) -> AdhesionC
         comes down to the baseline after its peak, or when the dip is not :data:`N_SE`
         standard errors deep.
     """
+    return _window(trace, cycle_segments(trace), n_se)
+
+
+def _window(trace: IndentationTrace, codes: np.ndarray, n_se: float) -> AdhesionCut | None:
+    """:func:`adhesive_window` given the trace's segment codes."""
     w = DIP_WINDOW
-    ret = np.flatnonzero(_segment_codes(trace) == _RETRACT)
+    ret = np.flatnonzero(codes == RETRACT)
     if ret.size < 4 * w:
         return None
     b = max(1, ret.size // ADHESION_BLOCKS)
@@ -229,11 +225,11 @@ def cut_adhesion(trace: IndentationTrace, *, n_se: float = N_SE
     trace, cut
         The trace without the stretch, and the :class:`AdhesionCut` (or ``trace`` and None).
     """
-    cut = adhesive_window(trace, n_se=n_se)
+    codes = cycle_segments(trace)
+    cut = _window(trace, codes, n_se)
     if cut is None:
         return trace, None
-    codes = _segment_codes(trace)
-    keep = ~((codes == _RETRACT) & (trace.time >= cut.t_start) & (trace.time <= cut.t_end))
+    keep = ~((codes == RETRACT) & (trace.time >= cut.t_start) & (trace.time <= cut.t_end))
     # the codes are kept even where they came from the motion: the motion across the cut's
     # time gap would not give them again
     return trace.replace(time=trace.time[keep], z=trace.z[keep], force=trace.force[keep],

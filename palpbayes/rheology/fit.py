@@ -433,10 +433,7 @@ def _cut_pull_off(trace: IndentationTrace, segments) -> tuple[IndentationTrace,
                          f"retract, which --segments {','.join(names)} does not fit: add the "
                          "retract (e.g. --segments approach,retract) or leave the adhesion at "
                          "keep")
-    if trace.segment is None:  # the segments from the motion, as prepare_cycle takes them
-        from ..io.motion_segments import segments_from_motion
-        trace = trace.replace(segment=segments_from_motion(trace.time, trace.z))
-    return cut_adhesion(trace)
+    return cut_adhesion(trace)  # a cut trace keeps the segment codes it was cut by
 
 
 def _tried_tilt(fit: RheologyFit, trace: IndentationTrace, rheology: str, **kw) -> str:

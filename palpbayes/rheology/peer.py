@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..checks.rate import cycle_segments
 from ..errors import InputError
 from ..trace import SEGMENTS, IndentationTrace
 
@@ -42,29 +43,22 @@ __all__ = ["PEERS", "PYFMRHEO_DRAG", "TURN_SHARE", "nominal_ramps", "pyfmrheo_co
 PEERS = ("pyfmrheo",)
 #: [N·s/m] The viscous drag PyFMRheo's viscoelastic example notebook fixes.
 PYFMRHEO_DRAG = 2.5e-6
+_APPROACH, _HOLD, _RETRACT = (SEGMENTS.index(n) for n in ("approach", "hold", "retract"))
 #: A "hold" shorter than this share of the approach's duration is the turn of a triangle.
 TURN_SHARE = 0.01
-
-
-def _codes(trace: IndentationTrace) -> np.ndarray:
-    """The trace's segment codes, from the motion when it records none."""
-    if trace.segment is not None:
-        return np.asarray(trace.segment)
-    from ..io.motion_segments import segments_from_motion
-    return segments_from_motion(trace.time, trace.z)
 
 
 def _turn_into_ramps(trace: IndentationTrace) -> np.ndarray:
     """The segment codes, with a "hold" of under :data:`TURN_SHARE` of the approach's duration
     (the turn itself, as the motion classifies a trace without codes) given to the approach up
     to the lowest height and to the retract after it."""
-    codes = np.array(_codes(trace))
-    hold, app = np.flatnonzero(codes == 1), np.flatnonzero(codes == 0)
+    codes = np.array(cycle_segments(trace))
+    hold, app = np.flatnonzero(codes == _HOLD), np.flatnonzero(codes == _APPROACH)
     if hold.size and app.size > 1:
         span = trace.time[hold[-1]] - trace.time[hold[0]]
         if span <= TURN_SHARE * (trace.time[app[-1]] - trace.time[app[0]]):
             low = hold[0] + int(np.argmin(trace.z[hold]))
-            codes[hold] = np.where(hold <= low, 0, 2)
+            codes[hold] = np.where(hold <= low, _APPROACH, _RETRACT)
     return codes
 
 
@@ -84,7 +78,7 @@ def nominal_ramps(trace: IndentationTrace) -> IndentationTrace:
     IndentationTrace
         The same samples, forces and segments; the heights on the ramps [m].
     """
-    codes = _codes(trace)
+    codes = cycle_segments(trace)
     z = np.array(trace.z, dtype=float)
     for code in np.unique(codes):
         rows = np.flatnonzero(codes == code)
@@ -131,7 +125,7 @@ def pyfmrheo_compatible(trace: IndentationTrace, drag: float = PYFMRHEO_DRAG
     if not {"approach", "retract"} <= names:
         raise InputError(f"{where}: PyFMRheo's Ting fit takes the approach and the retract; "
                          f"this trace has {', '.join(sorted(names)) or 'no segments'}")
-    app, ret = np.flatnonzero(codes == 0), np.flatnonzero(codes == 2)
+    app, ret = np.flatnonzero(codes == _APPROACH), np.flatnonzero(codes == _RETRACT)
     if min(app.size, ret.size) < 2:
         raise InputError(f"{where}: {min(app.size, ret.size)} sample in the approach or the "
                          "retract; a ramp's speed needs two")
