@@ -41,12 +41,13 @@ from ..io.trace_csv import write_trace
 from ..noise import PAPER_NOISE_PP, sigma_from_pp
 from ..paper import PAPER_TIPS
 from ..procs import lifeline
+from ..trace import IndentationTrace
 from ._checks import finite, nonneg, positive
 from .campaign import check_count, check_seed, child_seed, prepare_out_dir
 from .inclusion import Inclusion, apparent_ratio, contact_radius, sensitivity
 from .trace import simulate_trace
 
-__all__ = ["simulate_map", "read_map_truth", "default_inclusion", "lump_summary"]
+__all__ = ["simulate_map", "read_map_truth", "default_inclusion", "lump_summary", "press_trace"]
 
 #: File with the lump's truth in a map folder.
 LUMP_FILE = "truth_lump.json"
@@ -88,6 +89,26 @@ def lump_summary(inclusion: Inclusion | None, *, contact_radius: float,
     return {"peak_apparent_ratio": 1.0 + peak, "apparent_fwhm_diameter_m": 2.0 * half}
 
 
+def press_trace(E_app: float, gen: np.random.Generator, tip: Tip, options: dict,
+                trace_id: str) -> IndentationTrace:
+    """One press of a map phantom where the smooth field is ``E_app`` [Pa], drawing from
+    ``gen`` the point's heterogeneity, surface height, force offset, then the trace's noise.
+
+    ``options``: ``nu``, ``z_surf``, ``z_surf_halfwidth``, ``force_offset_sd``,
+    ``heterogeneity``, ``thickness``, ``depth``, ``approach``, ``noise_pp`` (SI units).
+    """
+    o = options
+    e = gen.standard_normal()
+    zs = o["z_surf"] + o["z_surf_halfwidth"] * gen.uniform(-1.0, 1.0)
+    f0 = o["force_offset_sd"] * gen.standard_normal()
+    E = float(E_app * math.exp(o["heterogeneity"] * e))
+    return simulate_trace(
+        E, tip, nu=o["nu"], z_surf=zs, thickness=o["thickness"], depth=o["depth"],
+        approach=o["approach"], noise_pp=o["noise_pp"], force_offset=f0, rng=gen,
+        trace_id=trace_id, specimen="phantom", material="phantom", repetition=1,
+        base=None)  # a half-space at E_app: the map's model (palpbayes.maps)
+
+
 def _write_rows(job: dict) -> list[dict]:
     """Simulate and write the traces of some grid rows; return their truth rows (in order)."""
     out, tip, o = Path(job["out"]), job["tip"], job["options"]
@@ -95,16 +116,8 @@ def _write_rows(job: dict) -> list[dict]:
     for j, E_row in zip(job["rows"], job["E_app"], strict=True):
         for i, E_app in enumerate(E_row):
             gen = np.random.default_rng(child_seed(job["seed"], "map", j, i))
-            e = gen.standard_normal()
-            zs = o["z_surf"] + o["z_surf_halfwidth"] * gen.uniform(-1.0, 1.0)
-            f0 = o["force_offset_sd"] * gen.standard_normal()
-            E = float(E_app * math.exp(o["heterogeneity"] * e))
             tid = job["ids"][j][i]
-            trace = simulate_trace(
-                E, tip, nu=o["nu"], z_surf=zs, thickness=o["thickness"], depth=o["depth"],
-                approach=o["approach"], noise_pp=o["noise_pp"], force_offset=f0, rng=gen,
-                trace_id=tid, specimen="phantom", material="phantom", repetition=1,
-                base=None)  # a half-space at E_app: the map's model (palpbayes.maps)
+            trace = press_trace(float(E_app), gen, tip, o, tid)
             if not job["dry_run"]:
                 write_trace(trace, out / "traces" / f"{tid}.csv", float_format=o["float_format"])
             m = trace.metadata
