@@ -14,8 +14,9 @@ Reading and fitting: :func:`read`, :func:`fit` (a :class:`Fit`), :func:`fit_opti
 :func:`report` (the PDF); the model: :class:`Tip`, :class:`Specimen`, :class:`ModelSpec`,
 :class:`BudgetSpec`, :func:`force`; simulating: :func:`simulate` (a campaign folder),
 :func:`simulate_trace`; online: :class:`OnlineEstimator`, :class:`StoppingRule`; maps:
-:func:`make_map`; viscoelastic fits: :func:`fit_rheology`, :func:`compare_rheology`
-(PSIS-LOO), :func:`pool_rheology` (one power law over speeds); the example campaign:
+:func:`make_map`; active search: :func:`next_presses` (the subpackage :mod:`active`);
+viscoelastic fits: :func:`fit_rheology`, :func:`compare_rheology` (PSIS-LOO),
+:func:`pool_rheology` (one power law over speeds); the example campaign:
 :func:`example_campaign_dir`; the subpackages :mod:`contact` (the contact laws and their
 formulas), :mod:`errors`, :mod:`stiffening`, :mod:`plots`, :mod:`paper`, :mod:`gap`,
 :mod:`twin`, :mod:`sim`, :mod:`groundtruth` (compression tests), :mod:`reporting` (the
@@ -54,6 +55,8 @@ _LAZY = {
     "OnlineEstimator": ("online.estimator", "OnlineEstimator"),
     "StoppingRule": ("online.estimator", "StoppingRule"),
     "make_map": ("maps.run", "make_map"),
+    "next_presses": ("active.front", "next_presses"),
+    "active": ("active", None),
     "fit_rheology": ("rheology.fit", "fit_rheology"),
     "compare_rheology": ("rheology.choice", "compare_fits"),
     "pool_rheology": ("rheology.pool", "pool_power_law"),

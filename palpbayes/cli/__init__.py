@@ -18,7 +18,7 @@ __all__ = ["main", "build_parser", "SUBCOMMANDS"]
 
 #: Subcommand modules, in the order ``--help`` lists them.
 SUBCOMMANDS = ("simulate", "fit", "groundtruth", "compare", "report", "replay", "follow",
-               "inspect", "map")
+               "inspect", "map", "next")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -1,0 +1,354 @@
+"""The next press, and when to stop: :func:`next_presses` on a :class:`SearchState`.
+
+A search state is the presses so far (position and posterior of log E) and the specimen:
+its footprint, keep-out zones, the tip's contact radius and the block thickness.  After each
+press the lump posterior (:mod:`palpbayes.active.posterior`) is updated; the stopping rule
+(:class:`StopRule`) says whether a decision is reached; if not, the candidates of a regular
+grid over the footprint (outside the keep-out zones and at least ``min_spacing`` from every
+press) are scored by a criterion (:mod:`palpbayes.active.criteria`) and the best is returned.
+A batch of k for a robot that plans a path is chosen greedily, each pick added to the state
+as a press that reads its predictive mean (the "kriging believer" of Ginsbourger, Le Riche &
+Carraro 2010, in *Computational Intelligence in Expensive Optimization Problems*, 131–162).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import pandas as pd
+
+from ..errors import InputError
+from .criteria import CRITERIA, level_probability, predictive
+from .posterior import LumpHypotheses, SearchPosterior, hypotheses, posterior
+
+__all__ = ["PRESS_COLUMNS", "SearchState", "StopRule", "NextPresses", "next_presses",
+           "decide", "summary", "history"]
+
+#: Columns of a search state's presses (``presses.csv``).
+PRESS_COLUMNS = ["x_m", "y_m", "logE_mean", "logE_sd"]
+#: sd of log E assumed for a press not made yet, when there is no press to take it from.
+_DEFAULT_PRESS_SD = 0.01
+_MAX_CANDIDATES = 900
+
+
+@dataclass(frozen=True)
+class StopRule:
+    """When the search has decided.
+
+    Parameters
+    ----------
+    p_decide
+        A lump is found when P(lump) >= ``p_decide`` and its centre is placed (below);
+        there is none when P(lump) <= 1 − ``p_decide``.
+    centre_radius
+        [m] Target radius of the centre's ``level`` credible disc.
+    level
+        Credibility of that disc.
+    max_presses
+        Stop after this many presses whatever the posterior (None: no budget).
+    """
+
+    p_decide: float = 0.95
+    centre_radius: float = 2e-3
+    level: float = 0.9
+    max_presses: int | None = None
+
+    def __post_init__(self) -> None:
+        if not 0.5 < self.p_decide < 1.0:
+            raise InputError(f"p_decide {self.p_decide!r} must lie in (0.5, 1)")
+        if not (self.centre_radius > 0 and 0 < self.level < 1):
+            raise InputError("centre_radius must be > 0 [m] and level in (0, 1)")
+        if self.max_presses is not None and int(self.max_presses) < 1:
+            raise InputError(f"max_presses {self.max_presses!r} must be >= 1")
+
+
+@dataclass(frozen=True)
+class SearchState:
+    """The presses so far and the specimen they were made on.
+
+    Parameters
+    ----------
+    presses
+        One row per press: ``x_m``, ``y_m`` [m], ``logE_mean``, ``logE_sd`` (the press's
+        posterior of log(E/Pa)); other columns are kept.
+    footprint
+        [m] (x0, x1, y0, y1): the rectangle that may be pressed and may hold the lump.
+    contact_radius, thickness
+        [m] The tip's contact radius at the indentation depth and the block thickness.
+    keep_out
+        [m] Discs (x, y, radius) not to press (a clamp, a suture, a marker).
+    min_spacing
+        [m] No press closer than this to another.
+    candidate_step
+        [m] Spacing of the candidate grid (coarsened to at most 900 candidates).
+    resolution
+        [m] Spacing of the lump-centre grid.
+    min_excess, max_ratio
+        The apparent peak excess that counts as a lump, and the prior's largest ratio.
+    k_level
+        k of the level set {E > k × background} (the ``lse`` criterion and the
+        misclassified area); default 1 + ``min_excess``.
+    prior_lump
+        Prior probability of a lump.
+    press_sd
+        sd of log E expected of the next press (None: the median of the presses').
+    """
+
+    presses: pd.DataFrame
+    footprint: tuple[float, float, float, float]
+    contact_radius: float
+    thickness: float
+    keep_out: tuple[tuple[float, float, float], ...] = ()
+    min_spacing: float = 1e-3
+    candidate_step: float = 2e-3
+    resolution: float = 1e-3
+    min_excess: float = 0.03
+    max_ratio: float = 3.0
+    k_level: float | None = None
+    prior_lump: float = 0.5
+    press_sd: float | None = None
+    _hyp: list = field(default_factory=list, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        p = self.presses
+        if not isinstance(p, pd.DataFrame):
+            raise InputError("presses must be a pandas DataFrame with columns "
+                             + ", ".join(PRESS_COLUMNS))
+        missing = [c for c in PRESS_COLUMNS if c not in p.columns]
+        if missing:
+            raise InputError(f"presses: missing column(s) {', '.join(missing)}; a press needs "
+                             + ", ".join(PRESS_COLUMNS))
+        vals = p[PRESS_COLUMNS].to_numpy(dtype=float)
+        bad = ~np.isfinite(vals).all(axis=1) | ~(vals[:, 3] > 0)
+        if bad.any():
+            j = int(np.flatnonzero(bad)[0])
+            raise InputError(f"presses: row {j} has a non-finite value or an sd <= 0 "
+                             f"({dict(zip(PRESS_COLUMNS, vals[j], strict=True))}); "
+                             "drop presses without a fit")
+        for i, z in enumerate(self.keep_out):
+            if len(z) != 3 or not all(math.isfinite(v) for v in z) or not z[2] > 0:
+                raise InputError(f"keep-out zone {i} {z!r} must be x, y, radius [m] with "
+                                 "radius > 0")
+        if not self.min_spacing >= 0 or not self.candidate_step > 0:
+            raise InputError("min_spacing must be >= 0 and candidate_step > 0 [m]")
+
+    @property
+    def hyp(self) -> LumpHypotheses:
+        """The hypothesis grid (built on first use, then kept)."""
+        if not self._hyp:
+            self._hyp.append(hypotheses(
+                self.footprint, contact_radius=self.contact_radius, thickness=self.thickness,
+                resolution=self.resolution, min_excess=self.min_excess,
+                max_ratio=self.max_ratio))
+        return self._hyp[0]
+
+    @property
+    def n(self) -> int:
+        return len(self.presses)
+
+    @property
+    def level(self) -> float:
+        return 1.0 + self.min_excess if self.k_level is None else float(self.k_level)
+
+    def expected_sd(self) -> float:
+        if self.press_sd is not None:
+            return float(self.press_sd)
+        if self.n == 0:
+            return _DEFAULT_PRESS_SD
+        return float(np.median(self.presses["logE_sd"].to_numpy(dtype=float)))
+
+    def posterior(self) -> SearchPosterior:
+        p = self.presses
+        return posterior(self.hyp, p["x_m"], p["y_m"], p["logE_mean"], p["logE_sd"],
+                         prior_lump=self.prior_lump)
+
+    def with_press(self, x: float, y: float, mean: float, sd: float, **extra) -> SearchState:
+        """A new state with one more press (the grid is shared, not rebuilt)."""
+        row = pd.DataFrame([{"x_m": x, "y_m": y, "logE_mean": mean, "logE_sd": sd, **extra}])
+        presses = row if self.n == 0 else pd.concat([self.presses, row], ignore_index=True)
+        return replace(self, presses=presses, _hyp=self._hyp)
+
+    def candidates(self, taken: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The candidate positions [m]: a grid over the footprint, outside the keep-out
+        zones, at least ``min_spacing`` from every press and from ``taken`` (m, 2)."""
+        x0, x1, y0, y1 = self.footprint
+        step = max(self.candidate_step,
+                   math.sqrt((x1 - x0) * (y1 - y0) / _MAX_CANDIDATES))
+        gx = np.linspace(x0, x1, max(1, int(round((x1 - x0) / step)) + 1))
+        gy = np.linspace(y0, y1, max(1, int(round((y1 - y0) / step)) + 1))
+        X, Y = (a.ravel() for a in np.meshgrid(gx, gy))
+        ok = np.ones(X.size, dtype=bool)
+        for zx, zy, r in self.keep_out:
+            ok &= np.hypot(X - zx, Y - zy) > r
+        pts = [self.presses[["x_m", "y_m"]].to_numpy(dtype=float)]
+        if taken is not None and len(taken):
+            pts.append(np.asarray(taken, dtype=float).reshape(-1, 2))
+        done = np.vstack(pts)
+        if done.size and self.min_spacing > 0:
+            for lo in range(0, X.size, 256):
+                sl = slice(lo, lo + 256)
+                d = np.hypot(X[sl, None] - done[None, :, 0], Y[sl, None] - done[None, :, 1])
+                ok[sl] &= d.min(axis=1) >= self.min_spacing
+        return X[ok], Y[ok]
+
+
+@dataclass
+class NextPresses:
+    """The answer of :func:`next_presses`.
+
+    Attributes
+    ----------
+    presses
+        The next press(es) in order: ``order``, ``x_m``, ``y_m``, ``score`` (the
+        criterion's), ``criterion``; empty when the search stops.
+    stop
+        True when the rule has decided (or the budget or the candidates ran out).
+    decision
+        ``"lump"``, ``"no lump"`` or ``""`` (undecided).
+    reason
+        Why it stops, in words ("" when it goes on).
+    summary
+        The posterior after the presses so far (:func:`summary`).
+    """
+
+    presses: pd.DataFrame
+    stop: bool
+    decision: str
+    reason: str
+    summary: dict
+    posterior: SearchPosterior | None = field(default=None, repr=False)
+
+
+def summary(state: SearchState, post: SearchPosterior | None, rule: StopRule) -> dict:
+    """The posterior as plain numbers: ``n``, ``p_lump``, the centre ``x_m``/``y_m`` [m] and
+    its credible radius ``centre_radius_m``, the apparent diameter ``size_m`` (FWHM),
+    ``apparent_ratio``, ``tau`` and ``misclassified_area_m2`` of the level set (NaN before
+    the first press)."""
+    if post is None:
+        nan = math.nan
+        return {"n": 0, "p_lump": state.prior_lump, "x_m": nan, "y_m": nan,
+                "centre_radius_m": nan, "size_m": nan, "apparent_ratio": nan, "tau": nan,
+                "misclassified_area_m2": nan}
+    x, y = post.centre
+    gx, gy, cell = _area_grid(state)
+    p = level_probability(post, gx, gy, state.level)
+    return {"n": post.n, "p_lump": post.p_lump, "x_m": x, "y_m": y,
+            "centre_radius_m": post.centre_radius(rule.level), "size_m": post.size,
+            "apparent_ratio": post.apparent_ratio, "tau": post.tau,
+            "misclassified_area_m2": float(np.minimum(p, 1 - p).sum() * cell)}
+
+
+def _area_grid(state: SearchState) -> tuple[np.ndarray, np.ndarray, float]:
+    """A 3 mm (at most 16 × 16) grid over the footprint and its cell area [m²]."""
+    x0, x1, y0, y1 = state.footprint
+    nx = int(min(16, max(2, round((x1 - x0) / 3e-3) + 1)))
+    ny = int(min(16, max(2, round((y1 - y0) / 3e-3) + 1)))
+    X, Y = np.meshgrid(np.linspace(x0, x1, nx), np.linspace(y0, y1, ny))
+    return X.ravel(), Y.ravel(), (x1 - x0) * (y1 - y0) / (nx * ny)
+
+
+def decide(post: SearchPosterior, rule: StopRule) -> tuple[str, str]:
+    """(decision, reason) of the stopping rule; ("", "") while undecided."""
+    p = post.p_lump
+    if p >= rule.p_decide:
+        r = post.centre_radius(rule.level)
+        if r <= rule.centre_radius:
+            return "lump", (f"P(lump) {p:.3f} >= {rule.p_decide:g} and the centre's "
+                            f"{100 * rule.level:g} % radius {1e3 * r:.2f} mm <= "
+                            f"{1e3 * rule.centre_radius:g} mm")
+    elif p <= 1.0 - rule.p_decide:
+        return "no lump", f"P(lump) {p:.3f} <= {1 - rule.p_decide:.3g}"
+    if rule.max_presses is not None and post.n >= rule.max_presses:
+        return "", f"the budget of {rule.max_presses} presses is spent, undecided"
+    return "", ""
+
+
+def _initial(state: SearchState, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Before any press: the candidates nearest a centred √k × √k pattern."""
+    x0, x1, y0, y1 = state.footprint
+    m = int(math.ceil(math.sqrt(k)))
+    gx = x0 + (np.arange(m) + 0.5) * (x1 - x0) / m
+    gy = y0 + (np.arange(m) + 0.5) * (y1 - y0) / m
+    X, Y = (a.ravel()[:k] for a in np.meshgrid(gx, gy))
+    cx, cy = state.candidates()
+    if cx.size == 0:
+        raise InputError("no candidate press: the keep-out zones cover the footprint")
+    j = [int(np.argmin(np.hypot(cx - a, cy - b))) for a, b in zip(X, Y, strict=True)]
+    j = list(dict.fromkeys(j))
+    return cx[j], cy[j]
+
+
+def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
+                 rule: StopRule | None = None) -> NextPresses:
+    """The next ``k`` presses of an active search, or the decision to stop (module docstring).
+
+    Parameters
+    ----------
+    state
+        The presses so far and the specimen (:class:`SearchState`).
+    k
+        Presses to return (a batch for a robot that plans its path).
+    criterion
+        ``"eig"``, ``"lse"`` or ``"ucb"`` (:data:`palpbayes.active.criteria.CRITERIA`).
+    rule
+        The stopping rule (default :class:`StopRule`).
+    """
+    if criterion not in CRITERIA:
+        raise InputError(f"criterion {criterion!r}: choose one of {', '.join(CRITERIA)}")
+    if int(k) < 1:
+        raise InputError(f"k {k!r} must be >= 1")
+    k, rule = int(k), rule or StopRule()
+    cols = ["order", "x_m", "y_m", "score", "criterion"]
+    if state.n == 0:
+        x, y = _initial(state, k)
+        table = pd.DataFrame({"order": np.arange(1, x.size + 1), "x_m": x, "y_m": y,
+                              "score": np.nan, "criterion": "start"})
+        return NextPresses(table, False, "", "", summary(state, None, rule))
+    post = state.posterior()
+    decision, reason = decide(post, rule)
+    info = summary(state, post, rule)
+    if reason:
+        return NextPresses(pd.DataFrame(columns=cols), True, decision, reason, info, post)
+    fn = CRITERIA[criterion][0]
+    sd = state.expected_sd()
+    rows, cur, cur_post, taken = [], state, post, np.empty((0, 2))
+    for order in range(1, k + 1):
+        qx, qy = state.candidates(taken)
+        if qx.size == 0:
+            break
+        kw = ({"k": state.level} if criterion == "lse" else
+              {"p_decide": rule.p_decide} if criterion == "eig" else {})
+        score = fn(cur_post, qx, qy, sd, **kw)
+        j = int(np.argmax(score))
+        rows.append({"order": order, "x_m": float(qx[j]), "y_m": float(qy[j]),
+                     "score": float(score[j]), "criterion": criterion})
+        taken = np.vstack([taken, [qx[j], qy[j]]])
+        if order < k:  # believe the predictive mean, then choose the next
+            w, mu, _ = predictive(cur_post, qx[j:j + 1], qy[j:j + 1], sd)
+            cur = cur.with_press(float(qx[j]), float(qy[j]), float(w @ mu[:, 0]), sd)
+            cur_post = cur.posterior()
+    if not rows:
+        return NextPresses(pd.DataFrame(columns=cols), True, "",
+                           "no candidate left (keep-out zones and minimum spacing)", info,
+                           post)
+    return NextPresses(pd.DataFrame(rows, columns=cols), False, "", "", info, post)
+
+
+def history(state: SearchState, rule: StopRule | None = None) -> pd.DataFrame:
+    """The posterior after each press of ``state`` in order: ``n``, ``press_x_m``,
+    ``press_y_m``, and the :func:`summary` fields except the misclassified area (one
+    posterior per press: about 0.05-0.2 s each)."""
+    rule = rule or StopRule()
+    rows = []
+    for n in range(1, state.n + 1):
+        sub = replace(state, presses=state.presses.iloc[:n], _hyp=state._hyp)
+        post = sub.posterior()
+        x, y = post.centre
+        rows.append({"n": n, "press_x_m": float(state.presses["x_m"].iloc[n - 1]),
+                     "press_y_m": float(state.presses["y_m"].iloc[n - 1]),
+                     "p_lump": post.p_lump, "x_m": x, "y_m": y,
+                     "centre_radius_m": post.centre_radius(rule.level), "size_m": post.size,
+                     "decision": decide(post, rule)[0]})
+    return pd.DataFrame(rows)
