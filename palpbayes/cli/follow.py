@@ -25,6 +25,9 @@ What comes when, at a stop (:class:`StopLine`):
 
 When the stream ends first there is no stop line: the updates, then the last line, ``end:``
 (``"event": "end"``).
+
+With ``--map DIR`` (and ``--listen``) follow runs the live loop of an active search, one
+connection per press, each answered with the next press (:mod:`palpbayes.cli.follow_map`).
 """
 
 from __future__ import annotations
@@ -45,6 +48,7 @@ from ..online import OnlineEstimator, OnlineState
 from ..online.stream import Batch, LimitHit, SampleParser, batches
 from ..online.tcp import DEFAULT_HOST, accept_lines, connect_lines, listen, parse_address
 from ..units import format_force, format_length, format_pressure
+from .next import add_rule_options
 from .online_options import add_online_options, estimator_from_args, rule_from_args
 from .options import (
     add_column_options,
@@ -53,9 +57,9 @@ from .options import (
     tip_from_args,
 )
 
-__all__ = ["register", "run", "follow", "update_text", "update_json", "final_json",
-           "final_text", "StopLine", "stop_json", "stop_text", "EXIT_STATUS", "EXIT_ENDED",
-           "EXIT_BAD_INPUT", "HELP_WIDTH", "SWITCH_INTERVAL"]
+__all__ = ["register", "run", "follow", "follow_stream", "update_text", "update_json",
+           "final_json", "final_text", "StopLine", "stop_json", "stop_text", "EXIT_STATUS",
+           "EXIT_ENDED", "EXIT_BAD_INPUT", "HELP_WIDTH", "SWITCH_INTERVAL"]
 
 #: Exit status when the stopping rule fires, per reason.
 EXIT_STATUS = {"target precision": 0, "max force": 3, "max depth": 4}
@@ -87,7 +91,15 @@ its full one (with the budget).  When the rule fires, three lines, in this order
      "final": true, with the checks), once the model checks of 'palpbayes fit' have run
      on the samples received (failures on stderr).
 When the stream ends first, the last line starts with 'end:' ("event": "end").
-Input is parsed as numbers only (float, json.loads): nothing is evaluated or unpickled."""
+Input is parsed as numbers only (float, json.loads): nothing is evaluated or unpickled.
+
+live loop (--listen PORT --map DIR, DIR from 'palpbayes next DIR --init'): one connection
+per press.  The robot sends 'press X Y' [m], then the samples; every line above also comes
+back on the connection; at the stop (or when the robot shuts its sending side) the press's
+E is added to DIR/presses.csv and the answer follows, one JSON line with a "decision" key:
+"event" "next" (the next press: connect again) or "stop" (exit 0 decided, 11 undecided: the
+--budget is spent or no candidate is left).  A first line other than 'press X Y' gets
+{{"event": "error", "message": ...}} and exit status 2."""
 
 #: [s] Longest a thread holds the interpreter while another waits for it, during the run
 #: (:func:`sys.setswitchinterval`; Python's default is 5 ms): the reader thread gets it within
@@ -107,7 +119,9 @@ DESCRIPTION = textwrap.fill(
     "and a last line, and exit with a status that says why (below). The "
     "estimator and its options are replay's; unlike replay, which keeps a recording's "
     "loading segment, follow uses every sample it is sent, so send the approach and the "
-    "indentation only (not the hold or retract).", HELP_WIDTH)
+    "indentation only (not the hold or retract). With --map DIR, the live loop of an active "
+    "search: one connection per press, each answered with the next press (below).",
+    HELP_WIDTH)
 
 
 def register(subparsers) -> None:
@@ -132,7 +146,16 @@ def register(subparsers) -> None:
     add_online_options(p)
     add_specimen_options(p, "tip and specimen")
     add_column_options(p, "columns, units and signs of the samples")
-    p.set_defaults(input="the stream")
+    m = p.add_argument_group("live loop of an active search (--map DIR, with --listen)")
+    m.add_argument("--map", metavar="DIR", default=None,
+                   help="a search state ('palpbayes next DIR --init'): take one connection "
+                        "per press ('press X Y', then its samples), add each press's E to "
+                        "DIR/presses.csv and answer with the next press or the decision")
+    m.add_argument("--criterion", choices=("eig", "lse", "ucb"), default="eig",
+                   help="how the next press is chosen (default eig; 'palpbayes next --help')")
+    add_rule_options(m)
+    p.set_defaults(input="the stream", map_only=tuple(
+        (a.option_strings[0], a.dest, a.default) for a in m._group_actions[1:]))
 
 
 def _value(x) -> float | None:
@@ -361,9 +384,92 @@ def _say(line: str) -> None:
         out.flush()
 
 
+def follow_stream(args: argparse.Namespace, estimator: OnlineEstimator, opts: dict,
+                  lines: Iterable[str], source: str, emit: Callable[[str], None],
+                  done: Callable[[], None] | None = None) -> OnlineState | None:
+    """Follow one stream of samples to its stop or its end (module docstring).
+
+    Parameters
+    ----------
+    args
+        follow's options (``--json``, ``--chunk``, ``--timeout``).
+    estimator
+        A fresh estimator with the stopping rule.
+    opts
+        Columns, units and signs of the samples (:func:`~.options.read_options_from_args`).
+    lines
+        The stream, one sample per line.
+    source
+        Its name in error messages (``stdin``, ``tcp HOST:PORT``).
+    emit
+        Prints one line, flushed, whole (called from two threads): every update, the stop
+        line and the last line.
+    done
+        Called once the updates are over (the stop, the end or an error), before the model
+        checks: closes the stream (None: the caller closes it).
+
+    Returns
+    -------
+    OnlineState or None
+        The last state (None if no sample arrived).
+
+    Raises
+    ------
+    StreamError
+        On a bad line (its number, the column or value, what to do).
+    """
+    parser = SampleParser(source, columns=opts.get("columns"), units=opts.get("units"),
+                          force_sign=opts.get("force_sign", 1.0),
+                          z_sign=opts.get("z_sign", 1.0))
+    stop_line = StopLine(emit, estimator, as_json=args.json)
+    stream = batches(lines, parser, chunk=args.chunk, timeout=args.timeout or None,
+                     limit=estimator.limit, on_limit=stop_line.limit,
+                     current=estimator.limit_current)
+    # the reader thread judges each sample as it arrives, while an update may be running in
+    # this one: hand it the interpreter within SWITCH_INTERVAL, not Python's default 5 ms
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(min(switch, SWITCH_INTERVAL))
+    try:
+        state, _ = follow(stream, estimator, emit, as_json=args.json, stop_line=stop_line)
+    finally:
+        sys.setswitchinterval(switch)
+        stream.close()
+        if done is not None:
+            done()
+    # the update carrying the stop is out: now the checks, on the samples received; a check
+    # that cannot run is said, and the exit status stays the rule's (robot scripts read it)
+    try:
+        checks = (estimator.model_checks() if state is not None and state.E is not None
+                  else [])
+    except Exception as exc:  # noqa: BLE001 - after the stop, nothing may turn into a crash
+        print(f"model check: could not run ({type(exc).__name__}: {exc})", file=sys.stderr,
+              flush=True)
+        checks = []
+    if args.json:
+        emit(final_json(state, checks))
+    else:
+        for flag in checks_summary(checks)["flags"]:
+            print(f"model check: {flag}", file=sys.stderr, flush=True)
+        emit(final_text(state, checks))
+    return state
+
+
+def _check_map_options(args: argparse.Namespace) -> None:
+    """--map needs --listen; the live loop's options need --map."""
+    if args.map is not None and args.listen is None:
+        raise InputError(f"--map {args.map} needs --listen [HOST:]PORT: the live loop takes "
+                         "one connection per press (not stdin or --connect)")
+    used = [opt for opt, dest, default in args.map_only if getattr(args, dest) != default]
+    if args.map is None and used:
+        raise InputError(f"{', '.join(used)} belong(s) to the live loop: give --map DIR "
+                         "(with --listen PORT), or leave them out")
+
+
 def run(args: argparse.Namespace) -> int:
+    _check_map_options(args)
     rule = rule_from_args(args)
-    estimator = estimator_from_args(args, tip_from_args(args), rule)
+    tip = tip_from_args(args)
+    estimator = estimator_from_args(args, tip, rule)
     opts = read_options_from_args(args)
     if not (math.isfinite(args.timeout) and args.timeout >= 0):
         raise InputError(f"--timeout {args.timeout!r} must be a time >= 0 [s]")
@@ -371,6 +477,14 @@ def run(args: argparse.Namespace) -> int:
     if args.nu is None:
         print(f"note: {DEFAULT_NU_NOTE.replace(', or a nu column in the manifest', '')}",
               file=sys.stderr, flush=True)
+    if args.map is not None:
+        from .follow_map import live_loop
+
+        def press(lines: Iterable[str], source: str, emit: Callable[[str], None]):
+            est = estimator_from_args(args, tip, rule)  # a fresh estimator per press
+            return follow_stream(args, est, opts, lines, source, emit)
+
+        return live_loop(args, press, _say)
     if args.listen is not None:
         host, port = parse_address(args.listen)
         if host not in (DEFAULT_HOST, "localhost", "::1"):
@@ -386,38 +500,8 @@ def run(args: argparse.Namespace) -> int:
         lines, source = connect_lines(host, port), f"tcp {host}:{port}"
     else:
         lines, source = sys.stdin, "stdin"
-    parser = SampleParser(source, columns=opts.get("columns"), units=opts.get("units"),
-                          force_sign=opts.get("force_sign", 1.0),
-                          z_sign=opts.get("z_sign", 1.0))
-    stop_line = StopLine(_say, estimator, as_json=args.json)
-    stream = batches(lines, parser, chunk=args.chunk, timeout=args.timeout or None,
-                     limit=estimator.limit, on_limit=stop_line.limit,
-                     current=estimator.limit_current)
-    # the reader thread judges each sample as it arrives, while an update may be running in
-    # this one: hand it the interpreter within SWITCH_INTERVAL, not Python's default 5 ms
-    switch = sys.getswitchinterval()
-    sys.setswitchinterval(min(switch, SWITCH_INTERVAL))
-    try:
-        state, _ = follow(stream, estimator, _say, as_json=args.json, stop_line=stop_line)
-    finally:
-        sys.setswitchinterval(switch)
-        if lines is not sys.stdin:
-            lines.close()
-    # the update carrying the stop is out: now the checks, on the samples received; a check
-    # that cannot run is said, and the exit status stays the rule's (robot scripts read it)
-    try:
-        checks = (estimator.model_checks() if state is not None and state.E is not None
-                  else [])
-    except Exception as exc:  # noqa: BLE001 - after the stop, nothing may turn into a crash
-        print(f"model check: could not run ({type(exc).__name__}: {exc})", file=sys.stderr,
-              flush=True)
-        checks = []
-    if args.json:
-        _say(final_json(state, checks))
-    else:
-        for flag in checks_summary(checks)["flags"]:
-            print(f"model check: {flag}", file=sys.stderr, flush=True)
-        _say(final_text(state, checks))
+    state = follow_stream(args, estimator, opts, lines, source, _say,
+                          done=None if lines is sys.stdin else lines.close)
     if state is not None and state.should_stop:
         return EXIT_STATUS[state.stop]
     return EXIT_ENDED

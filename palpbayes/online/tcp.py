@@ -1,20 +1,27 @@
 """A TCP connection as a stream of text lines for :func:`palpbayes.online.stream.batches`.
 
 Either palpbayes listens and the robot connects (:func:`listen`, then :func:`accept_lines`),
-or the robot listens and palpbayes connects (:func:`connect_lines`).  A listener binds to the
-loopback interface, :data:`DEFAULT_HOST`, unless another host is given on purpose: samples
-from another machine are then accepted by anyone who can reach the port.  What arrives is
-only read as text (UTF-8 lines), never unpickled or evaluated.
+or the robot listens and palpbayes connects (:func:`connect_lines`).  A session of several
+presses over one listener (``palpbayes follow --map``) takes one connection per press with
+:func:`accept_session`: its lines in, and lines back to the robot on the same connection.
+A listener binds to the loopback interface, :data:`DEFAULT_HOST`, unless another host is
+given on purpose: samples from another machine are then accepted by anyone who can reach
+the port.  What arrives is only read as text (UTF-8 lines), never unpickled or evaluated.
 """
 
 from __future__ import annotations
 
+import queue
 import socket
+import threading
+from collections.abc import Iterator
+from contextlib import suppress
 from typing import TextIO
 
 from ..errors import InputError
 
-__all__ = ["DEFAULT_HOST", "listen", "accept_lines", "connect_lines", "parse_address"]
+__all__ = ["DEFAULT_HOST", "listen", "accept_lines", "connect_lines", "parse_address",
+           "SessionConnection", "accept_session"]
 
 #: The interface a listener binds to unless told otherwise: loopback only.
 DEFAULT_HOST = "127.0.0.1"
@@ -62,3 +69,167 @@ def connect_lines(host: str, port: int, timeout: float = 10.0) -> TextIO:
     lines = conn.makefile("r", encoding="utf-8", newline=None)
     conn.close()  # the socket closes with its lines
     return lines
+
+
+_EOF = object()  # the pump's mark: the peer closed its side (or the connection is closed)
+
+
+class SessionConnection:
+    """One connection of a session: the lines the peer sends, and lines sent back to it.
+
+    One background thread (the pump) is the only reader of the socket: it reads lines until
+    the peer closes its side, and hands them to :meth:`readline` and to the iterator of
+    :meth:`lines` (for :func:`palpbayes.online.stream.batches`, whose own reader thread
+    iterates it); once :meth:`close` has begun it reads on and drops what arrives, so that
+    the connection is not reset with data unread.  :meth:`send` writes one line, flushed at
+    once (Nagle's algorithm off), from any thread.  What arrives is only decoded as UTF-8
+    text, never evaluated or unpickled.
+
+    Parameters
+    ----------
+    conn
+        The accepted socket (the connection owns it from now on).
+    peer
+        The peer's ``host:port``, for messages.
+
+    Attributes
+    ----------
+    lines_read
+        Lines handed out so far (by :meth:`readline` and :meth:`lines`).
+    broken
+        Why sending failed (the peer is gone); "" while sending works.
+    """
+
+    def __init__(self, conn: socket.socket, peer: str) -> None:
+        self.peer = peer
+        self.lines_read = 0  # lines handed out so far (readline and lines())
+        self.broken: str = ""  # why sending failed (the peer is gone), "" while it works
+        self._conn = conn
+        self._file = conn.makefile("r", encoding="utf-8", newline=None)
+        self._queue: queue.SimpleQueue = queue.SimpleQueue()
+        self._send_lock = threading.Lock()
+        self._closing = threading.Event()
+        with suppress(OSError):
+            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._pump = threading.Thread(target=self._read, name="palpbayes-session", daemon=True)
+        self._pump.start()
+
+    def _read(self) -> None:
+        """The pump: every line to the queue (dropped once closing), then the end."""
+        try:
+            while True:
+                line = self._file.readline()
+                if not line:
+                    break
+                if not self._closing.is_set():
+                    self._queue.put(line)
+        except (OSError, ValueError, UnicodeDecodeError) as exc:  # broken, closed, not UTF-8
+            if not self._closing.is_set():
+                self._queue.put(exc)
+        self._queue.put(_EOF)
+
+    def _next(self, timeout: float | None = None) -> str:
+        """The next line ('' at the end); raises what reading it raised."""
+        if self._closing.is_set():
+            return ""
+        try:
+            item = self._queue.get(timeout=timeout)
+        except queue.Empty:
+            raise TimeoutError(f"tcp {self.peer}: no line for {timeout:g} s") from None
+        if item is _EOF:
+            self._queue.put(_EOF)  # the end stays the end for every later call
+            return ""
+        if isinstance(item, BaseException):
+            self._queue.put(_EOF)
+            raise item
+        self.lines_read += 1
+        return item
+
+    def readline(self, timeout: float | None = None) -> str:
+        """The next line the peer sent, with its newline; '' once the peer has closed its
+        side (or :meth:`close` has begun).
+
+        Raises
+        ------
+        TimeoutError
+            No line within ``timeout`` [s] (None: wait for it).
+        OSError, UnicodeDecodeError
+            Reading the connection failed, or a line is not UTF-8.
+        """
+        return self._next(timeout)
+
+    def lines(self) -> Iterator[str]:
+        """The lines the peer sends from here on, until it closes its side or :meth:`close`
+        begins (the iterator then ends, whichever thread is waiting on it)."""
+        while True:
+            line = self._next()
+            if not line:
+                return
+            yield line
+
+    def send(self, line: str) -> bool:
+        """Write ``line`` and a newline to the peer at once; False (and :attr:`broken` set)
+        when the peer is gone, which is not an error: the caller goes on without it."""
+        if self.broken:
+            return False
+        data = (line.rstrip("\n") + "\n").encode("utf-8")
+        with self._send_lock:
+            try:
+                self._conn.sendall(data)
+            except OSError as exc:
+                self.broken = exc.strerror or type(exc).__name__
+                return False
+        return True
+
+    def close(self, grace: float = 2.0) -> None:
+        """Say the end to the peer (FIN after what was sent), wait up to ``grace`` [s] for it
+        to close its side while the pump reads and drops what it still sends, then close.
+        A peer still sending after ``grace`` is cut off (its last data may then be reset).
+        Safe to call twice, and from a ``finally``."""
+        if self._closing.is_set():
+            return
+        self._closing.set()
+        self._queue.put(_EOF)  # wakes a thread waiting in lines() or readline()
+        with suppress(OSError):
+            self._conn.shutdown(socket.SHUT_WR)
+        self._pump.join(max(0.0, grace))
+        if self._pump.is_alive():  # the peer neither closes nor stops: stop reading
+            with suppress(OSError):
+                self._conn.shutdown(socket.SHUT_RD)  # wakes the pump's blocked read
+            self._pump.join(1.0)
+        if not self._pump.is_alive():  # else leave the file to the pump (never close it
+            self._file.close()         # under a read in progress: that would block here)
+        self._conn.close()
+
+    def __enter__(self) -> SessionConnection:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close(grace=2.0 if exc[0] is None else 0.0)
+
+
+def accept_session(server: socket.socket, timeout: float | None = None) -> SessionConnection:
+    """Wait for the next connection on ``server`` (a :func:`listen` socket) and return it as
+    a :class:`SessionConnection`: its lines (:meth:`~SessionConnection.readline`,
+    :meth:`~SessionConnection.lines`) and a line writer back to the peer
+    (:meth:`~SessionConnection.send`); close it with :meth:`~SessionConnection.close`.
+
+    Parameters
+    ----------
+    server
+        The listening socket.
+    timeout
+        [s] Longest wait for a connection (None: as long as it takes).
+
+    Raises
+    ------
+    TimeoutError
+        No connection within ``timeout``.
+    """
+    server.settimeout(timeout)
+    try:
+        conn, peer = server.accept()
+    finally:
+        server.settimeout(None)
+    conn.settimeout(None)
+    return SessionConnection(conn, f"{peer[0]}:{peer[1]}")

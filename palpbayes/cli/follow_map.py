@@ -1,0 +1,287 @@
+"""``palpbayes follow --listen PORT --map DIR``: the live loop of an active search.
+
+One listener, one TCP connection per press, so that a robot program runs press → decide →
+move with nothing but a socket:
+
+1. the robot connects and sends ``press X Y`` (the press position [m], two numbers read
+   with ``float``) as the first non-blank line, then the press's samples exactly as to
+   ``palpbayes follow`` (CSV with a header, or JSON lines);
+2. follow runs a fresh online estimator on them (:func:`~.follow.follow_stream`) and writes
+   every line it prints (the updates, the stop line, the last line) to stdout **and** to the
+   connection, flushed, so the robot can stop on the stop line without reading stdout;
+3. at the stop (or when the robot shuts its sending side), the press's estimate of E becomes
+   its posterior of log(E/Pa) (:func:`press_posterior`), added to ``DIR/presses.csv`` with
+   P(lump) after it; a press without an estimate (no contact) is not added and the answer
+   says so (``"warning"``);
+4. the answer of :func:`palpbayes.active.next_presses` on the new state is one JSON line
+   (:func:`~.next.answer_json`; ``"event"`` ``"next"`` with the next press, or ``"done"``)
+   on the connection and stdout; then the connection is closed (after the robot closes its
+   side, or a grace period) and, unless the answer is ``"done"``, the next one is accepted.
+
+The answer does not wait for the robot to stop sending: what it still sends after the stop
+line is read and dropped.  Line numbers in messages count the connection's lines, the press
+line included.  A first line other than ``press X Y`` gets ``{"event": "error", "message":
+...}`` and ends the loop with exit status 2, as does a bad sample line.  Exit status at the
+end: :data:`~.next.EXIT_DECIDED` (decided) or :data:`~.next.EXIT_UNDECIDED` (the budget is
+spent, or no candidate is left).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import threading
+from collections.abc import Callable, Iterable
+from itertools import chain, repeat
+from pathlib import Path
+from statistics import NormalDist
+
+from ..active import NextPresses, SearchState, next_presses
+from ..active.files import SEARCH_FILE, append_press, read_state
+from ..errors import InputError
+from ..online import OnlineState
+from ..online.tcp import DEFAULT_HOST, SessionConnection, accept_session, listen, parse_address
+from .next import EXIT_DECIDED, EXIT_UNDECIDED, answer_json
+from .next import rule_from_args as search_rule_from_args
+
+__all__ = ["live_loop", "parse_press_line", "press_posterior", "error_json", "CLOSE_GRACE",
+           "NO_ESTIMATE"]
+
+#: [s] Longest wait, after the answer, for the robot to close its side of a connection before
+#: it is closed anyway (what the robot sends meanwhile is read and dropped).
+CLOSE_GRACE = 2.0
+
+#: The answer's ``"warning"`` for a press without an estimate of E.
+NO_ESTIMATE = ("no estimate of E from this press ({why}): it is not added to the search; "
+               "press again")
+
+_PRESS_FIX = ("send 'press X Y' (the press position [m], two numbers) as the first line of "
+              "each connection, then the press's samples")
+
+#: One press: follows ``lines`` (named ``source``), each line out through ``emit``; returns
+#: the last state (:func:`palpbayes.cli.follow.follow_stream` with a fresh estimator).
+PressFn = Callable[[Iterable[str], str, Callable[[str], None]], OnlineState | None]
+
+
+def error_json(message: str) -> str:
+    """The error line sent to the robot: ``{"event": "error", "message": ...}``."""
+    return json.dumps({"event": "error", "message": message})
+
+
+def parse_press_line(line: str, source: str, lineno: int) -> tuple[float, float]:
+    """(x, y) [m] of a ``press X Y`` line (numbers read with ``float`` only, finite).
+
+    Parameters
+    ----------
+    line
+        The connection's first non-blank line ('' when it ended before one).
+    source, lineno
+        The connection and the line's number in it, for the message.
+
+    Raises
+    ------
+    InputError
+        Not a press line: the message names the line and what to send.
+    """
+    parts = line.split()
+    if not parts:
+        raise InputError(f"{source}: the connection ended before its first line; "
+                         f"{_PRESS_FIX}")
+    try:
+        if len(parts) != 3 or parts[0].lower() != "press":
+            raise ValueError
+        x, y = float(parts[1]), float(parts[2])
+    except ValueError:
+        raise InputError(f"{source} line {lineno}: {line.strip()[:80]!r} is not a press line; "
+                         f"{_PRESS_FIX}") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise InputError(f"{source} line {lineno}: {line.strip()[:80]!r}: the position must "
+                         f"be finite; {_PRESS_FIX}")
+    return x, y
+
+
+def press_posterior(state: OnlineState | None) -> tuple[float, float] | None:
+    """A press's posterior of log(E/Pa) from its last online state: the mean log of E's
+    median [Pa], the sd the half-width of the log of its statistical interval (``state.E``,
+    90 %: the data's noise and surface, not the budget of ``E_total``) over the normal
+    quantile of that level (1.6448536 at 90 %); None without a usable estimate."""
+    E = None if state is None else state.E
+    if E is None:
+        return None
+    med, lo, hi = float(E.median), float(E.lo), float(E.hi)
+    if not all(math.isfinite(v) and v > 0 for v in (med, lo, hi)) or not 0 < E.level < 1:
+        return None
+    sd = (math.log(hi) - math.log(lo)) / (2.0 * NormalDist().inv_cdf(0.5 + E.level / 2))
+    if not (math.isfinite(sd) and sd > 0):
+        return None
+    return math.log(med), sd
+
+
+def _no_estimate_why(state: OnlineState | None) -> str:
+    if state is None:
+        return "no sample arrived"
+    if not state.in_contact:
+        return "no contact detected"
+    return "too few samples in contact"
+
+
+def _listen(address: str):
+    """The listener of ``address``, said on stderr as follow says it."""
+    host, port = parse_address(address)
+    if host not in (DEFAULT_HOST, "localhost", "::1"):
+        print(f"note: listening on {host}, not loopback: anyone who can reach port {port} "
+              "can send presses", file=sys.stderr, flush=True)
+    server = listen(port, host)
+    h, p = server.getsockname()[:2]
+    print(f"listening on {h}:{p}", file=sys.stderr, flush=True)
+    return server
+
+
+def _note_state_record(folder: Path, args: argparse.Namespace) -> None:
+    """A note on stderr where follow's tip or depth differs from the one the state was
+    created for (its contact radius is that tip's at that depth)."""
+    try:
+        rec = json.loads((folder / "search.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return
+    said = []
+    if rec.get("tip") and args.tip and rec["tip"] != args.tip:
+        said.append(f"tip {rec['tip']} (follow: --tip {args.tip})")
+    r = rec.get("tip_radius_m")
+    if isinstance(r, (int, float)) and args.radius and not math.isclose(r, args.radius,
+                                                                        rel_tol=1e-6):
+        said.append(f"tip radius {r:g} m (follow: --radius {args.radius:g})")
+    d = rec.get("depth_m")
+    if isinstance(d, (int, float)) and args.max_depth and not math.isclose(
+            d, args.max_depth, rel_tol=0.1):
+        said.append(f"depth {d:g} m (follow: --max-depth {args.max_depth:g})")
+    if said:
+        print(f"note: the search in {folder} was set up for {'; '.join(said)}: its contact "
+              "radius is that tip's at that depth", file=sys.stderr, flush=True)
+
+
+def _status(ans: NextPresses) -> int:
+    return EXIT_DECIDED if ans.decision else EXIT_UNDECIDED
+
+
+def live_loop(args: argparse.Namespace, press: PressFn, say: Callable[[str], None]) -> int:
+    """Run the live loop on ``--listen`` for the search state ``--map`` (module docstring).
+
+    Parameters
+    ----------
+    args
+        follow's options: ``map``, ``listen``, ``criterion``, the search's stopping rule
+        (``p_decide``, ``centre_radius``, ``budget``), ``json``, the tip.
+    press
+        Follows one press's lines (:data:`PressFn`).
+    say
+        Prints one line on stdout, flushed, whole (from two threads).
+
+    Returns
+    -------
+    int
+        :data:`~.next.EXIT_DECIDED` or :data:`~.next.EXIT_UNDECIDED` when the search stops.
+
+    Raises
+    ------
+    InputError
+        ``DIR`` holds no search state (the message names it; a ``palpbayes map`` folder is
+        not one here: its presses are its points), a bad option, a connection
+        whose first line is not ``press X Y``, or a bad sample line (the robot is sent the
+        error first).
+    """
+    folder = Path(args.map)
+    state = read_state(folder)
+    if not (folder / SEARCH_FILE).is_file():  # a map's folder: its presses are its points
+        raise InputError(f"--map {folder}: a 'palpbayes map' output folder, not a search "
+                         "state; the live loop adds its presses to a search state: create "
+                         "one with 'palpbayes next DIR --init ...'")
+    rule = search_rule_from_args(args)
+    _note_state_record(folder, args)
+
+    def answer(s: SearchState) -> NextPresses:
+        return next_presses(s, 1, criterion=args.criterion, rule=rule)
+
+    first = answer(state)
+    if first.stop:  # nothing to press: say so, do not listen
+        say(answer_json(first))
+        print(f"note: the search in {folder} has already stopped ({first.reason}); start "
+              "another with 'palpbayes next DIR --init'", file=sys.stderr, flush=True)
+        return _status(first)
+    with _listen(args.listen) as server:
+        while True:
+            with accept_session(server) as conn:
+                state, ans = _one_press(conn, state, folder, press, answer, say)
+                conn.close(CLOSE_GRACE)
+            if ans.stop:
+                print(f"search stopped: {ans.decision or 'undecided'} ({ans.reason})",
+                      file=sys.stderr, flush=True)
+                return _status(ans)
+
+
+def _fail(conn: SessionConnection, exc: InputError) -> None:
+    """Send the robot ``exc`` as an error line and close (the caller raises it)."""
+    conn.send(error_json(str(exc)))
+    conn.close(grace=1.0)
+
+
+def _one_press(conn: SessionConnection, state: SearchState, folder: Path, press: PressFn,
+               answer: Callable[[SearchState], NextPresses],
+               say: Callable[[str], None]) -> tuple[SearchState, NextPresses]:
+    """One connection: its press line, its samples, the press added, the answer sent;
+    returns the new state and the answer."""
+    source = f"tcp {conn.peer}"
+    try:
+        line = ""
+        while not line.strip():
+            line = conn.readline()
+            if not line:
+                break
+        x, y = parse_press_line(line, source, conn.lines_read)
+    except InputError as exc:
+        _fail(conn, exc)
+        raise
+    except (OSError, UnicodeDecodeError) as exc:
+        err = InputError(f"{source}: reading the press line failed ({exc}); {_PRESS_FIX}")
+        _fail(conn, err)
+        raise err from None
+
+    lock = threading.Lock()
+
+    def emit(text: str) -> None:  # the same lines in the same order on both (two threads)
+        with lock:
+            say(text)
+            conn.send(text)
+
+    # the lines already read come back blank, so that the parser's line numbers are the
+    # connection's (blank lines are skipped)
+    lines = chain(repeat("\n", conn.lines_read), conn.lines())
+    try:
+        last = press(lines, source, emit)
+    except InputError as exc:  # a bad sample line: the robot hears it too
+        _fail(conn, exc)
+        raise
+    post = press_posterior(last)
+    if post is None:
+        warning = NO_ESTIMATE.format(why=_no_estimate_why(last))
+        ans = answer(state)
+        print(f"press at ({x:g}, {y:g}) m: {warning}", file=sys.stderr, flush=True)
+    else:
+        warning = ""
+        ans = answer(state.with_press(x, y, *post))  # P(lump) after it, for its row
+        state = append_press(folder, state, x, y, *post, p_lump=float(ans.summary["p_lump"]))
+        print(f"press {state.n} at ({x:g}, {y:g}) m: log(E/Pa) = {post[0]:.4f} ± "
+              f"{post[1]:.4f}; P(lump) = {ans.summary['p_lump']:.3f}", file=sys.stderr,
+              flush=True)
+    text = answer_json(ans)
+    if warning:
+        text = json.dumps({**json.loads(text), "warning": warning})
+    say(text)
+    if conn.broken:
+        print(f"note: {source} closed before the answer ({conn.broken}); it is on stdout",
+              file=sys.stderr, flush=True)
+    else:
+        conn.send(text)
+    return state, ans
