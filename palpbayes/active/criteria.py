@@ -40,8 +40,9 @@ from .posterior import SearchPosterior
 
 __all__ = ["CRITERIA", "eig", "lse", "ucb", "predictive", "level_probability"]
 
-_Y_NODES = 48
-_CHUNK = 128  # candidates per block (bounds the (candidates, components, y) temporaries)
+_Y_NODES = 48  # fewest quadrature nodes over a press's reading
+_Y_NODES_MAX = 4096
+_BLOCK = 1 << 22  # elements of the (components, candidates, nodes) temporaries per block
 
 
 def _phi(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray) -> np.ndarray:
@@ -55,9 +56,8 @@ def predictive(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: 
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Group weights (N_kept + 1,) and the predictive mean and sd of log E of a press at each
     candidate under each group, (N_kept + 1, N_q): row 0 no lump, then the kept centres."""
-    ck = post.ck_weights[post.kept]  # (N_kept, K)
-    pc = ck.sum(axis=1)
-    pk = (ck / np.where(pc > 0, pc, 1.0)[:, None]).T[..., None]  # (K, N_kept, 1) P(k | c)
+    pc, pkc = post.kept_mix()
+    pk = pkc.T[..., None]  # (K, N_kept, 1) P(k | c)
     m = post.moments.transpose(1, 0, 2)[..., None, :]  # (K, N_kept, 1, 6)
     phi = _phi(post, qx, qy)
     mu_ck = m[..., 0] + m[..., 3] * phi
@@ -67,7 +67,7 @@ def predictive(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: 
     n0 = post.null_moments
     mu0 = np.full((1, qx.size), n0[0])
     var0 = np.full((1, qx.size), n0[1] - n0[0] ** 2 + n0[2] + press_sd ** 2)
-    w = np.concatenate([[1.0 - post.p_lump], post.p_lump * pc / pc.sum()])
+    w = np.concatenate([[1.0 - post.p_lump], post.p_lump * pc])
     return w, np.vstack([mu0, mu]), np.sqrt(np.vstack([var0, var]))
 
 
@@ -91,13 +91,19 @@ def eig(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: float, 
     p0 = float(w[0])
     wc = w[1:] / max(w[1:].sum(), 1e-300)  # P(centre | lump)
     h_comp = 0.5 * np.log(2 * math.pi * math.e * sd * sd)  # (G, N_q)
+    # quadrature over the reading: nodes at most half the narrowest sd apart over the range
+    # the components in play span (a fixed count is far too coarse when tau is small)
+    span = slice(1, None) if target == "centre" else slice(None)
+    lo_q, hi_q = (mu[span] - 6 * sd[span]).min(axis=0), (mu[span] + 6 * sd[span]).max(axis=0)
+    need = np.max((hi_q - lo_q) / (0.5 * sd[span].min(axis=0)))
+    nodes = int(np.clip(math.ceil(need) + 1, _Y_NODES, _Y_NODES_MAX))
+    chunk = max(1, _BLOCK // (mu.shape[0] * nodes))
+    t = np.linspace(0.0, 1.0, nodes)
     out = np.empty(qx.size)
-    t = np.linspace(0.0, 1.0, _Y_NODES)
-    for j in range(0, qx.size, _CHUNK):
-        sl = slice(j, j + _CHUNK)
+    for j in range(0, qx.size, chunk):
+        sl = slice(j, j + chunk)
         m, s = mu[:, sl], sd[:, sl]
-        lo, hi = (m - 6 * s).min(axis=0), (m + 6 * s).max(axis=0)
-        y = lo[:, None] + (hi - lo)[:, None] * t[None, :]  # (n, Y)
+        y = lo_q[sl, None] + (hi_q - lo_q)[sl, None] * t[None, :]  # (n, Y)
         z = (y[None, :, :] - m[:, :, None]) / s[:, :, None]
         dens = np.exp(-0.5 * z * z) / (math.sqrt(2 * math.pi) * s[:, :, None])
         p1 = np.einsum("g,gqy->qy", wc, dens[1:])  # the lump's mixture
@@ -109,7 +115,12 @@ def eig(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: float, 
             out[sl] = _entropy(mix, y) - p0 * h_comp[0, sl] - (1 - p0) * _entropy(p1, y)
         else:  # joint: H[p] − Σ_g P(g) H[N_g]
             out[sl] = _entropy(mix, y) - p0 * h_comp[0, sl] - (1 - p0) * (wc @ h_comp[1:, sl])
-    return np.maximum(out, 0.0)
+    # a mutual information lies between 0 and the entropy of what it is about
+    h_presence = -sum(v * math.log(v) for v in (p0, 1.0 - p0) if v > 0)
+    h_centre = float(-(wc[wc > 0] * np.log(wc[wc > 0])).sum())
+    top = {"presence": h_presence, "centre": h_centre,
+           "joint": h_presence + (1.0 - p0) * h_centre}[target]
+    return np.clip(out, 0.0, top)
 
 
 def _entropy(dens: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -133,8 +144,8 @@ def level_probability(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray,
                           axis=-1)
     K, C = surv.shape[:2]
     p = np.take_along_axis(surv.reshape(K * C, -1), idx.reshape(K * C, -1), axis=1)
-    ck = post.ck_weights[post.kept]
-    w = (ck / ck.sum()).T.reshape(K * C, 1)
+    pc, pkc = post.kept_mix()
+    w = (pc[:, None] * pkc).T.reshape(K * C, 1)
     return post.p_lump * (w * p).sum(axis=0)
 
 
@@ -149,8 +160,8 @@ def ucb(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: float, 
         kappa: float = 2.0) -> np.ndarray:
     """Upper confidence bound of the lump's log-excess at each candidate: mean + kappa·sd."""
     phi = _phi(post, qx, qy)
-    ck = post.ck_weights[post.kept]
-    w = (post.p_lump * ck / ck.sum()).T[..., None]  # (K, N_kept, 1)
+    pc, pkc = post.kept_mix()
+    w = (post.p_lump * pc[:, None] * pkc).T[..., None]  # (K, N_kept, 1)
     m = post.moments.transpose(1, 0, 2)
     mean = (w * m[..., 3:4] * phi).sum(axis=(0, 1))
     second = (w * m[..., 4:5] * phi * phi).sum(axis=(0, 1))

@@ -58,6 +58,7 @@ def init_state(folder: str | os.PathLike, *, footprint, contact_radius: float,
            "thickness_m": thickness, "keep_out_m": [list(map(float, z)) for z in keep_out],
            **extra}
     state = _from_record(rec, pd.DataFrame(columns=PRESS_COLUMNS), out / SEARCH_FILE)
+    _ = state.hyp  # the lump grid for this specimen can be built (a block thick enough)
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(json.dumps(rec, indent=2, allow_nan=False) + "\n", out / SEARCH_FILE)
     write_csv_atomic(pd.DataFrame(columns=[*PRESS_COLUMNS, "p_lump"]), out / PRESSES_FILE,
@@ -95,11 +96,13 @@ def _read_presses(path: Path) -> pd.DataFrame:
                             "a press needs " + ", ".join(PRESS_COLUMNS))
     for c in PRESS_COLUMNS:
         v = pd.to_numeric(df[c], errors="coerce")
-        bad = ~np.isfinite(v.to_numpy(dtype=float))
+        vals = v.to_numpy(dtype=float)
+        bad = ~np.isfinite(vals) | ((vals <= 0) if c == "logE_sd" else False)
         if bad.any():
             j = int(np.flatnonzero(bad)[0])
-            raise DataFileError(path, f"row {j + 2}, column {c}: {df[c].iloc[j]!r} is not a "
-                                "finite number", "remove the press or give its value")
+            what = "a finite number > 0" if c == "logE_sd" else "a finite number"
+            raise DataFileError(path, f"row {j + 2}, column {c}: {df[c].iloc[j]!r} is not "
+                                f"{what}", "remove the press or give its value")
         df[c] = v.astype(float)
     return df
 

@@ -47,6 +47,7 @@ def next_presses(state: SearchState | str | os.PathLike, k: int = 1, *,
     >>> ans = pb.next_presses("search-dir")          # doctest: +SKIP
     >>> ans.presses[["x_m", "y_m"]], ans.summary["p_lump"]  # doctest: +SKIP
     """
+    overrides = {k: v for k, v in overrides.items() if v is not None}
     if isinstance(state, SearchState):
         if overrides:  # a new grid for the new specimen: not the one the state has built
             state = replace(state, **overrides, _hyp=[])

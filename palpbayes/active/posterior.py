@@ -202,7 +202,9 @@ class SearchPosterior:
     ck_weights
         (N_c, K) P(centre, sphere | lump, presses).
     kept
-        Indices of the centres whose predictive moments are kept (the heaviest).
+        Indices of the centres whose predictive moments are kept (:func:`_kept`).
+    kept_weights
+        (N_kept,) The weight each kept centre carries for P(centre | lump) (sum 1).
     moments
         (N_kept, K, 6) per kept centre and sphere, the posterior means over tau and beta of b̂, b̂²,
         b̂·beta, beta, beta², and of the predictive variance's common part 1/S0 + tau².
@@ -223,6 +225,7 @@ class SearchPosterior:
     centre_weights: np.ndarray
     ck_weights: np.ndarray
     kept: np.ndarray
+    kept_weights: np.ndarray
     moments: np.ndarray
     null_moments: np.ndarray
     beta_weights: np.ndarray
@@ -261,6 +264,13 @@ class SearchPosterior:
         """Posterior mean of the apparent peak ratio A = exp(beta) given a lump."""
         return float(self.beta_weights @ np.exp(self.hyp.betas))
 
+    def kept_mix(self) -> tuple[np.ndarray, np.ndarray]:
+        """P(centre | lump) carried by each kept centre (N_kept,) and P(sphere | centre,
+        lump) (N_kept, K)."""
+        ck = self.ck_weights[self.kept]
+        s = ck.sum(axis=1)
+        return self.kept_weights, ck / np.where(s > 0, s, 1.0)[:, None]
+
     @property
     def tau(self) -> float:
         """Posterior mean of the heterogeneity tau (sd of log E between presses)."""
@@ -274,8 +284,9 @@ def posterior(hyp: LumpHypotheses, x: np.ndarray, y: np.ndarray, mean: np.ndarra
     per-press posteriors of log E (``mean``, ``sd``) (module docstring).
 
     The predictive moments (:attr:`SearchPosterior.moments`) are kept for the heaviest
-    centres that hold ``mass`` of the centre's posterior, at most ``max_kept`` of them (the
-    candidates of :mod:`palpbayes.active.criteria` are scored against these).
+    centres that hold ``mass`` of the centre's posterior when at most ``max_kept`` do, else
+    for a systematic sample of ``max_kept`` draws from it (:func:`_kept`); the candidates of
+    :mod:`palpbayes.active.criteria` are scored against these.
 
     Raises
     ------
@@ -324,7 +335,7 @@ def posterior(hyp: LumpHypotheses, x: np.ndarray, y: np.ndarray, mean: np.ndarra
     w_kc = w.sum(axis=(2, 3))  # (K, N_c)
     ck = (w_kc / z).T  # (N_c, K)
     centre_w = ck.sum(axis=1)
-    keep = _heaviest(centre_w, mass, max_kept)
+    keep, kept_w = _kept(centre_w, mass, max_kept)
     wk = w[:, keep]  # (K, N_keep, T, B)
     nk = w_kc[:, keep][..., None, None]
     cond = wk / np.where(nk > 0, nk, 1.0)  # P(tau, beta | c, k, lump)
@@ -342,14 +353,27 @@ def posterior(hyp: LumpHypotheses, x: np.ndarray, y: np.ndarray, mean: np.ndarra
     beta_w = w.sum(axis=(0, 1, 2)) / z
     surv = np.cumsum(cond.sum(axis=2)[..., ::-1], axis=-1)[..., ::-1]
     return SearchPosterior(hyp=hyp, n=int(x.size), p_lump=p_lump, log_bayes_factor=lbf,
-                           centre_weights=centre_w, ck_weights=ck, kept=keep, moments=mom,
+                           centre_weights=centre_w, ck_weights=ck, kept=keep,
+                           kept_weights=kept_w, moments=mom,
                            null_moments=null_mom, beta_weights=beta_w, beta_survival=surv,
                            tau_weights=tau_w)
 
 
-def _heaviest(w: np.ndarray, mass: float, most: int) -> np.ndarray:
-    """Indices of the fewest largest entries of ``w`` (normalised) that hold ``mass``, at most
-    ``most`` of them (sorted)."""
-    order = np.argsort(w)[::-1]
-    j = int(np.searchsorted(np.cumsum(w[order]), mass)) + 1
-    return np.sort(order[:max(1, min(j, most, w.size))])
+def _kept(w: np.ndarray, mass: float, most: int) -> tuple[np.ndarray, np.ndarray]:
+    """The centres the predictive is computed on, and the weights they carry (sum 1).
+
+    The fewest heaviest centres that hold ``mass`` of ``w`` (normalised), with their own
+    weights renormalised, when at most ``most`` do; else (a spread-out posterior, early in a
+    search) a systematic sample of ``most`` draws from ``w`` (Kitagawa 1996), each centre
+    weighted by how often it was drawn: an unbiased, deterministic, spatially representative
+    subset instead of an arbitrary cut of near-ties."""
+    order = np.argsort(-w, kind="stable")
+    cum = np.cumsum(w[order])
+    j = int(np.searchsorted(cum, mass)) + 1
+    if j <= most:
+        keep = np.sort(order[:max(1, min(j, w.size))])
+        return keep, w[keep] / w[keep].sum()
+    u = (np.arange(most) + 0.5) / most * cum[-1]
+    idx = np.minimum(np.searchsorted(np.cumsum(w), u), w.size - 1)
+    keep, counts = np.unique(idx, return_counts=True)
+    return keep, counts / counts.sum()

@@ -57,11 +57,12 @@ class StopRule:
 
     def __post_init__(self) -> None:
         if not 0.5 < self.p_decide < 1.0:
-            raise InputError(f"p_decide {self.p_decide!r} must lie in (0.5, 1)")
+            raise InputError(f"p_decide (--p-decide) {self.p_decide!r} must lie in (0.5, 1)")
         if not (self.centre_radius > 0 and 0 < self.level < 1):
-            raise InputError("centre_radius must be > 0 [m] and level in (0, 1)")
+            raise InputError("centre_radius (--centre-radius) must be > 0 [m] and level in "
+                             "(0, 1)")
         if self.max_presses is not None and int(self.max_presses) < 1:
-            raise InputError(f"max_presses {self.max_presses!r} must be >= 1")
+            raise InputError(f"max_presses (--budget) {self.max_presses!r} must be >= 1")
 
 
 @dataclass(frozen=True)
@@ -124,25 +125,52 @@ class SearchState:
         bad = ~np.isfinite(vals).all(axis=1) | ~(vals[:, 3] > 0)
         if bad.any():
             j = int(np.flatnonzero(bad)[0])
-            raise InputError(f"presses: row {j} has a non-finite value or an sd <= 0 "
-                             f"({dict(zip(PRESS_COLUMNS, vals[j], strict=True))}); "
-                             "drop presses without a fit")
+            row = ", ".join(f"{c} {v:g}" for c, v in zip(PRESS_COLUMNS, vals[j], strict=True))
+            raise InputError(f"presses: press {j + 1} has a non-finite value or an sd <= 0 "
+                             f"({row}); drop presses without a fit")
         for i, z in enumerate(self.keep_out):
             if len(z) != 3 or not all(math.isfinite(v) for v in z) or not z[2] > 0:
                 raise InputError(f"keep-out zone {i} {z!r} must be x, y, radius [m] with "
                                  "radius > 0")
         if not self.min_spacing >= 0 or not self.candidate_step > 0:
-            raise InputError("min_spacing must be >= 0 and candidate_step > 0 [m]")
+            raise InputError(f"min_spacing (--min-spacing) {self.min_spacing!r} must be >= 0 "
+                             f"and candidate_step {self.candidate_step!r} > 0 [m]")
+        fp = tuple(self.footprint)
+        if (len(fp) != 4 or not all(math.isfinite(float(v)) for v in fp)
+                or not (fp[1] > fp[0] and fp[3] > fp[2])):
+            raise InputError(f"footprint (--footprint) {self.footprint!r} must be x0, x1, y0, y1 "
+                             "[m] with x1 > x0 and y1 > y0")
+        for name, v in (("contact_radius", self.contact_radius),
+                        ("thickness (--thickness)", self.thickness),
+                        ("resolution", self.resolution)):
+            if not (math.isfinite(float(v)) and v > 0):
+                raise InputError(f"{name} {v!r} must be > 0 [m]")
+        if not 0.0 < self.prior_lump < 1.0:
+            raise InputError(f"prior_lump {self.prior_lump!r} must lie in (0, 1)")
+        if not (self.min_excess > 0 and self.max_ratio > 1 + self.min_excess):
+            raise InputError(f"min_excess (--min-excess) {self.min_excess!r} must be > 0 and "
+                             f"max_ratio {self.max_ratio!r} > 1 + min_excess")
+        if self.k_level is not None and not self.k_level > 1:
+            raise InputError(f"k_level {self.k_level!r} must be > 1")
+        if self.press_sd is not None and not self.press_sd > 0:
+            raise InputError(f"press_sd {self.press_sd!r} must be > 0")
+
+    def _grid_key(self) -> tuple:
+        return (tuple(map(float, self.footprint)), float(self.contact_radius),
+                float(self.thickness), float(self.resolution), float(self.min_excess),
+                float(self.max_ratio))
 
     @property
     def hyp(self) -> LumpHypotheses:
-        """The hypothesis grid (built on first use, then kept)."""
-        if not self._hyp:
-            self._hyp.append(hypotheses(
+        """The hypothesis grid, built on first use and kept (with the specimen it was built
+        for: a copy of the state with another footprint, tip or prior builds its own)."""
+        key = self._grid_key()
+        if not self._hyp or self._hyp[0][0] != key:
+            self._hyp[:] = [(key, hypotheses(
                 self.footprint, contact_radius=self.contact_radius, thickness=self.thickness,
                 resolution=self.resolution, min_excess=self.min_excess,
-                max_ratio=self.max_ratio))
-        return self._hyp[0]
+                max_ratio=self.max_ratio))]
+        return self._hyp[0][1]
 
     @property
     def n(self) -> int:
@@ -313,6 +341,8 @@ def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
         return NextPresses(pd.DataFrame(columns=cols), True, decision, reason, info, post)
     fn = CRITERIA[criterion][0]
     sd = state.expected_sd()
+    if rule.max_presses is not None:
+        k = max(1, min(k, int(rule.max_presses) - state.n))
     rows, cur, cur_post, taken = [], state, post, np.empty((0, 2))
     for order in range(1, k + 1):
         qx, qy = state.candidates(taken)

@@ -97,7 +97,7 @@ live loop (--listen PORT --map DIR, DIR from 'palpbayes next DIR --init'): one c
 per press.  The robot sends 'press X Y' [m], then the samples; every line above also comes
 back on the connection; at the stop (or when the robot shuts its sending side) the press's
 E is added to DIR/presses.csv and the answer follows, one JSON line with a "decision" key:
-"event" "next" (the next press: connect again) or "stop" (exit 0 decided, 11 undecided: the
+"event" "next" (the next press: connect again) or "done" (exit 0 decided, 11 undecided: the
 --budget is spent or no candidate is left).  A first line other than 'press X Y' gets
 {{"event": "error", "message": ...}} and exit status 2."""
 

@@ -47,11 +47,15 @@ from .next import EXIT_DECIDED, EXIT_UNDECIDED, answer_json
 from .next import rule_from_args as search_rule_from_args
 
 __all__ = ["live_loop", "parse_press_line", "press_posterior", "error_json", "CLOSE_GRACE",
-           "NO_ESTIMATE"]
+           "NO_ESTIMATE", "PRESS_TIMEOUT"]
 
 #: [s] Longest wait, after the answer, for the robot to close its side of a connection before
 #: it is closed anyway (what the robot sends meanwhile is read and dropped).
 CLOSE_GRACE = 2.0
+
+#: [s] Longest wait for a connection's ``press X Y`` line (a robot that connects and dies
+#: must not block the loop).
+PRESS_TIMEOUT = 30.0
 
 #: The answer's ``"warning"`` for a press without an estimate of E.
 NO_ESTIMATE = ("no estimate of E from this press ({why}): it is not added to the search; "
@@ -236,10 +240,15 @@ def _one_press(conn: SessionConnection, state: SearchState, folder: Path, press:
     try:
         line = ""
         while not line.strip():
-            line = conn.readline()
+            line = conn.readline(timeout=PRESS_TIMEOUT)
             if not line:
                 break
         x, y = parse_press_line(line, source, conn.lines_read)
+    except TimeoutError:
+        err = InputError(f"{source}: no 'press X Y' line within {PRESS_TIMEOUT:g} s of "
+                         f"connecting; {_PRESS_FIX}")
+        _fail(conn, err)
+        raise err from None
     except InputError as exc:
         _fail(conn, exc)
         raise

@@ -191,7 +191,9 @@ def run(args: argparse.Namespace) -> int:
     state = read_state(args.state, thickness=args.thickness, **state_overrides(args))
     ans = next_presses(state, args.k, criterion=args.criterion, rule=rule)
     print(answer_json(ans) if args.json else answer_text(ans), flush=True)
-    if args.plot:
+    if args.plot and state.n == 0:
+        print(f"note: no press yet, so no {args.plot}", file=sys.stderr)
+    elif args.plot:
         from ..plots.active import plot_search
 
         plot_search(state, rule=rule).savefig(args.plot, dpi=150, bbox_inches="tight")

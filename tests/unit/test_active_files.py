@@ -82,6 +82,9 @@ def test_a_bad_press_row_is_named(tmp_path):
                                          "0.02,0.02,abc,0.01\n")
     with pytest.raises(DataFileError, match=r"row 3, column logE_mean: 'abc'"):
         read_state(tmp_path)
+    (tmp_path / PRESSES_FILE).write_text("x_m,y_m,logE_mean,logE_sd\n0.01,0.01,10.8,0\n")
+    with pytest.raises(DataFileError, match=r"row 2, column logE_sd: .* > 0"):
+        read_state(tmp_path)
     (tmp_path / PRESSES_FILE).write_text("x_m,y_m,logE_mean\n0.01,0.01,10.8\n")
     with pytest.raises(DataFileError, match="no column logE_sd"):
         read_state(tmp_path)
@@ -91,8 +94,10 @@ def test_cli_init_then_next_then_decide(tmp_path, capsys):
     d = str(tmp_path / "s")
     assert main(["next", d, *INIT]) == 0
     capsys.readouterr()
-    assert main(["next", d, "--json"]) == EXIT_GO_ON
-    first = json.loads(capsys.readouterr().out)
+    assert main(["next", d, "--json", "--plot", str(tmp_path / "none.png")]) == EXIT_GO_ON
+    out = capsys.readouterr()
+    first = json.loads(out.out)
+    assert "no press yet" in out.err and not (tmp_path / "none.png").exists()
     assert first["event"] == "next" and first["presses"][0]["x_m"] == pytest.approx(0.022)
     _fill(d, 16)
     assert main(["next", d, "--plot", str(tmp_path / "s.png")]) == EXIT_GO_ON
@@ -115,6 +120,10 @@ def test_cli_init_then_next_then_decide(tmp_path, capsys):
     (["--init", "--footprint", "0,1,0", "--thickness", "0.02", "--tip", "paraboloid",
       "--radius", "0.01"], "--footprint"),
     (["--keep-out", "1,2"], "--keep-out"),
+    (["--init", "--footprint", "0,-0.01,0,0.01", "--thickness", "0.02", "--tip", "paraboloid",
+      "--radius", "0.01"], "--footprint"),
+    (["--init", "--footprint", "0,0.04,0,0.04", "--thickness", "0.002", "--tip",
+      "paraboloid", "--radius", "0.01", "--depth", "0.0002"], "too thin"),
 ])
 def test_cli_errors_name_the_option(tmp_path, capsys, args, match):
     d = str(tmp_path / "s")
@@ -122,6 +131,8 @@ def test_cli_errors_name_the_option(tmp_path, capsys, args, match):
         assert main(["next", d, *INIT]) == 0
     assert main(["next", d, *args]) == 2
     assert match in capsys.readouterr().err
+    if "--init" in args:  # nothing half-written
+        assert not (tmp_path / "s").exists()
 
 
 def test_cli_on_a_folder_without_a_state(tmp_path, capsys):

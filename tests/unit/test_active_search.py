@@ -173,6 +173,42 @@ def test_decide_uses_the_thresholds():
     assert decide(post, StopRule(p_decide=0.95, centre_radius=1e-5)) == ("", "")
 
 
+def test_eig_quadrature_holds_when_the_heterogeneity_is_small(monkeypatch):
+    """Narrow predictives (tau 0.3 %) over a wide spread of lump means: the information is
+    the converged quadrature's (4,000 nodes) and never above the entropy it is about."""
+    import palpbayes.active.criteria as crit
+
+    rng = np.random.default_rng(7)
+    x, y = rng.uniform(0, 0.042, 8), rng.uniform(0, 0.042, 8)
+    df = pd.DataFrame({"x_m": x, "y_m": y, "logE_sd": 0.002,
+                       "logE_mean": np.log(5e4) + 0.003 * rng.standard_normal(8)})
+    st = SearchState(df, FOOT, PH.contact_radius, PH.thickness)
+    post = st.posterior()
+    qx, qy = st.candidates()
+    assert 0.05 < post.p_lump < 0.95
+    h = -(post.p_lump * math.log(post.p_lump) + (1 - post.p_lump) * math.log(1 - post.p_lump))
+    got = eig(post, qx, qy, 0.002, target="presence")
+    monkeypatch.setattr(crit, "_Y_NODES", 4000)
+    fine = eig(post, qx, qy, 0.002, target="presence")
+    assert np.abs(got - fine).max() < 1e-3 and got.max() <= h + 1e-12
+    assert np.argmax(got) == np.argmax(fine)
+
+
+def test_a_copy_for_another_specimen_builds_its_own_grid():
+    from dataclasses import replace
+
+    st = _state(*_raster(3))
+    st.posterior()
+    other = replace(st, footprint=(0.0, 0.1, 0.0, 0.1), min_excess=0.2)
+    assert other.hyp.cx.max() == 0.1 and other.hyp.betas[0] == pytest.approx(math.log(1.2))
+    assert st.hyp.cx.max() == 0.042 and st.hyp.betas[0] == pytest.approx(math.log(1.03))
+
+
+def test_a_batch_stops_at_the_budget():
+    ans = next_presses(_state(*_raster(3)), 5, rule=StopRule(max_presses=11))
+    assert len(ans.presses) == 2
+
+
 def test_history_gives_p_lump_after_each_press():
     st = _state(*_raster(4))
     h = history(st)
@@ -203,12 +239,19 @@ def test_bad_states_are_refused():
         SearchState(pd.DataFrame({"x_m": [0.0]}), FOOT, 0.005, 0.02)
     df = pd.DataFrame({"x_m": [0.0, 0.01], "y_m": [0.0, 0.01], "logE_mean": [10.0, np.nan],
                        "logE_sd": [0.01, 0.01]})
-    with pytest.raises(InputError, match="row 1"):
+    with pytest.raises(InputError, match="press 2 has"):
         SearchState(df, FOOT, 0.005, 0.02)
     with pytest.raises(InputError, match="keep-out zone 0"):
         _empty(keep_out=((0.01, 0.01),))
     with pytest.raises(InputError, match="p_decide"):
         StopRule(p_decide=0.4)
+    for kw, match in ((dict(footprint=(0, -0.01, 0, 0.01)), "footprint"),
+                      (dict(footprint=(0, np.nan, 0, 0.01)), "footprint"),
+                      (dict(thickness=0.0), "thickness"), (dict(prior_lump=1.0), "prior_lump"),
+                      (dict(min_excess=0.0), "min_excess"), (dict(k_level=0.9), "k_level")):
+        args = {"footprint": FOOT, "contact_radius": 0.005, "thickness": 0.02, **kw}
+        with pytest.raises(InputError, match=match):
+            SearchState(pd.DataFrame(columns=PRESS_COLUMNS), **args)
     every = _empty(keep_out=((0.021, 0.021, 0.05),))
     with pytest.raises(InputError, match="keep-out zones cover"):
         next_presses(every)
