@@ -85,7 +85,8 @@ def _from_record(rec: dict, presses: pd.DataFrame, path: Path, **overrides) -> S
         raise DataFileError(path, str(exc)) from None
 
 
-def _read_presses(path: Path) -> pd.DataFrame:
+def _read_table(path: Path) -> pd.DataFrame:
+    """A CSV with the press columns (:data:`PRESS_COLUMNS`), or an error naming the file."""
     try:
         df = pd.read_csv(path)
     except (OSError, ValueError, pd.errors.ParserError) as exc:
@@ -94,6 +95,11 @@ def _read_presses(path: Path) -> pd.DataFrame:
     if missing:
         raise DataFileError(path, f"no column {', '.join(missing)}",
                             "a press needs " + ", ".join(PRESS_COLUMNS))
+    return df
+
+
+def _read_presses(path: Path) -> pd.DataFrame:
+    df = _read_table(path)
     for c in PRESS_COLUMNS:
         v = pd.to_numeric(df[c], errors="coerce")
         vals = v.to_numpy(dtype=float)
@@ -155,14 +161,7 @@ def _from_map(d: Path, **overrides) -> SearchState:
 
 
 def _read_points(path: Path) -> pd.DataFrame:
-    try:
-        df = pd.read_csv(path)
-    except (OSError, ValueError, pd.errors.ParserError) as exc:
-        raise DataFileError(path, f"not readable ({exc})") from None
-    missing = [c for c in PRESS_COLUMNS if c not in df.columns]
-    if missing:
-        raise DataFileError(path, f"no column {', '.join(missing)}")
-    v = df[PRESS_COLUMNS].apply(pd.to_numeric, errors="coerce")
+    v = _read_table(path)[PRESS_COLUMNS].apply(pd.to_numeric, errors="coerce")
     ok = np.isfinite(v.to_numpy(dtype=float)).all(axis=1) & (v["logE_sd"] > 0).to_numpy()
     return v[ok].reset_index(drop=True)  # points without a fit are not presses
 
