@@ -1,0 +1,373 @@
+"""Active search for a lump against a raster and random presses, in a closed loop.
+
+Run from the repository root (~25 min on 2 cores with the defaults)::
+
+    python benchmarks/bench_active.py                      # 50 phantoms, eig
+    python benchmarks/bench_active.py --criteria eig,lse,ucb --phantoms 20
+    python benchmarks/bench_active.py --phantoms 4 --budget 40   # a quick look
+
+Phantoms: the map phantom of ``palpbayes simulate --map`` (:class:`palpbayes.sim.phantom.
+MapPhantom`: a 20 mm block of 50 kPa, heterogeneity 3 %, the paper's paraboloid pressed 2 mm,
+a 42 × 42 mm footprint as the default 15 × 15 map at 3 mm).  Phantom i has a lump when i is
+even: 10 mm across (radius 5 mm), its centre 5-10 mm deep (uniform), modulus ratio 10, its
+centre uniform over the footprint less 5 mm at each edge.  Every press is simulated as a
+whole trace (:func:`~palpbayes.sim.phantom.press_trace`, the code ``simulate --map`` uses) and
+fitted by the exact engine as ``palpbayes map`` fits a point (:func:`palpbayes.maps.pertrace.
+fit_point`); its posterior of log E goes into the search state.
+
+Strategies, all judged by the same posterior and stopping rule (P(lump) >= 0.95 with the
+centre's 90 % radius <= 2 mm, or P(lump) <= 0.05):
+
+* ``active-<criterion>``: :func:`palpbayes.active.next_presses` after every press;
+* ``random``: presses uniform over the footprint, the rule checked after every 5th;
+* ``raster``: an m × m raster over the footprint, fixed in advance, for m = 3, 4, ...: the
+  presses it needs are m² for the first m whose raster decides.
+
+Prints per strategy: phantoms decided within the budget, presses to decide (median, mean;
+undecided count as the budget), wrong decisions, the centre within 2 mm of the truth on lump
+phantoms called "lump", presses until the apparent size (FWHM) is within 20 % of the truth,
+and the wall time per decision (median, p90, and at the largest state).  Writes the
+per-phantom table and the press sequences to ``--out`` (default reports/active).
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures as cf
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+FOOTPRINT = (0.0, 0.042, 0.0, 0.042)
+#: Random presses are judged by the rule after every 5th press (a posterior each: 0.1-0.2 s).
+RANDOM_EVERY = 5
+
+
+def make_phantom(i: int, seed: int):
+    from palpbayes.sim.inclusion import Inclusion
+    from palpbayes.sim.phantom import MapPhantom
+
+    rng = np.random.default_rng([seed, i])
+    inc = None
+    if i % 2 == 0:
+        x, y = rng.uniform(5e-3, 37e-3, 2)
+        inc = Inclusion(x=float(x), y=float(y), depth=float(rng.uniform(5e-3, 10e-3)),
+                        radius=5e-3, ratio=10.0)
+    return MapPhantom(inclusion=inc, seed=seed * 1000 + i)
+
+
+def truth_of(ph) -> dict:
+    from palpbayes.sim.map import lump_summary
+
+    inc = ph.inclusion
+    if inc is None:
+        return {"has_lump": False, "x": math.nan, "y": math.nan, "size": math.nan,
+                "A": 1.0, "depth": math.nan}
+    s = lump_summary(inc, contact_radius=ph.contact_radius, thickness=ph.thickness)
+    return {"has_lump": True, "x": inc.x, "y": inc.y, "size": s["apparent_fwhm_diameter_m"],
+            "A": s["peak_apparent_ratio"], "depth": inc.depth}
+
+
+class Presser:
+    """Simulate and fit one press (a real trace through the exact engine)."""
+
+    def __init__(self, ph):
+        from palpbayes.campaign.fitjob import FitOptions
+        from palpbayes.maps.pertrace import PointOptions
+
+        self.ph = ph
+        self.opts = PointOptions(fit=FitOptions(layer="off", nu=ph.nu), draws=1000)
+        self.count = 0
+
+    def __call__(self, x: float, y: float, key: str) -> tuple[float, float]:
+        from palpbayes.maps.pertrace import fit_point
+
+        trace = self.ph.press(float(x), float(y), key)
+        row = pd.Series({"trace_id": key, "x_m": x, "y_m": y})
+        rec = fit_point(row, self.opts, self.count, trace=trace)
+        self.count += 1
+        if rec["error"] or not np.isfinite(rec["logE_mean"]):
+            raise RuntimeError(f"press {key} at ({x}, {y}) did not fit: {rec['error']}")
+        return float(rec["logE_mean"]), float(rec["logE_sd"])
+
+
+def _state(ph):
+    from palpbayes.active import SearchState
+    from palpbayes.active.search import PRESS_COLUMNS
+
+    return SearchState(pd.DataFrame(columns=PRESS_COLUMNS), FOOTPRINT, ph.contact_radius,
+                       ph.thickness)
+
+
+def _score(decision: str, info: dict, truth: dict, n: int) -> dict:
+    wrong = bool(decision) and ((decision == "lump") != truth["has_lump"])
+    centre = math.nan
+    if truth["has_lump"] and decision == "lump":
+        centre = math.hypot(info["x_m"] - truth["x"], info["y_m"] - truth["y"])
+    return {"presses": n, "decision": decision, "wrong": wrong, "centre_err_m": centre}
+
+
+class Milestones:
+    """The first press count at which the lump is detected (P(lump) >= 0.95) with its centre
+    within 2 mm of the truth, and with its apparent size (FWHM) within 20 %."""
+
+    def __init__(self, truth: dict):
+        self.truth, self.centre, self.size = truth, None, None
+
+    def see(self, n: int, p_lump: float, centre: tuple[float, float], size: float) -> None:
+        t = self.truth
+        if not t["has_lump"] or p_lump < 0.95:
+            return
+        if self.centre is None and math.hypot(centre[0] - t["x"], centre[1] - t["y"]) <= 2e-3:
+            self.centre = n
+        if self.size is None and abs(size / t["size"] - 1.0) <= 0.2:
+            self.size = n
+
+    def row(self) -> dict:
+        return {"centre_presses": self.centre, "size_presses": self.size}
+
+
+def run_active(ph, truth, criterion: str, budget: int) -> tuple[dict, list[dict]]:
+    from palpbayes.active import StopRule, next_presses
+
+    rule = StopRule(max_presses=budget)
+    press, state, seq, times, ms = Presser(ph), _state(ph), [], [], Milestones(truth)
+    while True:
+        t0 = time.perf_counter()
+        r = next_presses(state, criterion=criterion, rule=rule)
+        times.append((state.n, time.perf_counter() - t0))
+        if state.n:
+            seq.append({"n": state.n, **r.summary})
+            i = r.summary
+            ms.see(state.n, i["p_lump"], (i["x_m"], i["y_m"]), i["size_m"])
+        if r.stop:
+            break
+        x, y = float(r.presses.x_m.iloc[0]), float(r.presses.y_m.iloc[0])
+        m, s = press(x, y, f"{criterion}-{state.n}")
+        state = state.with_press(x, y, m, s)
+    xy = state.presses[["x_m", "y_m"]].to_numpy(dtype=float)
+    for row in seq:  # the summary after n presses, and where the n-th one was
+        row.update(press_x_m=xy[row["n"] - 1, 0], press_y_m=xy[row["n"] - 1, 1])
+    out = _score(r.decision, r.summary, truth, state.n)
+    out.update(**ms.row(), times=times)
+    return out, seq, state
+
+
+def run_random(ph, truth, budget: int, seed: int) -> dict:
+    from palpbayes.active import StopRule
+    from palpbayes.active.search import decide, summary
+
+    rule = StopRule(max_presses=budget)
+    rng = np.random.default_rng([seed, 7])
+    press, state, ms = Presser(ph), _state(ph), Milestones(truth)
+    x0, x1, y0, y1 = FOOTPRINT
+    while True:
+        x, y = rng.uniform(x0, x1), rng.uniform(y0, y1)
+        m, s = press(x, y, f"random-{state.n}")
+        state = state.with_press(x, y, m, s)
+        if state.n % RANDOM_EVERY and state.n < budget:
+            continue
+        post = state.posterior()
+        decision, reason = decide(post, rule)
+        ms.see(state.n, post.p_lump, post.centre, post.size)
+        if reason:
+            break
+    out = _score(decision, summary(state, post, rule), truth, state.n)
+    out.update(**ms.row())
+    return out
+
+
+def run_raster(ph, truth, budget: int) -> dict:
+    from palpbayes.active import StopRule
+    from palpbayes.active.search import decide, summary
+
+    rule = StopRule()
+    x0, x1, y0, y1 = FOOTPRINT
+    ms, last = Milestones(truth), None
+    for m in range(3, int(math.isqrt(budget)) + 1):
+        press, state = Presser(ph), _state(ph)
+        g = (np.arange(m) + 0.5) / m
+        for j, (gx, gy) in enumerate((a, b) for b in g for a in g):
+            x, y = x0 + gx * (x1 - x0), y0 + gy * (y1 - y0)
+            mm, s = press(x, y, f"raster{m}-{j}")
+            state = state.with_press(x, y, mm, s)
+        post = state.posterior()
+        decision, reason = decide(post, rule)
+        ms.see(m * m, post.p_lump, post.centre, post.size)
+        last = (decision, summary(state, post, rule), m * m)
+        if reason:
+            break
+    out = _score(last[0], last[1], truth, last[2])
+    out.update(**ms.row())
+    return out
+
+
+def run_phantom(job: dict) -> dict:
+    import warnings
+
+    warnings.simplefilter("ignore")
+    i, seed, budget = job["i"], job["seed"], job["budget"]
+    ph = make_phantom(i, seed)
+    truth = truth_of(ph)
+    rows, seqs = [], {}
+    for crit in job["criteria"]:
+        t0 = time.perf_counter()
+        res, seq, _ = run_active(ph, truth, crit, budget)
+        rows.append({"strategy": f"active-{crit}", **res, "wall_s": time.perf_counter() - t0})
+        seqs[crit] = seq
+    if job["baselines"]:
+        t0 = time.perf_counter()
+        rows.append({"strategy": "random", **run_random(ph, truth, budget, seed * 1000 + i),
+                     "wall_s": time.perf_counter() - t0})
+        t0 = time.perf_counter()
+        rows.append({"strategy": "raster", **run_raster(ph, truth, budget),
+                     "wall_s": time.perf_counter() - t0})
+    for r in rows:
+        r.update(phantom=i, has_lump=truth["has_lump"], A_true=truth["A"],
+                 depth_true_m=truth["depth"], size_true_m=truth["size"])
+    return {"rows": rows, "seqs": seqs, "truth": truth}
+
+
+def report(table: pd.DataFrame, budget: int) -> pd.DataFrame:
+    out = []
+    for name, g in table.groupby("strategy", sort=False):
+        decided = g["decision"].astype(bool)
+        n = np.where(decided, g["presses"], budget)
+        lump = g[g["has_lump"] & (g["decision"] == "lump")]
+        lumps = g[g["has_lump"]]
+        out.append({
+            "strategy": name, "phantoms": len(g), "decided": int(decided.sum()),
+            "presses_median": float(np.median(n)), "presses_mean": float(np.mean(n)),
+            "presses_lump_mean": float(np.mean(n[g["has_lump"].to_numpy()])),
+            "presses_none_mean": float(np.mean(n[~g["has_lump"].to_numpy()])),
+            "wrong": int(g["wrong"].sum()),
+            "wrong_rate": float(g["wrong"].sum() / max(1, decided.sum())),
+            "centre_2mm": f"{int((lump['centre_err_m'] <= 2e-3).sum())}/"
+                          f"{int(g['has_lump'].sum())}",
+            **{f"{what}_{stat}": v for what in ("centre", "size")
+               for stat, v in _milestone(lumps[f"{what}_presses"], budget).items()},
+        })
+    return pd.DataFrame(out)
+
+
+def _milestone(v: pd.Series, budget: int) -> dict:
+    """Median presses to a milestone (not reached: the budget) and how many reached it."""
+    v = v.astype(float)
+    return {"median": float(np.median(np.where(v.notna(), v, budget))) if len(v) else math.nan,
+            "reached": int(v.notna().sum())}
+
+
+def time_large_states(n: int, states: int, seed: int) -> np.ndarray:
+    """Wall time [s] of next_presses (eig, k = 1) on ``states`` states of ``n`` random presses
+    (simulated and fitted on lump phantoms, undecided so that the candidates are scored)."""
+    from palpbayes.active import StopRule, next_presses
+
+    out = []
+    for i in range(states):
+        ph = make_phantom(2 * i, seed + 99)
+        press, state = Presser(ph), _state(ph)
+        rng = np.random.default_rng([seed, 99, i])
+        x0, x1, y0, y1 = FOOTPRINT
+        for j in range(n):
+            x, y = rng.uniform(x0, x1), rng.uniform(y0, y1)
+            state = state.with_press(x, y, *press(x, y, f"time-{j}"))
+        rule = StopRule(centre_radius=1e-6)  # never placed: always score the candidates
+        next_presses(state, rule=rule)  # the grid is built once per specimen: not timed
+        t0 = time.perf_counter()
+        next_presses(state, rule=rule)
+        out.append(time.perf_counter() - t0)
+    return np.array(out)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--phantoms", type=int, default=50)
+    ap.add_argument("--criteria", default="eig")
+    ap.add_argument("--no-baselines", action="store_true")
+    ap.add_argument("--budget", type=int, default=225)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", default="reports/active")
+    ap.add_argument("--figure", type=int, default=0, metavar="I",
+                    help="draw the searches of phantoms I (a lump) and I + 1 (none); -1: none")
+    ap.add_argument("--time-states", type=int, default=5,
+                    help="states of 200 presses to time a decision on (0: skip)")
+    args = ap.parse_args(argv)
+    criteria = [c for c in args.criteria.split(",") if c]
+    jobs = [{"i": i, "seed": args.seed, "budget": args.budget, "criteria": criteria,
+             "baselines": not args.no_baselines} for i in range(args.phantoms)]
+    t0 = time.perf_counter()
+    results = []
+    with cf.ProcessPoolExecutor(args.workers) as pool:
+        for k, res in enumerate(pool.map(run_phantom, jobs), 1):
+            results.append(res)
+            print(f"  phantom {k}/{len(jobs)}: " + "; ".join(
+                f"{r['strategy']} {r['presses']} {r['decision'] or '-'}"
+                + (" WRONG" if r["wrong"] else "") for r in res["rows"]), flush=True)
+    rows = [r for res in results for r in res["rows"]]
+    times = [t for r in rows for t in r.pop("times", [])]
+    table = pd.DataFrame(rows)
+    pd.set_option("display.width", 200)
+    print(f"\n{args.phantoms} phantoms, budget {args.budget}, "
+          f"{time.perf_counter() - t0:.0f} s on {args.workers} workers")
+    summ = report(table, args.budget)
+    print(summ.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    base = summ.set_index("strategy")
+    if "raster" in base.index:
+        for name in base.index:
+            if name.startswith("active"):
+                print(f"raster / {name}, mean presses to decide: "
+                      f"{base.loc['raster', 'presses_mean'] / base.loc[name, 'presses_mean']:.2f}")
+    if times:
+        t = np.array([s for _, s in times])
+        n = np.array([k for k, _ in times])
+        big = t[n >= np.percentile(n, 90)]
+        print(f"decision time: median {1e3 * np.median(t):.0f} ms, p90 "
+              f"{1e3 * np.percentile(t, 90):.0f} ms, at the largest states (>= "
+              f"{int(np.percentile(n, 90))} presses) median {1e3 * np.median(big):.0f} ms "
+              f"(on {args.workers} busy workers)")
+    if args.figure >= 0:
+        from palpbayes.active import StopRule
+        from palpbayes.plots.active import plot_search
+
+        for i in (args.figure, args.figure + 1):
+            ph = make_phantom(i, args.seed)
+            truth = truth_of(ph)
+            _, _, state = run_active(ph, truth, criteria[0], args.budget)
+            where = (truth["x"], truth["y"]) if truth["has_lump"] else None
+            what = (f"lump {2e3 * ph.inclusion.radius:g} mm across, centre "
+                    f"{1e3 * ph.inclusion.depth:.1f} mm deep" if truth["has_lump"] else
+                    "no lump")
+            fig = plot_search(state, rule=StopRule(max_presses=args.budget), truth=where,
+                              title=f"phantom {i} ({what}): {state.n} presses, "
+                                    f"{criteria[0]}")
+            Path(args.out).mkdir(parents=True, exist_ok=True)
+            fig.savefig(Path(args.out) / f"search-phantom{i}.png", dpi=130,
+                        bbox_inches="tight")
+            print(f"wrote {args.out}/search-phantom{i}.png")
+    if args.time_states:
+        t = time_large_states(200, args.time_states, args.seed)
+        print(f"decision time at 200 presses, idle machine, {len(t)} states: median "
+              f"{1e3 * np.median(t):.0f} ms, max {1e3 * t.max():.0f} ms (target <= 500 ms)")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    table.to_csv(out / "bench_active.csv", index=False)
+    summ.to_csv(out / "bench_active_summary.csv", index=False)
+    seqs = {f"{res['rows'][0]['phantom']}-{c}": s for res in results
+            for c, s in res["seqs"].items()}
+    (out / "sequences.json").write_text(json.dumps(seqs, default=float))
+    print(f"wrote {out}/bench_active.csv, bench_active_summary.csv, sequences.json")
+    return 0
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    sys.exit(main())
