@@ -16,7 +16,7 @@ y_q ~ Normal(mu_0, sigma_0²).
   G ∈ {no lump, lump centred at c} (``target="joint"``) is dominated by the centre's
   entropy (about 7.5 nat on a 1 mm grid against at most 0.69 for presence) and chases the
   heterogeneity's bumps on a block without a lump: on the first 8 bench phantoms it left
-  3 undecided at 225 presses where a raster decided (docs/reference.md, "Active search").
+  3 undecided at 225 presses, the staged target 2 (docs/reference.md, "Active search").
 * ``"lse"`` — level-set estimation of {E > k × background} (Gotovos, Casati, Hitz & Krause
   2013, IJCAI; the probabilistic "straddle" of Bryan et al. 2005, NIPS): the candidate
   whose class is most in doubt, min(P_q, 1 − P_q) with P_q = P(E_app(q) > k·E_b); the sum
