@@ -36,11 +36,11 @@ import threading
 from collections.abc import Callable, Iterable
 from itertools import chain, repeat
 from pathlib import Path
-from statistics import NormalDist
 
 from ..active import NextPresses, SearchState, next_presses
 from ..active.files import SEARCH_FILE, append_press, read_state
 from ..errors import InputError
+from ..intervals import normal_z
 from ..online import OnlineState
 from ..online.tcp import DEFAULT_HOST, SessionConnection, accept_session, listen, parse_address
 from .next import EXIT_DECIDED, EXIT_UNDECIDED, answer_json
@@ -117,7 +117,7 @@ def press_posterior(state: OnlineState | None) -> tuple[float, float] | None:
     med, lo, hi = float(E.median), float(E.lo), float(E.hi)
     if not all(math.isfinite(v) and v > 0 for v in (med, lo, hi)) or not 0 < E.level < 1:
         return None
-    sd = (math.log(hi) - math.log(lo)) / (2.0 * NormalDist().inv_cdf(0.5 + E.level / 2))
+    sd = (math.log(hi) - math.log(lo)) / (2.0 * normal_z(E.level))
     if not (math.isfinite(sd) and sd > 0):
         return None
     return math.log(med), sd

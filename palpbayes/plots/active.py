@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
+from matplotlib.ticker import NullFormatter, ScalarFormatter
 
 from .style import MM
 
@@ -76,7 +77,10 @@ def plot_search(state, *, rule=None, hist: pd.DataFrame | None = None,
     ax.set_ylim(y0 * MM, y1 * MM)
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
-    ax.set_title(title or f"{state.n} presses, P(lump) = {post.p_lump:.3f}")
+    head = f"{state.n} presses, P(lump) = {post.p_lump:.3f}"
+    if title:  # a long title spans the figure, above both panels and the colour bars
+        fig.suptitle(title)
+    ax.set_title(head)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="upper right", fontsize=8, framealpha=0.8)
 
@@ -93,6 +97,8 @@ def plot_search(state, *, rule=None, hist: pd.DataFrame | None = None,
     r2.set_ylabel(f"centre's {100 * rule.level:g} % radius [mm] (if a lump)",
                   color="tab:orange")
     r2.set_yscale("log")
+    r2.yaxis.set_major_formatter(ScalarFormatter())
+    r2.yaxis.set_minor_formatter(NullFormatter())
     bx.legend(loc="center right", fontsize=8)
     bx.set_title("P(lump) after each press")
     return fig
