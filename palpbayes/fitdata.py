@@ -123,6 +123,20 @@ class FitData:
         step = max(1, max_elements // max(self.n_points, 1))
         return [slice(i, min(i + step, n_rows)) for i in range(0, n_rows, step)]
 
+    def rough_modulus(self) -> float:
+        """[Pa] E from the deepest point alone: the force above the baseline at the deepest
+        fitted sample over the half-space law's shape at the depth below the contact onset,
+        times 1 − nu² (NaN when either is not positive).  Within a factor of about 2 of the
+        fit: enough to weigh a force's unit (:mod:`palpbayes.forcescale`), before any fit."""
+        level = self.baseline.level - self.tare if self.baseline is not None else 0.0
+        i = int(np.argmin(self.z))
+        depth = self.z_contact - float(self.z[i])
+        peak = float(self.force[i]) - level
+        if not (depth > 0 and peak > 0):
+            return float("nan")
+        shape = float(self.model.half_space().shape(np.array([depth]))[0])
+        return peak / shape * (1.0 - self.model.nu ** 2) if shape > 0 else float("nan")
+
     def measured_force_at(self, z_surf: float | np.ndarray) -> np.ndarray:
         """Measured force [N] when the tip first passed ``z_surf`` on the way down.
 

@@ -132,6 +132,7 @@ def flag_columns(text: object) -> dict[str, str]:
 
 #: Codes of a viscoelastic fit's flags (rheology.csv): (words anywhere in the flag, code).
 RHEOLOGY_CODES = (
+    ("force scale", "force_scale"),
     ("alpha piles up at 0", "alpha_at_zero"), ("alpha piles up", "alpha_at_bound"),
     ("below one step", "tau_fast"), ("beyond the recorded", "tau_slow"),
     ("phi piles up", "phi_at_bound"), ("surface posterior reaches", "surface_at_bound"),

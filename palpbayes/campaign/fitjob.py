@@ -28,12 +28,12 @@ from ..errors import (
 from ..fitdata import FitData, prepare
 from ..fitdata import tared as tared_data
 from ..flagcodes import flag_columns, split_flags
+from ..forcescale import force_scale_flag as scale_flag
 from ..lsq import LSQResult, fit_lsq_data
-from ..noise import noise_scale_mismatch
 from ..refit import layer_alternatives
 from ..trace import IndentationTrace
 from ..twin import twin_depth_limit, twin_depth_limit_reason
-from ..units import format_force, format_pressure
+from ..units import format_pressure
 from .layout import posterior_file
 from .options import LAYER_MODES, METHODS, FitOptions
 from .tracemodel import nu_source, prepare_twin, trace_model, trace_seed, trace_specimen
@@ -207,29 +207,25 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
 
 
 def force_scale_flag(data: FitData, options: FitOptions) -> str | None:
-    """The ``force scale`` warning of a trace whose force noise before contact lies more than
-    :data:`palpbayes.noise.NOISE_SCALE_FACTOR` times from the declared sensor noise, else None.
+    """The ``force scale`` warning of a trace whose force reads as if it were in another unit,
+    else None.
 
-    The declared noise is ``--noise-pp`` (``options.priors.noise_pp``, the sensor's
-    peak-to-peak noise).  ``--f-unc`` is not compared: it is a contact threshold, which a user
-    may set far above the noise on purpose.  A force in another
-    unit than the one given (N read as mN) scales the data, their noise and E by the same
-    factor: the fit itself cannot see it, and the noise the user declared for the sensor is the
-    one number in the other unit.  Without a declared noise there is nothing to compare, and
-    None is returned.
+    A force in another unit than the one given (N read as mN) scales the data, their noise
+    and E by the same factor: the fit itself cannot see it.  Two references can:
+
+    * the declared sensor noise ``--noise-pp`` (``options.priors.noise_pp``): the noise before
+      contact more than :data:`palpbayes.noise.NOISE_SCALE_FACTOR` times from it;
+    * without one, the tip (:func:`palpbayes.forcescale.force_scale_doubt`): the noise before
+      contact and E (:meth:`~palpbayes.fitdata.FitData.rough_modulus`) far more typical of
+      an instrument of the tip's size with the force multiplied by a power of 1,000.
+
+    ``--f-unc`` is not compared: it is a contact threshold, which a user may set far above the
+    noise on purpose.
     """
-    declared, option = options.priors.noise_pp, "--noise-pp"
     base = data.baseline
-    if declared is None or base is None or not base.reliable:
-        return None
-    ratio = noise_scale_mismatch(base.noise_pp, declared)
-    if ratio is None:
-        return None
-    how = f"{1 / ratio:,.0f} times below" if ratio < 1 else f"{ratio:,.0f} times above"
-    return (f"force scale: the noise before contact is {how} the declared {option}, check "
-            f"--force-unit (the sensor noise: {format_force(base.noise_pp)} peak-to-peak, 6 sd "
-            f"of the baseline, against {format_force(declared)}; a force in N read as mN makes "
-            "the force, and E, 1,000 times too small)")
+    noise = base.noise_pp if base is not None and base.reliable else None
+    return scale_flag(data.model.tip, data.z_contact - data.z_min, data.rough_modulus(), noise,
+                      options.priors.noise_pp)
 
 
 def tried_baseline_hint(row: dict, data: FitData, options: FitOptions, seed: int,

@@ -31,7 +31,7 @@ import pandas as pd
 
 from ..bayes.exact import exact_posterior, sampled_coordinates
 from ..bayes.flags import bound_flags
-from ..campaign.fitjob import FitOptions, check_fittable
+from ..campaign.fitjob import FitOptions, check_fittable, force_scale_flag
 from ..campaign.run import progress_bar
 from ..cluster import close_client, dask_client
 from ..errors import FitError, InputError, PalpbayesError
@@ -140,7 +140,9 @@ def fit_point(row: pd.Series, options: PointOptions, index: int = 0,
     E = data.model.to_E(d["E_star"])
     logE = np.log(E)
     lo, hi = central(E, LEVEL)
-    flags = bound_flags(sampled_coordinates(d, list(prior.bounds)), prior)
+    scale = force_scale_flag(data, options.fit)
+    flags = ([] if scale is None else [scale]) + bound_flags(
+        sampled_coordinates(d, list(prior.bounds)), prior)
     if not post.complete:
         flags.append("surface grid stopped at its node cap: the posterior may be incomplete")
     try:

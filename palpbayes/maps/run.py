@@ -231,6 +231,13 @@ def map_from_points(points: pd.DataFrame, *, tip: Tip, thickness: float | None,
     if holes:
         flags.append(f"info: {holes} of {len(points)} grid nodes have no curve in the file "
                      "(holes without data; see points.csv, column error)")
+    codes = good.get("flag_codes", pd.Series("", index=good.index)).fillna("").astype(str)
+    scaled = codes.str.split(";").map(lambda c: "force_scale" in c)
+    if scaled.any():  # the first flag: every E of the map is off by the factor it names
+        head = str(good.loc[scaled, "notes"].iloc[0])
+        head = head[:head.find(" (")] if " (" in head else head
+        flags.insert(0, f"{head} (on {int(scaled.sum())} of {len(good)} fitted points; see "
+                        "points.csv, column notes)")
     notes = good.get("notes", good.get("flags"))  # "flags": a points.csv written before
     n_flag = 0 if notes is None else int(notes.map(lambda v: isinstance(v, str) and v != "")
                                          .sum())

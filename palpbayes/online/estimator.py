@@ -69,6 +69,7 @@ from ..checks import CheckResult, run_checks
 from ..contact import youngs_factor
 from ..errors import InputError
 from ..fitdata import ModelSpec
+from ..forcescale import force_scale_flag
 from ..intervals import LEVEL, central, hull
 from ..noise import sigma_from_pp
 
@@ -570,6 +571,12 @@ class OnlineEstimator:
         relax = self._relaxation(zs.median)
         if relax:
             flags.append(relax)
+        # the force's unit, weighed once E is known to within a factor of about 1.5
+        scale = force_scale_flag(self.model.tip, zs.median - float(self._z[:n].min()),
+                                 E.median, self._base.noise_pp if self._base.reliable else None,
+                                 self.noise_pp) if E.rel_half_width < 0.5 else None
+        if scale:
+            flags.insert(0, scale)
         if self._phi.size > 1:
             w_phi = np.exp(post.log_mass - post.log_mass.max()).sum(axis=0)
             if w_phi[[0, -1]].max() > 0.5 * w_phi.sum():

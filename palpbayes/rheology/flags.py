@@ -8,12 +8,14 @@ Two lists, each one line per finding:
   the drag is not fitted, a baseline that tilts with the height when it is constant, adhesion
   at pull-off (its hint names ``adhesion="cut"``; after that cut, what is left is checked).
   These fail the model check (``RheologyFit.model_ok``);
-* :func:`fit_flags` -- those, and what the posterior shows: alpha piling up at a bound of its
-  prior, tau faster than one step or slower than the record, phi at its bound (a drift the
-  noise soaks up), a surface at its prior bound, a grid that did not settle, other basins, a
-  contact that shrinks during the hold (:data:`SHRINK_FLAG`), a specimen thinner than
-  1/:data:`THIN_FLAG` of the depth, a poor importance sample (:data:`MIN_ESS`), an emcee chain
-  that did not converge, and the failed posterior-predictive check.
+* :func:`fit_flags` -- a force that reads as if it were in another unit
+  (:func:`force_scale_flags`, :mod:`palpbayes.forcescale`), those, and what the posterior
+  shows: alpha piling up at a bound of its prior, tau faster than one step or slower than
+  the record, phi at its bound (a drift the noise soaks up), a surface at its prior bound, a
+  grid that did not settle, other basins, a contact that shrinks during the hold
+  (:data:`SHRINK_FLAG`), a specimen thinner than 1/:data:`THIN_FLAG` of the depth, a poor
+  importance sample (:data:`MIN_ESS`), an emcee chain that did not converge, and the failed
+  posterior-predictive check.
 """
 
 from __future__ import annotations
@@ -23,13 +25,15 @@ from typing import Any, Protocol
 import numpy as np
 
 from ..checks.core import CheckResult
+from ..forcescale import force_scale_flag
+from ..noise import pp_from_sigma
 from ..units import format_force
 from .cycle import CycleData
 from .offcontact import N_SE, adhesion_dip, baseline_tilt, drag_gap
 from .posterior import ALPHA_MAX, PHI_BOUNDS, GridPosterior
 
-__all__ = ["offcontact_flags", "fit_flags", "SHRINK_FLAG", "THIN_FLAG", "MIN_ESS", "DRAG_N_SE",
-           "TILT_HINT", "ADHESION_HINT"]
+__all__ = ["offcontact_flags", "fit_flags", "force_scale_flags", "SHRINK_FLAG", "THIN_FLAG",
+           "MIN_ESS", "DRAG_N_SE", "TILT_HINT", "ADHESION_HINT"]
 
 
 class RheologyFit(Protocol):
@@ -104,10 +108,25 @@ def offcontact_flags(fit: RheologyFit, residual: np.ndarray) -> list[str]:
     return out
 
 
+def force_scale_flags(fit: RheologyFit) -> list[str]:
+    """The ``force scale`` flag of a fit whose force reads as if it were in another unit
+    (:func:`palpbayes.forcescale.force_scale_doubt`: the tip's size, the noise of the samples
+    before contact and the first modulus, E0 or E_inf, at its median), or none."""
+    data, d = fit.data, fit.draws
+    name = next(k for k in ("E0", "E_inf", "E") if k in d)
+    nu = getattr(fit, "nu", None)
+    modulus = float(np.median(d[name])) * (1.0 - (nu or 0.0) ** 2)
+    noise = pp_from_sigma(data.sigma_center * np.sqrt(data.block))
+    depth = float(np.median(d["z_surf"]) - data.z.min())
+    flag = force_scale_flag(data.trace.tip, depth, modulus, noise)
+    return [] if flag is None else [flag]
+
+
 def fit_flags(fit: RheologyFit) -> list[str]:
-    """Every flag of ``fit`` (module docstring): its :attr:`offcontact` ones first."""
+    """Every flag of ``fit`` (module docstring): a doubted force unit first, then its
+    :attr:`offcontact` ones."""
     d, data, grid = fit.draws, fit.data, fit.grid
-    out = list(fit.offcontact)
+    out = force_scale_flags(fit) + list(fit.offcontact)
     if fit.rheology == "power-law":
         a = d["alpha"]
         if np.mean(a < 0.01) > 0.05:
