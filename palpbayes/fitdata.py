@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .baseline import MIN_BASELINE_POINTS, Baseline, estimate_baseline
-from .contact import Tip, get_law
+from .contact import Tip, get_law, youngs_factor
 from .errors import FitError, InputError, NoContactError
 from .modelspec import BONDINGS, ModelSpec
 from .noise import PAPER_NOISE_PP
@@ -135,7 +135,7 @@ class FitData:
         if not (depth > 0 and peak > 0):
             return float("nan")
         shape = float(self.model.half_space().shape(np.array([depth]))[0])
-        return peak / shape * (1.0 - self.model.nu ** 2) if shape > 0 else float("nan")
+        return peak / shape * youngs_factor(self.model.nu) if shape > 0 else float("nan")
 
     def measured_force_at(self, z_surf: float | np.ndarray) -> np.ndarray:
         """Measured force [N] when the tip first passed ``z_surf`` on the way down.

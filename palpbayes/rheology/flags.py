@@ -25,6 +25,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ..checks.core import CheckResult
+from ..contact import youngs_factor
 from ..forcescale import force_scale_flag
 from ..noise import pp_from_sigma
 from ..units import format_force
@@ -115,7 +116,7 @@ def force_scale_flags(fit: RheologyFit) -> list[str]:
     data, d = fit.data, fit.draws
     name = next(k for k in ("E0", "E_inf", "E") if k in d)
     nu = getattr(fit, "nu", None)
-    modulus = float(np.median(d[name])) * (1.0 - (nu or 0.0) ** 2)
+    modulus = float(np.median(d[name])) * youngs_factor(nu or 0.0)
     noise = pp_from_sigma(data.sigma_center * np.sqrt(data.block))
     depth = float(np.median(d["z_surf"]) - data.z.min())
     flag = force_scale_flag(data.trace.tip, depth, modulus, noise)
