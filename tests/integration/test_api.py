@@ -231,3 +231,22 @@ def test_load_fit_names_what_is_wrong(saved, tmp_path):
         pb.load_fit(tmp_path / "trace.nc")
     assert pb.load_fit(two, "trace").E == pb.load_fit(api).E
 
+
+def test_plot_draws_every_residual_and_least_squares_only_when_asked(tmp_path):
+    """An untared sensor (0.2 N before contact): the least squares' residuals reach +202 mN
+    and -55 mN; the panel showed -51..32 mN.  With method='bayes' the least-squares curve was
+    drawn all the same."""
+    tr = pb.simulate_trace(120e3, pb.Tip("sphere", radius=0.01), nu=0.45, rng=6,
+                           depth=2e-3, force_offset=0.2, trace_id="offset")
+    for method in ("both", "bayes"):
+        fig = pb.fit(tr, nu=0.45, engine="exact", method=method).plot()
+        fig.canvas.draw()
+        labels = [lab for ax in fig.axes for lab in ax.get_legend_handles_labels()[1]]
+        drawn = [ln.get_label() for ax in fig.axes for ln in ax.get_lines()]
+        assert any("least squares" in s for s in labels) == (method == "both"), labels
+        assert any("least squares" in s for s in drawn) == (method == "both"), drawn
+        res = next(ax for ax in fig.axes if ax.get_title() == "Residuals")
+        lo, hi = res.get_ylim()
+        for ln in res.get_lines():
+            y = np.asarray(ln.get_ydata(), float)
+            assert lo <= np.nanmin(y) and np.nanmax(y) <= hi, (ln.get_label(), lo, hi)
