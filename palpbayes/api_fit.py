@@ -71,8 +71,9 @@ class Fit:
 
     @property
     def lsq(self):
-        """The paper's least squares (:class:`~palpbayes.lsq.LSQResult`), None if it failed
-        (and for a ``method="lsq"`` fit read back, whose folder has no posterior to refit)."""
+        """The paper's least squares (:class:`~palpbayes.lsq.LSQResult`), None if it failed,
+        and for a fit read back without a posterior (``method="lsq"``, a failed Bayesian fit),
+        whose points the folder does not keep: its row is in :meth:`summary`."""
         return self.outcome.lsq
 
     @property
