@@ -7,9 +7,10 @@ package fits E (and the unknown surface height z_surf) by the paper's least-squa
 The public names, with examples, are in docs/api.md::
 
     import palpbayes as pb
-    f = pb.fit("press.csv", tip="sphere", radius=0.01, nu=0.45, seed=1)
+    f = pb.fit("press.csv", tip="sphere", radius=0.01, nu=0.45)
 
-Reading and fitting: :func:`read`, :func:`fit` (a :class:`Fit`), :func:`fit_options`,
+Reading and fitting: :func:`read`, :func:`fit` (a :class:`Fit`), :func:`load_fit` (a saved
+:class:`Fit`), :func:`fit_options`,
 :func:`fit_campaign`, :func:`compare`, :func:`run_pipeline`, :func:`load_results`,
 :func:`report` (the PDF); the model: :class:`Tip`, :class:`Specimen`, :class:`ModelSpec`,
 :class:`BudgetSpec`, :func:`force`; simulating: :func:`simulate` (a campaign folder),
@@ -40,6 +41,7 @@ _LAZY = {
     "write_trace": ("io.trace_csv", "write_trace"),
     "fit": ("api", "fit"),
     "Fit": ("api", "Fit"),
+    "load_fit": ("api", "load_fit"),
     "fit_options": ("api", "fit_options"),
     "fit_campaign": ("campaign.run", "fit_campaign"),
     "compare": ("campaign.compare", "compare_campaign"),

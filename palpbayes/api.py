@@ -1,15 +1,19 @@
 """The front door: palpbayes from Python, by the code path the command line takes.
 
->>> import palpbayes as pb                                              # doctest: +SKIP
->>> f = pb.fit("press.csv", tip="sphere", radius=0.01, nu=0.45, seed=1)  # doctest: +SKIP
->>> f.E, f.interval                                                     # doctest: +SKIP
+>>> import palpbayes as pb                                     # doctest: +SKIP
+>>> f = pb.fit("press.csv", tip="sphere", radius=0.01, nu=0.45)  # doctest: +SKIP
+>>> f.E, f.interval                                            # doctest: +SKIP
+>>> f.save("press-fit")         # what palpbayes fit --out press-fit writes # doctest: +SKIP
+>>> pb.load_fit("press-fit")    # either folder, read back                  # doctest: +SKIP
 
 :func:`fit` builds its options with :func:`fit_options`, the function ``palpbayes fit`` builds
 its own with (:func:`palpbayes.cli.options.options_from_args` calls it), reads a file with the
 reader ``fit`` uses (:func:`palpbayes.io.recording.read_recording`), and fits with
 :func:`palpbayes.campaign.fitjob.fit_trace`, the fit of every trace of a run: the same file,
 options and seed give the same numbers in a notebook and on the command line
-(``Fit.summary()`` equals ``summary.csv``, field by field; ``tests/integration/test_api.py``).
+(``Fit.summary()`` equals ``summary.csv``, field by field; ``tests/integration/test_api.py``),
+the default seed included (0, ``--seed``'s).  The :class:`Fit` (:mod:`palpbayes.api_fit`)
+saves the folder ``palpbayes fit --out`` writes, and :func:`load_fit` reads either back.
 docs/api.md shows every public name with examples that the test suite runs.
 """
 
@@ -18,24 +22,21 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from .api_fit import Fit, load_fit
 from .bayes import BudgetSpec, PriorSpec, SamplerSettings
-from .campaign.fitjob import SUMMARY_COLUMNS, FitOutcome, fit_trace_rows
-from .campaign.layout import SUMMARY, posterior_path
+from .campaign.fitjob import fit_trace_rows
 from .campaign.options import LAYER_MODES, FitOptions
 from .contact import TIP_PARAMETERS, Tip, check_nu
 from .errors import FitError, GeometryError, InputError
-from .io.atomic import write_csv_atomic
 from .io.recording import AFM_META_KEYS, READER_OPTIONS
 from .trace import IndentationTrace
 from .twin import Specimen, parse_specimen
 
-__all__ = ["read", "fit", "Fit", "fit_options", "make_tip", "check_specimen"]
+__all__ = ["read", "fit", "Fit", "load_fit", "fit_options", "make_tip", "check_specimen"]
 
 #: Reader options :func:`fit` passes to :func:`read`: every reader's own
 #: (:data:`~palpbayes.io.recording.READER_OPTIONS`: a table's columns, units and signs, a
@@ -355,140 +356,3 @@ def fit(source, *, tip: str | Tip | None = None, radius: float | None = None,
             raise FitError(f"{trace.trace_id}: the {' and '.join(r['method'] for r in failed)} "
                            f"fit failed in strict mode: {failed[0].get('notes', '')}")
     return Fit(trace=trace, options=opts, outcome=outcome)
-
-
-@dataclass
-class Fit:
-    """One trace's fit (:func:`fit`): its rows, its results and what a reader needs.
-
-    Attributes
-    ----------
-    trace
-        The trace fitted.
-    options
-        The fit's options.
-    outcome
-        Its ``summary.csv`` rows and result objects
-        (:class:`~palpbayes.campaign.fitjob.FitOutcome`).
-    """
-
-    trace: IndentationTrace
-    options: FitOptions
-    outcome: FitOutcome
-
-    @property
-    def bayes(self):
-        """The Bayesian result (:class:`~palpbayes.bayes.BayesResult`), None for ``lsq``."""
-        return self.outcome.bayes
-
-    @property
-    def lsq(self):
-        """The paper's least squares (:class:`~palpbayes.lsq.LSQResult`), None if it failed."""
-        return self.outcome.lsq
-
-    @property
-    def row(self) -> dict:
-        """The main ``summary.csv`` row: the Bayesian one, else the least-squares one, with
-        every column (NaN where the row has none: a failed fit's)."""
-        rows = {r["method"]: r for r in self.outcome.rows}
-        r = rows.get("bayes", rows.get("lsq"))
-        return {c: r.get(c, float("nan")) for c in SUMMARY_COLUMNS}
-
-    @property
-    def E(self) -> float:
-        """[Pa] Young's modulus: the posterior median at the stated inputs (the row's ``E_pa``,
-        inside :attr:`interval`, which adds the budget)."""
-        return float(self.row["E_pa"])
-
-    @property
-    def interval(self) -> tuple[float, float]:
-        """[Pa] E's 90 % interval (the row's full ``E_lo_pa``, ``E_hi_pa``: statistical,
-        budget and, after a material misfit, the model form)."""
-        return float(self.row["E_lo_pa"]), float(self.row["E_hi_pa"])
-
-    @property
-    def E_stat(self) -> tuple[float, float, float]:
-        """[Pa] The statistical part alone: median and 90 % interval (``E_stat_*``); least
-        squares: its E and interval."""
-        r = self.row
-        if r["method"] == "bayes":
-            return float(r["E_stat_pa"]), float(r["E_stat_lo_pa"]), float(r["E_stat_hi_pa"])
-        return float(r["E_pa"]), float(r["E_lo_pa"]), float(r["E_hi_pa"])
-
-    @property
-    def E_instron(self) -> tuple[float, float, float] | None:
-        """[Pa] With a specimen: what a compression test of the block would read, median and
-        90 % interval (``E_instron_*``); None otherwise."""
-        r = self.row
-        v = r.get("E_instron_pa")
-        if v is None or not np.isfinite(v):
-            return None
-        return float(v), float(r["E_instron_lo_pa"]), float(r["E_instron_hi_pa"])
-
-    def summary(self) -> pd.DataFrame:
-        """The ``summary.csv`` of this fit: exactly its rows and columns
-        (:data:`~palpbayes.campaign.fitjob.SUMMARY_COLUMNS`), sorted by method."""
-        df = pd.DataFrame(self.outcome.rows, columns=SUMMARY_COLUMNS)
-        return df.sort_values(["trace_id", "method"], kind="stable").reset_index(drop=True)
-
-    @property
-    def posterior(self):
-        """The arviz ``InferenceData`` of the Bayesian fit (None for ``lsq``)."""
-        return None if self.bayes is None else self.bayes.idata
-
-    @property
-    def checks(self) -> list:
-        """The model checks of the Bayesian fit (:class:`~palpbayes.checks.CheckResult`)."""
-        return [] if self.bayes is None else list(self.bayes.checks)
-
-    @property
-    def notes(self) -> list[str]:
-        """The main row's flags in words, one per item."""
-        from .flagcodes import split_flags
-
-        text = self.row.get("notes")
-        return split_flags(text) if isinstance(text, str) else []
-
-    def plot(self):
-        """A matplotlib Figure: the data with the fit (force against depth) and the
-        residuals."""
-        from matplotlib.figure import Figure
-
-        from . import plots
-
-        fig = Figure(figsize=(8.0, 6.5), layout="constrained")
-        top, bottom = fig.subplots(2, 1, height_ratios=(2, 1))
-        result = self.bayes if self.bayes is not None else self.lsq
-        lsq = self.lsq if self.bayes is not None else None
-        if self.bayes is None:
-            raise InputError("plot() draws a Bayesian fit; fit with method='bayes' or 'both'")
-        plots.plot_force_depth(result, lsq, ax=top)
-        plots.plot_residuals(result, lsq, ax=bottom)
-        return fig
-
-    def save(self, out: str | os.PathLike) -> Path:
-        """Write ``summary.csv`` and the posterior netCDF (``posterior/<trace_id>.nc``) into
-        the folder ``out`` (created), as ``palpbayes fit --out`` lays them out; the folder's
-        path."""
-        out = Path(out)
-        path = posterior_path(out, self.trace.trace_id)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        write_csv_atomic(self.summary(), out / SUMMARY)
-        if self.bayes is not None:
-            self.bayes.to_netcdf(path)
-        return out
-
-    def __repr__(self) -> str:
-        from .units import format_pressure
-
-        r = self.row
-        lo, hi = self.interval
-        state = []
-        if r["method"] == "bayes":
-            state.append("converged" if bool(r["converged"]) else "NOT converged")
-        ok = r.get("model_ok")
-        if ok is True or ok is False:
-            state.append("model ok" if ok else "model check failed")
-        return (f"Fit({self.trace.trace_id!r}, {r['method']}: E {format_pressure(self.E)} "
-                f"[{format_pressure(lo)}, {format_pressure(hi)}] (90 %)"
-                + (f", {', '.join(state)}" if state else "") + ")")

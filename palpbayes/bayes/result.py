@@ -104,6 +104,23 @@ class BayesResult:
         if self.fitted_model is None:
             self.fitted_model = self.data.model
 
+    def __repr__(self) -> str:
+        """A line of what the fit says (its arrays are in :attr:`idata` and :meth:`summary`):
+        E, the full 90 % interval, converged, the model checks, the points, the engine."""
+        from ..units import format_pressure
+
+        lo, hi = self.intervals()["full"]
+        ok = checks_summary(self.checks)["model_ok"]
+        state = ["converged" if self.converged else "NOT converged"]
+        if isinstance(ok, bool | np.bool_):
+            state.append("model ok" if ok else "model check failed")
+        state.append(f"{self.data.n_points} points")
+        engine = self.idata.posterior.attrs.get("engine", "emcee")
+        return (f"BayesResult({self.trace_id!r}: E {format_pressure(np.median(self.draws('E')))}"
+                f" [{format_pressure(lo)}, {format_pressure(hi)}] (90 %), {', '.join(state)}; "
+                f"{self.data.model.tip.describe()}, nu {self.data.model.nu:g}, {self.noise} "
+                f"noise, {engine})")
+
     # ----------------------------------------------------------------- access
     def draws(self, name: str) -> np.ndarray:
         """All draws of a posterior variable, flattened over walkers."""

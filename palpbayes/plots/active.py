@@ -58,9 +58,15 @@ def plot_search(state, *, rule=None, hist: pd.DataFrame | None = None,
     sc = ax.scatter(px * MM, py * MM, c=np.arange(1, px.size + 1), cmap="viridis", s=22,
                     edgecolor="k", lw=0.4, zorder=3)
     fig.colorbar(sc, ax=ax, label="press number", location="left")
+    xm, ym = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
     for i in range(0, px.size, max(1, px.size // 12)):
+        # towards the footprint's middle, so that a press on its edge keeps its number
+        # inside the panel (a number above the top edge overprinted the title)
+        right, up = px[i] <= xm, py[i] <= ym
         ax.annotate(str(i + 1), (px[i] * MM, py[i] * MM), fontsize=7,
-                    xytext=(3, 3), textcoords="offset points")
+                    xytext=(3 if right else -3, 3 if up else -3), textcoords="offset points",
+                    ha="left" if right else "right", va="bottom" if up else "top",
+                    annotation_clip=True)
     for zx, zy, r in state.keep_out:
         ax.add_patch(Circle((zx * MM, zy * MM), r * MM, fill=False, hatch="///",
                             color="0.3", label="keep out"))
@@ -81,8 +87,6 @@ def plot_search(state, *, rule=None, hist: pd.DataFrame | None = None,
     if title:  # a long title spans the figure, above both panels and the colour bars
         fig.suptitle(title)
     ax.set_title(head)
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(loc="upper right", fontsize=8, framealpha=0.8)
 
     bx.plot(hist["n"], hist["p_lump"], "o-", ms=3, color="tab:purple", label="P(lump)")
     bx.axhline(rule.p_decide, color="tab:red", ls="--", lw=1,
@@ -99,6 +103,10 @@ def plot_search(state, *, rule=None, hist: pd.DataFrame | None = None,
     r2.set_yscale("log")
     r2.yaxis.set_major_formatter(ScalarFormatter())
     r2.yaxis.set_minor_formatter(NullFormatter())
-    bx.legend(loc="center right", fontsize=8)
     bx.set_title("P(lump) after each press")
+    # one legend under both panels: inside either it sat on the presses or on the curves
+    handles, labels = (a + b for a, b in zip(ax.get_legend_handles_labels(),
+                                             bx.get_legend_handles_labels(), strict=True))
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3),
+               fontsize=8)
     return fig

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.transforms import Bbox
 
 from .style import KPA, METHOD_COLORS, MM, UM, fig_ax
 
@@ -109,6 +110,29 @@ def _mark_lump(ax: Axes, lump: Mapping[str, tuple[float, float, float]] | None,
                 capthick=1.5, lw=1.2, **err)
 
 
+def _colour_bar(fig: Figure, ax: Axes, im, label: str, *, strip: bool) -> None:
+    """The map's colour bar, as long as the map's image is tall: where the layout puts it,
+    beside the axes' box, but at each draw its length moved onto the image, which the equal
+    aspect makes lower (or narrower) than the box; a one-row strip's bar lies under it, as
+    wide.  Its box aspect (length / thickness) is kept, so its thickness follows."""
+    cbar = fig.colorbar(im, ax=ax, label=label, location="bottom" if strip else "right")
+    laid_out = cbar.ax.get_axes_locator()  # the colour bar's own (it places any extends)
+
+    def on_the_image(cax: Axes, renderer) -> Bbox:
+        slot = laid_out(cax, renderer)  # where the layout put the bar, in figure fractions
+        aspect = cax.get_box_aspect() or (0.05 if strip else 20.0)  # height / width
+        w, h = fig.get_size_inches()
+        ax.apply_aspect()
+        image = ax.get_position(original=False)
+        if strip:
+            thick = image.width * w * aspect / h
+            under = ax.get_tightbbox(renderer).transformed(fig.transFigure.inverted()).y0
+            return Bbox.from_bounds(image.x0, under - 0.01 - thick, image.width, thick)
+        return Bbox.from_bounds(slot.x0, image.y0, image.height * h / aspect / w, image.height)
+
+    cbar.ax.set_axes_locator(on_the_image)
+
+
 def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None = None,
                    lump: Mapping[str, tuple[float, float, float]] | None = None,
                    threshold: float | None = None, truth: tuple[float, float] | None = None,
@@ -147,7 +171,7 @@ def plot_map_panel(nodes: pd.DataFrame, kind: str = "mean", *, ax: Axes | None =
     unit, scale = position_unit(nodes)
     im = ax.imshow(z, origin="lower", extent=_extent(nodes, scale), cmap=cmap,
                    interpolation="nearest", aspect="equal", **kw)
-    fig.colorbar(im, ax=ax, label=label, shrink=0.9)
+    _colour_bar(fig, ax, im, label, strip=int(nodes["iy"].max()) == 0)
     if kind == "probability" and np.isfinite(z).any() and np.nanmax(z) >= 0.5:
         xs = np.unique(nodes["x_m"]) * scale
         ys = np.unique(nodes["y_m"]) * scale
@@ -176,8 +200,9 @@ def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None
     a row given is titled as the lump's).
 
     Posterior mean with its 90 % band, each point's own posterior (median, interval), the
-    naive least-squares value, the background level and, along the bottom, an ``x`` at
-    every node without a fitted point (:data:`HOLE_LABEL`).
+    naive least-squares value (in the legend only when that fit succeeded somewhere on the
+    row: on an AFM force map it may fail everywhere), the background level and, along the
+    bottom, an ``x`` at every node without a fitted point (:data:`HOLE_LABEL`).
 
     Parameters
     ----------
@@ -209,8 +234,9 @@ def plot_profile(nodes: pd.DataFrame, *, row: int | None = None, ax: Axes | None
                           (pts["E_point_hi_pa"] - pts["E_point_pa"]) * KPA],
                     fmt="o", ms=3, color="0.25", capsize=2, lw=0.8,
                     label="each point's own posterior")
-    ax.plot(r["x_m"] * scale, r["E_lsq_pa"] * KPA, "x", color=METHOD_COLORS["lsq"], ms=5,
-            label="naive least squares")
+    if np.isfinite(r["E_lsq_pa"].to_numpy(float)).any():  # none (an AFM map's): no entry
+        ax.plot(r["x_m"] * scale, r["E_lsq_pa"] * KPA, "x", color=METHOD_COLORS["lsq"], ms=5,
+                label="naive least squares")
     if background is not None:
         med, lo, hi = background
         ax.axhspan(lo * KPA, hi * KPA, color="0.6", alpha=0.2, lw=0)

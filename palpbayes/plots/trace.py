@@ -161,7 +161,8 @@ def plot_residuals(
     The Bayesian curve uses the posterior-median parameters (including the force offset F0);
     the least-squares curve is the paper's model without offset.  Points are the Bayesian
     residuals; lines are binned means of both methods (structure in them means the contact law
-    does not fit); the grey band is ±2 sigma (posterior-median noise sd).
+    does not fit); the grey band is ±2 sigma (posterior-median noise sd).  The axis holds them
+    all (the least squares of an untared sensor miss by its offset).
 
     Parameters
     ----------
@@ -191,15 +192,17 @@ def plot_residuals(
             label="Bayes residuals")
     x, m = _binned_mean(depth, rb, bins)
     ax.plot(x, m, color=METHOD_COLORS["bayes"], lw=1.4, label="Bayes, binned mean")
+    shown = [rb]
     if lsq is not None:
         rl = (data.force - _lsq_curve(lsq, lsq.model, data.z)) * MN
         x, m = _binned_mean(depth, rl, bins)
         ax.plot(x, m, "--", color=METHOD_COLORS["lsq"], lw=1.4,
                 label="least squares, binned mean")
+        shown.append(m)  # an untared sensor's least squares can be off by far more
     ax.axhline(0.0, color="0.3", lw=0.6)
-    # room for the legend below the points: it must not hide residuals
-    lo = min(float(np.min(rb)), -2 * sigma * MN)
-    hi = max(float(np.max(rb)), 2 * sigma * MN)
+    # every residual drawn inside, and room for the legend below them: it must not hide any
+    lo = min(min(float(np.min(v)) for v in shown), -2 * sigma * MN)
+    hi = max(max(float(np.max(v)) for v in shown), 2 * sigma * MN)
     span = hi - lo if hi > lo else 1.0
     ax.set_ylim(lo - 0.42 * span, hi + 0.05 * span)
     decorate(ax, _DEPTH_LABEL, "Residual, F − F_fit [mN]", "Residuals", "lower left", ncol=2,

@@ -153,3 +153,100 @@ def test_fit_campaign_without_a_folder_strict_names_the_failed_traces(tmp_path):
         pb.fit_campaign([tr], options=pb.fit_options(method="lsq", strict=True), workers=1)
     table = pb.fit_campaign([tr], options=pb.fit_options(method="lsq"), workers=1)
     assert "fit_failed" in table.loc[0, "flag_codes"]
+
+
+@pytest.fixture(scope="module")
+def saved(trace_file, tmp_path_factory):
+    """One fit with the defaults (no seed) saved by Fit.save, and `palpbayes fit` of the same
+    file with the same options and no --seed."""
+    root = tmp_path_factory.mktemp("saved")
+    f = pb.fit(trace_file, tip="sphere", radius=0.01, nu=0.45, engine="exact", method="both")
+    f.save(root / "api")
+    assert main(["fit", str(trace_file), "--tip", "sphere", "--radius", "0.01", "--nu", "0.45",
+                 "--engine", "exact", "--method", "both", "--out", str(root / "cli")]) == 0
+    return f, root / "api", root / "cli"
+
+
+def _files(folder):
+    return sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*")
+                  if p.is_file() and not p.relative_to(folder).as_posix().startswith(".partial"))
+
+
+def test_save_writes_what_fit_out_writes_and_the_default_seeds_agree(saved):
+    """Fit.save wrote summary.csv and the posterior only, against docs/api.md ('the layout of
+    palpbayes fit --out'); pb.fit without a seed and fit without --seed give one summary."""
+    _, api, cli = saved
+    assert _files(api) == _files(cli) == ["posterior/trace.nc", "settings.json", "summary.csv",
+                                          "traces.csv"]
+    for name in ("settings.json", "traces.csv", "summary.csv"):
+        assert (api / name).read_text() == (cli / name).read_text(), name
+
+
+def test_a_saved_fit_loads_back_as_the_fit(saved, tmp_path):
+    from matplotlib.figure import Figure
+
+    f, api, cli = saved
+    for source in (api, cli, cli / "posterior" / "trace.nc"):
+        back = pb.load_fit(source)
+        assert repr(back) == repr(f) and back.E == f.E and back.interval == f.interval
+        assert back.summary().to_csv(index=False) == (cli / "summary.csv").read_text()
+        np.testing.assert_array_equal(back.posterior.posterior["E"], f.posterior.posterior["E"])
+        assert back.trace is None and back.methods == ["bayes", "lsq"]
+        assert {c.name for c in back.checks} == {c.name for c in f.checks}
+    assert isinstance(back.plot(), Figure)
+    again = pb.Fit.load(back.save(tmp_path / "again"), trace_id="trace")
+    assert again.summary().equals(back.summary())
+    assert _files(tmp_path / "again") == _files(cli)
+    assert main(["compare", str(tmp_path / "again")]) == 0
+
+
+def test_reprs_say_the_result_in_a_line(saved):
+    f, _, _ = saved
+    text = repr(f.bayes)  # was ~9 kB: every array of the result
+    assert len(text) < 300 and text.startswith("BayesResult('trace': E ")
+    assert "(90 %), converged" in text and "2880 points" in text and "exact" in text
+    assert repr(f).endswith(", 2880 points)")
+
+
+def test_load_fit_names_what_is_wrong(saved, tmp_path):
+    import shutil
+
+    _, api, _ = saved
+    two = shutil.copytree(api, tmp_path / "two")
+    df = pd.read_csv(two / "summary.csv")
+    pd.concat([df, df.assign(trace_id="other")]).to_csv(two / "summary.csv", index=False)
+    for args, match in [
+        ((tmp_path / "none",), "no such folder"),
+        ((api / "summary.csv",), r"not a posterior \(\.nc\) file"),
+        ((api / "posterior" / "x.nc",), "no such posterior file"),
+        ((api / "posterior" / "trace.nc", "other"), "is the posterior of trace 'trace'"),
+        ((api, "other"), r"no trace 'other' in its summary.csv \(it holds trace\)"),
+        ((two,), r"holds 2 traces \(trace, other\); pick one with trace_id="),
+        ((two, "other"), "no posterior for trace 'other'"),  # its row says it was fitted
+    ]:
+        with pytest.raises(InputError, match=match):
+            pb.load_fit(*args)
+    shutil.copy(api / "posterior" / "trace.nc", tmp_path / "trace.nc")
+    with pytest.raises(InputError, match="not in the posterior/ folder of a results folder"):
+        pb.load_fit(tmp_path / "trace.nc")
+    assert pb.load_fit(two, "trace").E == pb.load_fit(api).E
+
+
+def test_plot_draws_every_residual_and_least_squares_only_when_asked(tmp_path):
+    """An untared sensor (0.2 N before contact): the least squares' residuals reach +202 mN
+    and -55 mN; the panel showed -51..32 mN.  With method='bayes' the least-squares curve was
+    drawn all the same."""
+    tr = pb.simulate_trace(120e3, pb.Tip("sphere", radius=0.01), nu=0.45, rng=6,
+                           depth=2e-3, force_offset=0.2, trace_id="offset")
+    for method in ("both", "bayes"):
+        fig = pb.fit(tr, nu=0.45, engine="exact", method=method).plot()
+        fig.canvas.draw()
+        labels = [lab for ax in fig.axes for lab in ax.get_legend_handles_labels()[1]]
+        drawn = [ln.get_label() for ax in fig.axes for ln in ax.get_lines()]
+        assert any("least squares" in s for s in labels) == (method == "both"), labels
+        assert any("least squares" in s for s in drawn) == (method == "both"), drawn
+        res = next(ax for ax in fig.axes if ax.get_title() == "Residuals")
+        lo, hi = res.get_ylim()
+        for ln in res.get_lines():
+            y = np.asarray(ln.get_ydata(), float)
+            assert lo <= np.nanmin(y) and np.nanmax(y) <= hi, (ln.get_label(), lo, hi)

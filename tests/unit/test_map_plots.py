@@ -121,3 +121,69 @@ def test_a_one_row_map_is_a_strip_of_square_pixels():
     x0, x1, y0, y1 = ax.images[0].get_extent()
     assert (x1 - x0, y1 - y0) == (pytest.approx(4 * 0.078), pytest.approx(0.078))
     assert ax.get_xlabel() == "x [µm]" and len(_hole_markers(ax)) == 1
+
+
+def _drawn(fig):
+    """The figure drawn by Agg (the positions of aspect-equal axes are then final)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig).draw()
+    return fig
+
+
+def _bars(fig):
+    """(map axes, its colour bar's axes) of every map panel of a figure."""
+    return [(ax, ax.images[0].colorbar.ax) for ax in fig.axes if ax.images
+            and ax.images[0].colorbar is not None]
+
+
+def _assert_as_tall(fig, n):
+    pairs = _bars(_drawn(fig))
+    assert len(pairs) == n
+    for ax, cax in pairs:
+        a, c = ax.get_position(), cax.get_position()
+        # before: 0.684 of the page beside a map of 0.381 (the report), 1.8x too tall in
+        # map.png on a wide lattice
+        assert c.height == pytest.approx(a.height, abs=2e-3), ax.get_title()
+        assert c.y0 == pytest.approx(a.y0, abs=2e-3) and c.x0 > a.x1, ax.get_title()
+
+
+def test_colour_bars_are_as_tall_as_their_maps_in_map_png_and_the_report():
+    nodes = _nodes()
+    wide = nodes[nodes["iy"] < 4]  # 9 x 4 nodes: the image is far lower than its box
+    _assert_as_tall(plot_map(wide, lump=LUMP, background=(50e3, 49e3, 51e3)), 3)
+    _assert_as_tall(plot_map(nodes, lump=LUMP, background=(50e3, 49e3, 51e3)), 3)
+    # the report's heat page: two maps side by side on a landscape A4 page, no layout engine
+    from matplotlib.figure import Figure
+
+    page = Figure(figsize=(11.69, 8.27))
+    a1, a2 = page.subplots(1, 2)
+    page.subplots_adjust(top=0.86, bottom=0.1, wspace=0.3)
+    plot_map_panel(nodes, "mean", ax=a1)
+    plot_map_panel(nodes, "lsq", ax=a2)
+    _assert_as_tall(page, 2)
+
+
+def test_a_strips_colour_bar_is_as_wide_as_the_strip_and_under_its_labels():
+    fig = _drawn(plot_map_panel(_afm_nodes(nx=4, ny=1, step=78e-9, holes=()), "mean"))
+    ((ax, cax),) = _bars(fig)
+    a, c = ax.get_position(), cax.get_position()
+    assert c.width == pytest.approx(a.width, abs=2e-3) and c.x0 == pytest.approx(a.x0, abs=2e-3)
+    below = ax.get_tightbbox(fig.canvas.get_renderer())  # the strip with its x labels
+    assert cax.get_window_extent().y1 <= below.y0
+    assert c.height < 0.2 * c.width
+
+
+def test_the_profile_legend_names_only_what_it_draws():
+    """An AFM map has no least-squares value (that fit fails on its curves): map.png's legend
+    listed 'naive least squares' with no marker drawn."""
+    nodes = _afm_nodes(holes=())
+    nodes["E_lsq_pa"] = np.nan
+    for frame in (nodes, _nodes()):
+        ax = plot_profile(frame, row=1, background=(50e3, 49e3, 51e3)).axes[0]
+        handles, labels = ax.get_legend_handles_labels()
+        for h, label in zip(handles, labels, strict=True):
+            lines = h.lines[0] if hasattr(h, "lines") else h  # an errorbar's data line
+            if hasattr(lines, "get_ydata"):
+                assert np.isfinite(np.asarray(lines.get_ydata(), float)).any(), label
+        assert ("naive least squares" in labels) == bool(np.isfinite(frame["E_lsq_pa"]).any())
