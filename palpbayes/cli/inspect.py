@@ -19,7 +19,7 @@ from pathlib import Path
 from ..errors import DataFileError
 from ..units import LENGTH_PREFIXES, format_force, format_length, format_si
 
-__all__ = ["register", "run", "fit_command", "RADIUS_PLACEHOLDER"]
+__all__ = ["register", "run", "fit_command", "RADIUS_PLACEHOLDER", "HEADER_DURATIONS"]
 
 #: Curves of a force map listed one by one (the rest are summarised).
 MAX_CURVES_SHOWN = 20
@@ -31,6 +31,10 @@ POSITION_RESOLUTION_M = 1e-9
 
 #: What the printed ``fit`` command has in place of the tip radius, for the user to fill in.
 RADIUS_PLACEHOLDER = "R"
+
+#: The header's durations (afmformats metadata), shown only for a curve without a time column
+#: to measure them on.
+HEADER_DURATIONS = ("duration approach", "duration intermediate")
 
 #: Prefixes of a sampling rate: Hz, kHz, MHz.
 RATE_PREFIXES: dict[int, str] = {0: "", 3: "k", 6: "M"}
@@ -93,17 +97,26 @@ def _bag(path: Path) -> None:
                   "or JointState)")
 
 
-def _segment_counts(counts: dict[int, int], names: dict[int, str]) -> str:
+def _segment_counts(counts: dict[int, int], names: dict[int, str],
+                    durations: dict[int, float] | None = None) -> str:
     """Points per afmformats segment under their classified names, in time order, consecutive
-    segments of one name joined: ``approach 256 + 2048, hold 7680, retract 1951``."""
+    segments of one name joined, with their durations [s] when measured:
+    ``approach 256 + 2048 points (1 + 1 s), hold 7680 (30 s), retract 1951 (0.9526 s)``, or
+    without: ``approach 256 + 2048, hold 7680, retract 1951 points``."""
     parts: list[tuple[str, list[int]]] = []
     for k in names or counts:
         name = names.get(k, f"segment {k}")
         if parts and parts[-1][0] == name:
-            parts[-1][1].append(counts[k])
+            parts[-1][1].append(k)
         else:
-            parts.append((name, [counts[k]]))
-    return ", ".join(f"{name} {' + '.join(map(str, ns))}" for name, ns in parts)
+            parts.append((name, [k]))
+    if not durations:
+        return ", ".join(f"{name} {' + '.join(str(counts[k]) for k in ks)}"
+                         for name, ks in parts) + " points"
+    return ", ".join(
+        f"{name} {' + '.join(str(counts[k]) for k in ks)}{' points' if i == 0 else ''} "
+        f"({' + '.join(f'{durations[k]:.4g}' for k in ks)} s)"
+        for i, (name, ks) in enumerate(parts))
 
 
 def _position(x_m: float) -> str:
@@ -119,7 +132,8 @@ def _value_range(values: Sequence[float], fmt: Callable[[float], str]) -> str:
     return f"{fmt(lo)} to {fmt(hi)}"
 
 
-def _calibration_lines(calibration: Sequence[dict[str, float]]) -> list[str]:
+def _calibration_lines(calibration: Sequence[dict[str, float]],
+                       measured: bool = False) -> list[str]:
     """The calibration and approach settings of the curves, as ``inspect`` prints them.
 
     Parameters
@@ -127,16 +141,23 @@ def _calibration_lines(calibration: Sequence[dict[str, float]]) -> list[str]:
     calibration
         Per curve, afmformats metadata in SI units
         (:func:`palpbayes.io.afm.afm_calibration`).
+    measured
+        The segments' durations were measured on the time column (and shown with the
+        curves): the header's durations (:data:`HEADER_DURATIONS`) are left out.  A JPK
+        stress-relaxation file that holds 30 s has ``duration intermediate`` 1 s.
 
     Returns
     -------
     list of str
         ``calibration: ...`` (spring constant, deflection sensitivity) and ``approach: ...``
-        (setpoint, speed, sampling rate, duration, hold), each left out when the file records
-        none of its values; a value that differs between curves is given as a range.
+        (setpoint, speed, sampling rate, and unless ``measured`` the header's duration and
+        hold), each left out when the file records none of its values; a value that differs
+        between curves is given as a range.
     """
     shown = {}
     for key, (label, fmt) in _CALIBRATION_FORMAT.items():
+        if measured and key in HEADER_DURATIONS:
+            continue
         values = [c[key] for c in calibration if key in c]
         if values:
             shown[key] = f"{label} {_value_range(values, fmt)}"
@@ -243,13 +264,17 @@ def _afm(path: Path) -> None:
     first = curves[0]
     print(f"  columns: {', '.join(first.columns)}")
     for c in curves[:MAX_CURVES_SHOWN]:
-        segs = _segment_counts(c.segments, c.segment_names)
+        segs = _segment_counts(c.segments, c.segment_names, c.durations)
         where = ("" if c.x_m is None else
                  f"  at x = {_position(c.x_m)}, y = {_position(c.y_m or 0.0)}")
-        print(f"  curve {c.index}: {segs} points{where}")
+        print(f"  curve {c.index}: {segs}{where}")
     if len(curves) > MAX_CURVES_SHOWN:
         print(f"  ... {len(curves) - MAX_CURVES_SHOWN} more")
-    calibration = _calibration_lines(afm_calibration(path, override))
+    measured = all(c.durations for c in curves)
+    if measured:
+        print("  durations measured on the time column (the file's header is not read for "
+              "them)")
+    calibration = _calibration_lines(afm_calibration(path, override), measured)
     for line in calibration:
         print(f"  {line}")
     if override is not None:

@@ -59,29 +59,46 @@ def test_a_position_at_the_stage_origin_is_shown_as_zero_not_in_fractions_of_a_p
     assert "at x = 0 m, y = 0 m" in out
     assert " pm" not in out
     out = _inspect(afm_dir / QI, capsys)
-    assert "curve 0: approach 300, retract 300 points  at x = -4.9609 µm, y = -6.9609 µm" in out
+    assert ("curve 0: approach 300 points (0.028 s), retract 300 (0.028 s)  at x = -4.9609 µm, "
+            "y = -6.9609 µm") in out
 
 
 def test_inspect_shows_the_calibration_and_approach_settings_the_file_records(
         afm_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """Spring constant, deflection sensitivity, setpoint, speed, rate and duration from
-    afmformats' metadata, in SI with prefixes; none for the AFM Workshop zip (which lacks
-    them: the placeholders inspect reads it with are not shown)."""
+    """Spring constant, deflection sensitivity, setpoint, speed and rate from afmformats'
+    metadata, in SI with prefixes (the durations come from the data: the next test); none for
+    the AFM Workshop zip (which lacks them: the placeholders inspect reads it with are not
+    shown)."""
     (cal,) = afm_calibration(afm_dir / SPOT3)
     assert cal["spring constant"] == pytest.approx(0.043493666407368466)
     assert cal["sensitivity"] == pytest.approx(7.000143623002982e-08)
     assert cal["setpoint"] == pytest.approx(4e-9)
     out = _inspect(afm_dir / SPOT3, capsys)
     assert "  calibration: spring constant 0.04349 N/m, deflection sensitivity 70 nm/V\n" in out
-    assert ("  approach: setpoint 4 nN, speed 5 µm/s, sampled at 2 kHz, duration 1 s\n"
-            in out)
+    assert "  approach: setpoint 4 nN, speed 5 µm/s, sampled at 2 kHz\n" in out
+    assert "curve 0: approach 2000 points (1 s), retract 2000 (1 s)" in out
     out = _inspect(afm_dir / RELAX, capsys)
     assert "spring constant 1.068 N/m, deflection sensitivity 110.3 nm/V" in out
-    assert "hold 1 s" in out
     placeholders = {"spring constant": 1.0, "sensitivity": 1.0}
     assert all(c == {} for c in afm_calibration(afm_dir / WORKSHOP, placeholders))
     out = _inspect(afm_dir / WORKSHOP, capsys)
     assert "calibration: none recorded" in out and "spring constant 1 N/m" not in out
+
+
+def test_the_hold_is_measured_on_the_data_not_read_from_the_header(
+        afm_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The JPK stress-relaxation cell holds 30 s (7,680 points at 256 Hz) but its header's
+    ``duration intermediate`` says 1 s, which inspect printed as ``hold 1 s`` (issue 58, item
+    7): each segment's duration is now measured on the time column, and inspect says so."""
+    out = _inspect(afm_dir / RELAX, capsys)
+    assert ("curve 0: approach 256 + 2048 points (1 + 1 s), hold 7680 (30 s), retract 1951 "
+            "(0.9526 s)") in out
+    assert "durations measured on the time column" in out
+    assert "hold 1 s" not in out and "duration 1 s" not in out
+    # the Workshop zip has no time column: nothing measured, nothing claimed
+    out = _inspect(afm_dir / WORKSHOP, capsys)
+    assert "curve 0: approach 391, retract 391 points" in out
+    assert "durations measured" not in out
 
 
 def test_the_printed_fit_command_runs_with_the_radius_filled_in(
