@@ -60,7 +60,9 @@ them for a file that says otherwise.  The force is raw: not tared, its baseline 
 
 A single-curve file gives a trace named after the file (``force-save-example``); a force map
 (``.jpk-force-map``, QI data) gives one trace per curve, ``<stem>-<index>``, a campaign whose
-traces carry their x, y.  Needs the optional extra ``pip install 'palpbayes[afm]'``.
+traces carry their x, y.  Needs the optional extra ``afm`` (afmformats: ``pip install -e
+'.[afm]' -c requirements/constraints.txt`` in a clone of the repository, ``pip install
+'palpbayes[afm]'`` from a package index; the error when it is missing says which).
 """
 
 from __future__ import annotations
@@ -373,8 +375,9 @@ def read_afm(
     InputError
         An unknown segment name or sign.
     MissingExtraError
-        afmformats is not installed: "reading .jpk-force files needs the optional extra:
-        pip install 'palpbayes[afm]'".
+        afmformats is not installed: "reading .jpk-force files needs the optional extra afm
+        (afmformats is not installed): pip install ..."
+        (:func:`palpbayes.io.extras.install_command`).
     """
     force_sign = validate_force_sign(force_sign, allow_auto=False)
     if z_sign not in (1, -1):

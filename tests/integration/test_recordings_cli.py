@@ -147,5 +147,6 @@ def test_a_missing_extra_is_a_one_line_error(monkeypatch, capsys, tmp_path, spot
     monkeypatch.setitem(sys.modules, "afmformats", None)
     assert main(["fit", str(spot3), "--out", str(tmp_path / "r"), *AFM]) == 2
     err = capsys.readouterr().err
-    assert "reading .jpk-force files needs the optional extra: pip install 'palpbayes[afm]'" \
-        in err
+    assert "reading .jpk-force files needs the optional extra afm (afmformats is not " \
+        "installed): pip install -e " in err and "pip install 'palpbayes[afm]'" in err
+    assert len(err.strip().splitlines()) == 1
