@@ -196,8 +196,10 @@ def add_column_options(p: argparse.ArgumentParser,
     """Column names, units and signs of a text table or stream (``fit``, ``replay``,
     ``follow``, ``map``; read back by :func:`read_options_from_args`)."""
     c = p.add_argument_group(title)
-    for q, unit in (("time", "s"), ("z", "m"), ("force", "N")):
-        c.add_argument(f"--{q}-column", metavar="NAME", help=f"column holding {q}")
+    for q, unit, example in (("time", "s", "timestamp"), ("z", "m", "tcp_z_mm"),
+                             ("force", "N", "fz")):
+        c.add_argument(f"--{q}-column", metavar="NAME",
+                       help=f"column holding {q}, spelled as in the header (e.g. {example})")
         c.add_argument(f"--{q}-unit", metavar="UNIT", help=f"unit of {q} (default {unit})")
     c.add_argument("--force-sign", type=float, choices=(1.0, -1.0), default=None,
                    help="-1 if pressing gives negative force (default +1; for a ROS 2 bag the "

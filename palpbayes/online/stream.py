@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError, StreamError
+from ..io.trace_csv import column_hint
 from ..io.units import force_factor, length_factor, time_factor
 
 __all__ = ["SampleParser", "Batch", "LimitHit", "batches", "CANONICAL_COLUMNS"]
@@ -109,16 +110,21 @@ class SampleParser:
     def _header(self, text: str, lineno: int) -> None:
         self.delimiter = next((d for d in ",;\t" if d in text), None)  # None: blanks
         names = [n.strip().strip('"') for n in text.split(self.delimiter)]
-        missing = [self.keys[q] for q in CANONICAL_COLUMNS if self.keys[q] not in names]
+        missing = [q for q in CANONICAL_COLUMNS if self.keys[q] not in names]
         if missing:
             try:
                 float(names[0])
                 first = " (the first line is numbers: a CSV stream starts with its header)"
             except ValueError:
                 first = ""
+            # the column that differs in case only, or a robot log's, with the options
+            listed = ", ".join(
+                repr(self.keys[q]) + column_hint(names, q, self.keys[q],
+                                                 given=self.keys[q] != CANONICAL_COLUMNS[q])
+                for q in missing)
             raise StreamError(self.source, lineno,
-                              f"missing column {', '.join(map(repr, missing))}{first}; the "
-                              f"header has {', '.join(map(repr, names))}", _FIX_COLUMNS)
+                              f"missing column {listed}{first}; the header has "
+                              f"{', '.join(map(repr, names))}", _FIX_COLUMNS)
         self.index = {q: names.index(self.keys[q]) for q in CANONICAL_COLUMNS}
         self.n_fields = len(names)
 
