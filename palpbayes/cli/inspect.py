@@ -4,7 +4,10 @@ A ROS 2 bag: its topics with message type, count, rate and time span, and the to
 would take.  An AFM file: its curves with modality, columns, points per segment and position,
 the calibration and approach settings the file records, and a ``palpbayes fit`` command for
 it with the tip left to fill in (no AFM file records the tip).  A text table: its columns and
-number of rows.
+number of rows, and a ``palpbayes fit`` command with the column and unit options its header
+tells (a robot log's ``timestamp, tcp_z_mm, fz``: ``--time-column timestamp --z-column
+tcp_z_mm --z-unit mm --force-column fz``), ``--force-sign -1`` when the data press with a
+negative force, and the tip to fill in; a campaign manifest, the command that fits it.
 """
 
 from __future__ import annotations
@@ -19,7 +22,8 @@ from pathlib import Path
 from ..errors import DataFileError
 from ..units import LENGTH_PREFIXES, format_force, format_length, format_si
 
-__all__ = ["register", "run", "fit_command", "RADIUS_PLACEHOLDER", "HEADER_DURATIONS"]
+__all__ = ["register", "run", "fit_command", "RADIUS_PLACEHOLDER", "HEADER_DURATIONS",
+           "COLUMN_PLACEHOLDERS"]
 
 #: Curves of a force map listed one by one (the rest are summarised).
 MAX_CURVES_SHOWN = 20
@@ -303,6 +307,84 @@ def _table(path: Path) -> None:
         raise DataFileError(path, f"not a readable table ({type(exc).__name__})",
                             "palpbayes reads trace CSVs, ROS 2 bags and AFM files") from None
     print(f"{path}: table, {len(df)} row(s), columns: {', '.join(map(str, df.columns))}")
+    from ..io.manifest import is_manifest
+
+    if is_manifest(path):
+        print("a campaign manifest (its rows name the traces and their tips); to fit them:")
+        print(f"  palpbayes fit {shlex.quote(str(path))} --out "
+              f"{shlex.quote(path.parent.name or path.stem)}-fit")
+        return
+    for line in _table_fit_lines(path, df):
+        print(line)
+
+
+#: Placeholders of the columns a table's header does not name, per quantity.
+COLUMN_PLACEHOLDERS = {"time": "TIME", "z": "Z", "force": "FORCE"}
+_DEFAULT_UNITS = {"time": "s", "z": "m", "force": "N"}
+
+
+def _trial_read(df, source: str, options: dict) -> tuple[float, str]:
+    """(force sign, problem) of reading the table ``df`` with ``options`` as ``fit`` would:
+    (1, '') when it reads, (-1, '') when it reads with the force's sign flipped only (its
+    force falls as the tip goes down), else (1, the reader's problem)."""
+    from ..errors import InputError
+    from ..io.trace_csv import trace_from_frame
+
+    try:
+        trace_from_frame(df, source, **options)
+        return 1.0, ""
+    except InputError as exc:
+        problem = getattr(exc, "problem", str(exc))
+        fix = getattr(exc, "fix", "")
+    try:
+        trace_from_frame(df, source, force_sign=-1.0, **options)
+        return -1.0, ""
+    except InputError:
+        return 1.0, problem + (f" ({fix})" if fix else "")
+
+
+def _table_fit_lines(path: Path, df) -> list[str]:
+    """What ``inspect`` prints after a trace table's columns: a ``fit`` command with the column
+    and unit options the header tells (:func:`~palpbayes.io.trace_csv.suggest_read_options`),
+    ``--force-sign -1`` when the data press with a negative force, and what to fill in."""
+    from ..io.trace_csv import suggest_read_options
+
+    options, unfound = suggest_read_options(df.columns)
+    columns, units = options.get("columns", {}), options.get("units", {})
+    words = ["palpbayes", "fit", str(path), "--out", f"{path.stem}-fit"]
+    for q in ("time", "z", "force"):
+        if q in columns:
+            words += [f"--{q}-column", columns[q]]
+        elif q in unfound:
+            words += [f"--{q}-column", COLUMN_PLACEHOLDERS[q]]
+        if q in units:
+            words += [f"--{q}-unit", units[q]]
+    sign, problem = (1.0, "") if unfound or df.empty else _trial_read(df, str(path), options)
+    if sign < 0:
+        words += ["--force-sign", "-1"]
+    words += ["--tip", "sphere", "--radius", RADIUS_PLACEHOLDER]
+    keep = {RADIUS_PLACEHOLDER, *COLUMN_PLACEHOLDERS.values()}
+    lines = [f"to fit it (a table does not record the tip: replace {RADIUS_PLACEHOLDER} by the "
+             "tip radius in metres (e.g. 0.01), or give another --tip with its size (paraboloid "
+             "--radius, cone --half-angle); add --nu: foams 0.1-0.3, silicone, gels and tissue "
+             "0.45-0.5, else 0.3):",
+             "  " + " ".join(w if w in keep else shlex.quote(w) for w in words)]
+    bare = [q for q in columns if q not in units]
+    if bare:
+        lines.append(f"{', '.join(columns[q] for q in bare)}: no unit in the name, read in "
+                     f"{', '.join(_DEFAULT_UNITS[q] for q in bare)} (else "
+                     f"{', '.join(f'--{q}-unit' for q in bare)})")
+    if unfound:
+        lines.append(f"{', '.join(COLUMN_PLACEHOLDERS[q] for q in unfound)}: the column(s) "
+                     f"holding {', '.join(unfound)} (the header names none palpbayes knows), "
+                     f"with {', '.join(f'--{q}-unit' for q in unfound)} when not in "
+                     f"{', '.join(_DEFAULT_UNITS[q] for q in unfound)}")
+    if sign < 0:
+        lines.append("--force-sign -1: the force falls below its pre-contact level as the tip "
+                     "goes down (the sensor reads pressing as negative)")
+    if problem:
+        lines.append(f"note: read so, the file is refused: {problem}")
+    return lines
 
 
 def run(args: argparse.Namespace) -> int:

@@ -45,7 +45,7 @@ from .units import FORCE_UNITS, LENGTH_UNITS, TIME_UNITS, force_factor, length_f
 
 __all__ = ["read_trace", "read_frame", "write_trace", "trace_from_frame", "check_plausible",
            "sniff_delimiter", "MAX_Z_SPAN_M", "MAX_FORCE_N", "ROBOT_LOG_NAMES",
-           "robot_log_column", "column_hint"]
+           "robot_log_column", "column_hint", "suggest_read_options"]
 
 _QUANTITIES = {"time": TIME_UNITS, "z": LENGTH_UNITS, "force": FORCE_UNITS}
 _FACTORS = {"time": time_factor, "z": length_factor, "force": force_factor}
@@ -148,6 +148,39 @@ def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: st
     canon = {"time": "time_s", "z": "z_m", "force": "force_n"}[quantity]
     return (f"missing column '{canon}' (for {quantity})"
             f"{column_hint(df.columns, quantity, canon, given=False)}")
+
+
+def suggest_read_options(names) -> tuple[dict[str, dict[str, str]], list[str]]:
+    """The reader options that read a table whose header is ``names``, as far as the header
+    tells them (``palpbayes inspect`` prints them as ``--*-column`` and ``--*-unit``).
+
+    A quantity the reader finds without options (``time_s``, ``z_mm`` ..., any case; z of a
+    table of joint angles) needs none; one held by a robot log's column
+    (:func:`robot_log_column`: ``timestamp``, ``tcp_z_mm``, ``fz`` ...) gets its column and,
+    when the name ends with one, its unit.  Signs are not in a header.
+
+    Returns
+    -------
+    options, unfound
+        ``{"columns": {...}, "units": {...}}`` (each only when needed), and the quantities
+        (``time``, ``z``, ``force``) the header does not tell.
+    """
+    frame = pd.DataFrame(columns=[str(c) for c in names])
+    lower = {str(c).strip().lower() for c in names}
+    joints = not any(c.startswith("z") for c in lower) and any(c.startswith("q0_") for c in lower)
+    columns, units, unfound = {}, {}, []
+    for q in ("time", "z", "force"):
+        if (q == "z" and joints) or not isinstance(_find_column(frame, q, None, None), str):
+            continue
+        found = robot_log_column(names, q)
+        if found is None:
+            unfound.append(q)
+            continue
+        columns[q] = found[0]
+        if found[1] is not None:
+            units[q] = found[1]
+    options = {k: v for k, v in (("columns", columns), ("units", units)) if v}
+    return options, unfound
 
 
 def _find_columns(df: pd.DataFrame, columns: dict[str, str], units: dict[str, str],

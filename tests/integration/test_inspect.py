@@ -162,3 +162,39 @@ def test_the_workshop_zips_fit_command_runs_once_filled_in(
     assert main([*fit, "--method", "lsq"]) == 0, capsys.readouterr().err
     out = tmp_path / fit[fit.index("--out") + 1]
     assert (out / "summary.csv").is_file()
+
+
+def test_a_robot_csv_gets_a_fit_command_with_the_options_its_header_and_data_tell(
+        capsys: pytest.CaptureFixture[str], tmp_path: Path,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 58, item 7: inspect printed a plain CSV's columns and no fit command.  The
+    README's robot log (timestamp, tcp_z_mm, fz; pressing reads negative) now gets
+    ``--time-column timestamp --z-column tcp_z_mm --z-unit mm --force-column fz`` from its
+    header and ``--force-sign -1`` from its data, and the command fits once R is filled in; a
+    canonical CSV needs no option; a header palpbayes does not know gets placeholders."""
+    from palpbayes.contact import Tip
+    from palpbayes.sim import simulate_trace
+
+    tr = simulate_trace(6e5, Tip("sphere", radius=0.01), thickness=0.02, depth=3e-3,
+                        force_offset=0.21, rng=1, rate=250.0, base=None)
+    monkeypatch.chdir(tmp_path)
+    pd.DataFrame({"timestamp": tr.time, "tcp_z_mm": 1e3 * tr.z, "fz": -tr.force}).to_csv(
+        "press.csv", index=False)
+    out = _inspect(Path("press.csv"), capsys)
+    (argv,) = _commands(out)
+    assert argv[:4] == ["fit", "press.csv", "--out", "press-fit"]
+    assert " ".join(argv[4:]) == ("--time-column timestamp --z-column tcp_z_mm --z-unit mm "
+                                  "--force-column fz --force-sign -1 --tip sphere --radius 5e-6")
+    assert "timestamp, fz: no unit in the name, read in s, N" in out
+    assert main([*argv[:-1], "0.01", "--engine", "exact", "--nu", "0.3"]) == 0, \
+        capsys.readouterr().err
+    summary = pd.read_csv(tmp_path / "press-fit" / "summary.csv")
+    assert summary["E_pa"].iloc[0] == pytest.approx(6e5, rel=0.05)
+
+    pd.DataFrame({"time_s": tr.time, "z_m": tr.z, "force_n": tr.force}).to_csv(
+        "plain.csv", index=False)
+    (argv,) = _commands(_inspect(Path("plain.csv"), capsys))
+    assert argv[4:] == ["--tip", "sphere", "--radius", "5e-6"]
+    pd.DataFrame({"t": [0, 1], "height": [0, 1], "load": [0, 1]}).to_csv("odd.csv", index=False)
+    out = _inspect(Path("odd.csv"), capsys)
+    assert "--z-column Z --force-column FORCE" in out and "header names none" in out
