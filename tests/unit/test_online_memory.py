@@ -1,4 +1,4 @@
-"""What the online estimator keeps of a long stream (issue 58, item 9):
+"""What the online estimator and ``follow``'s reader keep of a long stream (issue 58, item 9):
 bounded, whatever the stream's length, and a press within the bounds is estimated, stopped and
 checked as by an estimator that keeps everything.  Sizes of what is stored are asserted, never
 times or process memory."""
@@ -6,6 +6,8 @@ times or process memory."""
 from __future__ import annotations
 
 import dataclasses
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -13,6 +15,7 @@ import pytest
 import palpbayes.online.estimator as estimator
 from palpbayes.fitdata import ModelSpec
 from palpbayes.online import OnlineEstimator, StoppingRule
+from palpbayes.online.stream import SampleParser, batches
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.sim import simulate_trace
 
@@ -158,3 +161,55 @@ def test_samples_beyond_the_contact_cap_update_the_estimate_unkept(press, monkey
     assert last.E.lo < 1.25e5 < last.E.hi
     assert est.model_checks()  # on the samples kept
 
+
+def test_the_stream_reader_stays_within_the_backlog_of_a_slow_consumer(monkeypatch):
+    """A recording piped in faster than the updates: the reader read it all ahead (~300 bytes
+    a sample waiting: 240 MB for 400,000 piped into follow); now it reads at most MAX_BACKLOG
+    samples beyond the batches handed over, and every sample still arrives, in order."""
+    monkeypatch.setattr("palpbayes.online.stream.MAX_BACKLOG", 500)
+    n, chunk = 20_000, 50
+    read = [0]
+    ahead = []
+    handed = [0]
+    lock = threading.Lock()
+
+    def lines():
+        yield "time_s,z_m,force_n\n"
+        for i in range(n):
+            with lock:
+                read[0] += 1
+                ahead.append(read[0] - handed[0])
+            yield f"{i / RATE},{0.1 - i * 1e-7},0.0\n"
+
+    got = []
+    for k, batch in enumerate(batches(lines(), SampleParser(), chunk=chunk, timeout=None)):
+        if k < 3:
+            time.sleep(0.2)  # the consumer busy: the reader runs ahead
+        got.append(batch.t)
+        with lock:
+            handed[0] += batch.size
+    t = np.concatenate(got)
+    assert t.size == n and np.all(np.diff(t) > 0)
+    # the bound, the line being read, and a batch handed over but not yet counted here
+    assert max(ahead) <= 500 + 1 + chunk
+
+
+def test_a_stopped_consumer_releases_a_reader_at_the_backlog(monkeypatch):
+    """When the consumer stops (a target reached) with the reader waiting at the backlog, the
+    reader is let go: it reads the rest of the stream to its end, keeping none of it (so that
+    a sender is not reset), instead of waiting forever."""
+    monkeypatch.setattr("palpbayes.online.stream.MAX_BACKLOG", 100)
+    done = threading.Event()
+
+    def lines():
+        yield "time_s,z_m,force_n\n"
+        for i in range(5000):
+            yield f"{i / RATE},0.1,0.0\n"
+        done.set()
+
+    stream = batches(lines(), SampleParser(), chunk=10, timeout=None)
+    first = next(stream)
+    time.sleep(0.2)  # the reader fills the backlog and waits
+    stream.close()
+    assert first.size == 10
+    assert done.wait(30)  # a liveness bound, not a speed one
