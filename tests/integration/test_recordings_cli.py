@@ -120,7 +120,8 @@ def test_inspect_lists_bag_topics_and_afm_curves(sim, tmp_path, capsys, spot3):
     assert main(["inspect", str(spot3)]) == 0
     out = capsys.readouterr().out
     assert "AFM file, 1 curve(s) (force-distance)" in out
-    assert "curve 0: approach 2000, retract 2000 points" in out and "x = -16.667 µm" in out
+    assert "curve 0: approach 2000 points (1 s), retract 2000 (1 s)" in out
+    assert "x = -16.667 µm" in out
 
 
 def test_bag_errors_are_one_line_with_exit_status_2(sim, tmp_path, capsys, spot3):
