@@ -4,7 +4,10 @@ A ROS 2 bag: its topics with message type, count, rate and time span, and the to
 would take.  An AFM file: its curves with modality, columns, points per segment and position,
 the calibration and approach settings the file records, and a ``palpbayes fit`` command for
 it with the tip left to fill in (no AFM file records the tip).  A text table: its columns and
-number of rows.
+number of rows, and a ``palpbayes fit`` command with the column and unit options its header
+tells (a robot log's ``timestamp, tcp_z_mm, fz``: ``--time-column timestamp --z-column
+tcp_z_mm --z-unit mm --force-column fz``), ``--force-sign -1`` when the data press with a
+negative force, and the tip to fill in; a campaign manifest, the command that fits it.
 """
 
 from __future__ import annotations
@@ -19,7 +22,8 @@ from pathlib import Path
 from ..errors import DataFileError
 from ..units import LENGTH_PREFIXES, format_force, format_length, format_si
 
-__all__ = ["register", "run", "fit_command", "RADIUS_PLACEHOLDER"]
+__all__ = ["register", "run", "fit_command", "RADIUS_PLACEHOLDER", "HEADER_DURATIONS",
+           "COLUMN_PLACEHOLDERS"]
 
 #: Curves of a force map listed one by one (the rest are summarised).
 MAX_CURVES_SHOWN = 20
@@ -31,6 +35,10 @@ POSITION_RESOLUTION_M = 1e-9
 
 #: What the printed ``fit`` command has in place of the tip radius, for the user to fill in.
 RADIUS_PLACEHOLDER = "R"
+
+#: The header's durations (afmformats metadata), shown only for a curve without a time column
+#: to measure them on.
+HEADER_DURATIONS = ("duration approach", "duration intermediate")
 
 #: Prefixes of a sampling rate: Hz, kHz, MHz.
 RATE_PREFIXES: dict[int, str] = {0: "", 3: "k", 6: "M"}
@@ -93,17 +101,26 @@ def _bag(path: Path) -> None:
                   "or JointState)")
 
 
-def _segment_counts(counts: dict[int, int], names: dict[int, str]) -> str:
+def _segment_counts(counts: dict[int, int], names: dict[int, str],
+                    durations: dict[int, float] | None = None) -> str:
     """Points per afmformats segment under their classified names, in time order, consecutive
-    segments of one name joined: ``approach 256 + 2048, hold 7680, retract 1951``."""
+    segments of one name joined, with their durations [s] when measured:
+    ``approach 256 + 2048 points (1 + 1 s), hold 7680 (30 s), retract 1951 (0.9526 s)``, or
+    without: ``approach 256 + 2048, hold 7680, retract 1951 points``."""
     parts: list[tuple[str, list[int]]] = []
     for k in names or counts:
         name = names.get(k, f"segment {k}")
         if parts and parts[-1][0] == name:
-            parts[-1][1].append(counts[k])
+            parts[-1][1].append(k)
         else:
-            parts.append((name, [counts[k]]))
-    return ", ".join(f"{name} {' + '.join(map(str, ns))}" for name, ns in parts)
+            parts.append((name, [k]))
+    if not durations:
+        return ", ".join(f"{name} {' + '.join(str(counts[k]) for k in ks)}"
+                         for name, ks in parts) + " points"
+    return ", ".join(
+        f"{name} {' + '.join(str(counts[k]) for k in ks)}{' points' if i == 0 else ''} "
+        f"({' + '.join(f'{durations[k]:.4g}' for k in ks)} s)"
+        for i, (name, ks) in enumerate(parts))
 
 
 def _position(x_m: float) -> str:
@@ -119,7 +136,8 @@ def _value_range(values: Sequence[float], fmt: Callable[[float], str]) -> str:
     return f"{fmt(lo)} to {fmt(hi)}"
 
 
-def _calibration_lines(calibration: Sequence[dict[str, float]]) -> list[str]:
+def _calibration_lines(calibration: Sequence[dict[str, float]],
+                       measured: bool = False) -> list[str]:
     """The calibration and approach settings of the curves, as ``inspect`` prints them.
 
     Parameters
@@ -127,16 +145,23 @@ def _calibration_lines(calibration: Sequence[dict[str, float]]) -> list[str]:
     calibration
         Per curve, afmformats metadata in SI units
         (:func:`palpbayes.io.afm.afm_calibration`).
+    measured
+        The segments' durations were measured on the time column (and shown with the
+        curves): the header's durations (:data:`HEADER_DURATIONS`) are left out.  A JPK
+        stress-relaxation file that holds 30 s has ``duration intermediate`` 1 s.
 
     Returns
     -------
     list of str
         ``calibration: ...`` (spring constant, deflection sensitivity) and ``approach: ...``
-        (setpoint, speed, sampling rate, duration, hold), each left out when the file records
-        none of its values; a value that differs between curves is given as a range.
+        (setpoint, speed, sampling rate, and unless ``measured`` the header's duration and
+        hold), each left out when the file records none of its values; a value that differs
+        between curves is given as a range.
     """
     shown = {}
     for key, (label, fmt) in _CALIBRATION_FORMAT.items():
+        if measured and key in HEADER_DURATIONS:
+            continue
         values = [c[key] for c in calibration if key in c]
         if values:
             shown[key] = f"{label} {_value_range(values, fmt)}"
@@ -243,13 +268,17 @@ def _afm(path: Path) -> None:
     first = curves[0]
     print(f"  columns: {', '.join(first.columns)}")
     for c in curves[:MAX_CURVES_SHOWN]:
-        segs = _segment_counts(c.segments, c.segment_names)
+        segs = _segment_counts(c.segments, c.segment_names, c.durations)
         where = ("" if c.x_m is None else
                  f"  at x = {_position(c.x_m)}, y = {_position(c.y_m or 0.0)}")
-        print(f"  curve {c.index}: {segs} points{where}")
+        print(f"  curve {c.index}: {segs}{where}")
     if len(curves) > MAX_CURVES_SHOWN:
         print(f"  ... {len(curves) - MAX_CURVES_SHOWN} more")
-    calibration = _calibration_lines(afm_calibration(path, override))
+    measured = all(c.durations for c in curves)
+    if measured:
+        print("  durations measured on the time column (the file's header is not read for "
+              "them)")
+    calibration = _calibration_lines(afm_calibration(path, override), measured)
     for line in calibration:
         print(f"  {line}")
     if override is not None:
@@ -278,6 +307,84 @@ def _table(path: Path) -> None:
         raise DataFileError(path, f"not a readable table ({type(exc).__name__})",
                             "palpbayes reads trace CSVs, ROS 2 bags and AFM files") from None
     print(f"{path}: table, {len(df)} row(s), columns: {', '.join(map(str, df.columns))}")
+    from ..io.manifest import is_manifest
+
+    if is_manifest(path):
+        print("a campaign manifest (its rows name the traces and their tips); to fit them:")
+        print(f"  palpbayes fit {shlex.quote(str(path))} --out "
+              f"{shlex.quote(path.parent.name or path.stem)}-fit")
+        return
+    for line in _table_fit_lines(path, df):
+        print(line)
+
+
+#: Placeholders of the columns a table's header does not name, per quantity.
+COLUMN_PLACEHOLDERS = {"time": "TIME", "z": "Z", "force": "FORCE"}
+_DEFAULT_UNITS = {"time": "s", "z": "m", "force": "N"}
+
+
+def _trial_read(df, source: str, options: dict) -> tuple[float, str]:
+    """(force sign, problem) of reading the table ``df`` with ``options`` as ``fit`` would:
+    (1, '') when it reads, (-1, '') when it reads with the force's sign flipped only (its
+    force falls as the tip goes down), else (1, the reader's problem)."""
+    from ..errors import InputError
+    from ..io.trace_csv import trace_from_frame
+
+    try:
+        trace_from_frame(df, source, **options)
+        return 1.0, ""
+    except InputError as exc:
+        problem = getattr(exc, "problem", str(exc))
+        fix = getattr(exc, "fix", "")
+    try:
+        trace_from_frame(df, source, force_sign=-1.0, **options)
+        return -1.0, ""
+    except InputError:
+        return 1.0, problem + (f" ({fix})" if fix else "")
+
+
+def _table_fit_lines(path: Path, df) -> list[str]:
+    """What ``inspect`` prints after a trace table's columns: a ``fit`` command with the column
+    and unit options the header tells (:func:`~palpbayes.io.trace_csv.suggest_read_options`),
+    ``--force-sign -1`` when the data press with a negative force, and what to fill in."""
+    from ..io.trace_csv import suggest_read_options
+
+    options, unfound = suggest_read_options(df.columns)
+    columns, units = options.get("columns", {}), options.get("units", {})
+    words = ["palpbayes", "fit", str(path), "--out", f"{path.stem}-fit"]
+    for q in ("time", "z", "force"):
+        if q in columns:
+            words += [f"--{q}-column", columns[q]]
+        elif q in unfound:
+            words += [f"--{q}-column", COLUMN_PLACEHOLDERS[q]]
+        if q in units:
+            words += [f"--{q}-unit", units[q]]
+    sign, problem = (1.0, "") if unfound or df.empty else _trial_read(df, str(path), options)
+    if sign < 0:
+        words += ["--force-sign", "-1"]
+    words += ["--tip", "sphere", "--radius", RADIUS_PLACEHOLDER]
+    keep = {RADIUS_PLACEHOLDER, *COLUMN_PLACEHOLDERS.values()}
+    lines = [f"to fit it (a table does not record the tip: replace {RADIUS_PLACEHOLDER} by the "
+             "tip radius in metres (e.g. 0.01), or give another --tip with its size (paraboloid "
+             "--radius, cone --half-angle); add --nu: foams 0.1-0.3, silicone, gels and tissue "
+             "0.45-0.5, else 0.3):",
+             "  " + " ".join(w if w in keep else shlex.quote(w) for w in words)]
+    bare = [q for q in columns if q not in units]
+    if bare:
+        lines.append(f"{', '.join(columns[q] for q in bare)}: no unit in the name, read in "
+                     f"{', '.join(_DEFAULT_UNITS[q] for q in bare)} (else "
+                     f"{', '.join(f'--{q}-unit' for q in bare)})")
+    if unfound:
+        lines.append(f"{', '.join(COLUMN_PLACEHOLDERS[q] for q in unfound)}: the column(s) "
+                     f"holding {', '.join(unfound)} (the header names none palpbayes knows), "
+                     f"with {', '.join(f'--{q}-unit' for q in unfound)} when not in "
+                     f"{', '.join(_DEFAULT_UNITS[q] for q in unfound)}")
+    if sign < 0:
+        lines.append("--force-sign -1: the force falls below its pre-contact level as the tip "
+                     "goes down (the sensor reads pressing as negative)")
+    if problem:
+        lines.append(f"note: read so, the file is refused: {problem}")
+    return lines
 
 
 def run(args: argparse.Namespace) -> int:

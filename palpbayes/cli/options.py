@@ -25,7 +25,7 @@ from .afm_options import AFM_META_OPTIONS, add_afm_meta_options, afm_meta_from_a
 
 __all__ = ["add_nu_option", "add_f_unc_option", "positive_force", "add_model_options",
            "add_trace_options", "add_tip_options", "add_specimen_options",
-           "add_column_options", "options_from_args",
+           "add_column_options", "sign", "SIGN_METAVAR", "options_from_args",
            "thickness_from_args", "layer_from_args", "specimen_from_args",
            "read_options_from_args", "dest",
            "RECORDING_FLAGS", "recording_options_from_args", "tip_from_args",
@@ -190,19 +190,44 @@ def add_specimen_options(p: argparse.ArgumentParser, title: str = "single trace"
     t.add_argument("--material", default="", help="material label")
 
 
+#: How ``--force-sign`` and ``--z-sign`` show their values in ``--help`` and errors (argparse's
+#: ``choices=(1.0, -1.0)`` showed ``{1.0,-1.0}``).
+SIGN_METAVAR = "{1,-1}"
+
+
+def sign(text: str) -> float:
+    """A sign option's value (``1``, ``+1``, ``-1``, ``1.0`` ...) as the float +1.0 or -1.0.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        Anything else: "invalid choice: '2' (choose from 1, -1)", which argparse prefixes
+        with the option's name.
+    """
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if value not in (1.0, -1.0):
+        raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from 1, -1)")
+    return value
+
+
 def add_column_options(p: argparse.ArgumentParser,
                        title: str = "columns, units and signs (every trace, also of a "
                                     "manifest)") -> None:
     """Column names, units and signs of a text table or stream (``fit``, ``replay``,
     ``follow``, ``map``; read back by :func:`read_options_from_args`)."""
     c = p.add_argument_group(title)
-    for q, unit in (("time", "s"), ("z", "m"), ("force", "N")):
-        c.add_argument(f"--{q}-column", metavar="NAME", help=f"column holding {q}")
+    for q, unit, example in (("time", "s", "timestamp"), ("z", "m", "tcp_z_mm"),
+                             ("force", "N", "fz")):
+        c.add_argument(f"--{q}-column", metavar="NAME",
+                       help=f"column holding {q}, spelled as in the header (e.g. {example})")
         c.add_argument(f"--{q}-unit", metavar="UNIT", help=f"unit of {q} (default {unit})")
-    c.add_argument("--force-sign", type=float, choices=(1.0, -1.0), default=None,
+    c.add_argument("--force-sign", type=sign, metavar=SIGN_METAVAR, default=None,
                    help="-1 if pressing gives negative force (default +1; for a ROS 2 bag the "
                         "sign that makes the force grow as the tip goes down)")
-    c.add_argument("--z-sign", type=float, choices=(1.0, -1.0), default=1.0,
+    c.add_argument("--z-sign", type=sign, metavar=SIGN_METAVAR, default=1.0,
                    help="-1 if z is down-positive")
 
 

@@ -60,7 +60,9 @@ them for a file that says otherwise.  The force is raw: not tared, its baseline 
 
 A single-curve file gives a trace named after the file (``force-save-example``); a force map
 (``.jpk-force-map``, QI data) gives one trace per curve, ``<stem>-<index>``, a campaign whose
-traces carry their x, y.  Needs the optional extra ``pip install 'palpbayes[afm]'``.
+traces carry their x, y.  Needs the optional extra ``afm`` (afmformats: ``pip install -e
+'.[afm]' -c requirements/constraints.txt`` in a clone of the repository, ``pip install
+'palpbayes[afm]'`` from a package index; the error when it is missing says which).
 """
 
 from __future__ import annotations
@@ -77,6 +79,7 @@ from ..errors import DataFileError, InputError
 from ..trace import SEGMENTS, IndentationTrace, parse_segments
 from .afm_load import AFM_SUFFIXES, load_afm_curves
 from .afm_workshop import is_afm_workshop_zip
+from .motion_segments import segment_durations
 from .tabular import check_plausible, split_trace_metadata, validate_force_sign
 
 __all__ = ["AFM_SUFFIXES", "AFM_MODALITIES", "MOTION_FRACTION", "IGNORED", "AFMCurveInfo",
@@ -103,8 +106,10 @@ _META = {"position x": "x_m", "position y": "y_m", "grid index x": "grid_index_x
 @dataclass(frozen=True)
 class AFMCurveInfo:
     """What ``palpbayes inspect`` shows of one curve: index, modality, columns, points per
-    afmformats segment, position [m] (None when the file has none), and what each afmformats
-    segment is (``{0: "approach", 1: "retract"}``; :func:`classify_segments`)."""
+    afmformats segment, position [m] (None when the file has none), what each afmformats
+    segment is (``{0: "approach", 1: "retract"}``; :func:`classify_segments`), and how long
+    each lasts [s], measured on the curve's time column
+    (:func:`~palpbayes.io.motion_segments.segment_durations`; empty without one)."""
 
     index: int
     modality: str
@@ -113,6 +118,7 @@ class AFMCurveInfo:
     x_m: float | None
     y_m: float | None
     segment_names: dict[int, str] = field(default_factory=dict)
+    durations: dict[int, float] = field(default_factory=dict)
 
 
 def is_afm_file(path: str | os.PathLike) -> bool:
@@ -369,8 +375,9 @@ def read_afm(
     InputError
         An unknown segment name or sign.
     MissingExtraError
-        afmformats is not installed: "reading .jpk-force files needs the optional extra:
-        pip install 'palpbayes[afm]'".
+        afmformats is not installed: "reading .jpk-force files needs the optional extra afm
+        (afmformats is not installed): pip install ..."
+        (:func:`palpbayes.io.extras.install_command`).
     """
     force_sign = validate_force_sign(force_sign, allow_auto=False)
     if z_sign not in (1, -1):
@@ -410,17 +417,20 @@ def read_afm(
 def describe_afm(path: str | os.PathLike, meta_override: dict | None = None
                  ) -> list[AFMCurveInfo]:
     """The curves of an AFM file: modality, columns, points per segment, what each segment is
-    (:func:`classify_segments`), position."""
+    (:func:`classify_segments`), position, and each segment's duration measured on the time
+    column (not the header's ``duration`` fields)."""
     data, _ = load_afm_curves(path, meta_override)
     out = []
     for i, c in enumerate(data):
         seg = _segment_ids(c)
         values, counts = np.unique(seg, return_counts=True)
         meta = curve_metadata(c)
+        durations = (segment_durations(np.asarray(c["time"], dtype=float), seg)
+                     if "time" in set(c.columns) else {})
         out.append(AFMCurveInfo(i, c.modality, tuple(c.columns),
                                 {int(v): int(n) for v, n in zip(values, counts, strict=True)},
                                 meta.get("x_m"), meta.get("y_m"),
-                                classify_segments(seg, _height(c), c.modality)))
+                                classify_segments(seg, _height(c), c.modality), durations))
     return out
 
 

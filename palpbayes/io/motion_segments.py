@@ -6,6 +6,10 @@ column), :func:`segments_from_motion` gives the per-sample codes that
 
     trace = trace.replace(segment=segments_from_motion(trace.time, trace.z))
     loading = trace.segments("approach,hold")
+
+:func:`segment_durations` measures how long each segment of a recording lasts on its time
+axis (``palpbayes inspect`` shows an AFM curve's from its data, not from the header, whose
+``duration`` fields can be wrong: a JPK stress-relaxation file that holds 30 s says 1 s).
 """
 
 from __future__ import annotations
@@ -19,8 +23,8 @@ from ..errors import InputError
 from ..noise import mad_sd
 from ..trace import SEGMENTS
 
-__all__ = ["segments_from_motion", "default_hold_tolerance", "SMOOTH_WINDOW",
-           "NOISE_MULTIPLE", "RANGE_FRACTION"]
+__all__ = ["segments_from_motion", "segment_durations", "default_hold_tolerance",
+           "SMOOTH_WINDOW", "NOISE_MULTIPLE", "RANGE_FRACTION"]
 
 #: Samples in the running median that smooths z before the deepest point is looked for, so that
 #: a single noise spike neither sets the deepest z nor ends the hold.
@@ -155,3 +159,47 @@ def segments_from_motion(time, z, *, hold_tolerance: float | None = None) -> np.
     codes[first:last + 1] = _HOLD
     codes[last + 1:] = _RETRACT
     return codes
+
+
+def segment_durations(time, segment) -> dict[int, float]:
+    """[s] How long each segment of a recording lasts, measured on its time axis.
+
+    A segment's duration is the time from its first sample to its last plus one sample period
+    of that segment (the median step between its samples), so that segments recorded back to
+    back add up to the recording's length, whatever rate each was sampled at (a JPK
+    stress-relaxation curve samples its approach at 2048 Hz and its hold at 256 Hz).  A segment
+    of one sample lasts 0 s.
+
+    Parameters
+    ----------
+    time
+        [s] Sample times, one per sample.
+    segment
+        Segment label per sample (afmformats' segment numbers, or the codes of
+        :data:`~palpbayes.trace.SEGMENTS`); each label's samples are one segment.
+
+    Returns
+    -------
+    dict
+        Segment label (int) -> duration [s], in order of each segment's first sample.
+
+    Raises
+    ------
+    InputError
+        If time and segment differ in length or time holds NaN/inf.
+    """
+    t = np.asarray(time, dtype=float)
+    seg = np.asarray(segment)
+    if t.shape != seg.shape or t.ndim != 1:
+        raise InputError(f"time has shape {t.shape} but segment {seg.shape}; give one segment "
+                         "label per sample")
+    if not np.isfinite(t).all():
+        raise InputError("time has non-finite values (NaN/inf); repair them before measuring "
+                         "the segments")
+    ids, first = np.unique(seg, return_index=True)
+    out = {}
+    for i in ids[np.argsort(first)]:
+        ts = t[seg == i]
+        step = float(np.median(np.diff(ts))) if ts.size > 1 else 0.0
+        out[int(i)] = float(ts[-1] - ts[0]) + step
+    return out

@@ -44,7 +44,8 @@ from .tabular import (
 from .units import FORCE_UNITS, LENGTH_UNITS, TIME_UNITS, force_factor, length_factor, time_factor
 
 __all__ = ["read_trace", "read_frame", "write_trace", "trace_from_frame", "check_plausible",
-           "sniff_delimiter", "MAX_Z_SPAN_M", "MAX_FORCE_N"]
+           "sniff_delimiter", "MAX_Z_SPAN_M", "MAX_FORCE_N", "ROBOT_LOG_NAMES",
+           "robot_log_column", "column_hint", "suggest_read_options"]
 
 _QUANTITIES = {"time": TIME_UNITS, "z": LENGTH_UNITS, "force": FORCE_UNITS}
 _FACTORS = {"time": time_factor, "z": length_factor, "force": force_factor}
@@ -77,13 +78,54 @@ def _segment_column(df: pd.DataFrame, source: str) -> np.ndarray | None:
 
 
 #: Column names of common robot logs, per quantity (lower case): a file that has one of them
-#: instead of the canonical name gets the option that maps it in its error message (the
-#: mapping is not silent: sign and unit conventions differ between loggers).
+#: instead of the canonical name, alone or with a unit suffix (``tcp_z_mm``), gets the options
+#: that map it in its error message (the mapping is not silent: sign and unit conventions
+#: differ between loggers).
 ROBOT_LOG_NAMES = {
     "time": ("timestamp", "t", "time", "stamp", "header.stamp", "elapsed_s"),
     "z": ("actual_tcp_pose_2", "tcp_z", "pose_z", "z_tcp", "position_z", "tool_z"),
     "force": ("fz", "force_z", "actual_tcp_force_2", "ft_fz", "wrench.force.z", "tcp_fz"),
 }
+
+
+def robot_log_column(names, quantity: str) -> tuple[str, str | None] | None:
+    """The column of a common robot log among ``names`` that holds ``quantity`` (``time``,
+    ``z`` or ``force``), and its unit when the name ends with one: ``timestamp`` -> (
+    ``timestamp``, None), ``tcp_z_mm`` -> (``tcp_z_mm``, ``mm``); matched case-insensitively
+    (:data:`ROBOT_LOG_NAMES`); None when there is none."""
+    lower = {str(c).strip().lower(): str(c) for c in names}
+    for name in ROBOT_LOG_NAMES[quantity]:
+        if name in lower:
+            return lower[name], None
+        for u in _QUANTITIES[quantity]:
+            if f"{name}_{u}".lower() in lower:
+                return lower[f"{name}_{u}".lower()], u
+    return None
+
+
+def column_hint(names, quantity: str, wanted: str, given: bool) -> str:
+    """What to add to "missing column ``wanted`` (for ``quantity``)" when the columns are
+    ``names``: the column that differs from it in case (or surrounding blanks) only, else,
+    unless the user ``given`` the name, a robot log's column (:func:`robot_log_column`) with
+    the options that map it; '' when neither.
+
+    Examples: ``" (the header's 'Fz' differs from it in case only: --force-column Fz)"``,
+    ``" (a robot log's 'tcp_z_mm'? map it with --z-column tcp_z_mm --z-unit mm, and check
+    its sign)"``.
+    """
+    key = wanted.strip().lower()
+    same = next((str(c) for c in names if str(c).strip().lower() == key and str(c) != wanted),
+                None)
+    if same is not None:
+        return (f" (the header's {same!r} differs from it in case only: --{quantity}-column "
+                f"{same})")
+    found = None if given else robot_log_column(names, quantity)
+    if found is None:
+        return ""
+    col, unit = found
+    option = f"--{quantity}-column {col}" + (f" --{quantity}-unit {unit}" if unit else "")
+    check = "its sign" if unit else "its unit and sign"
+    return f" (a robot log's {col!r}? map it with {option}, and check {check})"
 
 
 def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: str | None
@@ -92,7 +134,8 @@ def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: st
     (:func:`_find_columns` reports every problem of a file at once)."""
     if explicit is not None:
         if explicit not in df.columns:
-            return f"column {explicit!r} (given for {quantity}) is missing"
+            return (f"column {explicit!r} (given for {quantity}) is missing"
+                    f"{column_hint(df.columns, quantity, explicit, given=True)}")
         return explicit, unit or ("s" if quantity == "time" else "m" if quantity == "z" else "N")
     lower = {str(c).strip().lower(): c for c in df.columns}
     for u in _QUANTITIES[quantity]:
@@ -103,10 +146,41 @@ def _find_column(df: pd.DataFrame, quantity: str, explicit: str | None, unit: st
         return lower[quantity], unit or ("s" if quantity == "time" else
                                          "m" if quantity == "z" else "N")
     canon = {"time": "time_s", "z": "z_m", "force": "force_n"}[quantity]
-    known = next((lower[n] for n in ROBOT_LOG_NAMES[quantity] if n in lower), None)
-    hint = (f" (a robot log's {known!r}? map it with --{quantity}-column {known}, and check "
-            f"its unit and sign)" if known is not None else "")
-    return f"missing column '{canon}' (for {quantity}){hint}"
+    return (f"missing column '{canon}' (for {quantity})"
+            f"{column_hint(df.columns, quantity, canon, given=False)}")
+
+
+def suggest_read_options(names) -> tuple[dict[str, dict[str, str]], list[str]]:
+    """The reader options that read a table whose header is ``names``, as far as the header
+    tells them (``palpbayes inspect`` prints them as ``--*-column`` and ``--*-unit``).
+
+    A quantity the reader finds without options (``time_s``, ``z_mm`` ..., any case; z of a
+    table of joint angles) needs none; one held by a robot log's column
+    (:func:`robot_log_column`: ``timestamp``, ``tcp_z_mm``, ``fz`` ...) gets its column and,
+    when the name ends with one, its unit.  Signs are not in a header.
+
+    Returns
+    -------
+    options, unfound
+        ``{"columns": {...}, "units": {...}}`` (each only when needed), and the quantities
+        (``time``, ``z``, ``force``) the header does not tell.
+    """
+    frame = pd.DataFrame(columns=[str(c) for c in names])
+    lower = {str(c).strip().lower() for c in names}
+    joints = not any(c.startswith("z") for c in lower) and any(c.startswith("q0_") for c in lower)
+    columns, units, unfound = {}, {}, []
+    for q in ("time", "z", "force"):
+        if (q == "z" and joints) or not isinstance(_find_column(frame, q, None, None), str):
+            continue
+        found = robot_log_column(names, q)
+        if found is None:
+            unfound.append(q)
+            continue
+        columns[q] = found[0]
+        if found[1] is not None:
+            units[q] = found[1]
+    options = {k: v for k, v in (("columns", columns), ("units", units)) if v}
+    return options, unfound
 
 
 def _find_columns(df: pd.DataFrame, columns: dict[str, str], units: dict[str, str],

@@ -40,6 +40,20 @@ exact E*: ~±3.5 % for a half-space at nu 0.3, ~±7 % for a bonded layer at nu 0
 :class:`StoppingRule` tests its target on either (``target_on``); a full target below the
 floor cannot fire, and the state says so.  :meth:`OnlineEstimator.model_checks` runs the
 offline fit's adequacy checks (:mod:`palpbayes.checks`) on the samples so far.
+
+**Memory.**  The sums are per node, but a node the refinement adds needs every sample fitted,
+and so do the relaxation flag and the model checks: the samples are kept, within bounds, so
+that a long stream (an hour at 800 Hz is 2.9 million samples) does not grow without end.
+Before the contact the estimator keeps the last :data:`PRE_CONTACT_SAMPLES` (with the chunk
+being added): the baseline, the contact onset and the fit read those, the same as reading a
+recording that starts there.  From the contact on it keeps :data:`MAX_CONTACT_SAMPLES`; the
+samples after them still update the sums of the surface nodes there are (exactly), but the
+grid is no longer refined and the relaxation flag sees the samples kept, which the state
+flags.  The model checks run on at most :data:`CHECK_SAMPLES` of the samples kept, thinned
+evenly beyond (the lag-one correlation of the noise taken to the stride's power): their
+posterior-predictive check holds ~8 kB per sample.  A press at the paper's 800 Hz (~4,000
+samples) or an AFM approach (~2,000-12,000) is within every bound, its estimates, stops and
+checks those of an estimator that keeps everything.
 """
 
 from __future__ import annotations
@@ -74,7 +88,8 @@ from ..intervals import LEVEL, central, hull
 from ..noise import sigma_from_pp
 
 __all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE", "HOLD_WINDOW",
-           "HOLD_TOLERANCE", "RELAX_N_SE", "TARGET_ON", "BUDGET_DRAWS"]
+           "HOLD_TOLERANCE", "RELAX_N_SE", "TARGET_ON", "BUDGET_DRAWS", "PRE_CONTACT_SAMPLES",
+           "MAX_CONTACT_SAMPLES", "CHECK_SAMPLES"]
 
 #: Nodes whose log density falls this far below the best are no longer updated.
 PRUNE = 28.0
@@ -88,6 +103,15 @@ RELAX_N_SE = 5.0
 TARGET_ON = ("full", "stat")
 #: Posterior draws (and budget input draws) behind the full interval of an update.
 BUDGET_DRAWS = 4000
+#: Samples kept from before the contact, the last ones (25 s at 800 Hz, 1 s at 20 kHz): the
+#: baseline, the contact onset and the fit read these (module docstring, "Memory").
+PRE_CONTACT_SAMPLES = 20_000
+#: Samples kept from the contact on (10 min at 800 Hz): later ones update the sums of the
+#: surface nodes there are, but the grid is no longer refined (flagged).
+MAX_CONTACT_SAMPLES = 500_000
+#: Most samples the model checks run on, thinned evenly beyond (their posterior-predictive
+#: check held 3.2 GB for 400,000 samples).
+CHECK_SAMPLES = 20_000
 #: Fewer draws for an update whose full interval is only shown (``follow``'s lines): the draws
 #: cost ~5 ms per 1,000 (:meth:`palpbayes.bayes.exact.ExactPosterior.draws`); an update where
 #: a target on the full interval may fire (the statistical interval is within it) takes
@@ -275,10 +299,15 @@ class OnlineEstimator:
         if self.noise not in ("gaussian", "ar1"):
             raise InputError(f"online estimation takes noise 'gaussian' or 'ar1', not "
                              f"{self.noise!r}")
+        # the samples kept (module docstring, "Memory"): the first _n of _t, _z, _f; the
+        # samples seen, those dropped before the contact, and the last one (t, z, F)
         self._t = np.empty(0)
         self._z = np.empty(0)
         self._f = np.empty(0)
         self._n = 0
+        self._seen = self._dropped = 0
+        self._last = (math.nan, math.nan, math.nan)
+        self._peak = math.nan
         self._contact: int | None = None
         self._gram: Gram | None = None
         self._active: np.ndarray | None = None
@@ -306,6 +335,34 @@ class OnlineEstimator:
         if not (np.isfinite(t).all() and np.isfinite(z).all() and np.isfinite(f).all()):
             raise InputError("update: t, z and F must be finite (drop NaN samples first)")
         return t, z, f
+
+    @property
+    def n_kept(self) -> int:
+        """Samples kept in memory (module docstring, "Memory"): at most
+        :data:`PRE_CONTACT_SAMPLES` + a chunk before the contact, and
+        :data:`MAX_CONTACT_SAMPLES` more from it on."""
+        return self._n
+
+    @property
+    def _unkept(self) -> int:
+        """Samples after the contact beyond :data:`MAX_CONTACT_SAMPLES`, not kept."""
+        return self._seen - self._dropped - self._n
+
+    def _keep(self, t: np.ndarray, z: np.ndarray, f: np.ndarray) -> None:
+        """Keep the new samples within the bounds of the module docstring ("Memory"): before
+        the contact, all of them and the last :data:`PRE_CONTACT_SAMPLES` of the older ones;
+        from the contact on, up to :data:`MAX_CONTACT_SAMPLES` samples."""
+        if self._contact is None and self._n > PRE_CONTACT_SAMPLES:
+            drop = self._n - PRE_CONTACT_SAMPLES
+            for name in ("_t", "_z", "_f"):
+                a = getattr(self, name)
+                a[:PRE_CONTACT_SAMPLES] = a[drop:self._n]
+            self._n = PRE_CONTACT_SAMPLES
+            self._dropped += drop
+        elif self._contact is not None:
+            room = max(self._contact + MAX_CONTACT_SAMPLES - self._n, 0)
+            t, z, f = t[:room], z[:room], f[:room]
+        self._append(t, z, f)
 
     def _append(self, t: np.ndarray, z: np.ndarray, f: np.ndarray) -> None:
         need = self._n + t.size
@@ -387,13 +444,17 @@ class OnlineEstimator:
         t, z, force = self._arrays(t, z, force)
         hit = self.limit(z, force)
         self._updates += 1
-        start = self._n
-        self._append(t, z, force)
-        if self._contact is None:
+        self._seen += t.size
+        if t.size:
+            self._last = (float(t[-1]), float(z[-1]), float(force[-1]))
+        contact = self._contact is not None
+        self._keep(t, z, force)
+        if not contact:
             self._detect()
-        elif start < self._n:
-            new = slice(start, self._n)
-            self._gram_active().extend(self._z[new], self._columns(new), self.model)
+        elif t.size:  # every sample updates the sums, kept or not
+            y = force - self._base.level
+            self._gram_active().extend(z, fixed_columns(y, None), self.model)
+            self._peak = max(self._peak, float(y.max()))
         if self._contact is not None:
             self._refresh()
         self.state = self._make_state("" if hit is None else hit[1], on_stop)
@@ -425,6 +486,7 @@ class OnlineEstimator:
                              f"{MIN_BASELINE_POINTS} samples before contact")
         self._contact = int(inside[-1]) + 1
         self._base, self._f_unc = base, float(f_unc)
+        self._peak = float(np.max(self._f[:n] - base.level))
         pp = self.noise_pp if self.noise_pp is not None else base.noise_pp
         self._sigma_c = sigma_from_pp(pp)
         z_c = float(self._z[self._contact - 1])
@@ -468,8 +530,10 @@ class OnlineEstimator:
         g = self._gram_active()
         post = self._node_posterior(g)
         lp = log_marginal_phi(post.logp, self._phi)
+        # a node added now would miss the samples not kept: none is added once there are some
+        frozen = {"max_nodes": g.z.size} if self._unkept else {}
         _, _, self._complete = refine_grid(self._z_lo, self._z_top, evaluate,
-                                           start=(g.z, lp))
+                                           start=(g.z, lp), **frozen)
         for other in added:
             g = g.concat(other)
         self._gram = g
@@ -545,16 +609,17 @@ class OnlineEstimator:
         return state
 
     def _state(self, limit: str, say: Callable[[OnlineState], None]) -> OnlineState:
-        n = self._n
+        n = self._seen
         if n == 0:  # an empty first chunk
             return OnlineState(0, float("nan"), float("nan"), False, 0, 0.0, 0.0, None, None, "")
-        t, z = float(self._t[n - 1]), float(self._z[n - 1])
+        t, z, last_force = self._last
         if self._contact is None:
             return OnlineState(n, t, z, False, 0, 0.0, 0.0, None, None, "")
-        peak = float(np.max(self._f[:n] - self._base.level))
-        force = float(self._f[n - 1] - self._base.level)
+        peak = self._peak
+        force = last_force - float(self._base.level)
+        n_contact = n - self._dropped - self._contact
         if not np.isfinite(self._post.logp).any():  # no surface has enough samples in contact
-            early = OnlineState(n, t, z, True, n - self._contact, 0.0, peak, None, None, "",
+            early = OnlineState(n, t, z, True, n_contact, 0.0, peak, None, None, "",
                                 ("no surface height has enough samples in contact yet",),
                                 force=force)
             return replace(early, stop=limit or self.rule.reason(early))
@@ -572,18 +637,24 @@ class OnlineEstimator:
         if relax:
             flags.append(relax)
         # the force's unit, weighed once E is known to within a factor of about 1.5
-        scale = force_scale_flag(self.model.tip, zs.median - float(self._z[:n].min()),
+        scale = force_scale_flag(self.model.tip, zs.median - float(self._z[:self._n].min()),
                                  E.median, self._base.noise_pp if self._base.reliable else None,
                                  self.noise_pp) if E.rel_half_width < 0.5 else None
         if scale:
             flags.insert(0, scale)
+        if self._unkept:
+            flags.append(f"more than {MAX_CONTACT_SAMPLES:,} samples in contact: the later "
+                         f"{self._unkept:,} update the estimate but are not kept, so the "
+                         "surface grid is no longer refined and the relaxation flag and the "
+                         "model checks see the first ones (send the approach and the "
+                         "indentation only)")
         if self._phi.size > 1:
             w_phi = np.exp(post.log_mass - post.log_mass.max()).sum(axis=0)
             if w_phi[[0, -1]].max() > 0.5 * w_phi.sum():
                 flags.append("noise correlation phi at the end of its grid: the residuals wander "
                              "like drift, or the noise is correlated beyond the prior's ±0.99")
         rule = self.rule
-        partial = OnlineState(n, t, z, True, n - self._contact, max(zs.median - z, 0.0),
+        partial = OnlineState(n, t, z, True, n_contact, max(zs.median - z, 0.0),
                               peak, E, zs, "", tuple(flags), force=force)
         # a stop that needs no full interval (a limit, a statistical target) is said before
         # the budget's draws are made
@@ -661,8 +732,11 @@ class OnlineEstimator:
 
     def model_checks(self, seed: int = 0) -> list[CheckResult]:
         """The offline fit's adequacy checks (:func:`palpbayes.checks.run_checks`: exponent,
-        residual structure, depth consistency, posterior-predictive) on every sample so far,
-        at the posterior medians, graded against the statistical interval of E*.
+        residual structure, depth consistency, posterior-predictive) on the samples kept (every
+        sample of a press: module docstring, "Memory"), at most :data:`CHECK_SAMPLES` of them,
+        thinned evenly beyond (the last always in, the noise's lag-one correlation taken to
+        the stride's power), at the posterior medians, graded against the statistical
+        interval of E*.
 
         Returns
         -------
@@ -677,8 +751,12 @@ class OnlineEstimator:
         lo, hi = central(draws["E_star"], self.level)
         lag1 = self._base.lag1 if self._base.reliable else None
         n = self._n
+        stride = -(-n // CHECK_SAMPLES)
+        rows = slice(None, n) if stride == 1 else np.arange(n - 1, -1, -stride)[::-1]
+        if lag1 is not None and stride > 1:
+            lag1 = lag1 ** stride  # AR(1): the correlation at lag k is phi^k
         try:
-            return run_checks(self._z[:n], self._f[:n], self.model, z_surf=med["z_surf"],
+            return run_checks(self._z[rows], self._f[rows], self.model, z_surf=med["z_surf"],
                               estar=med["E_star"], f0=med["F0"], sigma=med["sigma"],
                               draws=draws, baseline_lag1=lag1, baseline="constant",
                               z_ref=self._z_top, rng=seed,

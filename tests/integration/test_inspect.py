@@ -59,29 +59,46 @@ def test_a_position_at_the_stage_origin_is_shown_as_zero_not_in_fractions_of_a_p
     assert "at x = 0 m, y = 0 m" in out
     assert " pm" not in out
     out = _inspect(afm_dir / QI, capsys)
-    assert "curve 0: approach 300, retract 300 points  at x = -4.9609 µm, y = -6.9609 µm" in out
+    assert ("curve 0: approach 300 points (0.028 s), retract 300 (0.028 s)  at x = -4.9609 µm, "
+            "y = -6.9609 µm") in out
 
 
 def test_inspect_shows_the_calibration_and_approach_settings_the_file_records(
         afm_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """Spring constant, deflection sensitivity, setpoint, speed, rate and duration from
-    afmformats' metadata, in SI with prefixes; none for the AFM Workshop zip (which lacks
-    them: the placeholders inspect reads it with are not shown)."""
+    """Spring constant, deflection sensitivity, setpoint, speed and rate from afmformats'
+    metadata, in SI with prefixes (the durations come from the data: the next test); none for
+    the AFM Workshop zip (which lacks them: the placeholders inspect reads it with are not
+    shown)."""
     (cal,) = afm_calibration(afm_dir / SPOT3)
     assert cal["spring constant"] == pytest.approx(0.043493666407368466)
     assert cal["sensitivity"] == pytest.approx(7.000143623002982e-08)
     assert cal["setpoint"] == pytest.approx(4e-9)
     out = _inspect(afm_dir / SPOT3, capsys)
     assert "  calibration: spring constant 0.04349 N/m, deflection sensitivity 70 nm/V\n" in out
-    assert ("  approach: setpoint 4 nN, speed 5 µm/s, sampled at 2 kHz, duration 1 s\n"
-            in out)
+    assert "  approach: setpoint 4 nN, speed 5 µm/s, sampled at 2 kHz\n" in out
+    assert "curve 0: approach 2000 points (1 s), retract 2000 (1 s)" in out
     out = _inspect(afm_dir / RELAX, capsys)
     assert "spring constant 1.068 N/m, deflection sensitivity 110.3 nm/V" in out
-    assert "hold 1 s" in out
     placeholders = {"spring constant": 1.0, "sensitivity": 1.0}
     assert all(c == {} for c in afm_calibration(afm_dir / WORKSHOP, placeholders))
     out = _inspect(afm_dir / WORKSHOP, capsys)
     assert "calibration: none recorded" in out and "spring constant 1 N/m" not in out
+
+
+def test_the_hold_is_measured_on_the_data_not_read_from_the_header(
+        afm_dir: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The JPK stress-relaxation cell holds 30 s (7,680 points at 256 Hz) but its header's
+    ``duration intermediate`` says 1 s, which inspect printed as ``hold 1 s`` (issue 58, item
+    7): each segment's duration is now measured on the time column, and inspect says so."""
+    out = _inspect(afm_dir / RELAX, capsys)
+    assert ("curve 0: approach 256 + 2048 points (1 + 1 s), hold 7680 (30 s), retract 1951 "
+            "(0.9526 s)") in out
+    assert "durations measured on the time column" in out
+    assert "hold 1 s" not in out and "duration 1 s" not in out
+    # the Workshop zip has no time column: nothing measured, nothing claimed
+    out = _inspect(afm_dir / WORKSHOP, capsys)
+    assert "curve 0: approach 391, retract 391 points" in out
+    assert "durations measured" not in out
 
 
 def test_the_printed_fit_command_runs_with_the_radius_filled_in(
@@ -145,3 +162,39 @@ def test_the_workshop_zips_fit_command_runs_once_filled_in(
     assert main([*fit, "--method", "lsq"]) == 0, capsys.readouterr().err
     out = tmp_path / fit[fit.index("--out") + 1]
     assert (out / "summary.csv").is_file()
+
+
+def test_a_robot_csv_gets_a_fit_command_with_the_options_its_header_and_data_tell(
+        capsys: pytest.CaptureFixture[str], tmp_path: Path,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 58, item 7: inspect printed a plain CSV's columns and no fit command.  The
+    README's robot log (timestamp, tcp_z_mm, fz; pressing reads negative) now gets
+    ``--time-column timestamp --z-column tcp_z_mm --z-unit mm --force-column fz`` from its
+    header and ``--force-sign -1`` from its data, and the command fits once R is filled in; a
+    canonical CSV needs no option; a header palpbayes does not know gets placeholders."""
+    from palpbayes.contact import Tip
+    from palpbayes.sim import simulate_trace
+
+    tr = simulate_trace(6e5, Tip("sphere", radius=0.01), thickness=0.02, depth=3e-3,
+                        force_offset=0.21, rng=1, rate=250.0, base=None)
+    monkeypatch.chdir(tmp_path)
+    pd.DataFrame({"timestamp": tr.time, "tcp_z_mm": 1e3 * tr.z, "fz": -tr.force}).to_csv(
+        "press.csv", index=False)
+    out = _inspect(Path("press.csv"), capsys)
+    (argv,) = _commands(out)
+    assert argv[:4] == ["fit", "press.csv", "--out", "press-fit"]
+    assert " ".join(argv[4:]) == ("--time-column timestamp --z-column tcp_z_mm --z-unit mm "
+                                  "--force-column fz --force-sign -1 --tip sphere --radius 5e-6")
+    assert "timestamp, fz: no unit in the name, read in s, N" in out
+    assert main([*argv[:-1], "0.01", "--engine", "exact", "--nu", "0.3"]) == 0, \
+        capsys.readouterr().err
+    summary = pd.read_csv(tmp_path / "press-fit" / "summary.csv")
+    assert summary["E_pa"].iloc[0] == pytest.approx(6e5, rel=0.05)
+
+    pd.DataFrame({"time_s": tr.time, "z_m": tr.z, "force_n": tr.force}).to_csv(
+        "plain.csv", index=False)
+    (argv,) = _commands(_inspect(Path("plain.csv"), capsys))
+    assert argv[4:] == ["--tip", "sphere", "--radius", "5e-6"]
+    pd.DataFrame({"t": [0, 1], "height": [0, 1], "load": [0, 1]}).to_csv("odd.csv", index=False)
+    out = _inspect(Path("odd.csv"), capsys)
+    assert "--z-column Z --force-column FORCE" in out and "header names none" in out

@@ -120,7 +120,8 @@ def test_inspect_lists_bag_topics_and_afm_curves(sim, tmp_path, capsys, spot3):
     assert main(["inspect", str(spot3)]) == 0
     out = capsys.readouterr().out
     assert "AFM file, 1 curve(s) (force-distance)" in out
-    assert "curve 0: approach 2000, retract 2000 points" in out and "x = -16.667 µm" in out
+    assert "curve 0: approach 2000 points (1 s), retract 2000 (1 s)" in out
+    assert "x = -16.667 µm" in out
 
 
 def test_bag_errors_are_one_line_with_exit_status_2(sim, tmp_path, capsys, spot3):
@@ -147,5 +148,6 @@ def test_a_missing_extra_is_a_one_line_error(monkeypatch, capsys, tmp_path, spot
     monkeypatch.setitem(sys.modules, "afmformats", None)
     assert main(["fit", str(spot3), "--out", str(tmp_path / "r"), *AFM]) == 2
     err = capsys.readouterr().err
-    assert "reading .jpk-force files needs the optional extra: pip install 'palpbayes[afm]'" \
-        in err
+    assert "reading .jpk-force files needs the optional extra afm (afmformats is not " \
+        "installed): pip install -e " in err and "pip install 'palpbayes[afm]'" in err
+    assert len(err.strip().splitlines()) == 1

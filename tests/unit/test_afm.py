@@ -15,6 +15,7 @@ from afmfiles import write_afm_h5
 
 from palpbayes.contact import Tip
 from palpbayes.errors import DataFileError, MissingExtraError
+from palpbayes.io import extras
 from palpbayes.io.afm import describe_afm, read_afm
 from palpbayes.io.recording import read_recording, recording_kind
 from palpbayes.io.trace_csv import read_trace
@@ -149,7 +150,31 @@ def test_the_missing_extra_is_named(monkeypatch, spot3):
     monkeypatch.setitem(sys.modules, "afmformats", None)
     with pytest.raises(MissingExtraError) as err:
         read_afm(spot3)
-    assert str(err.value).startswith("reading .jpk-force files needs the optional extra: "
-                                     "pip install 'palpbayes[afm]'")
+    assert str(err.value).startswith("reading .jpk-force files needs the optional extra afm "
+                                     "(afmformats is not installed): pip install ")
     with pytest.raises(MissingExtraError, match=r"reading .jpk-force-map files needs"):
         read_recording("map.jpk-force-map")
+
+
+def test_the_missing_extras_command_is_the_readmes_and_names_the_index_one(monkeypatch):
+    """Issue 58, item 7: the error said ``pip install 'palpbayes[afm]'``, the README (an
+    install from the clone) ``pip install -e '.[afm]' -c requirements/constraints.txt``.  From
+    a clone the error now gives the README's command with the clone's absolute paths (it works
+    from any folder) and, in brackets, the index one; without a clone, the index one first.
+    One line either way."""
+    root = Path(__file__).resolve().parents[2]
+    monkeypatch.setitem(sys.modules, "afmformats", None)
+    with pytest.raises(MissingExtraError) as err:
+        read_recording("cells.jpk-force")
+    msg = str(err.value)
+    assert "\n" not in msg
+    assert (f"pip install -e '{root}[afm]' -c {root}/requirements/constraints.txt (a palpbayes "
+            "installed from a package index: pip install 'palpbayes[afm]')") in msg
+    assert "pip install -e '.[afm]' -c requirements/constraints.txt" in (
+        root / "README.md").read_text()  # the same command, run in the clone's root
+    monkeypatch.setattr(extras, "source_root", lambda: None)
+    with pytest.raises(MissingExtraError) as err:
+        read_recording("cells.jpk-force")
+    assert str(err.value).endswith(
+        ": pip install 'palpbayes[afm]' (a clone of the repository: pip install -e '.[afm]' "
+        "-c requirements/constraints.txt in its root)")

@@ -190,6 +190,11 @@ def test_the_library_listener_streams_to_the_estimator(recorded):
 BAD = [  # (stream, line number, words the message must have)
     ("time_s,z_m,force_n\n0.1,0.1,0.0\n0.2,0.1\n", 3, ["2 fields", "header names 3"]),
     ("time_s,z,force_n\n0.1,0.1,0.0\n", 1, ["missing column 'z_m'", "--z-column"]),
+    ("timestamp,tcp_z_mm,fz\n0.1,100,0.0\n", 1,
+     ["'z_m' (a robot log's 'tcp_z_mm'? map it with --z-column tcp_z_mm --z-unit mm",
+      "'time_s' (a robot log's 'timestamp'? map it with --time-column timestamp"]),
+    ("Time_S,z_m,force_n\n0.1,0.1,0.0\n", 1,
+     ["'time_s' (the header's 'Time_S' differs from it in case only: --time-column Time_S)"]),
     ("0.1,0.1,0.0\n", 1, ["missing column", "starts with its header"]),
     ("time_s,z_m,force_n\n0.1,0.1,0.0\n0.2,nan,0.0\n", 3, ["z_m = 'nan' is not finite"]),
     ("time_s,z_m,force_n\n0.1,0.1,0.0\n0.2,0.1,abc\n", 3, ["force_n = 'abc' is not a number"]),

@@ -51,3 +51,27 @@ def test_the_target_help_keeps_its_promise(helps):
         assert "--target-on {full,stat}" in text
         assert "both intervals are printed" in text
         assert "the budget interval is printed beside it" not in text
+
+
+#: The subcommands that take the trace's sign options (one argparse group, cli/options.py).
+SIGNED = ("fit", "replay", "follow", "map")
+
+
+@pytest.mark.parametrize("name", SIGNED)
+def test_the_sign_options_show_and_take_1_and_minus_1(helps, capsys, name):
+    """Issue 58, item 7: ``--force-sign {1.0,-1.0}`` in the help and "invalid choice: 2.0
+    (choose from 1.0, -1.0)" in the error; now ``{1,-1}`` in both, and the value stays the
+    float the readers take."""
+    assert "--force-sign {1,-1}" in helps[name] and "--z-sign {1,-1}" in helps[name]
+    assert "1.0" not in helps[name]
+    parser = build_parser()
+    head = {"fit": ["x.csv", "--out", "r"], "replay": ["x.csv"], "follow": [],
+            "map": ["x.csv", "--out", "m"]}[name]
+    args = parser.parse_args([name, *head, "--force-sign", "-1", "--z-sign", "+1"])
+    assert (args.force_sign, args.z_sign) == (-1.0, 1.0) and isinstance(args.force_sign, float)
+    argv = [name, *head, "--force-sign", "2"]
+    with pytest.raises(SystemExit):
+        parser.parse_args(argv)
+    err = capsys.readouterr().err
+    assert "argument --force-sign: invalid choice: '2' (choose from 1, -1)" in err
+    assert "1.0" not in err

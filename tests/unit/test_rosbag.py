@@ -212,6 +212,7 @@ def test_not_a_bag_and_a_broken_bag_give_data_file_errors(sim, tmp_path):
 def test_the_missing_extra_is_named(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "rosbags.rosbag2", None)
     with pytest.raises(MissingExtraError,
-                       match=r"reading ROS 2 bags needs the optional extra: "
+                       match=r"reading ROS 2 bags needs the optional extra ros "
+                             r"\(rosbags.rosbag2 is not installed\): pip install .*"
                              r"pip install 'palpbayes\[ros\]'"):
         read_bag(tmp_path / "x.mcap")

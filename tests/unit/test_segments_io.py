@@ -13,7 +13,11 @@ import pytest
 
 from palpbayes.errors import DataFileError, InputError
 from palpbayes.io.afm import classify_segments, describe_afm, parse_segments, read_afm
-from palpbayes.io.motion_segments import default_hold_tolerance, segments_from_motion
+from palpbayes.io.motion_segments import (
+    default_hold_tolerance,
+    segment_durations,
+    segments_from_motion,
+)
 from palpbayes.io.trace_csv import read_trace, write_trace
 from palpbayes.trace import SEGMENTS, IndentationTrace
 
@@ -33,6 +37,27 @@ def cycle(approach=2.0, hold=1.0, retract=2.0, depth=2e-3, noise=2e-6, rng=0):
 def runs(codes: np.ndarray) -> list[int]:
     """The codes in the order they occur, one per run."""
     return [int(c) for c in codes[np.r_[0, np.flatnonzero(np.diff(codes)) + 1]]]
+
+
+# ------------------------------------------------------------------ segment_durations
+def test_segment_durations_add_up_whatever_rate_each_segment_was_sampled_at():
+    """A JPK stress-relaxation layout: a 1 s pause at 256 Hz, a 1 s approach at 2048 Hz, a
+    30 s hold at 256 Hz, a retract of 1951 samples at 2048 Hz; each lasts its samples' span
+    plus one of its own periods, in time order of its first sample."""
+    rates, n = (256.0, 2048.0, 256.0, 2048.0), (256, 2048, 7680, 1951)
+    t, seg, start = [], [], 0.0
+    for i, (r, k) in enumerate(zip(rates, n, strict=True)):
+        t.append(start + np.arange(k) / r)
+        seg.append(np.full(k, i, dtype=np.uint8))
+        start += k / r
+    got = segment_durations(np.concatenate(t), np.concatenate(seg))
+    assert list(got) == [0, 1, 2, 3]
+    np.testing.assert_allclose(list(got.values()), [1.0, 1.0, 30.0, 1951 / 2048], rtol=1e-12)
+    assert segment_durations([0.0, 0.1, 0.2], [5, 5, 7]) == pytest.approx({5: 0.2, 7: 0.0})
+    with pytest.raises(InputError, match="one segment label per sample"):
+        segment_durations([0.0, 0.1], [0])
+    with pytest.raises(InputError, match="non-finite"):
+        segment_durations([0.0, np.nan], [0, 0])
 
 
 # ------------------------------------------------------------------ segments_from_motion

@@ -424,3 +424,31 @@ def test_a_robot_log_gets_the_options_that_map_its_columns(tmp_path):
     trace = read_trace(path, columns={"time": "timestamp", "z": "actual_TCP_pose_2",
                                       "force": "fz"}, check=False)
     assert trace.n_points == 3
+
+
+def test_the_hint_maps_the_readmes_robot_log_and_points_out_case_only_differences(tmp_path):
+    """Issue 58, item 7: the README's robot log (timestamp, tcp_z_mm, fz) got no hint for
+    tcp_z_mm, and a column given in another case (--force-column fz for a file's Fz, the
+    README's spelling) was only "missing".  Now tcp_z_mm gets --z-column and --z-unit mm, and
+    a column that differs in case only is named with the option that reads it."""
+    path = tmp_path / "press.csv"
+    path.write_text("timestamp,tcp_z_mm,fz\n0,25.0,0.21\n0.004,24.996,0.21\n")
+    with pytest.raises(DataFileError) as info:
+        read_trace(path)
+    msg = str(info.value)
+    assert ("missing column 'z_m' (for z) (a robot log's 'tcp_z_mm'? map it with --z-column "
+            "tcp_z_mm --z-unit mm, and check its sign)") in msg
+    assert "--time-column timestamp" in msg and "--force-column fz" in msg
+    path = tmp_path / "case.csv"
+    path.write_text("Time_S,TCP_Z_MM,Fz\n0,25.0,0.21\n0.004,24.996,0.21\n0.008,24.992,0.2\n")
+    with pytest.raises(DataFileError) as info:
+        read_trace(path, columns={"time": "time_s", "z": "tcp_z_mm", "force": "fz"},
+                   units={"z": "mm"})
+    msg = str(info.value)
+    for name, there, q in (("time_s", "Time_S", "time"), ("tcp_z_mm", "TCP_Z_MM", "z"),
+                            ("fz", "Fz", "force")):
+        assert (f"column '{name}' (given for {q}) is missing (the header's '{there}' differs "
+                f"from it in case only: --{q}-column {there})") in msg
+    trace = read_trace(path, columns={"time": "Time_S", "z": "TCP_Z_MM", "force": "Fz"},
+                       units={"z": "mm"}, check=False)
+    assert trace.z[0] == pytest.approx(0.025)
