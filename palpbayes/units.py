@@ -32,7 +32,8 @@ from decimal import Decimal
 from numbers import Real
 
 __all__ = ["MICRO", "FORCE_PREFIXES", "LENGTH_PREFIXES", "PRESSURE_PREFIXES", "format_si",
-           "format_force", "format_length", "format_pressure", "si_scale"]
+           "format_force", "format_length", "format_pressure", "format_pressure_interval",
+           "interval_digits", "si_scale"]
 
 #: The micro prefix used in messages: MICRO SIGN U+00B5.
 MICRO = "\u00b5"
@@ -156,6 +157,57 @@ def format_pressure(x_pa: float, digits: int = 3) -> str:
         E.g. ``format_pressure(1.11e5) == '111 kPa'``, ``format_pressure(2.5e9) == '2.5 GPa'``.
     """
     return format_si(x_pa, "Pa", PRESSURE_PREFIXES, digits)
+
+
+def interval_digits(lo: float, hi: float, digits: int = 3, most: int = 6) -> int:
+    """Significant digits to print a value and its interval [lo, hi] with: ``digits``, or more
+    where the interval is narrow, so that its width reads to about a tenth (34,810 to 34,990
+    Pa: 4 digits, ``'34.81 kPa'`` and ``'34.99 kPa'``; with 3 both ends would read near 35 kPa
+    and hide that 35 kPa lies outside).
+
+    Parameters
+    ----------
+    lo, hi
+        The interval's ends, in any one unit.
+    digits
+        The fewest significant digits (default 3).
+    most
+        The most (default 6).
+
+    Returns
+    -------
+    int
+        Between ``digits`` and ``most``; ``digits`` when an end is not finite or the width is 0.
+    """
+    lo, hi = float(lo), float(hi)
+    width, top = abs(hi - lo), max(abs(lo), abs(hi))
+    if not (math.isfinite(width) and width > 0):
+        return digits
+    need = math.floor(math.log10(top)) - math.floor(math.log10(width / 10))
+    return min(max(digits, need + 1), max(digits, most))
+
+
+def format_pressure_interval(x_pa: float, lo_pa: float, hi_pa: float, digits: int = 3) -> str:
+    """A modulus [Pa] and its interval, ``'34.9 kPa [34.81 kPa, 34.99 kPa]'``: each with
+    :func:`format_pressure` at the digits :func:`interval_digits` gives (``digits`` at least),
+    so that a narrow interval's ends read apart.
+
+    Parameters
+    ----------
+    x_pa, lo_pa, hi_pa
+        The value and the interval's ends in pascals.
+    digits
+        The fewest significant digits (default 3).
+
+    Returns
+    -------
+    str
+        E.g. ``format_pressure_interval(34.9e3, 34.81e3, 34.99e3) ==
+        '34.9 kPa [34.81 kPa, 34.99 kPa]'``.
+    """
+    d = interval_digits(lo_pa, hi_pa, digits)
+    return (f"{format_pressure(x_pa, d)} [{format_pressure(lo_pa, d)}, "
+            f"{format_pressure(hi_pa, d)}]")
 
 
 def si_scale(largest: float, unit: str, prefixes: dict[int, str]) -> tuple[float, str]:

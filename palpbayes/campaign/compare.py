@@ -135,6 +135,10 @@ POOLED_COLUMNS = (
        "budget_applied", "p_bonded",
        "base_ratio"]
 )
+#: The Bayesian row's moduli of ``comparison.csv``, copied from its group's ``pooled.csv``
+#: row: one computation (:meth:`palpbayes.pooling.PooledEstimate.row`), equal in both files.
+POOLED_SHARED = ("E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa", "E_new_pa", "E_new_sd_pa",
+                 "E_new_lo_pa", "E_new_hi_pa")
 
 
 @dataclass
@@ -309,21 +313,19 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None,
     n_conv = int(conv[g["trace_id"].isin(ids)].sum())
     if n_conv < len(ids):
         flags.append(f"{len(ids) - n_conv} trace fit(s) not converged")
-    # as a trace's row: the median at the stated inputs, the budget's interval around it
-    h = pooled.headline(level)
+    # as a trace's row: the median at the stated inputs, the budget's interval around it;
+    # pooled.csv's row is the one source of these numbers (comparison.csv copies them)
+    prow = {**pooled.row(level), "representative_trace": ids[i_rep],
+            "budget_applied": spec is not None}
+    row.update({c: prow[c] for c in POOLED_SHARED})
     row.update({
-        "E_pa": h["E"], "E_sd_pa": float(np.std(pooled.E, ddof=1)),
-        "E_lo_pa": h["E_lo"], "E_hi_pa": h["E_hi"], "E_new_pa": h["E_new"],
-        "E_new_sd_pa": float(np.std(pooled.E_new, ddof=1)), "E_new_lo_pa": h["E_new_lo"],
-        "E_new_hi_pa": h["E_new_hi"], "tau": float(np.median(pooled.posterior.tau)),
+        "tau": float(np.median(pooled.posterior.tau)),
         "tau_prior_sd": pooled.posterior.tau_prior_sd,
         "converged_all": bool(n_conv == len(g) and pooled.posterior.converged),
         **flag_columns("; ".join(flags)), "p_bonded": np.nan if p_bonded is None else p_bonded,
     })
-    prow = {**pooled.row(level), "representative_trace": ids[i_rep],
-            "budget_applied": spec is not None,
-            "p_bonded": row["p_bonded"], "base_ratio": np.nan if base_ratio is None
-            else base_ratio}
+    prow.update(p_bonded=row["p_bonded"],
+                base_ratio=np.nan if base_ratio is None else base_ratio)
     row.update(instron_group_columns(pooled.E_new, pooled.nu, fitted, budget,
                                      str((settings_fields or {}).get("platens", "unknown"))))
     btab = pooled.budget.assign(material=material, tip=tip)[BUDGET_COLUMNS]

@@ -1,16 +1,71 @@
-"""What ``palpbayes fit`` prints under a run: the table, the parts of each interval, the
-failed checks in one line each, and the Poisson ratio when it was assumed."""
+"""What ``palpbayes fit`` prints under a run: the table, the parts of each interval, E read
+with the other layer models, the failed checks in one line each, and the Poisson ratio when it
+was assumed.
+
+Every line fits in :data:`WIDTH` characters (a terminal's 100): a long trace id is shortened in
+its middle (the whole id is in ``summary.csv``, which holds every column of a row) and the
+sentences are wrapped.
+"""
 
 from __future__ import annotations
+
+import math
+import re
+import textwrap
 
 from ..contact import DEFAULT_NU_NOTE
 from ..flagcodes import split_flags
 from ..units import format_pressure
 
-__all__ = ["console_lines", "flag_headlines"]
+__all__ = ["WIDTH", "console_lines", "flag_headlines", "short_ids"]
+
+#: The widest line ``fit`` prints [characters].
+WIDTH = 100
+#: The narrowest a shortened trace id gets [characters].
+MIN_ID_WIDTH = 12
 
 
-def _interval_part_lines(summary) -> list[str]:
+#: A number and its unit ("55.8 kPa", "3 nN", "20 mm"), kept on one line by :func:`_wrap`.
+_VALUE_UNIT = re.compile(r"(\d) (?=[pnµmkMG]?(?:Pa|N|m|s)\b)")
+
+
+def _wrap(text: str, indent: str = "", width: int = WIDTH) -> list[str]:
+    """``text`` wrapped at ``width``, continuation lines indented by two more spaces; a
+    number stays on the line of its unit."""
+    glued = _VALUE_UNIT.sub("\\1\0", text)
+    lines = textwrap.wrap(glued, width, initial_indent=indent,
+                          subsequent_indent=indent + "  ", break_on_hyphens=False)
+    return [line.replace("\0", " ") for line in lines] or [indent.rstrip()]
+
+
+def _cut(text: str, width: int, head: int) -> str:
+    """``text`` as its first ``head`` characters, "…" and its last ones, ``width`` in all."""
+    if len(text) <= width:
+        return text
+    return text[:head] + "…" + text[len(text) - (width - 1 - head):]
+
+
+def short_ids(ids, width: int) -> tuple[dict[str, str], list[str]]:
+    """Each trace id as the console shows it: whole when it fits ``width``, else cut to it
+    with "…" where the cut is — in the middle, or nearer an end where the middle is what
+    tells two ids apart; when no cut tells them apart, ``trace 1``, ``trace 2`` ... with a key.
+
+    Returns
+    -------
+    dict, list of str
+        Id -> shown id, and the key's lines (empty unless ids were numbered).
+    """
+    ids = list(dict.fromkeys(str(i) for i in ids))
+    width = max(width, MIN_ID_WIDTH)
+    for head in sorted(range(width), key=lambda h: (abs(h - width // 2), -h)):
+        shown = {i: _cut(i, width, head) for i in ids}
+        if len(set(shown.values())) == len(ids):
+            return shown, []
+    shown = {i: f"trace {k}" for k, i in enumerate(ids, 1)}
+    return shown, ["trace ids:"] + [f"  {shown[i]} = {i}" for i in ids]
+
+
+def _interval_part_lines(summary, shown: dict[str, str]) -> list[str]:
     """Under the table: what E_lo..E_hi of each Bayesian row is made of (90 %: statistical,
     + budget, + model form where a model check found a material misfit)."""
     from ..bayes.modelform import interval_parts  # here: the parser does not load it
@@ -18,19 +73,49 @@ def _interval_part_lines(summary) -> list[str]:
     rows = summary[summary["method"] == "bayes"]
     if rows.empty or "E_budget_lo_pa" not in rows:
         return []
-    lines = ["bayes E_lo..E_hi: 90 % interval, statistical + budget (+ model form: with a "
-             "material misfit, the envelope of the alternatives' 90 % intervals); its parts "
-             "(% of E):"]
+    lines = _wrap("bayes E_lo..E_hi is the full 90 % interval: statistical + budget (+ model "
+                  "form: with a material misfit, the envelope of the alternatives' 90 % "
+                  "intervals); its parts (% of E):")
     for _, r in rows.iterrows():
         parts = interval_parts(r["E_pa"], (r["E_stat_lo_pa"], r["E_stat_hi_pa"]),
                                (r["E_budget_lo_pa"], r["E_budget_hi_pa"]),
                                (r["E_lo_pa"], r["E_hi_pa"]))
-        misfit = "" if r["model_ok"] else f"; material misfit: {r['misfit_checks']}"
-        lines.append(f"  {r['trace_id']}: {parts}{misfit}")
+        misfit = ("" if r["model_ok"] or not isinstance(r.get("misfit_checks"), str)
+                  else f"; material misfit: {r['misfit_checks'].replace(';', ', ')}")
+        lines += _wrap(f"{shown[str(r['trace_id'])]}: {parts}{misfit}", "  ")
     return lines
 
 
-def _instron_lines(summary) -> list[str]:
+def _finite(v) -> bool:
+    try:
+        return math.isfinite(float(v))
+    except (TypeError, ValueError):
+        return False
+
+
+def _layer_lines(summary, shown: dict[str, str]) -> list[str]:
+    """Under the table, when a row has a layer (a thickness, or the specimen's twin): its
+    fitted curve read as a half-space, a bonded and a free layer (``E_halfspace_pa``,
+    ``E_bonded_pa``, ``E_free_pa``)."""
+    cols = ("E_halfspace_pa", "E_bonded_pa", "E_free_pa")
+    if not all(c in summary for c in cols):
+        return []
+    layered = summary[[_finite(b) or _finite(f) for b, f in
+                       zip(summary["E_bonded_pa"], summary["E_free_pa"], strict=True)]]
+    if layered.empty:
+        return []
+    lines = _wrap("E of the same fitted curve read as a half-space, a bonded and a free layer "
+                  "(summary.csv E_halfspace_pa, E_bonded_pa, E_free_pa):")
+    for _, r in layered.iterrows():
+        read = ", ".join(f"{name} {format_pressure(r[c])}" for name, c in
+                         zip(("half-space", "bonded", "free"), cols, strict=True)
+                         if _finite(r[c]))
+        layer = f" [{r['layer']}]" if isinstance(r.get("layer"), str) and r["layer"] else ""
+        lines += _wrap(f"{shown[str(r['trace_id'])]} {r['method']}{layer}: {read}", "  ")
+    return lines
+
+
+def _instron_lines(summary, shown: dict[str, str]) -> list[str]:
     """Under the table, for Bayesian rows fitted with the specimen's twin: what a compression
     test of the block would read (``E_instron_pa`` and its 90 % interval)."""
     if "E_instron_pa" not in summary:
@@ -38,13 +123,13 @@ def _instron_lines(summary) -> list[str]:
     rows = summary[(summary["method"] == "bayes") & summary["E_instron_pa"].notna()]
     if rows.empty:
         return []
-    lines = ["E_instron: what a compression test of the block would read (the block's twin; "
-             "set it beside your Instron, like for like):"]
+    lines = _wrap("E_instron: what a compression test of the block would read (the block's "
+                  "twin; set it beside your Instron, like for like):")
     for _, r in rows.iterrows():
-        lines.append(f"  {r['trace_id']}: {format_pressure(r['E_instron_pa'])} "
-                     f"[{format_pressure(r['E_instron_lo_pa'])}, "
-                     f"{format_pressure(r['E_instron_hi_pa'])}] ({r['platens']} platens; "
-                     f"{r['layer']})")
+        lines += _wrap(f"{shown[str(r['trace_id'])]}: {format_pressure(r['E_instron_pa'])} "
+                       f"[{format_pressure(r['E_instron_lo_pa'])}, "
+                       f"{format_pressure(r['E_instron_hi_pa'])}] ({r['platens']} platens; "
+                       f"{r['layer']})", "  ")
     return lines
 
 
@@ -61,26 +146,65 @@ def flag_headlines(text: str, width: int = 110) -> list[str]:
     return out
 
 
-def _table(summary):
-    """The run's table: E with its 90 % interval, the Hertz law's E for a sphere (the paper's
-    choice, ``E_hertz_pa``), convergence (``n/a`` for a least-squares row: nothing is sampled)
-    and the model check."""
-    cols = ["trace_id", "method", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa", "E_hertz_pa",
-            "converged", "model_ok"]
-    show = summary[[c for c in cols if c in summary]].copy()
-    if "E_hertz_pa" in show and show["E_hertz_pa"].isna().all():
-        show = show.drop(columns="E_hertz_pa")
-    for c in ("E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa", "E_hertz_pa"):
-        if c in show:
-            show[c.removesuffix("_pa")] = [format_pressure(v) if v == v else "n/a"
-                                           for v in show.pop(c)]
-    if "converged" in show:
-        sampled = summary["method"] != "lsq"
-        show["converged"] = [str(bool(c)) if s and c == c else "n/a"
-                             for c, s in zip(show.pop("converged"), sampled, strict=True)]
-        if "model_ok" in show:
-            show["model_ok"] = show.pop("model_ok")
-    return show
+#: The table's columns after the trace id: summary.csv column -> header.
+_COLUMNS = (("method", "method"), ("E_pa", "E"), ("E_lo_pa", "E_lo"), ("E_hi_pa", "E_hi"),
+            ("E_sd_pa", "E_sd"), ("E_hertz_pa", "E_hertz"), ("converged", "converged"),
+            ("model_ok", "model_ok"))
+
+
+def _cells(summary) -> dict[str, list[str]]:
+    """The table's cells after the trace id, as strings, by header."""
+    out: dict[str, list[str]] = {}
+    sampled = summary["method"] != "lsq"
+    for col, head in _COLUMNS:
+        if col not in summary:
+            continue
+        values = summary[col].tolist()
+        if col.endswith("_pa"):
+            if col == "E_hertz_pa" and not any(_finite(v) for v in values):
+                continue
+            out[head] = [format_pressure(v) if _finite(v) else "n/a" for v in values]
+        elif col == "converged":  # n/a for a least-squares row: nothing is sampled
+            out[head] = [str(bool(c)) if s and c == c else "n/a"
+                         for c, s in zip(values, sampled, strict=True)]
+        else:
+            out[head] = [str(v) for v in values]
+    return out
+
+
+def _table(summary, shown: dict[str, str]) -> str:
+    """The run's table, at most :data:`WIDTH` wide: the trace id (shortened as ``shown``
+    says), the method, E with its 90 % interval and sd, the Hertz law's E for a sphere (the
+    paper's choice, ``E_hertz_pa``), convergence and the model check."""
+    cells = _cells(summary)
+    ids = [shown[str(i)] for i in summary["trace_id"]]
+    id_width = max(len("trace_id"), *(len(i) for i in ids))
+    widths = {h: max(len(h), *(len(v) for v in vals)) for h, vals in cells.items()}
+    lines = ["trace_id".ljust(id_width) + "".join(f" {h:>{w}}" for h, w in widths.items())]
+    for k, i in enumerate(ids):
+        lines.append(i.ljust(id_width)
+                     + "".join(f" {cells[h][k]:>{w}}" for h, w in widths.items()))
+    return "\n".join(line.rstrip() for line in lines)
+
+
+def _id_width(summary) -> int:
+    """Room the table leaves for the trace id within :data:`WIDTH`."""
+    cells = _cells(summary)
+    rest = sum(1 + max(len(h), *(len(v) for v in vals)) for h, vals in cells.items())
+    return WIDTH - rest
+
+
+def _legend(summary) -> list[str]:
+    hertz = "E_hertz_pa" in summary and summary["E_hertz_pa"].map(_finite).any()
+    return _wrap(
+        "E: the Bayesian posterior median or the least-squares estimate; E_lo..E_hi its 90 % "
+        "interval (bayes: the full one, its parts below; lsq: statistical only); E_sd: bayes, "
+        "the sd of E with the budget, i.e. of the statistical + budget part of E_lo..E_hi "
+        "(summary.csv E_sd_pa; the model form, an envelope, has no sd); lsq, its standard "
+        "error"
+        + ("; E_hertz: E with the Hertz (paraboloid) law, the paper's choice for a sphere"
+           if hertz else "")
+        + "; every column in summary.csv")
 
 
 def _warned(summary):
@@ -93,33 +217,34 @@ def _warned(summary):
 
 
 def console_lines(summary) -> list[str]:
-    """What ``fit`` prints under a run: the table (E with its 90 % interval, convergence and
-    the model check), what each Bayesian interval is made of, one line per flag of a fit that
-    failed a model check, did not converge or carries a warning on its input, and the Poisson
-    ratio when it was assumed."""
-    lines = [_table(summary).to_string(index=False),
-             "E: the Bayesian posterior median or the least-squares estimate; E_sd its sd; "
-             "E_lo..E_hi its 90 % interval"
-             + ("; E_hertz: E with the Hertz (paraboloid) law, the paper's choice for a sphere"
-                if "E_hertz_pa" in summary and summary["E_hertz_pa"].notna().any() else "")]
-    lines += _interval_part_lines(summary)
-    lines += _instron_lines(summary)
+    """What ``fit`` prints under a run, every line at most :data:`WIDTH` characters: the
+    table (E with its 90 % interval and sd, convergence and the model check), what each
+    Bayesian interval is made of, E read with the other layer models, one line per flag of a
+    fit that failed a model check, did not converge or carries a warning on its input, and
+    the Poisson ratio when it was assumed."""
+    shown, key = short_ids(summary["trace_id"], _id_width(summary))
+    lines = [_table(summary, shown), *key, *_legend(summary)]
+    lines += _interval_part_lines(summary, shown)
+    lines += _layer_lines(summary, shown)
+    lines += _instron_lines(summary, shown)
     not_converged = summary["converged"] == False  # noqa: E712
     misfit = summary.get("model_ok", True) == False  # noqa: E712
     bad = summary[not_converged | misfit | _warned(summary)]
     for i, r in bad.iterrows():
-        what = ("did not converge" if not_converged[i] else "failed a model check"
-                if misfit[i] else "carries a warning on its input")
-        lines.append(f"{r['trace_id']} ({r['method']}): {what}; E may be biased by what the "
-                     "model leaves out:" if what != "carries a warning on its input" else
-                     f"{r['trace_id']} ({r['method']}): {what}; E may be off by the factor "
-                     "it names:")
+        who = f"{shown[str(r['trace_id'])]} ({r['method']})"
+        if not_converged[i] or misfit[i]:
+            what = "did not converge" if not_converged[i] else "failed a model check"
+            lines += _wrap(f"{who}: {what}; E may be biased by what the model leaves out:")
+        else:
+            lines += _wrap(f"{who}: carries a warning on its input; E may be off by the factor "
+                           "it names:")
         notes = r.get("notes")
-        lines += [f"  - {h}" for h in flag_headlines(notes if isinstance(notes, str) else "")]
+        for h in flag_headlines(notes if isinstance(notes, str) else ""):
+            lines += _wrap(f"- {h}", "  ")
     if len(bad):
-        lines.append(f"warning: {len(bad)} fit(s) above failed a check; the full text and "
-                     "the effect on E are in summary.csv (columns notes, flag_codes, "
-                     "misfit_checks, misfit_effect)")
+        lines += _wrap(f"warning: {len(bad)} fit(s) above failed a check; the full text and "
+                       "the effect on E are in summary.csv (columns notes, flag_codes, "
+                       "misfit_checks, misfit_effect)")
     if "nu_source" in summary and (summary["nu_source"] == "default").any():
-        lines.append(f"note: {DEFAULT_NU_NOTE}")
+        lines += _wrap(f"note: {DEFAULT_NU_NOTE}")
     return lines

@@ -23,6 +23,7 @@ from .rheology import (
     add_rheology_options,
     check_rheology_args,
     given_options,
+    print_pooled,
     print_rheology,
 )
 
@@ -67,7 +68,7 @@ def _check_input_path(path: Path) -> None:
 def _run_rheology(args: argparse.Namespace) -> int:
     """``fit --rheology power-law|sls``: the viscoelastic fit of every trace, one table."""
     from ..io.manifest import is_manifest, load_trace, read_manifest
-    from ..rheology.campaign import RHEOLOGY_POOLED, SpeedPools, pooled_lines
+    from ..rheology.campaign import SpeedPools
     from ..rheology.results import RHEOLOGY_TABLE, fit_traces
 
     path, out, pools = Path(args.input), Path(args.out), None
@@ -96,8 +97,7 @@ def _run_rheology(args: argparse.Namespace) -> int:
     print_rheology(table)
     print(f"wrote {out / RHEOLOGY_TABLE}")
     if pools is not None:
-        print("\n".join(pooled_lines(pools.finish(out))))
-        print(f"wrote {out / RHEOLOGY_POOLED}")
+        print_pooled(pools, out)
     return 0
 
 

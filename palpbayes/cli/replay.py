@@ -1,9 +1,12 @@
 """``palpbayes replay TRACE --target 5%``: where would online estimation have stopped?
 
-The target is tested on the full interval of E (with the uncertainty budget) unless
-``--target-on stat`` (:data:`~palpbayes.cli.online_options.DEFAULT_TARGET_ON`); both
+The target is tested on the interval of E with the uncertainty budget (``--target-on full``)
+unless ``--target-on stat`` (:data:`~palpbayes.cli.online_options.DEFAULT_TARGET_ON`); both
 intervals are printed, and the model checks of the offline fit are run on the samples up to
-the stop.
+the stop.  The interval with the budget is ``fit``'s ``E_budget_lo_pa..E_budget_hi_pa``, not
+its ``E_lo_pa..E_hi_pa``: the model form, which widens that one when a check finds a material
+misfit, is not computed online (the console says so, and says it again under checks that find
+one).
 """
 
 from __future__ import annotations
@@ -19,10 +22,11 @@ from ..contact import DEFAULT_NU_NOTE
 from ..io.atomic import write_csv_atomic, write_with
 from ..online import replay
 from ..units import format_force, format_length, format_pressure
+from .console import _wrap
 from .online_options import add_online_options, model_from_args, parse_fraction, rule_from_args
 from .options import add_trace_options, trace_from_args
 
-__all__ = ["register", "run", "parse_fraction", "check_lines"]
+__all__ = ["register", "run", "parse_fraction", "check_lines", "INTERVALS_NOTE", "MISFIT_NOTE"]
 
 
 def register(subparsers) -> None:
@@ -41,6 +45,20 @@ def register(subparsers) -> None:
                    help=f"write {layout.REPLAY_HISTORY}, {layout.REPLAY_SUMMARY} and "
                         f"{layout.REPLAY_FIGURE} here")
     add_trace_options(p)
+
+
+#: What replay's two intervals hold, printed above its lines: the one with the budget is
+#: 'fit''s E_budget_lo..E_budget_hi, not its E_lo..E_hi (the model form is not run online).
+INTERVALS_NOTE = (
+    "E: median [90 % interval]; statistical: from the data alone; with the budget: also nu, "
+    "tip radius, gain and compliance, the interval 'fit' reports as E_budget_lo..E_budget_hi "
+    "(summary.csv E_budget_lo_pa, E_budget_hi_pa); its E_lo..E_hi adds the model form when a "
+    "check finds a material misfit, which replay does not compute")
+#: Said under the checks at the stop when they find a material misfit.
+MISFIT_NOTE = (
+    "note: with this material misfit 'palpbayes fit' widens E's interval by the model form "
+    "(the envelope of its alternatives' 90 % intervals, E_lo..E_hi), often by tens of per cent; "
+    "the intervals here hold the budget only: fit the trace for the full one")
 
 
 def _show(label: str, s, budget) -> str:
@@ -79,12 +97,12 @@ def run(args: argparse.Namespace) -> int:
     res = replay(trace, model, rule=rule, chunk=args.chunk, noise=args.noise,
                  noise_pp=args.noise_pp, total=True)
     s, f = res.at_stop, res.final
-    tested = ("the full one, with the budget" if rule.target_on == "full"
-              else "the statistical one")
-    print("E: median [90 % interval]; statistical: from the data alone; with the budget: also "
-          "nu, tip radius, gain and compliance (the full interval, as 'fit' reports E)")
+    tested = ("the one with the budget (--target-on full)" if rule.target_on == "full"
+              else "the statistical one (--target-on stat)")
+    for line in _wrap(INTERVALS_NOTE):
+        print(line)
     if rule.target is not None:
-        print(f"--target ±{100 * rule.target:.3g} % is tested on {tested} (--target-on)")
+        print(f"--target ±{100 * rule.target:.3g} % is tested on {tested}")
     if model.has_layer:
         print(f"layer: {format_length(model.thickness)} thick on a {model.bonding} base")
     if s is None:
@@ -93,6 +111,9 @@ def run(args: argparse.Namespace) -> int:
         print(_show(f"stop ({s.stop})", s, res.budget_at_stop))
         for line in check_lines(res.checks_at_stop, "at the stop"):
             print(line)
+        if res.checks_at_stop and not checks_summary(res.checks_at_stop)["model_ok"]:
+            for line in _wrap(MISFIT_NOTE):
+                print(line)
     print(_show("whole trace", f, res.budget_final))
     summary = res.summary()
     if s is not None:

@@ -15,9 +15,11 @@ import numpy as np
 
 from ..contact import check_nu
 from ..errors import InputError
+from ..units import FORCE_PREFIXES, format_pressure_interval, format_si, interval_digits
 
-__all__ = ["ELASTIC_ONLY", "VISCO_ONLY", "add_rheology_options", "given_options",
-           "parse_rheologies", "check_rheology_args", "print_rheology"]
+__all__ = ["ELASTIC_ONLY", "VISCO_ONLY", "INTERVALS_NOTE", "add_rheology_options",
+           "given_options", "parse_rheologies", "check_rheology_args", "print_rheology",
+           "print_pooled", "value_interval"]
 
 #: Options of the elastic fit that --rheology power-law|sls does not use (dest -> flag).
 ELASTIC_ONLY = {
@@ -169,18 +171,30 @@ def check_rheology_args(args: argparse.Namespace) -> tuple[float | None, str]:
     return nu, ",".join(names)
 
 
+#: What every interval of the viscoelastic console holds, said above its lines.
+INTERVALS_NOTE = (
+    "posterior medians [90 % intervals]; the intervals are statistical only (the record's "
+    "noise: no uncertainty budget of nu, tip radius, force gain or compliance, and no model "
+    "form, which the elastic fit's E_lo..E_hi carries), so a true value can lie just outside "
+    "them; moduli as E* = E/(1-nu^2) (with --nu, rheology.csv has E too)")
+
+
 def print_rheology(table) -> None:
-    """One line per trace and model: the parameters with 90 % intervals, the model check, the
-    flags; with several models, which one the record prefers."""
-    print("posterior medians [90 % intervals]; moduli as E* = E/(1 - nu^2) (with --nu, "
-          "rheology.csv has E too)")
+    """One line per trace and model (wrapped at 100 characters): the parameters with 90 %
+    intervals, the model check, the flags; with several models, which one the record
+    prefers.  Above them, what the intervals hold (:data:`INTERVALS_NOTE`)."""
+    from .console import _wrap
+
+    for line in _wrap(INTERVALS_NOTE):
+        print(line)
     for trace_id, rows in table.groupby("trace_id", sort=False):
         for _, r in rows.iterrows():
             label = trace_id if len(rows) == 1 else f"{trace_id} ({r['rheology']})"
             if isinstance(r.get("error"), str) and r["error"]:
                 print(f"  {label}: not fitted: {r['error']}")
                 continue
-            print(f"  {label}: {_rheology_line(r)}")
+            for line in _packed(label, _rheology_parts(r)):
+                print(line)
             if isinstance(r["notes"], str) and r["notes"]:
                 for note in r["notes"].split(" | "):
                     print(f"      - {note}")
@@ -188,11 +202,37 @@ def print_rheology(table) -> None:
             print(f"  {trace_id}: {_choice_line(rows)}")
 
 
-#: Column suffix -> unit printed on the console.
+def print_pooled(pools, out: Path) -> None:
+    """The pooled power laws of a manifest (:class:`~palpbayes.rheology.campaign.SpeedPools`),
+    and the table's path when one was written (none when no group pools)."""
+    from ..rheology.campaign import RHEOLOGY_POOLED, pooled_lines
+
+    table = pools.finish(out)
+    print("\n".join(pooled_lines(table)))
+    if not table.empty:
+        print(f"wrote {out / RHEOLOGY_POOLED}")
+
+
+#: Column suffix -> unit printed on the console (moduli: :func:`format_pressure`).
 _SUFFIXES = (("_n_s_per_m", " N·s/m"), ("_n_per_m", " N/m"), ("_pa", " Pa"), ("_s", " s"))
 
 
-def _rheology_line(r) -> str:
+def value_interval(x: float, lo: float, hi: float, unit: str = "") -> str:
+    """``x [lo, hi]`` with the digits :func:`~palpbayes.units.interval_digits` gives: a modulus
+    (``unit`` " Pa") with the package's SI prefix (``'34.9 kPa [34.81 kPa, 34.99 kPa]'``), a
+    drag or stiffness (" N·s/m", " N/m") with the force's prefix, anything else as a plain
+    number and its unit."""
+    if unit == " Pa":
+        return format_pressure_interval(x, lo, hi)
+    d = interval_digits(lo, hi)
+    if unit in (" N·s/m", " N/m"):
+        def one(v):
+            return format_si(v, unit.strip(), FORCE_PREFIXES, d)
+        return f"{one(x)} [{one(lo)}, {one(hi)}]"
+    return f"{x:.{d}g} [{lo:.{d}g}, {hi:.{d}g}]{unit}"
+
+
+def _rheology_parts(r) -> list[str]:
     names = {"power-law": ("E0_star_pa", "alpha"), "elastic": ("E_star_pa",),
              "sls": ("E_inf_star_pa", "E1_star_pa", "tau_s")}[r["rheology"]]
     names += tuple(c for c in ("drag_n_s_per_m", "tilt_n_per_m")
@@ -202,20 +242,38 @@ def _rheology_line(r) -> str:
         unit, stem = next(((u, c.removesuffix(s)) for s, u in _SUFFIXES if c.endswith(s)),
                           ("", c))
         lo, hi = (r[f"{stem}_{p}{c[len(stem):]}"] for p in ("lo", "hi"))
-        parts.append(f"{stem.replace('_star', '*')} {r[c]:.4g} [{lo:.4g}, {hi:.4g}]{unit}")
+        parts.append(f"{stem.replace('_star', '*')} {value_interval(r[c], lo, hi, unit)}")
     if np.isfinite(r.get("E_compression_pa", np.nan)):
         parts.append(f"a compression test at {r['compression_speed_mm_min']:g} mm/min "
-                     f"would read E {r['E_compression_pa']:.4g} "
-                     f"[{r['E_compression_lo_pa']:.4g}, {r['E_compression_hi_pa']:.4g}] Pa")
+                     "would read E " + value_interval(
+                         r["E_compression_pa"], r["E_compression_lo_pa"],
+                         r["E_compression_hi_pa"], " Pa"))
     if np.isfinite(r.get("adhesion_cut_from_s", np.nan)):
         parts.append(f"adhesion cut {r['adhesion_cut_from_s']:.4g}-"
                      f"{r['adhesion_cut_to_s']:.4g} s")
-    check = ("model check passed" if r["model_ok"]
-             else f"model check FAILED ({r['flag_codes']})")
+    parts.append("model check passed" if r["model_ok"]
+                 else f"model check FAILED ({r['flag_codes']})")
     peer = r.get("peer_compatible")
-    read = (f"read as {peer} reads it (to compare, not to report); "
-            if isinstance(peer, str) else "")
-    return f"{read}{'; '.join(parts)}; {check}"
+    if isinstance(peer, str):
+        parts.insert(0, f"read as {peer} reads it (to compare, not to report)")
+    return parts
+
+
+def _packed(head: str, parts: list[str], width: int = 100) -> list[str]:
+    """``head`` then ``parts`` joined by "; ", a line broken between parts only (a part
+    longer than a line wrapped on its own), continuation lines indented by four spaces."""
+    from .console import _wrap
+
+    lines, line = [], f"  {head}:"
+    for k, part in enumerate(parts):
+        piece = part + (";" if k < len(parts) - 1 else "")
+        if len(line) + 1 + len(piece) <= width:
+            line += " " + piece
+            continue
+        lines.append(line)
+        *done, line = _wrap(piece, "    ", width)
+        lines += done
+    return lines + [line]
 
 
 def _choice_line(rows) -> str:

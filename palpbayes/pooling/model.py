@@ -309,18 +309,32 @@ class PooledEstimate:
         of ``factor`` is ``factor / stated``."""
         return np.ones_like(self.factor) if self.base is None else self.base
 
+    def at_inputs(self, with_budget: np.ndarray, level: float = LEVEL
+                  ) -> tuple[float, float, float]:
+        """[Pa] Draws with the budget summarised as a per-trace row reports E
+        (:meth:`palpbayes.bayes.result.BayesResult.intervals`): the median at the stated
+        inputs (the draws divided by the budget's share of :attr:`factor`) and the budget's
+        central ``level`` interval widened where needed to hold that of the stated draws.
+
+        Returns
+        -------
+        tuple of float
+            (median, lo, hi).
+        """
+        at_inputs = with_budget / (self.factor / self.stated)
+        lo, hi = hull(central(with_budget, level), central(at_inputs, level))
+        return float(np.median(at_inputs)), lo, hi
+
     def headline(self, level: float = LEVEL) -> dict[str, float]:
         """[Pa] The group's E and a new specimen's E as the per-trace rows report theirs
-        (:meth:`palpbayes.bayes.result.BayesResult.intervals`): the median at the stated inputs
-        (exp(mu) and exp(mu + tau·z) times :attr:`stated`, no budget) and the budget's central
-        ``level`` interval widened where needed to hold that of the stated draws.  Keys
-        ``E``, ``E_lo``, ``E_hi``, ``E_new``, ``E_new_lo``, ``E_new_hi``."""
+        (:meth:`at_inputs`: exp(mu) and exp(mu + tau·z) times :attr:`stated`, no budget, with
+        the budget's interval around them), the numbers of ``pooled.csv`` and
+        ``comparison.csv`` alike.  Keys ``E``, ``E_lo``, ``E_hi``, ``E_new``, ``E_new_lo``,
+        ``E_new_hi``."""
         out = {}
-        budget_part = self.factor / self.stated
         for key, with_budget in (("E", self.E), ("E_new", self.E_new)):
-            at_inputs = with_budget / budget_part
-            lo, hi = hull(central(with_budget, level), central(at_inputs, level))
-            out.update({key: float(np.median(at_inputs)), f"{key}_lo": lo, f"{key}_hi": hi})
+            med, lo, hi = self.at_inputs(with_budget, level)
+            out.update({key: med, f"{key}_lo": lo, f"{key}_hi": hi})
         return out
 
     @property
@@ -334,15 +348,19 @@ class PooledEstimate:
         return np.exp(self.posterior.mu + 0.5 * self.posterior.tau ** 2) * self.factor
 
     def row(self, level: float = LEVEL) -> dict:
-        """One row of ``pooled.csv`` (medians, sds and central ``level`` intervals)."""
+        """One row of ``pooled.csv``: medians, sds and central ``level`` intervals; the moduli
+        with the budget (E, E_mean, E_new) as :meth:`at_inputs` summarises them, the same
+        numbers as ``comparison.csv``'s, their sd that of the draws with the budget."""
         p = self.posterior
         out = {"material": self.material, "tip": self.tip, "n_traces": p.n}
         for stem, unit, x in (("mu", "", p.mu), ("tau", "", p.tau),
                               ("E_stat", "_pa", self.E_stat), ("E", "_pa", self.E),
                               ("E_mean", "_pa", self.E_mean), ("E_new", "_pa", self.E_new),
                               ("factor", "", self.factor)):
-            lo, hi = central(x, level)
-            out[f"{stem}{unit}"] = float(np.median(x))
+            med, (lo, hi) = float(np.median(x)), central(x, level)
+            if stem in ("E", "E_mean", "E_new"):
+                med, lo, hi = self.at_inputs(x, level)
+            out[f"{stem}{unit}"] = med
             out[f"{stem}_sd{unit}"] = float(np.std(x, ddof=1))
             out[f"{stem}_lo{unit}"] = lo
             out[f"{stem}_hi{unit}"] = hi

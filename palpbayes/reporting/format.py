@@ -10,6 +10,9 @@ from typing import Any
 
 #: Pa -> kPa.
 KPA = 1e-3
+#: Decimals of a modulus in kPa wherever the report prints one (a value, an sd, an interval's
+#: ends): one quantity, one printed form on every page and on the console.
+KPA_DIGITS = 1
 
 
 def fmt(v: Any, digits: int = 1) -> str:
@@ -20,7 +23,13 @@ def fmt(v: Any, digits: int = 1) -> str:
     return "–" if not math.isfinite(x) else f"{x:.{digits}f}"
 
 
-def pm(e: Any, sd: Any, digits: int = 1) -> str:
+def kpa(v: Any) -> str:
+    """A modulus [Pa] as the report prints it: kPa with :data:`KPA_DIGITS` decimals, "–" when
+    it is missing."""
+    return fmt(float(v) * KPA if isnum(v) else v, KPA_DIGITS)
+
+
+def pm(e: Any, sd: Any, digits: int = KPA_DIGITS) -> str:
     a, b = fmt(float(e) * KPA if isnum(e) else e, digits), \
         fmt(float(sd) * KPA if isnum(sd) else sd, digits)
     if a == "–":
@@ -43,7 +52,9 @@ def yesno(v: Any) -> str:
     return "yes" if bool(v) else "NO"
 
 
-def interval(lo: Any, hi: Any, digits: int = 0) -> str:
+def interval(lo: Any, hi: Any, digits: int = KPA_DIGITS) -> str:
+    """An interval [Pa] as "[lo, hi]" in kPa (:data:`KPA_DIGITS` decimals), "–" when an end
+    is missing."""
     if not (isnum(lo) and isnum(hi)):
         return "–"
     return f"[{float(lo) * KPA:.{digits}f}, {float(hi) * KPA:.{digits}f}]"

@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 from .. import plots
 from ..campaign.layout import posterior_path
 from ..campaign.results import ResultsFolder, load_fit
-from .format import KPA, fmt, interval
+from .format import fmt, interval, kpa, pm
 from .layout import Page, text_lines, wrap_to
 from .tables import hertz_of_group, pooled_of
 
@@ -62,12 +62,12 @@ def group_page(res: ResultsFolder, mat: str, tip: str, seed: int) -> Page:
         txt = []
         if pooled is not None:
             txt.append(f"Pooled ({int(pooled['n_traces'])} traces): E = "
-                       f"{fmt(pooled['E_pa'] * KPA)} kPa, 90 % "
-                       f"{interval(pooled['E_lo_pa'], pooled['E_hi_pa'], 1)}; new specimen "
-                       f"{interval(pooled['E_new_lo_pa'], pooled['E_new_hi_pa'], 1)} kPa; "
+                       f"{kpa(pooled['E_pa'])} kPa, 90 % "
+                       f"{interval(pooled['E_lo_pa'], pooled['E_hi_pa'])}; new specimen "
+                       f"{interval(pooled['E_new_lo_pa'], pooled['E_new_hi_pa'])} kPa; "
                        f"between-trace sd of log E tau = {fmt(pooled.get('tau'), 3)}")
         if gt is not None:
-            txt.append(f"Ground truth: {fmt(gt[0] * KPA)} ± {fmt(gt[1] * KPA)} kPa")
+            txt.append(f"Ground truth: {pm(*gt)} kPa")
         # the group's numbers under the page title, wrapped; the panels below them
         top = 0.925
         if txt:
@@ -120,9 +120,9 @@ def _hertz_line(res: ResultsFolder, mat: str, tip: str) -> str:
     ls = s[(s["material"].fillna("").astype(str) == mat) & (s["tip"].astype(str) == tip)
            & (s["method"] == "lsq")]
     e = pd.to_numeric(ls["E_pa"], errors="coerce").dropna()
-    sd = f" ± {fmt(h[1] * KPA)}" if math.isfinite(h[1]) else ""
-    ref = (f"least squares with the exact Sneddon law ({fmt(e.mean() * KPA)} kPa)"
+    sd = f" ± {kpa(h[1])}" if math.isfinite(h[1]) else ""
+    ref = (f"least squares with the exact Sneddon law ({kpa(e.mean())} kPa)"
            if len(e) else "the exact Sneddon law")
     return (f"Paper's Hertz fit of the same {h[3]} trace(s) (least squares, paraboloid law at "
-            f"the sphere's radius): E = {fmt(h[0] * KPA)}{sd} kPa, Δ = {100 * h[2]:+.1f} % "
+            f"the sphere's radius): E = {kpa(h[0])}{sd} kPa, Δ = {100 * h[2]:+.1f} % "
             f"vs {ref}.")

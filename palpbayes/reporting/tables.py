@@ -15,7 +15,7 @@ from matplotlib.axes import Axes
 
 from ..campaign.results import MATERIAL_ORDER, TIP_ORDER, ResultsFolder, ordered
 from ..io.tabular import parse_bool
-from .format import KPA, fmt, interval, isnum, pm, yesno
+from .format import fmt, interval, isnum, kpa, pm, yesno
 from .layout import PAGE_SIZE, TABLE_ROWS_PER_PAGE, text_width, wrap_to
 
 __all__ = ["summary_table", "coverage_counts", "GT_COL", "LS_E_COL", "BAYES_E_COL", "BAYES_NEW_COL",
@@ -106,7 +106,7 @@ def summary_table(results: ResultsFolder) -> pd.DataFrame:
                 h = hertz[(mat, tip)]
                 row[HERTZ_COL] = "–"
                 if h is not None:  # Δ: mean per-trace (E_hertz − E)/E, as on the group page
-                    row[HERTZ_COL] = f"{fmt(h[0] * KPA)} ({100 * h[2]:+.1f} %)"
+                    row[HERTZ_COL] = f"{kpa(h[0])} ({100 * h[2]:+.1f} %)"
             if bay is not None and not parse_bool(bay.get("converged_all")):
                 row[BAYES_E_COL] += " (!)"
             rows.append(row)

@@ -12,8 +12,8 @@ The speed is not a key: repetitions at one speed pool too (they share E0* and al
 each trace's speed is read from its fitted approach (the median of the block means' motion).
 A group with two or more successfully fitted power-law traces gets one row; a group of one
 manifest row gets none, and so does a group with fewer than two fits.  The table is written
-whenever a manifest is fitted with the power law, **with its header only when no group
-pools**; ``fit --rheology`` removes a previous run's table first
+when a manifest is fitted with the power law and a group pools, **not at all when none
+does** (an empty table is not written); ``fit --rheology`` removes a previous run's table first
 (:data:`~palpbayes.campaign.layout.RHEOLOGY_OUTPUTS`).  **SLS fits are not pooled**: the speed
 scaling is the power law's (an SLS's apparent modulus has no single exponent); with
 ``--rheology power-law,sls`` the power-law fits are pooled.
@@ -59,6 +59,7 @@ from ..errors import PalpbayesError
 from ..flagcodes import POOLED_RHEOLOGY_CODES, listed_flag_columns
 from ..io.atomic import write_csv_atomic
 from ..trace import IndentationTrace
+from ..units import format_pressure_interval, interval_digits
 from .cycle import CycleData
 from .fit import RheologyFit
 from .pool import pool_power_law
@@ -212,8 +213,9 @@ class SpeedPools:
 
     def finish(self, out: str | os.PathLike) -> pd.DataFrame:
         """Pool the groups still open (a trace failed) with two or more fits, write
-        ``out/rheology_pooled.csv`` atomically (its header only when no group pools) and
-        return the table, one row per pooled group in manifest order."""
+        ``out/rheology_pooled.csv`` atomically when a group pools (no file when none does:
+        an empty table is not written) and return the table, one row per pooled group in
+        manifest order."""
         for key in list(self._kept):
             if len(self._kept[key]) >= 2:
                 self._pool(key)
@@ -221,9 +223,10 @@ class SpeedPools:
                 del self._kept[key]
         rows = [self._rows[k] for k in self.groups if k in self._rows]
         table = pd.DataFrame(rows, columns=POOLED_COLUMNS)
-        out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
-        write_csv_atomic(table, out / RHEOLOGY_POOLED, index=False)
+        if not table.empty:
+            out = Path(out)
+            out.mkdir(parents=True, exist_ok=True)
+            write_csv_atomic(table, out / RHEOLOGY_POOLED, index=False)
         return table
 
 
@@ -248,7 +251,8 @@ def pooled_lines(table: pd.DataFrame) -> list[str]:
             continue
         flags = (f"flagged: {r['flag_codes']} (notes in {RHEOLOGY_POOLED})"
                  if isinstance(r["flag_codes"], str) and r["flag_codes"] else "no flags")
-        lines.append(f"{head}: E0* {r['E0_star_pa']:.4g} [{r['E0_star_lo_pa']:.4g}, "
-                     f"{r['E0_star_hi_pa']:.4g}] Pa, alpha {r['alpha']:.4g} "
-                     f"[{r['alpha_lo']:.4g}, {r['alpha_hi']:.4g}]; {flags}")
+        d = interval_digits(r["alpha_lo"], r["alpha_hi"])
+        E0 = format_pressure_interval(r["E0_star_pa"], r["E0_star_lo_pa"], r["E0_star_hi_pa"])
+        lines.append(f"{head}: E0* {E0}, alpha {r['alpha']:.{d}g} "
+                     f"[{r['alpha_lo']:.{d}g}, {r['alpha_hi']:.{d}g}]; {flags}")
     return lines

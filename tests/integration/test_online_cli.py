@@ -142,7 +142,7 @@ def test_replay_tests_the_target_on_the_full_interval_by_default(trace_csv, tmp_
     out = tmp_path / "full"
     assert main(["replay", str(path), *tip, "--target", "5%", "--out", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "tested on the full one, with the budget" in text
+    assert "tested on the one with the budget (--target-on full)" in text
     assert "stop (target precision)" in text
     assert "model checks at the stop: all 4 passed" in text
     s = pd.read_csv(out / layout.REPLAY_SUMMARY).iloc[0]
@@ -162,6 +162,40 @@ def test_replay_runs_the_model_checks_at_the_stop(layer_csv, capsys):
     text = capsys.readouterr().out
     assert "model checks at the stop: material misfit" in text
     assert "depth_consistency" in text and "finite thickness" in text
+
+
+def test_replays_interval_with_the_budget_is_fits_budget_interval_not_its_full_one(
+        layer_csv, tmp_path, capsys):
+    """Issue 58: replay called its interval with the budget "the full interval, as 'fit'
+    reports E"; on AFM spot3 it read [20.7, 22.3] kPa where fit's E_lo..E_hi was [15.1, 34.5]
+    (fit adds the model form of a material misfit, which replay does not run).  It is fit's
+    E_budget_lo..E_budget_hi, and replay now says so, and says it again under checks that
+    find a misfit.  Here: the 20 mm block read as a half-space."""
+    tip = ["--tip", "sphere", "--radius", "0.01", "--nu", "0.45"]
+    assert main(["replay", str(layer_csv), *tip, "--max-depth", "1.5e-3", "--out",
+                 str(tmp_path / "replay")]) == 0
+    said = capsys.readouterr().out
+    text = " ".join(ln.strip() for ln in said.splitlines())
+    assert "as 'fit' reports E" not in text
+    assert ("with the budget: also nu, tip radius, gain and compliance, the interval 'fit' "
+            "reports as E_budget_lo..E_budget_hi") in text
+    assert "which replay does not compute" in text
+    assert "model checks at the stop: material misfit" in text
+    assert "note: with this material misfit 'palpbayes fit' widens E's interval by the model " \
+        "form" in text
+    assert max(len(ln) for ln in said.splitlines() if not ln.startswith(
+        ("stop", " ", "whole", "wrote"))) <= 100
+    assert main(["fit", str(layer_csv), *tip, "--engine", "exact", "--out",
+                 str(tmp_path / "fit"), "--no-progress"]) == 0
+    capsys.readouterr()
+    rep = pd.read_csv(tmp_path / "replay" / layout.REPLAY_SUMMARY).iloc[0]
+    row = pd.read_csv(tmp_path / "fit" / "summary.csv").iloc[0]
+    # the same quantity: replay's whole-trace interval with the budget is fit's budget one
+    np.testing.assert_allclose([rep["E_total_final_lo_pa"], rep["E_total_final_hi_pa"]],
+                               [row["E_budget_lo_pa"], row["E_budget_hi_pa"]], rtol=0.01)
+    # and not fit's E_lo..E_hi, which the model form widens by tens of per cent here
+    assert not row["model_ok"]
+    assert row["E_lo_pa"] < 0.8 * rep["E_total_final_lo_pa"]
 
 
 @pytest.fixture(scope="module")

@@ -182,6 +182,31 @@ def test_pdf_pages_and_titles(fitted):
     assert "All 4 Bayesian fits converged" in text and "NOT converged" not in text
 
 
+def test_one_number_per_quantity_in_the_tables_pages_and_console(fitted):
+    """Issue 58: Grey·flat's pooled E read 190.9 kPa in comparison.csv, on the console and the
+    summary page, 191.9 kPa in pooled.csv and on its group page (the median at the stated
+    inputs against the median with the budget); White·paraboloid's new-specimen interval read
+    [65, 179] on the summary page and [64.8, 178.1] on its group page.  One computation,
+    copied; one printed form (0.1 kPa) everywhere."""
+    from palpbayes.campaign.compare import POOLED_SHARED
+
+    out, _, stdout = fitted
+    comp = pd.read_csv(out / "comparison.csv")
+    bayes = comp[comp["method"] == "bayes"].set_index(["material", "tip"])
+    pooled = pd.read_csv(out / "pooled.csv").set_index(["material", "tip"]).loc[bayes.index]
+    for col in POOLED_SHARED:
+        np.testing.assert_array_equal(bayes[col].to_numpy(), pooled[col].to_numpy(), col)
+    texts = _LAYOUT["texts"]
+    summary = " ".join(t for name, t in texts.items() if ": Summary" in name)  # "page 2: ..."
+    for (mat, tip), r in bayes.iterrows():
+        e = f"{r['E_pa'] / 1e3:.1f}"
+        new = f"[{r['E_new_lo_pa'] / 1e3:.1f}, {r['E_new_hi_pa'] / 1e3:.1f}]"
+        assert f"{e} ± {r['E_sd_pa'] / 1e3:.1f}" in summary and new in summary
+        assert new in stdout  # the console's table
+        page = next(t for name, t in texts.items() if name.endswith(f": {mat} · {tip}"))
+        assert f"E = {e} kPa" in page and f"new specimen {new} kPa" in page, page
+
+
 def test_report_from_results_folder_cli(fitted, tmp_path, capsys):
     out, _, _ = fitted
     pdf = tmp_path / "again.pdf"

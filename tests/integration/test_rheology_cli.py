@@ -4,6 +4,7 @@ stress-relaxation AFM file; the table, the console and the one-line errors."""
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -35,7 +36,7 @@ def test_fit_rheology_writes_one_row_with_intervals_and_says_what_it_checked(
     out = tmp_path / "res"
     assert main(["fit", str(record_csv), "--rheology", "power-law", "--nu", "0.45",
                  "--thickness", "0.02", "--out", str(out), *PARA]) == 0
-    text = capsys.readouterr().out
+    text = " ".join(ln.strip() for ln in capsys.readouterr().out.splitlines())  # wrapped
     assert "pl: E0* " in text and "alpha " in text and "model check passed" in text
     assert "a compression test at 50 mm/min would read E " in text
     assert "takes a half-space" in text  # 3 mm into 20 mm: said, not modelled
@@ -186,3 +187,31 @@ def test_a_real_stress_relaxation_file_end_to_end(shared_data, tmp_path, capsys)
         assert "model check passed" in text
     else:  # what fails is said, with its code in the table
         assert "model check FAILED" in text and row["flag_codes"]
+
+
+def test_the_console_says_its_intervals_are_statistical_in_the_packages_units(tmp_path, capsys):
+    """Issue 58, on a simulated one-trace campaign (E0* 35 kPa, alpha 0.25): the console gave
+    'E0* 3.49e+04 [3.481e+04, 3.499e+04] Pa' with no word on what the intervals hold (the
+    truth sat just outside), then 'no pooled power law' and 'wrote rheology_pooled.csv', a
+    header-only table.  Now kPa with the digits that tell the ends apart, the intervals said
+    to be statistical only, and no empty table written or announced."""
+    camp, out = tmp_path / "camp", tmp_path / "res"
+    assert main(["simulate", str(camp), "--rheology", "power-law", "--materials", "Soft",
+                 "--tips", "paraboloid", "--speeds", "50", "--seed", "0"]) == 0
+    capsys.readouterr()
+    assert main(["fit", str(camp / "manifest.csv"), "--rheology", "power-law", "--nu", "0.3",
+                 "--out", str(out), "--no-progress"]) == 0
+    said = capsys.readouterr().out
+    lines = said.splitlines()
+    text = " ".join(ln.strip() for ln in lines)
+    assert "the intervals are statistical only" in text and "no model form" in text
+    assert "e+0" not in said and " kPa [" in text, said
+    row = pd.read_csv(out / "rheology.csv").iloc[0]
+    E0 = re.search(r"E0\* ([\d.]+) kPa \[([\d.]+) kPa, ([\d.]+) kPa\]", text)
+    assert E0 is not None, said
+    lo, hi = (float(v) * 1e3 for v in E0.groups()[1:])
+    assert (lo, hi) == pytest.approx((row["E0_star_lo_pa"], row["E0_star_hi_pa"]), abs=5.1)
+    assert lo != hi  # narrow intervals keep the digits that tell their ends apart
+    assert max(len(ln) for ln in lines if not ln.startswith("wrote ")) <= 100
+    assert "no pooled power law" in said and "rheology_pooled.csv" not in said
+    assert not (out / "rheology_pooled.csv").exists()

@@ -154,3 +154,35 @@ def test_pooled_headline_is_at_the_stated_inputs_like_a_traces():
     for k in ("E", "E_new"):
         assert h[f"{k}_lo"] <= h[k] <= h[f"{k}_hi"]
     assert np.median(est.E) / h["E"] - 1 > 0.02  # what the headline used to be: shifted
+
+
+def test_pooled_row_is_the_headline_comparison_csv_quotes():
+    """Issue 58: Grey·flat's pooled E read 190.9 kPa in comparison.csv (the median at the stated
+    inputs) and 191.9 kPa in pooled.csv (the median of the draws with the budget): pooled.csv's
+    row is now the headline, E_mean by the same rule, the sds those of the budget's draws."""
+    from palpbayes.pooling.model import PooledEstimate
+
+    rng = np.random.default_rng(3)
+    n = 8000
+    post = type("P", (), {"mu": np.log(190e3) + rng.normal(0, 0.03, n),
+                          "tau": np.abs(rng.normal(0.05, 0.02, n)), "n": 3, "m": np.zeros(3),
+                          "s": np.ones(3), "tau_prior_sd": 0.5,
+                          "diagnostics": type("D", (), {
+                              "rhat_max": 1.0, "ess_min": 1e3, "tau": {"mu": 10.0},
+                              "n_steps": 1000, "problems": lambda self: []})(),
+                          "converged": True})()
+    budget = rng.uniform(0.99, 1.05, n)  # a one-sided budget moves the draws' median
+    z = rng.standard_normal(n)
+    est = PooledEstimate(material="Grey", tip="flat", posterior=post, factor=budget,
+                         E=np.exp(post.mu) * budget,
+                         E_new=np.exp(post.mu + post.tau * z) * budget, budget=None)
+    row, h = est.row(), est.headline()
+    assert abs(np.median(est.E) / h["E"] - 1) > 0.005  # the old pooled.csv E_pa: not it
+    for key in ("E", "E_new"):
+        assert (row[f"{key}_pa"], row[f"{key}_lo_pa"], row[f"{key}_hi_pa"]) == (
+            h[key], h[f"{key}_lo"], h[f"{key}_hi"])
+    assert row["E_sd_pa"] == pytest.approx(np.std(est.E, ddof=1), rel=1e-12)
+    mean = np.exp(post.mu + 0.5 * post.tau ** 2)  # at the stated inputs, as E
+    assert row["E_mean_pa"] == pytest.approx(np.median(mean), rel=1e-12)
+    assert row["E_mean_lo_pa"] <= row["E_mean_pa"] <= row["E_mean_hi_pa"]
+    assert row["E_mean_pa"] > row["E_pa"]

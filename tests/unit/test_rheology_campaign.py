@@ -41,15 +41,15 @@ def test_groups_are_material_specimen_and_tip_with_its_size():
     assert key == ("W", "W1", "paraboloid", 0.0117, None, None, None)
 
 
-def test_one_trace_per_specimen_writes_the_header_only(tmp_path):
+def test_one_trace_per_specimen_writes_no_table(tmp_path):
+    """Issue 58: a header-only table was written (and announced) when nothing pooled."""
     m = _manifest([{"trace_id": t, "material": "W", "specimen": t} for t in "abc"])
     pools = SpeedPools(m)
     for t in "abc":  # never looked at: alone in their groups
         pools.add(SimpleNamespace(trace_id=t), SimpleNamespace(rheology="power-law"))
     table = pools.finish(tmp_path)
     assert table.empty and list(table.columns) == POOLED_COLUMNS
-    back = pd.read_csv(tmp_path / RHEOLOGY_POOLED)
-    assert back.empty and list(back.columns) == POOLED_COLUMNS
+    assert not (tmp_path / RHEOLOGY_POOLED).exists()
     assert pooled_lines(table) == ["no pooled power law: no specimen x tip of the manifest has "
                                    "two fitted power-law traces"]
     assert RHEOLOGY_POOLED in RHEOLOGY_OUTPUTS  # fit --rheology removes a stale table
@@ -76,6 +76,7 @@ def test_console_line_per_group():
                alpha_lo=0.14, alpha_hi=0.16, flag_codes="trace_disagrees", error="")
     lines = pooled_lines(pd.DataFrame([row]))
     assert len(lines) == 2 and lines[0].startswith("pooled power law per specimen x tip")
-    assert lines[1] == ("  W/W1 x flat: 2 traces at 5, 50 mm/min: E0* 8.1e+04 [7.9e+04, "
-                        "8.3e+04] Pa, alpha 0.15 [0.14, 0.16]; flagged: trace_disagrees "
+    # issue 58: E0* with the package's prefix (it read "8.1e+04 [7.9e+04, 8.3e+04] Pa")
+    assert lines[1] == ("  W/W1 x flat: 2 traces at 5, 50 mm/min: E0* 81 kPa [79 kPa, "
+                        "83 kPa], alpha 0.15 [0.14, 0.16]; flagged: trace_disagrees "
                         "(notes in rheology_pooled.csv)")

@@ -159,3 +159,15 @@ def test_round_trip(fmt, prefixes, x, digits):
         assert 1 <= abs(number) < 1000, text
     # %g-like: no trailing zeros after a decimal point
     assert not re.search(r"\.\d*0(?!\d)|\.(?!\d)", text.split(" ")[0].split("e")[0]), text
+
+
+def test_a_narrow_interval_keeps_the_digits_that_tell_its_ends_apart():
+    """Issue 58: the viscoelastic console's E0* [34,810, 34,990] Pa around a true 35,000 Pa
+    would read [34.8 kPa, 35 kPa] at 3 digits, as if it held the truth."""
+    from palpbayes.units import format_pressure_interval, interval_digits
+
+    assert format_pressure_interval(34.9e3, 34.81e3, 34.99e3) == "34.9 kPa [34.81 kPa, 34.99 kPa]"
+    assert format_pressure_interval(20.8e3, 15.1e3, 34.5e3) == "20.8 kPa [15.1 kPa, 34.5 kPa]"
+    assert interval_digits(0.2494, 0.2507) == 4
+    assert interval_digits(1.0, 1.0) == 3 and interval_digits(1.0, float("nan")) == 3
+    assert interval_digits(1e6, 1e6 + 1e-6) == 6  # at most `most`
