@@ -36,7 +36,7 @@ from pathlib import Path
 __all__ = [
     "SETTINGS", "TRACES", "SUMMARY", "POSTERIOR_DIR", "PARTIAL_DIR", "COMPARISON", "POOLED",
     "BUDGET", "STIFFENING", "STIFFENING_PARAMETERS", "STIFFENING_CURVES",
-    "INDENTATION", "GROUNDTRUTH", "GROUNDTRUTH_SUMMARY", "GAP", "REPORT",
+    "INDENTATION", "GROUNDTRUTH", "GROUNDTRUTH_SUMMARY", "GROUNDTRUTH_LAWS", "GAP", "REPORT",
     "COMPARE_OUTPUTS",
     "FIT_OUTPUTS", "REPLAY_HISTORY", "REPLAY_SUMMARY", "REPLAY_FIGURE", "posterior_path",
     "posterior_file", "partial_path", "RHEOLOGY_TABLE", "RHEOLOGY_DIR", "RHEOLOGY_OUTPUTS",
@@ -75,6 +75,8 @@ INDENTATION = "indentation.csv"
 GROUNDTRUTH = "groundtruth.csv"
 #: Per material ground truth (``palpbayes groundtruth``).
 GROUNDTRUTH_SUMMARY = "groundtruth_summary.csv"
+#: Hyperelastic laws compared per material (``palpbayes groundtruth --law``).
+GROUNDTRUTH_LAWS = "groundtruth_laws.csv"
 #: The paper's robot-vs-Instron gap decomposed (:func:`palpbayes.gap.gap_table`), written by
 #: the report pipeline when the campaign has the paper's materials.
 GAP = "gap.csv"

@@ -55,6 +55,7 @@ from ..errors import FitError, InputError, OutputExistsError
 from ..fitdata import FitData
 from ..io.atomic import write_csv_atomic, write_text_atomic
 from ..procs import lifeline
+from ..progress import progress_bar
 from ..trace import IndentationTrace
 from . import layout
 from .fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable
@@ -93,16 +94,6 @@ def _clear_outputs(out: Path) -> None:
 
 
 # ----------------------------------------------------------------------------- campaign
-
-
-def progress_bar(total: int, progress: bool | None, *, initial: int = 0,
-                 desc: str = "fitting"):
-    """A tqdm bar of traces on stderr; ``progress`` None shows it when stderr is a terminal."""
-    from tqdm.auto import tqdm
-
-    show = sys.stderr.isatty() if progress is None else bool(progress)
-    return tqdm(total=total, initial=initial, disable=not show, desc=desc, unit="trace",
-                file=sys.stderr, dynamic_ncols=True)
 
 
 def _mp_context():

@@ -53,6 +53,22 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="specimen cross-section [m^2] for every test (overrides headers)")
     p.add_argument("--height-m", type=float, default=None, metavar="M",
                    help="specimen height [m] for every test (overrides headers)")
+    h = p.add_argument_group("finite strain (a hyperelastic law fitted to the whole curve)")
+    h.add_argument("--law", default="linear", metavar="NAME|auto",
+                   help="linear (default: the line over the strain window, E0 = E), a "
+                        "hyperelastic law fitted to the whole loading curve with a posterior "
+                        "of its parameters and of its small-strain modulus E0 (neo-hookean, "
+                        "mooney-rivlin, yeoh, yeoh-2, ogden, ogden-2, ogden-3, exponential, "
+                        "hyperfoam, hyperfoam-2), or auto: the laws neo-hookean, "
+                        "mooney-rivlin, yeoh-2, yeoh, ogden and exponential compared by PSIS-LOO "
+                        f"and each material's best kept ({layout.GROUNDTRUTH_LAWS})")
+    h.add_argument("--strain", default=None, metavar="LO,HI",
+                   help="also each test's chord modulus between these compressive strains "
+                        "(fractions, e.g. 0.05,0.20) under its law: two tests set side by side "
+                        "at one strain")
+    h.add_argument("--seed", type=int, default=0, help="seed of the law fits' draws (default 0)")
+    h.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="a progress bar over the law fits (default: when stderr is a terminal)")
     c = p.add_argument_group("platen friction (the specimen twin's compression test)")
     c.add_argument("--platens", choices=("lubricated", "bonded"), default=None,
                    help="correct each test's E for its platens: bonded (the faces could not "
@@ -80,6 +96,7 @@ def run(args: argparse.Namespace) -> int:
     """
     from ..campaign.pipeline import write_groundtruth  # here: building the parser stays quick
     from ..groundtruth import analyse, correct_for_platens, summarise_corrected
+    from ..io.atomic import write_csv_atomic
     from ..io.groundtruth_inputs import scan_inputs
 
     lo_pct, hi_pct = args.strain_window
@@ -99,14 +116,17 @@ def run(args: argparse.Namespace) -> int:
         check_nu(args.nu)
 
     _, _, skipped = scan_inputs(args.inputs)
-    per_file, summary = analyse(args.inputs, strain_window=window,
-                                toe_compensation=args.toe_compensation,
-                                skip_toe=args.skip_toe, area_m2=area, height_m=height)
+    per_file, summary, laws = analyse(
+        args.inputs, strain_window=window, toe_compensation=args.toe_compensation,
+        skip_toe=args.skip_toe, area_m2=area, height_m=height, law=args.law,
+        chord=args.strain, seed=args.seed, progress=args.progress, return_laws=True)
     if args.platens is not None:
         per_file = correct_for_platens(per_file, args.platens, args.nu)
         summary = summarise_corrected(per_file, summary)
     out.mkdir(parents=True, exist_ok=True)
     write_groundtruth(per_file, summary, out)
+    if args.law != "linear":
+        write_csv_atomic(laws, out / layout.GROUNDTRUTH_LAWS, float_format="%.10g")
 
     origin = "the toe offset" if args.toe_compensation else "zero measured strain"
     extra = "; points below twice the toe offset skipped" if args.skip_toe else ""
@@ -127,5 +147,42 @@ def run(args: argparse.Namespace) -> int:
               f"{c.min():.4g}" + (f"-{c.max():.4g}" if c.max() > c.min() else "")
               + " (the blocks' twins); E_corrected_kPa = the material's E")
     print(shown.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
-    print(f"wrote {out / layout.GROUNDTRUTH} and {out / layout.GROUNDTRUTH_SUMMARY}")
+    if args.law != "linear":
+        for line in law_lines(summary, laws, per_file):
+            print(line)
+    print(f"wrote {out / layout.GROUNDTRUTH} and {out / layout.GROUNDTRUTH_SUMMARY}"
+          + (f" and {out / layout.GROUNDTRUTH_LAWS}" if args.law != "linear" else ""))
     return 0
+
+
+def law_lines(summary, laws, per_file) -> list[str]:
+    """What ``--law`` adds to the console: per material, the law kept with E0 (mean ± sd over
+    the tests, against the linear E), the chord with ``--strain``, how clearly the law was
+    chosen, and every law's E0 beside it when several were compared."""
+    from ..units import format_pressure
+
+    out = ["finite strain: the small-strain modulus E0 of each material's law, fitted to the "
+           "whole loading curve (mean ± sd over its tests; E: the line over the window)"]
+    for _, r in summary.iterrows():
+        mine = laws[laws["material"] == r["material"]]
+        line = (f"  {r['material']}: {r['law']} E0 {format_pressure(r['E0_mean_pa'], 4)} ± "
+                f"{format_pressure(r['E0_sd_pa'], 2)} ({r['E0_mean_pa'] / r['E_mean_pa'] - 1:+.1%}"
+                f" against E {format_pressure(r['E_mean_pa'], 4)})")
+        if "E_chord_mean_pa" in r and r["E_chord_mean_pa"] == r["E_chord_mean_pa"]:
+            rows = per_file[per_file["material"] == r["material"]]
+            line += (f"; chord {100 * rows['chord_lo'].iloc[0]:g}-"
+                     f"{100 * rows['chord_hi'].iloc[0]:g} % "
+                     f"{format_pressure(r['E_chord_mean_pa'], 4)}")
+        out.append(line)
+        if len(mine) > 1:
+            chosen = mine[mine["chosen"]].iloc[0]
+            out.append("    chosen by PSIS-LOO " + ("clearly (ahead of every other law by > 2 se)"
+                                                    if chosen["clear"] else
+                                                    "but not clearly (another law within 2 se)")
+                       + "; every law's E0: " + ", ".join(
+                           f"{x['law']} {format_pressure(x['E0_mean_pa'], 3)}"
+                           for _, x in mine.iterrows() if x["E0_mean_pa"] == x["E0_mean_pa"]))
+    notes = per_file["law_note"].fillna("").astype(str)
+    for _, r in per_file[notes != ""].iterrows():
+        out.append(f"  note: {r['file']}: {r['law_note']}")
+    return out

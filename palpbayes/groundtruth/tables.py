@@ -59,7 +59,11 @@ import pandas as pd
 from ..errors import FitError, InputError
 from ..io.groundtruth_inputs import collect_tests
 from ..io.instron import CompressionTest
+from ..material import LINEAR
+from ..progress import progress_bar
+from .finite import AUTO_LAWS
 from .fit import PER_FILE_COLUMNS, GroundTruthFit, fit_modulus
+from .laws import check_chord, check_law, fit_tests, law_rows, law_table, summary_columns
 from .window import DEFAULT_STRAIN_WINDOW, check_strain_window, describe_rule, sensitivity_windows
 
 __all__ = ["SUMMARY_COLUMNS", "analyse", "summarise"]
@@ -170,7 +174,12 @@ def analyse(
     height_m: float | None = None,
     materials: Mapping[str, str] | None = None,
     specimens: Mapping[str, str] | None = None,
-) -> tuple[pd.DataFrame, pd.DataFrame]:
+    law: str = LINEAR,
+    chord: Sequence[float] | None = None,
+    seed: int = 0,
+    progress: bool | None = False,
+    return_laws: bool = False,
+) -> tuple[pd.DataFrame, pd.DataFrame] | tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame]:
     """Fit every test and summarise per material.
 
     Parameters
@@ -188,6 +197,21 @@ def analyse(
         Label overrides, keyed by specimen label, file path, file name or file stem.  Default
         labels: specimen = file stem (or the manifest's), material = specimen without its
         replicate suffix (``EF10_50T_A1`` -> ``EF10_50T``, ``White_S1`` -> ``White``).
+    law
+        ``"linear"`` (the line above: E0 = E), a registered hyperelastic law
+        (:func:`palpbayes.material.material_law`) fitted to the whole loading curve
+        (:mod:`.finite`), or ``"auto"``: each law of :data:`.finite.AUTO_LAWS`, a material's
+        law the best by PSIS-LOO (:mod:`.laws`).
+    chord
+        (lo, hi) compressive strains [-]: add each test's chord modulus over that window under
+        its law (:data:`.laws.CHORD_COLUMNS`).
+    seed
+        Seed of the law fits' draws.
+    progress
+        A progress bar over the law fits (None: when stderr is a terminal).
+    return_laws
+        Also return the law comparison (:func:`.laws.law_table`; one row per material for a
+        single law, with elpd NaN for ``linear``).
 
     Returns
     -------
@@ -200,17 +224,23 @@ def analyse(
         one of them, or the plain fit is impossible); ``area_m2`` and ``height_m``, the
         block's cross-section [m²] and height [m] used.
     summary : pandas.DataFrame
-        One row per material, :data:`SUMMARY_COLUMNS` (see :func:`summarise`).
+        One row per material, :data:`SUMMARY_COLUMNS` (see :func:`summarise`), then the law's
+        (:func:`.laws.summary_columns`).
+    laws : pandas.DataFrame
+        With ``return_laws``: :data:`.laws.LAW_TABLE_COLUMNS`.
     """
     window = check_strain_window(strain_window)
+    law = check_law(law)
+    chord = check_chord(chord)
     tests = collect_tests(paths_or_tests, area_m2=area_m2, height_m=height_m)
-    rows = []
+    rows, labelled = [], []
     for test in tests:
         spec = _label(test, specimens)
         mat = _label(test, materials)
         if spec is not None or mat is not None:
             test = replace(test, specimen=spec if spec is not None else test.specimen,
                            material=mat if mat is not None else test.material)
+        labelled.append(test)
         fit = fit_modulus(test, window, toe_compensation, skip_toe=skip_toe)
         rows.append({**fit.as_row(),
                      **_variants(test, fit, window, toe_compensation, skip_toe),
@@ -218,5 +248,15 @@ def analyse(
     per_file = pd.DataFrame(rows, columns=PER_FILE_COLUMNS)
     per_file["n_points"] = per_file["n_points"].astype(int)
     per_file["hac_lags"] = per_file["hac_lags"].astype(int)
-    return per_file, summarise(per_file, window, toe_compensation=toe_compensation,
-                               skip_toe=skip_toe)
+    laws = list(AUTO_LAWS) if law == "auto" else [law]
+    with progress_bar(len(labelled) * len(laws) if law != LINEAR else 0, progress,
+                      desc="hyperelastic fits", unit="fit") as bar:
+        fits = fit_tests(labelled, laws, seed=seed, progress=bar.update)
+    table = law_table(labelled, fits, laws)
+    choice = dict(zip(table.loc[table["chosen"], "material"],
+                      table.loc[table["chosen"], "law"], strict=True))
+    per_file = pd.concat([per_file, pd.DataFrame(law_rows(labelled, fits, choice, chord),
+                                                 index=per_file.index)], axis=1)
+    summary = summarise(per_file, window, toe_compensation=toe_compensation, skip_toe=skip_toe)
+    summary = summary.merge(summary_columns(per_file), on="material", how="left")
+    return (per_file, summary, table) if return_laws else (per_file, summary)

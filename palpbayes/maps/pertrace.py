@@ -32,13 +32,13 @@ import pandas as pd
 from ..bayes.exact import exact_posterior, sampled_coordinates
 from ..bayes.flags import bound_flags
 from ..campaign.fitjob import FitOptions, check_fittable, force_scale_flag
-from ..campaign.run import progress_bar
 from ..cluster import close_client, dask_client
 from ..errors import FitError, InputError, PalpbayesError
 from ..flagcodes import flag_columns
 from ..intervals import LEVEL, central
 from ..io.manifest import tip_from_row
 from ..lsq import fit_lsq_data
+from ..progress import progress_bar
 from ..trace import IndentationTrace
 from .afm_source import is_afm_row, load_point_trace, read_afm_rows
 

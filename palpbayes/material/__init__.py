@@ -21,8 +21,9 @@ from .registry import (
     register,
     registered_laws,
 )
+from .solid import Solid
 from .uniaxial import MAX_STRAIN, chord_modulus, compression_stress, lateral_stretch
 
 __all__ = ["LINEAR", "MaterialLaw", "ShapeParameter", "bulk_modulus", "isochoric",
            "lame_lambda", "law_names", "material_law", "register", "registered_laws",
-           "MAX_STRAIN", "chord_modulus", "compression_stress", "lateral_stretch"]
+           "MAX_STRAIN", "chord_modulus", "compression_stress", "lateral_stretch", "Solid"]

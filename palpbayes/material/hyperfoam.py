@@ -55,7 +55,9 @@ def _dtau(lam, p):
 
 
 def _stable(p, lam):
-    return 0.0 <= float(p["nu"]) < 0.5 and all(mu > 0 and a != 0 for mu, a in _terms(p))
+    terms = _terms(p)
+    return (0.0 <= float(p["nu"]) < 0.5 and sum(mu for mu, _ in terms) > 0
+            and all(a != 0 for _, a in terms))
 
 
 def _law(n: int) -> MaterialLaw:

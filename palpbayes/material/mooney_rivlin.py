@@ -39,5 +39,4 @@ LAW = register(MaterialLaw(
     shape=(ShapeParameter("f", (0.0, 1.0), 0.2, "C01/(C10 + C01), the second invariant's "
                           "share of the shear modulus"),),
     natural=_natural, order=20,
-    stable=lambda p, lam: float(p["C10"]) >= 0 and float(p["C01"]) >= 0
-    and float(p["C10"]) + float(p["C01"]) > 0))
+    stable=lambda p, lam: float(p["C10"]) + float(p["C01"]) > 0))

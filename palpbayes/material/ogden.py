@@ -38,7 +38,10 @@ def _dtau_bar(lam, p):
 
 
 def _stable(p, lam):
-    return all(mu * a > 0 and abs(a) >= MIN_ALPHA for mu, a in _terms(p))
+    """A positive shear modulus and no exponent near 0 (mu_p·alpha_p > 0 for every term is
+    sufficient, not necessary: fitted Ogden laws often have a term without it)."""
+    terms = _terms(p)
+    return sum(mu * a for mu, a in terms) > 0 and all(abs(a) >= MIN_ALPHA for _, a in terms)
 
 
 def _law(n: int) -> MaterialLaw:

@@ -106,8 +106,11 @@ class MaterialLaw:
         The natural parameter that is the foam's small-strain Poisson ratio (None: nu is the
         caller's).
     stable
-        ``stable(p, lam) -> bool``: the energy is convex enough along the stretches ``lam``
-        (..., 3) that a solid and a fit can use it (Drucker-type checks of each law).
+        ``stable(p, lam) -> bool``: the parameters make a solid along the stretches ``lam``
+        (..., 3): a positive small-strain shear modulus and the law's own limits (exponents
+        away from 0, the foam's nu in [0, 0.5), Yeoh's dW/dI1 > 0 along the path).  A fit
+        also asks for a compressive stress that rises with strain
+        (:mod:`palpbayes.groundtruth.finite`).
     order
         Display order.
     """

@@ -34,8 +34,8 @@ def _d2f(i1, p):
 
 
 def _stable(p, lam):
-    """W' = dW/dI1 > 0 wherever the stretches ``lam`` take I1_bar (a positive shear
-    stiffness along the path)."""
+    """C10 > 0 and W' = dW/dI1 > 0 wherever the stretches ``lam`` take I1_bar (a positive
+    shear stiffness along the path)."""
     lam = np.asarray(lam, dtype=float)
     bar = lam * np.prod(lam, axis=-1, keepdims=True) ** (-1.0 / 3.0)
     return bool(np.all(_df(np.square(bar).sum(axis=-1), p) > 0)) and _coefficients(p)[0] > 0

@@ -159,7 +159,7 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
     pandas.DataFrame
         The table written to ``out/rheology.csv``.
     """
-    from ..campaign.run import progress_bar
+    from ..progress import progress_bar
     from .choice import compare_fits
 
     models = (rheology,) if isinstance(rheology, str) else tuple(rheology)

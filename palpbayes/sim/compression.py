@@ -21,6 +21,7 @@ from ..contact import check_nu
 from ..errors import InputError
 from ..groundtruth.window import toe_compression
 from ..io.atomic import write_text_atomic
+from ..material import Solid
 from ..twin import Specimen, compression_factor
 from ._checks import nonneg, positive
 
@@ -68,7 +69,10 @@ def simulate_compression_test(
     Parameters
     ----------
     E
-        [Pa] Young's modulus of an elastic block (give either ``E`` or ``kernel``).
+        [Pa] Young's modulus of an elastic block, or a hyperelastic
+        :class:`~palpbayes.material.Solid` (its nominal stress at finite strain between
+        lubricated platens, :meth:`~palpbayes.material.Solid.compression_stress`; ``E_true_pa``
+        is then its E0); give either ``E`` or ``kernel``.
     kernel
         Uniaxial relaxation modulus E(t) [Pa] of a viscoelastic block: a
         :class:`~palpbayes.contact.PowerLawKernel` or
@@ -105,6 +109,7 @@ def simulate_compression_test(
         ``specimen``, ``material``, ``platens``, ``nu``, ``platen_factor`` (c) and
         ``E_apparent_pa``, c·E: what the test reads).
     """
+    solid = None
     if (E is None) == (kernel is None):
         raise InputError("give the block's Young's modulus E [Pa] or its relaxation modulus "
                          "kernel=, one of the two")
@@ -112,6 +117,11 @@ def simulate_compression_test(
         from ..contact.viscoelastic import PowerLawKernel, PronyKernel
         if not isinstance(kernel, PowerLawKernel | PronyKernel):
             raise InputError(f"kernel {kernel!r} is neither a PowerLawKernel nor a PronyKernel")
+    elif isinstance(E, Solid):
+        solid, E = E, E.E0
+        if platens != "lubricated":
+            raise InputError("a hyperelastic block is compressed between lubricated platens "
+                             "only (bonded platens at finite strain need its twin)")
     else:
         E = positive(E, "Young's modulus E [Pa]")
     width = positive(width, "block width [m]")
@@ -140,7 +150,10 @@ def simulate_compression_test(
     t = np.arange(n + 1) / rate
     x = np.minimum(speed * t, max_compression)
     area = width * length
-    if kernel is None:
+    if solid is not None:
+        k = E * area / height
+        load = area * solid.compression_stress(toe_compression(x, toe) / height)
+    elif kernel is None:
         k = c * E * area / height
         load = k * toe_compression(x, toe)
     else:
@@ -151,6 +164,8 @@ def simulate_compression_test(
     df = pd.DataFrame({"time_s": t, "compression_m": x, "force_n": f})
     if kernel is not None:
         df.attrs["kernel"] = repr(kernel)
+    if solid is not None:
+        df.attrs["solid"] = solid.describe()
     df.attrs.update({
         "E_true_pa": E, "area_m2": area, "height_m": height, "width_m": width,
         "length_m": length, "stiffness_n_per_m": k, "toe_m": toe, "noise_n": noise_n,
