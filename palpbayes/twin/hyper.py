@@ -72,10 +72,16 @@ GRAD_INDEX = ((0, 0), (0, 1), (1, 0), (1, 1))
 _DEGENERATE = 1e-6
 
 
+def _raw(w, name: str) -> np.ndarray:
+    """The array passed to a form as ``name`` (scikit-fem wraps it in a DiscreteField, whose
+    indexing copies it)."""
+    return np.asarray(w[name])
+
+
 def _gradient5(u, r):
     """(5, ...) components of grad u in F's order, the hoop one u_r/R."""
     g = u.grad
-    return (g[0, 0], g[0, 1], g[1, 0], g[1, 1], u[0] / r)
+    return (g[0, 0], g[0, 1], g[1, 0], g[1, 1], np.asarray(u)[0] / r)
 
 
 #: Entries of F's 5-vector that the r and z components of a displacement reach: u_r gives
@@ -86,7 +92,7 @@ _COMPONENT = {"r": (0, 1, 4), "z": (2, 3)}
 def _parts(phi, comp: str, r):
     """dF of a scalar shape function ``phi`` moving component ``comp``, on its entries."""
     g = phi.grad
-    return (g[0], g[1], phi.value / r) if comp == "r" else (g[0], g[1])
+    return (g[0], g[1], np.asarray(phi) / r) if comp == "r" else (g[0], g[1])
 
 
 def _block(a: str, b: str) -> BilinearForm:
@@ -96,7 +102,7 @@ def _block(a: str, b: str) -> BilinearForm:
 
     @BilinearForm
     def form(u, v, w):
-        r, mat = w.x[0], w["A"]
+        r, mat = w.x[0], _raw(w, "A")
         du, dv = _parts(u, b, r), _parts(v, a, r)
         out = 0.0
         for i, vi in zip(ia, dv, strict=True):
@@ -117,7 +123,7 @@ def _coupling(comp: str) -> BilinearForm:
 
     @BilinearForm
     def form(u, q, w):
-        du, b = _parts(u, comp, w.x[0]), w["B"]
+        du, b = _parts(u, comp, w.x[0]), _raw(w, "B")
         out = 0.0
         for i, uj in zip(idx, du, strict=True):
             out = out + b[i] * uj
@@ -135,14 +141,14 @@ def _pp(p, q, w):
 
 @LinearForm
 def _ru(v, w):
-    dv, pk = _gradient5(v, w.x[0]), w["P"]
+    dv, pk = _gradient5(v, w.x[0]), _raw(w, "P")
     return (pk[0] * dv[0] + pk[1] * dv[1] + pk[2] * dv[2] + pk[3] * dv[3] + pk[4] * dv[4]) \
         * w.x[0]
 
 
 @LinearForm
 def _rp(q, w):
-    return q * w["g"] * w.x[0]
+    return np.asarray(q) * _raw(w, "g") * w.x[0]
 
 
 @dataclass
@@ -210,7 +216,7 @@ class HyperSolid:
         else:
             self.pbasis, self.n_p = None, 0
         self.sbasis = Basis(self.mesh, ElementTriP2(), intorder=intorder)
-        self.radius = self.basis.global_coordinates().value[0]
+        self.radius = np.asarray(self.basis.global_coordinates())[0]
         comp = self.basis.split_indices()
         self._perm = np.concatenate(comp)  # [r dofs, z dofs] -> the vector basis's dofs
         self._dofs = {"r": comp[0], "z": comp[1]}
@@ -253,7 +259,7 @@ class HyperSolid:
         uf = self.basis.interpolate(x[:self.n_u])
         g = uf.grad
         f11, f12, f21, f22 = 1.0 + g[0, 0], g[0, 1], g[1, 0], 1.0 + g[1, 1]
-        f33 = 1.0 + uf.value[0] / self.radius
+        f33 = 1.0 + np.asarray(uf)[0] / self.radius
         det2 = f11 * f22 - f12 * f21
         if not (np.all(det2 > 0) and np.all(f33 > 0)):
             return None
@@ -272,7 +278,7 @@ class HyperSolid:
         lnj = np.log(det2) + np.log(f33)
         p = None
         if self.mixed:
-            p = self.pbasis.interpolate(x[self.n_u:]).value
+            p = np.asarray(self.pbasis.interpolate(x[self.n_u:]))
             tau = tau + p[..., None]
         s = tau / c
         d = (dtau - 2.0 * tau[..., :, None] * np.eye(3)) / (c[..., :, None] * c[..., None, :])
@@ -366,7 +372,7 @@ def _factor(k: sp.csr_matrix, free: np.ndarray):
 
 def newton(solid: HyperSolid, x0: np.ndarray, fixed: np.ndarray, values: np.ndarray,
            extra: Callable[[np.ndarray, int], tuple[np.ndarray, sp.spmatrix]] | None = None,
-           rtol: float = 1e-8, utol: float = 1e-8, max_iter: int = 30,
+           rtol: float = 1e-8, utol: float = 1e-6, max_iter: int = 30,
            length: float = 1.0) -> NewtonResult:
     """Equilibrium of ``solid`` from ``x0`` with ``x[fixed] = values``.
 
@@ -429,7 +435,8 @@ def newton(solid: HyperSolid, x0: np.ndarray, fixed: np.ndarray, values: np.ndar
 def march(solid: HyperSolid, targets: np.ndarray, fixed: np.ndarray,
           load: Callable[[float], tuple[np.ndarray, Callable | None]],
           record: Callable[[int, np.ndarray, NewtonResult], None], what: str,
-          max_cuts: int = 10, max_iter: int = 25) -> tuple[int, int]:
+          max_cuts: int = 10, max_iter: int = 25, contact=None,
+          augmentations: int = 8, first_fraction: float = 1.0) -> tuple[int, int]:
     """Load ``solid`` along the increasing load parameters ``targets`` (from 0), in adaptive
     steps: each target is reached by one or more steps, a step halved when Newton's method
     fails (up to ``max_cuts`` times) and grown by half after an easy one (<= 8 iterations),
@@ -442,6 +449,12 @@ def march(solid: HyperSolid, targets: np.ndarray, fixed: np.ndarray,
         (``extra`` as :func:`newton`'s).
     record
         ``record(i, x, result)`` at each target i.
+    contact
+        An object with ``augment(x, t) -> bool`` (an augmented Lagrangian's update after a
+        converged step: True to solve the step again, up to ``augmentations`` times) and an
+        array attribute ``multiplier`` (restored when a step is cut), or None.
+    first_fraction
+        The first step is ``targets[0]/first_fraction``.
     what
         The solve's name in the error's message.
 
@@ -456,7 +469,7 @@ def march(solid: HyperSolid, targets: np.ndarray, fixed: np.ndarray,
     """
     x = np.zeros(solid.size)
     x_old, t_old, t = None, 0.0, 0.0
-    step = float(targets[0])
+    step = float(targets[0]) / first_fraction
     steps = iters = 0
     for i, target in enumerate(targets):
         while t < target * (1.0 - 1e-12):
@@ -465,10 +478,19 @@ def march(solid: HyperSolid, targets: np.ndarray, fixed: np.ndarray,
             start = x if x_old is None else x + (x - x_old) * (dt / (t - t_old))
             if solid.state(start) is None:
                 start = x
+            saved = None if contact is None else contact.multiplier.copy()
             try:
                 sol = newton(solid, start, fixed, values, extra=extra, length=float(target),
                              max_iter=max_iter)
+                for _ in range(augmentations if contact is not None else 0):
+                    if not contact.augment(sol.x, t + dt):
+                        break
+                    more = newton(solid, sol.x, fixed, values, extra=extra,
+                                  length=float(target), max_iter=max_iter)
+                    sol = NewtonResult(more.x, more.residual, sol.iterations + more.iterations)
             except FitError as err:
+                if saved is not None:
+                    contact.multiplier = saved
                 step = dt / 2
                 if step < target * 0.5 ** max_cuts:
                     raise FitError(f"{what} did not converge beyond {t:.4g} (asked "

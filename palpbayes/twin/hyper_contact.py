@@ -7,14 +7,16 @@ the tip, negative inside it), its gradient n = dg/dx (the tip's outward normal a
 point) and its Hessian.  The contact is a penalty on the penetration integrated over the
 reference top face Gamma_0 (docs/design.md §14):
 
-    Pi_c = ∫_Gamma_0 k/2·<−g(x)>²·R dS,    residual −∫ k<−g> n·v,
-    tangent ∫ k·H(−g)·(n·du)(n·v) − k<−g>·v·Hess(g)·du,
+    Pi_c = ∫_Gamma_0 1/(2k)·<lambda − k·g(x)>²·R dS,    residual −∫ <lambda − k·g> n·v,
+    tangent ∫ k·H(lambda − k·g)·(n·du)(n·v) − <lambda − k·g>·v·Hess(g)·du,
 
-so the force acts along the tip's normal in the deformed configuration (a sphere's centre
-direction, 30° off vertical at a/R = 0.5), not along z.  The curvature term (the Hessian's)
-is left out of the tangent on a step's first Newton iteration, when the penetration is about
-the step's size (design.md §14: with it the prototype inverted elements).  The tip's force is
-the vertical resultant of the penalty forces.
+with lambda the contact pressure of an augmented Lagrangian (Uzawa's updates after each
+converged step until the penetration is below its tolerance; lambda = 0, the pure penalty,
+when it is already), so the force acts along the tip's normal in the deformed configuration
+(a sphere's centre direction, 30° off vertical at a/R = 0.5), not along z.  The curvature
+term (the Hessian's) is left out of the tangent on a step's first Newton iteration, when the
+penetration is about the step's size (design.md §14: with it the prototype inverted
+elements).  The tip's force is the vertical resultant of the penalty forces.
 
 Surfaces (:func:`tip_surface`):
 
@@ -41,7 +43,7 @@ from skfem import BilinearForm, FacetBasis, LinearForm, asm
 
 from ..contact import Tip, get_law
 from ..errors import GeometryError
-from .hyper import HyperSolid
+from .hyper import HyperSolid, _raw
 
 __all__ = ["TipSurface", "tip_surface", "PenaltyContact"]
 
@@ -183,16 +185,17 @@ def tip_surface(tip: Tip) -> TipSurface:
 
 @LinearForm
 def _contact_residual(v, w):
-    return w["t"] * (w["n"][0] * v[0] + w["n"][1] * v[1]) * w.x[0]
+    n, v = _raw(w, "n"), np.asarray(v)
+    return _raw(w, "t") * (n[0] * v[0] + n[1] * v[1]) * w.x[0]
 
 
 @BilinearForm
 def _contact_tangent(u, v, w):
-    n, hs = w["n"], w["h"]
+    n, hs, u, v = _raw(w, "n"), _raw(w, "h"), np.asarray(u), np.asarray(v)
     nu_, nv = n[0] * u[0] + n[1] * u[1], n[0] * v[0] + n[1] * v[1]
     curv = (v[0] * (hs[0, 0] * u[0] + hs[0, 1] * u[1]) + v[1] * (hs[1, 0] * u[0]
                                                                  + hs[1, 1] * u[1]))
-    return (w["k"] * nu_ * nv + w["c"] * curv) * w.x[0]
+    return (_raw(w, "k") * nu_ * nv + _raw(w, "c") * curv) * w.x[0]
 
 
 class PenaltyContact:
@@ -213,11 +216,13 @@ class PenaltyContact:
         self.surface = surface
         top = solid.mesh.facets_satisfying(lambda x: solid.on_top(x[0], x[1]))
         self.fbasis = FacetBasis(solid.mesh, solid.basis.elem, facets=top, intorder=intorder)
-        self.x0 = self.fbasis.global_coordinates().value
+        self.x0 = np.asarray(self.fbasis.global_coordinates())
         self.z_dofs = solid.dofs("z", lambda r, z: np.ones_like(r, dtype=bool))
+        #: The augmented Lagrangian's contact pressures [E0] at the face's quadrature points.
+        self.multiplier = np.zeros(self.x0.shape[1:])
 
     def _gap(self, x: np.ndarray, z0: float):
-        u = self.fbasis.interpolate(x[:self.solid.n_u]).value
+        u = np.asarray(self.fbasis.interpolate(x[:self.solid.n_u]))
         pos = self.x0 + u
         g, n, hess = self.surface.distance(pos[0], pos[1], z0)
         return pos, g, n, hess
@@ -228,8 +233,8 @@ class PenaltyContact:
         every unknown of the solid (zero on the pressures); the curvature term when
         ``curvature``."""
         _, g, n, hess = self._gap(x, z0)
-        pen = np.maximum(-g, 0.0)
-        active = (g < 0).astype(float)
+        pen = np.maximum(self.multiplier / k - g, 0.0)
+        active = (pen > 0).astype(float)
         r = asm(_contact_residual, self.fbasis, t=-k * pen, n=n)
         kt = asm(_contact_tangent, self.fbasis, n=n, h=hess, k=k * active,
                  c=-k * pen if curvature else 0.0 * pen)
@@ -243,9 +248,19 @@ class PenaltyContact:
         """(force [E0·L²] the tip reads: 2·pi × the penalty's vertical resultant, the contact
         radius [L] in the deformed configuration, the largest penetration [L])."""
         pos, g, n, _ = self._gap(x, z0)
-        pen = np.maximum(-g, 0.0)
+        pen = np.maximum(self.multiplier / k - g, 0.0)
         r = asm(_contact_residual, self.fbasis, t=-k * pen, n=n)
         force = 2.0 * math.pi * r[self.z_dofs].sum()
-        touching = g < 0
+        touching = pen > 0
         a = float(pos[0][touching].max()) if touching.any() else 0.0
-        return float(force), a, float(pen.max())
+        return float(force), a, float(np.maximum(-g, 0.0).max())
+
+    def augment(self, x: np.ndarray, z0: float, k: float, tolerance: float) -> bool:
+        """Uzawa's update of the multipliers, lambda <- <lambda − k·g> (Simo & Laursen
+        1992, Comput. Struct. 42:97), when the largest penetration exceeds ``tolerance``
+        [L]; True when they changed (the step is to be solved again)."""
+        _, g, _, _ = self._gap(x, z0)
+        if np.maximum(-g, 0.0).max() <= tolerance:
+            return False
+        self.multiplier = np.maximum(self.multiplier - k * g, 0.0)
+        return True

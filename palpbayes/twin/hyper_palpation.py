@@ -7,9 +7,9 @@ The specimen is the linear twin's (:mod:`palpbayes.twin.palpation`): a cylinder 
 without friction (u_z = 0), its side free, at finite strain (:class:`~.hyper.HyperSolid`, any
 registered law).  The tip presses the top face's centre without friction, by a penalty on
 the signed distance to its true surface (:mod:`.hyper_contact`), k = ``penalty``·E0/a with a
-the half-space contact radius of the step's depth (the punch's radius for a flat punch), so
-that the penetration stays ~1/``penalty`` of the contact's size (below 1e-3 of the depth;
-every curve reports its largest).
+the half-space contact radius of the step's depth (the punch's radius for a flat punch), and
+an augmented Lagrangian's updates where the penetration still exceeds ``tolerance`` (5e-4)
+of the depth (a flat punch's edge, a cone's apex); every curve reports its largest.
 
 The depth is stepped up to each asked depth, the step halved when Newton's method fails
 (:func:`~.hyper.newton`) and grown by half after an easy step; the predictor extrapolates the
@@ -36,10 +36,12 @@ from .mesh import Resolution, contact_grid, depth_grid, punch_grid
 from .palpation import TWIN_BASES
 
 __all__ = ["HyperResolution", "HYPER_RESOLUTIONS", "HyperCurve", "solve_hyper_palpation",
-           "PENALTY"]
+           "PENALTY", "TOLERANCE", "fixed_dofs"]
 
 #: Penalty factor: k = PENALTY·E0/a.
 PENALTY = 2000.0
+#: The largest penetration a converged step keeps, as a fraction of its depth.
+TOLERANCE = 5e-4
 
 
 @dataclass(frozen=True)
@@ -115,10 +117,12 @@ def _resolution(resolution) -> HyperResolution:
 
 
 def _contact_scale(tip: Tip, depths: np.ndarray) -> np.ndarray:
-    """The half-space contact radius [L] at ``depths`` (the punch's radius)."""
+    """The length of the penalty, k = PENALTY·E0/scale [L]: the half-space contact radius at
+    ``depths``; a tenth of a flat punch's radius (its pressure is singular at the edge, where
+    the penetration would otherwise exceed the tolerance and take many updates)."""
     law = get_law(tip)
     if math.isinf(law.profile_exponent(tip)):
-        return np.full(depths.shape, float(tip.radius))
+        return np.full(depths.shape, 0.1 * float(tip.radius))
     return np.asarray(law.contact_radius(depths, tip), dtype=float)
 
 
@@ -152,7 +156,8 @@ def _mesh(radius, height, tip, depths, res: HyperResolution):
 def solve_hyper_palpation(radius: float, height: float, tip: Tip, law: str | MaterialLaw,
                           params: dict, nu: float, base: str, depths: np.ndarray,
                           resolution: str | HyperResolution = "default",
-                          penalty: float = PENALTY, max_cuts: int = 10) -> HyperCurve:
+                          penalty: float = PENALTY, max_cuts: int = 10,
+                          tolerance: float = TOLERANCE) -> HyperCurve:
     """Force of ``tip`` pressed ``depths`` into the hyperelastic twin (module docstring).
 
     Parameters
@@ -175,6 +180,9 @@ def solve_hyper_palpation(radius: float, height: float, tip: Tip, law: str | Mat
         k = ``penalty``·E0/a (module docstring).
     max_cuts
         Halvings of a load step before giving up.
+    tolerance
+        The largest penetration allowed, as a fraction of the depth (the augmented
+        Lagrangian's updates stop below it).
 
     Raises
     ------
@@ -214,7 +222,23 @@ def solve_hyper_palpation(radius: float, height: float, tip: Tip, law: str | Mat
         out[:, i] = (depths[i], *contact.measure(x, height - depths[i],
                                                  penalty * e0 / scale[i]))
 
+    class _Augmented:
+        """The contact's multipliers for :func:`~.hyper.march`."""
+
+        @property
+        def multiplier(self):
+            return contact.multiplier
+
+        @multiplier.setter
+        def multiplier(self, value):
+            contact.multiplier = value
+
+        def augment(self, x, d):
+            k = penalty * e0 / float(_contact_scale(tip, np.array([d]))[0])
+            return contact.augment(x, height - d, k, tolerance * d)
+
     steps, iters = march(solid, depths, fixed, load, record,
-                         f"the hyperelastic twin ({law.title}, {tip.describe()})", max_cuts)
+                         f"the hyperelastic twin ({law.title}, {tip.describe()})", max_cuts,
+                         contact=_Augmented(), first_fraction=4.0)
     return HyperCurve(out[0], out[1], out[2], out[3], steps, iters, solid.size,
                       time.perf_counter() - t0)
