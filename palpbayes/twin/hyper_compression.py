@@ -22,7 +22,8 @@ import numpy as np
 
 from ..errors import GeometryError
 from ..material import MaterialLaw, material_law
-from .hyper import HyperSolid, march
+from .hyper import HyperSolid
+from .hyper_newton import march
 from .hyper_palpation import HyperResolution, _resolution
 from .mesh import compression_grid
 

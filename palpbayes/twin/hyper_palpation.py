@@ -30,8 +30,9 @@ import numpy as np
 from ..contact import Tip, get_law
 from ..errors import GeometryError
 from ..material import MaterialLaw, material_law
-from .hyper import HyperSolid, march
+from .hyper import HyperSolid
 from .hyper_contact import PenaltyContact, tip_surface
+from .hyper_newton import march
 from .mesh import Resolution, contact_grid, depth_grid, punch_grid
 from .palpation import TWIN_BASES
 

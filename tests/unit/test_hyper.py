@@ -28,9 +28,10 @@ from palpbayes.contact import Tip
 from palpbayes.errors import FitError, GeometryError, InputError
 from palpbayes.material import compression_stress, material_law, registered_laws
 from palpbayes.twin import Specimen, solve_palpation
-from palpbayes.twin.hyper import HyperSolid, newton
+from palpbayes.twin.hyper import HyperSolid
 from palpbayes.twin.hyper_compression import solve_hyper_compression
 from palpbayes.twin.hyper_contact import tip_surface
+from palpbayes.twin.hyper_newton import newton
 from palpbayes.twin.hyper_palpation import fixed_dofs, solve_hyper_palpation
 from palpbayes.twin.hyper_table import HyperTable, hyper_table
 
