@@ -12,9 +12,8 @@ Literature checks not pinned here, and why (docs/layout.md, the twin's row):
   Du et al. 2022 (arXiv 2209.05646; J. Mech. Phys. Solids 2023): their formulas could not be
   read from any source reachable here (abstracts only), and none is written from memory.
 * Shojaeifard & Bacca 2025 (Soft Matter; one-term Ogden): F = 16/9·E·sqrt(R)·D^1.5 for
-  D << R (Hertz at nu = 0.5: 4/3·E/(1 − 1/4) = 16/9·E) and F ∝ D² for D >> R: pinned as the
-  trend of the local exponent d ln F/d ln D, from 1.5 at small depth rising toward 2
-  (:func:`test_deep_regime_exponent_drifts_toward_two`, slow).
+  D << R (Hertz at nu = 0.5: 4/3·E/(1 − 1/4) = 16/9·E), pinned; their F ∝ D² for D >> R is
+  not reproduced up to D = 2.4 R (:func:`test_deep_regime_shallow_limit_and_exponent`, slow).
 """
 
 from __future__ import annotations
@@ -289,14 +288,21 @@ def test_incompressible_small_depth_default_mesh():
 
 
 @pytest.mark.slow
-def test_deep_regime_exponent_drifts_toward_two():
+def test_deep_regime_shallow_limit_and_exponent():
     """Shojaeifard & Bacca 2025: one-term Ogden (alpha 2.5), incompressible, a sphere on its
-    stem pressed to D = 1.2 R into a block 8 R × 8 R: the local exponent d ln F/d ln D is
-    ~1.5 at D = 0.05 R and rises monotonically toward 2 (above 1.7 by D = R)."""
+    stem into a block 30 R × 30 R (coarse mesh).  Their Hertzian regime, F = 16/9·E·sqrt(R)·
+    D^1.5 for D << R: within 2 % at D = 0.04 R, local exponent d ln F/d ln D 1.5 ± 0.03.
+
+    Their parabolic regime (F ∝ D² for D >> R) is NOT reproduced here: the local exponent
+    falls from 1.49 (D 0.05 R) to 1.42 (0.3 R), 1.30 (1.1 R), 1.11 (1.7 R) and 1.06 (2.4 R),
+    as a frictionless punch's would once the contact reaches the sphere's equator, and the
+    coarse mesh stops converging near D = 2.8 R (benchmarks/bench_finite_twin.py, part deep):
+    pinned here as the fall below 1.5 past D = R, so that a change is noticed."""
     law = material_law("ogden")
     p = law.natural(1.0, {"alpha_1": 2.5}, 0.5)
-    d = np.array([0.04, 0.06, 0.25, 0.3, 0.5, 0.6, 0.9, 1.1])
-    curve = solve_hyper_palpation(8.0, 8.0, SPHERE, law, p, 0.5, "bonded", d, "coarse")
+    d = np.array([0.04, 0.06, 0.3, 0.35, 1.0, 1.15])
+    curve = solve_hyper_palpation(30.0, 30.0, SPHERE, law, p, 0.5, "bonded", d, "coarse")
     slope = np.diff(np.log(curve.force))[::2] / np.diff(np.log(d))[::2]
-    assert slope[0] == pytest.approx(1.5, abs=0.06)
-    assert np.all(np.diff(slope) > 0) and slope[-1] > 1.7
+    assert curve.force[0] == pytest.approx(16 / 9 * 0.04 ** 1.5, rel=0.02)
+    assert slope[0] == pytest.approx(1.5, abs=0.03)
+    assert slope[-1] < slope[0] - 0.1
