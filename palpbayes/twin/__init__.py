@@ -7,6 +7,11 @@ test (:mod:`.compression`), on scikit-fem (axisymmetric, the block as the cylind
 footprint area: :mod:`.specimen`; linear elasticity with mixed elements up to nu = 0.5:
 :mod:`.fe`, graded meshes: :mod:`.mesh`).  The palpation law is tabulated once per geometry ×
 tip × nu × base and cached on disk (:mod:`.table`, :mod:`.cache`).
+
+At finite strain (any law of :mod:`palpbayes.material`): the hyperelastic solid
+(:mod:`.hyper`), the tips' true surfaces in frictionless contact (:mod:`.hyper_contact`),
+palpation (:mod:`.hyper_palpation`) and compression (:mod:`.hyper_compression`) to large
+strain, and their force curves tabulated for a fit (:mod:`.hyper_table`).
 """
 
 from __future__ import annotations
@@ -23,6 +28,16 @@ if TYPE_CHECKING:  # the same names, for static tools
         platen_factor,
         pressure_solution_factor,
     )
+    from .hyper import HyperSolid
+    from .hyper_compression import HyperCompression, solve_hyper_compression
+    from .hyper_contact import PenaltyContact, TipSurface, tip_surface
+    from .hyper_palpation import (
+        HYPER_RESOLUTIONS,
+        HyperCurve,
+        HyperResolution,
+        solve_hyper_palpation,
+    )
+    from .hyper_table import HyperTable, hyper_table, prepare_hyper_table
     from .palpation import TWIN_BASES, PalpationCurve, solve_palpation
     from .specimen import (
         FOOTPRINT_COLUMNS,
@@ -54,6 +69,19 @@ _LAZY = {
     "oedometric_factor": "compression",
     "platen_factor": "compression",
     "pressure_solution_factor": "compression",
+    "HyperSolid": "hyper",
+    "HyperCompression": "hyper_compression",
+    "solve_hyper_compression": "hyper_compression",
+    "PenaltyContact": "hyper_contact",
+    "TipSurface": "hyper_contact",
+    "tip_surface": "hyper_contact",
+    "HYPER_RESOLUTIONS": "hyper_palpation",
+    "HyperCurve": "hyper_palpation",
+    "HyperResolution": "hyper_palpation",
+    "solve_hyper_palpation": "hyper_palpation",
+    "HyperTable": "hyper_table",
+    "hyper_table": "hyper_table",
+    "prepare_hyper_table": "hyper_table",
     "TWIN_BASES": "palpation",
     "PalpationCurve": "palpation",
     "solve_palpation": "palpation",
@@ -83,7 +111,10 @@ __all__ = [
     "parse_specimen", "specimen_from_sizes",
     "TWIN_SOLVER_VERSION", "TwinTable", "prepare_tables", "table_key", "twin_depth_limit",
     "twin_depth_limit_reason", "twin_factor", "twin_shape", "twin_table", "clear_memory",
-    "MAX_ASPECT",
+    "MAX_ASPECT", "HyperSolid", "HyperCompression", "solve_hyper_compression",
+    "PenaltyContact", "TipSurface", "tip_surface", "HYPER_RESOLUTIONS", "HyperCurve",
+    "HyperResolution", "solve_hyper_palpation", "HyperTable", "hyper_table",
+    "prepare_hyper_table",
 ]
 
 
