@@ -17,10 +17,9 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from ..errors import DataFileError
-from ..intervals import LEVEL
+from ..intervals import LEVEL, normal_z
 from . import layout
 
 __all__ = ["load_groundtruth", "paper_estimates", "gt_columns", "paper_columns",
@@ -94,7 +93,7 @@ def new_specimen_sd(lo: float, hi: float, level: float = LEVEL) -> float:
     """
     if lo is None or hi is None or not (np.isfinite(lo) and np.isfinite(hi)):
         return np.nan
-    return float((hi - lo) / (2.0 * stats.norm.ppf(0.5 + level / 2.0)))
+    return float((hi - lo) / (2.0 * normal_z(level)))
 
 
 def gt_columns(row: dict, gt: pd.DataFrame | None, material: str, level: float = LEVEL

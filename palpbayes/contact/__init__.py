@@ -77,7 +77,6 @@ __all__ = [
     "DEFAULT_NU_NOTE",
     "shape",
     "force",
-    "force_star",
     "exponent",
     "prefactor",
     "effective_modulus",
@@ -321,11 +320,6 @@ def touching(shape: Callable[[np.ndarray], np.ndarray], depth: np.ndarray) -> np
     if inside.any():
         out[inside] = shape(depth[inside])
     return out
-
-
-def force_star(depth: np.ndarray, Estar, tip: Tip, **kwargs) -> np.ndarray:
-    """Force F = E*·s(d) [N] for effective modulus E* [Pa]; keywords as :func:`shape`."""
-    return Estar * shape(depth, tip, **kwargs)
 
 
 def force(
