@@ -51,7 +51,7 @@ _LAZY = {
     "report": ("reporting.build", "build_report"),
     "BudgetSpec": ("bayes.budget", "BudgetSpec"),
     "ModelSpec": ("modelspec", "ModelSpec"),
-    "Specimen": ("twin.specimen", "Specimen"),
+    "Specimen": ("specimen", "Specimen"),
     "simulate": ("sim.campaign", "simulate_campaign"),
     "simulate_trace": ("sim.trace", "simulate_trace"),
     "OnlineEstimator": ("online.estimator", "OnlineEstimator"),

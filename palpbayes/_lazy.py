@@ -55,7 +55,7 @@ def lazy_modules(package: str, api_modules: tuple[str, ...]
         if name.startswith("__"):  # e.g. __wrapped__, looked up by tools: never a public name
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
         if importlib.util.find_spec(f"{package}.{name}") is not None:
-            # a submodule (``from palpbayes.campaign import layout``): import only that one
+            # a submodule (``from palpbayes.campaign import run``): import only that one
             return importlib.import_module(f"{package}.{name}")
         sub = public_names().get(name)
         if sub is None:

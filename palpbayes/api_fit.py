@@ -19,11 +19,11 @@ import numpy as np
 import pandas as pd
 
 from .campaign.fitjob import SUMMARY_COLUMNS, FitOutcome
-from .campaign.layout import POSTERIOR_DIR, SETTINGS, SUMMARY, TRACES, posterior_path
 from .campaign.options import FitOptions
 from .campaign.results import ResultsFolder
 from .errors import InputError
 from .io.atomic import write_csv_atomic, write_text_atomic
+from .outputs import POSTERIOR_DIR, SETTINGS, SUMMARY, TRACES, posterior_path
 from .trace import IndentationTrace
 
 __all__ = ["Fit", "load_fit"]

@@ -8,8 +8,10 @@ submodule ``x`` when one exists, else to the package (its ``__init__``).
 
 Usage::
 
-    python tools/import_graph.py          # print cycles and relative imports of modules that
-                                          # do not exist; exit 1 if there are any, else 0
+    python tools/import_graph.py          # print cycles (between modules, and between parts:
+                                          # subpackages and top-level modules) and relative
+                                          # imports of modules that do not exist; exit 1 if
+                                          # there are any, else 0
     python tools/import_graph.py --dot    # Graphviz DOT of module -> module edges, one
                                           # cluster per subpackage
 """
@@ -232,16 +234,19 @@ def main(argv: Iterable[str] | None = None) -> int:
     for line in missing:
         print(f"unresolved relative import: {line}")
     found = cycles(edges)
+    parts = layers(edges)
+    found_parts = cycles(parts)
     n_edges = sum(len(t) for t in edges.values())
-    if not found and not missing:
-        print(f"no import cycles ({len(edges)} modules, {n_edges} edges)")
+    if not found and not found_parts and not missing:
+        print(f"no import cycles ({len(edges)} modules, {n_edges} edges; {len(parts)} parts)")
         return 0
-    for component in found:
-        print("import cycle: " + " <-> ".join(component))
+    for graph_, component in [(edges, c) for c in found] + [(parts, c) for c in found_parts]:
+        print(("import cycle: " if graph_ is edges else "cycle between parts: ")
+              + " <-> ".join(component))
         for module in component:
-            inside = sorted(edges[module] & set(component))
+            inside = sorted(graph_[module] & set(component))
             print(f"  {module} -> {', '.join(inside)}")
-    return 1 if found or missing else 0
+    return 1 if found or found_parts or missing else 0
 
 
 if __name__ == "__main__":

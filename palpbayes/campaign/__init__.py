@@ -1,11 +1,11 @@
 """Campaigns: fit every trace of a manifest into a results folder, read it back, compare.
 
 A *results folder* is what ``palpbayes fit`` writes and ``compare``, ``groundtruth`` and
-``report`` add to; every file name in it is owned by :mod:`~palpbayes.campaign.layout`.
+``report`` add to; every file name in it is owned by :mod:`~palpbayes.outputs`.
 
 Modules, one job each
 ---------------------
-:mod:`~palpbayes.campaign.layout`
+:mod:`~palpbayes.outputs`
     The name of every file of a results folder (no other module spells one).
 :mod:`~palpbayes.campaign.fitjob`
     One trace's fit (least squares and/or Bayes) and its ``summary.csv`` rows.
@@ -38,7 +38,7 @@ Modules, one job each
     Fit, ground truth and compare in one call (``palpbayes report CAMPAIGN``).
 
 The package's public names are the ``__all__`` of the modules in :data:`API_MODULES`.  They are
-imported on first use (PEP 562), so that importing :mod:`~palpbayes.campaign.layout` or
+imported on first use (PEP 562), so that importing :mod:`~palpbayes.outputs` or
 :mod:`~palpbayes.campaign.reference` alone does not load the fitting code.
 """
 

@@ -74,6 +74,7 @@ import pandas as pd
 from scipy import stats
 from scipy.special import expit
 
+from .. import outputs
 from ..bayes.budget import BudgetSpec
 from ..bayes.result import saved_fitted_model, saved_model
 from ..contact import DEFAULT_NU, registered_kinds
@@ -87,7 +88,6 @@ from ..io.tabular import parse_bool
 from ..pooling.inputs import fitdata_from_posterior, posterior_attrs, read_posterior
 from ..pooling.model import TAU_PRIOR_SD, log_normal_summary, pool_group
 from ..refit import ALTERNATIVE_COLUMNS
-from . import layout
 from .compare_text import format_comparison
 from .fitjob import trace_seed
 from .indentation import indentation_study
@@ -171,9 +171,9 @@ def _campaign_dir(res: Path, settings: dict) -> Path | None:
 
 
 def _read_summary(res: Path) -> pd.DataFrame:
-    path = res / layout.SUMMARY
+    path = res / outputs.SUMMARY
     if not path.is_file():
-        raise DataFileError(res, f"no {layout.SUMMARY} in this folder",
+        raise DataFileError(res, f"no {outputs.SUMMARY} in this folder",
                             "give the --out folder of 'palpbayes fit' on a campaign manifest")
     df = pd.read_csv(path, dtype={"trace_id": str, "material": str, "tip": str,
                                   "method": str, "notes": str})
@@ -244,7 +244,7 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None,
     sampled_base = False
     for _, trow in g.iterrows():
         tid, E = trow["trace_id"], trow["E_pa"]
-        path = layout.posterior_path(res, tid)
+        path = outputs.posterior_path(res, tid)
         if not (np.isfinite(E) and path.is_file()):
             continue
         idata = read_posterior(path)
@@ -278,7 +278,7 @@ def _bayes_group(g: pd.DataFrame, res: Path, geometry: pd.DataFrame | None,
         row.update({"converged_all": False, **flag_columns("no Bayesian posterior to pool")})
         return row, None, None
     i_rep = int(np.argmin(np.abs(np.asarray(ms) - np.median(ms))))
-    idata = read_posterior(layout.posterior_path(res, ids[i_rep]))
+    idata = read_posterior(outputs.posterior_path(res, ids[i_rep]))
     data = z_med = e_med = None
     spec = budget
     try:
@@ -387,8 +387,8 @@ def compare_campaign(
     budget = _budget_spec(fields)
     seed = int(settings.get("seed", 0) if seed is None else seed)
     geometry = None
-    if (res / layout.TRACES).is_file():
-        geometry = pd.read_csv(res / layout.TRACES, dtype={"trace_id": str, "material": str,
+    if (res / outputs.TRACES).is_file():
+        geometry = pd.read_csv(res / outputs.TRACES, dtype={"trace_id": str, "material": str,
                                                           "tip": str, "specimen": str})
         geometry = geometry.set_index("trace_id", drop=False)
     camp = _campaign_dir(res, settings)
@@ -432,7 +432,7 @@ def compare_campaign(
                     row["z_surf_err_mean_m"] = float(err.mean()) if err.size else np.nan
                 rows.append(row)
     if not rows:
-        raise FitError(f"{res / layout.SUMMARY} has no lsq or bayes rows to compare")
+        raise FitError(f"{res / outputs.SUMMARY} has no lsq or bayes rows to compare")
     comparison = pd.DataFrame(rows, columns=COMPARISON_COLUMNS)
     # header-only when no group has Bayes rows (an lsq-only fit): a file without columns is
     # not a CSV table, and readers reject it
@@ -443,14 +443,14 @@ def compare_campaign(
     study = (indentation_study(geometry, settings) if "bayes" in set(summary["method"])
              else pd.DataFrame())
     if write:
-        write_csv_atomic(comparison, res / layout.COMPARISON)
-        write_csv_atomic(pooled, res / layout.POOLED)
-        write_csv_atomic(budget_tab, res / layout.BUDGET)
+        write_csv_atomic(comparison, res / outputs.COMPARISON)
+        write_csv_atomic(pooled, res / outputs.POOLED)
+        write_csv_atomic(budget_tab, res / outputs.BUDGET)
         # a table with no rows now is removed: a previous run's would be stale
-        for table, name in ((stiff.rows, layout.STIFFENING),
-                            (stiff.parameters, layout.STIFFENING_PARAMETERS),
-                            (stiff.curves, layout.STIFFENING_CURVES),
-                            (study if len(study) else None, layout.INDENTATION)):
+        for table, name in ((stiff.rows, outputs.STIFFENING),
+                            (stiff.parameters, outputs.STIFFENING_PARAMETERS),
+                            (stiff.curves, outputs.STIFFENING_CURVES),
+                            (study if len(study) else None, outputs.INDENTATION)):
             if table is not None:
                 write_csv_atomic(table, res / name)
             else:

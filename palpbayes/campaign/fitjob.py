@@ -30,11 +30,11 @@ from ..fitdata import tared as tared_data
 from ..flagcodes import flag_columns, split_flags
 from ..forcescale import force_scale_flag as scale_flag
 from ..lsq import LSQResult, fit_lsq_data
+from ..outputs import posterior_file
 from ..refit import layer_alternatives
 from ..trace import IndentationTrace
 from ..twin import twin_depth_limit, twin_depth_limit_reason
 from ..units import format_pressure
-from .layout import posterior_file
 from .options import LAYER_MODES, METHODS, FitOptions
 from .tracemodel import nu_source, prepare_twin, trace_model, trace_seed, trace_specimen
 

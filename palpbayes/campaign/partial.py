@@ -18,12 +18,12 @@ from pathlib import Path
 import numpy as np
 
 from .. import errors as _errors
+from .. import outputs
 from ..errors import InputError
 from ..fitdata import FitData
 from ..io.atomic import write_text_atomic
+from ..specimen import FOOTPRINT_COLUMNS
 from ..trace import IndentationTrace
-from ..twin.specimen import FOOTPRINT_COLUMNS
-from . import layout
 from .fitjob import FitOptions, fit_trace_rows, fitted_methods
 from .settings import options_record
 
@@ -66,7 +66,7 @@ def fit_and_record(trace: IndentationTrace, options: FitOptions, out: str,
     Returns ``{"rows": [...]}`` or, for bad input, ``{"error": (class name, message)}`` (custom
     exception classes do not all survive pickling between processes).
     """
-    post_dir = Path(out) / layout.POSTERIOR_DIR
+    post_dir = Path(out) / outputs.POSTERIOR_DIR
     try:
         rows = fit_trace_rows(trace, options, post_dir, data=data).rows
     except InputError as exc:
@@ -78,7 +78,7 @@ def fit_and_record(trace: IndentationTrace, options: FitOptions, out: str,
     record = {"trace_id": trace.trace_id, "options": options_record(options)["repr"],
               "data_sha256": trace_fingerprint(trace), "rows": rows}
     write_text_atomic(json.dumps(record, indent=1),
-                      layout.partial_path(out, trace.trace_id))
+                      outputs.partial_path(out, trace.trace_id))
     return {"rows": rows}
 
 
@@ -96,7 +96,7 @@ def raise_input(error: tuple[str, str]) -> None:
 
 def read_partial(out: Path, trace: IndentationTrace, options: FitOptions) -> list[dict] | None:
     """The recorded rows of a finished trace, or None when it must be (re)fitted."""
-    path = layout.partial_path(out, trace.trace_id)
+    path = outputs.partial_path(out, trace.trace_id)
     if not path.is_file():
         return None
     try:
@@ -114,6 +114,6 @@ def read_partial(out: Path, trace: IndentationTrace, options: FitOptions) -> lis
         ok = r.get("E_pa") is not None and not (isinstance(r["E_pa"], float)
                                                 and math.isnan(r["E_pa"]))
         if r["method"] == "bayes" and ok and \
-                not layout.posterior_path(out, trace.trace_id).is_file():
+                not outputs.posterior_path(out, trace.trace_id).is_file():
             return None
     return rows

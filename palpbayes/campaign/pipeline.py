@@ -20,9 +20,8 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .. import __version__
+from .. import __version__, outputs
 from ..errors import InputError, OutputExistsError
-from . import layout
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -43,7 +42,7 @@ def write_groundtruth(per_file: pd.DataFrame, per_group: pd.DataFrame,
     from ..io.atomic import write_csv_atomic
 
     out = Path(out_dir)
-    a, b = out / layout.GROUNDTRUTH, out / layout.GROUNDTRUTH_SUMMARY
+    a, b = out / outputs.GROUNDTRUTH, out / outputs.GROUNDTRUTH_SUMMARY
     write_csv_atomic(per_file, a, float_format="%.10g")
     write_csv_atomic(per_group, b, float_format="%.10g")
     return a, b
@@ -162,8 +161,8 @@ def write_gap(out_dir: str | os.PathLike) -> Path | None:
     from ..paper import PAPER_MATERIALS
 
     out = Path(out_dir)
-    path = out / layout.GAP
-    summary = pd.read_csv(out / layout.SUMMARY, usecols=["material"], dtype=str)
+    path = out / outputs.GAP
+    summary = pd.read_csv(out / outputs.SUMMARY, usecols=["material"], dtype=str)
     mats = [m for m in PAPER_MATERIALS if m in set(summary["material"].dropna())]
     if not mats:
         path.unlink(missing_ok=True)

@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .. import outputs
 from ..errors import DataFileError
 from ..intervals import LEVEL, normal_z
-from . import layout
 
 __all__ = ["load_groundtruth", "paper_estimates", "gt_columns", "paper_columns",
            "new_specimen_sd"]
@@ -72,9 +72,9 @@ def load_groundtruth(spec: str | os.PathLike | None, campaign_dir: Path | None
     if spec is not None:
         p = Path(spec)
         if p.is_dir():
-            if (p / layout.GROUNDTRUTH_SUMMARY).is_file():
-                return _gt_from_file(p / layout.GROUNDTRUTH_SUMMARY), str(
-                    p / layout.GROUNDTRUTH_SUMMARY)
+            if (p / outputs.GROUNDTRUTH_SUMMARY).is_file():
+                return _gt_from_file(p / outputs.GROUNDTRUTH_SUMMARY), str(
+                    p / outputs.GROUNDTRUTH_SUMMARY)
             return analyse([p])[1], f"{p} (analysed)"
         if not p.is_file():
             raise DataFileError(p, "ground truth not found", "give a groundtruth_summary.csv, "

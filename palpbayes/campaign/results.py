@@ -30,10 +30,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from .. import outputs
 from ..contact import registered_kinds
 from ..errors import DataFileError, InputError
 from ..flagcodes import flag_columns
-from . import layout
 
 if TYPE_CHECKING:
     from ..bayes.result import BayesResult
@@ -162,29 +162,29 @@ def load_results(path: str | os.PathLike) -> ResultsFolder:
         ``path`` has no ``summary.csv``.
     """
     p = Path(path)
-    summary = _read_csv(p / layout.SUMMARY)
+    summary = _read_csv(p / outputs.SUMMARY)
     if summary is None:
-        raise InputError(f"{p}: no {layout.SUMMARY}; run 'palpbayes fit' first, or give a campaign "
-                         "folder or manifest to fit it")
+        raise InputError(f"{p}: no {outputs.SUMMARY}; run 'palpbayes fit' first, or give a "
+                         "campaign folder or manifest to fit it")
     if summary.empty:
-        raise DataFileError(p / layout.SUMMARY, "has no rows")
+        raise DataFileError(p / outputs.SUMMARY, "has no rows")
     settings: dict = {}
-    if (p / layout.SETTINGS).is_file():
+    if (p / outputs.SETTINGS).is_file():
         try:
-            settings = json.loads((p / layout.SETTINGS).read_text(encoding="utf-8"))
+            settings = json.loads((p / outputs.SETTINGS).read_text(encoding="utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise DataFileError(p / layout.SETTINGS, f"not valid JSON ({exc})") from None
+            raise DataFileError(p / outputs.SETTINGS, f"not valid JSON ({exc})") from None
     return ResultsFolder(
         path=p, summary=summary, settings=settings,
-        traces=_read_csv(p / layout.TRACES), comparison=_read_csv(p / layout.COMPARISON),
-        pooled=_read_csv(p / layout.POOLED), budget=_read_csv(p / layout.BUDGET),
-        stiffening=_read_csv(p / layout.STIFFENING),
-        stiffening_parameters=_read_csv(p / layout.STIFFENING_PARAMETERS),
-        stiffening_curves=_read_csv(p / layout.STIFFENING_CURVES),
-        indentation=_read_csv(p / layout.INDENTATION),
-        groundtruth=_read_csv(p / layout.GROUNDTRUTH),
-        groundtruth_summary=_read_csv(p / layout.GROUNDTRUTH_SUMMARY),
-        gap=_read_csv(p / layout.GAP),
+        traces=_read_csv(p / outputs.TRACES), comparison=_read_csv(p / outputs.COMPARISON),
+        pooled=_read_csv(p / outputs.POOLED), budget=_read_csv(p / outputs.BUDGET),
+        stiffening=_read_csv(p / outputs.STIFFENING),
+        stiffening_parameters=_read_csv(p / outputs.STIFFENING_PARAMETERS),
+        stiffening_curves=_read_csv(p / outputs.STIFFENING_CURVES),
+        indentation=_read_csv(p / outputs.INDENTATION),
+        groundtruth=_read_csv(p / outputs.GROUNDTRUTH),
+        groundtruth_summary=_read_csv(p / outputs.GROUNDTRUTH_SUMMARY),
+        gap=_read_csv(p / outputs.GAP),
     )
 
 
@@ -198,7 +198,7 @@ def load_rheology_table(path: str | os.PathLike) -> pd.DataFrame | None:
     DataFileError
         The table cannot be read, has no rows or lacks ``trace_id`` / ``rheology``.
     """
-    p = Path(path) / layout.RHEOLOGY_TABLE
+    p = Path(path) / outputs.RHEOLOGY_TABLE
     if not p.is_file():
         return None
     try:
@@ -246,7 +246,7 @@ def load_fit(results: ResultsFolder | str | os.PathLike, trace_id: str) -> Bayes
     from ..pooling.inputs import fitdata_from_posterior, read_posterior
 
     res = results if isinstance(results, ResultsFolder) else load_results(results)
-    path = layout.posterior_path(res.path, trace_id)
+    path = outputs.posterior_path(res.path, trace_id)
     if not path.is_file():
         raise InputError(f"{path}: no posterior for trace {trace_id!r}")
     idata = read_posterior(path)

@@ -3,7 +3,7 @@
 :func:`fit_campaign` runs :func:`palpbayes.campaign.fitjob.fit_trace` on every trace over a
 process pool or on Dask (``scheduler``: a LocalCluster or a cluster's scheduler; each trace in
 :func:`palpbayes.campaign.partial.fit_and_record`) and writes a
-results folder (docs/design.md §5, §7; file names in :mod:`palpbayes.campaign.layout`)::
+results folder (docs/design.md §5, §7; file names in :mod:`palpbayes.outputs`)::
 
     OUT_DIR/
       summary.csv               one row per trace × method, columns fitjob.SUMMARY_COLUMNS
@@ -51,13 +51,13 @@ from pathlib import Path
 
 import pandas as pd
 
+from .. import outputs
 from ..errors import FitError, InputError, OutputExistsError
 from ..fitdata import FitData
 from ..io.atomic import write_csv_atomic, write_text_atomic
 from ..procs import lifeline
 from ..progress import progress_bar
 from ..trace import IndentationTrace
-from . import layout
 from .fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable
 from .partial import fit_and_record, raise_input, read_partial
 from .settings import read_settings, settings_record
@@ -86,9 +86,9 @@ def _check_out_dir(out: Path, resume: bool, force: bool) -> None:
 
 def _clear_outputs(out: Path) -> None:
     """Remove a previous run's results (only files palpbayes writes)."""
-    for name in layout.FIT_OUTPUTS:
+    for name in outputs.FIT_OUTPUTS:
         (out / name).unlink(missing_ok=True)
-    for sub, pattern in ((layout.POSTERIOR_DIR, "*.nc"), (layout.PARTIAL_DIR, "*.json")):
+    for sub, pattern in ((outputs.POSTERIOR_DIR, "*.nc"), (outputs.PARTIAL_DIR, "*.json")):
         for f in (out / sub).glob(pattern):
             f.unlink()
 
@@ -171,15 +171,15 @@ def _write_and_fit(traces: list[IndentationTrace], options: FitOptions, out: Pat
     fit data."""
     try:
         out.mkdir(parents=True, exist_ok=True)
-        (out / layout.PARTIAL_DIR).mkdir(exist_ok=True)
-        (out / layout.POSTERIOR_DIR).mkdir(exist_ok=True)
+        (out / outputs.PARTIAL_DIR).mkdir(exist_ok=True)
+        (out / outputs.POSTERIOR_DIR).mkdir(exist_ok=True)
     except OSError as exc:
         raise InputError(f"cannot create output folder {out} ({exc.strerror or exc}); choose "
                          "another --out") from None
     if force:
         _clear_outputs(out)
-    write_text_atomic(json.dumps(settings, indent=2) + "\n", out / layout.SETTINGS)
-    write_csv_atomic(traces_table(traces), out / layout.TRACES, float_format="%.10g")
+    write_text_atomic(json.dumps(settings, indent=2) + "\n", out / outputs.SETTINGS)
+    write_csv_atomic(traces_table(traces), out / outputs.TRACES, float_format="%.10g")
 
     done = {t.trace_id for t in traces if resume and read_partial(out, t, options) is not None}
     todo = [t for t in traces if t.trace_id not in done]
@@ -327,9 +327,9 @@ def fit_campaign(
         rows += recorded
     summary = pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
     summary = summary.sort_values(["trace_id", "method"], kind="stable").reset_index(drop=True)
-    write_csv_atomic(summary, out / layout.SUMMARY)
+    write_csv_atomic(summary, out / outputs.SUMMARY)
     if options.strict:
-        _raise_strict(rows, str(out / layout.SUMMARY))
+        _raise_strict(rows, str(out / outputs.SUMMARY))
     return summary
 
 

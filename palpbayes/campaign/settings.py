@@ -13,9 +13,8 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .. import __version__
+from .. import __version__, outputs
 from .. import errors as _errors
-from . import layout
 
 if TYPE_CHECKING:
     from .fitjob import FitOptions
@@ -31,7 +30,7 @@ def options_record(options: FitOptions) -> dict:
 
 def read_settings(out_dir: str | os.PathLike) -> dict:
     """``settings.json`` of a results folder as a dict ({} when absent)."""
-    path = Path(out_dir) / layout.SETTINGS
+    path = Path(out_dir) / outputs.SETTINGS
     if not path.is_file():
         return {}
     try:

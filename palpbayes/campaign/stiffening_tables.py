@@ -3,7 +3,7 @@
 :func:`fit_stiffening_tables` fits the law E(rest time) (:func:`palpbayes.stiffening.
 fit_stiffening_summary`) to the Bayesian rows of every group whose palpations span
 :data:`STIFFENING_MIN_REST_TIMES` or more distinct positive rest times, and returns three
-tables that ``palpbayes compare`` writes (file names: :mod:`palpbayes.campaign.layout`):
+tables that ``palpbayes compare`` writes (file names: :mod:`palpbayes.outputs`):
 
 * ``stiffening.csv`` — one row per group: verdict, BICs, the preferred law's medians
   (:meth:`~palpbayes.stiffening.StiffeningResult.row`);

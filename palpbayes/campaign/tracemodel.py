@@ -12,9 +12,9 @@ from ..bayes.layers import default_thickness_range
 from ..contact import DEFAULT_NU, check_tip_plausible
 from ..errors import GeometryError, InputError
 from ..fitdata import ModelSpec
+from ..specimen import FOOTPRINT_COLUMNS
 from ..trace import IndentationTrace
 from ..twin import Specimen, prepare_tables, specimen_from_sizes
-from ..twin.specimen import FOOTPRINT_COLUMNS
 from .options import FitOptions
 
 __all__ = ["nu_source", "trace_seed", "trace_model", "trace_specimen", "prepare_twin"]

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..campaign import layout
+from .. import outputs
 
 __all__ = ["register", "run"]
 
@@ -50,5 +50,5 @@ def run(args: argparse.Namespace) -> int:
               "interval] (comparison.csv E_new_pa [E_new_lo_pa, E_new_hi_pa]); the pooled "
               "MATERIAL modulus (E_pa ± E_sd_pa) is the report's 'Bayes material E ± sd' column")
     res = result.results_dir
-    print(f"\nwrote {res / layout.COMPARISON}, {res / layout.POOLED} and {res / layout.BUDGET}")
+    print(f"\nwrote {res / outputs.COMPARISON}, {res / outputs.POOLED} and {res / outputs.BUDGET}")
     return 0

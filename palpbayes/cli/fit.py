@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..campaign import layout
+from .. import outputs
 from ..errors import DataFileError, InputError
 from .console import console_lines
 from .options import (
@@ -131,5 +131,5 @@ def run(args: argparse.Namespace) -> int:
                            read_options=manifest_options, scheduler=args.scheduler)
     for line in console_lines(summary):
         print(line)
-    print(f"wrote {Path(args.out) / layout.SUMMARY}")
+    print(f"wrote {Path(args.out) / outputs.SUMMARY}")
     return 0

@@ -16,7 +16,7 @@ import argparse
 import math
 from pathlib import Path
 
-from ..campaign import layout
+from .. import outputs
 from ..contact import check_nu
 from ..errors import InputError
 from ..groundtruth import DEFAULT_STRAIN_WINDOW
@@ -40,7 +40,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("inputs", nargs="+", metavar="INPUT",
                    help="compression-test CSV files, folders, or a ground-truth manifest")
     p.add_argument("--out", required=True, metavar="DIR", type=Path,
-                   help=f"output folder for {layout.GROUNDTRUTH} and {layout.GROUNDTRUTH_SUMMARY}")
+                   help=f"output folder for {outputs.GROUNDTRUTH} and "
+                        f"{outputs.GROUNDTRUTH_SUMMARY}")
     p.add_argument("--strain-window", nargs=2, type=float, metavar=("LO", "HI"),
                    default=[lo, hi],
                    help="fit window in PERCENT engineering strain, measured from the toe offset "
@@ -61,7 +62,7 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "mooney-rivlin, yeoh, yeoh-2, ogden, ogden-2, ogden-3, exponential, "
                         "hyperfoam, hyperfoam-2), or auto: the laws neo-hookean, "
                         "mooney-rivlin, yeoh-2, yeoh, ogden and exponential compared by PSIS-LOO "
-                        f"and each material's best kept ({layout.GROUNDTRUTH_LAWS})")
+                        f"and each material's best kept ({outputs.GROUNDTRUTH_LAWS})")
     h.add_argument("--strain", default=None, metavar="LO,HI",
                    help="also each test's chord modulus between these compressive strains "
                         "(fractions, e.g. 0.05,0.20) under its law: two tests set side by side "
@@ -126,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     write_groundtruth(per_file, summary, out)
     if args.law != "linear":
-        write_csv_atomic(laws, out / layout.GROUNDTRUTH_LAWS, float_format="%.10g")
+        write_csv_atomic(laws, out / outputs.GROUNDTRUTH_LAWS, float_format="%.10g")
 
     origin = "the toe offset" if args.toe_compensation else "zero measured strain"
     extra = "; points below twice the toe offset skipped" if args.skip_toe else ""
@@ -150,8 +151,8 @@ def run(args: argparse.Namespace) -> int:
     if args.law != "linear":
         for line in law_lines(summary, laws, per_file):
             print(line)
-    print(f"wrote {out / layout.GROUNDTRUTH} and {out / layout.GROUNDTRUTH_SUMMARY}"
-          + (f" and {out / layout.GROUNDTRUTH_LAWS}" if args.law != "linear" else ""))
+    print(f"wrote {out / outputs.GROUNDTRUTH} and {out / outputs.GROUNDTRUTH_SUMMARY}"
+          + (f" and {out / outputs.GROUNDTRUTH_LAWS}" if args.law != "linear" else ""))
     return 0
 
 

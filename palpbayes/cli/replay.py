@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..campaign import layout
+from .. import outputs
 from ..checks import checks_summary
 from ..contact import DEFAULT_NU_NOTE
 from ..io.atomic import write_csv_atomic, write_with
@@ -42,8 +42,8 @@ def register(subparsers) -> None:
     p.add_argument("--truth", type=float, default=None, metavar="PA",
                    help="true modulus [Pa] of a simulated trace, drawn on the figure")
     p.add_argument("--out", metavar="DIR", default=None,
-                   help=f"write {layout.REPLAY_HISTORY}, {layout.REPLAY_SUMMARY} and "
-                        f"{layout.REPLAY_FIGURE} here")
+                   help=f"write {outputs.REPLAY_HISTORY}, {outputs.REPLAY_SUMMARY} and "
+                        f"{outputs.REPLAY_FIGURE} here")
     add_trace_options(p)
 
 
@@ -128,12 +128,12 @@ def run(args: argparse.Namespace) -> int:
 
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
-        write_csv_atomic(res.history, out / layout.REPLAY_HISTORY)
-        write_csv_atomic(pd.DataFrame([summary]), out / layout.REPLAY_SUMMARY)
+        write_csv_atomic(res.history, out / outputs.REPLAY_HISTORY)
+        write_csv_atomic(pd.DataFrame([summary]), out / outputs.REPLAY_SUMMARY)
         fig = plot_replay(res.history, stop_n=None if s is None else s.n, target=args.target,
                           truth=args.truth, title=trace.trace_id)
         write_with(lambda tmp: fig.savefig(tmp, dpi=150, format="png"),
-                   out / layout.REPLAY_FIGURE, suffix=".png")
-        print(f"wrote {out / layout.REPLAY_HISTORY}, {out / layout.REPLAY_SUMMARY} and "
-              f"{out / layout.REPLAY_FIGURE}")
+                   out / outputs.REPLAY_FIGURE, suffix=".png")
+        print(f"wrote {out / outputs.REPLAY_HISTORY}, {out / outputs.REPLAY_SUMMARY} and "
+              f"{out / outputs.REPLAY_FIGURE}")
     return 0

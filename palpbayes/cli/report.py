@@ -21,7 +21,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..campaign import layout
+from .. import outputs
 from ..errors import InputError
 from .options import add_model_options, options_from_args
 
@@ -79,12 +79,12 @@ def resolve_input(value: str | None) -> tuple[str, Path]:
     if not p.exists():
         raise InputError(f"{p}: no such file or folder")
     if p.is_dir():
-        if (p / layout.SUMMARY).is_file() or (p / layout.RHEOLOGY_TABLE).is_file():
+        if (p / outputs.SUMMARY).is_file() or (p / outputs.RHEOLOGY_TABLE).is_file():
             return "results", p
         if (p / "manifest.csv").is_file():
             return "campaign", p / "manifest.csv"
-        raise InputError(f"{p}: neither a results folder ({layout.SUMMARY} from 'palpbayes fit', "
-                         f"{layout.RHEOLOGY_TABLE} from 'palpbayes fit --rheology') nor a "
+        raise InputError(f"{p}: neither a results folder ({outputs.SUMMARY} from 'palpbayes fit', "
+                         f"{outputs.RHEOLOGY_TABLE} from 'palpbayes fit --rheology') nor a "
                          "campaign folder (manifest.csv)")
     if is_manifest(p):
         return "campaign", p
@@ -125,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"--out is for a campaign INPUT; {path} is already a results "
                              "folder (use -o FILE.pdf to choose the report's name)")
         results = path
-        if not (path / layout.SUMMARY).is_file():  # viscoelastic fits only
+        if not (path / outputs.SUMMARY).is_file():  # viscoelastic fits only
             info = build_report(path, args.output, seed=args.seed)
             print(f"report: {info.n_pages} pages, {info.n_traces} trace(s), "
                   f"{_rheology_line(info)}")

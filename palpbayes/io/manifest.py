@@ -46,8 +46,8 @@ import pandas as pd
 
 from ..contact import TIP_PARAMETERS, Tip
 from ..errors import DataFileError, GeometryError, InputError
+from ..specimen import FOOTPRINT_COLUMNS, check_specimen_plausible, specimen_from_sizes
 from ..trace import IndentationTrace
-from ..twin.specimen import FOOTPRINT_COLUMNS, check_specimen_plausible, specimen_from_sizes
 from .atomic import write_csv_atomic
 from .tabular import sniff_delimiter
 from .trace_csv import read_frame, read_trace, trace_from_frame

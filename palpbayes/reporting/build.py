@@ -8,10 +8,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .. import __version__
-from ..campaign.layout import REPORT, RHEOLOGY_TABLE, SUMMARY
 from ..campaign.results import ResultsFolder, load_results, load_rheology_table
 from ..errors import InputError
 from ..io.tabular import parse_bool
+from ..outputs import REPORT, RHEOLOGY_TABLE, SUMMARY
 from .format import shown_path
 from .layout import RASTER_DPI, Page, write_pages
 from .pages_budget import budget_pages

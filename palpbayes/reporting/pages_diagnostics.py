@@ -8,10 +8,10 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
-from ..campaign.layout import posterior_path
 from ..campaign.results import ResultsFolder, load_fit
 from ..flagcodes import flag_level, split_flags
 from ..io.tabular import parse_bool
+from ..outputs import posterior_path
 from .format import fmt, fmt_range, yesno
 from .layout import PAGE_SIZE, Page, text_height, text_lines
 from .tables import (

@@ -10,8 +10,8 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from .. import plots
-from ..campaign.layout import posterior_path
 from ..campaign.results import ResultsFolder, load_fit
+from ..outputs import posterior_path
 from .format import fmt, interval, kpa, pm
 from .layout import Page, text_lines, wrap_to
 from .tables import hertz_of_group, pooled_of

@@ -189,7 +189,7 @@ def _fit_lines(row, fit: StoredRheologyFit, rows: pd.DataFrame) -> list[tuple[st
 def _page_fit(results: Path, row, rows: pd.DataFrame) -> Page:
     """One trace and model: force against time with the band, E*(t) of every model of the
     trace, the hysteresis, the parameters and the flags in words."""
-    from ..campaign.layout import rheology_fit_path
+    from ..outputs import rheology_fit_path
 
     tid, model = str(row["trace_id"]), str(row["rheology"])
     label = RHEOLOGY_LABELS.get(model, model)

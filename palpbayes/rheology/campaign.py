@@ -14,7 +14,7 @@ A group with two or more successfully fitted power-law traces gets one row; a gr
 manifest row gets none, and so does a group with fewer than two fits.  The table is written
 when a manifest is fitted with the power law and a group pools, **not at all when none
 does** (an empty table is not written); ``fit --rheology`` removes a previous run's table first
-(:data:`~palpbayes.campaign.layout.RHEOLOGY_OUTPUTS`).  **SLS fits are not pooled**: the speed
+(:data:`~palpbayes.outputs.RHEOLOGY_OUTPUTS`).  **SLS fits are not pooled**: the speed
 scaling is the power law's (an SLS's apparent modulus has no single exponent); with
 ``--rheology power-law,sls`` the power-law fits are pooled.
 
@@ -53,11 +53,11 @@ import numpy as np
 import pandas as pd
 
 from ..bayes.conjugate import NodePosterior
-from ..campaign.layout import RHEOLOGY_POOLED
 from ..contact import TIP_PARAMETERS, youngs_modulus
 from ..errors import PalpbayesError
 from ..flagcodes import POOLED_RHEOLOGY_CODES, listed_flag_columns
 from ..io.atomic import write_csv_atomic
+from ..outputs import RHEOLOGY_POOLED
 from ..trace import IndentationTrace
 from ..units import format_pressure_interval, interval_digits
 from .cycle import CycleData

@@ -29,10 +29,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..campaign.layout import RHEOLOGY_TABLE, rheology_fit_path
 from ..errors import InputError, PalpbayesError
 from ..flagcodes import RHEOLOGY_CODES, listed_flag_columns
 from ..io.atomic import write_csv_atomic
+from ..outputs import RHEOLOGY_TABLE, rheology_fit_path
 from ..trace import IndentationTrace
 from .compression import PAPER_COMPRESSION_SPEED
 from .cycle import DEFAULT_SEGMENTS

@@ -2,7 +2,7 @@
 without fitting anything.
 
 :func:`save_rheology_fit` writes one netCDF file per trace and relaxation model,
-``DIR/rheology/<trace_id>_<rheology>.nc`` (:func:`~palpbayes.campaign.layout.rheology_fit_path`),
+``DIR/rheology/<trace_id>_<rheology>.nc`` (:func:`~palpbayes.outputs.rheology_fit_path`),
 atomically (a temporary file renamed), with h5netcdf through xarray: a plain dataset that
 ``xarray.open_dataset(path, engine="h5netcdf")`` opens; nothing is pickled.  It holds
 
@@ -45,8 +45,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from .. import __version__
-from ..campaign import layout
+from .. import __version__, outputs
 from ..errors import DataFileError, InputError
 from ..intervals import LEVEL, central_band
 from ..io.atomic import write_with
@@ -267,7 +266,7 @@ def save_rheology_fit(fit: RheologyFit, path: str | os.PathLike, *,
     fit
         A :func:`~palpbayes.rheology.fit_rheology` result.
     path
-        The file (folders created), usually :func:`~palpbayes.campaign.layout.
+        The file (folders created), usually :func:`~palpbayes.outputs.
         rheology_fit_path`.
     trace
         The whole recording, for the hysteresis of every segment; default the fitted
@@ -391,10 +390,10 @@ def load_rheology_fit(path: str | os.PathLike) -> StoredRheologyFit:
 
 def clear_rheology_outputs(results_dir: str | os.PathLike) -> None:
     """Remove a previous viscoelastic run's files from a results folder
-    (:data:`~palpbayes.campaign.layout.RHEOLOGY_OUTPUTS` and the stored fits
+    (:data:`~palpbayes.outputs.RHEOLOGY_OUTPUTS` and the stored fits
     ``rheology/*.nc``); other files are kept."""
     out = Path(results_dir)
-    for name in layout.RHEOLOGY_OUTPUTS:
+    for name in outputs.RHEOLOGY_OUTPUTS:
         (out / name).unlink(missing_ok=True)
-    for f in (out / layout.RHEOLOGY_DIR).glob("*.nc"):
+    for f in (out / outputs.RHEOLOGY_DIR).glob("*.nc"):
         f.unlink()

@@ -12,7 +12,7 @@ Kelly (1990)'s E_app = K·[1 − 2·I1(x)/(x·I0(x))], x² = 48·G·S²/K, and a
 (``tests/unit/test_twin.py``).
 
 **Model.**  The half of an axisymmetric cylinder (the cuboid's twin: the cylinder of equal
-area, :class:`~palpbayes.twin.specimen.Specimen`) above its mid-plane (u_z = 0 there, u_r
+area, :class:`~palpbayes.specimen.Specimen`) above its mid-plane (u_z = 0 there, u_r
 free: symmetry), the platen pushing its top face down by a unit strain: u_z prescribed, u_r = 0
 (bonded) or free (lubricated).  The force is the platen's reaction; the mesh is graded towards
 the platen's edge, where the bonded corner's stresses are singular.
@@ -89,7 +89,7 @@ def _solve(aspect: float, nu: float, platens: str, res: Resolution) -> float:
 
 def compression_factor(specimen, nu: float, platens: str,
                        resolution: str | Resolution = "default") -> float:
-    """E_app/E [-] of the :class:`~palpbayes.twin.specimen.Specimen` between ``platens``
+    """E_app/E [-] of the :class:`~palpbayes.specimen.Specimen` between ``platens``
     (its equal-area cylinder)."""
     return platen_factor(specimen.radius / specimen.height, nu, platens, resolution)
 

@@ -3,7 +3,7 @@ strain.
 
 The specimen is the linear twin's (:mod:`palpbayes.twin.palpation`): a cylinder of radius
 ``radius`` and height ``height`` (a block's equal-area cylinder,
-:class:`~palpbayes.twin.specimen.Specimen`) on a rigid plate, bonded (u = 0) or lying on it
+:class:`~palpbayes.specimen.Specimen`) on a rigid plate, bonded (u = 0) or lying on it
 without friction (u_z = 0), its side free, at finite strain (:class:`~.hyper.HyperSolid`, any
 registered law).  The tip presses the top face's centre without friction, by a penalty on
 the signed distance to its true surface (:mod:`.hyper_contact`), k = ``penalty``·E0/a with a

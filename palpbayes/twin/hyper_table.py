@@ -37,10 +37,10 @@ from scipy.interpolate import PchipInterpolator
 from ..contact import Tip, get_law
 from ..errors import FitError, GeometryError, InputError
 from ..material import MaterialLaw, material_law
+from ..specimen import Specimen
 from .cache import load_arrays, save_arrays
 from .hyper_palpation import HYPER_RESOLUTIONS, PENALTY, solve_hyper_palpation
 from .palpation import TWIN_BASES
-from .specimen import Specimen
 
 __all__ = ["HyperTable", "hyper_table", "prepare_hyper_table", "hyper_curve", "curve_key",
            "table_depths", "HYPER_TABLE_VERSION", "DEPTH_POINTS"]

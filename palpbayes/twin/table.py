@@ -40,11 +40,11 @@ from scipy.interpolate import PchipInterpolator
 from ..contact import Tip, get_law
 from ..contact import layer as layer_solution
 from ..errors import GeometryError
+from ..specimen import Specimen
 from ..units import format_length
 from .cache import key_text, load_arrays, save_arrays
 from .mesh import RESOLUTIONS
 from .palpation import TWIN_BASES, solve_palpation
-from .specimen import Specimen
 
 __all__ = ["TwinTable", "twin_table", "twin_shape", "twin_factor", "prepare_tables",
            "table_key", "TWIN_SOLVER_VERSION", "twin_depth_limit", "twin_depth_limit_reason",

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from palpbayes.campaign import layout
+from palpbayes import outputs as layout
 from palpbayes.cli import main
 from palpbayes.contact import Tip
 from palpbayes.io.trace_csv import write_trace

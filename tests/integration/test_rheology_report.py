@@ -22,11 +22,11 @@ import pytest
 import palpbayes.rheology.fit as rfit
 import palpbayes.rheology.posterior as rpost
 import palpbayes.rheology.results as rresults
-from palpbayes.campaign.layout import rheology_fit_path
 from palpbayes.cli import main
 from palpbayes.contact.viscoelastic import PowerLawKernel
 from palpbayes.errors import DataFileError, InputError
 from palpbayes.intervals import central_band
+from palpbayes.outputs import rheology_fit_path
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.plots import plot_cycle_fit, plot_hysteresis, plot_relaxation
 from palpbayes.reporting import build_report

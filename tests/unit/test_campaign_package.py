@@ -1,5 +1,5 @@
 """The campaign and pooling packages: public names from the submodules' ``__all__``, one owner
-per name, and ``campaign.layout`` importable alone (no import cycle through the package)."""
+per name, and ``palpbayes.outputs`` importable alone (no import cycle through the package)."""
 
 from __future__ import annotations
 
@@ -36,9 +36,9 @@ def test_pooling_exports_are_its_modules_all():
 
 
 def test_layout_and_reference_import_alone_without_the_fitting_code():
-    """``campaign.reference`` (imported by campaign.compare) imports campaign.layout: importing
+    """``campaign.reference`` (imported by campaign.compare) imports palpbayes.outputs: importing
     it first must neither fail nor load the campaign run, the sampler or arviz."""
-    code = ("import sys, palpbayes.campaign.reference, palpbayes.campaign.layout\n"
+    code = ("import sys, palpbayes.campaign.reference, palpbayes.outputs\n"
             "heavy = [m for m in ('palpbayes.campaign.run', 'palpbayes.campaign.compare', "
             "'arviz', 'emcee') if m in sys.modules]\n"
             "assert not heavy, heavy\n")
@@ -47,8 +47,8 @@ def test_layout_and_reference_import_alone_without_the_fitting_code():
 
 @pytest.mark.slow
 def test_every_campaign_and_pooling_module_imports_first_in_a_fresh_interpreter():
-    mods = [f"palpbayes.campaign.{m}" for m in (*campaign.API_MODULES, "layout", "partial")]
-    mods += ["palpbayes.pooling.model", "palpbayes.pooling.inputs",
+    mods = [f"palpbayes.campaign.{m}" for m in (*campaign.API_MODULES, "partial")]
+    mods += ["palpbayes.outputs", "palpbayes.pooling.model", "palpbayes.pooling.inputs",
              "palpbayes.campaign.reference"]
     for mod in mods:
         subprocess.run([sys.executable, "-c", f"import {mod}"], check=True)

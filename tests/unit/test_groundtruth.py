@@ -21,6 +21,7 @@ from palpbayes.groundtruth import (
     hac_slope_se,
     sensitivity_windows,
 )
+from palpbayes.groundtruth.laws import LAW_COLUMNS
 from palpbayes.io.atomic import write_csv_atomic
 from palpbayes.io.groundtruth_inputs import collect_tests, read_groundtruth_manifest, scan_inputs
 from palpbayes.io.instron import CompressionTest, read_compression_test
@@ -221,8 +222,11 @@ def phantom_tables(shared_data):
 
 def test_real_phantoms_match_published_moduli(phantom_tables):
     (per_file, summary), published = phantom_tables
-    assert list(per_file.columns) == PER_FILE_COLUMNS
-    assert list(summary.columns) == SUMMARY_COLUMNS
+    # the linear rule's columns, then the law's (linear: E0 = E)
+    assert list(per_file.columns) == PER_FILE_COLUMNS + LAW_COLUMNS
+    assert list(summary.columns) == SUMMARY_COLUMNS + ["law", "E0_mean_pa", "E0_sd_pa"]
+    assert (per_file["law"] == "linear").all()
+    assert (per_file["E0_pa"] == per_file["E_pa"]).all()
     assert len(per_file) == 30 and set(summary["material"]) == set(FOLDER.values())
     # the window used is reported, in the summary and per file
     assert (summary["window_lo"] == 0.0).all() and (summary["window_hi"] == 0.05).all()
@@ -432,8 +436,9 @@ def test_cli_writes_tables_and_reports_the_window(tmp_path, capsys):
     assert "White foam" in text and "1 other CSV file(s) skipped" in text
     per_file = pd.read_csv(out / "groundtruth.csv")
     summary = pd.read_csv(out / "groundtruth_summary.csv")
-    assert list(per_file.columns) == PER_FILE_COLUMNS and len(per_file) == 4
-    assert list(summary.columns) == SUMMARY_COLUMNS and (summary["window_hi"] == 0.04).all()
+    assert list(per_file.columns) == PER_FILE_COLUMNS + LAW_COLUMNS and len(per_file) == 4
+    assert list(summary.columns) == SUMMARY_COLUMNS + ["law", "E0_mean_pa", "E0_sd_pa"]
+    assert (summary["window_hi"] == 0.04).all()
     assert summary["rule"].str.contains("over 0-4 % strain measured from the toe offset").all()
     assert summary["rule"].str.contains("0-2.4 %, 0-4 %, 0.8-4.8 %").all()
     assert per_file["E_plain_pa"].notna().all() and per_file["E_window_spread_pa"].notna().all()

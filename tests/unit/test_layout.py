@@ -1,4 +1,4 @@
-"""Results-folder layout (palpbayes.campaign.layout): stale files after --force, lsq-only
+"""Results-folder layout (palpbayes.outputs): stale files after --force, lsq-only
 compare/report."""
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 
-from palpbayes.campaign.layout import RHEOLOGY_OUTPUTS, RHEOLOGY_POOLED
+from palpbayes.outputs import RHEOLOGY_OUTPUTS, RHEOLOGY_POOLED
 from palpbayes.rheology.campaign import (
     POOLED_COLUMNS,
     SpeedPools,
