@@ -26,7 +26,7 @@ import numpy as np
 
 from ..io.atomic import atomic_path
 
-__all__ = ["cache_dir", "load_arrays", "save_arrays", "key_text", "code_stamp"]
+__all__ = ["cache_dir", "load_arrays", "save_arrays", "key_text", "code_stamp", "package_stamp"]
 
 #: Subfolder of the cache for the twin's tables; its number changes with the solver.
 _SUBDIR = "twin-v1"
@@ -103,4 +103,24 @@ def code_stamp(modules: tuple[str, ...], extra: str = "") -> str:
             h.update(Path(sys.modules[name].__file__).read_bytes())
         except (KeyError, OSError, TypeError):
             return ""
+    return h.hexdigest()[:32]
+
+
+@functools.lru_cache(maxsize=1)
+def package_stamp() -> str:
+    """A digest of every source and compiled file of the palpbayes package with numpy's,
+    scipy's and pandas' versions: what a result of the whole package (the gap table) is valid
+    for.  "" when a file cannot be read."""
+    import pandas
+    import scipy
+
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256(f"{np.__version__} {scipy.__version__} {pandas.__version__}".encode())
+    try:
+        for f in sorted(root.rglob("*")):
+            if f.suffix in (".py", ".pyx", ".so", ".pyd") and "__pycache__" not in f.parts:
+                h.update(f.relative_to(root).as_posix().encode())
+                h.update(f.read_bytes())
+    except OSError:
+        return ""
     return h.hexdigest()[:32]
