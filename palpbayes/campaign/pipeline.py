@@ -77,8 +77,8 @@ def check_reusable(out_dir: str | os.PathLike, manifest: str | os.PathLike,
     """Whether the fits in a non-empty ``out_dir`` may be reused one by one for ``manifest``.
 
     Returns None when they may: ``out_dir`` holds palpbayes results (``settings.json``) of
-    this campaign, fitted with ``options`` (None: not compared) and the reader's default
-    column, unit and sign options by this palpbayes version; each trace's fit is then reused
+    this campaign, read with the reader's default columns, units and signs, fitted with
+    ``options`` (None: not compared) by this palpbayes version; each trace's fit is then reused
     only when its data are unchanged too (:func:`palpbayes.campaign.partial.read_partial`).
     Otherwise the reason every fit must be redone, in words ("it was fitted by palpbayes
     0.0.1, this is 0.1.0").
@@ -88,7 +88,8 @@ def check_reusable(out_dir: str | os.PathLike, manifest: str | os.PathLike,
     OutputExistsError
         The folder holds no palpbayes results.
     InputError
-        The folder holds another campaign's results.
+        The folder holds another campaign's results, or traces read with column, unit or sign
+        options (``palpbayes fit MANIFEST --z-unit ...``).
     """
     from .settings import options_record, read_settings
 
@@ -106,8 +107,10 @@ def check_reusable(out_dir: str | os.PathLike, manifest: str | os.PathLike,
                 f"{__version__}")
     if options is not None and old.get("options") != options_record(options)["repr"]:
         return "it was fitted with other options"
-    if old.get("read_options", {}):
-        return "its traces were read with other column, unit or sign options"
+    if old.get("read_options", {}):  # 'palpbayes fit MANIFEST --z-unit mm ...': not ours
+        raise InputError(f"{out} was fitted from traces read with column, unit or sign "
+                         f"options ({old['read_options']}), which 'report' does not take: "
+                         "choose another --out, or use --force to refit them as the files read")
     return None
 
 

@@ -171,6 +171,16 @@ def test_another_campaigns_folder_is_still_refused(campaign, fitted, tmp_path, c
     code, _ = _report(other, fitted[0])
     assert code == 2
     assert "holds results of another campaign" in capsys.readouterr().err
+    # a folder of 'palpbayes fit MANIFEST' with reader options: refused, not refitted otherwise
+    camp, out = _copy(campaign, fitted, tmp_path)
+    settings = json.loads((out / layout.SETTINGS).read_text(encoding="utf-8"))
+    settings["read_options"] = {"units": {"z": "mm"}}
+    (out / layout.SETTINGS).write_text(json.dumps(settings), encoding="utf-8")
+    times = _mtimes(out)
+    code, _ = _report(camp, out)
+    assert code == 2
+    assert "read with column, unit or sign options" in capsys.readouterr().err
+    assert _mtimes(out) == times
 
 
 def test_plan_line_names_at_most_five_traces():
