@@ -2,9 +2,10 @@
 
 :func:`fit_and_record` is what a worker process runs for one trace: it fits the trace
 (:func:`palpbayes.campaign.fitjob.fit_trace`), writes its posterior and, atomically, the JSON
-record ``.partial/<trace_id>.json`` (options, a fingerprint of the data, the summary rows).
-:func:`read_partial` reads a record back, and only if it still matches the options and the
-data (:func:`trace_fingerprint`): that is how ``--resume`` keeps finished traces.  Used by
+record ``.partial/<trace_id>.json`` (options, palpbayes version, a fingerprint of the data,
+the summary rows).  :func:`read_partial` reads a record back, and only if it still matches the
+options, the version and the data (:func:`trace_fingerprint`): that is how ``--resume`` and a
+re-run of ``palpbayes report`` keep finished traces, and refit an edited one.  Used by
 :mod:`palpbayes.campaign.run` only (not part of the package's public API).
 """
 
@@ -17,12 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import __version__, outputs
 from .. import errors as _errors
-from .. import outputs
 from ..errors import InputError
 from ..fitdata import FitData
 from ..io.atomic import write_text_atomic
-from ..specimen import FOOTPRINT_COLUMNS
 from ..trace import IndentationTrace
 from .fitjob import FitOptions, fit_trace_rows, fitted_methods
 from .settings import options_record
@@ -40,19 +40,42 @@ def _jsonable(v):
     return str(v)
 
 
+def _canonical(value) -> object:
+    """A stable, hashable stand-in for a metadata value: arrays by dtype, shape and a digest of
+    their bytes, containers item by item, numbers and text as themselves; any other object by
+    its type's name (its repr may hold a memory address that changes from run to run)."""
+    if isinstance(value, np.ndarray):
+        a = np.ascontiguousarray(value)
+        return ("array", a.dtype.str, a.shape, hashlib.sha256(a.tobytes()).hexdigest())
+    if isinstance(value, np.generic):
+        value = value.item()
+    if value is None or isinstance(value, bool | int | float | str | complex):
+        return value
+    if isinstance(value, list | tuple):
+        return tuple(_canonical(v) for v in value)
+    if isinstance(value, dict):
+        return tuple(sorted((str(k), _canonical(v)) for k, v in value.items()))
+    return ("object", type(value).__qualname__)
+
+
 def trace_fingerprint(trace: IndentationTrace) -> str:
-    """SHA-256 of what a fit of ``trace`` depends on: the time, z and force arrays, the tip,
-    the thickness, a manifest's per-row nu and the specimen's footprint (``length_m``,
-    ``width_m``, ``diameter_m``).  ``--resume`` refits a trace whose fingerprint changed (an
-    edited file or row) instead of reusing its recorded rows."""
+    """SHA-256 of everything a fit of ``trace`` and its summary rows depend on: the time, z,
+    force and segment arrays (the numbers read from the file), the tip, the thickness, the
+    labels the rows carry (trace id, specimen, material, repetition, rest time) and the
+    metadata (a manifest's per-row nu, the specimen's footprint ``length_m``, ``width_m``,
+    ``diameter_m``, ...).  Not the file's path: a moved campaign is the same data.  A re-run
+    refits a trace whose fingerprint changed (an edited file or manifest row) instead of
+    reusing its recorded rows."""
     h = hashlib.sha256()
     for a in (trace.time, trace.z, trace.force):
         h.update(np.ascontiguousarray(a, dtype=float).tobytes())
-    meta = trace.metadata or {}
-    footprint = tuple(meta.get(c) for c in FOOTPRINT_COLUMNS)
-    h.update(repr((trace.tip, trace.thickness, meta.get("nu"))).encode("utf-8"))
-    if any(v is not None for v in footprint):  # traces without one keep their old fingerprint
-        h.update(repr(footprint).encode("utf-8"))
+    h.update(b"segment")
+    if trace.segment is not None:
+        h.update(np.ascontiguousarray(trace.segment, dtype=np.int64).tobytes())
+    labels = (trace.trace_id, trace.specimen, trace.material, trace.repetition,
+              trace.rest_time)
+    h.update(repr((trace.tip, trace.thickness, labels,
+                   _canonical(trace.metadata or {}))).encode("utf-8"))
     return h.hexdigest()
 
 
@@ -76,7 +99,8 @@ def fit_and_record(trace: IndentationTrace, options: FitOptions, out: str,
         return {"error": (type(exc).__name__, msg)}
     rows = [{k: _jsonable(v) for k, v in r.items()} for r in rows]
     record = {"trace_id": trace.trace_id, "options": options_record(options)["repr"],
-              "data_sha256": trace_fingerprint(trace), "rows": rows}
+              "palpbayes_version": __version__, "data_sha256": trace_fingerprint(trace),
+              "rows": rows}
     write_text_atomic(json.dumps(record, indent=1),
                       outputs.partial_path(out, trace.trace_id))
     return {"rows": rows}
@@ -95,7 +119,9 @@ def raise_input(error: tuple[str, str]) -> None:
 
 
 def read_partial(out: Path, trace: IndentationTrace, options: FitOptions) -> list[dict] | None:
-    """The recorded rows of a finished trace, or None when it must be (re)fitted."""
+    """The recorded rows of a finished trace, or None when it must be (re)fitted: no record,
+    or one of other options, of another palpbayes version or of other data
+    (:func:`trace_fingerprint`)."""
     path = outputs.partial_path(out, trace.trace_id)
     if not path.is_file():
         return None
@@ -105,6 +131,8 @@ def read_partial(out: Path, trace: IndentationTrace, options: FitOptions) -> lis
         return None
     rows = rec.get("rows", [])
     if rec.get("options") != options_record(options)["repr"]:
+        return None
+    if rec.get("palpbayes_version") != __version__:
         return None
     if rec.get("data_sha256") != trace_fingerprint(trace):
         return None

@@ -5,9 +5,12 @@
 campaign has ``groundtruth/`` (:func:`palpbayes.groundtruth.analyse`, written by
 :func:`write_groundtruth`) and pools and compares
 (:func:`palpbayes.campaign.compare.compare_campaign`), into one results folder.
-A results folder fitted before from the same campaign with the same options *and the same
-palpbayes version* is reused; anything else needs ``force``.  :func:`example_campaign_dir`
-locates the campaign shipped with a source checkout.
+A results folder fitted before from the same campaign is reused fit by fit: a trace's fit is
+kept only when its inputs are unchanged (the numbers read from its file and its manifest row,
+the options, the palpbayes version: :func:`palpbayes.campaign.partial.read_partial`), every
+other trace is refitted, and the ground truth, pooling, comparison and gap that follow are
+computed again from the fits as they now are.  Another campaign's folder needs ``force``.
+:func:`example_campaign_dir` locates the campaign shipped with a source checkout.
 
 This module and the command line are the only writers of a results folder's ground-truth
 tables; reading a results folder is :mod:`palpbayes.campaign.results`, the PDF
@@ -17,6 +20,7 @@ tables; reading a results folder is :mod:`palpbayes.campaign.results`, the PDF
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -67,23 +71,26 @@ def example_campaign_dir() -> Path:
     return p
 
 
-def check_reusable(out_dir: str | os.PathLike, manifest: str | os.PathLike) -> None:
-    """Refuse to reuse a non-empty ``out_dir`` that is not this campaign's, by this version.
+def check_reusable(out_dir: str | os.PathLike, manifest: str | os.PathLike,
+                   options: FitOptions | None = None) -> str | None:
+    """Whether the fits in a non-empty ``out_dir`` may be reused one by one for ``manifest``.
 
-    Reuse (the campaign's resume) keeps every finished fit, so it is only safe when the folder
-    holds palpbayes results (``settings.json``) of the same campaign manifest written by the
-    same palpbayes version (``settings.json`` ``palpbayes_version``): another version may fit
-    differently.  Different fit options are refused later by
-    :func:`palpbayes.campaign.fit_campaign`.
+    Returns None when they may: ``out_dir`` holds palpbayes results (``settings.json``) of
+    this campaign, read with the reader's default columns, units and signs, fitted with
+    ``options`` (None: not compared) by this palpbayes version; each trace's fit is then reused
+    only when its data are unchanged too (:func:`palpbayes.campaign.partial.read_partial`).
+    Otherwise the reason every fit must be redone, in words ("it was fitted by palpbayes
+    0.0.1, this is 0.1.0").
 
     Raises
     ------
     OutputExistsError
         The folder holds no palpbayes results.
     InputError
-        Another campaign, or another (or unrecorded) palpbayes version.
+        The folder holds another campaign's results, or traces read with column, unit or sign
+        options (``palpbayes fit MANIFEST --z-unit ...``).
     """
-    from .settings import read_settings
+    from .settings import options_record, read_settings
 
     out = Path(out_dir)
     old = read_settings(out)
@@ -95,23 +102,33 @@ def check_reusable(out_dir: str | os.PathLike, manifest: str | os.PathLike) -> N
                          "choose another --out or use --force to replace them")
     version = old.get("palpbayes_version")
     if version != __version__:
-        raise InputError(f"{out} was fitted by palpbayes {version or '(unrecorded version)'}, "
-                         f"this is {__version__}: its fits are not reused; use --force to refit "
-                         "them, or choose another --out")
+        return (f"it was fitted by palpbayes {version or '(an unrecorded version)'}, this is "
+                f"{__version__}")
+    if options is not None and old.get("options") != options_record(options)["repr"]:
+        return "it was fitted with other options"
+    if old.get("read_options", {}):  # 'palpbayes fit MANIFEST --z-unit mm ...': not ours
+        raise InputError(f"{out} was fitted from traces read with column, unit or sign "
+                         f"options ({old['read_options']}), which 'report' does not take: "
+                         "choose another --out, or use --force to refit them as the files read")
+    return None
 
 
 def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
                  options: FitOptions | None = None, *,
                  workers: int | None = None, force: bool = False,
-                 progress: bool | None = None, scheduler: str | None = None) -> Path:
+                 progress: bool | None = None, scheduler: str | None = None,
+                 on_plan: Callable[[list[str], list[str], str | None], None] | None = None
+                 ) -> Path:
     """Fit a campaign (both methods), analyse its ground truth and compare; return out_dir.
 
     Steps: :func:`palpbayes.campaign.fit_campaign` (``palpbayes fit``); when the campaign folder
     has ``groundtruth/``, :func:`palpbayes.groundtruth.analyse` written to ``groundtruth.csv``
     and ``groundtruth_summary.csv`` (``palpbayes groundtruth``); then
     :func:`palpbayes.campaign.compare.compare_campaign` (``palpbayes compare OUT``).  A results
-    folder fitted before from the same source with the same options by the same palpbayes version is
-    reused (the campaign's resume); anything else needs ``force`` (:func:`check_reusable`).
+    folder fitted before from the same campaign is reused fit by fit (the campaign's resume):
+    a trace whose file, manifest row, options and palpbayes version are unchanged keeps its
+    fit, the others are refitted; with other options or by another version every trace is
+    refitted (:func:`check_reusable`).  Another campaign's folder needs ``force``.
 
     Parameters
     ----------
@@ -123,6 +140,10 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
         :class:`~palpbayes.campaign.fitjob.FitOptions` (default: both methods, package defaults).
     workers, force, progress, scheduler
         As for :func:`~palpbayes.campaign.fit_campaign`.
+    on_plan
+        Called before anything is fitted with the ids of the traces whose fits are reused, of
+        those to fit, and the reason every trace is refitted (None when fits are reused one
+        by one, or the folder is new or ``force`` is set).
     """
     from .fitjob import FitOptions
     from .run import fit_campaign
@@ -130,12 +151,18 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
     manifest = Path(manifest).resolve()
     out = Path(out_dir)
     options = options or FitOptions(method="both")
-    resume = False
+    resume, reason = False, None
     if not force and out.is_dir() and any(out.iterdir()):
-        check_reusable(out, manifest)
-        resume = True
+        reason = check_reusable(out, manifest, options)
+        resume = reason is None
+        force = reason is not None  # another version or other options: refit every trace
+
+    def plan(reused: list[str], todo: list[str]) -> None:
+        if on_plan is not None:
+            on_plan(reused, todo, reason)
+
     fit_campaign(manifest, out, options, workers=workers, resume=resume, force=force,
-                 progress=progress, scheduler=scheduler)
+                 progress=progress, scheduler=scheduler, on_plan=plan)
     gt_dir = manifest.parent / "groundtruth"
     if gt_dir.is_dir():  # for the report (compare analyses the same folder at full precision)
         from ..groundtruth import analyse
@@ -152,13 +179,19 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
 def write_gap(out_dir: str | os.PathLike) -> Path | None:
     """Write the paper's robot-vs-Instron gap, decomposed (:func:`palpbayes.gap.gap_table`),
     as ``gap.csv`` when the results hold one of the paper's materials; return its path (None
-    otherwise, and a stale table is removed).  About 10 s on one core, plus ~25 s the first
-    time to solve the blocks' twins (cached on disk after)."""
+    otherwise, and a stale table is removed).
+
+    The table depends on the package alone (not on the results): it is computed once per
+    package (about 10 s on one core, plus ~25 s the first time to solve the blocks' twins)
+    and its text kept in the twin's disk cache (:mod:`palpbayes.twin.cache`) under a digest
+    of every file of the package (:func:`palpbayes.twin.cache.package_stamp`); the next
+    report writes the same bytes from there."""
+    import numpy as np
     import pandas as pd
 
-    from ..gap import gap_table
-    from ..io.atomic import write_csv_atomic
+    from ..io.atomic import write_text_atomic
     from ..paper import PAPER_MATERIALS
+    from ..twin.cache import load_arrays, package_stamp, save_arrays
 
     out = Path(out_dir)
     path = out / outputs.GAP
@@ -167,5 +200,16 @@ def write_gap(out_dir: str | os.PathLike) -> Path | None:
     if not mats:
         path.unlink(missing_ok=True)
         return None
-    write_csv_atomic(gap_table(), path, float_format="%.6g")
+    stamp = package_stamp()
+    key = {"kind": "gap", "package": stamp}
+    stored = load_arrays(key) if stamp else None
+    if stored is not None and stored.get("csv") is not None and stored["csv"].dtype == np.uint8:
+        text = stored["csv"].tobytes().decode("utf-8")
+    else:
+        from ..gap import gap_table
+
+        text = gap_table().to_csv(index=False, float_format="%.6g", lineterminator="\n")
+        if stamp:
+            save_arrays(key, {"csv": np.frombuffer(text.encode("utf-8"), dtype=np.uint8)})
+    write_text_atomic(text, path)
     return path

@@ -17,10 +17,13 @@ Comparison tables (ground truth vs least squares vs Bayes) are made from this fo
 
 Failure policy
 --------------
-* Every trace is read and passes :func:`palpbayes.campaign.fitjob.check_fittable` (geometry, units,
-  contact, fit window, the contact model at every depth a fit evaluates) and the output folder
-  must be creatable before anything is written; only then does ``force=True`` remove the
-  previous results.  Bad input found there leaves the results folder as it was.
+* Every trace is read, every trace to fit passes
+  :func:`palpbayes.campaign.fitjob.check_fittable` (geometry, units, contact, fit window, the
+  contact model at every depth a fit evaluates) and the output folder must be creatable before
+  anything is written; only then does ``force=True`` remove the previous results.  Bad input
+  found there leaves the results folder as it was.  (A trace whose record is reused passed
+  that check when it was fitted, with the same data, options and version: it is not checked
+  again.)
 * A trace whose *input* is bad (:class:`~palpbayes.errors.InputError`: unreadable file, no
   contact, missing geometry) fails the whole run with an error naming the trace — bad input is
   exit status 2, and a campaign silently missing traces would bias every table.  Finished traces
@@ -164,11 +167,11 @@ def _run_dask(todo: list[IndentationTrace], options: FitOptions, out: Path, clie
 
 
 def _write_and_fit(traces: list[IndentationTrace], options: FitOptions, out: Path,
-                   settings: dict, force: bool, resume: bool, workers: int | None, client,
+                   settings: dict, force: bool, done: set[str], workers: int | None, client,
                    progress: bool | None, prepared: dict[str, FitData]) -> None:
-    """Create the results folder, write the settings and the traces' table, fit what is not
-    recorded yet (on the Dask ``client`` or the local pool) from the traces' ``prepared``
-    fit data."""
+    """Create the results folder, write the settings and the traces' table, fit the traces
+    not ``done`` (their records reused) on the Dask ``client`` or the local pool from their
+    ``prepared`` fit data."""
     try:
         out.mkdir(parents=True, exist_ok=True)
         (out / outputs.PARTIAL_DIR).mkdir(exist_ok=True)
@@ -181,10 +184,7 @@ def _write_and_fit(traces: list[IndentationTrace], options: FitOptions, out: Pat
     write_text_atomic(json.dumps(settings, indent=2) + "\n", out / outputs.SETTINGS)
     write_csv_atomic(traces_table(traces), out / outputs.TRACES, float_format="%.10g")
 
-    done = {t.trace_id for t in traces if resume and read_partial(out, t, options) is not None}
     todo = [t for t in traces if t.trace_id not in done]
-    for trace_id in done:  # each FitData goes with its trace's task, none is kept
-        prepared.pop(trace_id, None)
     with progress_bar(len(traces), progress, initial=len(done)) as bar:
         if client is not None:
             _run_dask(todo, options, out, client, lambda: bar.update(1), prepared)
@@ -203,6 +203,7 @@ def fit_campaign(
     progress: bool | None = None,
     read_options: dict | None = None,
     scheduler: str | None = None,
+    on_plan: Callable[[list[str], list[str]], None] | None = None,
 ) -> pd.DataFrame:
     """Fit every trace of a campaign and write the results folder (module docstring).
 
@@ -229,8 +230,10 @@ def fit_campaign(
         see the trace files and ``out_dir`` under the same paths (each writes its trace's
         records there).  Same summary as the local run with the same seed.
     resume
-        Keep traces already recorded in ``out_dir/.partial`` with the same options and fit the
-        rest (an interrupted run picks up where it stopped).
+        Keep traces already recorded in ``out_dir/.partial`` with the same options, by the same
+        palpbayes version, from the same data (:func:`palpbayes.campaign.partial.read_partial`:
+        an edited trace file or manifest row is refitted) and fit the rest (an interrupted run
+        picks up where it stopped).
     force
         Replace the results of a previous run in a non-empty ``out_dir``.
     progress
@@ -239,6 +242,10 @@ def fit_campaign(
         Reader options for every trace file of a manifest (``columns``, ``units``,
         ``force_sign``, ``z_sign``; see :func:`load_source`); recorded in ``settings.json``,
         and resuming with other read options is refused.
+    on_plan
+        Called once the run knows what it reuses, before anything is checked or fitted, with
+        the ids of the traces whose records are reused and of those to fit (e.g. to say so on
+        the console).
 
     Returns
     -------
@@ -294,9 +301,17 @@ def fit_campaign(
         raise InputError(
             f"cannot resume {out}: its traces were read with other column/unit/sign options "
             f"({old.get('read_options', {})}); use --force to refit everything with the new ones")
+    # a trace recorded with these options, by this version, from these data is reused: it is
+    # neither checked nor fitted again (the check passed when it was fitted)
+    done = {t.trace_id for t in traces if resume and read_partial(out, t, options) is not None}
+    if on_plan is not None:
+        on_plan([t.trace_id for t in traces if t.trace_id in done],
+                [t.trace_id for t in traces if t.trace_id not in done])
     checking = options.with_progress(progress)  # the twin's first tables show a bar
     prepared: dict[str, FitData] = {}  # each trace prepared once: checked here, fitted below
     for t in traces:  # bad input (geometry, nu, no contact) fails before anything is written
+        if t.trace_id in done:
+            continue
         try:
             prepared[t.trace_id] = check_fittable(t, checking)
         except InputError as exc:
@@ -312,7 +327,7 @@ def fit_campaign(
 
         client = dask_client(None if scheduler == "local" else scheduler, workers)
     try:
-        _write_and_fit(traces, options, out, settings, force, resume, workers, client, progress,
+        _write_and_fit(traces, options, out, settings, force, done, workers, client, progress,
                        prepared)
     finally:  # on an error or Ctrl-C the cluster's queued traces go with the client
         if client is not None:

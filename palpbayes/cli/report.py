@@ -8,8 +8,9 @@ INPUT is one of
 * a campaign folder (it has ``manifest.csv``) or a campaign manifest: the campaign is fitted
   with both methods, its ground truth analysed (if it has ``groundtruth/``) and compared, into
   ``--out`` (default ``palpbayes-results/`` in the current folder; a folder fitted before from
-  the same campaign with the same options by the same palpbayes version is reused), then the
-  report is built;
+  the same campaign is reused fit by fit: a trace whose file, manifest row, options and
+  palpbayes version are unchanged keeps its fit, the others are refitted, and the console
+  says how many of each), then the report is built;
 * nothing: the shipped example campaign ``data/example-campaign`` of a source checkout.
 
 The PDF goes to ``-o FILE.pdf`` (default ``report.pdf`` in the results folder).  See
@@ -25,7 +26,7 @@ from .. import outputs
 from ..errors import InputError
 from .options import add_model_options, options_from_args
 
-__all__ = ["register", "run", "resolve_input", "DEFAULT_OUT"]
+__all__ = ["register", "run", "resolve_input", "plan_line", "DEFAULT_OUT"]
 
 #: Results folder for a campaign INPUT when ``--out`` is not given.
 DEFAULT_OUT = "palpbayes-results"
@@ -54,7 +55,10 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="DIR", default=None,
                    help=f"results folder when INPUT is a campaign (default ./{DEFAULT_OUT})")
     p.add_argument("--force", action="store_true",
-                   help="refit a campaign into --out even if it holds results")
+                   help="refit every trace of a campaign into --out, even into another "
+                        "campaign's results (default: a re-run reuses each fit whose trace, "
+                        "manifest row, options and palpbayes version are unchanged, and "
+                        "refits the others)")
     add_model_options(p)
     # the report compares the two methods: fit both unless told otherwise
     p.set_defaults(method="both", func=run)
@@ -115,10 +119,10 @@ def run(args: argparse.Namespace) -> int:
     if kind == "campaign":
         options = options_from_args(args)
         out = Path(args.out) if args.out is not None else Path.cwd() / DEFAULT_OUT
-        print(f"fitting campaign {path} into {out} (methods: {options.method}, seed "
-              f"{options.seed})")
+        print(f"campaign {path} into {out} (methods: {options.method}, seed {options.seed})")
         run_pipeline(path, out, options, workers=args.workers, force=args.force,
-                     progress=args.progress, scheduler=args.scheduler)
+                     progress=args.progress, scheduler=args.scheduler,
+                     on_plan=lambda *plan: print(plan_line(*plan), flush=True))
         results = out
     else:
         if args.out is not None:
@@ -158,6 +162,21 @@ def run(args: argparse.Namespace) -> int:
     print(line)
     print(f"wrote {info.path} (from the results folder {info.results_shown})")
     return 0
+
+
+def plan_line(reused: list[str], todo: list[str], reason: str | None) -> str:
+    """What a campaign run reuses and fits, in one line: 'fitting 27 traces', 'reusing 26
+    fits, refitting 1: White_sphere_r01' or 'refitting all 27 traces (it was fitted with other
+    options)' (``reason``: why no fit is reused)."""
+    if reason is not None:
+        return f"refitting all {len(todo)} traces ({reason})"
+    if not reused:
+        return f"fitting {len(todo)} traces"
+    line = f"reusing {len(reused)} fits (inputs unchanged), refitting {len(todo)}"
+    if todo:
+        shown = ", ".join(todo[:5]) + (f" and {len(todo) - 5} more" if len(todo) > 5 else "")
+        line += f": {shown}"
+    return line
 
 
 def _rheology_line(info) -> str:

@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from ..errors import GeometryError
+from .cache import load_arrays, save_arrays
 from .mesh import RESOLUTIONS, Resolution, compression_grid
 
 __all__ = ["PLATENS", "compression_factor", "platen_factor", "oedometric_factor",
@@ -65,9 +66,24 @@ def platen_factor(radius_over_height: float, nu: float, platens: str,
     return _solve(float(radius_over_height), float(nu), platens, resolution)
 
 
+#: Changes whenever the compression model or its mesh does (part of the disk cache's key).
+_COMPRESSION_VERSION = 1
+
+
 @functools.lru_cache(maxsize=512)
 def _cached(aspect: float, nu: float, platens: str, resolution: str) -> float:
-    return _solve(aspect, nu, platens, RESOLUTIONS[resolution])
+    """The factor of a named resolution, from memory, the disk cache
+    (:mod:`palpbayes.twin.cache`: a fit needs the budget's five nodes of nu, each a finite
+    element solve of ~0.15 s, in every process) or solved and stored."""
+    key = {"kind": "compression", "version": _COMPRESSION_VERSION, "aspect": aspect, "nu": nu,
+           "platens": platens, "resolution": resolution,
+           "mesh": repr(RESOLUTIONS[resolution])}
+    stored = load_arrays(key)
+    if stored is not None and "factor" in stored and stored["factor"].shape == ():
+        return float(stored["factor"])
+    factor = _solve(aspect, nu, platens, RESOLUTIONS[resolution])
+    save_arrays(key, {"factor": np.array(factor)})
+    return factor
 
 
 def _solve(aspect: float, nu: float, platens: str, res: Resolution) -> float:

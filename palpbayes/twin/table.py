@@ -15,9 +15,11 @@ grow).
 Everything is solved in units of the specimen's height: the table's key (the tip's and the
 footprint's sizes over H, nu, base, the mesh's parameters, the depths' rule and the solver's
 version) is dimensionless, so a table serves any specimen of the same proportions.  The disk
-cache (:mod:`palpbayes.twin.cache`) keeps the finite elements' points only; the infinite layer's
-factor and the lookup grid are rebuilt from them when read, so a change of
-:mod:`palpbayes.contact.layer` never meets a stale table.
+cache (:mod:`palpbayes.twin.cache`) keeps the finite elements' points and the lookup table
+made from them (the infinite layer's factor, the grid) under a stamp of the code that makes it
+(:func:`derived_stamp`): read with the same stamp, a table is used as stored (a new process
+solves no infinite-layer table for each nu and base); with another, it is rebuilt from the
+points, so a change of :mod:`palpbayes.contact.layer` never meets a stale table.
 
 A block L × W is modelled as the cylinder of equal footprint area.  Against the block itself
 in 3-D (``benchmarks/bench_twin_3d.py``, the sphere and flat punch of the paper at 10 % depth,
@@ -42,13 +44,13 @@ from ..contact import layer as layer_solution
 from ..errors import GeometryError
 from ..specimen import Specimen
 from ..units import format_length
-from .cache import key_text, load_arrays, save_arrays
+from .cache import code_stamp, key_text, load_arrays, save_arrays
 from .mesh import RESOLUTIONS
 from .palpation import TWIN_BASES, solve_palpation
 
 __all__ = ["TwinTable", "twin_table", "twin_shape", "twin_factor", "prepare_tables",
            "table_key", "TWIN_SOLVER_VERSION", "twin_depth_limit", "twin_depth_limit_reason",
-           "clear_memory", "MAX_ASPECT"]
+           "clear_memory", "MAX_ASPECT", "derived_stamp"]
 
 #: Changes whenever the solver, the mesh or the table's construction does (part of the key).
 TWIN_SOLVER_VERSION = 1
@@ -58,9 +60,11 @@ _POINTS = 24
 _A_MIN = 0.1
 #: Uniform grid of the lookup table.
 _GRID = 2049
-#: Arrays of a table on disk: the finite elements' output only (the layer's factor and the
-#: lookup grid are rebuilt from them when read).
+#: Arrays of a table on disk: the finite elements' output (what the key stands for) ...
 _POINT_ARRAYS = {"punch", "points_chi", "points_factor", "dofs"}
+#: ... and the lookup table made from them, valid for the code of its stamp (module docstring).
+_DERIVED_ARRAYS = {"derived_stamp", "chi", "log_factor", "tail_slope", "chi_top",
+                   "points_layer"}
 #: Longest footprint (length/width) the equal-area cylinder stands for (module docstring).
 MAX_ASPECT = 3.0
 
@@ -141,6 +145,33 @@ class TwinTable:
     def width_effect(self) -> np.ndarray:
         """w = f/f_layer [-] at the solved points: what the finite width changes."""
         return self.points_factor / self.points_layer
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The table as the disk cache keeps it: the points and the lookup table with the
+        stamp of the code that made it (:func:`derived_stamp`)."""
+        return {"punch": np.array(self.punch), "points_chi": self.points_chi,
+                "points_factor": self.points_factor, "dofs": np.array(self.dofs),
+                "derived_stamp": np.array(derived_stamp()), "chi": self.chi,
+                "log_factor": self.log_factor, "tail_slope": np.array(self.tail_slope),
+                "chi_top": np.array(self.chi_top), "points_layer": self.points_layer}
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, np.ndarray]) -> TwinTable | None:
+        """The table stored by :meth:`arrays`, or None when its lookup table is missing or
+        was made by other code (another stamp): then rebuild it with :meth:`from_points`."""
+        if not _DERIVED_ARRAYS <= set(arrays) or str(arrays["derived_stamp"]) != derived_stamp():
+            return None
+        return cls(bool(arrays["punch"]), arrays["chi"], arrays["log_factor"],
+                   float(arrays["tail_slope"]), float(arrays["chi_top"]),
+                   arrays["points_chi"], arrays["points_factor"], arrays["points_layer"],
+                   int(arrays["dofs"]))
+
+
+def derived_stamp() -> str:
+    """The stamp of the code a table's lookup grid is made with from its points
+    (:func:`palpbayes.twin.cache.code_stamp` of :mod:`palpbayes.contact.layer`, the infinite
+    layer's factor, and of this module)."""
+    return code_stamp((layer_solution.__name__, __name__), f"grid {_GRID}")
 
 
 def _check(specimen: Specimen, tip: Tip, nu: float, base: str) -> None:
@@ -251,17 +282,21 @@ _MEMORY: dict[str, TwinTable] = {}
 
 
 def _table(key: dict, specimen: Specimen, tip: Tip, nu: float, base: str,
-           resolution: str) -> TwinTable:
+           resolution: str, stored: dict[str, np.ndarray] | None = None) -> TwinTable:
+    """The table of ``key``: from memory, the disk (``stored``: read already) or solved; a
+    table read or solved here is stored on disk with its lookup table when that is new."""
     text = key_text(key)
     table = _MEMORY.get(text)
     if table is None:
-        points = load_arrays(key)
+        points = load_arrays(key) if stored is None else stored
         if points is None or not _POINT_ARRAYS <= set(points):
             points = _solve_points(specimen, tip, nu, base, resolution)
-            save_arrays(key, points)
-        table = TwinTable.from_points(bool(points["punch"]), points["points_chi"],
-                                      points["points_factor"], int(points["dofs"]),
-                                      get_law(tip).profile_exponent(tip), nu, base)
+        table = TwinTable.from_arrays(points)
+        if table is None:
+            table = TwinTable.from_points(bool(points["punch"]), points["points_chi"],
+                                          points["points_factor"], int(points["dofs"]),
+                                          get_law(tip).profile_exponent(tip), nu, base)
+            save_arrays(key, table.arrays())
         _MEMORY[text] = table
     return table
 
@@ -324,10 +359,17 @@ def twin_shape(depth: np.ndarray, tip: Tip, specimen: Specimen, nu: float, base:
     return s * table.factor(a / specimen.height)
 
 
-def _available(specimen: Specimen, tip: Tip, nu: float, base: str, resolution: str) -> bool:
-    """True when the table is in memory or on disk (no finite elements to run)."""
-    key = table_key(specimen, tip, nu, base, resolution)
-    return key_text(key) in _MEMORY or load_arrays(key) is not None
+def _load(specimen: Specimen, tip: Tip, nu: float, base: str, resolution: str) -> bool:
+    """Put the table in memory when it is on disk (read once, no finite elements to run);
+    True when it is in memory then."""
+    key, *args = _normalized(specimen, tip, nu, base, resolution)
+    if key_text(key) in _MEMORY:
+        return True
+    stored = load_arrays(key)
+    if stored is None or not _POINT_ARRAYS <= set(stored):
+        return False
+    _table(key, *args, resolution, stored=stored)
+    return True
 
 
 def prepare_tables(specimen: Specimen, tip: Tip, nus: Iterable[float], bases: Iterable[str],
@@ -343,7 +385,7 @@ def prepare_tables(specimen: Specimen, tip: Tip, nus: Iterable[float], bases: It
             for b in dict.fromkeys(bases)]
     for nu, b in todo:
         _check(specimen, tip, nu, b)
-    missing = [(nu, b) for nu, b in todo if not _available(specimen, tip, nu, b, resolution)]
+    missing = [(nu, b) for nu, b in todo if not _load(specimen, tip, nu, b, resolution)]
     show = sys.stderr.isatty() if progress is None else progress
     bar = tqdm(total=len(missing), disable=not (show and missing), unit="table",
                desc=f"twin of the {specimen.describe()}, {tip.describe()}", file=sys.stderr)

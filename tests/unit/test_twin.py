@@ -221,6 +221,80 @@ def test_tables_are_cached_on_disk_and_rebuilt_when_wrong(tmp_path, monkeypatch)
     assert twin_cache.load_arrays({**key, "nu": 0.26}) is None
 
 
+def _fresh_process(monkeypatch) -> list:
+    """Forget every table and factor this process holds (the twin's, the infinite layer's,
+    the compression's), as a new process starts; the layer's Nyström solves are then recorded
+    in the list returned."""
+    from palpbayes.contact import layer
+
+    twin_tables.clear_memory()
+    twin_compression._cached.cache_clear()
+    for cached in (layer._profile_table, layer._flat_table, layer._transform_spline):
+        cached.cache_clear()
+    calls: list = []
+    solve = layer._solve_many
+    monkeypatch.setattr(layer, "_solve_many", lambda *a: calls.append(a) or solve(*a))
+    return calls
+
+
+def test_a_stored_table_is_read_without_solving_the_layer_again(tmp_path, monkeypatch):
+    """A table read from the disk in a new process is used as stored: the infinite layer's
+    tables it was made with are not solved again (six of them per fit, ~1.5 s on one core,
+    were most of a cached fit's twin time); made by other code (another stamp) it is rebuilt
+    from its points, to the same numbers, and stored again."""
+    monkeypatch.setenv("PALPBAYES_CACHE_DIR", str(tmp_path))
+    block = Specimen(0.01, diameter=0.04)
+    first = twin_table(block, PARABOLOID.scaled(0.005), 0.35, "bonded", resolution="coarse")
+    layer_calls = _fresh_process(monkeypatch)
+    again = twin_table(block, PARABOLOID.scaled(0.005), 0.35, "bonded", resolution="coarse")
+    assert layer_calls == []
+    for name in ("chi", "log_factor", "points_chi", "points_factor", "points_layer"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(first, name))
+    assert (again.tail_slope, again.chi_top, again.dofs) == (first.tail_slope, first.chi_top,
+                                                             first.dofs)
+    # another stamp (contact/layer.py or this table's code edited): rebuilt, the same numbers
+    _fresh_process(monkeypatch)
+    monkeypatch.setattr(twin_tables, "derived_stamp", lambda: "other code")
+    solved = []
+    monkeypatch.setattr(twin_tables, "_solve_points", lambda *a: solved.append(a))
+    rebuilt = twin_table(block, PARABOLOID.scaled(0.005), 0.35, "bonded", resolution="coarse")
+    assert solved == []  # from the stored points, no finite elements
+    np.testing.assert_array_equal(rebuilt.log_factor, first.log_factor)
+    key = twin_tables.table_key(block, PARABOLOID.scaled(0.005), 0.35, "bonded", "coarse")
+    assert str(twin_cache.load_arrays(key)["derived_stamp"]) == "other code"
+
+
+def test_prepare_tables_reads_each_file_once(tmp_path, monkeypatch):
+    monkeypatch.setenv("PALPBAYES_CACHE_DIR", str(tmp_path))
+    block = Specimen(0.01, diameter=0.04)
+    tip = PARABOLOID.scaled(0.005)
+    twin_tables.clear_memory()
+    assert twin_tables.prepare_tables(block, tip, [0.3, 0.35], ("bonded", "free"),
+                                      resolution="coarse", progress=False) == 4
+    twin_tables.clear_memory()
+    reads = []
+    load = twin_tables.load_arrays
+    monkeypatch.setattr(twin_tables, "load_arrays", lambda key: reads.append(key) or load(key))
+    assert twin_tables.prepare_tables(block, tip, [0.3, 0.35], ("bonded", "free"),
+                                      resolution="coarse", progress=False) == 0
+    assert len(reads) == 4  # was 8: once to see that it is there, once to read it
+
+
+def test_compression_factors_are_cached_on_disk(tmp_path, monkeypatch):
+    """A fit's Instron-equivalent needs the budget's five compression factors; a new process
+    reads them from the disk instead of solving five finite-element models again."""
+    monkeypatch.setenv("PALPBAYES_CACHE_DIR", str(tmp_path))
+    twin_compression._cached.cache_clear()
+    first = platen_factor(1.2, 0.3, "bonded", "coarse")
+    twin_compression._cached.cache_clear()
+    solved = []
+    monkeypatch.setattr(twin_compression, "_solve", lambda *a: solved.append(a) or 0.0)
+    assert platen_factor(1.2, 0.3, "bonded", "coarse") == first  # to the last bit
+    assert solved == []
+    assert platen_factor(1.2, 0.31, "bonded", "coarse") == 0.0 and len(solved) == 1
+    twin_compression._cached.cache_clear()
+
+
 def test_cache_can_be_switched_off(monkeypatch):
     monkeypatch.setenv("PALPBAYES_CACHE_DIR", "off")
     assert twin_cache.cache_dir() is None
