@@ -13,6 +13,7 @@ import warnings
 
 from .. import __version__
 from ..errors import InputError, PalpbayesError
+from ..threads import one_blas_thread
 
 __all__ = ["main", "build_parser", "SUBCOMMANDS"]
 
@@ -66,6 +67,7 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "command", None):
         parser.print_help()
         return 2
+    one_blas_thread()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("default")
