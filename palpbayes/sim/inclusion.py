@@ -52,8 +52,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..contact import Tip
-from ..contact.sphere import contact_radius as _sphere_contact_radius
+from ..contact import Tip, get_law, registered_laws
 from ..errors import InputError
 from ._checks import finite, positive
 
@@ -108,29 +107,26 @@ class Inclusion:
 
 
 def contact_radius(tip: Tip, depth: float) -> float:
-    """Contact radius a [m] of ``tip`` pressed ``depth`` [m] into a half-space.
-
-    Flat punch: a = tip radius.  Paraboloid: a = sqrt(R_tip·d) (Hertz).  Sphere: the exact
-    Sneddon radius, d = (a/2)·ln((R + a)/(R − a)) (as the simulator's sphere law; within 4 %
-    of sqrt(R·d) for d <= 0.2·R).
+    """Contact radius a [m] of ``tip`` pressed ``depth`` [m] into a half-space: the tip's
+    contact law's own (:attr:`palpbayes.contact.ContactLaw.contact_radius`: the punch's radius,
+    Hertz's sqrt(R·d), the exact Sneddon sphere's, a cone's 2·d·tan(alpha)/pi, ...), so that a
+    tip kind registered later maps and searches with no edit here.
 
     Raises
     ------
     InputError
-        ``tip`` is not a :class:`~palpbayes.contact.Tip` of kind flat, sphere or paraboloid,
-        or ``depth`` is not positive.
+        ``tip`` is not a :class:`~palpbayes.contact.Tip`, its law has no contact radius, or
+        ``depth`` is not positive.
     """
     if not isinstance(tip, Tip):
         raise InputError(f"tip must be a palpbayes.contact.Tip, got {type(tip).__name__}")
     d = positive(depth, "indentation depth [m]")
-    if tip.kind == "flat":
-        return float(tip.radius)
-    if tip.kind == "paraboloid":
-        return math.sqrt(tip.radius * d)
-    if tip.kind == "sphere":
-        return float(_sphere_contact_radius(np.array([d]), tip.radius)[0])
-    raise InputError(f"the inclusion model needs a tip of kind flat, sphere or paraboloid, got "
-                     f"{tip.kind!r}; use one of those tips for a stiffness map")
+    law = get_law(tip)
+    if law.contact_radius is None:
+        kinds = [k.kind for k in registered_laws() if k.contact_radius is not None]
+        raise InputError(f"the inclusion model needs a tip with a contact radius "
+                         f"({', '.join(kinds)}), got {tip.kind!r}")
+    return float(law.contact_radius(np.array([d]), tip)[0])
 
 
 def _omega_integral(z, a: float):

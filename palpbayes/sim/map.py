@@ -171,7 +171,7 @@ def simulate_map(
     nu
         Poisson ratio [-] (written to the manifest's ``nu`` column).
     tip
-        The indenter, a flat, sphere or paraboloid :class:`~palpbayes.contact.Tip` (default
+        The indenter, any :class:`~palpbayes.contact.Tip` whose law has a contact radius (default
         the paper's paraboloid).
     thickness
         [m] Block thickness H.

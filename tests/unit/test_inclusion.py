@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
-from palpbayes.contact import Tip
+from palpbayes.contact import ContactLaw, Tip
+from palpbayes.contact.registry import register, unregister
 from palpbayes.errors import InputError
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.sim.inclusion import (
@@ -170,10 +172,30 @@ def test_contact_radius():
     a = contact_radius(PAPER_TIPS["sphere"], d)  # Sneddon: d = (a/2)·ln((R + a)/(R − a))
     assert 0.5 * a * math.log((R + a) / (R - a)) == pytest.approx(d, rel=1e-9)
     assert a == pytest.approx(math.sqrt(R * d), rel=0.04)
-    with pytest.raises(InputError, match="flat, sphere or paraboloid"):
-        contact_radius(Tip("cone", half_angle=1.2), 2e-3)
+    # every tip whose law has a contact radius, a cone among them: a = 2·d·tan(alpha)/pi
+    assert contact_radius(Tip("cone", half_angle=1.2), 2e-3) == pytest.approx(
+        2 * 2e-3 * math.tan(1.2) / math.pi, rel=1e-12)
     with pytest.raises(InputError, match="depth"):
         contact_radius(PAPER_TIPS["flat"], 0.0)
+
+
+def test_a_tip_kind_registered_later_is_asked_not_named():
+    """The inclusion model asks the contact-law registry (issue 57: it switched on the kind,
+    so a new tip was refused by maps and the active search until this file was edited)."""
+    law = register(ContactLaw(
+        kind="wedge9", parameters=("radius",), shape=lambda d, tip: np.clip(d, 0, None) * 0.0,
+        exponent=1.0, prefactor=lambda tip: 0.0, reference="a toy law of this test",
+        name="wedge", label="wedge", summary="toy", describe=lambda tip: "wedge9",
+        contact_radius=lambda d, tip: np.full(np.shape(d), 3.0 * tip.radius),
+        profile_exponent=lambda tip: 2.0))
+    try:
+        assert contact_radius(Tip("wedge9", radius=0.002), 1e-3) == pytest.approx(0.006)
+        unregister("wedge9")
+        register(dataclasses.replace(law, contact_radius=None, profile_exponent=None))
+        with pytest.raises(InputError, match="needs a tip with a contact radius"):
+            contact_radius(Tip("wedge9", radius=0.002), 1e-3)
+    finally:
+        unregister("wedge9")
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -10,7 +10,6 @@ import pandas as pd
 import pytest
 
 from palpbayes.cli import main
-from palpbayes.contact import Tip
 from palpbayes.errors import DataFileError, InputError, OutputExistsError
 from palpbayes.io.manifest import iter_traces, read_manifest
 from palpbayes.io.trace_csv import write_trace
@@ -156,7 +155,6 @@ def test_heterogeneity_is_lognormal_about_the_field(tmp_path):
     ({"step": -1e-3}, "grid step"),
     ({"E_background": 0.0}, "E_background"),
     ({"heterogeneity": -0.1}, "heterogeneity"),
-    ({"tip": Tip("cone", half_angle=1.2)}, "flat, sphere or paraboloid"),
     ({"inclusion": Inclusion(0.0, 0.0, depth=0.018, radius=5e-3, ratio=5.0)}, "thickness"),
     ({"workers": 0}, "workers"),
     ({"seed": -1}, "seed"),
