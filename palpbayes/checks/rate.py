@@ -37,10 +37,11 @@ import numpy as np
 from ..contact import touching
 from ..errors import InputError
 from ..fitdata import ModelSpec
+from ..io.motion_segments import cycle_segments
 from ..trace import SEGMENTS, IndentationTrace
 from .core import THRESHOLDS, CheckResult, ar1_mean_variance_factor
 
-__all__ = ["rate_dependence_check", "cycle_segments", "HOLD_WINDOW", "MIN_RETRACT"]
+__all__ = ["rate_dependence_check", "HOLD_WINDOW", "MIN_RETRACT"]
 
 #: Fewest samples in each of the two hold windows (the hold needs twice as many).
 HOLD_WINDOW = 5
@@ -48,16 +49,6 @@ HOLD_WINDOW = 5
 MIN_RETRACT = 10
 
 _HOLD, _RETRACT = SEGMENTS.index("hold"), SEGMENTS.index("retract")
-
-
-def cycle_segments(trace: IndentationTrace) -> np.ndarray:
-    """Segment codes of every sample of ``trace`` (:data:`~palpbayes.trace.SEGMENTS`): its own
-    when it records them, else told apart by the motion
-    (:func:`~palpbayes.io.motion_segments.segments_from_motion`)."""
-    if trace.segment is not None:
-        return np.asarray(trace.segment)
-    from ..io.motion_segments import segments_from_motion
-    return segments_from_motion(trace.time, trace.z)
 
 
 def _hold_relaxation(t, z, f, hold, mu, base, sigma, phi):

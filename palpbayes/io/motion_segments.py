@@ -21,9 +21,9 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from ..errors import InputError
 from ..noise import mad_sd
-from ..trace import SEGMENTS
+from ..trace import SEGMENTS, IndentationTrace
 
-__all__ = ["segments_from_motion", "segment_durations", "default_hold_tolerance",
+__all__ = ["segments_from_motion", "cycle_segments", "segment_durations", "default_hold_tolerance",
            "SMOOTH_WINDOW", "NOISE_MULTIPLE", "RANGE_FRACTION"]
 
 #: Samples in the running median that smooths z before the deepest point is looked for, so that
@@ -203,3 +203,12 @@ def segment_durations(time, segment) -> dict[int, float]:
         step = float(np.median(np.diff(ts))) if ts.size > 1 else 0.0
         out[int(i)] = float(ts[-1] - ts[0]) + step
     return out
+
+
+def cycle_segments(trace: IndentationTrace) -> np.ndarray:
+    """Segment codes of every sample of ``trace`` (:data:`~palpbayes.trace.SEGMENTS`): its own
+    when it records them, else told apart by the motion (:func:`segments_from_motion`): what
+    the rate check, the adhesion cut and the peer-compatible reading all start from."""
+    if trace.segment is not None:
+        return np.asarray(trace.segment)
+    return segments_from_motion(trace.time, trace.z)

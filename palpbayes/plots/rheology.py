@@ -159,7 +159,7 @@ def plot_hysteresis(trace: Any, ax: Axes | None = None, *, z_surf: float | None 
     title
         Default the trace id.
     """
-    from ..checks.rate import cycle_segments
+    from ..io.motion_segments import cycle_segments
 
     fig, ax = fig_ax(ax)
     if isinstance(trace, StoredRheologyFit):

@@ -69,7 +69,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..checks.rate import cycle_segments
+from ..io.motion_segments import cycle_segments
 from ..noise import mad_sd
 from ..trace import IndentationTrace
 from .offcontact import ADHESION_WINDOW, N_SE, _long_run

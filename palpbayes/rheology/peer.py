@@ -32,8 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..checks.rate import cycle_segments
 from ..errors import InputError
+from ..io.motion_segments import cycle_segments
 from ..trace import SEGMENTS, IndentationTrace
 
 __all__ = ["PEERS", "PYFMRHEO_DRAG", "TURN_SHARE", "nominal_ramps", "pyfmrheo_compatible",

@@ -226,7 +226,7 @@ def _thin(n_total: int, n: int) -> np.ndarray:
 def _record_blocks(trace: IndentationTrace, limit: int) -> dict[str, np.ndarray]:
     """Block means of every segment of ``trace`` (no block straddles two segments), at most
     about ``limit`` points in all."""
-    from ..checks.rate import cycle_segments
+    from ..io.motion_segments import cycle_segments
 
     seg = cycle_segments(trace)
     k = max(1, math.ceil(seg.size / limit))
