@@ -37,9 +37,10 @@ __all__ = ["offcontact_flags", "fit_flags", "force_scale_flags", "SHRINK_FLAG", 
            "MIN_ESS", "DRAG_N_SE", "TILT_HINT", "ADHESION_HINT"]
 
 
-class RheologyFit(Protocol):
-    """What the flags read of a :class:`~palpbayes.rheology.fit.RheologyFit` (which imports
-    this module, so the class itself is not imported here)."""
+class FitView(Protocol):
+    """What the flags read of a fit: the attributes of
+    :class:`~palpbayes.rheology.fit.RheologyFit`, which imports this module (so the class is
+    not imported here, and this Protocol has a name of its own)."""
 
     rheology: str
     data: CycleData
@@ -70,7 +71,7 @@ MIN_ESS = 400
 DRAG_N_SE = N_SE
 
 
-def offcontact_flags(fit: RheologyFit, residual: np.ndarray) -> list[str]:
+def offcontact_flags(fit: FitView, residual: np.ndarray) -> list[str]:
     """Flags of the force out of contact (:mod:`~palpbayes.rheology.offcontact`)."""
     data, grid, out = fit.data, fit.grid, []
     zs = float(np.median(fit.draws["z_surf"]))
@@ -109,7 +110,7 @@ def offcontact_flags(fit: RheologyFit, residual: np.ndarray) -> list[str]:
     return out
 
 
-def force_scale_flags(fit: RheologyFit) -> list[str]:
+def force_scale_flags(fit: FitView) -> list[str]:
     """The ``force scale`` flag of a fit whose force reads as if it were in another unit
     (:func:`palpbayes.forcescale.force_scale_doubt`: the tip's size, the noise of the samples
     before contact and the first modulus, E0 or E_inf, at its median), or none."""
@@ -123,7 +124,7 @@ def force_scale_flags(fit: RheologyFit) -> list[str]:
     return [] if flag is None else [flag]
 
 
-def fit_flags(fit: RheologyFit) -> list[str]:
+def fit_flags(fit: FitView) -> list[str]:
     """Every flag of ``fit`` (module docstring): a doubted force unit first, then its
     :attr:`offcontact` ones."""
     d, data, grid = fit.draws, fit.data, fit.grid
