@@ -191,8 +191,9 @@ def read(path: str | os.PathLike, *, tip: str | Tip | None = None,
          n: float | None = None, thickness: float | None = None, material: str = "",
          curve: int | None = None, **reader_options) -> IndentationTrace:
     """One trace from a file, as ``palpbayes fit FILE`` reads it: a trace CSV (``columns``,
-    ``units``, ``force_sign``, ``z_sign``), a ROS 2 bag or an AFM file (every segment; a force
-    map needs ``curve``), in SI units.
+    ``units``, ``force_sign``, ``z_sign``), a UR RTDE log (``tool_offset``, ``z_source``,
+    ``force_axis``, ``force_sign``), a ROS 2 bag or an AFM file (every segment; a force map
+    needs ``curve``), in SI units.
 
     Parameters
     ----------

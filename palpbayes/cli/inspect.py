@@ -318,6 +318,26 @@ def _table(path: Path) -> None:
         print(line)
 
 
+def _rtde(path: Path) -> None:
+    from ..io.rtde import default_z_source, read_rtde
+
+    source = default_z_source(path)
+    trace = read_rtde(path, check=False, z_source=source)
+    meta = trace.metadata
+    z = ("the joints (actual_q, UR3e kinematics, plus --tool-offset)" if source == "q" else
+         "the TCP pose (actual_TCP_pose_2: the TCP configured on the robot)")
+    print(f"{path}: a UR RTDE log, {trace.n_points} samples over {trace.time[-1]:.4g} s; "
+          f"z from {z}, force {meta.get('force_column')} x {meta.get('force_sign'):+g} (the "
+          "sign that makes it grow as the tip goes down)")
+    print(f"  z {1e3 * trace.z.min():.4g}..{1e3 * trace.z.max():.4g} mm, force "
+          f"{format_force(float(trace.force.min()))}..{format_force(float(trace.force.max()))}")
+    offset = " --tool-offset M" if source == "q" else ""
+    print("to fit it (give the tip" + (", and the sensor + tip length along the flange"
+                                        if offset else "") + "):")
+    print(f"  palpbayes fit {shlex.quote(str(path))} --out {shlex.quote(_stem(path))}-fit "
+          f"--tip sphere --radius R{offset}")
+
+
 #: Placeholders of the columns a table's header does not name, per quantity.
 COLUMN_PLACEHOLDERS = {"time": "TIME", "z": "Z", "force": "FORCE"}
 _DEFAULT_UNITS = {"time": "s", "z": "m", "force": "N"}
@@ -393,5 +413,5 @@ def run(args: argparse.Namespace) -> int:
     path = Path(args.path)
     if not path.exists():
         raise DataFileError(path, "not found", "check the path")
-    {"bag": _bag, "afm": _afm, "table": _table}[recording_kind(path)](path)
+    {"bag": _bag, "afm": _afm, "rtde": _rtde, "table": _table}[recording_kind(path)](path)
     return 0

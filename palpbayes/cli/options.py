@@ -235,20 +235,26 @@ def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -
     """Tip, specimen, columns, units and signs of a trace file (``fit``, ``replay``)."""
     add_specimen_options(p, title)
     add_column_options(p)
-    r = p.add_argument_group("ROS 2 bags and AFM files (palpbayes inspect FILE lists what is in "
-                             "one)")
+    r = p.add_argument_group("ROS 2 bags, UR RTDE logs and AFM files (palpbayes inspect FILE "
+                             "lists what is in one)")
     r.add_argument("--force-topic", metavar="TOPIC",
                    help="geometry_msgs/WrenchStamped topic (default: the bag's only one)")
     r.add_argument("--pose-topic", metavar="TOPIC",
                    help="geometry_msgs/PoseStamped tip pose or sensor_msgs/JointState topic "
                         "(UR3e kinematics; default: the bag's only one)")
     r.add_argument("--force-axis", choices=("x", "y", "z"), default=None,
-                   help="wrench force component along the indentation (default z)")
+                   help="wrench force component along the indentation (a bag's wrench, an "
+                        "RTDE log's actual_TCP_force; default z)")
     r.add_argument("--time-offset", type=float, metavar="S", default=None,
                    help="seconds added to the pose stamps (clocks that differ; default 0)")
     r.add_argument("--tool-offset", type=float, metavar="M", default=None,
                    help="sensor + tip length along the flange z axis for a JointState "
-                        "topic, or an extra offset of a PoseStamped tip [m] (default 0)")
+                        "topic or an RTDE log's joints, or an extra offset of a PoseStamped "
+                        "tip or an RTDE log's TCP pose [m] (default 0)")
+    r.add_argument("--z-source", choices=("q", "tcp"), default=None,
+                   help="an RTDE log's tip height: from the joints actual_q by UR3e "
+                        "kinematics plus --tool-offset (q, default), or from actual_TCP_pose_2 "
+                        "(tcp, the TCP configured on the robot)")
     r.add_argument("--curve", type=int, action="append", metavar="I", dest="curves",
                    help="fit only curve I of an AFM force map (repeatable; default all)")
     add_afm_meta_options(r)
@@ -338,10 +344,12 @@ def dest(option: str) -> str:
     return option.lstrip("-").replace("-", "_")
 
 
-#: Reader option (= argparse attribute) -> its flag, of the options for bags and AFM files.
+#: Reader option (= argparse attribute) -> its flag, of the options for bags, RTDE logs and AFM
+#: files.
 RECORDING_FLAGS = {"force_topic": "--force-topic", "pose_topic": "--pose-topic",
                     "force_axis": "--force-axis", "time_offset": "--time-offset",
-                    "tool_offset": "--tool-offset", "curves": "--curve"}
+                    "tool_offset": "--tool-offset", "z_source": "--z-source",
+                    "curves": "--curve"}
 
 
 def recording_options_from_args(args: argparse.Namespace) -> dict:
@@ -380,7 +388,7 @@ def traces_from_args(args: argparse.Namespace, segments: str | None = None) -> l
     sign and recording options; one trace, or one per curve of an AFM force map.
     ``segments`` (names) are read from an AFM file instead of the approach alone (a trace
     CSV keeps its ``segment`` column; a bag gets segments from the motion when fitted)."""
-    from ..io.recording import KIND_NAMES, read_recording, recording_kind
+    from ..io.recording import KIND_NAMES, READER_OPTIONS, read_recording, recording_kind
 
     tip = tip_from_args(args)
     kind = recording_kind(args.input)
@@ -393,9 +401,11 @@ def traces_from_args(args: argparse.Namespace, segments: str | None = None) -> l
         bag_or_afm = recording_options_from_args(args)
         extra = sorted(set(bag_or_afm) - {"force_sign", "z_sign"})
         if extra:
+            owners = [KIND_NAMES[k].split(" ", 1)[1] + "s" for k, v in READER_OPTIONS.items()
+                      if extra[0] in v] or ["AFM files"]
             raise InputError(f"{args.input} is {KIND_NAMES[kind]}: "
-                             f"{RECORDING_FLAGS[extra[0]]} applies to ROS 2 bags and AFM "
-                             "files only")
+                             f"{RECORDING_FLAGS[extra[0]]} applies to {' and '.join(owners)} "
+                             "only")
         opts = read_options_from_args(args)
     else:
         if any(getattr(args, f"{q}_{w}") for q in ("time", "z", "force")

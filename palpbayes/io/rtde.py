@@ -47,17 +47,22 @@ from ..errors import DataFileError, InputError
 from ..kinematics import UR3E, DHParameters, as_offset, tip_z
 from ..trace import IndentationTrace
 from .tabular import (
+    WHITESPACE,
+    _header_line,
     auto_force_sign,
     check_force_sign,
     check_plausible,
     numeric_column,
     read_table,
+    sniff_delimiter,
     split_trace_metadata,
     validate_force_sign,
 )
 
 __all__ = [
     "read_rtde",
+    "is_rtde",
+    "default_z_source",
     "rotvec_to_matrix",
     "RTDE_TIME_COLUMN",
     "RTDE_Q_COLUMNS",
@@ -100,6 +105,31 @@ def rotvec_to_matrix(rotvec: np.ndarray) -> np.ndarray:
     s = np.sin(theta)[:, None, None]
     c = (1.0 - np.cos(theta))[:, None, None]
     return np.eye(3) + s * K + c * (K @ K)
+
+
+def _header_names(path: Path) -> set[str]:
+    header, sep = _header_line(path), sniff_delimiter(path)
+    return {n.strip() for n in (header.split() if sep == WHITESPACE else header.split(sep))}
+
+
+def default_z_source(path: str | os.PathLike) -> Literal["q", "tcp"]:
+    """``"q"`` when the log records the joints (the paper's method), else ``"tcp"``."""
+    return "q" if set(RTDE_Q_COLUMNS) <= _header_names(Path(path)) else "tcp"
+
+
+def is_rtde(path: str | os.PathLike) -> bool:
+    """True when ``path`` is a text table whose header names the RTDE ``timestamp``, a
+    component of ``actual_TCP_force`` and the joints or the TCP pose: what
+    :func:`palpbayes.io.recording.recording_kind` reads with :func:`read_rtde`."""
+    p = Path(path)
+    if not p.is_file():
+        return False
+    try:
+        names = _header_names(p)
+    except (OSError, UnicodeDecodeError):
+        return False
+    return (RTDE_TIME_COLUMN in names and bool(names & set(RTDE_TCP_FORCE_COLUMNS))
+            and (set(RTDE_Q_COLUMNS) <= names or RTDE_TCP_POSE_COLUMNS[2] in names))
 
 
 def _require(df: pd.DataFrame, columns: list[str], source: str, fix: str) -> None:

@@ -138,7 +138,7 @@ def test_bag_errors_are_one_line_with_exit_status_2(sim, tmp_path, capsys, spot3
     assert "do not overlap" in err and "--time-offset -120" in err
     csv = write_trace(sim, tmp_path / "t.csv")
     assert main(["fit", str(csv), "--force-topic", FT, *args]) == 2
-    assert "--force-topic applies to ROS 2 bags and AFM files only" in capsys.readouterr().err
+    assert "--force-topic applies to ROS 2 bags only" in capsys.readouterr().err
     assert main(["fit", str(spot3), "--z-unit", "mm", *args]) == 2
     assert "--*-column and --*-unit apply to text tables only" in capsys.readouterr().err
     assert not (tmp_path / "res").exists()

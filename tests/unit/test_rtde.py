@@ -338,3 +338,59 @@ def test_canonical_reader_delegates(tmp_path, data):
     tr = read_trace(path)
     np.testing.assert_allclose(tr.z, tip_z(q), atol=1e-12)
     np.testing.assert_allclose(tr.force, force, atol=1e-12)
+
+
+# --- reachable from pb.read and the command line (issue 57: io/rtde.py was wired to nothing) ---
+
+
+def _log(tmp_path, data, **kw):
+    t, q, z, force = data
+    return write(rtde_frame(t, q, z, force, **kw), tmp_path / "press-rtde.csv", " ")
+
+
+def test_a_log_is_recognised_by_its_header_and_read_as_fit_reads_it(tmp_path, data):
+    from palpbayes import read
+    from palpbayes.io.recording import read_recording, recording_kind
+
+    t, q, z, force = data
+    path = _log(tmp_path, data)
+    assert recording_kind(path) == "rtde"
+    assert recording_kind(write(pd.DataFrame({"time_s": t, "z_m": z, "force_n": force}),
+                                tmp_path / "plain.csv", ",")) == "table"
+    (tr,) = read_recording(path, tool_offset=OFFSET, force_axis="z")
+    np.testing.assert_allclose(tr.z, z, atol=1e-12)
+    np.testing.assert_allclose(tr.force, force, atol=1e-12)
+    tr2 = read(path, tip="sphere", radius=0.01, tool_offset=OFFSET)
+    np.testing.assert_allclose(tr2.force, force, atol=1e-12)
+    assert tr2.tip.radius == 0.01 and tr2.metadata["reader"] == "rtde"
+    with pytest.raises(InputError, match="a UR RTDE log: option 'columns'"):
+        read_recording(path, columns={"z": "x"})
+
+
+def test_a_log_without_joints_reads_its_tcp_pose(tmp_path, data):
+    from palpbayes.io.recording import read_recording
+
+    t, q, z, force = data
+    df = rtde_frame(t, q, z, force).drop(columns=list(RTDE_Q_COLUMNS))
+    path = write(df, tmp_path / "tcp-only.csv", ",")
+    (tr,) = read_recording(path)
+    assert tr.metadata["z_source"] == "tcp"
+    np.testing.assert_allclose(tr.z, z + 0.1, atol=1e-12)
+
+
+def test_fit_and_inspect_read_a_log(tmp_path, capsys):
+    from palpbayes.cli import main
+
+    path = _log(tmp_path, palpation(n=2000))
+    assert main(["inspect", str(path)]) == 0
+    text = capsys.readouterr().out
+    assert "a UR RTDE log" in text and "--tool-offset M" in text
+    out = tmp_path / "fit"
+    assert main(["fit", str(path), "--out", str(out), "--tip", "sphere", "--radius", "0.01",
+                 "--tool-offset", str(OFFSET), "--method", "lsq", "--f-unc", "0.01"]) == 0
+    row = pd.read_csv(out / "summary.csv").iloc[0]
+    assert row["E_pa"] > 0 and row["method"] == "lsq"
+    capsys.readouterr()
+    assert main(["fit", str(path), "--out", str(tmp_path / "bad"), "--tip", "sphere",
+                 "--radius", "0.01", "--z-column", "z"]) == 2
+    assert "a UR RTDE log" in capsys.readouterr().err
