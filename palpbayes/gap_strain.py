@@ -159,7 +159,8 @@ def strain_verdicts(gap: pd.DataFrame, strain: pd.DataFrame) -> dict[str, object
     lo = 1.0 + g["predicted_lo_pct"] / 100.0
     hi = 1.0 + g["predicted_hi_pct"] / 100.0
     f = strain.groupby(["material", "tip"])["strain_factor"]
-    soft_lo, soft_hi = lo * np.minimum(f.min(), 1.0), hi * np.maximum(f.max(), 1.0)
+    f_min, f_max = f.min().reindex(obs.index), f.max().reindex(obs.index)
+    soft_lo, soft_hi = lo * np.minimum(f_min, 1.0), hi * np.maximum(f_max, 1.0)
     explained_linear = int(((lo <= obs) & (obs <= hi)).sum())
     explained_soft = int(((soft_lo <= obs) & (obs <= soft_hi)).sum())
     best, total = {}, 0
@@ -170,7 +171,8 @@ def strain_verdicts(gap: pd.DataFrame, strain: pd.DataFrame) -> dict[str, object
             n = 0
             for tip in fk.groups:
                 key = (material, tip)
-                n += bool(lo[key] * fk.min()[tip] <= obs[key] <= hi[key] * fk.max()[tip])
+                if key in obs.index:
+                    n += bool(lo[key] * fk.min()[tip] <= obs[key] <= hi[key] * fk.max()[tip])
             counts[foam] = n
         name = max(counts, key=counts.get)
         best[material] = (name, counts[name], len(strain[strain["material"] == material]

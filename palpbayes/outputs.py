@@ -17,7 +17,9 @@ A results folder (``palpbayes fit MANIFEST --out DIR``) holds::
       indentation.csv          each trace replayed online: where it stopped (compare)
       groundtruth.csv          per compression test              (groundtruth)
       groundtruth_summary.csv  per material                      (groundtruth)
+      groundtruth_laws.csv     per material × hyperelastic law   (groundtruth --law)
       gap.csv                  the paper's robot-vs-Instron gap   (report, paper's materials)
+      gap_strain.csv           the same gap at finite strain      (report, paper's materials)
       rheology.csv             one row per trace × relaxation model    (fit --rheology)
       rheology/<trace>_<model>.nc  a viscoelastic fit's draws, bands  (fit --rheology)
       rheology_pooled.csv      one row per specimen × tip, speeds pooled (fit --rheology power-law)
@@ -36,7 +38,8 @@ from pathlib import Path
 __all__ = [
     "SETTINGS", "TRACES", "SUMMARY", "POSTERIOR_DIR", "PARTIAL_DIR", "COMPARISON", "POOLED",
     "BUDGET", "STIFFENING", "STIFFENING_PARAMETERS", "STIFFENING_CURVES",
-    "INDENTATION", "GROUNDTRUTH", "GROUNDTRUTH_SUMMARY", "GROUNDTRUTH_LAWS", "GAP", "REPORT",
+    "INDENTATION", "GROUNDTRUTH", "GROUNDTRUTH_SUMMARY", "GROUNDTRUTH_LAWS", "GAP", "GAP_STRAIN",
+    "REPORT",
     "COMPARE_OUTPUTS",
     "FIT_OUTPUTS", "REPLAY_HISTORY", "REPLAY_SUMMARY", "REPLAY_FIGURE", "posterior_path",
     "posterior_file", "partial_path", "RHEOLOGY_TABLE", "RHEOLOGY_DIR", "RHEOLOGY_OUTPUTS",
@@ -80,6 +83,10 @@ GROUNDTRUTH_LAWS = "groundtruth_laws.csv"
 #: The paper's robot-vs-Instron gap decomposed (:func:`palpbayes.gap.gap_table`), written by
 #: the report pipeline when the campaign has the paper's materials.
 GAP = "gap.csv"
+#: The gap at finite strain (:func:`palpbayes.gap_strain.strain_table`: a foam that softens
+#: pressed on the blocks' finite-strain twins), copied from the package's data by the report
+#: pipeline beside ``gap.csv``.
+GAP_STRAIN = "gap_strain.csv"
 #: One row per trace × relaxation model (``palpbayes fit --rheology power-law|sls``).
 RHEOLOGY_TABLE = "rheology.csv"
 #: Folder of the stored viscoelastic fits ``<trace_id>_<rheology>.nc``

@@ -112,6 +112,8 @@ class ResultsFolder:
         Per-test and per-material ground truth.
     gap
         The paper's robot-vs-Instron gap decomposed (``gap.csv``, :mod:`palpbayes.gap`).
+    gap_strain
+        The same at finite strain (``gap_strain.csv``, :mod:`palpbayes.gap_strain`).
     """
 
     path: Path
@@ -128,6 +130,7 @@ class ResultsFolder:
     groundtruth: pd.DataFrame | None = None
     groundtruth_summary: pd.DataFrame | None = None
     gap: pd.DataFrame | None = None
+    gap_strain: pd.DataFrame | None = None
 
     @property
     def options(self) -> dict:
@@ -184,7 +187,7 @@ def load_results(path: str | os.PathLike) -> ResultsFolder:
         indentation=_read_csv(p / outputs.INDENTATION),
         groundtruth=_read_csv(p / outputs.GROUNDTRUTH),
         groundtruth_summary=_read_csv(p / outputs.GROUNDTRUTH_SUMMARY),
-        gap=_read_csv(p / outputs.GAP),
+        gap=_read_csv(p / outputs.GAP), gap_strain=_read_csv(p / outputs.GAP_STRAIN),
     )
 
 

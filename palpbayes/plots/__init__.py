@@ -25,6 +25,7 @@ Functions
 :func:`plot_forest`          per-trace intervals of one material × tip with the pooled result
 :func:`plot_stiffening`      modulus vs rest time with the fitted stiffening law and its band
 :func:`plot_gap`             the paper's robot-vs-Instron gap against the layer's prediction
+:func:`plot_strain_factors`  what finite strain multiplies that gap by, per foam and tip
 :func:`plot_halfspace_vs_layer` a campaign's half-space and layer estimates side by side
 :func:`plot_specimen_as_tested` palpation (the block's twin) and compression like for like
 :func:`plot_cycle_fit`       a viscoelastic fit: force against time with its band
@@ -41,7 +42,7 @@ Modules, by subject: :mod:`~palpbayes.plots.style` (colours, units, shared helpe
 
 from .budget import plot_budget
 from .campaign import plot_comparison, plot_forest
-from .layer import plot_gap, plot_halfspace_vs_layer
+from .layer import plot_gap, plot_halfspace_vs_layer, plot_strain_factors
 from .posterior import plot_pair, plot_posterior, plot_posterior_E, plot_posterior_zsurf
 from .rheology import plot_cycle_fit, plot_hysteresis, plot_relaxation
 from .stiffening import plot_stiffening
@@ -66,6 +67,7 @@ __all__ = [
     "plot_forest",
     "plot_stiffening",
     "plot_gap",
+    "plot_strain_factors",
     "plot_halfspace_vs_layer",
     "plot_specimen_as_tested",
     "plot_cycle_fit",

@@ -14,7 +14,7 @@ from ..campaign.results import MATERIAL_ORDER, TIP_ORDER, ordered
 from .groups import material_tip_columns
 from .style import KPA, METHOD_COLORS, METHOD_LABELS, fig_ax
 
-__all__ = ["plot_gap", "plot_halfspace_vs_layer"]
+__all__ = ["plot_gap", "plot_strain_factors", "plot_halfspace_vs_layer"]
 
 _LAYER = "#E69F00"  # orange: what the layer model predicts
 
@@ -83,6 +83,47 @@ def plot_gap(gap: pd.DataFrame, *, ax: Axes | None = None) -> Figure:
         Patch(facecolor="none", edgecolor="0.45",
               label="the same with an infinite layer and an exact Instron")],
         fontsize="x-small", frameon=False, loc="upper center", ncol=2)
+    return fig
+
+
+def plot_strain_factors(strain: pd.DataFrame, *, ax: Axes | None = None) -> Figure:
+    """What finite strain multiplies the paper's robot ÷ Instron ratio by, per foam and tip.
+
+    One column per foam of :data:`palpbayes.gap_strain.FOAMS`; per tip a vertical bar over
+    the paper's three blocks and both bases (``strain_factor`` − 1 [%] of ``gap_strain.csv``):
+    above 0 the foam makes the robot read stiffer against the Instron than a linear block does.
+
+    Parameters
+    ----------
+    strain
+        :func:`palpbayes.gap_strain.strain_table` (``gap_strain.csv``).
+    ax
+        Axes to draw on (default: a new 9 × 4 in figure).
+    """
+    fig, ax = fig_ax(ax, (9.0, 4.0))
+    foams = list(dict.fromkeys(strain["foam"]))
+    tips = ordered(strain["tip"], TIP_ORDER)
+    colors = {t: c for t, c in zip(tips, ("#0072B2", "#009E73", "#CC79A7"), strict=False)}
+    width = 0.8 / max(len(tips), 1)
+    for i, foam in enumerate(foams):
+        for j, tip in enumerate(tips):
+            f = 100.0 * (strain[(strain["foam"] == foam) & (strain["tip"] == tip)]
+                         ["strain_factor"] - 1.0)
+            if f.empty:
+                continue
+            x = i - 0.4 + (j + 0.5) * width
+            ax.bar(x, max(f.max() - f.min(), 0.4), bottom=f.min(), width=0.8 * width,
+                   color=colors[tip], lw=0, label=tip if i == 0 else None)
+    ax.axhline(0.0, color="0.3", lw=0.7)
+    labels = [f.replace("hyperfoam ", "").replace("neo-Hookean ", "neo-H.\n")
+              .replace(" alpha ", "\nα ").replace("nu ", "ν ") for f in foams]
+    ax.set_xticks(range(len(foams)), labels, fontsize="x-small")
+    ax.set_xlabel("the foam: hyperfoam (ν, α; α = 2 nearly linear, larger: a plateau) or a "
+                  "compressible neo-Hookean solid", fontsize="small")
+    ax.set_ylabel("robot ÷ Instron against a linear block [%]")
+    ax.set_title("A softening foam raises the ratio, a stiffening one lowers it; the tips move "
+                 "together", fontsize="medium")
+    ax.legend(fontsize="x-small", frameon=False, ncol=len(tips), loc="upper left")
     return fig
 
 

@@ -8,6 +8,8 @@ from matplotlib.figure import Figure
 from .. import plots
 from ..campaign.results import ResultsFolder
 from ..gap import gap_verdicts
+from ..gap_strain import strain_verdicts
+from ..gap_text import strain_paragraph
 from .format import wrap
 from .layout import Page, text_height, text_lines
 
@@ -51,8 +53,8 @@ def layer_pages(res: ResultsFolder) -> list[Page]:
             "paper's geometry with the Instron's E: the 50 x 50 mm block as tested, its "
             "finite-element twin on its plate (free to bonded base), compressed between "
             "lubricated or bonded platens, the foam's nu (0.1-0.35 against the 0.3 assumed), "
-            "series compliance (0-2 µm/N), Hertz for the sphere. Not modelled: foam "
-            "nonlinearity and rate.", _W_SMALL)]
+            "series compliance (0-2 µm/N), Hertz for the sphere. Foam nonlinearity: the next "
+            "page (finite strain); not modelled: rate.", _W_SMALL)]
         for v in verdicts.values():
             lines += [("", "")] + [("t", ln) for ln in wrap(v, _W_SMALL)]
 
@@ -63,4 +65,17 @@ def layer_pages(res: ResultsFolder) -> list[Page]:
             plots.plot_gap(res.gap, ax=ax)
             text_lines(fig, lines, top=text_top, left=0.04, size=8.0)
         pages.append(Page("Why does the robot read stiffer than the Instron?", build_gap))
+    if res.gap is not None and not res.gap.empty and res.gap_strain is not None \
+            and not res.gap_strain.empty:
+        text = strain_paragraph(strain_verdicts(res.gap, res.gap_strain), res.gap_strain,
+                                res.gap)
+        strain_lines = [("t", ln) for ln in wrap(text, _W_SMALL)]
+
+        def build_strain(fig: Figure, lines=strain_lines) -> None:
+            text_top = max(0.35, 0.05 + text_height(lines, size=8.0, left=0.04))
+            ax = fig.add_axes((0.08, text_top + 0.11, 0.86, 0.91 - text_top - 0.11))
+            plots.plot_strain_factors(res.gap_strain, ax=ax)
+            text_lines(fig, lines, top=text_top, left=0.04, size=8.0)
+        pages.append(Page("The gap at finite strain: foams that soften or stiffen",
+                          build_strain))
     return pages

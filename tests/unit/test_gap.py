@@ -3,7 +3,10 @@ its terms: the physics of every verdict, the count the twin explains, the verdic
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
+import pandas as pd
 import pytest
 
 from palpbayes.gap import GAP_COLUMNS, gap_table, gap_verdicts, paper_fit_ratio
@@ -122,3 +125,65 @@ def test_verdicts_follow_the_table_not_the_paper(table):
     high["explained"] = False
     v = gap_verdicts(high)["flat"]
     assert "White and Pink and Grey read" in v and "above the prediction's upper end" in v
+
+
+# --- the gap at finite strain (issue 56, item 5: palpbayes.gap_strain, the shipped table) -------
+
+SHIPPED = Path(__file__).resolve().parents[2] / "data" / "gap-strain" / "gap_strain.csv"
+
+
+@pytest.fixture(scope="module")
+def strain():
+    from palpbayes.gap_strain import FOAMS, STRAIN_COLUMNS
+
+    s = pd.read_csv(SHIPPED)
+    assert list(s.columns) == STRAIN_COLUMNS
+    assert len(s) == len(PAPER_MATERIALS) * len(PAPER_TIPS) * 2 * len(FOAMS)
+    assert np.isfinite(s["strain_factor"]).all()
+    return s
+
+
+def test_a_softening_foam_raises_every_ratio_a_stiffening_one_lowers_it(strain):
+    soft = strain[(strain["law"] == "hyperfoam") & (strain["nu0"] < 0.2) & (strain["alpha"] >= 5)]
+    assert (soft["strain_factor"] > 1.0).all()  # the Instron's plateau reads softer
+    # and the more it softens (larger alpha), the more (per tip, block and base)
+    by = soft.pivot_table(index=["material", "tip", "base"], columns="alpha",
+                          values="strain_factor")
+    assert (by.diff(axis=1).iloc[:, 1:] > 0).all().all()
+    nh = strain[strain["law"] == "neo-hookean"]["strain_factor"]
+    assert (nh < 1.0).all()  # nominal stress stiffens in compression: the Instron reads stiffer
+
+
+def test_finite_strain_moves_the_two_curved_tips_together(strain):
+    piv = strain.pivot_table(index=["material", "base", "foam"], columns="tip",
+                             values="strain_factor")
+    ratio = piv["paraboloid"] / piv["sphere"]
+    assert ratio.between(0.97, 1.04).all()
+
+
+def test_the_verdicts_and_their_words(table, strain):
+    from palpbayes.gap_strain import strain_verdicts
+    from palpbayes.gap_text import strain_paragraph
+
+    v = strain_verdicts(table, strain)
+    assert v["explained_linear"] == int(table["explained"].sum()) == 4
+    assert v["best_total"] >= 8  # one law per foam (neo-Hookean nu 0.3 on every block)
+    assert all(name.startswith("neo-Hookean") for name, _, _ in v["best"].values())
+    assert 0.97 < v["paraboloid_over_sphere_min"] <= v["paraboloid_over_sphere_max"] < 1.04
+    text = strain_paragraph(v, strain, table)
+    assert "raises every ratio" in text and "lowers every ratio" in text
+    assert "does not tell the paraboloid from the sphere" in text and "R_true/R = 0.5" in text
+
+
+@pytest.mark.slow
+def test_the_shipped_table_is_what_the_code_computes(strain):
+    """Two rows of the shipped table recomputed (the finite elements, coarse: ~20 s)."""
+    from palpbayes.gap_strain import FOAMS, strain_row
+
+    for material, tip, base, foam in (("White", "sphere", "free", FOAMS[0]),
+                                      ("Grey", "paraboloid", "bonded", FOAMS[3])):
+        row = strain_row(material, tip, base, foam)
+        shipped = strain[(strain["material"] == material) & (strain["tip"] == tip)
+                         & (strain["base"] == base) & (strain["foam"] == foam[0])].iloc[0]
+        for col in ("robot_read", "instron_read", "linear_ratio", "strain_factor"):
+            assert row[col] == pytest.approx(shipped[col], rel=1e-6), (material, tip, col)
