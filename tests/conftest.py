@@ -42,6 +42,9 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 _OWN_CACHE = os.path.join(__import__("tempfile").gettempdir(),
                           f"palpbayes-test-cache-{os.getpid()}")
 os.environ.setdefault("PALPBAYES_CACHE_DIR", _OWN_CACHE)
+# ... and without the tables the source ships for its example (data/twin-cache): the tests solve
+# what they test (tests/unit/test_twin.py reads the shipped ones on purpose).
+os.environ.setdefault("PALPBAYES_SHIPPED_TABLES", "off")
 
 import pytest  # noqa: E402
 from hypothesis import settings  # noqa: E402

@@ -9,6 +9,12 @@ be read, is rebuilt).  Files are written atomically.
 
 The folder is ``$PALPBAYES_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/palpbayes``, else
 ``~/.cache/palpbayes``; ``PALPBAYES_CACHE_DIR=off`` keeps the tables in memory only.
+
+A source checkout also ships the tables its example campaign needs (:data:`SHIPPED_DIR`,
+``data/twin-cache``, written by ``python tools/ship_twin_cache.py``): a file the cache folder
+lacks is read from there, read-only, under the same key (a key of other inputs, code or library
+versions finds nothing and the table is solved as before).  ``PALPBAYES_SHIPPED_TABLES=off``
+ignores them (the test suite does, so that it solves what it tests).
 """
 
 from __future__ import annotations
@@ -26,10 +32,21 @@ import numpy as np
 
 from ..io.atomic import atomic_path
 
-__all__ = ["cache_dir", "load_arrays", "save_arrays", "key_text", "code_stamp", "package_stamp"]
+__all__ = ["cache_dir", "load_arrays", "save_arrays", "key_text", "code_stamp", "package_stamp",
+           "SHIPPED_DIR", "shipped_dir"]
 
 #: Subfolder of the cache for the twin's tables; its number changes with the solver.
 _SUBDIR = "twin-v1"
+#: The tables shipped with the source checkout (the example campaign's), read-only.
+SHIPPED_DIR = Path(__file__).resolve().parents[2] / "data" / "twin-cache" / _SUBDIR
+
+
+def shipped_dir() -> Path | None:
+    """:data:`SHIPPED_DIR` when it is there and not switched off
+    (``PALPBAYES_SHIPPED_TABLES=off``), else None."""
+    if os.environ.get("PALPBAYES_SHIPPED_TABLES", "").strip().lower() in ("off", "0", "no"):
+        return None
+    return SHIPPED_DIR if SHIPPED_DIR.is_dir() else None
 
 
 def cache_dir() -> Path | None:
@@ -54,19 +71,17 @@ def key_text(key: dict) -> str:
     return json.dumps({k: norm(v) for k, v in key.items()}, sort_keys=True)
 
 
+def _name(key: dict) -> str:
+    digest = hashlib.sha256(key_text(key).encode()).hexdigest()[:32]
+    return f"{key.get('kind', 'table')}-{digest}.npz"
+
+
 def _file(key: dict) -> Path | None:
     folder = cache_dir()
-    if folder is None:
-        return None
-    digest = hashlib.sha256(key_text(key).encode()).hexdigest()[:32]
-    return folder / f"{key.get('kind', 'table')}-{digest}.npz"
+    return None if folder is None else folder / _name(key)
 
 
-def load_arrays(key: dict) -> dict[str, np.ndarray] | None:
-    """The arrays stored under ``key``, or None (absent, unreadable or another key)."""
-    path = _file(key)
-    if path is None or not path.is_file():
-        return None
+def _read(path: Path, key: dict) -> dict[str, np.ndarray] | None:
     try:
         with np.load(path, allow_pickle=False) as data:
             if str(data["key"]) != key_text(key):
@@ -74,6 +89,17 @@ def load_arrays(key: dict) -> dict[str, np.ndarray] | None:
             return {k: data[k] for k in data.files if k != "key"}
     except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError):
         return None
+
+
+def load_arrays(key: dict) -> dict[str, np.ndarray] | None:
+    """The arrays stored under ``key`` in the cache folder, else among the shipped tables
+    (:func:`shipped_dir`), or None (absent, unreadable or another key)."""
+    for folder in (cache_dir(), shipped_dir()):
+        if folder is not None and (folder / _name(key)).is_file():
+            found = _read(folder / _name(key), key)
+            if found is not None:
+                return found
+    return None
 
 
 def save_arrays(key: dict, arrays: dict[str, np.ndarray]) -> Path | None:

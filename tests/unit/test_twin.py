@@ -347,3 +347,26 @@ def test_table_lookup_interpolates_its_grid_linearly():
     np.testing.assert_allclose(got[:-1], ref[:-1], rtol=1e-14)
     assert np.isnan(got[-1]) and got[0] == 1.0
     assert tab.factor(np.array(0.0)) == 1.0
+
+
+def test_the_shipped_tables_are_read_when_the_cache_lacks_them(tmp_path, monkeypatch):
+    """The source ships the example's tables (data/twin-cache, tools/ship_twin_cache.py): a key
+    stored there is found from an empty cache folder, read-only and without unpickling; with
+    PALPBAYES_SHIPPED_TABLES=off (the test suite's default) it is not."""
+    import numpy as np
+
+    from palpbayes.twin import cache
+
+    files = sorted(cache.SHIPPED_DIR.glob("*.npz"))
+    assert len(files) >= 50  # the example's blocks x tips x nu nodes x bases, its platens
+    with np.load(files[0], allow_pickle=False) as data:
+        import json
+
+        key = json.loads(str(data["key"]))
+    monkeypatch.setenv("PALPBAYES_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("PALPBAYES_SHIPPED_TABLES", "off")
+    assert cache.load_arrays(key) is None
+    monkeypatch.setenv("PALPBAYES_SHIPPED_TABLES", "on")
+    found = cache.load_arrays(key)
+    assert found is not None and all(isinstance(v, np.ndarray) for v in found.values())
+    assert not any(tmp_path.rglob("*.npz"))  # nothing written by reading
