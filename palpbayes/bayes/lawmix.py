@@ -40,6 +40,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.special import logsumexp
 
+from ..contact import youngs_modulus
 from ..errors import InputError, PalpbayesError
 from ..fitdata import FitData, ModelSpec
 from ..intervals import LEVEL
@@ -215,7 +216,7 @@ class LawPosterior:
             if k == 0:
                 continue
             d = c.post.draws(rng, int(k))
-            d["E"] = d["E_star"] * (1.0 - c.nu * c.nu)
+            d["E"] = youngs_modulus(d["E_star"], c.nu)
             d["nu"] = np.full(int(k), c.nu)
             for name, v in c.point.items():
                 d[f"law_{name}"] = np.full(int(k), v)

@@ -52,7 +52,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..contact import Tip, get_law, thickness_factor
+from ..contact import Tip, get_law, thickness_factor, youngs_factor
 from ..errors import GeometryError, InputError
 from ..material import MaterialLaw, material_law
 from .specimen import Specimen
@@ -302,7 +302,7 @@ def law_shape(depth, tip: Tip, nu: float, law: LawModel, thickness: float | None
     values = law.values()
     if law.law.nu_parameter is not None:
         values.setdefault(law.law.nu_parameter, nu0)
-    out = table.force(d, 1.0, values) * (1.0 - nu0 * nu0)
+    out = table.force(d, 1.0, values) * youngs_factor(nu0)
     if proxy:
         pos = d > 0
         out[pos] = out[pos] / thickness_factor(d[pos], tip, block.height, nu0, "bonded")
