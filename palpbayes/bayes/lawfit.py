@@ -28,7 +28,6 @@ from ..errors import FitError, GeometryError, InputError
 from ..fitdata import FitData, ModelSpec
 from ..intervals import central, hull
 from ..material import chord_modulus, compression_stress
-from ..units import format_pressure
 from .exact import sampled_coordinates
 from .lawmix import LawPosterior, law_posterior
 from .layer_fit import layer_coordinates
@@ -38,7 +37,7 @@ from .sampler import ChainResult
 from .start import Mode
 
 __all__ = ["check_law_model", "exact_law_chains", "law_columns", "law_notes", "instron_law_draws",
-           "LAW_COLUMNS", "law_parameters_text", "law_columns_of", "describe_instron"]
+           "LAW_COLUMNS", "law_parameters_text", "law_columns_of"]
 
 #: ``summary.csv`` columns of a law fit (empty or NaN under the linear law).
 LAW_COLUMNS = ("law", "law_params", "instron_strain", "E_instron_law_pa",
@@ -160,7 +159,7 @@ def _bonded_ratio(model: ModelSpec, strain: float, nu_grid: np.ndarray
                                         np.array([strain]), model.law.resolution)
         except (FitError, GeometryError) as exc:
             return None, (f"E_instron_law is for lubricated platens: the block's twin between "
-                          f"bonded platens did not converge to {strain:.0%} strain "
+                          f"bonded platens did not converge to {100 * strain:g} % strain "
                           f"({str(exc).split(':')[0]})")
         out.append(float(c.stress[0] / compression_stress(law, p, np.array([strain]), nu)[0]))
     return np.array(out), ""
@@ -265,13 +264,3 @@ def law_notes(mixture: LawPosterior | None, data: FitData, best: ModelSpec) -> l
             notes.append(f"{name}'s posterior piles at the end of its range ({edge[0]:g}, p "
                          f"{edge[1]:.2f}): the data want a value beyond it")
     return notes
-
-
-def describe_instron(cols: dict) -> str:
-    """E_instron_law in words (the console's)."""
-    if not math.isfinite(cols.get("E_instron_law_pa", math.nan)):
-        return ""
-    return (f"compression to {cols['instron_strain']:.0%} would read "
-            f"{format_pressure(cols['E_instron_law_pa'])} "
-            f"[{format_pressure(cols['E_instron_law_lo_pa'])}, "
-            f"{format_pressure(cols['E_instron_law_hi_pa'])}]")

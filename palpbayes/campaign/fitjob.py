@@ -74,7 +74,7 @@ SUMMARY_COLUMNS = [
     # tip "sphere" only (a law with a hertz_approximation; else NaN): the paper's choice for a
     # sphere, least squares with the paraboloid (Hertz) law at the sphere's radius on the same
     # (tared) points, as the ratio to the Sneddon least squares: the row's E times it, and the
-    # ratio − 1 (fit_trace)
+    # ratio − 1 (fit_trace); NaN under a material law (its twin presses the true sphere)
     "E_hertz_pa", "E_hertz_rel_diff",
     # the specimen's layer (finite thickness): the model of the row (lsq: always the paper's
     # half-space; bayes: a layer on a rigid base wherever the thickness is known), the concrete
@@ -366,7 +366,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
 
     def with_hertz(row: dict) -> dict:
         e = row.get("E_pa")
-        e = float("nan") if e is None else float(e)
+        e = float("nan") if e is None or row.get("law", "linear") != "linear" else float(e)
         return {**row, "E_hertz_pa": e * ratio, "E_hertz_rel_diff": ratio - 1.0}
 
     meta = {"material": trace.material, "specimen": trace.specimen,
