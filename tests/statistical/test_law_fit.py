@@ -17,6 +17,7 @@ runs them (its :func:`run_case`; that script prints the same figures with timing
 from __future__ import annotations
 
 import importlib.util
+import sys
 from pathlib import Path
 
 import pytest
@@ -29,6 +30,7 @@ _BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_law_fit.py"
 def _bench():
     spec = importlib.util.spec_from_file_location("bench_law_fit", _BENCH)
     module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # its dataclasses look their module up
     spec.loader.exec_module(module)
     return module
 

@@ -10,6 +10,7 @@ import math
 import warnings
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import palpbayes as pb
@@ -17,8 +18,10 @@ from palpbayes.bayes import BudgetSpec
 from palpbayes.campaign.options import FitOptions, LawOptions, parse_law_shape
 from palpbayes.campaign.tracemodel import trace_law
 from palpbayes.contact import Tip, get_law
-from palpbayes.errors import InputError
+from palpbayes.errors import DataFileError, InputError
 from palpbayes.fitdata import ModelSpec
+from palpbayes.io.manifest import load_trace, read_manifest, write_manifest
+from palpbayes.io.trace_csv import write_trace
 from palpbayes.material import Solid
 from palpbayes.sim import simulate_trace
 from palpbayes.twin import Specimen
@@ -109,6 +112,24 @@ def test_law_options_and_the_traces_law():
     with pytest.raises(InputError, match="at most 2"):
         trace_law(tr, pb.fit_options(law="ogden-2", engine="exact"), 2e-3)
     assert trace_law(tr, pb.fit_options(), 2e-3) is None
+
+
+def test_manifest_law_column(tmp_path):
+    """A manifest's ``law`` column reaches the trace (an empty cell: the run's law) and names
+    its row when it is no law."""
+    tr = simulate_trace(E0, SPHERE, nu=0.3, depth=1e-3, rng=0)
+    write_trace(tr, tmp_path / "t.csv")
+    rows = [{"trace_id": t, "file": "t.csv", "material": "foam", "tip": "sphere",
+             "radius_m": 0.01, "law": law} for t, law in (("a", "neo-hookean"), ("b", ""))]
+    write_manifest(pd.DataFrame(rows), tmp_path / "m.csv")
+    a, b = (load_trace(r) for _, r in read_manifest(tmp_path / "m.csv").iterrows())
+    assert a.metadata["law"] == "neo-hookean" and "law" not in b.metadata
+    law = trace_law(a, pb.fit_options(), 1e-3)
+    assert law.name == "neo-hookean" and trace_law(b, pb.fit_options(), 1e-3) is None
+    rows[0]["law"] = "rubber"
+    write_manifest(pd.DataFrame(rows), tmp_path / "m.csv")
+    with pytest.raises(DataFileError, match="row 1 .*column 'law'.*unknown material law"):
+        read_manifest(tmp_path / "m.csv")
 
 
 def test_cli_parses_law_options():
