@@ -26,9 +26,9 @@ The cases (E0 60 kPa, a 50 × 50 mm footprint, the block free on its plate):
                     the half-space proxy against the linear half-space
 ==================  ==========================================================================
 
-Run: ``python benchmarks/bench_law_fit.py [--case NAME ...] [--n 10]`` (the cases with 10
-traces: about 13 minutes on 2 cores shared with others, fresh cache; the finite-element curves are cached in
-``$PALPBAYES_CACHE_DIR``, a temporary folder unless ``--cache`` is given).
+Run: ``python benchmarks/bench_law_fit.py [--case NAME ...] [--n 10]`` (every case with 10
+traces: about 13 minutes on 2 shared cores from a fresh cache; the finite-element curves are
+cached in ``$PALPBAYES_CACHE_DIR``, a temporary folder unless ``--cache`` is given).
 ``tests/statistical/test_law_fit.py`` runs :func:`run_case` and asserts the issue's figures.
 """
 
