@@ -29,7 +29,7 @@ The cases (E0 60 kPa, a 50 × 50 mm footprint, the block free on its plate):
 Run: ``python benchmarks/bench_law_fit.py [--case NAME ...] [--n 10]`` (every case with 10
 traces: about 13 minutes on 2 shared cores from a fresh cache; the finite-element curves are
 cached in ``$PALPBAYES_CACHE_DIR``, a temporary folder unless ``--cache`` is given).
-``tests/statistical/test_law_fit.py`` runs :func:`run_case` and asserts the issue's figures.
+``tests/statistical/test_law_fits.py`` runs :func:`run_case` and asserts the issue's figures.
 """
 
 from __future__ import annotations

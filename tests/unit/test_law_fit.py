@@ -1,7 +1,7 @@
 """Fits with a hyperelastic law (issue 56, item 4): the law in the contact model, its options,
 geometry proxies and tables, the model form's neo-Hookean reading, the simulator's hyperelastic
 block, and one trace of each of the issue's cases (coarse meshes, a few seconds of finite
-elements each; the 10-trace figures are tests/statistical/test_law_fit.py's).
+elements each; the 10-trace figures are tests/statistical/test_law_fits.py's).
 """
 
 from __future__ import annotations
