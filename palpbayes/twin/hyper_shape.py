@@ -275,7 +275,8 @@ def _bracket(nodes, point: dict[str, float]) -> tuple:
 
 def law_table(law: LawModel, tip: Tip, nu: float, thickness: float | None,
               specimen: Specimen | None, base: str) -> tuple:
-    """The :class:`~.hyper_table.HyperTable` of ``law`` (every node of its grid) on the fit's
+    """The :class:`~.hyper_table.HyperTable` of ``law`` (every node of its grid; at a
+    concrete point of a grid the nodes around it, all its interpolation needs) on the fit's
     geometry, its cylinder and whether that is the half-space proxy (:func:`law_block`);
     built once per process (and solved once per disk cache, a progress bar on stderr while
     curves are solved on a terminal).  ``nu`` is the model's (a foam's fixed nu)."""
