@@ -26,7 +26,10 @@ The cases (E0 60 kPa, a 50 × 50 mm footprint, the block free on its plate):
                     the half-space proxy against the linear half-space
 ==================  ==========================================================================
 
-Run: ``python benchmarks/bench_law_fit.py [--case NAME ...] [--n 10]`` (every case with 10
+``--proxy`` prints the half-space proxy against Hertz (and Sneddon's sphere) at small depth
+(d/L 0.0025-0.01, extrapolated to d = 0) for the sphere, the paraboloid and the flat punch.
+
+Run: ``python benchmarks/bench_law_fit.py [--proxy] [--case NAME ...] [--n 10]`` (every case with 10
 traces: about 13 minutes on 2 shared cores from a fresh cache; the finite-element curves are
 cached in ``$PALPBAYES_CACHE_DIR``, a temporary folder unless ``--cache`` is given).
 ``tests/statistical/test_law_fits.py`` runs :func:`run_case` and asserts the issue's figures.
@@ -162,8 +165,32 @@ def figures(df: pd.DataFrame) -> dict:
     return out
 
 
+def proxy(mesh: str = "default") -> None:
+    """The half-space proxy against Hertz/Sneddon at small depth: the neo-Hookean law's F/E*
+    on the proxy (palpbayes.twin.hyper_shape) over the linear half-space's at d/L 0.0025-0.01,
+    and its value extrapolated to d = 0 (the finite-strain term is linear in sqrt(d))."""
+    from palpbayes.contact import shape
+    from palpbayes.fitdata import ModelSpec
+    from palpbayes.twin.hyper_shape import LawModel, table_depth
+
+    for tip in (Tip("sphere", radius=0.01), Tip("paraboloid", radius=0.01),
+                Tip("flat", radius=0.01)):
+        d = np.array([0.0025, 0.005, 0.0075, 0.01]) * 0.01
+        for nu in (0.3, 0.45):
+            t0 = time.perf_counter()
+            law = LawModel("neo-hookean", depth=table_depth(d[-1]), resolution=mesh)
+            r = ModelSpec(tip, nu=nu, law=law).shape(d) / shape(d, tip)
+            icpt = np.polyfit(np.sqrt(d), r, 1)[1]
+            print(f"half-space proxy, {tip.describe()}, nu {nu}, {mesh} mesh: F/F_linear at d/L "
+                  f"{', '.join(f'{v:g}' for v in d / 0.01)} = "
+                  f"{', '.join(f'{v:.4f}' for v in r)}; extrapolated to d = 0: {icpt:.4f} "
+                  f"({time.perf_counter() - t0:.0f} s)", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--proxy", action="store_true",
+                    help="the half-space proxy against Hertz at small depth, then the cases")
     ap.add_argument("--case", choices=sorted(CASES), action="append")
     ap.add_argument("--n", type=int, default=10)
     ap.add_argument("--sim-mesh", default="fine")
@@ -172,7 +199,9 @@ def main() -> None:
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as fresh:
         os.environ["PALPBAYES_CACHE_DIR"] = args.cache or fresh
-        for name in args.case or CASES:
+        if args.proxy:
+            proxy(args.fit_mesh)
+        for name in args.case or ([] if args.proxy else CASES):
             t0 = time.perf_counter()
             df = run_case(name, args.n, args.sim_mesh, args.fit_mesh)
             f = figures(df)
