@@ -208,7 +208,8 @@ def law_columns(post: dict, data: FitData, best: ModelSpec, mixture: LawPosterio
     if len(points) < len(model.law.free):  # a concrete fit: the best model's point
         points = {n: np.full(np.shape(E_total), v) for n, v in (best.law.point or ())}
     lub = instron_law_draws(E_total, nu, points, best, strain, nu_grid)
-    ratio, note = _bonded_ratio(best, strain, np.unique(np.asarray(nu_grid, dtype=float)))
+    ratio, note = (None, "") if platens == "lubricated" else _bonded_ratio(
+        best, strain, np.unique(np.asarray(nu_grid, dtype=float)))
     notes = [note] if note else []
     if ratio is None:
         lo, hi = central(lub)
