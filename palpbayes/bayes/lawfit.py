@@ -184,12 +184,16 @@ def law_parameters_text(mixture: LawPosterior | None, model: ModelSpec) -> str:
     return "; ".join(parts) or "none (no shape parameters)"
 
 
-def law_columns_of(cols: dict) -> dict:
-    """The row's law columns from a result's stored ones (the linear law's when empty)."""
+def law_columns_of(cols: dict, widen: tuple[float, float] = (1.0, 1.0)) -> dict:
+    """The row's law columns from a result's stored ones (the linear law's when empty), the
+    ends of ``E_instron_law``'s interval widened as E's full interval is over its budget
+    interval (``widen`` = (full lo / budget lo, full hi / budget hi), the model form's)."""
     out = {"law": "linear", "law_params": "", "instron_strain": math.nan,
            "E_instron_law_pa": math.nan, "E_instron_law_lo_pa": math.nan,
            "E_instron_law_hi_pa": math.nan}
     out.update({k: v for k, v in cols.items() if k in LAW_COLUMNS})
+    out["E_instron_law_lo_pa"] *= widen[0]
+    out["E_instron_law_hi_pa"] *= widen[1]
     return out
 
 

@@ -257,7 +257,7 @@ class BayesResult:
             **self.layer,
             **self._alternatives(Es, E_med, z_med, best),
             **instron,
-            **law_columns_of(self.law),
+            **law_columns_of(self.law, (lo / blo, hi / bhi)),
         }
 
     def _alternatives(self, E: np.ndarray, E_med: float, z_med: float, best: ModelSpec
