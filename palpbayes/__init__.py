@@ -20,9 +20,9 @@ viscoelastic fits: :func:`fit_rheology`, :func:`compare_rheology` (PSIS-LOO),
 :func:`pool_rheology` (one power law over speeds); the example campaign:
 :func:`example_campaign_dir`; the subpackages :mod:`contact` (the contact laws and their
 formulas), :mod:`errors`, :mod:`stiffening`, :mod:`plots`, :mod:`paper`, :mod:`gap`,
-:mod:`twin`, :mod:`sim`, :mod:`groundtruth` (compression tests), :mod:`reporting` (the
-report's tables and pages).  They are imported when first used (``import palpbayes`` stays
-quick).
+:mod:`twin`, :mod:`sim`, :mod:`groundtruth` (compression tests), :mod:`material` (the
+hyperelastic laws and ``Solid``), :mod:`reporting` (the report's tables and pages).  They
+are imported when first used (``import palpbayes`` stays quick).
 """
 
 from __future__ import annotations
@@ -71,6 +71,7 @@ _LAZY = {
     "twin": ("twin", None),
     "sim": ("sim", None),
     "groundtruth": ("groundtruth", None),
+    "material": ("material", None),
     "reporting": ("reporting", None),
 }
 

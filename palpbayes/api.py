@@ -29,7 +29,7 @@ import pandas as pd
 from .api_fit import Fit, load_fit
 from .bayes import BudgetSpec, PriorSpec, SamplerSettings
 from .campaign.fitjob import fit_trace_rows
-from .campaign.options import LAYER_MODES, FitOptions
+from .campaign.options import LAYER_MODES, FitOptions, LawOptions
 from .contact import TIP_PARAMETERS, Tip, check_nu
 from .errors import FitError, GeometryError, InputError
 from .io.recording import AFM_META_KEYS, READER_OPTIONS
@@ -118,7 +118,9 @@ def fit_options(*, method: str = "bayes", nu: float | None = None,
                 max_depth: float | None = None, radius_tolerance: float = 0.01,
                 gain_sd: float = 0.01, compliance_max: float = 2e-6, model_form: bool = True,
                 max_steps: int = 20000, seed: int = 0, strict: bool = False,
-                progress: bool | None = None, budget: BudgetSpec | None = None) -> FitOptions:
+                progress: bool | None = None, budget: BudgetSpec | None = None,
+                law: str | LawOptions = "linear", law_shape: str | None = None,
+                law_mesh: str = "default", instron_strain: float = 0.2) -> FitOptions:
     """The :class:`~palpbayes.campaign.options.FitOptions` of a fit, from the command line's
     options by their Python names and defaults (``palpbayes fit --help``): the one place both
     ways in build them.
@@ -141,6 +143,12 @@ def fit_options(*, method: str = "bayes", nu: float | None = None,
         the statistical interval alone); then ``nu_range`` only sets the fit's nu.
     max_steps, progress
         emcee's step cap and progress bars (None: on a terminal).
+    law, law_shape, law_mesh, instron_strain
+        The material law (``--law``: ``"linear"``, the paper's, or a registered hyperelastic
+        law, or a whole :class:`~palpbayes.campaign.options.LawOptions`), its shape
+        parameters fixed or narrowed (``"alpha_1=8,nu=0.1"``, ``"alpha_1=4:12"``), the
+        finite-strain twin's mesh and the strain of ``E_instron_law`` (docs/reference.md,
+        "Finite strain in the fits").
 
     Raises
     ------
@@ -172,6 +180,14 @@ def fit_options(*, method: str = "bayes", nu: float | None = None,
                          f"loading, not {what}: use --engine emcee for it")
     if layer not in LAYER_MODES:
         raise InputError(f"unknown layer mode {layer!r}; use one of {', '.join(LAYER_MODES)}")
+    if not isinstance(law, LawOptions):
+        from .campaign.options import parse_law_shape
+
+        name = str(law).strip().lower()
+        law = LawOptions(name, () if name == "linear" or not law_shape
+                         else parse_law_shape(name, law_shape), law_mesh, instron_strain)
+        if name == "linear" and law_shape:
+            raise InputError("--law-shape needs a hyperelastic law (--law NAME)")
     if budget is None:
         budget = BudgetSpec(nu_range=budget_nu, radius_tolerance=radius_tolerance,
                             gain_sd=gain_sd, compliance_max=compliance_max)
@@ -183,7 +199,7 @@ def fit_options(*, method: str = "bayes", nu: float | None = None,
         priors=PriorSpec(noise_pp=noise_pp, surface=surface_prior), budget=budget,
         settings=SamplerSettings(max_steps=max_steps, progress=progress), seed=seed,
         strict=strict, engine=engine, model_form=model_form, specimen=specimen,
-        platens=platens)
+        platens=platens, law=law)
 
 
 def read(path: str | os.PathLike, *, tip: str | Tip | None = None,
@@ -288,7 +304,8 @@ def fit(source, *, tip: str | Tip | None = None, radius: float | None = None,
         half_angle: float | None = None, c: float | None = None, n: float | None = None,
         nu: float | None = None, thickness: float | str | None = None,
         specimen: Specimen | str | None = None, method: str = "bayes", engine: str = "emcee",
-        seed: int | None = None, half_space: bool = False, **options) -> Fit:
+        seed: int | None = None, half_space: bool = False, law: str = "linear",
+        **options) -> Fit:
     """Fit one trace, as ``palpbayes fit`` does (docs/api.md).
 
     Parameters
@@ -312,6 +329,11 @@ def fit(source, *, tip: str | Tip | None = None, radius: float | None = None,
         fit`` without ``--seed``).
     half_space
         Fit a half-space even with a thickness (``--half-space``).
+    law
+        The material law: ``"linear"`` (the paper's model, default) or a registered
+        hyperelastic law (``"neo-hookean"``, ``"hyperfoam"``, ...): ``E`` is then its
+        small-strain modulus E0 (docs/reference.md, "Finite strain in the fits"); with
+        ``law_shape``, ``law_mesh`` and ``instron_strain`` among the ``options``.
     **options
         :func:`fit_options`' keywords (``bonding``, ``platens``, ``noise``, ``baseline``,
         ``tare``, ``f_unc``, ``model_form``, ...) and the reader's (``columns``, ``units``,
@@ -346,7 +368,7 @@ def fit(source, *, tip: str | Tip | None = None, radius: float | None = None,
     block = check_specimen(specimen, thickness, half_space)
     layer = "off" if half_space else "unknown" if unknown else "auto"
     opts = fit_options(method=method, nu=nu, layer=layer, specimen=block, engine=engine,
-                       seed=0 if seed is None else int(seed), **options)
+                       seed=0 if seed is None else int(seed), law=law, **options)
     trace = _trace_of(source, make_tip(tip, radius=radius, half_angle=half_angle, c=c, n=n),
                       thickness, reader)
     outcome = fit_trace_rows(trace, opts)  # a failed fit is a row, as on the command line

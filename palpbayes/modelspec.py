@@ -1,7 +1,9 @@
 """The contact model of a fit (:class:`ModelSpec`): tip, Poisson ratio and the specimen's
 layer (thickness and base, each known or to be inferred) or the specimen as tested (a block of
-known footprint and height: :mod:`palpbayes.twin`), with its shape function F/E* = s(d)
-(:mod:`palpbayes.contact`).  :class:`palpbayes.fitdata.FitData` carries one.
+known footprint and height: :mod:`palpbayes.twin`), and the material law (linear, the paper's,
+or a hyperelastic law at finite strain: :mod:`palpbayes.twin.hyper_shape`), with its shape
+function F/E* = s(d) (:mod:`palpbayes.contact`).  :class:`palpbayes.fitdata.FitData` carries
+one.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import numpy as np
 from .contact import DEFAULT_NU, Tip, check_nu, exponent, shape, youngs_modulus
 from .errors import FitError, InputError
 from .twin import Specimen, twin_shape
+from .twin.hyper_shape import LawModel, law_shape
 from .units import format_length
 
 __all__ = ["ModelSpec", "BONDINGS"]
@@ -56,6 +59,11 @@ class ModelSpec:
         a layer of infinite width (or a half-space).  With a specimen the shape function is
         its finite-element twin's (:func:`palpbayes.twin.twin_shape`), and ``thickness`` is
         its height.
+    law
+        A hyperelastic law (:class:`~palpbayes.twin.hyper_shape.LawModel`) on the same
+        geometry (the specimen, a wide cylinder of the known thickness, or a half-space
+        proxy); None: linear elasticity, the paper's model.  Its free shape parameters make
+        the model a mixture (not concrete); a foam's concrete variant takes its own nu.
     """
 
     tip: Tip
@@ -65,9 +73,18 @@ class ModelSpec:
     thickness_range: tuple[float, float] | None = None
     p_bonded: float = 0.5
     specimen: Specimen | None = None
+    law: LawModel | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "nu", check_nu(self.nu))
+        if self.law is not None:
+            if self.thickness_range is not None:
+                raise InputError(f"a material law ({self.law.name}) needs the specimen's "
+                                 "geometry: give --specimen or --thickness, or neither (a "
+                                 "half-space), not --thickness unknown")
+            own = self.law.foam_nu()
+            if own is not None:  # a foam's concrete variant: its own Poisson ratio
+                object.__setattr__(self, "nu", check_nu(own))
         if self.specimen is not None:
             if self.thickness_range is not None:
                 raise InputError("a specimen's height is its thickness: give the specimen "
@@ -124,12 +141,17 @@ class ModelSpec:
 
     @property
     def is_concrete(self) -> bool:
-        """True when the model has one shape function (nothing about the layer unknown)."""
-        return not self.has_layer or (self.thickness is not None and self.bonding != "unknown")
+        """True when the model has one shape function (nothing about the layer unknown, every
+        free shape parameter of its law given)."""
+        law = self.law is None or self.law.is_concrete
+        return law and (not self.has_layer
+                        or (self.thickness is not None and self.bonding != "unknown"))
 
-    def variant(self, *, thickness: float | None = None, base: str | None = None) -> ModelSpec:
-        """The concrete model with the given thickness [m] and base (defaults: the known
-        thickness, the known base)."""
+    def variant(self, *, thickness: float | None = None, base: str | None = None,
+                law_point: dict | None = None) -> ModelSpec:
+        """The concrete model with the given thickness [m], base and law shape parameters
+        ``law_point`` (by name; defaults: the known thickness, the known base, the law's
+        point)."""
         h = self.thickness if thickness is None else float(thickness)
         b = base if base is not None else (self.bonding if self.bonding != "unknown" else None)
         if self.has_layer and (h is None or b is None):
@@ -137,12 +159,30 @@ class ModelSpec:
         spec = self.specimen
         if spec is not None and h != spec.height:
             spec = spec.with_height(h)
+        law = self.law
+        if law is not None and law_point is not None:
+            law = law.at(law_point)
         return replace(self, thickness=h, thickness_range=None,
-                       bonding=b if b is not None else self.bonding, specimen=spec)
+                       bonding=b if b is not None else self.bonding, specimen=spec, law=law)
 
     def half_space(self) -> ModelSpec:
-        """The same tip and nu on a half-space (the paper's model)."""
-        return replace(self, thickness=None, thickness_range=None, specimen=None)
+        """The same tip and nu on a half-space, linear: the paper's model."""
+        return replace(self, thickness=None, thickness_range=None, specimen=None, law=None)
+
+    def with_nu(self, nu: float) -> ModelSpec:
+        """The same model at Poisson ratio ``nu`` [-] (a foam's law whose nu is fixed: that
+        nu too)."""
+        law = self.law
+        name = None if law is None else law.law.nu_parameter
+        if name is not None and name in dict(law.nodes) and name not in law.free:
+            law = replace(law, nodes=tuple((n, (float(nu),)) if n == name else (n, g)
+                                           for n, g in law.nodes))
+        return replace(self, nu=nu, law=law)
+
+    def linear(self) -> ModelSpec:
+        """The same model without its material law: linear elasticity on the same geometry
+        (itself when it has no law)."""
+        return self if self.law is None else replace(self, law=None)
 
     def layer_only(self) -> ModelSpec:
         """The same model with the specimen's footprint dropped: a layer of its height and
@@ -157,13 +197,16 @@ class ModelSpec:
 
     @property
     def exponent(self) -> float | None:
-        """Exponent m of F = k·d^m on a half-space, None for the exact sphere or a layer."""
-        return exponent(self.tip) if not self.has_layer else None
+        """Exponent m of F = k·d^m on a half-space, None for the exact sphere, a layer or a
+        material law."""
+        return exponent(self.tip) if not self.has_layer and self.law is None else None
 
     def shape(self, depth: np.ndarray) -> np.ndarray:
         """F/E* [m²] at depth [m] (with the layer's bottom effect when it has one, the
         specimen twin's law when it has a specimen)."""
         self._require_concrete("single shape function")
+        if self.law is not None:
+            return self._law_shape(depth, self.bases[0])
         if self.thickness is None:
             return shape(depth, self.tip)
         if self.specimen is not None:
@@ -176,6 +219,11 @@ class ModelSpec:
         """F/E* [m²] at ``depth`` for a thickness [m] (number or array broadcastable with
         ``depth``, e.g. one per draw) and a base; None: the model's own."""
         h = self.thickness if thickness is None else thickness
+        if self.law is not None:
+            if thickness is not None and not np.allclose(thickness, self.thickness or np.inf):
+                raise FitError("a material law's twin has the model's own thickness; another "
+                               "thickness needs its own (ModelSpec.variant)")
+            return self._law_shape(depth, base if base is not None else self.base)
         if h is None:
             return shape(depth, self.tip)
         b = base if base is not None else self.base
@@ -183,6 +231,16 @@ class ModelSpec:
             self._same_height(h)
             return twin_shape(depth, self.tip, self.specimen, self.nu, b)
         return shape(depth, self.tip, thickness_m=h, nu=self.nu, base=b)
+
+    def _law_shape(self, depth, base: str) -> np.ndarray:
+        """F/E* [m²] of the concrete law at ``depth`` [m] on ``base``."""
+        if self.law.mode == "correction":
+            from .twin.hyper_correction import neo_hookean_correction
+
+            return self.linear().shape_at(depth, base=base if self.has_layer else None) * (
+                neo_hookean_correction(depth, self.tip, self.nu))
+        return law_shape(depth, self.tip, self.nu, self.law, self.thickness, self.specimen,
+                         base)
 
     def _same_height(self, thickness) -> None:
         h = np.asarray(thickness, dtype=float)
@@ -212,7 +270,9 @@ class ModelSpec:
         h = np.broadcast_to(h[:, None], depth.shape)
         for base in np.unique(b):
             cells = (depth > 0) & (b == base)[:, None]
-            if self.specimen is not None:
+            if self.law is not None:
+                out[cells] = self._law_shape(depth[cells], str(base))
+            elif self.specimen is not None:
                 out[cells] = twin_shape(depth[cells], self.tip, self.specimen, self.nu,
                                         str(base))
             else:
@@ -248,4 +308,5 @@ class ModelSpec:
         return f"{h}, {base}"
 
     def describe(self) -> str:
-        return f"{self.tip.describe()}, nu={self.nu:g}, {self.describe_layer()}"
+        law = "" if self.law is None else f", {self.law.describe()}"
+        return f"{self.tip.describe()}, nu={self.nu:g}, {self.describe_layer()}{law}"

@@ -27,7 +27,14 @@ perturbation and interpolated. For the twin of a specimen (:mod:`palpbayes.twin`
 ratio's refit uses the twin at each node of nu, for either base (the block's free sides make
 even a free one depend on nu); the tip-radius and thickness refits use the layer of the
 specimen's height without its footprint (what the finite width adds to their sensitivity is of
-second order, and a twin per perturbed tip or height would cost seconds each). Because the
+second order, and a twin per perturbed tip or height would cost seconds each).  Under a
+hyperelastic law (:mod:`palpbayes.twin.hyper_shape`) the Poisson ratio's refit is the law's
+own twin at three nodes of nu (:func:`law_nu_nodes`: the finite-strain part of the curve
+depends on nu at first order, e.g. a neo-Hookean sphere's 3 mm in a 20 mm block reads E
++6 % linear at nu 0.3 and −2 % at 0.45), for either base; the tip radius and thickness refits
+are the linear model's on the same geometry (finite strain changes their sensitivity at
+second order), the compliance's the law's own curve; a foam's nu, when sampled, is in the
+posterior (``nu_draws``) and no input of the budget. Because the
 factors multiply, their logarithms add and, the inputs being independent, the variance of ln E
 is the sum of the variances of the logarithms of the factors: the *share* of each input is its
 term over the total.
@@ -45,7 +52,7 @@ from ..errors import InputError
 from ..fitdata import FitData, ModelSpec
 from ..refit import refit_factor
 
-__all__ = ["BudgetSpec", "Budget", "propagate", "nu_nodes"]
+__all__ = ["BudgetSpec", "Budget", "propagate", "nu_nodes", "law_nu_nodes"]
 
 
 @dataclass(frozen=True)
@@ -125,9 +132,16 @@ def nu_nodes(spec: BudgetSpec, nu: float) -> np.ndarray:
     return np.linspace(lo, hi, _NU_NODES) if hi > lo else np.array([float(nu)])
 
 
+def law_nu_nodes(spec: BudgetSpec, nu: float) -> np.ndarray:
+    """The Poisson ratios [-] at which the budget refits a model with a material law (each a
+    finite-element curve): the range's ends and ``nu``; ``[nu]`` when nu is fixed."""
+    lo, hi = spec.nu_bounds(nu)
+    return np.unique([lo, float(nu), hi]) if hi > lo else np.array([float(nu)])
+
+
 def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
               rng: np.random.Generator, bonded: np.ndarray | None = None,
-              sampled_thickness: bool = False) -> Budget:
+              sampled_thickness: bool = False, nu_draws: np.ndarray | None = None) -> Budget:
     """Propagate the budget over posterior draws ``estar`` [Pa] (any shape).
 
     Parameters
@@ -149,6 +163,9 @@ def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
     sampled_thickness
         The thickness was a parameter of the fit (its uncertainty is in ``estar``): no
         thickness input.
+    nu_draws
+        The Poisson ratio of each draw when it was a parameter of the fit (a foam's law):
+        E = E*·(1 − nu²) per draw, no Poisson-ratio input.
     """
     model = data.model
     shape = estar.shape
@@ -158,31 +175,37 @@ def propagate(estar: np.ndarray, data: FitData, z_surf: float, spec: BudgetSpec,
     e_med = float(np.median(estar))
 
     lo, hi = spec.nu_bounds(model.nu)
-    nu = rng.uniform(lo, hi, n) if hi > lo else np.full(n, model.nu)
+    if nu_draws is not None:
+        lo = hi = model.nu  # the posterior's: no input
+    nu = (np.asarray(nu_draws, dtype=float).ravel() if nu_draws is not None
+          else rng.uniform(lo, hi, n) if hi > lo else np.full(n, model.nu))
     log_nu = np.log(youngs_factor(nu))
     layered = model.has_layer and np.isfinite(model.thickness)
-    twin = model.specimen is not None
-    # the bases whose shape depends on nu: a bonded layer's; a twin's, both
-    nu_bases = ("bonded", "free") if twin else ("bonded",)
+    law = model.law is not None
+    twin = model.specimen is not None or law
+    # the bases whose shape depends on nu: a bonded layer's; a twin's and a law's, both
+    nu_bases = ("bonded", "free") if twin and model.has_layer else ("bonded",)
     draw_bases = (np.full(n, model.base) if bonded is None
                   else np.where(np.asarray(bonded, dtype=float).ravel() == 1.0, "bonded",
                                 "free"))
-    if layered and hi > lo and depth.size:
-        grid = nu_nodes(spec, model.nu)
+    if (layered or law) and hi > lo and depth.size:
+        grid = law_nu_nodes(spec, model.nu) if law else nu_nodes(spec, model.nu)
         for base in nu_bases:
             rows = draw_bases == base
             if not rows.any():
                 continue
-            base_model = model.variant(base=base)
-            fac = [_refit_factor(base_model, depth, replace(base_model, nu=v).shape)
+            base_model = model.variant(base=base) if model.has_layer else model
+            fac = [_refit_factor(base_model, depth, base_model.with_nu(v).shape)
                    for v in grid]
             log_nu[rows] += np.log(np.interp(nu[rows], grid, fac))
     log_terms = {"E* (posterior)": np.log(estar.ravel()), "Poisson ratio": log_nu}
     rows = [("E* (posterior)", "posterior draws"),
-            ("Poisson ratio", f"Uniform({lo:.3g}, {hi:.3g})" if hi > lo else f"fixed {lo:.3g}")]
+            ("Poisson ratio", "posterior draws (the law's own)" if nu_draws is not None
+             else f"Uniform({lo:.3g}, {hi:.3g})" if hi > lo else f"fixed {lo:.3g}")]
 
     tol = spec.radius_tolerance
-    sized = model.layer_only()  # the tip's and the height's refits without the footprint
+    # the tip's and the height's refits: linear, without the footprint
+    sized = model.linear().layer_only()
     if tol > 0 and model.tip.has_length_scale:
         grid = np.linspace(-tol, tol, 9)
         fac = [_refit_factor(sized, depth, replace(sized, tip=sized.tip.scaled(1 + e)).shape)

@@ -16,11 +16,12 @@ from ..fitdata import FitData, ModelSpec, prepare_trace
 from ..intervals import central
 from ..lsq import LSQResult, fit_lsq_data
 from ..trace import IndentationTrace
-from .budget import BudgetSpec, nu_nodes, propagate
+from .budget import BudgetSpec, law_nu_nodes, nu_nodes, propagate
 from .diagnostics import chain_passes, compute_diagnostics, import_arviz
 from .exact import exact_posterior, sampled_coordinates
 from .flags import bound_flags, is_bimodal, posterior_flags
 from .instron import instron_bonded_draws
+from .lawfit import check_law_model, exact_law_chains, law_columns, law_notes
 from .layer_fit import (
     best_model,
     concrete_draws,
@@ -36,6 +37,7 @@ from .priors import PriorSpec, TracePrior, log_posterior
 from .result import BayesResult
 from .sampler import ChainResult, SamplerSettings, run_emcee
 from .start import Mode, find_modes, initial_ensemble, modes_from_exact
+from .strainform import strain_reading
 
 __all__ = ["fit_bayes", "fit_bayes_data", "is_bimodal", "bound_flags", "ENGINES",
            "EXACT_DRAWS"]
@@ -110,10 +112,17 @@ def fit_bayes_data(
             lsq = None
     ss = np.random.SeedSequence(seed)
     init_ss, sampler_ss, budget_ss, check_ss, form_ss = ss.spawn(5)  # first four as before
-    mixture = None
+    mixture = extra = None
+    law = data.model.law
+    check_law_model(data.model, engine)
     if engine == "exact" and data.model.is_concrete:
         chains, modes, like = _exact_chains(data, prior, np.random.default_rng(sampler_ss))
         settings = f"exact engine, {chains.n_steps} (surface, phi) nodes"
+    elif engine == "exact" and law is not None:
+        chains, modes, like, mixture, extra = exact_law_chains(
+            data, prior, np.random.default_rng(sampler_ss), EXACT_DRAWS)
+        settings = (f"exact engine, {len(mixture.components)} law components, "
+                    f"{chains.n_steps} (surface, phi) nodes")
     elif engine == "exact":
         chains, modes, like, mixture = exact_layer_chains(
             data, prior, np.random.default_rng(sampler_ss), EXACT_DRAWS, log_prob)
@@ -126,13 +135,16 @@ def fit_bayes_data(
         chains, modes, like, settings = emcee_layer_chains(
             data, prior, settings, tabulate, init_ss, sampler_ss, chain_passes)
     post = _posterior_dict(chains.samples, prior, data.model.nu, like)
+    post.update(extra or {})  # a law's mixture: each draw's E at its nu, its shape
     post_theta = {n: chains.samples[..., i] for i, n in enumerate(names)}
     post_theta["log_Estar"] = np.log(post["E_star"])  # the real one (a layer's is aligned)
     best = best_model(data.model, post, mixture)
     fitted = replace(data, model=best)
+    sampled_nu = law is not None and law.law.nu_parameter in law.free
     bud = propagate(post["E_star"], fitted, float(np.median(post["z_surf"])), budget,
                     np.random.default_rng(budget_ss), bonded=post.get("bonded"),
-                    sampled_thickness=data.model.thickness_unknown)
+                    sampled_thickness=data.model.thickness_unknown,
+                    nu_draws=post["nu"] if sampled_nu else None)
     post["E_total"] = bud.E
     if data.model.specimen is not None:  # what a compression test of the block would read
         post["E_instron_bonded"] = instron_bonded_draws(
@@ -148,18 +160,23 @@ def fit_bayes_data(
     idata.posterior.attrs["platens"] = platens
     if mixture is not None and data.model.bonding == "unknown":
         idata.posterior.attrs["log_bf_bonded"] = mixture.log_bayes_factor()
+    law_cols, law_more = law_columns(post, data, best, mixture if extra else None, bud.E,
+                                     bud.nu, platens, law_nu_nodes(budget, best.nu))
     flags = posterior_flags(post, post_theta, prior) + layer_warnings(post, data, best)
-    notes = layer_notes(post, data, best)
+    notes = (layer_notes(post, data, best) + law_notes(mixture if extra else None, data, best)
+             + law_more)
     checks = _model_checks(post, fitted, like, int(check_ss.generate_state(1)[0]))
     form = None
     if with_model_form:
-        layer = None if data.model.has_layer else partial(
+        layer = None if data.model.has_layer or law is not None else partial(
             layer_alternative, fit_bayes_data, data, float(np.median(post["z_surf"])),
             noise=noise, baseline=baseline, priors=priors, budget=budget, seed=seed,
             trace_id=trace_id, lsq=lsq)
-        form = model_form(post["E_total"], checks, np.random.default_rng(form_ss), layer)
+        form = model_form(post["E_total"], checks, np.random.default_rng(form_ss), layer,
+                          nonlinear=partial(strain_reading, fitted, post, priors, noise,
+                                            baseline))
     return _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
-                   like, checks, notes, best, form)
+                   like, checks, notes, best, form, law_cols)
 
 
 def _emcee_chains(data: FitData, prior: TracePrior, settings: SamplerSettings, tabulate: bool,
@@ -280,7 +297,7 @@ def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, 
 
 
 def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags, like,
-            checks, notes, best, form=None):
+            checks, notes, best, form=None, law=None):
     """Diagnostics, flags and the warning (or error in strict mode)."""
     diag_names = [n for n in ("E_star", "z_surf", "sigma", "F0", "F1", "phi", "nu_t")
                   if n in post]
@@ -291,7 +308,8 @@ def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
                          trace_id=trace_id, lsq=lsq, warnings=flags,
                          baseline=like.baseline, z_ref=like.z_ref, checks=checks,
                          notes=notes, fitted_model=best,
-                         layer=layer_columns(post, data, best), model_form=form)
+                         layer=layer_columns(post, data, best), model_form=form,
+                         law=law or {})
     if not result.converged:
         problems = "; ".join(result.warnings + diag.problems())
         msg = f"{trace_id}: Bayesian fit flagged as not converged: {problems}"

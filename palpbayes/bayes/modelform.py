@@ -21,6 +21,11 @@ layer, thickness       a finite thickness that was not given (half-space models 
 unknown                apparent modulus rises with depth: :func:`points_to_stiffer_base`):
                        the exact engine with h log-uniform (:mod:`.layers`), kept only when
                        it converges and its own checks find no material misfit
+neo-Hookean            finite strain (a linear fit of a trace pressed deep, whether or not a
+                       check fails): the same data read with the compressible neo-Hookean
+                       solid at the same nu and geometry, kept when the data allow it and it
+                       moves E by more than the statistical interval
+                       (:mod:`palpbayes.bayes.strainform`)
 =====================  ====================================================================
 
 The full interval is the **envelope** of the 90 % intervals of the fitted model and of its
@@ -36,7 +41,8 @@ overconfident (Brynjarsdóttir & O'Hagan, *Inverse Probl.* 30 (2014) 114007).  C
 calibrates (slow suite, ``tests/statistical/test_modelform_calibration.py``: unmodelled layers
 of 20–30 mm, bonded and lying free, strain stiffening, a gradual onset, a blunted paraboloid
 apex, with the budget's inputs drawn).  Without a material misfit the full interval is the
-budget interval.
+budget interval, unless the neo-Hookean reading is kept: a linear fit of a deep trace then
+carries finite strain even when no check fails.
 """
 
 from __future__ import annotations
@@ -56,10 +62,12 @@ from ..units import format_pressure
 from .layers import default_thickness_range
 
 __all__ = ["Alternative", "ModelForm", "window_alternatives", "layer_alternative",
-           "points_to_stiffer_base", "model_form", "interval_parts", "SEPARATOR"]
+           "points_to_stiffer_base", "model_form", "interval_parts", "SEPARATOR",
+           "summarise"]
 
 #: Name of the layer alternative.
 LAYER = "layer, thickness unknown"
+
 #: Separator of the alternatives in ``modelform_models`` (their notes may contain "; ").
 SEPARATOR = " | "
 
@@ -138,7 +146,8 @@ class ModelForm:
                    float(state["lo_pa"]), float(state["hi_pa"]))
 
 
-def _summarise(name: str, E: np.ndarray, level: float) -> Alternative:
+def summarise(name: str, E: np.ndarray, level: float = LEVEL) -> Alternative:
+    """The :class:`Alternative` ``name`` of draws ``E`` [Pa]: median and central interval."""
     lo, hi = central(E, level)
     return Alternative(name, float(np.median(E)), float(lo), float(hi))
 
@@ -183,7 +192,7 @@ def window_alternatives(E_total: np.ndarray, depth_details: dict, rng: np.random
                                    "bound"))
             continue
         draws = np.ravel(E_total) * (e / all_) * np.exp(se / e * z)
-        out.append(_summarise(name, draws, level))
+        out.append(summarise(name, draws, level))
     return out
 
 
@@ -240,7 +249,7 @@ def layer_alternative(fit: Callable[..., object], data: FitData, z_surf: float, 
         [] if checks["model_ok"] is True else
         [f"its own checks fail ({checks['misfit_checks']})" if res.checks
          else "its checks did not run"])
-    alt = _summarise(LAYER, E, LEVEL)
+    alt = summarise(LAYER, E, LEVEL)
     return replace(alt, plausible=not why, note="; ".join(why))
 
 
@@ -262,9 +271,10 @@ def points_to_stiffer_base(checks: list) -> bool:
 
 def model_form(E_total: np.ndarray, checks: list, rng: np.random.Generator,
                fit_layer: Callable[[], Alternative | None] | None = None,
-               level: float = LEVEL) -> ModelForm | None:
-    """The model-form interval of a fit whose checks found a material misfit (module
-    docstring); None when none did.
+               level: float = LEVEL,
+               nonlinear: Callable[[], Alternative | None] | None = None) -> ModelForm | None:
+    """The model-form interval of a fit whose checks found a material misfit, or whose
+    neo-Hookean reading is kept (module docstring); None otherwise.
 
     Parameters
     ----------
@@ -281,6 +291,9 @@ def model_form(E_total: np.ndarray, checks: list, rng: np.random.Generator,
         (:func:`points_to_stiffer_base`); None: no layer alternative.
     level
         Central probability of each interval [-].
+    nonlinear
+        The neo-Hookean reading (:func:`nonlinear_alternative`), called for every fit; None:
+        none.
 
     Returns
     -------
@@ -288,9 +301,14 @@ def model_form(E_total: np.ndarray, checks: list, rng: np.random.Generator,
         The alternatives and their envelope; when no interval is finite, the envelope is
         NaN.
     """
+    strain = nonlinear() if nonlinear is not None else None
+    fitted = summarise("as fitted", E_total, level)
     if not any(material(c) for c in checks if c.name != "rate"):
-        return None  # rate dependence: the remedy is the time-dependent fit, not a window
-    fitted = _summarise("as fitted", E_total, level)
+        # rate dependence: the remedy is the time-dependent fit, not a window
+        if strain is None or not strain.plausible:
+            return None
+        return ModelForm((fitted, strain), min(fitted.lo_pa, strain.lo_pa),
+                         max(fitted.hi_pa, strain.hi_pa))
     alts = [fitted]
     depth = next((c for c in checks if c.name == "depth_consistency"), None)
     if depth is not None:
@@ -299,6 +317,8 @@ def model_form(E_total: np.ndarray, checks: list, rng: np.random.Generator,
         layer = fit_layer()
         if layer is not None:
             alts.append(layer)
+    if strain is not None:
+        alts.append(strain)
     keep = [a for a in alts if a.plausible and math.isfinite(a.lo_pa) and math.isfinite(a.hi_pa)]
     if not keep:
         return ModelForm(tuple(alts), math.nan, math.nan)

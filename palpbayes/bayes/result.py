@@ -26,11 +26,13 @@ from ..fitdata import FitData, ModelSpec
 from ..flagcodes import flag_columns
 from ..intervals import LEVEL, central, central_band, hull
 from ..io.atomic import write_netcdf_atomic
-from ..refit import layer_alternatives
+from ..refit import ALTERNATIVE_COLUMNS, layer_alternatives
 from ..twin import Specimen
+from ..twin.hyper_shape import LawModel
 from .budget import Budget
 from .diagnostics import Diagnostics, import_arviz
 from .instron import instron_columns
+from .lawfit import law_columns_of
 from .layer_fit import concrete_draws
 from .modelform import ModelForm
 
@@ -82,6 +84,9 @@ class BayesResult:
     model_form
         The alternatives of a fit with a material misfit and their envelope, E's full
         interval (:mod:`palpbayes.bayes.modelform`); None without material misfit.
+    law
+        The material law's ``summary.csv`` columns (:func:`palpbayes.bayes.lawfit.
+        law_columns`: ``law``, ``law_params``, ``E_instron_law_pa`` ...); empty: linear.
     """
 
     idata: object
@@ -99,6 +104,7 @@ class BayesResult:
     fitted_model: ModelSpec | None = None
     layer: dict = field(default_factory=dict)
     model_form: ModelForm | None = None
+    law: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.fitted_model is None:
@@ -251,12 +257,15 @@ class BayesResult:
             **self.layer,
             **self._alternatives(Es, E_med, z_med, best),
             **instron,
+            **law_columns_of(self.law, (lo / blo, hi / bhi)),
         }
 
     def _alternatives(self, E: np.ndarray, E_med: float, z_med: float, best: ModelSpec
                       ) -> dict:
         """E_halfspace/bonded/free_pa: the refits of :func:`palpbayes.refit.
         layer_alternatives`, and where the base was sampled the median of each base's draws."""
+        if best.law is not None:  # the law's E0 read with linear models: not comparable
+            return dict.fromkeys(ALTERNATIVE_COLUMNS, float("nan"))
         out = layer_alternatives(E_med, z_med, self.data.z, best, self.data.model)
         if "bonded" in self.idata.posterior:
             b = self.draws("bonded")
@@ -340,6 +349,7 @@ class BayesResult:
             "notes": list(self.notes),
             "layer": dict(self.layer),
             "model_form": None if self.model_form is None else self.model_form.to_state(),
+            "law": dict(self.law),
         }
 
     @classmethod
@@ -365,7 +375,8 @@ class BayesResult:
                    fitted_model=None if fitted is None else _model_from_state(fitted),
                    layer=dict(state.get("layer", {})),
                    model_form=None if state.get("model_form") is None
-                   else ModelForm.from_state(state["model_form"]))
+                   else ModelForm.from_state(state["model_form"]),
+                   law=dict(state.get("law", {})))
 
 
 def saved_state(idata) -> dict:
@@ -403,7 +414,8 @@ def _model_state(model: ModelSpec) -> dict:
             "thickness_range": None if model.thickness_range is None
             else list(model.thickness_range), "p_bonded": model.p_bonded,
             "specimen": None if model.specimen is None
-            else dataclasses.asdict(model.specimen)}
+            else dataclasses.asdict(model.specimen),
+            "law": None if model.law is None else dataclasses.asdict(model.law)}
 
 
 def _model_from_state(m: dict) -> ModelSpec:
@@ -411,10 +423,15 @@ def _model_from_state(m: dict) -> ModelSpec:
     bonding = m.get("bonding") or ("bonded" if m.get("bonded", True) else "free")
     rng = m.get("thickness_range")
     block = m.get("specimen")
+    law = m.get("law")
+    if law is not None:  # JSON lists back to the model's tuples
+        law = LawModel(**{**law, "nodes": tuple((n, tuple(g)) for n, g in law["nodes"]),
+                          "point": None if law["point"] is None
+                          else tuple((n, v) for n, v in law["point"])})
     return ModelSpec(Tip(**m["tip"]), nu=m["nu"], thickness=m["thickness"], bonding=bonding,
                      thickness_range=None if rng is None else tuple(rng),
                      p_bonded=m.get("p_bonded", 0.5),
-                     specimen=None if block is None else Specimen(**block))
+                     specimen=None if block is None else Specimen(**block), law=law)
 
 
 def _to_json(obj):

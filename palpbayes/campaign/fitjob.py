@@ -74,7 +74,7 @@ SUMMARY_COLUMNS = [
     # tip "sphere" only (a law with a hertz_approximation; else NaN): the paper's choice for a
     # sphere, least squares with the paraboloid (Hertz) law at the sphere's radius on the same
     # (tared) points, as the ratio to the Sneddon least squares: the row's E times it, and the
-    # ratio − 1 (fit_trace)
+    # ratio − 1 (fit_trace); NaN under a material law (its twin presses the true sphere)
     "E_hertz_pa", "E_hertz_rel_diff",
     # the specimen's layer (finite thickness): the model of the row (lsq: always the paper's
     # half-space; bayes: a layer on a rigid base wherever the thickness is known), the concrete
@@ -88,6 +88,13 @@ SUMMARY_COLUMNS = [
     # its 90 % interval (palpbayes.bayes.instron); the bonded and free columns above are then
     # the twin's
     "platens", "E_instron_pa", "E_instron_lo_pa", "E_instron_hi_pa",
+    # the material law (bayes rows; palpbayes.bayes.lawfit): linear, or a hyperelastic law
+    # whose E_pa is the small-strain modulus E0, its shape parameters (posterior medians and
+    # intervals, each finite-element node's probability when they were free), and what a
+    # compression test would read at instron_strain: the chord of the law's uniaxial curve
+    # over the draws, with its 90 % interval
+    "law", "law_params", "instron_strain", "E_instron_law_pa", "E_instron_law_lo_pa",
+    "E_instron_law_hi_pa",
 ]
 
 @dataclass
@@ -160,8 +167,8 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
             f"the twin of the {model.specimen.describe()} is solved to "
             f"({twin_depth_limit_reason(model.specimen, tip)}); fit a shallower window "
             "(--max-depth M)")
-    if model.specimen is not None:  # the finite elements, after every cheap check
-        try:
+    if model.specimen is not None or model.law is not None:  # the finite elements, after
+        try:                                                   # every cheap check
             prepare_twin(model, options)
         except GeometryError as exc:
             raise GeometryError(f"{src}: {exc}") from None
@@ -184,7 +191,7 @@ def check_fittable(trace: IndentationTrace, options: FitOptions) -> FitData:
     models = [("", half)]
     if options.method in ("bayes", "both") and model.has_layer:
         h = model.thickness if model.thickness is not None else model.thickness_range[0]
-        models += [(f" (on a {b} layer)", model.variant(thickness=h, base=b))
+        models += [(f" (on a {b} layer)", model.linear().variant(thickness=h, base=b))
                    for b in model.bases]
     tol = options.budget.radius_tolerance
     if options.method in ("bayes", "both") and tol > 0 and tip.has_length_scale:
@@ -359,7 +366,7 @@ def fit_trace(trace: IndentationTrace, options: FitOptions,
 
     def with_hertz(row: dict) -> dict:
         e = row.get("E_pa")
-        e = float("nan") if e is None else float(e)
+        e = float("nan") if e is None or row.get("law", "linear") != "linear" else float(e)
         return {**row, "E_hertz_pa": e * ratio, "E_hertz_rel_diff": ratio - 1.0}
 
     meta = {"material": trace.material, "specimen": trace.specimen,

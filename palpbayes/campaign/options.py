@@ -1,5 +1,6 @@
 """The options of a fit (:class:`FitOptions`): everything a fit needs besides the trace,
-picklable for worker processes; :data:`METHODS` and :data:`LAYER_MODES`."""
+picklable for worker processes, its material law's among them (:class:`LawOptions`);
+:data:`METHODS` and :data:`LAYER_MODES`."""
 
 from __future__ import annotations
 
@@ -12,9 +13,11 @@ from ..bayes.priors import BASELINES, NOISE_MODELS, PriorSpec
 from ..bayes.sampler import SamplerSettings
 from ..errors import InputError
 from ..fitdata import BONDINGS
+from ..material import LINEAR, law_names, material_law
 from ..twin import PLATENS, Specimen
+from ..twin.hyper_shape import INSTRON_STRAIN, LAW_MESHES
 
-__all__ = ["FitOptions", "METHODS", "LAYER_MODES"]
+__all__ = ["FitOptions", "LawOptions", "METHODS", "LAYER_MODES", "parse_law_shape"]
 
 METHODS = ("bayes", "lsq", "both")
 
@@ -22,6 +25,94 @@ METHODS = ("bayes", "lsq", "both")
 #: trace's thickness is known (else a half-space), ``off`` a half-space everywhere (the
 #: paper's model), ``unknown`` a layer of unknown thickness (or none) everywhere.
 LAYER_MODES = ("auto", "off", "unknown")
+
+
+def parse_law_shape(law: str, text: str | None) -> tuple[tuple[str, tuple[float, ...]], ...]:
+    """``--law-shape`` as (name, (value,)) for a fixed shape parameter and (name, (lo, hi))
+    for a narrowed range: ``"alpha_1=8,nu=0.1"``, ``"alpha_1=4:12"``.
+
+    Raises
+    ------
+    InputError
+        A malformed entry, a parameter the law lacks, a value outside its bounds.
+    """
+    spec = material_law(law)
+    bounds = {s.name: s.bounds for s in spec.shape}
+    out = {}
+    for item in filter(None, (t.strip() for t in str(text or "").split(","))):
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or name not in bounds:
+            raise InputError(f"--law-shape {item!r}: give NAME=VALUE or NAME=LO:HI with NAME "
+                             f"one of the {spec.title} law's shape parameters "
+                             f"({', '.join(bounds) or 'none'})")
+        try:
+            values = tuple(float(v) for v in value.split(":"))
+        except ValueError:
+            raise InputError(f"--law-shape {item!r}: {value!r} is not a number or LO:HI"
+                             ) from None
+        lo, hi = bounds[name]
+        if len(values) > 2 or not all(lo <= v <= hi for v in values) or (
+                len(values) == 2 and not values[0] < values[1]):
+            raise InputError(f"--law-shape {item!r}: {name} must lie in [{lo:g}, {hi:g}] (a "
+                             "value, or LO:HI with LO < HI)")
+        out[name] = values
+    return tuple(out.items())
+
+
+@dataclass(frozen=True)
+class LawOptions:
+    """The material law of a fit (``--law``, ``--law-shape``, ``--law-mesh``,
+    ``--instron-strain``).
+
+    Parameters
+    ----------
+    name
+        ``"linear"`` (the paper's model, the default) or a registered law
+        (:func:`palpbayes.material.law_names`).
+    shape
+        (name, values) per shape parameter: one value fixes it, (lo, hi) narrows its uniform
+        prior (:func:`parse_law_shape`); the others span their registry bounds.  A foam's nu
+        is fixed by ``--nu`` (or a manifest's ``nu``) when given.
+    mesh
+        The finite-strain twin's mesh (``default``; ``coarse`` is 3-4 times faster and within
+        0.1-0.4 % of it; ``fine`` for checks).
+    instron_strain
+        [-] The compressive strain of ``E_instron_law_pa``'s chord (default 0.2: the paper's
+        5 mm of 20-30 mm).
+    """
+
+    name: str = LINEAR
+    shape: tuple[tuple[str, tuple[float, ...]], ...] = ()
+    mesh: str = "default"
+    instron_strain: float = INSTRON_STRAIN
+
+    def __post_init__(self) -> None:
+        name = str(self.name).strip().lower().replace("_", "-")
+        if name != LINEAR:
+            name = material_law(name).name  # InputError naming the laws there are
+        elif self.shape:
+            raise InputError("--law-shape needs a hyperelastic law (--law NAME); the linear "
+                             "law has no shape parameters")
+        object.__setattr__(self, "name", name)
+        if name != LINEAR:
+            given = ",".join(f"{n}={':'.join(f'{v!r}' for v in vs)}" for n, vs in self.shape)
+            object.__setattr__(self, "shape", parse_law_shape(name, given))
+        if self.mesh not in LAW_MESHES:
+            raise InputError(f"unknown --law-mesh {self.mesh!r}; use one of "
+                             f"{', '.join(LAW_MESHES)}")
+        if not 0.0 < float(self.instron_strain) < 0.95:
+            raise InputError(f"--instron-strain {self.instron_strain!r} must be a compressive "
+                             "strain in (0, 0.95), e.g. 0.2 for 5 mm of a 25 mm block")
+
+    @property
+    def is_linear(self) -> bool:
+        return self.name == LINEAR
+
+    @staticmethod
+    def names() -> list[str]:
+        """``linear`` and the registered laws."""
+        return law_names()
 
 
 @dataclass(frozen=True)
@@ -82,7 +173,9 @@ class FitOptions:
     platens
         The compression test's platens the Bayesian rows' Instron-equivalent modulus is for
         (``E_instron_pa``): ``"lubricated"``, ``"bonded"`` or ``"unknown"`` (default: an
-        interval spanning both); used with a specimen only.
+        interval spanning both); used with a specimen only (and for ``E_instron_law_pa``).
+    law
+        The material law (:class:`LawOptions`; default linear, the paper's model).
     """
 
     method: str = "bayes"
@@ -105,6 +198,7 @@ class FitOptions:
     model_form: bool = True
     specimen: Specimen | None = None
     platens: str = "unknown"
+    law: LawOptions = field(default_factory=LawOptions)
 
     def __post_init__(self) -> None:
         from ..bayes.fit import ENGINES  # here: the options alone do not load the fitting code

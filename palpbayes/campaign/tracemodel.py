@@ -1,23 +1,30 @@
-"""The contact model a trace is fitted with (:func:`trace_model`): its tip, its Poisson ratio
-and the specimen it was pressed into (a half-space, a layer, or the block's finite-element twin
-when its footprint is known: :func:`trace_specimen`), and the twin's tables built before the
-fit (:func:`prepare_twin`); each trace's seed (:func:`trace_seed`)."""
+"""The contact model a trace is fitted with (:func:`trace_model`): its tip, its Poisson ratio,
+the specimen it was pressed into (a half-space, a layer, or the block's finite-element twin
+when its footprint is known: :func:`trace_specimen`) and its material law (:func:`trace_law`),
+and the twin's tables built before the fit (:func:`prepare_twin`); each trace's seed
+(:func:`trace_seed`)."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
-from ..bayes.budget import nu_nodes
+from ..bayes.budget import law_nu_nodes, nu_nodes
+from ..bayes.lawmix import MAX_FREE, law_nodes
 from ..bayes.layers import default_thickness_range
 from ..contact import DEFAULT_NU, check_tip_plausible
 from ..errors import GeometryError, InputError
 from ..fitdata import ModelSpec
+from ..material import LINEAR, material_law
 from ..specimen import FOOTPRINT_COLUMNS
 from ..trace import IndentationTrace
 from ..twin import Specimen, prepare_tables, specimen_from_sizes
+from ..twin.hyper_shape import LawModel, table_depth
 from .options import FitOptions
 
-__all__ = ["nu_source", "trace_seed", "trace_model", "trace_specimen", "prepare_twin"]
+__all__ = ["nu_source", "trace_seed", "trace_model", "trace_specimen", "prepare_twin",
+           "trace_law"]
 
 
 def nu_source(trace: IndentationTrace, options: FitOptions) -> str:
@@ -47,7 +54,8 @@ def trace_model(trace: IndentationTrace, options: FitOptions,
     options
         The fit options.
     depth
-        [m] Indentation depth, for the default range of an unknown thickness.
+        [m] Indentation depth, for the default range of an unknown thickness and the depth of
+        a material law's table (:func:`trace_law`; without it the model is linear).
 
     Raises
     ------
@@ -64,6 +72,15 @@ def trace_model(trace: IndentationTrace, options: FitOptions,
         raise GeometryError(f"{src}: {exc}") from None
     # a manifest's per-row nu (trace.metadata["nu"]) overrides the run's option
     nu = trace.metadata.get("nu", DEFAULT_NU if options.nu is None else options.nu)
+    law = None if depth is None else trace_law(trace, options, depth)
+    model = _geometry(trace, options, tip, nu, depth)
+    return model if law is None else replace(model, law=law)
+
+
+def _geometry(trace: IndentationTrace, options: FitOptions, tip, nu: float,
+              depth: float | None) -> ModelSpec:
+    """The linear model of :func:`trace_model`: tip, nu and the specimen's layer."""
+    src = trace.source or trace.trace_id
     block = trace_specimen(trace, options)
     if options.layer == "off" or (options.layer == "auto" and trace.thickness is None
                                   and block is None):
@@ -79,6 +96,45 @@ def trace_model(trace: IndentationTrace, options: FitOptions,
     if rng is None:
         rng = default_thickness_range(np.nan if depth is None else depth)
     return ModelSpec(tip, nu=nu, bonding=options.bonding, thickness_range=tuple(rng))
+
+
+def trace_law(trace: IndentationTrace, options: FitOptions, depth: float) -> LawModel | None:
+    """The material law a Bayesian fit of ``trace`` uses (None: linear): its manifest row's
+    ``law`` or ``options.law``, each shape parameter fixed (``--law-shape NAME=VALUE``; a
+    foam's nu by ``--nu`` or the row's ``nu`` when given) or free over its range (its
+    registry bounds or ``NAME=LO:HI``) on :func:`palpbayes.bayes.lawmix.law_nodes`, the table
+    reaching :func:`~palpbayes.twin.hyper_shape.table_depth` of the indentation ``depth``
+    [m].
+
+    Raises
+    ------
+    InputError
+        More than :data:`~palpbayes.bayes.lawmix.MAX_FREE` free shape parameters, or free
+        ones with the emcee engine (one line naming what to give).
+    """
+    src = trace.source or trace.trace_id
+    name = str(trace.metadata.get("law") or options.law.name).strip().lower()
+    if name == LINEAR:
+        return None
+    law = material_law(name)
+    given = dict(options.law.shape) if options.law.name == law.name else {}
+    nu_given = "nu" in trace.metadata or options.nu is not None
+    if law.nu_parameter is not None and law.nu_parameter not in given and nu_given:
+        given[law.nu_parameter] = (float(trace.metadata.get("nu", options.nu)),)
+    ranges = {s.name: given.get(s.name, s.bounds) for s in law.shape}
+    free = [n for n, r in ranges.items() if len(r) == 2]
+    if len(free) > MAX_FREE:
+        raise InputError(f"{src}: the {law.title} law has {len(free)} free shape parameters "
+                         f"({', '.join(free)}); a fit mixes over at most {MAX_FREE}: fix the "
+                         "others with --law-shape NAME=VALUE")
+    if free and options.engine != "exact":
+        raise InputError(f"{src}: --law {law.name} mixes over its free shape parameters "
+                         f"({', '.join(free)}), which only the exact engine integrates: give "
+                         "--engine exact, or fix them with --law-shape NAME=VALUE")
+    nodes = tuple((n, law_nodes(*r, len(free)) if len(r) == 2 else (float(r[0]),))
+                  for n, r in ranges.items())
+    return LawModel(law.name, nodes, point=None if free else (), depth=table_depth(depth),
+                    resolution=options.law.mesh, instron_strain=options.law.instron_strain)
 
 
 def trace_specimen(trace: IndentationTrace, options: FitOptions) -> Specimen | None:
@@ -113,7 +169,11 @@ def prepare_twin(model: ModelSpec, options: FitOptions) -> int:
     """Build (or load from the cache) the twin's tables a fit of ``model`` needs: its nu and
     the budget's nodes of nu (a Bayesian fit), for both bases (the least-squares row reads its
     curve with each); 0 without a specimen.  A progress bar shows on stderr while new tables
-    are solved (``options.settings.progress``; None: when stderr is a terminal)."""
+    are solved (``options.settings.progress``; None: when stderr is a terminal).  A material
+    law's tables (every node of its grid, each base it allows, the budget's nodes of nu) are
+    built too, with their own bar (:func:`palpbayes.twin.hyper_shape.law_table`)."""
+    if model.law is not None and options.method in ("bayes", "both"):
+        _prepare_law(model, options)
     if model.specimen is None:
         return 0
     nus = [model.nu]
@@ -121,3 +181,18 @@ def prepare_twin(model: ModelSpec, options: FitOptions) -> int:
         nus += list(nu_nodes(options.budget, model.nu))
     return prepare_tables(model.specimen, model.tip, nus, ("bonded", "free"),
                           progress=options.settings.progress)
+
+
+def _prepare_law(model: ModelSpec, options: FitOptions) -> None:
+    """Solve (or read) the finite-strain curves of a law's fit before it starts, so that a
+    failure is an error of the trace, not of its posterior."""
+    from ..twin.hyper_shape import law_table
+
+    bases = model.bases if model.has_layer else ("bonded",)
+    nus = [model.nu]
+    if not model.law.free:  # the budget's nodes of nu (free shapes: the fitted point's, later)
+        nus = list(law_nu_nodes(options.budget, model.nu))
+    for base in bases:
+        for nu in nus:
+            law_table(model.with_nu(nu).law, model.tip, nu, model.thickness, model.specimen,
+                      base)

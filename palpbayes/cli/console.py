@@ -133,6 +133,30 @@ def _instron_lines(summary, shown: dict[str, str]) -> list[str]:
     return lines
 
 
+def _law_lines(summary, shown: dict[str, str]) -> list[str]:
+    """Under the table, for Bayesian rows fitted with a hyperelastic law (``--law``): E is the
+    law's small-strain modulus E0, its shape parameters, and what a compression test would
+    read at the Instron's strain (``E_instron_law_pa``)."""
+    if "law" not in summary:
+        return []
+    rows = summary[(summary["method"] == "bayes") & summary["law"].notna()
+                   & (summary["law"].astype(str) != "linear")]
+    if rows.empty:
+        return []
+    lines = _wrap("law: E is the hyperelastic law's small-strain modulus E0; E_instron_law what "
+                  "a compression test of the block would read at the strain given (the chord "
+                  "of the law's curve):")
+    for _, r in rows.iterrows():
+        text = f"{shown[str(r['trace_id'])]}: {r['law']}, {r['law_params']}"
+        if _finite(r.get("E_instron_law_pa")):
+            text += (f"; E_instron_law to {100 * r['instron_strain']:g} % "
+                     f"{format_pressure(r['E_instron_law_pa'])} "
+                     f"[{format_pressure(r['E_instron_law_lo_pa'])}, "
+                     f"{format_pressure(r['E_instron_law_hi_pa'])}]")
+        lines += _wrap(text, "  ")
+    return lines
+
+
 def flag_headlines(text: str, width: int = 110) -> list[str]:
     """The flags of a summary row (``notes``: messages joined by "; ") as one short line each:
     a message up to its first parenthesis or bracket (the explanation and the effect on E stay
@@ -221,12 +245,13 @@ def console_lines(summary) -> list[str]:
     table (E with its 90 % interval and sd, convergence and the model check), what each
     Bayesian interval is made of, E read with the other layer models, one line per flag of a
     fit that failed a model check, did not converge or carries a warning on its input, and
-    the Poisson ratio when it was assumed."""
+    the Poisson ratio when it was assumed; a law fit's shape and Instron-equivalent."""
     shown, key = short_ids(summary["trace_id"], _id_width(summary))
     lines = [_table(summary, shown), *key, *_legend(summary)]
     lines += _interval_part_lines(summary, shown)
     lines += _layer_lines(summary, shown)
     lines += _instron_lines(summary, shown)
+    lines += _law_lines(summary, shown)
     not_converged = summary["converged"] == False  # noqa: E712
     misfit = summary.get("model_ok", True) == False  # noqa: E712
     bad = summary[not_converged | misfit | _warned(summary)]

@@ -22,6 +22,7 @@ from ..errors import InputError
 from ..fitdata import BONDINGS
 from ..twin import PLATENS
 from .afm_options import AFM_META_OPTIONS, add_afm_meta_options, afm_meta_from_args
+from .law_options import add_law_options, law_options_from_args
 
 __all__ = ["add_nu_option", "add_f_unc_option", "positive_force", "add_model_options",
            "add_trace_options", "add_tip_options", "add_specimen_options",
@@ -154,6 +155,7 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                    help="widen E's interval to the envelope of the alternatives a material "
                         "misfit points to: shallow half, deep half, a layer of unknown "
                         "thickness (default on; --no-model-form: statistical + budget only)")
+    add_law_options(p)
     r = p.add_argument_group("run")
     r.add_argument("--seed", type=int, default=0, help="base random seed (default 0)")
     r.add_argument("--strict", action="store_true",
@@ -277,7 +279,8 @@ def options_from_args(args: argparse.Namespace) -> FitOptions:
         max_depth=args.max_depth, radius_tolerance=args.radius_tolerance,
         gain_sd=args.gain_sd, compliance_max=args.compliance_max,
         model_form=getattr(args, "model_form", True), max_steps=args.max_steps,
-        seed=args.seed, strict=args.strict, progress=args.progress)
+        seed=args.seed, strict=args.strict, progress=args.progress,
+        **law_options_from_args(args))
 
 
 def specimen_from_args(args: argparse.Namespace):

@@ -23,7 +23,9 @@ Columns (SI units; file paths relative to the manifest's folder):
 
 The tip-size columns are those of :data:`palpbayes.contact.TIP_PARAMETERS` (a tip kind reads the
 ones its law needs, :func:`palpbayes.contact.get_law`).  Optional: ``nu`` (Poisson ratio for
-that row) and ``x_m``, ``y_m`` (lateral position of the palpation [m], for stiffness maps).
+that row), ``law`` (that row's material law: ``linear`` or a registered hyperelastic law,
+``fit --law``'s choices; empty: the run's) and ``x_m``, ``y_m`` (lateral position of the
+palpation [m], for stiffness maps).
 A manifest is recognised by its ``file`` and ``tip`` columns.
 
 :func:`read_manifest` validates every row before any trace is read: ``trace_id``, ``file``,
@@ -238,6 +240,14 @@ def read_manifest(path: str | os.PathLike, *,
             raise DataFileError(path, f"{where}: {exc}",
                                 "give length_m and width_m (a block) or diameter_m (a "
                                 "cylinder), with thickness_m, in metres") from None
+        if "law" in df.columns and not _blank(row.get("law")):
+            from ..material import LINEAR, material_law
+
+            if str(row["law"]).strip().lower() != LINEAR:
+                try:
+                    material_law(str(row["law"]))
+                except InputError as exc:
+                    raise DataFileError(path, f"{where}: column 'law': {exc}") from None
         if "nu" in df.columns and pd.notna(row.get("nu")):
             from ..contact import check_nu
 
@@ -308,6 +318,7 @@ def load_trace(row: pd.Series, **read_options) -> IndentationTrace:
         repetition=None if rep is None else int(rep),
         rest_time=_opt(row, "rest_time_s"),
         metadata={**({} if _opt(row, "nu") is None else {"nu": _opt(row, "nu")}),
+                  **({} if _blank(row.get("law")) else {"law": str(row["law"]).strip()}),
                   **footprint_metadata(row)},
         **read_options,
     )

@@ -32,11 +32,12 @@ from scipy.signal import lfilter
 
 from ..contact import DEFAULT_NU, Tip, check_nu, effective_modulus
 from ..errors import InputError
+from ..material import Solid
 from ..noise import PAPER_NOISE_PP, sigma_from_pp
 from ..trace import IndentationTrace
 from ..twin import FOOTPRINT_COLUMNS, Specimen
 from ._checks import ar1_phi, finite, nonneg, positive
-from .force import onset_force_profile, solve_series_compliance, true_force
+from .force import onset_force_profile, solid_force, solve_series_compliance, true_force
 
 __all__ = ["ar1_noise", "simulate_trace"]
 
@@ -88,7 +89,7 @@ def _motion(travel: float, speed: float, rate: float, hold: float,
 
 
 def simulate_trace(
-    E: float,
+    E: float | Solid,
     tip: Tip,
     *,
     nu: float = DEFAULT_NU,
@@ -133,7 +134,12 @@ def simulate_trace(
     Parameters
     ----------
     E
-        [Pa] Young's modulus.
+        [Pa] Young's modulus, or a hyperelastic solid (:class:`~palpbayes.material.Solid`:
+        a registered law, its natural parameters and its Poisson ratio, ``nu`` then unused)
+        pressed at finite strain in its ``block`` (required): the force is the finite-strain
+        twin's (:func:`~palpbayes.sim.force.solid_force`, on the ``twin_resolution`` mesh),
+        the truth's ``E_true`` its small-strain modulus E0; ``stiffening`` and
+        ``apex_flat_radius`` are linear knobs and refused with it.
     tip
         The indenter (tip ``sphere`` is the exact Sneddon law).
     nu
@@ -233,6 +239,16 @@ def simulate_trace(
     """
     if not isinstance(tip, Tip):
         raise InputError(f"tip must be a palpbayes.contact.Tip, got {type(tip).__name__}")
+    solid = E if isinstance(E, Solid) else None
+    if solid is not None:
+        if block is None:
+            raise InputError(f"a hyperelastic solid ({solid.describe()}) is pressed in its "
+                             "block: give block=Specimen(...)")
+        if stiffening or apex_flat_radius:
+            raise InputError("stiffening and apex_flat_radius are knobs of the linear law; a "
+                             "hyperelastic solid has its own finite strain")
+        nu = solid.nu0
+        E = solid.E0
     E = positive(E, "Young's modulus E [Pa]")
     nu = check_nu(nu)
     z_surf = finite(z_surf, "surface height z_surf [m]")
@@ -277,7 +293,13 @@ def simulate_trace(
     law = {"nu": nu, "tip": tip, "thickness": thickness, "base": base,
            "stiffening": stiffening, "apex_flat_radius": apex_flat_radius, "block": block,
            "twin_resolution": twin_resolution}
-    true_force(np.array([depth]), E, **law)  # validate geometry before drawing anything
+
+    def force_of_depth(d: np.ndarray) -> np.ndarray:
+        if solid is not None:
+            return solid_force(d, solid, tip, block, base, depth, twin_resolution)
+        return true_force(d, E, **law)
+
+    force_of_depth(np.array([depth]))  # validate geometry before drawing anything
 
     gen = np.random.default_rng(rng)
     t, s = _motion(approach + depth, speed, rate, hold, retract)
@@ -288,8 +310,7 @@ def simulate_trace(
 
     z_cmd = (z_surf + approach) - s
     d_cmd = z_surf - z_cmd
-    delta, f_true = solve_series_compliance(
-        d_cmd, lambda d: true_force(d, E, **law), compliance)
+    delta, f_true = solve_series_compliance(d_cmd, force_of_depth, compliance)
     b = repeatability * u + 0.0  # + 0.0: no negative zero in the truth tables
     z_rec = z_cmd + b + position_noise * w_z
     if onset_force != 0:  # skipped when off, so default outputs stay bit-for-bit identical
@@ -330,6 +351,9 @@ def simulate_trace(
     }
     if isinstance(rng, int | np.integer):
         metadata["seed"] = int(rng)
+    if solid is not None:  # the law's truth: E_true is its small-strain modulus E0
+        metadata.update({"law_true": solid.law, "law_params_true": dict(solid.params),
+                         "twin_resolution": twin_resolution})
     if block is not None:  # the footprint, as a manifest row gives it (FOOTPRINT_COLUMNS)
         metadata.update({c: getattr(block, c[:-2]) for c in FOOTPRINT_COLUMNS
                          if getattr(block, c[:-2]) is not None})

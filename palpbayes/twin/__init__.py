@@ -37,7 +37,7 @@ if TYPE_CHECKING:  # the same names, for static tools
         HyperResolution,
         solve_hyper_palpation,
     )
-    from .hyper_table import HyperTable, hyper_table, prepare_hyper_table
+    from .hyper_table import HyperTable, hyper_table, prepare_hyper_table, solid_table
     from .palpation import TWIN_BASES, PalpationCurve, solve_palpation
     from .specimen import (
         FOOTPRINT_COLUMNS,
@@ -82,6 +82,7 @@ _LAZY = {
     "HyperTable": "hyper_table",
     "hyper_table": "hyper_table",
     "prepare_hyper_table": "hyper_table",
+    "solid_table": "hyper_table",
     "TWIN_BASES": "palpation",
     "PalpationCurve": "palpation",
     "solve_palpation": "palpation",
@@ -114,7 +115,7 @@ __all__ = [
     "MAX_ASPECT", "HyperSolid", "HyperCompression", "solve_hyper_compression",
     "PenaltyContact", "TipSurface", "tip_surface", "HYPER_RESOLUTIONS", "HyperCurve",
     "HyperResolution", "solve_hyper_palpation", "HyperTable", "hyper_table",
-    "prepare_hyper_table",
+    "prepare_hyper_table", "solid_table",
 ]
 
 

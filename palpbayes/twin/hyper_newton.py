@@ -4,10 +4,11 @@
 factorization of the free block per iteration, in its symmetric mode as the linear twin's),
 halved while it leads to an inadmissible state (J <= 0), converged when the free residual is
 at most ``rtol`` of the internal forces and the last displacement increment at most ``utol``
-of the problem's length.  :func:`march` follows a load path in steps that are halved on
-failure and grown after easy ones, with an augmented Lagrangian's updates between them.  A
-solve that cannot converge raises :class:`~palpbayes.errors.FitError`, naming the load it
-reached.
+of the problem's length (or, at round-off, when the residual stops falling below
+:data:`STAGNANT` of them with increments 1,000 times smaller).  :func:`march` follows a
+load path in steps that are halved on failure and grown after easy ones, with an augmented
+Lagrangian's updates between them.  A solve that cannot converge raises
+:class:`~palpbayes.errors.FitError`, naming the load it reached.
 """
 
 from __future__ import annotations
@@ -22,7 +23,11 @@ import scipy.sparse.linalg as spla
 from ..errors import FitError
 from .hyper import HyperSolid
 
-__all__ = ["NewtonResult", "newton", "march"]
+__all__ = ["NewtonResult", "newton", "march", "STAGNANT"]
+
+#: A residual that stops falling below this fraction of the internal forces, with increments
+#: 1,000 times below the displacement tolerance, is round-off: converged.
+STAGNANT = 1e-4
 
 
 @dataclass
@@ -85,6 +90,7 @@ def newton(solid: HyperSolid, x0: np.ndarray, fixed: np.ndarray, values: np.ndar
     if st is None:
         raise FitError("the starting state of a Newton solve is inadmissible (J <= 0)")
     step_u = np.inf
+    last = np.inf
     for it in range(max_iter):
         r = solid.residual(x, st)
         k = solid.tangent(st)
@@ -96,6 +102,12 @@ def newton(solid: HyperSolid, x0: np.ndarray, fixed: np.ndarray, values: np.ndar
         rnorm = np.linalg.norm(r[free_u])
         if rnorm <= rtol * scale and step_u <= utol * length:
             return NewtonResult(x, r, it)
+        if (rnorm <= STAGNANT * scale and rnorm > 0.5 * last
+                and step_u <= 1e-3 * utol * length):
+            # round-off: the residual stopped falling with increments far below utol (a
+            # first, tiny load step on a large body, where the internal forces are small)
+            return NewtonResult(x, r, it)
+        last = rnorm
         if not np.all(np.isfinite(r)):
             break
         dx = np.zeros_like(x)

@@ -43,7 +43,7 @@ from .hyper_palpation import HYPER_RESOLUTIONS, PENALTY, solve_hyper_palpation
 from .palpation import TWIN_BASES
 
 __all__ = ["HyperTable", "hyper_table", "prepare_hyper_table", "hyper_curve", "curve_key",
-           "table_depths", "HYPER_TABLE_VERSION", "DEPTH_POINTS"]
+           "table_depths", "solid_table", "HYPER_TABLE_VERSION", "DEPTH_POINTS"]
 
 #: Changes whenever the solver, the mesh or the table's construction does (part of the key).
 HYPER_TABLE_VERSION = 1
@@ -271,3 +271,35 @@ def hyper_table(law: str | MaterialLaw, specimen: Specimen, tip: Tip, nu: float,
     return prepare_hyper_table(law, specimen, tip, nu, base, shape_nodes, max_depth,
                                resolution, progress=False)
 
+
+
+def solid_table(solid, specimen: Specimen, tip: Tip, base: str, max_depth: float,
+                resolution: str = "default", points: int = DEPTH_POINTS) -> HyperTable:
+    """The one-node :class:`HyperTable` of a :class:`~palpbayes.material.Solid` (a law with
+    its natural parameters) on ``specimen`` pressed by ``tip`` to ``max_depth`` [m] at
+    ``points`` depths (:func:`table_depths`), cached on disk as every curve: what the
+    simulator presses (:mod:`palpbayes.sim.force`); ``table.force(d, solid.E0)`` is F [N].
+
+    Raises
+    ------
+    FitError
+        The finite elements did not converge (the message names the depth reached).
+    """
+    law = solid.spec
+    e0 = solid.E0
+    units = dict(law.parameters)
+    natural = {k: v / e0 if units.get(k) == "Pa" else v for k, v in solid.params.items()}
+    nu = solid.nu0
+    length, per_depth = _unit(tip, specimen)
+    unit_tip = tip.scaled(1.0 / length) if tip.has_length_scale else tip
+    if base not in TWIN_BASES:
+        raise GeometryError(f"unknown base {base!r}; use one of {', '.join(TWIN_BASES)}")
+    depths = table_depths(float(max_depth) / length, points)
+    force, note = hyper_curve(law, natural, nu, unit_tip, specimen.radius / length,
+                              specimen.height / length, base, depths, resolution)
+    if note:
+        raise FitError(f"the hyperelastic twin of {solid.describe()} pressed by "
+                       f"{tip.describe()}: {note}")
+    values = force / depths ** 2 if per_depth else force
+    return HyperTable(law.name, float(nu), base, float(length), per_depth, (), (), depths,
+                      values)
