@@ -58,7 +58,7 @@ import numpy as np
 from ..contact import Tip, get_law, thickness_factor, youngs_factor
 from ..errors import GeometryError, InputError
 from ..material import MaterialLaw, material_law
-from .specimen import Specimen
+from ..specimen import Specimen
 
 __all__ = ["LawModel", "law_shape", "law_table", "law_block", "table_depth", "DEPTH_MARGIN",
            "WIDE_CONTACT", "WIDE_HEIGHT", "PROXY_DEPTH", "LAW_MODES", "LAW_MESHES", "nu_of",

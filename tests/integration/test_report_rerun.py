@@ -19,7 +19,7 @@ import shutil
 import pandas as pd
 import pytest
 
-from palpbayes.campaign import layout
+from palpbayes import outputs as layout
 from palpbayes.campaign.pipeline import run_pipeline
 from palpbayes.cli import build_parser, main
 from palpbayes.cli.options import options_from_args

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 
 import palpbayes.gap as gap
-from palpbayes.campaign import layout
+from palpbayes import outputs as layout
 from palpbayes.campaign.pipeline import write_gap
 from palpbayes.twin import cache as twin_cache
 
