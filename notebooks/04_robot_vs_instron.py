@@ -279,10 +279,9 @@ plots.plot_specimen_as_tested(cmp_)
 # shipped in `data/gap-strain/` and read here.
 
 # %%
-from palpbayes.gap_strain import strain_verdicts
-from palpbayes.gap_text import strain_paragraph
+from palpbayes.gap_strain import shipped_table, strain_paragraph, strain_verdicts
 
-strain = pd.read_csv(Path("data") / "gap-strain" / "gap_strain.csv")
+strain = shipped_table()
 factors = strain.pivot_table(index="foam", columns="tip", values="strain_factor",
                              aggfunc=["min", "max"]).round(3)
 display(factors)

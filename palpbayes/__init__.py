@@ -68,6 +68,7 @@ _LAZY = {
     "plots": ("plots", None),
     "paper": ("paper", None),
     "gap": ("gap", None),
+    "gap_strain": ("gap_strain", None),
     "twin": ("twin", None),
     "sim": ("sim", None),
     "groundtruth": ("groundtruth", None),

@@ -26,7 +26,7 @@ softening foam can make the paraboloid read softer without a sharper tip.
 
 The finite elements take minutes (``python -m palpbayes.gap_strain OUT.csv``: ~250 curves at
 the coarse resolution, cached on disk); the table the report shows is the one shipped in
-``data/gap-strain.csv``, and a slow test recomputes rows of it.
+:data:`SHIPPED_TABLE` (:func:`shipped_table`), and a slow test recomputes rows of it.
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ import math
 import sys
 from collections.abc import Iterable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -49,7 +50,12 @@ from .specimen import Specimen
 from .trace import IndentationTrace
 
 __all__ = ["StrainSettings", "FOAMS", "STRAIN_COLUMNS", "strain_row", "strain_table",
-           "strain_verdicts", "INSTRON_REACH_M"]
+           "strain_verdicts", "strain_paragraph", "shipped_table", "SHIPPED_TABLE",
+           "INSTRON_REACH_M"]
+
+#: The table shipped with the source checkout (``python -m palpbayes.gap_strain`` writes it;
+#: minutes of finite elements), relative to the repository root.
+SHIPPED_TABLE = Path("data") / "gap-strain" / "gap_strain.csv"
 
 #: [m] How far the paper's Instron compressed its blocks (design.md §2).
 INSTRON_REACH_M = 5e-3
@@ -192,6 +198,32 @@ def strain_verdicts(gap: pd.DataFrame, strain: pd.DataFrame) -> dict[str, object
             "paraboloid_over_sphere_max": float(para_vs_sphere.max()) if len(
                 para_vs_sphere) else math.nan,
             "paraboloid_softer": bool(softer)}
+
+
+def shipped_table() -> pd.DataFrame:
+    """The shipped table (:data:`SHIPPED_TABLE`, beside the package in a source checkout).
+
+    Raises
+    ------
+    InputError
+        It is not there (an installed wheel ships the package only): compute it with
+        ``python -m palpbayes.gap_strain OUT.csv``.
+    """
+    from .errors import InputError
+
+    path = Path(__file__).resolve().parents[1] / SHIPPED_TABLE
+    if not path.is_file():
+        raise InputError(f"the finite-strain gap table is not at {path} (it comes with a source "
+                         "checkout); compute it with 'python -m palpbayes.gap_strain OUT.csv' "
+                         "(minutes of finite elements) and read that file")
+    return pd.read_csv(path)
+
+
+def strain_paragraph(verdicts: dict, strain: pd.DataFrame, gap: pd.DataFrame) -> str:
+    """The verdicts in plain sentences (:func:`palpbayes.gap_text.strain_paragraph`)."""
+    from .gap_text import strain_paragraph as paragraph
+
+    return paragraph(verdicts, strain, gap)
 
 
 def main(argv: list[str] | None = None) -> int:
