@@ -28,6 +28,7 @@ import pandas as pd
 
 from .api_fit import Fit, load_fit
 from .bayes import BudgetSpec, PriorSpec, SamplerSettings
+from .bayes.noisemodels import EXACT_NOISE_MODELS
 from .campaign.fitjob import fit_trace_rows
 from .campaign.options import LAYER_MODES, FitOptions, LawOptions
 from .contact import TIP_PARAMETERS, Tip, check_nu
@@ -174,10 +175,11 @@ def fit_options(*, method: str = "bayes", nu: float | None = None,
                     else "the contact threshold")
             raise InputError(f"--{name.replace('_', '-')} {v!r} must be a positive force in "
                              f"newtons ({what})")
-    if engine == "exact" and (noise == "student" or surface_prior == "soft"):
-        what = "--noise student" if noise == "student" else "--surface-prior soft"
-        raise InputError(f"--engine exact takes --noise gaussian or ar1 and --surface-prior "
-                         f"loading, not {what}: use --engine emcee for it")
+    if engine == "exact" and (noise not in EXACT_NOISE_MODELS or surface_prior == "soft"):
+        what = (f"--noise {noise}" if noise not in EXACT_NOISE_MODELS
+                else "--surface-prior soft")
+        raise InputError(f"--engine exact takes --noise {' or '.join(EXACT_NOISE_MODELS)} and "
+                         f"--surface-prior loading, not {what}: use --engine emcee for it")
     if layer not in LAYER_MODES:
         raise InputError(f"unknown layer mode {layer!r}; use one of {', '.join(LAYER_MODES)}")
     if not isinstance(law, LawOptions):

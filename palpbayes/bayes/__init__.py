@@ -16,7 +16,8 @@ if TYPE_CHECKING:  # the same names, for static tools
     from .diagnostics import ESS_MIN, RHAT_MAX, Diagnostics
     from .fit import fit_bayes, fit_bayes_data
     from .likelihood import TraceLikelihood
-    from .priors import NOISE_MODELS, PriorSpec, param_names
+    from .noisemodels import NOISE_MODELS, NOISE_REGISTRY, NoiseModel
+    from .priors import PriorSpec, param_names
     from .result import LEVEL, BayesResult
     from .sampler import SamplerSettings
 
@@ -26,14 +27,15 @@ _LAZY = {
     "Budget": "budget", "BudgetSpec": "budget", "propagate": "budget",
     "ESS_MIN": "diagnostics", "RHAT_MAX": "diagnostics", "Diagnostics": "diagnostics",
     "fit_bayes": "fit", "fit_bayes_data": "fit", "TraceLikelihood": "likelihood",
-    "NOISE_MODELS": "priors", "PriorSpec": "priors", "param_names": "priors",
+    "NOISE_MODELS": "noisemodels", "NOISE_REGISTRY": "noisemodels",
+    "NoiseModel": "noisemodels", "PriorSpec": "priors", "param_names": "priors",
     "LEVEL": "result", "BayesResult": "result", "SamplerSettings": "sampler",
 }
 
 __all__ = [
     "fit_bayes", "fit_bayes_data", "BayesResult", "PriorSpec", "BudgetSpec", "Budget",
     "SamplerSettings", "TraceLikelihood", "Diagnostics", "propagate", "param_names",
-    "NOISE_MODELS", "RHAT_MAX", "ESS_MIN", "LEVEL",
+    "NOISE_MODELS", "NOISE_REGISTRY", "NoiseModel", "RHAT_MAX", "ESS_MIN", "LEVEL",
 ]
 
 

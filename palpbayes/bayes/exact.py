@@ -53,6 +53,7 @@ from ..intervals import LEVEL
 from ..units import format_length, format_pressure
 from .conjugate import Gram, NodePosterior, gram, node_posterior
 from .mixture import NORMAL_NU, MixtureSummary, tilted_mixture
+from .noisemodels import EXACT_NOISE_MODELS
 from .priors import TracePrior
 
 __all__ = ["ExactPosterior", "exact_posterior", "refine_grid", "cell_widths", "phi_grid",
@@ -401,7 +402,7 @@ def exact_posterior(data: FitData, prior: TracePrior, coarse: int = COARSE_NODES
     InputError
         For Student-t noise or the soft surface prior (use the emcee engine).
     """
-    if prior.noise not in ("gaussian", "ar1"):
+    if prior.noise not in EXACT_NOISE_MODELS:
         raise InputError(f"the exact engine handles Gaussian and AR(1) noise, not "
                          f"{prior.noise!r}; use --engine emcee")
     if prior.spec.surface != "loading":

@@ -33,6 +33,7 @@ from .layer_fit import (
 )
 from .likelihood import TraceLikelihood
 from .modelform import layer_alternative, model_form
+from .noisemodels import EXACT_NOISE_MODELS
 from .priors import PriorSpec, TracePrior, log_posterior
 from .result import BayesResult
 from .sampler import ChainResult, SamplerSettings, run_emcee
@@ -184,7 +185,7 @@ def _emcee_chains(data: FitData, prior: TracePrior, settings: SamplerSettings, t
     """emcee, its walkers started at every mode (:mod:`palpbayes.bayes.start`)."""
     names = list(prior.names)
     modes = None
-    if prior.noise in ("gaussian", "ar1") and prior.spec.surface == "loading":
+    if prior.noise in EXACT_NOISE_MODELS and prior.spec.surface == "loading":
         try:
             modes = modes_from_exact(exact_posterior(data, prior),
                                      np.random.default_rng(init_ss.spawn(1)[0])) or None

@@ -22,6 +22,7 @@ from ..units import format_length, format_pressure
 from .exact import sampled_coordinates
 from .layer_likelihood import SWAP_WEIGHT, LayerLikelihood, base_swap_move
 from .layers import LayerPosterior, layer_posterior
+from .noisemodels import EXACT_NOISE_MODELS
 from .priors import TracePrior, log_posterior, param_names
 from .sampler import ChainResult, SamplerSettings, run_emcee
 from .start import Mode
@@ -102,7 +103,7 @@ def emcee_layer_chains(data: FitData, prior: TracePrior, settings: SamplerSettin
                        tabulate: bool, init_ss, sampler_ss, accept):
     """emcee on the mixture, started at draws of the exact one (module docstring)."""
     start_prior = prior
-    if prior.noise not in ("gaussian", "ar1") or prior.spec.surface != "loading":
+    if prior.noise not in EXACT_NOISE_MODELS or prior.spec.surface != "loading":
         start_prior = replace(prior, noise="gaussian", spec=replace(prior.spec,
                                                                      surface="loading"),
                               names=tuple(param_names("gaussian", prior.baseline)

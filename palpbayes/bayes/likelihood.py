@@ -28,6 +28,7 @@ from scipy.special import gammaln
 
 from ..fitdata import FitData
 from ..shapekernel import cross_sums
+from .noisemodels import EXACT_NOISE_MODELS
 
 __all__ = ["TraceLikelihood", "COARSE_POINTS", "FINE_POINTS", "FINE_HALF_WIDTH"]
 
@@ -127,7 +128,7 @@ class TraceLikelihood:
         self._const = _const_forms(self._F, self._u, self._ar1)
         self._n_stats = self._n_m * (4 if self._linear else 3)
         self._spline = None
-        if self.tabulate and self.noise in ("gaussian", "ar1"):
+        if self.tabulate and self.noise in EXACT_NOISE_MODELS:
             self._spline = self._build_table()
 
     @property

@@ -60,6 +60,7 @@ from ..fitdata import FitData
 from ..intervals import LEVEL, central
 from ..units import format_pressure
 from .layers import default_thickness_range
+from .noisemodels import exact_noise
 
 __all__ = ["Alternative", "ModelForm", "window_alternatives", "layer_alternative",
            "points_to_stiffer_base", "model_form", "interval_parts", "SEPARATOR",
@@ -236,7 +237,7 @@ def layer_alternative(fit: Callable[..., object], data: FitData, z_surf: float, 
             warnings.simplefilter("ignore", ConvergenceWarning)
             res = fit(replace(data, model=model, cycle=None), engine="exact",
                       with_model_form=False, log_prob=False,
-                      noise=noise if noise in ("gaussian", "ar1") else "gaussian", **options)
+                      noise=exact_noise(noise), **options)
     except (PalpbayesError, ValueError, np.linalg.LinAlgError) as exc:
         return Alternative(LAYER, math.nan, math.nan, math.nan, False, f"not fitted: {exc}")
     E = np.ravel(res.draws("E_total"))

@@ -45,6 +45,7 @@ import numpy as np
 from ..errors import InputError
 from ..fitdata import FitData
 from ..noise import sigma_from_pp
+from .noisemodels import NOISE_MODELS, get_noise_model
 
 __all__ = ["NOISE_MODELS", "BASELINES", "SURFACE_PRIORS", "PriorSpec", "TracePrior",
            "param_names", "layer_names", "LAYER_PARAMETERS", "P_HALFSPACE", "log_posterior"]
@@ -56,7 +57,6 @@ P_HALFSPACE = 0.5
 #: 1 and a thickness in the half-space segment are answers, not prior artefacts).
 LAYER_PARAMETERS = ("bond", "log_h")
 
-NOISE_MODELS = ("gaussian", "ar1", "student")
 BASELINES = ("constant", "linear")
 SURFACE_PRIORS = ("loading", "soft")
 
@@ -81,13 +81,8 @@ def param_names(noise: str, baseline: str = "constant", layer: tuple[str, ...] |
         names.append("F1")
     elif baseline != "constant":
         raise InputError(f"unknown baseline {baseline!r}; use one of {', '.join(BASELINES)}")
-    if noise == "ar1":
-        names.append("phi")
-    elif noise == "student":
-        names.append("log_nu_t")
-    elif noise != "gaussian":
-        raise InputError(f"unknown noise model {noise!r}; use one of {', '.join(NOISE_MODELS)}")
-    return names + list(layer)
+    extra = get_noise_model(noise).extra
+    return names + ([extra] if extra else []) + list(layer)
 
 
 @dataclass(frozen=True)

@@ -33,6 +33,7 @@ from ..fitdata import FitData
 from ..intervals import LEVEL, central
 from .layers import log_evidence
 from .modelform import Alternative, summarise
+from .noisemodels import exact_noise
 from .priors import PriorSpec
 
 __all__ = ["nonlinear_alternative", "strain_reading", "NONLINEAR_STRAIN", "NONLINEAR_ODDS",
@@ -100,7 +101,7 @@ def strain_reading(fitted: FitData, post: dict, priors: PriorSpec, noise: str,
     """:func:`nonlinear_alternative` of a fit's posterior draws ``post`` on its concrete
     model's data ``fitted``, by the exact engine with the fit's noise where it can (Gaussian
     for Student-t) and the 'loading' surface prior."""
-    exact_noise = noise if noise in ("gaussian", "ar1") else "gaussian"
-    prior = replace(priors, surface="loading").for_trace(fitted, exact_noise, baseline)
+    exact = exact_noise(noise)
+    prior = replace(priors, surface="loading").for_trace(fitted, exact, baseline)
     return nonlinear_alternative(fitted, post["E_total"], post["E"],
                                  float(np.median(post["z_surf"])), prior)

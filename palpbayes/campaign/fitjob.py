@@ -15,6 +15,7 @@ import numpy as np
 
 from ..bayes import BayesResult, fit_bayes_data
 from ..bayes.flags import BASELINE_HINT
+from ..bayes.noisemodels import EXACT_NOISE_MODELS
 from ..checks import CheckResult, check_fit, checks_summary
 from ..contact import get_law
 from ..errors import (
@@ -250,7 +251,7 @@ def tried_baseline_hint(row: dict, data: FitData, options: FitOptions, seed: int
     notes = str(row["notes"])
     heads = [f[:f.find(" (")] if " (" in f else f
              for f in split_flags(notes) if BASELINE_HINT in f]
-    engine = ("exact" if options.noise in ("gaussian", "ar1")
+    engine = ("exact" if options.noise in EXACT_NOISE_MODELS
               and options.priors.surface == "loading" else options.engine)
     try:
         with warnings.catch_warnings():

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from ..bayes.noisemodels import exact_noise
 from ..errors import PalpbayesError
 from ..io.manifest import load_trace
 from ..online import StoppingRule, needed_indentation
@@ -28,8 +29,7 @@ REPLAY_CHUNK = 100
 def online_noise(options: dict) -> str:
     """The campaign's noise model when the online estimator has it (gaussian, ar1), else
     gaussian (Student-t noise is emcee's alone)."""
-    noise = str(options.get("noise", "gaussian"))
-    return noise if noise in ("gaussian", "ar1") else "gaussian"
+    return exact_noise(str(options.get("noise", "gaussian")))
 
 
 def indentation_study(traces: pd.DataFrame | None, settings: dict,

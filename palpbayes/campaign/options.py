@@ -9,7 +9,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..bayes.budget import BudgetSpec
-from ..bayes.priors import BASELINES, NOISE_MODELS, PriorSpec
+from ..bayes.noisemodels import NOISE_MODELS
+from ..bayes.priors import BASELINES, PriorSpec
 from ..bayes.sampler import SamplerSettings
 from ..errors import InputError
 from ..fitdata import BONDINGS

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..bayes.noisemodels import EXACT_NOISE_MODELS
 from ..contact import DEFAULT_NU, Tip, check_nu
 from ..errors import InputError
 from ..fitdata import ModelSpec
@@ -57,7 +58,7 @@ def add_online_options(p: argparse.ArgumentParser) -> None:
                    help="stop at this depth below the estimated surface [m]")
     p.add_argument("--chunk", type=int, default=100, metavar="SAMPLES",
                    help="samples per update (default 100: 0.2 s at a UR robot's 500 Hz)")
-    p.add_argument("--noise", choices=("gaussian", "ar1"), default="gaussian",
+    p.add_argument("--noise", choices=EXACT_NOISE_MODELS, default="gaussian",
                    help="noise model (default gaussian)")
     p.add_argument("--noise-pp", type=float, default=None, metavar="N",
                    help="sensor peak-to-peak noise [N] (default: 6 sd of the baseline)")

@@ -9,7 +9,8 @@ import argparse
 import math
 
 from ..bayes.budget import BudgetSpec
-from ..bayes.priors import BASELINES, NOISE_MODELS, SURFACE_PRIORS
+from ..bayes.noisemodels import NOISE_MODELS
+from ..bayes.priors import BASELINES, SURFACE_PRIORS
 from ..campaign.options import METHODS, FitOptions
 from ..contact import (
     DEFAULT_NU,

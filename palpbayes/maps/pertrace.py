@@ -31,6 +31,7 @@ import pandas as pd
 
 from ..bayes.exact import exact_posterior, sampled_coordinates
 from ..bayes.flags import bound_flags
+from ..bayes.noisemodels import EXACT_NOISE_MODELS
 from ..campaign.fitjob import FitOptions, check_fittable, force_scale_flag
 from ..cluster import close_client, dask_client
 from ..errors import FitError, InputError, PalpbayesError
@@ -80,8 +81,9 @@ class PointOptions:
     read_options: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.fit.noise not in ("gaussian", "ar1"):
-            raise InputError(f"map fits use the exact engine: noise 'gaussian' or 'ar1', not "
+        if self.fit.noise not in EXACT_NOISE_MODELS:
+            raise InputError(f"map fits use the exact engine: noise "
+                             f"{' or '.join(map(repr, EXACT_NOISE_MODELS))}, not "
                              f"{self.fit.noise!r}")
         if self.fit.layer != "off":
             raise InputError("map fits take each point as a half-space (FitOptions.layer "

@@ -78,6 +78,7 @@ from ..bayes.exact import (
     refine_grid,
 )
 from ..bayes.mixture import MixtureSummary
+from ..bayes.noisemodels import EXACT_NOISE_MODELS
 from ..bayes.priors import PriorSpec, TracePrior, param_names
 from ..checks import CheckResult, run_checks
 from ..contact import youngs_factor
@@ -296,7 +297,7 @@ class OnlineEstimator:
                              "number of samples >= 1")
         if not 0 < self.level < 1:
             raise InputError(f"online estimation: level = {self.level!r} must lie in (0, 1)")
-        if self.noise not in ("gaussian", "ar1"):
+        if self.noise not in EXACT_NOISE_MODELS:
             raise InputError(f"online estimation takes noise 'gaussian' or 'ar1', not "
                              f"{self.noise!r}")
         # the samples kept (module docstring, "Memory"): the first _n of _t, _z, _f; the
