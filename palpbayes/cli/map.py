@@ -25,16 +25,12 @@ Try it with::
 from __future__ import annotations
 
 import argparse
-import time
-from dataclasses import replace
-from pathlib import Path
 
-from ..campaign.options import FitOptions
+from ..bayes.noisemodels import EXACT_NOISE_MODELS
 from ..contact import DEFAULT_NU_NOTE, check_nu
 from ..errors import InputError
 from ..flagcodes import level_and_text
 from ..io.afm import is_afm_file
-from ..io.manifest import read_manifest
 from ..units import format_length, format_pressure
 from .afm_options import add_afm_meta_options, afm_meta_from_args
 from .options import (
@@ -81,7 +77,7 @@ def register(subparsers) -> argparse.ArgumentParser:
                         "file does not record it")
     g = p.add_argument_group("per-point fits")
     add_nu_option(g, summary=False)
-    g.add_argument("--noise", choices=("gaussian", "ar1"), default="gaussian",
+    g.add_argument("--noise", choices=EXACT_NOISE_MODELS, default="gaussian",
                    help="noise model of the exact engine (default gaussian)")
     g.add_argument("--tare", action="store_true", help="subtract the pre-contact force level")
     add_f_unc_option(g)
@@ -112,9 +108,8 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Fit, map, write; print where and the lump.  Returns 0."""
-    from ..maps.files import FIGURE, REPORT, discard, prepare_out_dir, publish, write_map
-    from ..maps.pertrace import PointOptions
-    from ..maps.run import MapOptions, check_map_manifest, make_map
+    from ..api_map import MapRequest, prepare_map, run_map
+    from ..maps.files import discard, prepare_out_dir
 
     if args.lump_max_steps < 1000:
         raise InputError(f"--lump-max-steps {args.lump_max_steps} is too few; use at least "
@@ -135,55 +130,22 @@ def run(args: argparse.Namespace) -> int:
         if given:
             raise InputError(f"{args.input} is an AFM force map: {', '.join(given)} apply to "
                              "a manifest's trace CSVs (an AFM file names its own channels)")
-    lump = (not afm) if args.lump is None else bool(args.lump)
-    # a map is one block: a manifest's material label is optional (it pools nothing here)
-    manifest = _afm_rows(args) if afm else read_manifest(args.input, default_material="")
-    read_options = read_options_from_args(args)  # columns, units, signs: only those given
-    # each point a half-space: the lump's forward model (palpbayes.sim.inclusion) reads the
-    # block's thickness itself, and the map's per-point fits compare points with each other
-    nu = None if args.nu is None else check_nu(args.nu)
-    point_opts = PointOptions(fit=FitOptions(nu=nu, noise=args.noise, tare=args.tare,
-                                             f_unc=positive_force("--f-unc", args.f_unc),
-                                             engine="exact", seed=args.seed, layer="off"),
-                              seed=args.seed)
-    # an AFM line of curves (QI data) maps as a line; a manifest's grid must be 2-D
-    map_opts = MapOptions(threshold=args.threshold, detect=args.detect, seed=args.seed,
-                          lump=lump, lump_max_steps=args.lump_max_steps,
-                          min_points=4 if afm else 10, line=afm)
-    point_opts = replace(point_opts, read_options={**(_afm_override(args) if afm else {}),
-                                                   **read_options})
-    try:  # every trace file's header too: a bad column is reported before a cluster starts
-        checked = check_map_manifest(
-            manifest, lump=lump, min_points=map_opts.min_points, line=map_opts.line,
-            read_options=point_opts.read_options, source=args.input,
-            remote=args.scheduler not in (None, "local"))
-    except InputError as exc:
-        if not afm:
-            raise
-        raise InputError(f"{args.input}: {exc}; a field needs at least 4 curves (on a grid "
-                         "or a line); fit the curves one by one with palpbayes fit "
-                         f"{args.input} --tip ...") from None
+        if args.thickness is not None and not args.thickness > 0:
+            raise InputError(f"--thickness {args.thickness!r} must be a positive length [m]")
+    request = MapRequest(
+        tip=tip_from_args(args) if afm else None, thickness=args.thickness if afm else None,
+        nu=None if args.nu is None else check_nu(args.nu), noise=args.noise, tare=args.tare,
+        f_unc=positive_force("--f-unc", args.f_unc), seed=args.seed,
+        threshold=args.threshold, detect=args.detect, lump=args.lump,
+        lump_max_steps=args.lump_max_steps,
+        read_options=read_options_from_args(args),  # columns, units, signs: only those given
+        afm_meta=(afm_meta_from_args(args) or {}) if afm else {})
+    job = prepare_map(args.input, request, scheduler=args.scheduler)
     stage = prepare_out_dir(args.out, args.force)  # before the fits: a bad --out fails fast
-    try:
-        t0 = time.perf_counter()
-        res = make_map(manifest, point_options=point_opts, options=map_opts,
-                       scheduler=args.scheduler, workers=args.workers, progress=args.progress,
-                       checked=checked)
-        elapsed = time.perf_counter() - t0
-        truth = None if afm else _truth(Path(args.input).parent)
-        write_map(res, stage, extra={("afm_file" if afm else "manifest"):
-                                     str(Path(args.input).resolve()), "elapsed_s": elapsed})
-        if not args.no_report:
-            from ..reporting.map_pages import write_map_figure, write_map_report
-
-            write_map_figure(res, stage / FIGURE, truth=truth)
-            write_map_report(res, stage / REPORT, name=(Path(args.input).name if afm
-                                                         else Path(args.input).parent.name),
-                             truth=truth)
-    except BaseException:
-        discard(stage)
-        raise
-    out = publish(stage, args.out)
+    discard(stage)
+    fit = run_map(job, scheduler=args.scheduler, workers=args.workers, progress=args.progress)
+    res, elapsed, manifest, nu = fit.result, fit.elapsed_s, job.manifest, request.nu
+    out = fit.save(args.out, force=args.force, report=not args.no_report)
     n_ok = int((res.points["error"].fillna("") == "").sum())
     lat = res.field.lattice
     print(f"mapped {n_ok} of {len(res.points)} palpations on a {lat.nx} x {lat.ny} lattice "
@@ -215,32 +177,3 @@ def run(args: argparse.Namespace) -> int:
     if nu is None and "nu" not in manifest.columns:
         print(f"note: {DEFAULT_NU_NOTE}")
     return 0
-
-
-def _afm_override(args: argparse.Namespace) -> dict:
-    """read_afm options: the metadata the file lacks, from the options."""
-    meta = afm_meta_from_args(args)
-    return {"meta_override": meta} if meta else {}
-
-
-def _afm_rows(args: argparse.Namespace):
-    """The map rows of an AFM force map (:func:`palpbayes.maps.afm_source.afm_map_rows`)."""
-    from ..maps.afm_source import afm_map_rows
-
-    tip = tip_from_args(args)
-    rows = afm_map_rows(args.input, tip, **_afm_override(args))
-    if args.thickness is not None:
-        if not args.thickness > 0:
-            raise InputError(f"--thickness {args.thickness!r} must be a positive length [m]")
-        rows["thickness_m"] = float(args.thickness)
-    return rows
-
-
-def _truth(folder: Path) -> dict | None:
-    """The simulator's lump truth next to the manifest (for the figures), if any."""
-    try:
-        from ..sim.map import read_map_truth
-
-        return read_map_truth(folder)
-    except (ImportError, OSError, ValueError, KeyError, InputError):
-        return None

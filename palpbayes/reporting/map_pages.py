@@ -23,7 +23,7 @@ from ..units import format_length, format_pressure
 from .format import wrap
 from .layout import Page, text_lines, write_pages
 
-__all__ = ["write_map_figure", "write_map_report", "lump_lines"]
+__all__ = ["map_figure", "write_map_figure", "write_map_report", "lump_lines"]
 
 _QUANTITIES = {
     "x_m": ("centre x", "length"), "y_m": ("centre y", "length"),
@@ -176,12 +176,17 @@ def _pages(res: MapResult, truth: dict | None) -> list[Page]:
     ]
 
 
+def map_figure(res: MapResult, truth: dict | None = None):
+    """The four panels of ``map.png`` (:func:`palpbayes.plots.maps.plot_map`): a Figure."""
+    centre = None if not truth or not truth.get("has_lump") else (truth["x_m"], truth["y_m"])
+    return plot_map(res.nodes, lump=res.lump_centre(), threshold=res.options.threshold,
+                    background=res.background_interval(), truth_centre=centre)
+
+
 def write_map_figure(res: MapResult, path: str | os.PathLike,
                      truth: dict | None = None) -> Path:
-    """``map.png``: the four panels (:func:`palpbayes.plots.maps.plot_map`), written atomically."""
-    centre = None if not truth or not truth.get("has_lump") else (truth["x_m"], truth["y_m"])
-    fig = plot_map(res.nodes, lump=res.lump_centre(), threshold=res.options.threshold,
-                   background=res.background_interval(), truth_centre=centre)
+    """``map.png``: the four panels (:func:`map_figure`), written atomically."""
+    fig = map_figure(res, truth)
     return write_with(lambda tmp: fig.savefig(tmp, dpi=130, format="png"), path, suffix=".png")
 
 

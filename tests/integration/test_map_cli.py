@@ -280,3 +280,26 @@ def test_a_bad_column_is_reported_before_any_cluster_starts(tmp_path, capsys, mo
     assert rc == 2 and "column 'Fz' (given for force) is missing" in err, err
     assert "the file has timestamp, actual_TCP_pose_2, fz" in err
     assert calls == [] and not out.exists()
+
+
+def test_the_python_door_makes_the_command_lines_map(phantom, mapped, tmp_path):
+    """``pb.fit_map`` (issue 57): the same seed gives the command line's ``map.csv`` byte for
+    byte from ``.summary()``, and ``.save`` writes the same files with the same tables."""
+    import palpbayes as pb
+    from palpbayes.maps.files import FIGURE, MAP, POINTS, REPORT
+
+    m = pb.fit_map(phantom / "manifest.csv", seed=0, workers=2, progress=False)
+    ours = tmp_path / "map.csv"
+    m.summary().to_csv(ours, index=False)
+    theirs = pd.read_csv(mapped / MAP)
+    pd.testing.assert_frame_equal(pd.read_csv(ours), theirs)
+    out = m.save(tmp_path / "py-map")
+    for name in (MAP, POINTS):
+        assert (out / name).read_bytes() == (mapped / name).read_bytes(), name
+    assert (out / FIGURE).stat().st_size > 0 and (out / REPORT).stat().st_size > 0
+    fig = m.plot()
+    assert len(fig.axes) >= 4
+    with pytest.raises(pb.errors.InputError, match="unknown option.*colour"):
+        pb.fit_map(phantom / "manifest.csv", colour="red")
+    with pytest.raises(pb.errors.InputError, match="AFM force map"):
+        pb.fit_map(phantom / "manifest.csv", thickness=0.02)
