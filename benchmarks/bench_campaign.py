@@ -22,7 +22,7 @@ from pathlib import Path
 
 from palpbayes.campaign.fitjob import FitOptions
 from palpbayes.campaign.run import fit_campaign
-from palpbayes.sim import simulate_campaign
+from palpbayes.sim import simulate
 
 
 def main() -> None:
@@ -39,7 +39,7 @@ def main() -> None:
         camp, res = Path(tmp) / "campaign", Path(tmp) / "results"
         t0 = time.perf_counter()
         base = None if args.base == "none" else args.base
-        simulate_campaign(camp, seed=args.seed, repetitions=args.repetitions, base=base)
+        simulate(camp, seed=args.seed, repetitions=args.repetitions, base=base)
         t1 = time.perf_counter()
         layer = "off" if base is None else "auto"
         summary = fit_campaign(camp / "manifest.csv", res,

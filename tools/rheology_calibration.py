@@ -7,7 +7,7 @@ parameter: the share of 90 % intervals that hold the truth, the mean and sd of t
 (truth − median)/sd, and the median relative error; then how many posterior-predictive checks
 passed and the median fit time.  Per record it also fits the other relaxation model and the
 elastic law twice (a constant E* on the same block means, and the exact engine on the loading
-only): the share of records where PSIS-LOO (:func:`palpbayes.rheology.compare_fits`, over the
+only): the share of records where PSIS-LOO (:func:`palpbayes.rheology.compare_rheology`, over the
 three models of the same block means) prefers the true model beyond two standard errors,
 prefers a wrong one, or none; and the share of exact-engine elastic fits that the rate check
 (:mod:`palpbayes.checks.rate`) flags as materially rate dependent.
@@ -58,7 +58,7 @@ from palpbayes.fitdata import ModelSpec
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.procs import lifeline
 from palpbayes.rheology import fit_rheology
-from palpbayes.rheology.choice import compare_fits
+from palpbayes.rheology.choice import compare_rheology
 from palpbayes.sim import simulate_viscoelastic
 
 #: Parameters checked per model, with the names of the draws.
@@ -135,7 +135,7 @@ def fit_one(job: tuple[str, int] | tuple[str, int, bool]) -> list[dict]:
         rival = fit_rheology(trace, other, rng=i)
         constant = fit_rheology(trace, "elastic", rng=i)  # the same block means, E*(t) = E*
         elastic = fit_bayes(trace, ModelSpec(trace.tip, nu=0.3), engine="exact", seed=i)
-    table = compare_fits({model: fit, other: rival, "elastic": constant})
+    table = compare_rheology({model: fit, other: rival, "elastic": constant})
     preferred = table.loc[table["preferred"], "rheology"]
     rate = next((c for c in elastic.checks if c.name == "rate"), None)
     per_record = {"choice": preferred.iloc[0] if len(preferred) else "none",

@@ -108,8 +108,8 @@ def run(args: argparse.Namespace) -> int:
         INSTRON_COL,
         INSTRON_COVER_COL,
         LS_E_COL,
-        build_report,
         coverage_counts,
+        report,
         summary_table,
     )
 
@@ -130,13 +130,13 @@ def run(args: argparse.Namespace) -> int:
                              "folder (use -o FILE.pdf to choose the report's name)")
         results = path
         if not (path / outputs.SUMMARY).is_file():  # viscoelastic fits only
-            info = build_report(path, args.output, seed=args.seed)
+            info = report(path, args.output, seed=args.seed)
             print(f"report: {info.n_pages} pages, {info.n_traces} trace(s), "
                   f"{_rheology_line(info)}")
             print(f"wrote {info.path} (from the results folder {info.results_shown})")
             return 0
     res = load_results(results)
-    info = build_report(res, args.output, seed=args.seed)
+    info = report(res, args.output, seed=args.seed)
     table = summary_table(res)
     keep = [c for c in ("Material", "Tip", GT_COL, LS_E_COL, BAYES_E_COL, BAYES_NEW_COL,
                         "Bayes covers GT", INSTRON_COL, INSTRON_COVER_COL, HERTZ_COL,

@@ -100,9 +100,10 @@ def add_rheology_options(p: argparse.ArgumentParser) -> None:
                         "heights, its drag 2.5e-6 N·s/m fixed, approach and retract, t0 1 s; "
                         "sets --segments, --drag and --t0). Not a measurement: the tip did "
                         "not move at constant speed")
-    v.add_argument("--rheology-engine", choices=("grid", "emcee"), default="grid",
-                   help="posterior engine of --rheology: grid (moduli, offset and noise "
-                        "integrated in closed form; default) or emcee (the same posterior with "
+    v.add_argument("--rheology-engine", choices=("grid", "exact", "emcee"), default="grid",
+                   help="posterior engine of --rheology: grid (or exact: the same; moduli, "
+                        "offset and noise integrated in closed form; default) or emcee (the "
+                        "same posterior with "
                         "every parameter sampled, started from the grid: a cross-check, a few "
                         "times slower)")
     v.add_argument("--compression-speed", type=float, default=50.0, metavar="MM_PER_MIN",

@@ -216,13 +216,13 @@ def run(args: argparse.Namespace) -> int:
     if args.rheology:
         return _run_visco(args)
     from ..paper import PAPER_MATERIALS, PAPER_TIPS
-    from ..sim import simulate_campaign
+    from ..sim import simulate
 
     for name, default in (("repetitions", 3), ("ar1", 0.0), ("gt_specimens", 5),
                           ("base", DEFAULT_BASE), ("platens", "bonded")):
         if getattr(args, name) is None:
             setattr(args, name, default)
-    out = simulate_campaign(
+    out = simulate(
         args.out_dir,
         seed=args.seed,
         repetitions=args.repetitions,

@@ -1,6 +1,6 @@
 """The PDF report of a results folder: what a researcher attaches to a lab notebook.
 
-:func:`build_report` reads a results folder (:mod:`palpbayes.campaign.results`: ``summary.csv``,
+:func:`report` reads a results folder (:mod:`palpbayes.campaign.results`: ``summary.csv``,
 ``posterior/*.nc``, ``settings.json``, ``traces.csv`` and, when present, ``comparison.csv``,
 ``pooled.csv``, ``budget.csv``, ``stiffening.csv``, ``groundtruth.csv`` /
 ``groundtruth_summary.csv``) and writes a multi-page PDF (A4 landscape, written atomically):
@@ -56,7 +56,7 @@ Both modules' public names used by notebooks (``load_results``, ``load_fit``, ``
 Matplotlib is used through its object API only (figures are rendered by the PDF backend;
 :mod:`matplotlib.pyplot` is never imported), so the report works under any backend.
 
-Modules: :mod:`~palpbayes.reporting.build` (:func:`build_report`, page order),
+Modules: :mod:`~palpbayes.reporting.build` (:func:`report`, page order),
 :mod:`~palpbayes.reporting.format` (numbers and cells), :mod:`~palpbayes.reporting.tables` (the
 summary table, drawn tables, pagination), :mod:`~palpbayes.reporting.layout` (page geometry),
 :mod:`~palpbayes.reporting.methods` (the methods text), one ``pages_*`` module per page kind
@@ -71,7 +71,7 @@ from ..campaign.compare_text import format_comparison
 from ..campaign.pipeline import example_campaign_dir, run_pipeline
 from ..campaign.reference import paper_estimates
 from ..campaign.results import ResultsFolder, load_fit, load_results
-from .build import RASTER_DPI, REPORT_NAME, ReportInfo, build_report
+from .build import RASTER_DPI, REPORT_NAME, ReportInfo, report
 from .layout import BUDGET_GROUPS_PER_PAGE, CHART_GROUPS_PER_PAGE, PAGE_SIZE, TABLE_ROWS_PER_PAGE
 from .methods import MOVES_TEXT
 from .tables import (
@@ -104,7 +104,7 @@ __all__ = [
     "INSTRON_COL",
     "INSTRON_COVER_COL",
     "HERTZ_COL",
-    "build_report",
+    "report",
     # re-exported from palpbayes.campaign (results, pipeline, compare_text, reference): the
     # report's inputs and its comparison text, for notebooks
     "format_comparison",

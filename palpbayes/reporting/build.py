@@ -27,7 +27,7 @@ from .pages_title import title_page
 from .pages_twin import twin_pages
 from .tables import flagged_rows
 
-__all__ = ["REPORT_NAME", "RASTER_DPI", "ReportInfo", "build_report"]
+__all__ = ["REPORT_NAME", "RASTER_DPI", "ReportInfo", "report"]
 
 #: Default file name of the report inside a results folder.
 REPORT_NAME = REPORT
@@ -35,7 +35,7 @@ REPORT_NAME = REPORT
 
 @dataclass
 class ReportInfo:
-    """What :func:`build_report` wrote.
+    """What :func:`report` wrote.
 
     Attributes
     ----------
@@ -74,7 +74,7 @@ class ReportInfo:
         return len(self.titles)
 
 
-def build_report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathLike | None = None,
+def report(results: str | os.PathLike | ResultsFolder, pdf: str | os.PathLike | None = None,
                  *, seed: int = 0, created: str | None = None) -> ReportInfo:
     """Write the PDF report of a results folder (pages listed in :mod:`palpbayes.reporting`).
 

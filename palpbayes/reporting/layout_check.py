@@ -9,7 +9,7 @@ window extent, and returns what a reader would see as overprinted or clipped.
 (the campaign report, a single fit's, a map's, the viscoelastic fits'), before the page is saved::
 
     with watch_pages() as problems:
-        build_report(folder)
+        report(folder)
     assert not problems, problems
 """
 

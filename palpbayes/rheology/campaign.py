@@ -2,7 +2,7 @@
 
 ``palpbayes fit MANIFEST --rheology power-law`` fits every trace into ``DIR/rheology.csv``
 (:mod:`~palpbayes.rheology.results`) and pools the power laws of the traces of one group into
-one posterior of (E0*, alpha) (:func:`~palpbayes.rheology.pool.pool_power_law`): the apparent
+one posterior of (E0*, alpha) (:func:`~palpbayes.rheology.pool.pool_rheology`): the apparent
 modulus of a ramp scales as speed^alpha, so traces at several speeds pin alpha down.
 
 **Groups** are manifest rows with the same ``material``, ``specimen`` and tip: the ``tip``
@@ -62,7 +62,7 @@ from ..trace import IndentationTrace
 from ..units import format_pressure_interval, interval_digits
 from .cycle import CycleData
 from .fit import RheologyFit
-from .pool import pool_power_law
+from .pool import pool_rheology
 
 __all__ = ["RHEOLOGY_POOLED", "GROUP_COLUMNS", "POOLED_COLUMNS", "SPEED_TOLERANCE",
            "manifest_groups", "approach_speed", "SpeedPools", "pooled_lines"]
@@ -104,7 +104,7 @@ def approach_speed(data: CycleData) -> float:
 
 
 def _slim(fit: RheologyFit) -> RheologyFit:
-    """``fit`` reduced to what :func:`~palpbayes.rheology.pool.pool_power_law` reads: the raw
+    """``fit`` reduced to what :func:`~palpbayes.rheology.pool.pool_rheology` reads: the raw
     samples cut to a 3-sample stub (its id kept), the node posteriors emptied, the draws of E0
     and alpha only."""
     tr = fit.data.trace
@@ -181,7 +181,7 @@ class SpeedPools:
                    nu=np.nan if nu is None else nu, error="")
         start = _time.perf_counter()
         try:
-            pooled = pool_power_law([m.fit for m in members],
+            pooled = pool_rheology([m.fit for m in members],
                                     rng=self.seed + list(self.groups).index(key))
         except (PalpbayesError, np.linalg.LinAlgError) as exc:
             row.update(flag_codes="", flag_level="", notes="", error=f"not pooled: {exc}")

@@ -26,7 +26,7 @@ import pandas as pd
 from ..errors import InputError
 from .fit import RheologyFit, curve_draws
 
-__all__ = ["LooResult", "loo", "compare_fits", "pointwise_loglik", "LOO_DRAWS", "K_WARN"]
+__all__ = ["LooResult", "loo", "compare_rheology", "pointwise_loglik", "LOO_DRAWS", "K_WARN"]
 
 #: Posterior draws behind each model's pointwise log-likelihood.
 LOO_DRAWS = 200
@@ -91,7 +91,7 @@ def loo(fit: RheologyFit, n: int = LOO_DRAWS) -> LooResult:
                      pointwise=np.asarray(res.loo_i))
 
 
-def compare_fits(fits: Mapping[str, RheologyFit], n: int = LOO_DRAWS) -> pd.DataFrame:
+def compare_rheology(fits: Mapping[str, RheologyFit], n: int = LOO_DRAWS) -> pd.DataFrame:
     """Compare fits of one record by PSIS-LOO (module docstring).
 
     Parameters

@@ -314,7 +314,8 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
                  nu: float | None = None, drag: bool | None = None,
                  baseline: str = "constant", engine: str = "grid", n_draws: int = 4000,
                  max_points: int = MAX_POINTS, adhesion: str = "keep",
-                 rng: np.random.Generator | int | None = 0) -> RheologyFit:
+                 rng: np.random.Generator | int | None = 0,
+                 seed: int | None = None) -> RheologyFit:
     """Posterior of a relaxation modulus, the surface, offset and noise from one cycle.
 
     Parameters
@@ -327,7 +328,7 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
         standard linear solid E*(t) = E_inf* + E1*·exp(−t/tau); ``"elastic"``: E*(t) = E*,
         the rate-independent law fitted to the same block means (the force then follows the
         depth, F = C·E*·d^m, on the retract as on the approach), to compare with the others
-        (:func:`~palpbayes.rheology.choice.compare_fits`).
+        (:func:`~palpbayes.rheology.choice.compare_rheology`).
     tip
         Indenter (default ``trace.tip``), a power law F = C·E*·d^m.
     segments
@@ -346,7 +347,8 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
         ``"constant"`` (an offset F0) or ``"linear"``: F0 + F1·(z − z_ref), z_ref the mean
         height of the baseline samples (a tilted or drifting baseline; F1 [N/m] is ``tilt``).
     engine
-        ``"grid"``: the collapsed posterior on its grid (:mod:`~palpbayes.rheology.posterior`);
+        ``"grid"`` (or ``"exact"``, the elastic fit's name for its grid engine): the collapsed
+        posterior on its grid (:mod:`~palpbayes.rheology.posterior`);
         ``"emcee"``: the same posterior sampled with every parameter explicit, started from
         the grid's draws (:func:`~palpbayes.rheology.sampler.sample_emcee`; a cross-check, a
         few times slower; a chain that does not converge is flagged).
@@ -362,6 +364,8 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
         check what is left.  Needs the retract in ``segments``.
     rng
         Seed or Generator of the draws and the check.
+    seed
+        The seed, as :func:`palpbayes.fit` names it (given, it is ``rng``; not both).
 
     Returns
     -------
@@ -373,8 +377,17 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
                          f"{', '.join(RHEOLOGIES)} (or the elastic fit)")
     if nu is not None:
         nu = check_nu(nu)
+    if engine == "exact":  # the elastic fit's name for the posterior on a grid
+        engine = "grid"
     if engine not in ENGINES:
-        raise InputError(f"engine {engine!r}: use one of {', '.join(ENGINES)}")
+        raise InputError(f"engine {engine!r}: use one of {', '.join(ENGINES)} (or exact, "
+                         "which is grid)")
+    if seed is not None:
+        if rng not in (0, None):
+            raise InputError("give the seed once: seed= or rng=, not both")
+        if not (isinstance(seed, int | np.integer) and seed >= 0):
+            raise InputError(f"seed {seed!r} must be a non-negative whole number")
+        rng = int(seed)
     if baseline not in BASELINES:
         raise InputError(f"baseline {baseline!r}: use one of {', '.join(BASELINES)}")
     if not (isinstance(n_draws, int | np.integer) and n_draws >= 100):

@@ -38,7 +38,7 @@ from .fit import RheologyFit
 from .grid_search import FINE, SPAN_SD
 from .posterior import ALPHA_MAX, NodeEvaluator
 
-__all__ = ["PooledPowerLaw", "pool_power_law", "DISAGREE_SD"]
+__all__ = ["PooledPowerLaw", "pool_rheology", "DISAGREE_SD"]
 
 #: A trace is flagged when its own E0* or alpha median is this many of its own sd from the
 #: pooled median.
@@ -134,7 +134,7 @@ def _within(nodes: np.ndarray, profile: np.ndarray) -> tuple[float, float]:
     return float(nodes[idx[0]]), float(nodes[idx[-1]])
 
 
-def pool_power_law(fits: Sequence[RheologyFit], *, n_alpha: int = 41, n_e0: int = 401,
+def pool_rheology(fits: Sequence[RheologyFit], *, n_alpha: int = 41, n_e0: int = 401,
                    n_draws: int = 4000, rng: np.random.Generator | int | None = 0
                    ) -> PooledPowerLaw:
     """Pool power-law fits of one material (module docstring).

@@ -118,7 +118,7 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
     ``out/rheology.csv`` (module docstring); returns the table.
 
     ``rheology`` is one model or several (``("power-law", "sls")``): with several, every
-    trace gets a row per model and :func:`~palpbayes.rheology.choice.compare_fits`'s columns
+    trace gets a row per model and :func:`~palpbayes.rheology.choice.compare_rheology`'s columns
     (``elpd_loo``, ``elpd_loo_se``, ``p_loo``, ``pareto_k_max``, ``elpd_diff``,
     ``elpd_diff_se``, ``preferred``).  ``traces`` holds traces, or (trace_id, source, load)
     with ``load()`` reading the trace (a manifest's rows: a file that cannot be read keeps its
@@ -160,7 +160,7 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
         The table written to ``out/rheology.csv``.
     """
     from ..progress import progress_bar
-    from .choice import compare_fits
+    from .choice import compare_rheology
 
     models = (rheology,) if isinstance(rheology, str) else tuple(rheology)
     if peer is not None and peer not in PEERS:
@@ -207,7 +207,7 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
                     fits.pop(m, None)
                     new.append(_error_row(trace_id, source, m, exc))
             if len(fits) > 1:
-                choice = compare_fits(fits).set_index("rheology")
+                choice = compare_rheology(fits).set_index("rheology")
                 for r in new:
                     if r["rheology"] in choice.index:
                         r.update(choice.loc[r["rheology"]].to_dict())

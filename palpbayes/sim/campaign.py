@@ -1,6 +1,6 @@
 """Synthetic campaigns: a folder of palpation traces, Instron exports and the truth behind them.
 
-:func:`simulate_campaign` writes the layout of docs/design.md §5::
+:func:`simulate` writes the layout of docs/design.md §5::
 
     OUT_DIR/
       manifest.csv                 one row per trace (palpbayes.io.manifest columns, the
@@ -40,7 +40,7 @@ from ..units import format_pressure
 from .compression import simulate_compression_test, write_compression_export
 from .trace import simulate_trace
 
-__all__ = ["simulate_campaign", "child_seed", "check_seed", "check_count", "check_file_name",
+__all__ = ["simulate", "child_seed", "check_seed", "check_count", "check_file_name",
            "prepare_out_dir", "manifest_row"]
 
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]*$")
@@ -169,7 +169,7 @@ def _draw_modulus(gen: np.random.Generator, mat: Material) -> float:
     return float(E)
 
 
-def simulate_campaign(
+def simulate(
     out_dir: str | os.PathLike,
     *,
     seed: int = 0,

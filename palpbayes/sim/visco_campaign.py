@@ -13,7 +13,7 @@ For every material, tip, speed and repetition one trace is simulated
 (:func:`~palpbayes.sim.viscoelastic.simulate_viscoelastic`): trace ids like
 ``Medium_paraboloid_v50_r01`` (the speed in mm/min, a decimal point written ``p``).  Each
 material is one specimen with one relaxation modulus (reduced, E*): its palpations at several
-speeds share it, which is what :func:`palpbayes.rheology.pool.pool_power_law` pools.  Each
+speeds share it, which is what :func:`palpbayes.rheology.pool.pool_rheology` pools.  Each
 trace has its own surface height z_surf ~ Uniform(z_surf ± z_surf_halfwidth), force offset
 F0 ~ Normal(0, force_offset_sd) and noise stream, :func:`~palpbayes.sim.campaign.child_seed`
 (seed, "visco", material, tip, speed label, repetition): the same seed gives byte-identical

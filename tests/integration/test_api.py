@@ -130,7 +130,7 @@ def test_a_saved_fit_reads_back_as_a_results_folder(trace_file, tmp_path):
 def test_top_level_names_resolve():
     for name in pb.__all__:
         assert getattr(pb, name) is not None, name
-    assert "fit" in dir(pb) and pb.report.__name__ == "build_report"
+    assert "fit" in dir(pb) and pb.report.__name__ == "report"
 
 
 def test_fit_campaign_without_a_folder_refuses_what_needs_one():

@@ -30,7 +30,7 @@ from palpbayes.errors import (
 from palpbayes.io.manifest import iter_traces
 from palpbayes.io.trace_csv import write_trace
 from palpbayes.paper import PAPER_MATERIALS, PAPER_TIPS
-from palpbayes.sim import simulate_campaign, simulate_palpation_series, simulate_trace
+from palpbayes.sim import simulate, simulate_palpation_series, simulate_trace
 
 OPTS = FitOptions(method="both", settings=TINY, seed=5)
 
@@ -38,7 +38,7 @@ OPTS = FitOptions(method="both", settings=TINY, seed=5)
 @pytest.fixture(scope="module")
 def camp(tmp_path_factory):
     out = tmp_path_factory.mktemp("campaign")
-    simulate_campaign(out, seed=11, repetitions=2)
+    simulate(out, seed=11, repetitions=2)
     return out
 
 
@@ -457,7 +457,7 @@ def test_compare_fits_the_stiffening_law_when_rest_times_vary(tmp_path, monkeypa
     assert ((curve["lo_pa"] <= curve["median_pa"]) & (curve["median_pa"] <= curve["hi_pa"])).all()
     # the report draws the page from these tables and fits nothing
     from palpbayes.campaign.results import load_results
-    from palpbayes.reporting import build_report
+    from palpbayes.reporting import report
 
     def refit(*a, **k):
         raise AssertionError("the report fitted the stiffening law")
@@ -467,7 +467,7 @@ def test_compare_fits_the_stiffening_law_when_rest_times_vary(tmp_path, monkeypa
     for where in (stiffening, palpbayes.stiffening):
         monkeypatch.setattr(where, "fit_stiffening_summary", refit)
         monkeypatch.setattr(where, "fit_stiffening", refit)
-    info = build_report(load_results(res), tmp_path / "r.pdf")
+    info = report(load_results(res), tmp_path / "r.pdf")
     assert "Stiffening after repeated palpation: White · sphere" in info.titles
 
 
@@ -489,7 +489,7 @@ def test_pooled_interval_covers_the_true_material_modulus(tmp_path):
     themselves point the wrong way.  Calibration over many groups is in test_pooling.py.
     """
     camp = tmp_path / "camp"
-    simulate_campaign(camp, seed=2026, repetitions=3)
+    simulate(camp, seed=2026, repetitions=3)
     res = tmp_path / "res"
     campaign.fit_campaign(camp / "manifest.csv", res, FitOptions(method="both", seed=2026))
     cmp = compare_campaign(res).comparison

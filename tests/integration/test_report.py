@@ -29,15 +29,15 @@ from palpbayes.reporting import (
     CHART_GROUPS_PER_PAGE,
     REPORT_NAME,
     TABLE_ROWS_PER_PAGE,
-    build_report,
     load_fit,
     load_results,
+    report,
     summary_table,
 )
 from palpbayes.reporting.format import fmt_range, shown_path
 from palpbayes.reporting.methods import methods_lines
 from palpbayes.reporting.pages_title import _settings_lines
-from palpbayes.sim import simulate_campaign
+from palpbayes.sim import simulate
 
 GROUP_TITLES = ["White · sphere", "Pink · sphere"]
 FIXED_TITLES = ["Summary: ground truth vs least squares vs Bayes",
@@ -63,7 +63,7 @@ def _pdf_pages(path: Path) -> list[str]:
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory) -> Path:
     root = tmp_path_factory.mktemp("campaign")
-    return simulate_campaign(
+    return simulate(
         root / "camp", seed=5, repetitions=2, gt_specimens=2,
         materials={k: PAPER_MATERIALS[k] for k in ("White", "Pink")},
         tips={"sphere": PAPER_TIPS["sphere"]})
@@ -215,7 +215,7 @@ def test_report_from_results_folder_cli(fitted, tmp_path, capsys):
     assert pdf.is_file() and pdf.stat().st_size < 3_000_000
     assert f"wrote {pdf}" in capsys.readouterr().out
     # default name inside the results folder
-    info = build_report(out)
+    info = report(out)
     assert info.path == out / REPORT_NAME and info.path.is_file()
     assert info.titles[1].startswith("Summary") and info.n_traces == 4
     # continued pages are numbered 2/n, 3/n (not 'continued 2' on the second page)
@@ -421,9 +421,9 @@ def test_many_groups_paginate_tables_and_split_charts(fitted, tmp_path):
     (tmp_path / "many").mkdir()
     materials = [f"Foam{i}" for i in range(1, 10)]
     tips = ["flat", "sphere", "paraboloid"]
-    many = build_report(_replicated(res, tmp_path / "many", materials, tips),
+    many = report(_replicated(res, tmp_path / "many", materials, tips),
                         tmp_path / "many.pdf")
-    few = build_report(_replicated(res, tmp_path / "many", materials[:1], tips),
+    few = report(_replicated(res, tmp_path / "many", materials[:1], tips),
                        tmp_path / "few.pdf")
     assert len(_pdf_pages(many.path)) == many.n_pages
     assert max(many.table_rows) <= TABLE_ROWS_PER_PAGE
@@ -663,7 +663,7 @@ def test_indentation_page_replays_every_trace_file(fitted, tmp_path):
     # the intervals at the stop are within the target
     half = (study["E_stop_hi_pa"] - study["E_stop_lo_pa"]) / (2 * study["E_stop_pa"])
     assert (half <= 0.02).all()
-    info = build_report(res, tmp_path / "r.pdf")
+    info = report(res, tmp_path / "r.pdf")
     assert "How much indentation did we need?" in info.titles
     moved = res.traces.assign(file=str(tmp_path / "gone.csv"))
     assert indentation_study(moved, res.settings).empty

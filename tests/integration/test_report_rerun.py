@@ -25,7 +25,7 @@ from palpbayes.cli import build_parser, main
 from palpbayes.cli.options import options_from_args
 from palpbayes.cli.report import plan_line
 from palpbayes.paper import PAPER_MATERIALS, PAPER_TIPS
-from palpbayes.sim import simulate_campaign
+from palpbayes.sim import simulate
 
 #: The fast options of every run here (the same on every run, so fits can be reused).
 FAST = ["--workers", "1", "--engine", "exact", "--no-model-form", "--seed", "2"]
@@ -34,7 +34,7 @@ FAST = ["--workers", "1", "--engine", "exact", "--no-model-form", "--seed", "2"]
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory):
     root = tmp_path_factory.mktemp("rerun")
-    return simulate_campaign(
+    return simulate(
         root / "camp", seed=3, repetitions=2, gt_specimens=2, blocks=False,
         materials={"Foam": PAPER_MATERIALS["Pink"]},
         tips={"paraboloid": PAPER_TIPS["paraboloid"]})

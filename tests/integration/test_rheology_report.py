@@ -29,7 +29,7 @@ from palpbayes.intervals import central_band
 from palpbayes.outputs import rheology_fit_path
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.plots import plot_cycle_fit, plot_hysteresis, plot_relaxation
-from palpbayes.reporting import build_report
+from palpbayes.reporting import report as build_pdf
 from palpbayes.rheology import (
     STORED_DRAWS,
     clear_rheology_outputs,
@@ -200,7 +200,7 @@ def test_report_pages_carry_the_titles_and_the_tables_numbers(folder, report):
 def test_report_needs_summary_or_rheology_table(tmp_path, capsys):
     (tmp_path / "empty").mkdir()
     with pytest.raises(InputError, match="neither summary.csv .* nor rheology.csv"):
-        build_report(tmp_path / "empty")
+        build_pdf(tmp_path / "empty")
     assert main(["report", str(tmp_path / "empty")]) == 2
     err = capsys.readouterr().err
     assert "rheology.csv" in err and "summary.csv" in err and "Traceback" not in err

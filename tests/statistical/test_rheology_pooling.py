@@ -12,7 +12,7 @@ import pytest
 from palpbayes.contact.viscoelastic import PowerLawKernel
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.rheology import fit_rheology
-from palpbayes.rheology.pool import pool_power_law
+from palpbayes.rheology.pool import pool_rheology
 from palpbayes.sim.viscoelastic import multi_speed
 
 SPEEDS = [5 / 6e4, 50 / 6e4, 500 / 6e4]
@@ -35,7 +35,7 @@ def test_pooled_speeds_recover_the_power_law():
     z = []
     for seed in range(8):
         fits = _fits(TRUTH, seed)
-        p = pool_power_law(fits)
+        p = pool_rheology(fits)
         assert p.flags == []
         for name, truth in (("E0", TRUTH.E0), ("alpha", TRUTH.alpha)):
             d = p.draws[name]
@@ -49,7 +49,7 @@ def test_pooled_speeds_recover_the_power_law():
 @pytest.mark.slow
 def test_a_trace_of_another_material_is_flagged():
     fits = _fits(TRUTH, 0)[:2] + _fits(PowerLawKernel(60e3, 0.2), 1)[2:]
-    p = pool_power_law(fits)
+    p = pool_rheology(fits)
     assert any("one power law does not describe it" in s for s in p.flags)
 
 
@@ -58,7 +58,7 @@ def test_an_elastic_material_pools_without_a_false_flag():
     """alpha at 0, the bound of its prior: the pooled grid's edge there is the prior's, not a
     disagreement of the traces (a false flag the review found)."""
     fits = _fits(PowerLawKernel(80e3, 0.0), 2)[:2]
-    p = pool_power_law(fits)
+    p = pool_rheology(fits)
     assert p.flags == []
     lo, hi = np.percentile(p.draws["E0"], [5, 95])
     assert lo < 80e3 < hi and np.percentile(p.draws["alpha"], 95) < 0.01

@@ -7,13 +7,13 @@ import pandas as pd
 import pytest
 
 from palpbayes.cli import main
-from palpbayes.sim import simulate_campaign
+from palpbayes.sim import simulate
 
 
 @pytest.fixture(scope="module")
 def camp(tmp_path_factory):
     out = tmp_path_factory.mktemp("layout-campaign")
-    simulate_campaign(out, seed=3, repetitions=2)
+    simulate(out, seed=3, repetitions=2)
     return out
 
 

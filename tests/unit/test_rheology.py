@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from palpbayes.contact import Tip, exponent
@@ -502,14 +503,14 @@ def test_pointwise_loglik_is_the_ar1_likelihood(power_fit):
 def test_compare_fits_needs_two_fits_on_the_same_blocks(power_fit):
     import dataclasses
 
-    from palpbayes.rheology.choice import compare_fits
+    from palpbayes.rheology.choice import compare_rheology
 
     with pytest.raises(InputError, match="at least two"):
-        compare_fits({"power-law": power_fit})
+        compare_rheology({"power-law": power_fit})
     other = dataclasses.replace(power_fit, data=prepare_cycle(power_fit.data.trace,
                                                               max_points=300))
     with pytest.raises(InputError, match="same block means"):
-        compare_fits({"a": power_fit, "b": other})
+        compare_rheology({"a": power_fit, "b": other})
 
 
 @pytest.mark.slow
@@ -517,13 +518,24 @@ def test_pooling_a_fit_with_itself_halves_its_variance(power_fit):
     """The pooled posterior is the product of the traces' likelihoods: a fit pooled with
     itself keeps its centre and its sd shrinks by sqrt(2) (each trace's likelihood is its own
     collapse, re-evaluated on the pooled grid)."""
-    from palpbayes.rheology.pool import pool_power_law
+    from palpbayes.rheology.pool import pool_rheology
 
-    p = pool_power_law([power_fit, power_fit])
+    p = pool_rheology([power_fit, power_fit])
     for name in ("E0", "alpha"):
         own, pooled = power_fit.draws[name], p.draws[name]
         assert abs(np.median(pooled) - np.median(own)) < 0.15 * np.std(own)
         assert np.std(pooled) / np.std(own) == pytest.approx(2**-0.5, rel=0.08)
     assert p.flags == [] and list(p.table()["parameter"]) == ["E0*", "alpha"]
     with pytest.raises(InputError, match="two or more"):
-        pool_power_law([power_fit])
+        pool_rheology([power_fit])
+
+
+def test_seed_and_the_exact_engine_are_the_elastic_fits_names(power_fit):
+    """``seed=`` and ``engine="exact"`` as :func:`palpbayes.fit` names them: the same fit as
+    ``rng=`` and ``engine="grid"`` (issue 57)."""
+    f = fit_rheology(_record(PowerLawKernel(90e3, 0.2)), "power-law", seed=0, engine="exact")
+    pd.testing.assert_frame_equal(f.table(), power_fit.table())
+    with pytest.raises(InputError, match="seed= or rng=, not both"):
+        fit_rheology(_record(PowerLawKernel(90e3, 0.2)), "power-law", seed=1, rng=2)
+    with pytest.raises(InputError, match="engine 'mcmc'.*grid, emcee.*exact"):
+        fit_rheology(_record(PowerLawKernel(90e3, 0.2)), "power-law", engine="mcmc")

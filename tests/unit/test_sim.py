@@ -27,7 +27,7 @@ from palpbayes.paper import (
 )
 from palpbayes.sim import (
     onset_force_profile,
-    simulate_campaign,
+    simulate,
     simulate_compression_test,
     simulate_palpation_series,
     simulate_trace,
@@ -326,17 +326,17 @@ def _files(folder: Path) -> dict[str, bytes]:
 
 def test_campaign_reproducible_and_readable(tmp_path):
     kw = dict(repetitions=1, gt_specimens=2)
-    a = _files(simulate_campaign(tmp_path / "a", seed=7, **kw))
-    b = _files(simulate_campaign(tmp_path / "b", seed=7, **kw))
+    a = _files(simulate(tmp_path / "a", seed=7, **kw))
+    b = _files(simulate(tmp_path / "b", seed=7, **kw))
     assert a == b  # byte-identical, every file
     assert "manifest.csv" in a and "traces/White_flat_r01.csv" in a
     assert "groundtruth/Grey_S2.csv" in a and "groundtruth/manifest.csv" in a
     assert not any(name.startswith(".") or "/." in name for name in a)  # no temp files left
-    c = _files(simulate_campaign(tmp_path / "c", seed=8, **kw))
+    c = _files(simulate(tmp_path / "c", seed=8, **kw))
     assert set(c) == set(a)
     assert all(c[k] != a[k] for k in a if k.startswith("traces/"))
     # more repetitions leave the existing traces and ground truth unchanged
-    d = _files(simulate_campaign(tmp_path / "d", seed=7, repetitions=2, gt_specimens=3))
+    d = _files(simulate(tmp_path / "d", seed=7, repetitions=2, gt_specimens=3))
     kept = [k for k in a if k.startswith(("traces/", "groundtruth/")) and "manifest" not in k]
     assert len(kept) == 9 + 6 and all(d[k] == a[k] for k in kept)
     # manifest reads back; traces carry the geometry and match the truth table
@@ -355,12 +355,12 @@ def test_campaign_reproducible_and_readable(tmp_path):
 
 def test_campaign_refuses_non_empty_folder(tmp_path):
     out = tmp_path / "camp"
-    simulate_campaign(out, seed=1, repetitions=1, gt_specimens=0)
+    simulate(out, seed=1, repetitions=1, gt_specimens=0)
     with pytest.raises(OutputExistsError, match="--force"):
-        simulate_campaign(out, seed=1, repetitions=1, gt_specimens=0)
-    simulate_campaign(out, seed=2, repetitions=1, gt_specimens=0, overwrite=True)
+        simulate(out, seed=1, repetitions=1, gt_specimens=0)
+    simulate(out, seed=2, repetitions=1, gt_specimens=0, overwrite=True)
     with pytest.raises(InputError, match="phi"):
-        simulate_campaign(tmp_path / "bad", noise_ar1=1.5)
+        simulate(tmp_path / "bad", noise_ar1=1.5)
     assert not (tmp_path / "bad").exists()
 
 
