@@ -57,13 +57,12 @@ def _random_state(solid: HyperSolid, rng, amplitude: float = 0.03) -> np.ndarray
 
 
 # ------------------------------------------------------------------------ the tangent
-@pytest.mark.parametrize("name", LAWS)
-@pytest.mark.parametrize("nu", [0.3, 0.5])
+@pytest.mark.parametrize(("name", "nu"), [
+    (n, nu) for n in LAWS for nu in (0.3, 0.5)
+    if not (material_law(n).kind == "foam" and nu == 0.5)])  # a foam's nu is its own
 def test_tangent_matches_central_differences(name, nu):
     """d(residual)/dx against central differences at a random finite strain (stretches
     0.7-1.4): relative error below 1e-7; the matrix symmetric."""
-    if material_law(name).kind == "foam" and nu == 0.5:
-        pytest.skip("a foam's nu is its own")
     solid = _solid(name, nu)
     rng = np.random.default_rng(3)
     x = _random_state(solid, rng)
