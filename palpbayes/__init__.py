@@ -15,13 +15,15 @@ Reading and fitting: :func:`read`, :func:`fit` (a :class:`Fit`), :func:`load_fit
 :func:`report` (the PDF); the model: :class:`Tip`, :class:`Specimen`, :class:`ModelSpec`,
 :class:`BudgetSpec`, :func:`force`; simulating: :func:`simulate` (a campaign folder),
 :func:`simulate_trace`; online: :class:`OnlineEstimator`, :class:`StoppingRule`; maps:
-:func:`make_map`; active search: :func:`next_presses` (the subpackage :mod:`active`);
+:func:`fit_map` (a manifest or an AFM map in one call; :func:`make_map` the step after
+reading); active search: :func:`next_presses` (the subpackage :mod:`active`);
 viscoelastic fits: :func:`fit_rheology`, :func:`compare_rheology` (PSIS-LOO),
 :func:`pool_rheology` (one power law over speeds); the example campaign:
 :func:`example_campaign_dir`; the subpackages :mod:`contact` (the contact laws and their
 formulas), :mod:`errors`, :mod:`stiffening`, :mod:`plots`, :mod:`paper`, :mod:`gap`,
-:mod:`twin`, :mod:`sim`, :mod:`groundtruth` (compression tests), :mod:`material` (the
-hyperelastic laws and ``Solid``), :mod:`reporting` (the report's tables and pages).  They
+:mod:`gap_strain`, :mod:`twin`, :mod:`sim`, :mod:`groundtruth` (compression tests),
+:mod:`material` (the hyperelastic laws and ``Solid``), :mod:`reporting` (the report's tables
+and pages).  They
 are imported when first used (``import palpbayes`` stays quick).
 """
 

@@ -28,7 +28,7 @@ import pandas as pd
 
 from .api_fit import Fit, load_fit
 from .bayes import BudgetSpec, PriorSpec, SamplerSettings
-from .bayes.noisemodels import EXACT_NOISE_MODELS
+from .bayes.noisemodels import EXACT_NOISE_MODELS, get_noise_model
 from .campaign.fitjob import fit_trace_rows
 from .campaign.options import LAYER_MODES, FitOptions, LawOptions
 from .contact import TIP_PARAMETERS, Tip, check_nu
@@ -175,6 +175,7 @@ def fit_options(*, method: str = "bayes", nu: float | None = None,
                     else "the contact threshold")
             raise InputError(f"--{name.replace('_', '-')} {v!r} must be a positive force in "
                              f"newtons ({what})")
+    get_noise_model(noise)  # an unknown model: its own error, before the engine's
     if engine == "exact" and (noise not in EXACT_NOISE_MODELS or surface_prior == "soft"):
         what = (f"--noise {noise}" if noise not in EXACT_NOISE_MODELS
                 else "--surface-prior soft")

@@ -15,11 +15,14 @@ checks the source (every trace file's header too, before a cluster starts) into 
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
+import numpy as np
 import pandas as pd
 
 from .campaign.options import FitOptions
@@ -30,6 +33,9 @@ from .io.manifest import read_manifest
 from .maps import run as map_run
 from .maps.pertrace import PointOptions
 from .maps.run import MapOptions, MapResult, check_map_manifest
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["MapRequest", "MapJob", "MapFit", "prepare_map", "run_map", "fit_map"]
 
@@ -82,10 +88,12 @@ class MapJob:
     manifest: pd.DataFrame
     point_options: PointOptions
     options: MapOptions
-    checked: tuple
+    checked: tuple  # (Tip, thickness [m] or None): check_map_manifest's answer
 
 
 def _afm_rows(source: Path, req: MapRequest) -> pd.DataFrame:
+    """The map rows of an AFM force map (:func:`palpbayes.maps.afm_source.afm_map_rows`),
+    with the request's thickness."""
     from .maps.afm_source import afm_map_rows
 
     if req.tip is None:
@@ -100,7 +108,7 @@ def _afm_rows(source: Path, req: MapRequest) -> pd.DataFrame:
     return rows
 
 
-def prepare_map(source: str | os.PathLike, request: MapRequest = MapRequest(), *,
+def prepare_map(source: str | os.PathLike, request: MapRequest | None = None, *,
                 scheduler: str | None = None) -> MapJob:
     """Read and check a map's source (a manifest CSV or an AFM force map) for ``request``.
 
@@ -110,14 +118,23 @@ def prepare_map(source: str | os.PathLike, request: MapRequest = MapRequest(), *
         The source, a trace file's header or an option is not usable: the message names it
         and what to do.
     """
+    label = str(source)  # as the user wrote it, for the messages
     source = Path(source)
-    req = request
+    req = request or MapRequest()
+    if not (isinstance(req.seed, int | np.integer) and not isinstance(req.seed, bool)
+            and req.seed >= 0):
+        raise InputError(f"seed {req.seed!r} must be a non-negative whole number")
+    if req.f_unc is not None and not (math.isfinite(req.f_unc) and req.f_unc > 0):
+        raise InputError(f"f_unc {req.f_unc!r} must be a positive force in newtons (the "
+                         "contact threshold)")
+    if req.tip is not None and not isinstance(req.tip, Tip):
+        raise InputError(f"tip {req.tip!r} must be a palpbayes.Tip (e.g. Tip.sphere(5e-6))")
     if req.lump_max_steps < 1000:
         raise InputError(f"lump_max_steps {req.lump_max_steps} is too few; use at least 1000")
     afm = is_afm_file(source)
     if not afm and (req.tip is not None or req.thickness is not None or req.afm_meta):
-        given = [n for n, v in (("tip", req.tip), ("thickness", req.thickness),
-                                ("AFM metadata", req.afm_meta)) if v]
+        given = [n for n, v in (("tip", req.tip), ("thickness", req.thickness))
+                 if v is not None] + (["AFM metadata"] if req.afm_meta else [])
         raise InputError(f"{', '.join(given)}: for an AFM force map; a manifest gives the tip "
                          "and the thickness in its columns (tip, radius_m ..., thickness_m)")
     lump = (not afm) if req.lump is None else bool(req.lump)
@@ -139,14 +156,14 @@ def prepare_map(source: str | os.PathLike, request: MapRequest = MapRequest(), *
     try:  # every trace file's header too: a bad column is reported before a cluster starts
         checked = check_map_manifest(
             manifest, lump=lump, min_points=map_opts.min_points, line=map_opts.line,
-            read_options=point_opts.read_options, source=str(source),
+            read_options=point_opts.read_options, source=label,
             remote=scheduler not in (None, "local"))
     except InputError as exc:
         if not afm:
             raise
-        raise InputError(f"{source}: {exc}; a field needs at least 4 curves (on a grid or a "
+        raise InputError(f"{label}: {exc}; a field needs at least 4 curves (on a grid or a "
                          "line); fit the curves one by one with palpbayes fit "
-                         f"{source} --tip ...") from None
+                         f"{label} --tip ...") from None
     return MapJob(source, afm, manifest, point_opts, map_opts, checked)
 
 
@@ -190,7 +207,7 @@ class MapFit:
         """The simulator's lump truth beside a simulated phantom's manifest, else None."""
         return None if self.afm else _truth(self.source.parent)
 
-    def plot(self):
+    def plot(self) -> Figure:
         """The four panels of ``map.png`` (:func:`palpbayes.plots.maps.plot_map`): a Figure."""
         from .reporting.map_pages import map_figure
 
@@ -249,6 +266,6 @@ def fit_map(source: str | os.PathLike, *, seed: int = 0, scheduler: str | None =
     if unknown:
         raise InputError(f"fit_map: unknown option(s) {', '.join(unknown)}; use "
                          f"{', '.join(MapRequest.__dataclass_fields__)}")
-    req = replace(MapRequest(**request), seed=int(seed))
+    req = replace(MapRequest(**request), seed=seed)
     job = prepare_map(source, req, scheduler=scheduler)
     return run_map(job, scheduler=scheduler, workers=workers, progress=progress)

@@ -45,6 +45,7 @@ from .fitdata import ModelSpec
 from .lsq import fit_lsq
 from .material import Solid
 from .noise import PAPER_NOISE_PP
+from .outputs import SHIPPED_GAP_STRAIN
 from .paper import PAPER_MATERIALS, PAPER_TIPS
 from .specimen import Specimen
 from .trace import IndentationTrace
@@ -55,7 +56,7 @@ __all__ = ["StrainSettings", "FOAMS", "STRAIN_COLUMNS", "strain_row", "strain_ta
 
 #: The table shipped with the source checkout (``python -m palpbayes.gap_strain`` writes it;
 #: minutes of finite elements), relative to the repository root.
-SHIPPED_TABLE = Path("data") / "gap-strain" / "gap_strain.csv"
+SHIPPED_TABLE = SHIPPED_GAP_STRAIN
 
 #: [m] How far the paper's Instron compressed its blocks (design.md §2).
 INSTRON_REACH_M = 5e-3
@@ -205,17 +206,17 @@ def shipped_table() -> pd.DataFrame:
 
     Raises
     ------
-    InputError
+    DataFileError
         It is not there (an installed wheel ships the package only): compute it with
         ``python -m palpbayes.gap_strain OUT.csv``.
     """
-    from .errors import InputError
+    from .errors import DataFileError
 
     path = Path(__file__).resolve().parents[1] / SHIPPED_TABLE
     if not path.is_file():
-        raise InputError(f"the finite-strain gap table is not at {path} (it comes with a source "
-                         "checkout); compute it with 'python -m palpbayes.gap_strain OUT.csv' "
-                         "(minutes of finite elements) and read that file")
+        raise DataFileError(f"the finite-strain gap table is not at {path} (it comes with a "
+                            "source checkout); compute it with 'python -m palpbayes.gap_strain "
+                            "OUT.csv' (minutes of finite elements) and read that file")
     return pd.read_csv(path)
 
 

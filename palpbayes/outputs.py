@@ -39,7 +39,7 @@ __all__ = [
     "SETTINGS", "TRACES", "SUMMARY", "POSTERIOR_DIR", "PARTIAL_DIR", "COMPARISON", "POOLED",
     "BUDGET", "STIFFENING", "STIFFENING_PARAMETERS", "STIFFENING_CURVES",
     "INDENTATION", "GROUNDTRUTH", "GROUNDTRUTH_SUMMARY", "GROUNDTRUTH_LAWS", "GAP", "GAP_STRAIN",
-    "REPORT",
+    "SHIPPED_GAP_STRAIN", "REPORT",
     "COMPARE_OUTPUTS",
     "FIT_OUTPUTS", "REPLAY_HISTORY", "REPLAY_SUMMARY", "REPLAY_FIGURE", "posterior_path",
     "posterior_file", "partial_path", "RHEOLOGY_TABLE", "RHEOLOGY_DIR", "RHEOLOGY_OUTPUTS",
@@ -87,6 +87,9 @@ GAP = "gap.csv"
 #: pressed on the blocks' finite-strain twins), copied from the package's data by the report
 #: pipeline beside ``gap.csv``.
 GAP_STRAIN = "gap_strain.csv"
+#: The finite-strain gap table shipped with the source checkout, relative to the repository
+#: root (``python -m palpbayes.gap_strain OUT.csv`` writes it: minutes of finite elements).
+SHIPPED_GAP_STRAIN = Path("data") / "gap-strain" / GAP_STRAIN
 #: One row per trace × relaxation model (``palpbayes fit --rheology power-law|sls``).
 RHEOLOGY_TABLE = "rheology.csv"
 #: Folder of the stored viscoelastic fits ``<trace_id>_<rheology>.nc``

@@ -403,7 +403,8 @@ def exact_posterior(data: FitData, prior: TracePrior, coarse: int = COARSE_NODES
         For Student-t noise or the soft surface prior (use the emcee engine).
     """
     if prior.noise not in EXACT_NOISE_MODELS:
-        raise InputError(f"the exact engine handles Gaussian and AR(1) noise, not "
+        raise InputError(f"the exact engine handles noise "
+                         f"{' or '.join(map(repr, EXACT_NOISE_MODELS))}, not "
                          f"{prior.noise!r}; use --engine emcee")
     if prior.spec.surface != "loading":
         raise InputError("the exact engine takes the surface prior 'loading' only (the soft "

@@ -180,7 +180,7 @@ def write_gap(out_dir: str | os.PathLike) -> Path | None:
     """Write the paper's robot-vs-Instron gap, decomposed (:func:`palpbayes.gap.gap_table`),
     as ``gap.csv`` when the results hold one of the paper's materials, and beside it the same
     at finite strain (``gap_strain.csv``, copied from
-    :data:`palpbayes.gap_strain.SHIPPED_TABLE` when the source checkout has it); return its
+    :data:`palpbayes.outputs.SHIPPED_GAP_STRAIN` when the source checkout has it); return its
     path (None otherwise, and stale tables are removed).
 
     The table depends on the package alone (not on the results): it is computed once per
@@ -203,9 +203,7 @@ def write_gap(out_dir: str | os.PathLike) -> Path | None:
         path.unlink(missing_ok=True)
         (out / outputs.GAP_STRAIN).unlink(missing_ok=True)
         return None
-    from ..gap_strain import SHIPPED_TABLE
-
-    shipped = Path(__file__).resolve().parents[2] / SHIPPED_TABLE
+    shipped = Path(__file__).resolve().parents[2] / outputs.SHIPPED_GAP_STRAIN
     if shipped.is_file():  # minutes of finite elements, computed once and shipped
         write_text_atomic(shipped.read_text(encoding="utf-8"), out / outputs.GAP_STRAIN)
     stamp = package_stamp()

@@ -66,7 +66,8 @@ def prepare_out_dir(out: str | os.PathLike, force: bool) -> Path:
     present = [n for n in MAP_OUTPUTS if (out / n).exists()]
     if present and not force:
         raise OutputExistsError(f"{out} already holds a map ({', '.join(present)}); use --force "
-                                "to replace it or choose another --out")
+                                "(force=True from Python) to replace it or choose another "
+                                "--out")
     out.parent.mkdir(parents=True, exist_ok=True)
     return Path(tempfile.mkdtemp(prefix=f".{out.name}-partial-", dir=out.parent))
 

@@ -298,7 +298,8 @@ class OnlineEstimator:
         if not 0 < self.level < 1:
             raise InputError(f"online estimation: level = {self.level!r} must lie in (0, 1)")
         if self.noise not in EXACT_NOISE_MODELS:
-            raise InputError(f"online estimation takes noise 'gaussian' or 'ar1', not "
+            raise InputError(f"online estimation takes noise "
+                             f"{' or '.join(map(repr, EXACT_NOISE_MODELS))}, not "
                              f"{self.noise!r}")
         # the samples kept (module docstring, "Memory"): the first _n of _t, _z, _f; the
         # samples seen, those dropped before the contact, and the last one (t, z, F)

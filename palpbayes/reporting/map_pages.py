@@ -176,7 +176,7 @@ def _pages(res: MapResult, truth: dict | None) -> list[Page]:
     ]
 
 
-def map_figure(res: MapResult, truth: dict | None = None):
+def map_figure(res: MapResult, truth: dict | None = None) -> Figure:
     """The four panels of ``map.png`` (:func:`palpbayes.plots.maps.plot_map`): a Figure."""
     centre = None if not truth or not truth.get("has_lump") else (truth["x_m"], truth["y_m"])
     return plot_map(res.nodes, lump=res.lump_centre(), threshold=res.options.threshold,

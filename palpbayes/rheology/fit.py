@@ -365,7 +365,7 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
     rng
         Seed or Generator of the draws and the check.
     seed
-        The seed, as :func:`palpbayes.fit` names it (given, it is ``rng``; not both).
+        Same as ``rng`` (the name :func:`palpbayes.fit` uses); give one or the other.
 
     Returns
     -------
@@ -385,7 +385,7 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
     if seed is not None:
         if rng not in (0, None):
             raise InputError("give the seed once: seed= or rng=, not both")
-        if not (isinstance(seed, int | np.integer) and seed >= 0):
+        if isinstance(seed, bool) or not (isinstance(seed, int | np.integer) and seed >= 0):
             raise InputError(f"seed {seed!r} must be a non-negative whole number")
         rng = int(seed)
     if baseline not in BASELINES:
