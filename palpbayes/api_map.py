@@ -15,14 +15,12 @@ checks the source (every trace file's header too, before a cluster starts) into 
 
 from __future__ import annotations
 
-import math
 import os
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
 import pandas as pd
 
 from .campaign.options import FitOptions
@@ -121,12 +119,12 @@ def prepare_map(source: str | os.PathLike, request: MapRequest | None = None, *,
     label = str(source)  # as the user wrote it, for the messages
     source = Path(source)
     req = request or MapRequest()
-    if not (isinstance(req.seed, int | np.integer) and not isinstance(req.seed, bool)
-            and req.seed >= 0):
-        raise InputError(f"seed {req.seed!r} must be a non-negative whole number")
-    if req.f_unc is not None and not (math.isfinite(req.f_unc) and req.f_unc > 0):
-        raise InputError(f"f_unc {req.f_unc!r} must be a positive force in newtons (the "
-                         "contact threshold)")
+    nu = None if req.nu is None else check_nu(req.nu)
+    # each point a half-space: the lump's forward model (palpbayes.sim.inclusion) reads the
+    # block's thickness itself, and the map's per-point fits compare points with each other;
+    # built first, so that its own checks (seed, f_unc, noise) come before any file is read
+    fit = FitOptions(nu=nu, noise=req.noise, tare=req.tare, f_unc=req.f_unc, engine="exact",
+                     seed=req.seed, layer="off")
     if req.tip is not None and not isinstance(req.tip, Tip):
         raise InputError(f"tip {req.tip!r} must be a palpbayes.Tip (e.g. Tip.sphere(5e-6))")
     if req.lump_max_steps < 1000:
@@ -140,13 +138,8 @@ def prepare_map(source: str | os.PathLike, request: MapRequest | None = None, *,
     lump = (not afm) if req.lump is None else bool(req.lump)
     # a map is one block: a manifest's material label is optional (it pools nothing here)
     manifest = _afm_rows(source, req) if afm else read_manifest(source, default_material="")
-    nu = None if req.nu is None else check_nu(req.nu)
-    # each point a half-space: the lump's forward model (palpbayes.sim.inclusion) reads the
-    # block's thickness itself, and the map's per-point fits compare points with each other
     point_opts = PointOptions(
-        fit=FitOptions(nu=nu, noise=req.noise, tare=req.tare, f_unc=req.f_unc,
-                       engine="exact", seed=req.seed, layer="off"),
-        seed=req.seed,
+        fit=fit, seed=req.seed,
         read_options={**({"meta_override": req.afm_meta} if afm and req.afm_meta else {}),
                       **req.read_options})
     # an AFM line of curves (QI data) maps as a line; a manifest's grid must be 2-D

@@ -213,6 +213,9 @@ class FitOptions:
         if isinstance(self.seed, bool) or not isinstance(self.seed, int | np.integer) or (
                 self.seed < 0):
             raise InputError(f"seed {self.seed!r} must be a non-negative whole number")
+        if self.f_unc is not None and not (np.isfinite(self.f_unc) and self.f_unc > 0):
+            raise InputError(f"f_unc {self.f_unc!r} must be a positive force in newtons (the "
+                             "contact threshold)")
         if self.platens not in PLATENS:
             raise InputError(f"unknown platens {self.platens!r}; use one of "
                              f"{', '.join(PLATENS)}")

@@ -35,3 +35,13 @@ def test_a_missing_manifest_is_named_as_written(tmp_path):
 def test_fit_options_names_an_unknown_noise_model_before_the_engine():
     with pytest.raises(InputError, match="unknown noise model 'pink'"):
         pb.fit_options(engine="exact", noise="pink")
+
+
+@pytest.mark.parametrize("f_unc", [0.0, -1.0, float("nan"), float("inf")])
+def test_fit_options_refuse_a_contact_threshold_that_is_not_a_positive_force(f_unc):
+    """The check lives in FitOptions, so every door that builds one (fit, map, campaign)
+    has it."""
+    from palpbayes.campaign.options import FitOptions
+
+    with pytest.raises(InputError, match="f_unc .* must be a positive force in newtons"):
+        FitOptions(f_unc=f_unc)
