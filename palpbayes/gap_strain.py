@@ -42,6 +42,7 @@ import pandas as pd
 
 from .contact import DEFAULT_NU, Tip, get_law
 from .fitdata import ModelSpec
+from .gap_text import strain_paragraph  # public here: the verdicts in sentences
 from .lsq import fit_lsq
 from .material import Solid
 from .noise import PAPER_NOISE_PP
@@ -218,13 +219,6 @@ def shipped_table() -> pd.DataFrame:
                             "source checkout); compute it with 'python -m palpbayes.gap_strain "
                             "OUT.csv' (minutes of finite elements) and read that file")
     return pd.read_csv(path)
-
-
-def strain_paragraph(verdicts: dict, strain: pd.DataFrame, gap: pd.DataFrame) -> str:
-    """The verdicts in plain sentences (:func:`palpbayes.gap_text.strain_paragraph`)."""
-    from .gap_text import strain_paragraph as paragraph
-
-    return paragraph(verdicts, strain, gap)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -109,7 +109,7 @@ def register(subparsers) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """Fit, map, write; print where and the lump.  Returns 0."""
     from ..api_map import MapRequest, prepare_map, run_map
-    from ..maps.files import discard, prepare_out_dir
+    from ..maps.files import check_out_dir
 
     if args.lump_max_steps < 1000:
         raise InputError(f"--lump-max-steps {args.lump_max_steps} is too few; use at least "
@@ -141,8 +141,7 @@ def run(args: argparse.Namespace) -> int:
         read_options=read_options_from_args(args),  # columns, units, signs: only those given
         afm_meta=(afm_meta_from_args(args) or {}) if afm else {})
     job = prepare_map(args.input, request, scheduler=args.scheduler)
-    stage = prepare_out_dir(args.out, args.force)  # before the fits: a bad --out fails fast
-    discard(stage)
+    check_out_dir(args.out, args.force)  # before the fits: a bad --out fails fast
     fit = run_map(job, scheduler=args.scheduler, workers=args.workers, progress=args.progress)
     res, elapsed, manifest, nu = fit.result, fit.elapsed_s, job.manifest, request.nu
     out = fit.save(args.out, force=args.force, report=not args.no_report)

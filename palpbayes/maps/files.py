@@ -40,7 +40,8 @@ from ..io.atomic import write_csv_atomic, write_netcdf_atomic, write_text_atomic
 from .run import MapResult
 
 __all__ = ["POINTS", "MAP", "LUMP", "HYPER", "MAP_NC", "LUMP_NC", "SETTINGS", "FIGURE",
-           "REPORT", "MAP_OUTPUTS", "prepare_out_dir", "publish", "discard", "write_map"]
+           "REPORT", "MAP_OUTPUTS", "check_out_dir", "prepare_out_dir", "publish", "discard",
+           "write_map"]
 
 POINTS = "points.csv"
 MAP = "map.csv"
@@ -56,10 +57,17 @@ MAP_OUTPUTS = (POINTS, MAP, LUMP, HYPER, MAP_NC, LUMP_NC, SETTINGS, FIGURE, REPO
 
 
 def prepare_out_dir(out: str | os.PathLike, force: bool) -> Path:
-    """Check that ``out`` can take a map (refuse one holding map files unless ``force``) and
-    return a new, empty staging folder beside it.  Write everything there, then
-    :func:`publish` it: a run that fails leaves ``out`` as it was (the old map, if any, stays
-    until the new one is complete)."""
+    """Check that ``out`` can take a map (:func:`check_out_dir`) and return a new, empty
+    staging folder beside it.  Write everything there, then :func:`publish` it: a run that
+    fails leaves ``out`` as it was (the old map, if any, stays until the new one is
+    complete)."""
+    out = check_out_dir(out, force)
+    return Path(tempfile.mkdtemp(prefix=f".{out.name}-partial-", dir=out.parent))
+
+
+def check_out_dir(out: str | os.PathLike, force: bool) -> Path:
+    """``out`` as a Path, once it is known to take a map: not a file, no map files in it
+    unless ``force``, its parent made.  ``palpbayes map`` calls it before the fits."""
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise OutputExistsError(f"{out} exists and is not a folder; choose another --out")
@@ -69,7 +77,7 @@ def prepare_out_dir(out: str | os.PathLike, force: bool) -> Path:
                                 "(force=True from Python) to replace it or choose another "
                                 "--out")
     out.parent.mkdir(parents=True, exist_ok=True)
-    return Path(tempfile.mkdtemp(prefix=f".{out.name}-partial-", dir=out.parent))
+    return out
 
 
 def publish(stage: Path, out: str | os.PathLike) -> Path:
