@@ -114,6 +114,7 @@ def plot_strain_factors(strain: pd.DataFrame, *, ax: Axes | None = None) -> Figu
             x = i - 0.4 + (j + 0.5) * width
             ax.bar(x, max(f.max() - f.min(), 0.4), bottom=f.min(), width=0.8 * width,
                    color=colors[tip], lw=0, label=tip if i == 0 else None)
+    ax.use_sticky_edges = False  # a bar's foot is data, not the frame: keep a margin below
     ax.axhline(0.0, color="0.3", lw=0.7)
     labels = [f.replace("hyperfoam ", "").replace("neo-Hookean ", "neo-H.\n")
               .replace(" alpha ", "\nα ").replace("nu ", "ν ") for f in foams]
