@@ -62,7 +62,7 @@ _LAZY = {
     "make_map": ("maps.run", "make_map"),
     "next_presses": ("active.front", "next_presses"),
     "active": ("active", None),
-    "fit_rheology": ("rheology.fit", "fit_rheology"),
+    "fit_rheology": ("api_rheology", "fit_rheology"),
     "compare_rheology": ("rheology.choice", "compare_rheology"),
     "pool_rheology": ("rheology.pool", "pool_rheology"),
     "contact": ("contact", None),

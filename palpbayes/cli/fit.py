@@ -66,38 +66,25 @@ def _check_input_path(path: Path) -> None:
 
 
 def _run_rheology(args: argparse.Namespace) -> int:
-    """``fit --rheology power-law|sls``: the viscoelastic fit of every trace, one table."""
-    from ..io.manifest import is_manifest, load_trace, read_manifest
-    from ..rheology.campaign import SpeedPools
-    from ..rheology.results import RHEOLOGY_TABLE, fit_traces
+    """``fit --rheology power-law|sls``: the viscoelastic fit of every trace, one table
+    (:func:`palpbayes.api_rheology.run_rheology`, as :func:`palpbayes.fit_rheology` runs)."""
+    from ..api_rheology import manifest_traces, run_rheology
+    from ..io.manifest import is_manifest
+    from ..rheology.results import RHEOLOGY_TABLE
 
-    path, out, pools = Path(args.input), Path(args.out), None
+    path, out = Path(args.input), Path(args.out)
     _check_input_path(path)
-    nu, segments = check_rheology_args(args)
+    options = check_rheology_args(args)
     if path.is_file() and is_manifest(path):
-        opts = read_options_from_args(args)
-        manifest = read_manifest(path)
-        rows = [r for _, r in manifest.iterrows()]
-        if "power-law" in args.rheology and args.peer_compatible is None:
-            # one specimen x tip at several speeds: pooled (a peer's reading is not pooled)
-            pools = SpeedPools(manifest, seed=args.seed)
-        traces = [(str(r["trace_id"]), str(r["file"]), lambda r=r: load_trace(r, **opts))
-                  for r in rows]
-        total = len(traces)
+        manifest, traces = manifest_traces(path, read_options_from_args(args))
     else:
-        traces = traces_from_args(args, segments=segments)
-        total = len(traces)
-    table = fit_traces(traces, args.rheology, out, segments=segments, t0=args.t0, nu=nu,
-                       seed=args.seed, compression_speed=args.compression_speed / 6e4,
-                       drag={"auto": None, "on": True, "off": False}[args.drag],
-                       baseline=args.baseline, engine=args.rheology_engine,
-                       adhesion=args.adhesion, peer=args.peer_compatible,
-                       progress=args.progress, total=total,
-                       on_fit=None if pools is None else pools.add)
+        manifest, traces = None, traces_from_args(args, segments=options.segments)
+    table, pooled = run_rheology(traces, options, out, manifest=manifest,
+                                 progress=args.progress)
     print_rheology(table)
     print(f"wrote {out / RHEOLOGY_TABLE}")
-    if pools is not None:
-        print_pooled(pools, out)
+    if pooled is not None:
+        print_pooled(pooled, out)
     return 0
 
 

@@ -8,12 +8,10 @@ to which fit, checks them, and prints the table.
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 import numpy as np
 
-from ..contact import check_nu
 from ..errors import InputError
 from ..units import FORCE_PREFIXES, format_pressure_interval, format_si, interval_digits
 
@@ -112,9 +110,11 @@ def add_rheology_options(p: argparse.ArgumentParser) -> None:
                         "that test would report (default 50, the paper's Instron)")
 
 
-def check_rheology_args(args: argparse.Namespace) -> tuple[float | None, str]:
-    """Check the options of a ``fit --rheology`` run; returns nu (None if not given) and the
-    segments (checked names, comma-separated).
+def check_rheology_args(args: argparse.Namespace):
+    """Check the options of a ``fit --rheology`` run: those of the command line here, the
+    run's own by :func:`palpbayes.api_rheology.rheology_options` (as
+    :func:`palpbayes.fit_rheology` checks them); returns the
+    :class:`~palpbayes.api_rheology.RheologyOptions`.
 
     Raises
     ------
@@ -122,7 +122,7 @@ def check_rheology_args(args: argparse.Namespace) -> tuple[float | None, str]:
         An option of the elastic fit, a bad t0, compression speed or segment list, or an
         existing table without ``--force`` (one line each).
     """
-    from ..rheology.cycle import check_segments
+    from ..api_rheology import rheology_options
     from ..rheology.results import RHEOLOGY_TABLE
 
     out = Path(args.out)
@@ -137,39 +137,18 @@ def check_rheology_args(args: argparse.Namespace) -> tuple[float | None, str]:
     if args.resume:
         raise InputError("--resume is for elastic campaigns; a viscoelastic run writes "
                          f"{RHEOLOGY_TABLE} at the end: run it again with --force")
-    if not (math.isfinite(args.t0) and args.t0 > 0):
-        raise InputError(f"--t0 {args.t0!r} must be a positive time in seconds")
-    if not (math.isfinite(args.compression_speed) and args.compression_speed > 0):
-        raise InputError(f"--compression-speed {args.compression_speed!r} must be a positive "
-                         "speed in mm/min")
-    nu = None if args.nu is None else check_nu(args.nu)
     if args.nu_range is not None:
         raise InputError("--nu-range is for the elastic fit's budget; give --nu (or leave it "
                          "out: the table then has E* only)")
+    options = rheology_options(
+        args.rheology, segments=args.segments, t0=args.t0, nu=args.nu, drag=args.drag,
+        baseline=args.baseline, engine=args.rheology_engine,
+        adhesion=getattr(args, "adhesion", "keep"),
+        peer=getattr(args, "peer_compatible", None),
+        compression_speed_mm_min=args.compression_speed, seed=args.seed)
     if (out / RHEOLOGY_TABLE).exists() and not args.force:
         raise InputError(f"{out / RHEOLOGY_TABLE} exists; pass --force to overwrite it")
-    peer = getattr(args, "peer_compatible", None)
-    if peer is not None:
-        for flag, given in (("--segments", args.segments is not None), ("--t0", args.t0 != 1.0),
-                            ("--drag", args.drag != "auto")):
-            if given:
-                raise InputError(f"--peer-compatible {peer} sets {flag} as the peer does; "
-                                 f"leave {flag} out")
-        if "sls" in args.rheology:
-            raise InputError(f"--peer-compatible {peer} fits the retract by Ting's rule, which "
-                             "palpbayes fits with the power law only: use --rheology power-law "
-                             "(or elastic,power-law)")
-        args.segments = "approach,retract"
-    names = check_segments(args.segments or "approach,hold")
-    if getattr(args, "adhesion", "keep") == "cut" and "retract" not in names:
-        raise InputError(f"--adhesion cut cuts the pull-off out of the retract, which "
-                         f"--segments {','.join(names)} does not fit: add the retract (e.g. "
-                         "--segments approach,retract) or leave --adhesion at keep")
-    if "retract" in names and "sls" in args.rheology:
-        raise InputError("--segments with the retract is fitted with the power law only "
-                         "(Ting's rule under the SLS is not linear in its moduli); use "
-                         "--rheology power-law, or --segments approach,hold for the SLS")
-    return nu, ",".join(names)
+    return options
 
 
 #: What every interval of the viscoelastic console holds, said above its lines.
@@ -203,12 +182,12 @@ def print_rheology(table) -> None:
             print(f"  {trace_id}: {_choice_line(rows)}")
 
 
-def print_pooled(pools, out: Path) -> None:
-    """The pooled power laws of a manifest (:class:`~palpbayes.rheology.campaign.SpeedPools`),
-    and the table's path when one was written (none when no group pools)."""
+def print_pooled(table, out: Path) -> None:
+    """The pooled power laws of a manifest (``rheology_pooled.csv``:
+    :class:`~palpbayes.rheology.campaign.SpeedPools`), and the table's path when one was
+    written (none when no group pools)."""
     from ..rheology.campaign import RHEOLOGY_POOLED, pooled_lines
 
-    table = pools.finish(out)
     print("\n".join(pooled_lines(table)))
     if not table.empty:
         print(f"wrote {out / RHEOLOGY_POOLED}")
