@@ -45,7 +45,7 @@ _LAZY = {
     "Fit": ("api", "Fit"),
     "load_fit": ("api", "load_fit"),
     "fit_options": ("api", "fit_options"),
-    "fit_campaign": ("campaign.run", "fit_campaign"),
+    "fit_campaign": ("api", "fit_campaign"),
     "compare": ("campaign.compare", "compare_campaign"),
     "run_pipeline": ("campaign.pipeline", "run_pipeline"),
     "load_results": ("campaign.results", "load_results"),

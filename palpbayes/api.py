@@ -37,7 +37,8 @@ from .io.recording import AFM_META_KEYS, READER_OPTIONS
 from .trace import IndentationTrace
 from .twin import Specimen, parse_specimen
 
-__all__ = ["read", "fit", "Fit", "load_fit", "fit_options", "make_tip", "check_specimen"]
+__all__ = ["read", "fit", "Fit", "load_fit", "fit_options", "fit_campaign", "make_tip",
+           "check_specimen"]
 
 #: Reader options :func:`fit` passes to :func:`read`: every reader's own
 #: (:data:`~palpbayes.io.recording.READER_OPTIONS`: a table's columns, units and signs, a
@@ -382,3 +383,27 @@ def fit(source, *, tip: str | Tip | None = None, radius: float | None = None,
             raise FitError(f"{trace.trace_id}: the {' and '.join(r['method'] for r in failed)} "
                            f"fit failed in strict mode: {failed[0].get('notes', '')}")
     return Fit(trace=trace, options=opts, outcome=outcome)
+
+
+def fit_campaign(source, out_dir: str | os.PathLike | None = None,
+                 options: FitOptions | None = None, *, seed: int | None = None,
+                 workers: int | None = None, resume: bool = False, force: bool = False,
+                 progress: bool | None = None, read_options: dict | None = None,
+                 scheduler: str | None = None, **fit_kw) -> pd.DataFrame:
+    """Fit every trace of a campaign, as ``palpbayes fit MANIFEST --out DIR`` does
+    (:func:`palpbayes.campaign.run.fit_campaign`: its parameters, the folder it writes).
+
+    The fit options are :func:`fit_options`' keywords (``nu=``, ``engine=``, ``method=`` ...,
+    and ``seed=``, default 0 as on the command line), or a built ``options`` object: one or
+    the other.  Returns the summary table, as written to ``summary.csv``.
+    """
+    from .campaign.run import fit_campaign as run_campaign
+
+    if options is not None and (fit_kw or seed is not None):
+        given = sorted(fit_kw) + (["seed"] if seed is not None else [])
+        raise InputError(f"fit_campaign: give the fit options as keywords ({', '.join(given)}) "
+                         "or as options=pb.fit_options(...), not both")
+    if options is None:
+        options = fit_options(seed=0 if seed is None else seed, **fit_kw)
+    return run_campaign(source, out_dir, options, workers=workers, resume=resume, force=force,
+                        progress=progress, read_options=read_options, scheduler=scheduler)

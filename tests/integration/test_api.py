@@ -250,3 +250,22 @@ def test_plot_draws_every_residual_and_least_squares_only_when_asked(tmp_path):
         for ln in res.get_lines():
             y = np.asarray(ln.get_ydata(), float)
             assert lo <= np.nanmin(y) and np.nanmax(y) <= hi, (ln.get_label(), lo, hi)
+
+
+def test_fit_campaign_takes_keywords_and_writes_the_command_line_s_summary(trace_file,
+                                                                           tmp_path):
+    from palpbayes.io.manifest import write_manifest
+
+    manifest = write_manifest(pd.DataFrame({
+        "trace_id": ["a", "b"], "file": [str(trace_file)] * 2, "material": ["gel"] * 2,
+        "tip": ["sphere"] * 2, "radius_m": [0.01] * 2, "thickness_m": [0.02] * 2}),
+        tmp_path / "manifest.csv")
+    table = pb.fit_campaign(manifest, tmp_path / "api", nu=0.45, engine="exact", seed=4,
+                            workers=1, progress=False)
+    assert main(["fit", str(manifest), "--nu", "0.45", "--engine", "exact", "--seed", "4",
+                 "--workers", "1", "--out", str(tmp_path / "cli"), "--no-progress"]) == 0
+    cli = (tmp_path / "cli" / "summary.csv").read_bytes()
+    assert (tmp_path / "api" / "summary.csv").read_bytes() == cli
+    assert list(table["trace_id"]) == ["a", "b"] and table["E_pa"].notna().all()
+    with pytest.raises(pb.errors.InputError, match="as keywords .*nu.* or as options="):
+        pb.fit_campaign(manifest, tmp_path / "x", pb.fit_options(), nu=0.45)
