@@ -70,3 +70,29 @@ def test_cli_exit_status(capsys):
     assert "no import cycles" in capsys.readouterr().out
     assert _tool().main(["--dot"]) == 0
     assert capsys.readouterr().out.startswith("digraph palpbayes {")
+
+
+def _hand_table_parts() -> set[str]:
+    """The parts named in the first column of docs/layout.md's table "The parts and their one
+    job" (``campaign/`` -> campaign, ``api.py`` -> api, ``__init__.py`` -> palpbayes)."""
+    import re
+
+    text = _tool().LAYOUT.read_text(encoding="utf-8")
+    table = text.split("## The parts and their one job", 1)[1].split("\n\n", 2)[1]
+    names = set()
+    for row in table.splitlines()[2:]:
+        first = row.split("|")[1]
+        names |= {n.rstrip("/").removesuffix(".py") for n in re.findall(r"`([^`]+)`", first)}
+    return {"palpbayes" if n == "__init__" else n for n in names}
+
+
+def test_docs_layout_matches_the_code():
+    """docs/layout.md's generated block (parts, modules, arrows, long modules) is what the code
+    gives now, and its hand-written table has a row for every part and none for a gone one."""
+    tool = _tool()
+    assert tool.documented_block() == tool.layout_block(), (
+        "docs/layout.md is stale: run python tools/import_graph.py --layout")
+    parts = set(tool.layers(tool.graph()))
+    hand = _hand_table_parts()
+    assert not parts - hand, f"parts without a row in docs/layout.md: {sorted(parts - hand)}"
+    assert not hand - parts, f"rows of docs/layout.md naming no part: {sorted(hand - parts)}"
