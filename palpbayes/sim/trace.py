@@ -26,6 +26,7 @@ N = 3840), so a range measured over a long record overstates the ±3 sigma conve
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from scipy.signal import lfilter
@@ -39,7 +40,7 @@ from ..twin import FOOTPRINT_COLUMNS, Specimen
 from ._checks import ar1_phi, finite, nonneg, positive
 from .force import onset_force_profile, solid_force, solve_series_compliance, true_force
 
-__all__ = ["ar1_noise", "simulate_trace"]
+__all__ = ["ar1_noise", "TraceSpec", "trace_spec", "simulate_trace"]
 
 
 def ar1_noise(n: int, sigma: float, phi: float, w: np.ndarray) -> np.ndarray:
@@ -88,60 +89,16 @@ def _motion(travel: float, speed: float, rate: float, hold: float,
     return t, s
 
 
-def simulate_trace(
-    E: float | Solid,
-    tip: Tip,
-    *,
-    nu: float = DEFAULT_NU,
-    z_surf: float = 0.1,
-    thickness: float | None = None,
-    depth: float | None = None,
-    approach: float = 1e-3,
-    speed: float = 50 / 60e3,
-    rate: float = 800.0,
-    hold: float = 0.0,
-    retract: bool = False,
-    noise_pp: float = PAPER_NOISE_PP,
-    noise_ar1: float = 0.0,
-    force_offset: float = 0.0,
-    drift: float = 0.0,
-    onset_force: float = 0.0,
-    onset_length: float = 0.0,
-    position_noise: float = 0.0,
-    repeatability: float = 0.0,
-    compliance: float = 0.0,
-    base: str | float | None = "free",
-    stiffening: float = 0.0,
-    apex_flat_radius: float = 0.0,
-    block: Specimen | None = None,
-    twin_resolution: str = "fine",
-    rng: np.random.Generator | int | None = None,
-    trace_id: str = "sim",
-    specimen: str = "",
-    material: str = "",
-    repetition: int | None = None,
-    rest_time: float | None = None,
-) -> IndentationTrace:
-    """Simulate one palpation: a tip driven down into an elastic specimen at constant speed.
+@dataclass(frozen=True)
+class TraceSpec:
+    """Everything one simulated palpation is but its modulus, its tip and its random draws:
+    the specimen, the motion, the sensor's errors and the labels (:func:`simulate_trace`).
 
-    The tip starts ``approach`` above the surface, moves down at ``speed`` to the depth
-    ``depth`` below it, optionally holds and retracts at the same speed, and is sampled at
-    ``rate`` at t_k = k/rate, k = 1..N (a sample at the end of each sampling period, so the
-    deepest point is recorded).  With the defaults on a 30 mm specimen (depth 3 mm, approach
-    1 mm, 50 mm/min, 800 Hz) the trace has exactly 4 mm / (0.8333 mm/s) · 800 Hz = **3840
-    samples**, the benchmark trace size.  The model is given in the module docstring.
+    A spec is checked when a trace is simulated from it; ``dataclasses.replace(spec, ...)``
+    (or ``simulate_trace(E, tip, spec, field=value)``) changes a field.
 
-    Parameters
+    Attributes
     ----------
-    E
-        [Pa] Young's modulus, or a hyperelastic solid (:class:`~palpbayes.material.Solid`:
-        a registered law, its natural parameters and its Poisson ratio, ``nu`` then unused)
-        pressed at finite strain in its ``block`` (required): the force is the finite-strain
-        twin's (:func:`~palpbayes.sim.force.solid_force`, on the ``twin_resolution`` mesh),
-        the truth's ``E_true`` its small-strain modulus E0; ``stiffening`` and
-        ``apex_flat_radius`` are linear knobs and refused with it.
-    tip
-        The indenter (tip ``sphere`` is the exact Sneddon law).
     nu
         Poisson ratio [-].
     z_surf
@@ -209,12 +166,90 @@ def simulate_trace(
     twin_resolution
         The block's twin's mesh (default ``fine``, finer than the fits'; ``default`` for a
         quick prediction whose fit is no twin, e.g. :mod:`palpbayes.gap`).
+    trace_id, specimen, material, repetition, rest_time
+        Labels stored in the trace.
+
+    """
+
+    nu: float = DEFAULT_NU
+    z_surf: float = 0.1
+    thickness: float | None = None
+    depth: float | None = None
+    approach: float = 1e-3
+    speed: float = 50 / 60e3
+    rate: float = 800.0
+    hold: float = 0.0
+    retract: bool = False
+    noise_pp: float = PAPER_NOISE_PP
+    noise_ar1: float = 0.0
+    force_offset: float = 0.0
+    drift: float = 0.0
+    onset_force: float = 0.0
+    onset_length: float = 0.0
+    position_noise: float = 0.0
+    repeatability: float = 0.0
+    compliance: float = 0.0
+    base: str | float | None = "free"
+    stiffening: float = 0.0
+    apex_flat_radius: float = 0.0
+    block: Specimen | None = None
+    twin_resolution: str = "fine"
+    trace_id: str = "sim"
+    specimen: str = ""
+    material: str = ""
+    repetition: int | None = None
+    rest_time: float | None = None
+
+
+#: The fields of :class:`TraceSpec`, in order.
+SPEC_FIELDS = tuple(f.name for f in fields(TraceSpec))
+
+
+def trace_spec(spec: TraceSpec | None = None, **changes) -> TraceSpec:
+    """``spec`` (default :class:`TraceSpec`) with ``changes``; an unknown field is an
+    :class:`~palpbayes.errors.InputError` naming it and the fields there are."""
+    unknown = sorted(set(changes) - set(SPEC_FIELDS))
+    if unknown:
+        raise InputError(f"simulate_trace: unknown option(s) {', '.join(unknown)}; the "
+                         f"options are {', '.join(SPEC_FIELDS)} and rng")
+    if spec is None:
+        return TraceSpec(**changes)
+    if not isinstance(spec, TraceSpec):
+        raise InputError(f"spec must be a palpbayes.sim.TraceSpec, got {type(spec).__name__}")
+    return replace(spec, **changes) if changes else spec
+
+
+def simulate_trace(E: float | Solid, tip: Tip, spec: TraceSpec | None = None, *,
+                   rng: np.random.Generator | int | None = None,
+                   **changes) -> IndentationTrace:
+    """Simulate one palpation: a tip driven down into an elastic specimen at constant speed.
+
+    The tip starts ``approach`` above the surface, moves down at ``speed`` to the depth
+    ``depth`` below it, optionally holds and retracts at the same speed, and is sampled at
+    ``rate`` at t_k = k/rate, k = 1..N (a sample at the end of each sampling period, so the
+    deepest point is recorded).  With the defaults on a 30 mm specimen (depth 3 mm, approach
+    1 mm, 50 mm/min, 800 Hz) the trace has exactly 4 mm / (0.8333 mm/s) · 800 Hz = **3840
+    samples**, the benchmark trace size.  The model is given in the module docstring.
+
+    Parameters
+    ----------
+    E
+        [Pa] Young's modulus, or a hyperelastic solid (:class:`~palpbayes.material.Solid`:
+        a registered law, its natural parameters and its Poisson ratio, ``nu`` then unused)
+        pressed at finite strain in its ``block`` (required): the force is the finite-strain
+        twin's (:func:`~palpbayes.sim.force.solid_force`, on the ``twin_resolution`` mesh),
+        the truth's ``E_true`` its small-strain modulus E0; ``stiffening`` and
+        ``apex_flat_radius`` are linear knobs and refused with it.
+    tip
+        The indenter (tip ``sphere`` is the exact Sneddon law).
+    spec
+        The specimen, motion, sensor and labels (:class:`TraceSpec`; default its defaults).
     rng
         numpy Generator or seed.  The draws are made in a fixed order whatever the options
         (one uniform for b, N normals for the force, N normals for z), so the same seed gives
         the same noise across misspecification settings (common random numbers).
-    trace_id, specimen, material, repetition, rest_time
-        Labels stored in the trace.
+    **changes
+        Fields of :class:`TraceSpec` that replace the spec's (``nu=0.45, thickness=0.02``).
 
     Returns
     -------
@@ -237,6 +272,11 @@ def simulate_trace(
         non-zero ``onset_force`` without a positive ``onset_length``, a blunted apex
         (``apex_flat_radius`` > 0) on a tip other than a paraboloid.
     """
+    p = trace_spec(spec, **changes)
+    nu, z_surf, thickness, depth, base, block = (p.nu, p.z_surf, p.thickness, p.depth, p.base,
+                                                 p.block)
+    stiffening, apex_flat_radius, twin_resolution = (p.stiffening, p.apex_flat_radius,
+                                                     p.twin_resolution)
     if not isinstance(tip, Tip):
         raise InputError(f"tip must be a palpbayes.contact.Tip, got {type(tip).__name__}")
     solid = E if isinstance(E, Solid) else None
@@ -271,21 +311,22 @@ def simulate_trace(
                              "(thickness=, depth defaults to 10 % of it)")
         depth = 0.1 * thickness
     depth = positive(depth, "indentation depth [m]")
-    approach = nonneg(approach, "approach distance [m]")
-    speed = positive(speed, "speed [m/s]")
-    rate = positive(rate, "sample rate [Hz]")
-    hold = nonneg(hold, "hold time [s]")
+    approach = nonneg(p.approach, "approach distance [m]")
+    speed = positive(p.speed, "speed [m/s]")
+    rate = positive(p.rate, "sample rate [Hz]")
+    hold = nonneg(p.hold, "hold time [s]")
+    noise_pp = p.noise_pp
     sigma = sigma_from_pp(noise_pp)
-    phi = ar1_phi(noise_ar1)
-    force_offset = finite(force_offset, "force offset [N]")
-    drift = finite(drift, "force drift [N/s]")
-    onset_force = finite(onset_force, "onset force [N]")
-    onset_length = nonneg(onset_length, "onset length [m]")
+    phi = ar1_phi(p.noise_ar1)
+    force_offset = finite(p.force_offset, "force offset [N]")
+    drift = finite(p.drift, "force drift [N/s]")
+    onset_force = finite(p.onset_force, "onset force [N]")
+    onset_length = nonneg(p.onset_length, "onset length [m]")
     if onset_force != 0 and onset_length == 0:
         raise InputError("a gradual onset (onset_force != 0) needs a positive onset_length [m]")
-    position_noise = nonneg(position_noise, "position noise [m]")
-    repeatability = nonneg(repeatability, "repeatability [m]")
-    compliance = nonneg(compliance, "compliance [m/N]")
+    position_noise = nonneg(p.position_noise, "position noise [m]")
+    repeatability = nonneg(p.repeatability, "repeatability [m]")
+    compliance = nonneg(p.compliance, "compliance [m/N]")
     stiffening = nonneg(stiffening, "stiffening beta")
     apex_flat_radius = nonneg(apex_flat_radius, "apex flat radius [m]")
     if thickness is None:
@@ -302,7 +343,7 @@ def simulate_trace(
     force_of_depth(np.array([depth]))  # validate geometry before drawing anything
 
     gen = np.random.default_rng(rng)
-    t, s = _motion(approach + depth, speed, rate, hold, retract)
+    t, s = _motion(approach + depth, speed, rate, hold, p.retract)
     n = t.size
     u = gen.uniform(-1.0, 1.0)
     w_force = gen.standard_normal(n)
@@ -347,7 +388,7 @@ def simulate_trace(
         "speed": speed,
         "rate": rate,
         "hold": hold,
-        "retract": bool(retract),
+        "retract": bool(p.retract),
     }
     if isinstance(rng, int | np.integer):
         metadata["seed"] = int(rng)
@@ -358,7 +399,7 @@ def simulate_trace(
         metadata.update({c: getattr(block, c[:-2]) for c in FOOTPRINT_COLUMNS
                          if getattr(block, c[:-2]) is not None})
     return IndentationTrace(
-        time=t, z=z_rec, force=f_rec, tip=tip, trace_id=trace_id, specimen=specimen,
-        material=material, thickness=thickness, repetition=repetition, rest_time=rest_time,
-        source=f"simulated trace {trace_id!r}", metadata=metadata,
+        time=t, z=z_rec, force=f_rec, tip=tip, trace_id=p.trace_id, specimen=p.specimen,
+        material=p.material, thickness=thickness, repetition=p.repetition,
+        rest_time=p.rest_time, source=f"simulated trace {p.trace_id!r}", metadata=metadata,
     )

@@ -451,3 +451,27 @@ def test_paper_constants():
     np.testing.assert_allclose(err[~ok], [-11.53, -5.88, -4.23], atol=0.01)
     np.testing.assert_allclose(df["err_pct"][~ok], [-10.8, -4.1, -5.9])
     assert PAPER_TIPS["paraboloid"].radius == 0.0117 and PAPER_TIPS["sphere"].kind == "sphere"
+
+
+def test_a_trace_spec_gives_the_keywords_trace_bit_for_bit_and_names_unknown_fields():
+    """issue 57: the simulator's options are one dataclass (TraceSpec); keywords still work
+    and change a spec's fields, and an unknown one is named with the fields there are."""
+    from dataclasses import replace
+
+    from palpbayes.sim import TraceSpec, simulate_trace
+
+    tip = PAPER_TIPS["sphere"]
+    kw = dict(nu=0.45, thickness=0.02, noise_ar1=0.3, drift=1e-3, hold=0.5, retract=True,
+              trace_id="t", material="gel")
+    a = simulate_trace(60e3, tip, rng=4, **kw)
+    spec = TraceSpec(**kw)
+    b = simulate_trace(60e3, tip, spec, rng=4)
+    for name in ("time", "z", "force"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert a.metadata == b.metadata and (b.trace_id, b.material) == ("t", "gel")
+    c = simulate_trace(60e3, tip, spec, rng=4, nu=0.3)  # a keyword changes a spec field
+    d = simulate_trace(60e3, tip, replace(spec, nu=0.3), rng=4)
+    np.testing.assert_array_equal(c.force, d.force)
+    assert c.metadata["nu_true"] == 0.3 and not np.array_equal(c.force, b.force)
+    with pytest.raises(InputError, match="unknown option.*thicknes\\b.*the options are nu, "):
+        simulate_trace(60e3, tip, rng=4, thicknes=0.02)
