@@ -44,7 +44,7 @@ _LAZY = {
     "fit": ("api", "fit"),
     "Fit": ("api", "Fit"),
     "load_fit": ("api", "load_fit"),
-    "fit_options": ("api", "fit_options"),
+    "fit_options": ("campaign.options", "fit_options"),
     "fit_campaign": ("api", "fit_campaign"),
     "compare": ("campaign.compare", "compare_campaign"),
     "run_pipeline": ("campaign.pipeline", "run_pipeline"),

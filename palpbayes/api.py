@@ -27,11 +27,9 @@ import numpy as np
 import pandas as pd
 
 from .api_fit import Fit, load_fit
-from .bayes import BudgetSpec, PriorSpec, SamplerSettings
-from .bayes.noisemodels import EXACT_NOISE_MODELS, get_noise_model
 from .campaign.fitjob import fit_trace_rows
-from .campaign.options import LAYER_MODES, FitOptions, LawOptions
-from .contact import TIP_PARAMETERS, Tip, check_nu
+from .campaign.options import FitOptions, fit_options
+from .contact import TIP_PARAMETERS, Tip
 from .errors import FitError, GeometryError, InputError
 from .io.recording import AFM_META_KEYS, READER_OPTIONS
 from .trace import IndentationTrace
@@ -108,102 +106,6 @@ def check_specimen(specimen: Specimen | str | None, thickness: float | str | Non
         raise InputError("--specimen and --half-space contradict each other: the specimen's "
                          "twin models the block, the half-space the paper's model")
     return specimen
-
-
-def fit_options(*, method: str = "bayes", nu: float | None = None,
-                nu_range: tuple[float, float] | None = None, layer: str = "auto",
-                bonding: str = "unknown", thickness_range: tuple[float, float] | None = None,
-                specimen: Specimen | None = None, platens: str = "unknown",
-                engine: str = "emcee", noise: str = "gaussian", noise_pp: float | None = None,
-                f_unc: float | None = None, baseline: str = "constant", tare: bool = False,
-                surface_prior: str = "loading", fit_fraction: float | None = None,
-                max_depth: float | None = None, radius_tolerance: float = 0.01,
-                gain_sd: float = 0.01, compliance_max: float = 2e-6, model_form: bool = True,
-                max_steps: int = 20000, seed: int = 0, strict: bool = False,
-                progress: bool | None = None, budget: BudgetSpec | None = None,
-                law: str | LawOptions = "linear", law_shape: str | None = None,
-                law_mesh: str = "default", instron_strain: float = 0.2) -> FitOptions:
-    """The :class:`~palpbayes.campaign.options.FitOptions` of a fit, from the command line's
-    options by their Python names and defaults (``palpbayes fit --help``): the one place both
-    ways in build them.
-
-    Parameters
-    ----------
-    nu, nu_range
-        Poisson ratio [-] (None: a manifest row's, else 0.3 with a note), or a uniform range
-        for the budget (the fit at its midpoint); not both.
-    layer
-        ``"auto"`` (a layer wherever the thickness is known), ``"off"`` (``--half-space``)
-        or ``"unknown"`` (``--thickness unknown``).
-    noise_pp, f_unc
-        [N] Sensor peak-to-peak noise (the sigma prior) and the contact threshold (default:
-        the noise spec, else 6 sd of the baseline).
-    radius_tolerance, gain_sd, compliance_max
-        The uncertainty budget's inputs.
-    budget
-        A whole :class:`~palpbayes.bayes.BudgetSpec` instead (e.g. ``BudgetSpec.none()``:
-        the statistical interval alone); then ``nu_range`` only sets the fit's nu.
-    max_steps, progress
-        emcee's step cap and progress bars (None: on a terminal).
-    law, law_shape, law_mesh, instron_strain
-        The material law (``--law``: ``"linear"``, the paper's, or a registered hyperelastic
-        law, or a whole :class:`~palpbayes.campaign.options.LawOptions`), its shape
-        parameters fixed or narrowed (``"alpha_1=8,nu=0.1"``, ``"alpha_1=4:12"``), the
-        finite-strain twin's mesh and the strain of ``E_instron_law`` (docs/reference.md,
-        "Finite strain in the fits").
-
-    Raises
-    ------
-    InputError
-        A value out of range or options that contradict each other.
-    """
-    if nu is not None and nu_range is not None:
-        raise InputError("give --nu or --nu-range, not both")
-    if nu_range is not None:
-        lo, hi = (check_nu(v) for v in nu_range)
-        if hi < lo:
-            raise InputError(f"--nu-range {lo} {hi}: LO must not exceed HI")
-        nu, budget_nu = 0.5 * (lo + hi), (lo, hi)
-    else:
-        nu, budget_nu = (None if nu is None else check_nu(nu)), None
-    for name, v in (("radius_tolerance", radius_tolerance), ("gain_sd", gain_sd),
-                    ("compliance_max", compliance_max)):
-        if not (math.isfinite(v) and v >= 0):
-            raise InputError(f"--{name.replace('_', '-')} {v!r} must be a non-negative number")
-    for name, v in (("noise_pp", noise_pp), ("f_unc", f_unc)):
-        if v is not None and not (math.isfinite(v) and v > 0):
-            what = ("the sensor's peak-to-peak noise" if name == "noise_pp"
-                    else "the contact threshold")
-            raise InputError(f"--{name.replace('_', '-')} {v!r} must be a positive force in "
-                             f"newtons ({what})")
-    get_noise_model(noise)  # an unknown model: its own error, before the engine's
-    if engine == "exact" and (noise not in EXACT_NOISE_MODELS or surface_prior == "soft"):
-        what = (f"--noise {noise}" if noise not in EXACT_NOISE_MODELS
-                else "--surface-prior soft")
-        raise InputError(f"--engine exact takes --noise {' or '.join(EXACT_NOISE_MODELS)} and "
-                         f"--surface-prior loading, not {what}: use --engine emcee for it")
-    if layer not in LAYER_MODES:
-        raise InputError(f"unknown layer mode {layer!r}; use one of {', '.join(LAYER_MODES)}")
-    if not isinstance(law, LawOptions):
-        from .campaign.options import parse_law_shape
-
-        name = str(law).strip().lower()
-        law = LawOptions(name, () if name == "linear" or not law_shape
-                         else parse_law_shape(name, law_shape), law_mesh, instron_strain)
-        if name == "linear" and law_shape:
-            raise InputError("--law-shape needs a hyperelastic law (--law NAME)")
-    if budget is None:
-        budget = BudgetSpec(nu_range=budget_nu, radius_tolerance=radius_tolerance,
-                            gain_sd=gain_sd, compliance_max=compliance_max)
-    return FitOptions(
-        method=method, nu=nu, layer=layer, bonding=bonding,
-        thickness_range=None if thickness_range is None else tuple(thickness_range),
-        f_unc=f_unc if f_unc is not None else noise_pp, fit_fraction=fit_fraction,
-        max_depth=max_depth, noise=noise, baseline=baseline, tare=tare,
-        priors=PriorSpec(noise_pp=noise_pp, surface=surface_prior), budget=budget,
-        settings=SamplerSettings(max_steps=max_steps, progress=progress), seed=seed,
-        strict=strict, engine=engine, model_form=model_form, specimen=specimen,
-        platens=platens, law=law)
 
 
 def read(path: str | os.PathLike, *, tip: str | Tip | None = None,

@@ -35,7 +35,7 @@ def add_law_options(p: argparse.ArgumentParser) -> None:
 
 
 def law_options_from_args(args: argparse.Namespace) -> dict:
-    """:func:`palpbayes.api.fit_options`' law keywords from the parsed arguments."""
+    """:func:`palpbayes.campaign.options.fit_options`' law keywords from the parsed arguments."""
     return {"law": getattr(args, "law", "linear"), "law_shape": getattr(args, "law_shape", None),
             "law_mesh": getattr(args, "law_mesh", "default"),
             "instron_strain": getattr(args, "instron_strain", INSTRON_STRAIN)}

@@ -265,8 +265,9 @@ def add_trace_options(p: argparse.ArgumentParser, title: str = "single trace") -
 
 def options_from_args(args: argparse.Namespace) -> FitOptions:
     """Build :class:`FitOptions` from parsed arguments (validated) by
-    :func:`palpbayes.api.fit_options`, the function :func:`palpbayes.fit` uses too."""
-    from ..api import fit_options  # here: building the parser does not load the fitting code
+    :func:`palpbayes.campaign.options.fit_options`, the function :func:`palpbayes.fit` uses
+    too."""
+    from ..campaign.options import fit_options  # here: the parser does not load the fits
 
     if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers {args.workers} must be at least 1")
