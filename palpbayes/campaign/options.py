@@ -108,10 +108,6 @@ class LawOptions:
             raise InputError(f"--instron-strain {self.instron_strain!r} must be a compressive "
                              "strain in (0, 0.95), e.g. 0.2 for 5 mm of a 25 mm block")
 
-    @property
-    def is_linear(self) -> bool:
-        return self.name == LINEAR
-
     @staticmethod
     def names() -> list[str]:
         """``linear`` and the registered laws."""

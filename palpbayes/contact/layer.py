@@ -311,11 +311,6 @@ class ProfileTable:
     lam: np.ndarray
     tail_slope: float
 
-    @property
-    def chi_max(self) -> float:
-        """Largest tabulated chi [-] (a/h = :data:`LAMBDA_MAX`)."""
-        return float(self.chi[-1])
-
     def factor(self, chi: np.ndarray) -> np.ndarray:
         """f(chi) [-] (1 at chi <= 0)."""
         return _LogTable(self.chi, self.log_factor, self.tail_slope).factor(chi)

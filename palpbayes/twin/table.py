@@ -142,10 +142,6 @@ class TwinTable:
         """d ln f / d chi on each interval of the grid."""
         return np.diff(self.log_factor) / np.diff(self.chi)
 
-    def width_effect(self) -> np.ndarray:
-        """w = f/f_layer [-] at the solved points: what the finite width changes."""
-        return self.points_factor / self.points_layer
-
     def arrays(self) -> dict[str, np.ndarray]:
         """The table as the disk cache keeps it: the points and the lookup table with the
         stamp of the code that made it (:func:`derived_stamp`)."""

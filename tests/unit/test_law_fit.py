@@ -91,7 +91,7 @@ def test_law_geometry_proxies():
 
 # ------------------------------------------------------------------------- options
 def test_law_options_and_the_traces_law():
-    assert FitOptions().law == LawOptions() and LawOptions().is_linear
+    assert FitOptions().law == LawOptions() and LawOptions().name == "linear"
     assert parse_law_shape("hyperfoam", "alpha_1=4:12, nu=0.1") == (
         ("alpha_1", (4.0, 12.0)), ("nu", (0.1,)))
     for bad, match in (("beta=1", "shape parameters"), ("alpha_1=40", "must lie"),

@@ -181,7 +181,7 @@ def test_every_tip_has_a_layer_factor(tip):
 
 def test_thin_layers_continue_as_a_power_law_and_bad_input_is_named():
     tab = layer.profile_table(2.0, 0.5, "bonded")
-    beyond = tab.factor(np.array([tab.chi_max, 1.5 * tab.chi_max]))
+    beyond = tab.factor(np.array([tab.chi[-1], 1.5 * tab.chi[-1]]))  # the last tabulated chi
     assert beyond[1] > beyond[0] and np.isfinite(beyond).all()
     with pytest.raises(GeometryError, match="thickness"):
         thickness_factor(1e-3, Tip("flat", radius=0.01), -0.02, 0.3)
