@@ -1,4 +1,5 @@
-"""Sensor-noise conventions shared by the simulator and the priors.
+"""Sensor-noise conventions shared by the simulator and the priors, and the AR(1) noise the
+simulators draw (:func:`ar1_noise`).
 
 **Peak-to-peak to sigma.**  A force sensor's noise is specified as a peak-to-peak (p-p) value;
 palpbayes reads it as ±3 sigma, i.e. sigma = p-p / 6, the range holding 99.7 % of Gaussian
@@ -16,7 +17,7 @@ import numpy as np
 from .errors import InputError
 
 __all__ = ["PP_TO_SIGMA", "PAPER_NOISE_PP", "MAD_TO_SIGMA", "NOISE_SCALE_FACTOR", "sigma_from_pp",
-           "pp_from_sigma", "noise_scale_mismatch", "mad_sd", "acf1"]
+           "pp_from_sigma", "noise_scale_mismatch", "mad_sd", "acf1", "ar1_noise"]
 
 #: 1/Phi^-1(3/4): the median absolute deviation of normal values times this is their sd.
 MAD_TO_SIGMA = 1.4826
@@ -101,3 +102,21 @@ def acf1(x, undefined: float = 0.0) -> float:
     x = x - x.mean()
     den = float(x @ x)
     return float(x[1:] @ x[:-1]) / den if den > 0 else float(undefined)
+
+
+def ar1_noise(n: int, sigma: float, phi: float, w: np.ndarray) -> np.ndarray:
+    """Stationary Gaussian AR(1) noise from standard normal draws ``w`` (length n).
+
+    e(0) = sigma·w(0), e(t) = phi·e(t-1) + sqrt(1 - phi²)·sigma·w(t), so every e(t) has sd sigma
+    whatever phi, and corr(e(t), e(t-k)) = phi^k.
+    """
+    from scipy.signal import lfilter  # here: importing the conventions stays light
+
+    w = np.asarray(w, dtype=float)[:n]
+    if phi == 0:
+        return sigma * w
+    e = np.empty(n)
+    e[0] = sigma * w[0]
+    e[1:], _ = lfilter([math.sqrt(1.0 - phi * phi) * sigma], [1.0, -phi], w[1:],
+                       zi=[phi * e[0]])
+    return e

@@ -29,34 +29,17 @@ import math
 from dataclasses import dataclass, fields, replace
 
 import numpy as np
-from scipy.signal import lfilter
 
 from ..contact import DEFAULT_NU, Tip, check_nu, effective_modulus
 from ..errors import InputError
 from ..material import Solid
-from ..noise import PAPER_NOISE_PP, sigma_from_pp
+from ..noise import PAPER_NOISE_PP, ar1_noise, sigma_from_pp
 from ..trace import IndentationTrace
 from ..twin import FOOTPRINT_COLUMNS, Specimen
 from ._checks import ar1_phi, finite, nonneg, positive
 from .force import onset_force_profile, solid_force, solve_series_compliance, true_force
 
 __all__ = ["ar1_noise", "TraceSpec", "trace_spec", "simulate_trace"]
-
-
-def ar1_noise(n: int, sigma: float, phi: float, w: np.ndarray) -> np.ndarray:
-    """Stationary Gaussian AR(1) noise from standard normal draws ``w`` (length n).
-
-    e(0) = sigma·w(0), e(t) = phi·e(t-1) + sqrt(1 - phi²)·sigma·w(t), so every e(t) has sd sigma
-    whatever phi, and corr(e(t), e(t-k)) = phi^k.
-    """
-    w = np.asarray(w, dtype=float)[:n]
-    if phi == 0:
-        return sigma * w
-    e = np.empty(n)
-    e[0] = sigma * w[0]
-    e[1:], _ = lfilter([math.sqrt(1.0 - phi * phi) * sigma], [1.0, -phi], w[1:],
-                       zi=[phi * e[0]])
-    return e
 
 
 #: Sample periods by which the motion may end after the last sample (rounding in T·rate).

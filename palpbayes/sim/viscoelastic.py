@@ -43,10 +43,9 @@ import numpy as np
 from ..contact import PowerLawKernel, PronyKernel, Tip, exponent, get_law, hereditary_force
 from ..contact import prefactor as tip_prefactor
 from ..errors import GeometryError, InputError
-from ..noise import PAPER_NOISE_PP, pp_from_sigma, sigma_from_pp
+from ..noise import PAPER_NOISE_PP, ar1_noise, pp_from_sigma, sigma_from_pp
 from ..trace import IndentationTrace
 from ._checks import ar1_phi, finite, nonneg, positive
-from .trace import ar1_noise
 
 __all__ = ["ramp_hold_motion", "simulate_viscoelastic", "multi_speed", "adhesive_pull_off",
            "add_baseline_terms", "noise_free_force", "VISCO_BASELINE_TIME"]
