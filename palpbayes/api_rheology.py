@@ -16,7 +16,6 @@ recording or a manifest (a :class:`RheologyRun`: ``summary()`` is ``rheology.csv
 
 from __future__ import annotations
 
-import math
 import os
 import shutil
 import tempfile
@@ -28,9 +27,10 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from .contact import Tip, check_nu
+from .contact import Tip
 from .errors import InputError
 from .outputs import RHEOLOGY_DIR, RHEOLOGY_TABLE
+from .rheology.results import RheologyOptions, rheology_options
 from .trace import IndentationTrace
 
 if TYPE_CHECKING:
@@ -41,112 +41,6 @@ if TYPE_CHECKING:
 
 __all__ = ["RheologyOptions", "RheologyRun", "rheology_options", "run_rheology",
            "fit_rheology", "manifest_traces"]
-
-
-@dataclass(frozen=True)
-class RheologyOptions:
-    """What a viscoelastic run is asked to do, checked (:func:`rheology_options`).
-
-    Attributes
-    ----------
-    rheology
-        The models fitted to every trace (``"power-law"``, ``"sls"``, ``"elastic"``; several
-        are compared by PSIS-LOO).
-    segments
-        The fitted segments, comma-separated (``approach,hold`` unless chosen).
-    t0
-        [s] Reference time of the power law.
-    nu
-        Poisson's ratio (None: a manifest row's, else moduli as E* only).
-    drag
-        A viscous drag term (None: when the retract is fitted).
-    baseline, engine, adhesion
-        ``"constant"|"linear"``, ``"grid"|"exact"|"emcee"``, ``"keep"|"cut"``
-        (:func:`palpbayes.rheology.fit.fit_rheology`).
-    peer
-        Read every trace as this peer does (``"pyfmrheo"``), or None.
-    compression_speed_mm_min
-        [mm/min] Cross-head speed of the compression test set beside the fit.
-    seed
-        Seed of the draws (+ the trace's position).
-    """
-
-    rheology: tuple[str, ...] = ("power-law",)
-    segments: str = "approach,hold"
-    t0: float = 1.0
-    nu: float | None = None
-    drag: bool | None = None
-    baseline: str = "constant"
-    engine: str = "grid"
-    adhesion: str = "keep"
-    peer: str | None = None
-    compression_speed_mm_min: float = 50.0
-    seed: int = 0
-
-
-def rheology_options(rheology: str | Sequence[str] = "power-law", *,
-                     segments: str | Sequence[str] | None = None, t0: float = 1.0,
-                     nu: float | None = None, drag: bool | str | None = None,
-                     baseline: str = "constant", engine: str = "grid", adhesion: str = "keep",
-                     peer: str | None = None, compression_speed_mm_min: float = 50.0,
-                     seed: int = 0) -> RheologyOptions:
-    """Check a viscoelastic run's options (the checks ``palpbayes fit --rheology`` makes).
-
-    Parameters are :class:`RheologyOptions`'; ``rheology`` may be one name, a comma-separated
-    list or a sequence, ``segments`` names or a comma-separated string, ``drag`` also
-    ``"auto"|"on"|"off"`` as the command line spells it.
-
-    Raises
-    ------
-    InputError
-        An unknown model, a bad t0, compression speed, nu, seed or segment list, or options
-        that do not go together (the message names them).
-    """
-    from .rheology.cycle import check_segments
-    from .rheology.posterior import RHEOLOGIES
-
-    names = (tuple(n.strip() for n in rheology.split(",") if n.strip())
-             if isinstance(rheology, str) else tuple(rheology))
-    names = tuple(dict.fromkeys(names))
-    bad = [n for n in names if n not in RHEOLOGIES]
-    if bad or not names:
-        raise InputError(f"unknown model {bad[0] if bad else rheology!r}; use "
-                         f"{', '.join(RHEOLOGIES)} (or several: elastic,power-law,sls)")
-    if not (isinstance(t0, int | float) and math.isfinite(t0) and t0 > 0):
-        raise InputError(f"--t0 {t0!r} must be a positive time in seconds")
-    if not (isinstance(compression_speed_mm_min, int | float)
-            and math.isfinite(compression_speed_mm_min) and compression_speed_mm_min > 0):
-        raise InputError(f"--compression-speed {compression_speed_mm_min!r} must be a "
-                         "positive speed in mm/min")
-    if isinstance(seed, bool) or not (isinstance(seed, int) and seed >= 0):
-        raise InputError(f"seed {seed!r} must be a non-negative whole number")
-    if isinstance(drag, str):
-        if drag not in ("auto", "on", "off"):
-            raise InputError(f"drag {drag!r}: use auto, on or off (or None, True, False)")
-        drag = {"auto": None, "on": True, "off": False}[drag]
-    nu = None if nu is None else check_nu(nu)
-    if peer is not None:
-        for flag, given in (("--segments", segments is not None), ("--t0", t0 != 1.0),
-                            ("--drag", drag is not None)):
-            if given:
-                raise InputError(f"--peer-compatible {peer} sets {flag} as the peer does; "
-                                 f"leave {flag} out")
-        if "sls" in names:
-            raise InputError(f"--peer-compatible {peer} fits the retract by Ting's rule, which "
-                             "palpbayes fits with the power law only: use --rheology power-law "
-                             "(or elastic,power-law)")
-        segments = "approach,retract"
-    seg = check_segments(segments or "approach,hold")
-    if adhesion == "cut" and "retract" not in seg:
-        raise InputError(f"--adhesion cut cuts the pull-off out of the retract, which "
-                         f"--segments {','.join(seg)} does not fit: add the retract (e.g. "
-                         "--segments approach,retract) or leave --adhesion at keep")
-    if "retract" in seg and "sls" in names:
-        raise InputError("--segments with the retract is fitted with the power law only "
-                         "(Ting's rule under the SLS is not linear in its moduli); use "
-                         "--rheology power-law, or --segments approach,hold for the SLS")
-    return RheologyOptions(names, ",".join(seg), float(t0), nu, drag, baseline, engine,
-                           adhesion, peer, float(compression_speed_mm_min), int(seed))
 
 
 def run_rheology(traces: list, options: RheologyOptions, out: str | os.PathLike, *,
@@ -162,11 +56,8 @@ def run_rheology(traces: list, options: RheologyOptions, out: str | os.PathLike,
     o = options
     pools = (SpeedPools(manifest, seed=o.seed) if manifest is not None
              and "power-law" in o.rheology and o.peer is None else None)
-    table = fit_traces(traces, o.rheology, out, segments=o.segments, t0=o.t0, nu=o.nu,
-                       seed=o.seed, compression_speed=o.compression_speed_mm_min / 6e4,
-                       drag=o.drag, baseline=o.baseline, engine=o.engine,
-                       adhesion=o.adhesion, peer=o.peer, progress=progress,
-                       total=len(traces), on_fit=None if pools is None else pools.add)
+    table = fit_traces(traces, o, out, progress=progress, total=len(traces),
+                       on_fit=None if pools is None else pools.add)
     return table, (None if pools is None else pools.finish(out))
 
 

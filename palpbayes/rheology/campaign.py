@@ -38,7 +38,7 @@ alone).
 In Python::
 
     pools = SpeedPools(read_manifest(path))
-    fit_traces(traces, "power-law", out, on_fit=pools.add)
+    fit_traces(traces, rheology_options("power-law"), out, on_fit=pools.add)
     pooled = pools.finish(out)
 """
 

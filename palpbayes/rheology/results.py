@@ -22,25 +22,30 @@ are removed first.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from ..contact import check_nu
 from ..errors import InputError, PalpbayesError
 from ..flagcodes import RHEOLOGY_CODES, listed_flag_columns
 from ..io.atomic import write_csv_atomic
 from ..outputs import RHEOLOGY_TABLE, rheology_fit_path
 from ..trace import IndentationTrace
 from .compression import PAPER_COMPRESSION_SPEED
-from .cycle import DEFAULT_SEGMENTS
+from .cycle import check_segments
 from .fit import RheologyFit, fit_rheology
 from .peer import PEERS, peer_compatible
+from .posterior import RHEOLOGIES
 from .store import clear_rheology_outputs, save_rheology_fit
 
-__all__ = ["RHEOLOGY_TABLE", "summary_row", "fit_traces", "UNIT_SUFFIXES"]
+__all__ = ["RHEOLOGY_TABLE", "RheologyOptions", "rheology_options", "summary_row", "fit_traces",
+           "UNIT_SUFFIXES"]
 
 #: Column-name suffix of each parameter unit in ``rheology.csv`` (a parameter in Pa ends in
 #: ``_pa``; other units fall back to their lower-case spelling).
@@ -97,6 +102,112 @@ def summary_row(trace: IndentationTrace, fit: RheologyFit,
     return row
 
 
+@dataclass(frozen=True)
+class RheologyOptions:
+    """What a viscoelastic run is asked to do, checked (:func:`rheology_options`).
+
+    Attributes
+    ----------
+    rheology
+        The models fitted to every trace (``"power-law"``, ``"sls"``, ``"elastic"``; several
+        are compared by PSIS-LOO).
+    segments
+        The fitted segments, comma-separated (``approach,hold`` unless chosen).
+    t0
+        [s] Reference time of the power law.
+    nu
+        Poisson's ratio (None: a manifest row's, else moduli as E* only).
+    drag
+        A viscous drag term (None: when the retract is fitted).
+    baseline, engine, adhesion
+        ``"constant"|"linear"``, ``"grid"|"exact"|"emcee"``, ``"keep"|"cut"``
+        (:func:`palpbayes.rheology.fit.fit_rheology`).
+    peer
+        Read every trace as this peer does (``"pyfmrheo"``), or None.
+    compression_speed_mm_min
+        [mm/min] Cross-head speed of the compression test set beside the fit.
+    seed
+        Seed of the draws (+ the trace's position).
+    """
+
+    rheology: tuple[str, ...] = ("power-law",)
+    segments: str = "approach,hold"
+    t0: float = 1.0
+    nu: float | None = None
+    drag: bool | None = None
+    baseline: str = "constant"
+    engine: str = "grid"
+    adhesion: str = "keep"
+    peer: str | None = None
+    compression_speed_mm_min: float = 50.0
+    seed: int = 0
+
+
+def rheology_options(rheology: str | Sequence[str] = "power-law", *,
+                     segments: str | Sequence[str] | None = None, t0: float = 1.0,
+                     nu: float | None = None, drag: bool | str | None = None,
+                     baseline: str = "constant", engine: str = "grid", adhesion: str = "keep",
+                     peer: str | None = None, compression_speed_mm_min: float = 50.0,
+                     seed: int = 0) -> RheologyOptions:
+    """Check a viscoelastic run's options (the checks ``palpbayes fit --rheology`` makes).
+
+    Parameters are :class:`RheologyOptions`'; ``rheology`` may be one name, a comma-separated
+    list or a sequence, ``segments`` names or a comma-separated string, ``drag`` also
+    ``"auto"|"on"|"off"`` as the command line spells it.
+
+    Raises
+    ------
+    InputError
+        An unknown model, a bad t0, compression speed, nu, seed or segment list, or options
+        that do not go together (the message names them).
+    """
+
+    names = (tuple(n.strip() for n in rheology.split(",") if n.strip())
+             if isinstance(rheology, str) else tuple(rheology))
+    names = tuple(dict.fromkeys(names))
+    bad = [n for n in names if n not in RHEOLOGIES]
+    if bad or not names:
+        raise InputError(f"unknown model {bad[0] if bad else rheology!r}; use "
+                         f"{', '.join(RHEOLOGIES)} (or several: elastic,power-law,sls)")
+    if not (isinstance(t0, int | float) and math.isfinite(t0) and t0 > 0):
+        raise InputError(f"--t0 {t0!r} must be a positive time in seconds")
+    if not (isinstance(compression_speed_mm_min, int | float)
+            and math.isfinite(compression_speed_mm_min) and compression_speed_mm_min > 0):
+        raise InputError(f"--compression-speed {compression_speed_mm_min!r} must be a "
+                         "positive speed in mm/min")
+    if isinstance(seed, bool) or not (isinstance(seed, int) and seed >= 0):
+        raise InputError(f"seed {seed!r} must be a non-negative whole number")
+    if isinstance(drag, str):
+        if drag not in ("auto", "on", "off"):
+            raise InputError(f"drag {drag!r}: use auto, on or off (or None, True, False)")
+        drag = {"auto": None, "on": True, "off": False}[drag]
+    nu = None if nu is None else check_nu(nu)
+    if peer is not None and peer not in PEERS:
+        raise InputError(f"peer {peer!r}: palpbayes can read a trace as {', '.join(PEERS)} does")
+    if peer is not None:
+        for flag, given in (("--segments", segments is not None), ("--t0", t0 != 1.0),
+                            ("--drag", drag is not None)):
+            if given:
+                raise InputError(f"--peer-compatible {peer} sets {flag} as the peer does; "
+                                 f"leave {flag} out")
+        if "sls" in names:
+            raise InputError(f"--peer-compatible {peer} fits the retract by Ting's rule, which "
+                             "palpbayes fits with the power law only: use --rheology power-law "
+                             "(or elastic,power-law)")
+        segments = "approach,retract"
+    seg = check_segments(segments or "approach,hold")
+    if adhesion == "cut" and "retract" not in seg:
+        raise InputError(f"--adhesion cut cuts the pull-off out of the retract, which "
+                         f"--segments {','.join(seg)} does not fit: add the retract (e.g. "
+                         "--segments approach,retract) or leave --adhesion at keep")
+    if "retract" in seg and "sls" in names:
+        raise InputError("--segments with the retract is fitted with the power law only "
+                         "(Ting's rule under the SLS is not linear in its moduli); use "
+                         "--rheology power-law, or --segments approach,hold for the SLS")
+    return RheologyOptions(names, ",".join(seg), float(t0), nu, drag, baseline, engine,
+                           adhesion, peer, float(compression_speed_mm_min), int(seed))
+
+
 def _error_row(trace_id: str, source: str, rheology: str, exc: Exception) -> dict:
     what = str(exc) if isinstance(exc, PalpbayesError) else (
         f"the fit failed numerically ({type(exc).__name__}: {exc}); report this record")
@@ -105,49 +216,33 @@ def _error_row(trace_id: str, source: str, rheology: str, exc: Exception) -> dic
 
 
 def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], IndentationTrace]]],
-               rheology: str | Sequence[str], out: str | os.PathLike, *,
-               segments=DEFAULT_SEGMENTS, t0: float = 1.0, nu: float | None = None,
-               seed: int = 0, compression_speed: float = PAPER_COMPRESSION_SPEED,
-               drag: bool | None = None, baseline: str = "constant", engine: str = "grid",
-               adhesion: str = "keep", peer: str | None = None,
-               progress: bool | None = None,
-               total: int | None = None,
+               options: RheologyOptions, out: str | os.PathLike, *,
+               progress: bool | None = None, total: int | None = None,
                on_fit: Callable[[IndentationTrace, RheologyFit], None] | None = None
                ) -> pd.DataFrame:
-    """Fit every trace with :func:`~palpbayes.rheology.fit_rheology` and write
-    ``out/rheology.csv`` (module docstring); returns the table.
+    """Fit every trace with :func:`~palpbayes.rheology.fit_rheology` as ``options`` say and
+    write ``out/rheology.csv`` (module docstring); returns the table.
 
-    ``rheology`` is one model or several (``("power-law", "sls")``): with several, every
-    trace gets a row per model and :func:`~palpbayes.rheology.choice.compare_rheology`'s columns
-    (``elpd_loo``, ``elpd_loo_se``, ``p_loo``, ``pareto_k_max``, ``elpd_diff``,
-    ``elpd_diff_se``, ``preferred``).  ``traces`` holds traces, or (trace_id, source, load)
-    with ``load()`` reading the trace (a manifest's rows: a file that cannot be read keeps its
-    row too).  ``seed`` + the trace's position seeds its draws (the same table every run);
-    ``nu`` gives way to the trace's own ``metadata["nu"]`` (a manifest's ``nu`` column).
+    With several models (``options.rheology``), every trace gets a row per model and
+    :func:`~palpbayes.rheology.choice.compare_rheology`'s columns (``elpd_loo``,
+    ``elpd_loo_se``, ``p_loo``, ``pareto_k_max``, ``elpd_diff``, ``elpd_diff_se``,
+    ``preferred``).  ``options.seed`` + the trace's position seeds its draws (the same table
+    every run); ``options.nu`` gives way to the trace's own ``metadata["nu"]`` (a manifest's
+    ``nu`` column); with ``options.peer`` (``"pyfmrheo"``) every trace is read as the peer
+    does (:func:`~palpbayes.rheology.peer.pyfmrheo_compatible`: straight ramps, its drag
+    fixed), for comparing with the peer's numbers, and each row's ``peer_compatible`` says so.
     Errors of one trace and model (:class:`~palpbayes.errors.PalpbayesError`, or a linear
     algebra failure) go into that row's ``error``; the other models of the trace keep theirs.
-    ``compression_speed`` [m/s] is the compression test's (module docstring).
 
     Parameters
     ----------
     traces
-        Traces, or (trace_id, source, load) triples.
-    rheology
-        ``"power-law"``, ``"sls"`` or several of them.
+        Traces, or (trace_id, source, load) triples with ``load()`` reading the trace (a
+        manifest's rows: a file that cannot be read keeps its row too).
+    options
+        The checked options (:func:`rheology_options`).
     out
         Results folder (created).
-    segments, t0, nu, seed, compression_speed
-        As above; ``segments`` as :func:`~palpbayes.rheology.fit_rheology` takes them.
-    drag, baseline, engine, adhesion
-        A viscous drag term (None: when the retract is fitted), the baseline model
-        (``"constant"`` or ``"linear"``), the posterior engine (``"grid"`` or ``"emcee"``) and
-        what to do with an adhesive pull-off on the retract (``"keep"`` or ``"cut"``), as
-        :func:`~palpbayes.rheology.fit_rheology` takes them.
-    peer
-        ``"pyfmrheo"``: read every trace as PyFMRheo's notebook does
-        (:func:`~palpbayes.rheology.peer.pyfmrheo_compatible`: straight ramps, its drag fixed;
-        its segments, drag and t0 replace the ones above), for comparing with the peer's
-        numbers; each row's ``peer_compatible`` says so.  None (default): the recording.
     progress, total
         A progress bar (None: only on a terminal) and its length.
     on_fit
@@ -162,9 +257,8 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
     from ..progress import progress_bar
     from .choice import compare_rheology
 
-    models = (rheology,) if isinstance(rheology, str) else tuple(rheology)
-    if peer is not None and peer not in PEERS:
-        raise InputError(f"peer {peer!r}: palpbayes can read a trace as {', '.join(PEERS)} does")
+    o = options
+    models, peer = o.rheology, o.peer
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     clear_rheology_outputs(out)  # the table and stored fits of a previous run (--force)
@@ -182,22 +276,22 @@ def fit_traces(traces: Iterable[IndentationTrace | tuple[str, str, Callable[[], 
                 rows.extend(_error_row(trace_id, source, m, exc) for m in models)
                 bar.update(1)
                 continue
-            trace_nu = (trace.metadata or {}).get("nu", nu)
+            trace_nu = (trace.metadata or {}).get("nu", o.nu)
             fits, new = {}, []
-            options = {"segments": segments, "t0": t0, "drag": drag}
+            motion = {"segments": o.segments, "t0": o.t0, "drag": o.drag}
             if peer is not None:
                 try:
-                    trace, options = peer_compatible(trace, peer)
+                    trace, motion = peer_compatible(trace, peer)
                 except PalpbayesError as exc:
                     rows.extend(_error_row(trace_id, source, m, exc) for m in models)
                     bar.update(1)
                     continue
             for m in models:  # one model failing keeps the others' rows
                 try:
-                    fits[m] = fit_rheology(trace, m, nu=trace_nu, baseline=baseline,
-                                           engine=engine, adhesion=adhesion, rng=seed + i,
-                                           **options)
-                    row = summary_row(trace, fits[m], compression_speed)
+                    fits[m] = fit_rheology(trace, m, nu=trace_nu, baseline=o.baseline,
+                                           engine=o.engine, adhesion=o.adhesion,
+                                           rng=o.seed + i, **motion)
+                    row = summary_row(trace, fits[m], o.compression_speed_mm_min / 6e4)
                     if peer is not None:
                         row["peer_compatible"] = peer
                     save_rheology_fit(fits[m], rheology_fit_path(out, trace.trace_id, m),

@@ -70,7 +70,7 @@ def single_fit_report(shared_data, tmp_path_factory):
 @pytest.fixture(scope="module")
 def rheology_report(tmp_path_factory):
     from palpbayes.contact.viscoelastic import PowerLawKernel
-    from palpbayes.rheology import fit_traces
+    from palpbayes.rheology import fit_traces, rheology_options
     from palpbayes.sim import simulate_viscoelastic
 
     out = tmp_path_factory.mktemp("layout-rheology") / "res"
@@ -80,7 +80,7 @@ def rheology_report(tmp_path_factory):
             for speed in (100, 900)]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        fit_traces(recs, ("power-law", "sls"), out, nu=0.45, progress=False)
+        fit_traces(recs, rheology_options(("power-law", "sls"), nu=0.45), out, progress=False)
     return _run(["report", str(out)])
 
 

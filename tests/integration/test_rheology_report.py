@@ -36,6 +36,7 @@ from palpbayes.rheology import (
     fit_traces,
     load_rheology_fit,
     relaxation_grid,
+    rheology_options,
 )
 from palpbayes.sim import simulate_viscoelastic
 
@@ -68,7 +69,8 @@ def folder(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp, warnings.catch_warnings():
         warnings.simplefilter("ignore")
         mp.setattr(rresults, "save_rheology_fit", spy)
-        table = fit_traces([rec], ("power-law", "sls"), out, nu=NU, progress=False)
+        table = fit_traces([rec], rheology_options(("power-law", "sls"), nu=NU), out,
+                           progress=False)
     return out, table, saved
 
 
@@ -218,7 +220,7 @@ def test_a_new_run_removes_the_stored_fits_of_the_last(tmp_path):
     def unreadable():
         raise DataFileError("missing.csv", "no such file")
 
-    table = fit_traces([("gone", "missing.csv", unreadable)], "power-law", out,
+    table = fit_traces([("gone", "missing.csv", unreadable)], rheology_options(), out,
                        progress=False)
     assert "no such file" in table.loc[0, "error"]
     assert not list((out / "rheology").glob("*.nc")) and not (out / "report.pdf").exists()

@@ -151,5 +151,5 @@ def test_the_command_line_offers_the_peers_the_module_imitates():
         from palpbayes.rheology.peer import peer_compatible
         peer_compatible(_cycle(0), "nanite")
     with pytest.raises(InputError, match="can read a trace as pyfmrheo"):  # before any fit
-        from palpbayes.rheology.results import fit_traces
-        fit_traces([], "power-law", "unused", peer="nanite")
+        from palpbayes.rheology.results import rheology_options
+        rheology_options("power-law", peer="nanite")
