@@ -46,7 +46,7 @@ _LAZY = {
     "load_fit": ("api", "load_fit"),
     "fit_options": ("api", "fit_options"),
     "fit_campaign": ("campaign.run", "fit_campaign"),
-    "compare": ("campaign.compare", "compare_campaign"),
+    "compare": ("campaign.comparison", "compare"),
     "run_pipeline": ("campaign.pipeline", "run_pipeline"),
     "load_results": ("campaign.results", "load_results"),
     "example_campaign_dir": ("campaign.pipeline", "example_campaign_dir"),

@@ -4,7 +4,7 @@
 (:func:`palpbayes.campaign.run.fit_campaign`), analyses its compression tests when the
 campaign has ``groundtruth/`` (:func:`palpbayes.groundtruth.analyse`, written by
 :func:`write_groundtruth`) and pools and compares
-(:func:`palpbayes.campaign.compare.compare_campaign`), into one results folder.
+(:func:`palpbayes.campaign.comparison.compare`), into one results folder.
 A results folder fitted before from the same campaign is reused fit by fit: a trace's fit is
 kept only when its inputs are unchanged (the numbers read from its file and its manifest row,
 the options, the palpbayes version: :func:`palpbayes.campaign.partial.read_partial`), every
@@ -124,7 +124,7 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
     Steps: :func:`palpbayes.campaign.fit_campaign` (``palpbayes fit``); when the campaign folder
     has ``groundtruth/``, :func:`palpbayes.groundtruth.analyse` written to ``groundtruth.csv``
     and ``groundtruth_summary.csv`` (``palpbayes groundtruth``); then
-    :func:`palpbayes.campaign.compare.compare_campaign` (``palpbayes compare OUT``).  A results
+    :func:`palpbayes.campaign.comparison.compare` (``palpbayes compare OUT``).  A results
     folder fitted before from the same campaign is reused fit by fit (the campaign's resume):
     a trace whose file, manifest row, options and palpbayes version are unchanged keeps its
     fit, the others are refitted; with other options or by another version every trace is
@@ -168,10 +168,10 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
         from ..groundtruth import analyse
 
         write_groundtruth(*analyse(gt_dir), out)
-    from .compare import compare_campaign
+    from .comparison import compare
 
     # exactly `palpbayes compare OUT`: the campaign's groundtruth/ is found via settings.json
-    compare_campaign(out)
+    compare(out)
     write_gap(out)
     return out
 

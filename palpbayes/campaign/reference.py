@@ -7,7 +7,7 @@
   (:data:`palpbayes.paper.PAPER_ROBOT_ESTIMATES`) with the error recomputed from the printed
   E and the paper's Instron means;
 * :func:`gt_columns` / :func:`paper_columns` fill the reference columns of one comparison row
-  (definitions in :mod:`palpbayes.campaign.compare`).
+  (definitions in :mod:`palpbayes.campaign.comparison`).
 """
 
 from __future__ import annotations
@@ -99,7 +99,7 @@ def new_specimen_sd(lo: float, hi: float, level: float = LEVEL) -> float:
 def gt_columns(row: dict, gt: pd.DataFrame | None, material: str, level: float = LEVEL
                ) -> dict:
     """The ground-truth columns of one comparison row (definitions in
-    :mod:`palpbayes.campaign.compare`).
+    :mod:`palpbayes.campaign.comparison`).
 
     ``row`` needs ``method``, ``E_pa`` and the method's central ``level`` interval for a new
     specimen, ``E_new_lo_pa`` / ``E_new_hi_pa``.  Both methods are treated alike:
