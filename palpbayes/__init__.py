@@ -21,7 +21,7 @@ viscoelastic fits: :func:`fit_rheology`, :func:`compare_rheology` (PSIS-LOO),
 :func:`pool_rheology` (one power law over speeds); the example campaign:
 :func:`example_campaign_dir`; the subpackages :mod:`contact` (the contact laws and their
 formulas), :mod:`errors`, :mod:`stiffening`, :mod:`plots`, :mod:`paper`, :mod:`gap`,
-:mod:`gap_strain`, :mod:`twin`, :mod:`sim`, :mod:`groundtruth` (compression tests),
+:mod:`gap_strain`, :mod:`twin`, :mod:`sim`, :mod:`compression` (compression tests),
 :mod:`material` (the hyperelastic laws and ``Solid``), :mod:`reporting` (the report's tables
 and pages).  They
 are imported when first used (``import palpbayes`` stays quick).
@@ -74,7 +74,7 @@ _LAZY = {
     "gap_strain": ("gap_strain", None),
     "twin": ("twin", None),
     "sim": ("sim", None),
-    "groundtruth": ("groundtruth", None),
+    "compression": ("compression", None),
     "material": ("material", None),
     "reporting": ("reporting", None),
 }

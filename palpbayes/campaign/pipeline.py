@@ -2,7 +2,7 @@
 
 :func:`run_pipeline` fits a campaign folder with both methods
 (:func:`palpbayes.campaign.run.fit_campaign`), analyses its compression tests when the
-campaign has ``groundtruth/`` (:func:`palpbayes.groundtruth.analyse`, written by
+campaign has ``groundtruth/`` (:func:`palpbayes.compression.analyse`, written by
 :func:`write_groundtruth`) and pools and compares
 (:func:`palpbayes.campaign.comparison.compare`), into one results folder.
 A results folder fitted before from the same campaign is reused fit by fit: a trace's fit is
@@ -38,7 +38,7 @@ __all__ = ["example_campaign_dir", "run_pipeline", "write_groundtruth", "check_r
 
 def write_groundtruth(per_file: pd.DataFrame, per_group: pd.DataFrame,
                       out_dir: str | os.PathLike) -> tuple[Path, Path]:
-    """Write the ground-truth tables of :func:`palpbayes.groundtruth.analyse` into ``out_dir``.
+    """Write the ground-truth tables of :func:`palpbayes.compression.analyse` into ``out_dir``.
 
     ``groundtruth.csv`` (one row per test) and ``groundtruth_summary.csv`` (one row per
     material), atomically, floats to 10 significant digits.  Returns the two paths.
@@ -122,7 +122,7 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
     """Fit a campaign (both methods), analyse its ground truth and compare; return out_dir.
 
     Steps: :func:`palpbayes.campaign.fit_campaign` (``palpbayes fit``); when the campaign folder
-    has ``groundtruth/``, :func:`palpbayes.groundtruth.analyse` written to ``groundtruth.csv``
+    has ``groundtruth/``, :func:`palpbayes.compression.analyse` written to ``groundtruth.csv``
     and ``groundtruth_summary.csv`` (``palpbayes groundtruth``); then
     :func:`palpbayes.campaign.comparison.compare` (``palpbayes compare OUT``).  A results
     folder fitted before from the same campaign is reused fit by fit (the campaign's resume):
@@ -165,7 +165,7 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
                  progress=progress, scheduler=scheduler, on_plan=plan)
     gt_dir = manifest.parent / "groundtruth"
     if gt_dir.is_dir():  # for the report (compare analyses the same folder at full precision)
-        from ..groundtruth import analyse
+        from ..compression import analyse
 
         write_groundtruth(*analyse(gt_dir), out)
     from .comparison import compare

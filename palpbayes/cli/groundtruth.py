@@ -5,9 +5,9 @@ E_sd_pa, strain_lo, strain_hi, strain_toe, r2, n_points``) and ``DIR/groundtruth
 (one row per material: ``material, n, E_mean_pa, E_sd_pa, E_sem_pa, strain_lo, strain_hi,
 window_lo, window_hi``), atomically, and prints the summary and the strain window used.  Strains
 in the files are fractions; ``--strain-window`` takes **percent**.  The fitting rule is documented
-in :mod:`palpbayes.groundtruth`.  With ``--platens bonded --nu X`` each test's E is also
+in :mod:`palpbayes.compression`.  With ``--platens bonded --nu X`` each test's E is also
 corrected for the friction of its platens (``E_corrected_pa``, ``platen_factor``:
-:mod:`palpbayes.groundtruth.platens`), the block being the test's cross-section and height.
+:mod:`palpbayes.compression.platens`), the block being the test's cross-section and height.
 """
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ import math
 from pathlib import Path
 
 from .. import outputs
+from ..compression import DEFAULT_STRAIN_WINDOW
 from ..contact import check_nu
 from ..errors import InputError
-from ..groundtruth import DEFAULT_STRAIN_WINDOW
 
 __all__ = ["register", "run"]
 
@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
         Bad options or input files (the caller maps it to exit status 2).
     """
     from ..campaign.pipeline import write_groundtruth  # here: building the parser stays quick
-    from ..groundtruth import analyse, correct_for_platens, summarise_corrected
+    from ..compression import analyse, correct_for_platens, summarise_corrected
     from ..io.atomic import write_csv_atomic
     from ..io.groundtruth_inputs import scan_inputs
 
