@@ -56,9 +56,9 @@ def main() -> None:
         print(f"converged: {int(bayes['converged'].astype(bool).sum())}/{len(bayes)}, median "
               f"steps {bayes['n_steps'].median():.0f}")
         if args.compare:
-            from palpbayes.campaign.compare import compare_campaign
+            from palpbayes.campaign.comparison import compare
 
-            cmp = compare_campaign(res)
+            cmp = compare(res)
             t3 = time.perf_counter()
             print(f"compare (pooling {len(cmp.pooled)} groups): {t3 - t2:.1f} s")
             print(cmp.format())

@@ -48,8 +48,8 @@ from matplotlib.figure import Figure
 
 import palpbayes as pb
 from palpbayes import plots
+from palpbayes.compression import CompressionTest, fit_modulus
 from palpbayes.contact import PowerLawKernel
-from palpbayes.groundtruth import CompressionTest, fit_modulus
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.sim import simulate_compression_test, simulate_viscoelastic
 
@@ -135,7 +135,7 @@ fig
 # For each: the elastic fit's E, the power-law fit's compression-equivalent modulus — the
 # Young's modulus a 50 mm/min compression test of the 30 mm block with a 0.2 mm toe would
 # report by the ground truth's own rule — and, as the ground truth, that compression test
-# simulated on the same material and read by `palpbayes.groundtruth.fit_modulus`.
+# simulated on the same material and read by `palpbayes.compression.fit_modulus`.
 
 # %%
 young = PowerLawKernel(TRUE.E0 * (1 - NU**2), TRUE.alpha)  # E(t) = (1 − nu²)·E*(t)

@@ -10,21 +10,20 @@ The public names, with examples, are in docs/api.md::
     f = pb.fit("press.csv", tip="sphere", radius=0.01, nu=0.45)
 
 Reading and fitting: :func:`read`, :func:`fit` (a :class:`Fit`), :func:`load_fit` (a saved
-:class:`Fit`), :func:`fit_options`,
-:func:`fit_campaign`, :func:`compare`, :func:`run_pipeline`, :func:`load_results`,
-:func:`report` (the PDF); the model: :class:`Tip`, :class:`Specimen`, :class:`ModelSpec`,
-:class:`BudgetSpec`, :func:`force`; simulating: :func:`simulate` (a campaign folder),
-:func:`simulate_trace`; online: :class:`OnlineEstimator`, :class:`StoppingRule`; maps:
-:func:`fit_map` (a manifest or an AFM map in one call; :func:`make_map` the step after
-reading); active search: :func:`next_presses` (the subpackage :mod:`active`);
-viscoelastic fits: :func:`fit_rheology`, :func:`compare_rheology` (PSIS-LOO),
-:func:`pool_rheology` (one power law over speeds); the example campaign:
-:func:`example_campaign_dir`; the subpackages :mod:`contact` (the contact laws and their
-formulas), :mod:`errors`, :mod:`stiffening`, :mod:`plots`, :mod:`paper`, :mod:`gap`,
-:mod:`gap_strain`, :mod:`twin`, :mod:`sim`, :mod:`groundtruth` (compression tests),
+:class:`Fit`), :func:`fit_options`, :func:`fit_campaign`, :func:`compare`,
+:func:`run_pipeline`, :func:`load_results`, :func:`report` (the PDF); the ground truth:
+:func:`groundtruth` (Young's modulus of compression tests, as ``palpbayes groundtruth``); the
+model: :class:`Tip`, :class:`Specimen`, :class:`ModelSpec`, :class:`BudgetSpec`, :func:`force`;
+simulating: :func:`simulate` (a campaign folder), :func:`simulate_trace`; online:
+:class:`OnlineEstimator`, :class:`StoppingRule`; maps: :func:`fit_map` (a manifest or an AFM
+map in one call; :func:`make_map` the step after reading); active search: :func:`next_presses`
+(the subpackage :mod:`active`); viscoelastic fits: :func:`fit_rheology`,
+:func:`compare_rheology` (PSIS-LOO), :func:`pool_rheology` (one power law over speeds); the
+example campaign: :func:`example_campaign_dir`; the subpackages :mod:`contact` (the contact
+laws and their formulas), :mod:`errors`, :mod:`stiffening`, :mod:`plots`, :mod:`paper`,
+:mod:`gap`, :mod:`gap_strain`, :mod:`twin`, :mod:`sim`, :mod:`compression` (compression tests),
 :mod:`material` (the hyperelastic laws and ``Solid``), :mod:`reporting` (the report's tables
-and pages).  They
-are imported when first used (``import palpbayes`` stays quick).
+and pages).  They are imported when first used (``import palpbayes`` stays quick).
 """
 
 from __future__ import annotations
@@ -46,7 +45,8 @@ _LAZY = {
     "load_fit": ("api", "load_fit"),
     "fit_options": ("campaign.options", "fit_options"),
     "fit_campaign": ("api", "fit_campaign"),
-    "compare": ("campaign.compare", "compare_campaign"),
+    "compare": ("campaign.comparison", "compare"),
+    "groundtruth": ("api_groundtruth", "groundtruth"),
     "run_pipeline": ("campaign.pipeline", "run_pipeline"),
     "load_results": ("campaign.results", "load_results"),
     "example_campaign_dir": ("campaign.pipeline", "example_campaign_dir"),
@@ -74,7 +74,7 @@ _LAZY = {
     "gap_strain": ("gap_strain", None),
     "twin": ("twin", None),
     "sim": ("sim", None),
-    "groundtruth": ("groundtruth", None),
+    "compression": ("compression", None),
     "material": ("material", None),
     "reporting": ("reporting", None),
 }

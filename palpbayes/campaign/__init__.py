@@ -26,7 +26,7 @@ Modules, one job each
     (:func:`load_fit`, equal to the fit that was saved).
 :mod:`~palpbayes.campaign.reference`
     What a campaign is compared with: the Instron ground truth and the paper's estimates.
-:mod:`~palpbayes.campaign.compare`, :mod:`~palpbayes.campaign.compare_text`
+:mod:`~palpbayes.campaign.comparison`, :mod:`~palpbayes.campaign.compare_text`
     Pooling per material × tip (:mod:`palpbayes.pooling`) and the comparison with the ground
     truth and the paper (``palpbayes compare``), and its text table.
 :mod:`~palpbayes.campaign.instron`
@@ -49,12 +49,12 @@ from typing import TYPE_CHECKING
 from .._lazy import lazy_modules
 
 #: Submodules whose ``__all__`` make up the package's public names.
-API_MODULES = ("fitjob", "source", "settings", "run", "results", "compare", "compare_text",
+API_MODULES = ("fitjob", "source", "settings", "run", "results", "comparison", "compare_text",
                "instron", "pipeline", "stiffening_tables", "indentation")
 
 if TYPE_CHECKING:  # the same names, for static tools
-    from .compare import *  # noqa: F403
     from .compare_text import *  # noqa: F403
+    from .comparison import *  # noqa: F403
     from .fitjob import *  # noqa: F403
     from .indentation import *  # noqa: F403
     from .instron import *  # noqa: F403

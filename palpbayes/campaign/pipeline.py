@@ -2,9 +2,9 @@
 
 :func:`run_pipeline` fits a campaign folder with both methods
 (:func:`palpbayes.campaign.run.fit_campaign`), analyses its compression tests when the
-campaign has ``groundtruth/`` (:func:`palpbayes.groundtruth.analyse`, written by
+campaign has ``groundtruth/`` (:func:`palpbayes.compression.analyse`, written by
 :func:`write_groundtruth`) and pools and compares
-(:func:`palpbayes.campaign.compare.compare_campaign`), into one results folder.
+(:func:`palpbayes.campaign.comparison.compare`), into one results folder.
 A results folder fitted before from the same campaign is reused fit by fit: a trace's fit is
 kept only when its inputs are unchanged (the numbers read from its file and its manifest row,
 the options, the palpbayes version: :func:`palpbayes.campaign.partial.read_partial`), every
@@ -38,7 +38,7 @@ __all__ = ["example_campaign_dir", "run_pipeline", "write_groundtruth", "check_r
 
 def write_groundtruth(per_file: pd.DataFrame, per_group: pd.DataFrame,
                       out_dir: str | os.PathLike) -> tuple[Path, Path]:
-    """Write the ground-truth tables of :func:`palpbayes.groundtruth.analyse` into ``out_dir``.
+    """Write the ground-truth tables of :func:`palpbayes.compression.analyse` into ``out_dir``.
 
     ``groundtruth.csv`` (one row per test) and ``groundtruth_summary.csv`` (one row per
     material), atomically, floats to 10 significant digits.  Returns the two paths.
@@ -122,9 +122,9 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
     """Fit a campaign (both methods), analyse its ground truth and compare; return out_dir.
 
     Steps: :func:`palpbayes.campaign.fit_campaign` (``palpbayes fit``); when the campaign folder
-    has ``groundtruth/``, :func:`palpbayes.groundtruth.analyse` written to ``groundtruth.csv``
+    has ``groundtruth/``, :func:`palpbayes.compression.analyse` written to ``groundtruth.csv``
     and ``groundtruth_summary.csv`` (``palpbayes groundtruth``); then
-    :func:`palpbayes.campaign.compare.compare_campaign` (``palpbayes compare OUT``).  A results
+    :func:`palpbayes.campaign.comparison.compare` (``palpbayes compare OUT``).  A results
     folder fitted before from the same campaign is reused fit by fit (the campaign's resume):
     a trace whose file, manifest row, options and palpbayes version are unchanged keeps its
     fit, the others are refitted; with other options or by another version every trace is
@@ -165,13 +165,13 @@ def run_pipeline(manifest: str | os.PathLike, out_dir: str | os.PathLike,
                  progress=progress, scheduler=scheduler, on_plan=plan)
     gt_dir = manifest.parent / "groundtruth"
     if gt_dir.is_dir():  # for the report (compare analyses the same folder at full precision)
-        from ..groundtruth import analyse
+        from ..compression import analyse
 
         write_groundtruth(*analyse(gt_dir), out)
-    from .compare import compare_campaign
+    from .comparison import compare
 
     # exactly `palpbayes compare OUT`: the campaign's groundtruth/ is found via settings.json
-    compare_campaign(out)
+    compare(out)
     write_gap(out)
     return out
 

@@ -2,12 +2,12 @@
 
 * :func:`load_groundtruth` finds and reads the per-material ground truth (a
   ``groundtruth_summary.csv`` of ``palpbayes groundtruth``, or compression exports analysed with
-  :func:`palpbayes.groundtruth.analyse`);
+  :func:`palpbayes.compression.analyse`);
 * :func:`paper_estimates` gives the paper's published robot estimates
   (:data:`palpbayes.paper.PAPER_ROBOT_ESTIMATES`) with the error recomputed from the printed
   E and the paper's Instron means;
 * :func:`gt_columns` / :func:`paper_columns` fill the reference columns of one comparison row
-  (definitions in :mod:`palpbayes.campaign.compare`).
+  (definitions in :mod:`palpbayes.campaign.comparison`).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ def paper_estimates() -> pd.DataFrame:
 
 
 def _gt_from_file(p: Path) -> pd.DataFrame:
-    from ..groundtruth import analyse, summarise
+    from ..compression import analyse, summarise
 
     try:
         cols = {str(c).strip() for c in pd.read_csv(p, nrows=0).columns}
@@ -64,10 +64,10 @@ def load_groundtruth(spec: str | os.PathLike | None, campaign_dir: Path | None
 
     ``spec``: a ``groundtruth_summary.csv`` or ``groundtruth.csv`` written by ``palpbayes
     groundtruth``, a ground-truth manifest, a compression export, or a folder of them (analysed
-    with :func:`palpbayes.groundtruth.analyse` and its default strain window).  None: the
+    with :func:`palpbayes.compression.analyse` and its default strain window).  None: the
     ``groundtruth/`` folder of the campaign, if any.  Returns (None, None) when there is none.
     """
-    from ..groundtruth import analyse
+    from ..compression import analyse
 
     if spec is not None:
         p = Path(spec)
@@ -99,7 +99,7 @@ def new_specimen_sd(lo: float, hi: float, level: float = LEVEL) -> float:
 def gt_columns(row: dict, gt: pd.DataFrame | None, material: str, level: float = LEVEL
                ) -> dict:
     """The ground-truth columns of one comparison row (definitions in
-    :mod:`palpbayes.campaign.compare`).
+    :mod:`palpbayes.campaign.comparison`).
 
     ``row`` needs ``method``, ``E_pa`` and the method's central ``level`` interval for a new
     specimen, ``E_new_lo_pa`` / ``E_new_hi_pa``.  Both methods are treated alike:

@@ -13,7 +13,7 @@ results folder (docs/design.md §5, §7; file names in :mod:`palpbayes.outputs`)
       .partial/<trace_id>.json  per-trace rows, written as each trace finishes (for --resume)
 
 Comparison tables (ground truth vs least squares vs Bayes) are made from this folder by
-:func:`palpbayes.campaign.compare.compare_campaign` (``palpbayes compare``).
+:func:`palpbayes.campaign.comparison.compare` (``palpbayes compare``).
 
 Failure policy
 --------------

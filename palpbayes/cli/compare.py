@@ -2,7 +2,7 @@
 
 Reads ``RESULTS_DIR/summary.csv`` and the posteriors written by ``palpbayes fit`` on a campaign,
 pools the Bayesian fits per material × tip (:mod:`palpbayes.pooling`), compares least squares,
-Bayes, the ground truth and the paper's published numbers (:mod:`palpbayes.campaign.compare`),
+Bayes, the ground truth and the paper's published numbers (:mod:`palpbayes.campaign.comparison`),
 writes ``comparison.csv``, ``pooled.csv`` and ``budget.csv`` into RESULTS_DIR (atomically) and
 prints the comparison in the paper's layout.
 """
@@ -41,9 +41,9 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``palpbayes compare``; return 0.  Bad input raises InputError (exit status 2)."""
-    from ..campaign.compare import compare_campaign  # here: building the parser stays quick
+    from ..campaign.comparison import compare  # here: building the parser stays quick
 
-    result = compare_campaign(args.results_dir, groundtruth=args.groundtruth, seed=args.seed)
+    result = compare(args.results_dir, groundtruth=args.groundtruth, seed=args.seed)
     print(result.format())
     if "bayes" in set(result.comparison["method"].astype(str)):
         print("\nnote: the Bayes cells above are the prediction for a NEW SPECIMEN, median [90 % "

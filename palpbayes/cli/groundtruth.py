@@ -5,9 +5,11 @@ E_sd_pa, strain_lo, strain_hi, strain_toe, r2, n_points``) and ``DIR/groundtruth
 (one row per material: ``material, n, E_mean_pa, E_sd_pa, E_sem_pa, strain_lo, strain_hi,
 window_lo, window_hi``), atomically, and prints the summary and the strain window used.  Strains
 in the files are fractions; ``--strain-window`` takes **percent**.  The fitting rule is documented
-in :mod:`palpbayes.groundtruth`.  With ``--platens bonded --nu X`` each test's E is also
+in :mod:`palpbayes.compression`.  With ``--platens bonded --nu X`` each test's E is also
 corrected for the friction of its platens (``E_corrected_pa``, ``platen_factor``:
-:mod:`palpbayes.groundtruth.platens`), the block being the test's cross-section and height.
+:mod:`palpbayes.compression.platens`), the block being the test's cross-section and height.
+The analysis and the files are :func:`palpbayes.groundtruth`'s (:mod:`palpbayes.api_groundtruth`),
+the same bytes from Python.
 """
 
 from __future__ import annotations
@@ -17,9 +19,8 @@ import math
 from pathlib import Path
 
 from .. import outputs
-from ..contact import check_nu
+from ..compression import DEFAULT_STRAIN_WINDOW
 from ..errors import InputError
-from ..groundtruth import DEFAULT_STRAIN_WINDOW
 
 __all__ = ["register", "run"]
 
@@ -81,53 +82,36 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
-def _positive_option(value: float | None, flag: str) -> float | None:
-    if value is not None and not (math.isfinite(value) and value > 0):
-        raise InputError(f"{flag} must be a positive number, got {value}")
-    return value
-
-
 def run(args: argparse.Namespace) -> int:
     """Run ``palpbayes groundtruth``; return the exit status (0 on success).
+
+    The analysis and the files are :func:`palpbayes.groundtruth`'s
+    (:mod:`palpbayes.api_groundtruth`); this turns the options into its call (the window from
+    percent to fractions) and prints the summary.
 
     Raises
     ------
     InputError
         Bad options or input files (the caller maps it to exit status 2).
     """
-    from ..campaign.pipeline import write_groundtruth  # here: building the parser stays quick
-    from ..groundtruth import analyse, correct_for_platens, summarise_corrected
-    from ..io.atomic import write_csv_atomic
-    from ..io.groundtruth_inputs import scan_inputs
+    # here, not at the top: building the parser stays quick
+    from ..api_groundtruth import FLAGS, GroundTruthOptions, analyse_groundtruth
 
     lo_pct, hi_pct = args.strain_window
     if not (math.isfinite(lo_pct) and math.isfinite(hi_pct) and 0 <= lo_pct < hi_pct <= 100):
         raise InputError(f"--strain-window takes percent with 0 <= LO < HI <= 100, got "
                          f"{lo_pct:g} {hi_pct:g}")
-    window = (lo_pct / 100.0, hi_pct / 100.0)
-    area = _positive_option(args.area_m2, "--area-m2")
-    height = _positive_option(args.height_m, "--height-m")
+    options = GroundTruthOptions(
+        strain_window=(lo_pct / 100.0, hi_pct / 100.0), toe_compensation=args.toe_compensation,
+        skip_toe=args.skip_toe, area_m2=args.area_m2, height_m=args.height_m, law=args.law,
+        strain=args.strain, seed=args.seed, platens=args.platens, nu=args.nu).checked(FLAGS)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out} exists and is not a folder")
-    if (args.platens is None) != (args.nu is None):
-        raise InputError("--platens and --nu go together: the platen correction depends on "
-                         "the Poisson ratio (e.g. --platens bonded --nu 0.3)")
-    if args.nu is not None:
-        check_nu(args.nu)
 
-    _, _, skipped = scan_inputs(args.inputs)
-    per_file, summary, laws = analyse(
-        args.inputs, strain_window=window, toe_compensation=args.toe_compensation,
-        skip_toe=args.skip_toe, area_m2=area, height_m=height, law=args.law,
-        chord=args.strain, seed=args.seed, progress=args.progress, return_laws=True)
-    if args.platens is not None:
-        per_file = correct_for_platens(per_file, args.platens, args.nu)
-        summary = summarise_corrected(per_file, summary)
-    out.mkdir(parents=True, exist_ok=True)
-    write_groundtruth(per_file, summary, out)
-    if args.law != "linear":
-        write_csv_atomic(laws, out / outputs.GROUNDTRUTH_LAWS, float_format="%.10g")
+    gt = analyse_groundtruth(args.inputs, options, progress=args.progress)
+    gt.save(out)
+    per_file, summary, laws, skipped = gt.tests, gt.materials, gt.laws, gt.skipped
 
     origin = "the toe offset" if args.toe_compensation else "zero measured strain"
     extra = "; points below twice the toe offset skipped" if args.skip_toe else ""

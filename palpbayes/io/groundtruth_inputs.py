@@ -4,7 +4,7 @@
 into manifests, test files and skipped files; :func:`read_groundtruth_manifest` reads the tests
 a manifest lists, with its geometry and labels; :func:`collect_tests` does both and returns
 :class:`~palpbayes.io.instron.CompressionTest` objects for
-:func:`palpbayes.groundtruth.analyse`.  The tests are read by
+:func:`palpbayes.compression.analyse`.  The tests are read by
 :func:`palpbayes.io.instron.read_compression_test`.
 
 A ground-truth manifest is a CSV with a ``file`` column (paths relative to the manifest's

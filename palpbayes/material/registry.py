@@ -110,7 +110,7 @@ class MaterialLaw:
         (..., 3): a positive small-strain shear modulus and the law's own limits (exponents
         away from 0, the foam's nu in [0, 0.5), Yeoh's dW/dI1 > 0 along the path).  A fit
         also asks for a compressive stress that rises with strain
-        (:mod:`palpbayes.groundtruth.finite`).
+        (:mod:`palpbayes.compression.finite`).
     order
         Display order.
     """

@@ -1,7 +1,7 @@
 """Uniaxial compression of a hyperelastic solid: the nominal (engineering) stress a compression
 test between frictionless platens reads at each engineering strain.
 
-Conventions of :mod:`palpbayes.groundtruth`: compressive strain eps = compression / initial
+Conventions of :mod:`palpbayes.compression`: compressive strain eps = compression / initial
 height and compressive stress = load / initial cross-section, both positive in compression.
 The stretch along the load is lambda = 1 − eps; the lateral faces are free:
 

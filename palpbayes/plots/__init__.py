@@ -31,17 +31,20 @@ Functions
 :func:`plot_cycle_fit`       a viscoelastic fit: force against time with its band
 :func:`plot_relaxation`      the relaxation modulus E*(t) with its band, one or more fits
 :func:`plot_hysteresis`      force against depth per segment (approach, hold, retract)
+:func:`plot_compression_tests` compression tests' stress-strain curves with their fitted lines
 
 Modules, by subject: :mod:`~palpbayes.plots.style` (colours, units, shared helpers),
 :mod:`~palpbayes.plots.trace` (force-depth, residuals), :mod:`~palpbayes.plots.posterior`,
 :mod:`~palpbayes.plots.walkers`, :mod:`~palpbayes.plots.budget`,
 :mod:`~palpbayes.plots.campaign` (comparison, forest), :mod:`~palpbayes.plots.layer`
-(finite thickness), :mod:`~palpbayes.plots.stiffening` and :mod:`~palpbayes.plots.rheology`
-(viscoelastic fits); the functions are imported from here.
+(finite thickness), :mod:`~palpbayes.plots.stiffening`, :mod:`~palpbayes.plots.rheology`
+(viscoelastic fits) and :mod:`~palpbayes.plots.compression` (compression tests); the functions are
+imported from here.
 """
 
 from .budget import plot_budget
 from .campaign import plot_comparison, plot_forest
+from .compression import plot_compression_tests
 from .layer import plot_gap, plot_halfspace_vs_layer, plot_strain_factors
 from .posterior import plot_pair, plot_posterior, plot_posterior_E, plot_posterior_zsurf
 from .rheology import plot_cycle_fit, plot_hysteresis, plot_relaxation
@@ -73,4 +76,5 @@ __all__ = [
     "plot_cycle_fit",
     "plot_relaxation",
     "plot_hysteresis",
+    "plot_compression_tests",
 ]

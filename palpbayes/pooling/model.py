@@ -70,8 +70,8 @@ tau up to ~1 and two or three traces cannot exclude it), and exp(mu + tau·z) tu
 rare, very large draws: the sd of the E_new draws (``E_new_sd_pa``) then describes the tail, not
 the spread of a typical new specimen.  Quote the central 90 % interval (``E_new_lo_pa`` …
 ``E_new_hi_pa``) and the median instead, as :mod:`palpbayes.campaign.compare_text` and the
-``gt_z_new`` of :mod:`palpbayes.campaign.compare` do, and state the prior of tau (``tau_prior_sd``
-in ``pooled.csv`` and ``comparison.csv``).
+``gt_z_new`` of :mod:`palpbayes.campaign.comparison` do, and state the prior of tau
+(``tau_prior_sd`` in ``pooled.csv`` and ``comparison.csv``).
 
 References
 ----------

@@ -182,7 +182,7 @@ def methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         win = (f"{100 * float(gt['window_lo'].iloc[0]):g}–"
                f"{100 * float(gt['window_hi'].iloc[0]):g} %")
     else:
-        from ..groundtruth import DEFAULT_STRAIN_WINDOW
+        from ..compression import DEFAULT_STRAIN_WINDOW
 
         win = (f"{100 * DEFAULT_STRAIN_WINDOW[0]:g}–{100 * DEFAULT_STRAIN_WINDOW[1]:g} % "
                "(default)")

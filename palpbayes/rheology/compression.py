@@ -2,7 +2,7 @@
 
 The ground truth of the paper is an Instron compression of the specimen at a constant cross-head
 speed (50 mm/min), read as the slope of stress against strain over a strain window
-(:func:`palpbayes.groundtruth.fit_modulus`).  For a viscoelastic material that slope depends on
+(:func:`palpbayes.compression.fit_modulus`).  For a viscoelastic material that slope depends on
 the speed: a cylinder of height H compressed from rest at strain rate r = v/H carries the
 uniaxial stress (DESIGN §9)
 
@@ -21,10 +21,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..compression import DEFAULT_STRAIN_WINDOW, fit_modulus, toe_compression
 from ..contact import youngs_modulus
 from ..contact.viscoelastic import PowerLawKernel, PronyKernel, hereditary_force
 from ..errors import InputError
-from ..groundtruth import DEFAULT_STRAIN_WINDOW, fit_modulus, toe_compression
 from ..io.instron import CompressionTest
 
 __all__ = ["compression_moduli", "PAPER_COMPRESSION_SPEED", "CURVE_POINTS"]
@@ -55,7 +55,7 @@ def compression_moduli(kernels: Sequence[PowerLawKernel | PronyKernel], nu: floa
         [-] The ground truth's fit window (default 0–5 %).
     toe
         [m] Slack of the test before full contact (the quadratic toe of
-        :func:`~palpbayes.groundtruth.toe_compression`; the ground truth's analysis
+        :func:`~palpbayes.compression.toe_compression`; the ground truth's analysis
         reports it per test as ``strain_toe``·height).  With a toe the strain history is
         not a constant-rate ramp: the stress is the hereditary integral of the toe's strain
         history (:func:`~palpbayes.contact.viscoelastic.hereditary_force`), read with the

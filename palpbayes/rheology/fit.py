@@ -35,10 +35,10 @@ import pandas as pd
 
 from ..checks import posterior_predictive_check
 from ..checks.core import CheckResult
+from ..compression import DEFAULT_STRAIN_WINDOW
 from ..contact import Tip, check_nu, youngs_modulus
 from ..contact.viscoelastic import PowerLawKernel, PronyKernel, ramp_apparent_modulus
 from ..errors import InputError, PalpbayesError
-from ..groundtruth import DEFAULT_STRAIN_WINDOW
 from ..intervals import LEVEL, central_band
 from ..trace import IndentationTrace
 from ..units import format_pressure

@@ -2,7 +2,7 @@
 
 :func:`simulate_compression_test` compresses a foam block between flat platens at constant
 crosshead speed (linear elastic or viscoelastic, with a smooth toe,
-:func:`~palpbayes.groundtruth.toe_compression`, re-exported here);
+:func:`~palpbayes.compression.toe_compression`, re-exported here);
 :func:`write_compression_export` writes the table in the layout that
 :func:`palpbayes.io.instron.read_compression_test` reads, so the ground-truth path of the
 pipeline can be tested end to end on a known modulus.
@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..compression.window import toe_compression
 from ..contact import check_nu
 from ..errors import InputError
-from ..groundtruth.window import toe_compression
 from ..io.atomic import write_text_atomic
 from ..material import Solid
 from ..twin import Specimen, compression_factor

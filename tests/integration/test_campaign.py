@@ -14,8 +14,8 @@ import palpbayes.campaign as campaign
 import palpbayes.campaign.fitjob as fitjob
 import palpbayes.pooling.model as pooling_model
 from palpbayes.bayes import SamplerSettings
-from palpbayes.campaign.compare import COMPARISON_COLUMNS, compare_campaign
 from palpbayes.campaign.compare_text import format_comparison
+from palpbayes.campaign.comparison import COMPARISON_COLUMNS, compare
 from palpbayes.campaign.fitjob import SUMMARY_COLUMNS, FitOptions, check_fittable
 from palpbayes.cli import main
 from palpbayes.contact import Tip
@@ -352,7 +352,7 @@ def test_bad_manifest_number_writes_nothing(tmp_path):
 @pytest.fixture(scope="module")
 def compared(fitted):
     res, _ = fitted
-    return compare_campaign(res, pooling_settings=POOL_FAST)
+    return compare(res, pooling_settings=POOL_FAST)
 
 
 def test_comparison_tables_reproduce_the_paper_layout(compared, fitted):
@@ -437,7 +437,7 @@ def test_compare_fits_the_stiffening_law_when_rest_times_vary(tmp_path, monkeypa
                                        material="White", trace_prefix="s")
     res = tmp_path / "res"
     campaign.fit_campaign(series, res, replace(OPTS, method="bayes"), workers=1)
-    cmp = compare_campaign(res, pooling_settings=POOL_FAST)
+    cmp = compare(res, pooling_settings=POOL_FAST)
     st = pd.read_csv(res / "stiffening.csv")
     assert len(st) == 1 and st["material"].iloc[0] == "White" and st["n_points"].iloc[0] == 5
     assert not st["identifiable"].iloc[0]  # five rest times cannot pin two exponentials
@@ -492,7 +492,7 @@ def test_pooled_interval_covers_the_true_material_modulus(tmp_path):
     simulate(camp, seed=2026, repetitions=3)
     res = tmp_path / "res"
     campaign.fit_campaign(camp / "manifest.csv", res, FitOptions(method="both", seed=2026))
-    cmp = compare_campaign(res).comparison
+    cmp = compare(res).comparison
     truth = pd.read_csv(camp / "truth_materials.csv").set_index("material")["E_pa"]
     bayes = cmp[cmp["method"] == "bayes"]
     assert len(bayes) == 9 and bayes["converged_all"].astype(bool).all()

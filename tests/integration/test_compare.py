@@ -1,5 +1,5 @@
 """Comparison with the ground truth: z-score and interval columns on hand-computed tables,
-the pooling inputs campaign/compare.py reads, and the text table."""
+the pooling inputs campaign/comparison.py reads, and the text table."""
 
 from __future__ import annotations
 
@@ -10,12 +10,12 @@ import pandas as pd
 import pytest
 from presets import FAST
 
-import palpbayes.campaign.compare as compare
+import palpbayes.campaign.comparison as comparison
 from palpbayes import pooling
 from palpbayes.bayes import BudgetSpec
 from palpbayes.bayes.diagnostics import import_arviz
-from palpbayes.campaign.compare import COMPARISON_COLUMNS, _lsq_row, compare_campaign
 from palpbayes.campaign.compare_text import format_comparison
+from palpbayes.campaign.comparison import COMPARISON_COLUMNS, _lsq_row, compare
 from palpbayes.campaign.reference import gt_columns, new_specimen_sd
 
 Z90 = 1.6448536269514722  # Phi^-1(0.95)
@@ -140,11 +140,11 @@ def test_compare_pools_the_statistical_E_and_applies_the_budget_once(tmp_path, m
         return real_pool(m, s, material=material, tip=tip, tau_prior_sd=tau_prior_sd,
                          seed=seed, settings=settings)  # stage 2 only: no geometry here
 
-    monkeypatch.setattr(compare, "pool_group", spy)
-    monkeypatch.setattr(compare, "fitdata_from_posterior", lambda idata, model: sentinel)
+    monkeypatch.setattr(comparison, "pool_group", spy)
+    monkeypatch.setattr(comparison, "fitdata_from_posterior", lambda idata, model: sentinel)
     gt_file = tmp_path / "groundtruth_summary.csv"
     GT.to_csv(gt_file, index=False)
-    cmp = compare_campaign(tmp_path / "res", groundtruth=gt_file, pooling_settings=FAST,
+    cmp = compare(tmp_path / "res", groundtruth=gt_file, pooling_settings=FAST,
                            tau_prior_sd=0.3, seed=1)
     # one pooling per material × tip, each with the budget (applied there, once)
     assert [(c["material"], c["tip"]) for c in calls] == [("White", "sphere"),

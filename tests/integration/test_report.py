@@ -189,7 +189,7 @@ def test_one_number_per_quantity_in_the_tables_pages_and_console(fitted):
     inputs against the median with the budget); White·paraboloid's new-specimen interval read
     [65, 179] on the summary page and [64.8, 178.1] on its group page.  One computation,
     copied; one printed form (0.1 kPa) everywhere."""
-    from palpbayes.campaign.compare import POOLED_SHARED
+    from palpbayes.campaign.comparison import POOLED_SHARED
 
     out, _, stdout = fitted
     comp = pd.read_csv(out / "comparison.csv")

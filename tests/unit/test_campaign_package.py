@@ -20,7 +20,7 @@ def test_campaign_exports_are_the_api_modules_all():
     assert campaign.__all__ == expected
     assert len(set(expected)) == len(expected)  # one owner per name
     for name in ("fit_campaign", "FitOptions", "load_results", "load_fit", "run_pipeline",
-                 "compare_campaign", "format_comparison"):
+                 "compare", "format_comparison"):
         assert name in campaign.__all__
     for name in campaign.__all__:
         owner = next(s for s in campaign.API_MODULES
@@ -36,10 +36,10 @@ def test_pooling_exports_are_its_modules_all():
 
 
 def test_layout_and_reference_import_alone_without_the_fitting_code():
-    """``campaign.reference`` (imported by campaign.compare) imports palpbayes.outputs: importing
+    """``campaign.reference`` (imported by campaign.comparison) imports palpbayes.outputs: importing
     it first must neither fail nor load the campaign run, the sampler or arviz."""
     code = ("import sys, palpbayes.campaign.reference, palpbayes.outputs\n"
-            "heavy = [m for m in ('palpbayes.campaign.run', 'palpbayes.campaign.compare', "
+            "heavy = [m for m in ('palpbayes.campaign.run', 'palpbayes.campaign.comparison', "
             "'arviz', 'emcee') if m in sys.modules]\n"
             "assert not heavy, heavy\n")
     subprocess.run([sys.executable, "-c", code], check=True)

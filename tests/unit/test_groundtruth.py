@@ -11,8 +11,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from palpbayes.errors import DataFileError, InputError
-from palpbayes.groundtruth import (
+from palpbayes.compression import (
     PER_FILE_COLUMNS,
     SUMMARY_COLUMNS,
     analyse,
@@ -21,7 +20,8 @@ from palpbayes.groundtruth import (
     hac_slope_se,
     sensitivity_windows,
 )
-from palpbayes.groundtruth.laws import LAW_COLUMNS
+from palpbayes.compression.laws import LAW_COLUMNS
+from palpbayes.errors import DataFileError, InputError
 from palpbayes.io.atomic import write_csv_atomic
 from palpbayes.io.groundtruth_inputs import collect_tests, read_groundtruth_manifest, scan_inputs
 from palpbayes.io.instron import CompressionTest, read_compression_test
@@ -315,7 +315,7 @@ def test_sensitivity_windows_and_spread(tmp_path):
     assert np.isnan(s.loc["T", "E_window_spread_pa"])
     assert (summary["rule"] == describe_rule()).all()
     # a per-file table without the extra columns (an older groundtruth.csv) still summarises
-    from palpbayes.groundtruth import summarise
+    from palpbayes.compression import summarise
 
     old = summarise(per_file.drop(columns=["E_plain_pa", "E_window_spread_pa"]))
     assert list(old.columns) == SUMMARY_COLUMNS and old["E_plain_mean_pa"].isna().all()
@@ -324,7 +324,7 @@ def test_sensitivity_windows_and_spread(tmp_path):
 def test_auxiliary_window_failures_do_not_abort_the_analysis(monkeypatch):
     """A sensitivity or plain-convention fit that fails (any package error, e.g. a FitError or
     an InputError about a shifted window past 100 % strain) leaves only its column NaN."""
-    import palpbayes.groundtruth.tables as gt
+    import palpbayes.compression.tables as gt
     from palpbayes.errors import FitError
 
     t, x, f, _ = curve(toe=0.0, noise=0.0)

@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 
 from palpbayes.cli import main
-from palpbayes.groundtruth import analyse
-from palpbayes.groundtruth.finite import LOW_STRAIN, curve_bins, fit_law
+from palpbayes.compression import analyse
+from palpbayes.compression.finite import LOW_STRAIN, curve_bins, fit_law
 from palpbayes.io.instron import CompressionTest
 from palpbayes.material import Solid
 from palpbayes.sim import simulate_compression_test, write_compression_export

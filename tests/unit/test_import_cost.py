@@ -43,7 +43,7 @@ def test_fit_parser_and_help_are_light():
     """``palpbayes fit --help`` (the parser ``palpbayes fit ...`` builds) loads neither the
     fitting code nor the other subcommands."""
     heavy = (*NEVER, "scipy.signal", "palpbayes.rheology", "palpbayes.online",
-             "palpbayes.checks.ppc", "palpbayes.groundtruth", "palpbayes.cli.simulate",
+             "palpbayes.checks.ppc", "palpbayes.compression", "palpbayes.cli.simulate",
              "palpbayes.cli.report", "palpbayes.cli.map")
     code = """
         import contextlib, io

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import palpbayes
+from palpbayes.compression import resid_acf1
 from palpbayes.contact import DEFAULT_NU, youngs_factor
-from palpbayes.groundtruth import resid_acf1
 from palpbayes.noise import acf1
 
 PACKAGE = Path(palpbayes.__file__).resolve().parent

@@ -1,5 +1,5 @@
 """Compression tests between bonded platens: simulated (palpbayes.sim.compression), corrected
-(palpbayes.groundtruth.platens, ``palpbayes groundtruth --platens``), and the real phantom
+(palpbayes.compression.platens, ``palpbayes groundtruth --platens``), and the real phantom
 exports' correction for the platens they may have had."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ import pandas as pd
 import pytest
 
 from palpbayes.cli import main
+from palpbayes.compression import analyse, correct_for_platens, summarise_corrected
 from palpbayes.errors import InputError
-from palpbayes.groundtruth import analyse, correct_for_platens, summarise_corrected
 from palpbayes.io.instron import read_compression_test
 from palpbayes.sim import simulate_compression_test, write_compression_export
 from palpbayes.twin import Specimen, compression_factor, platen_factor

@@ -13,10 +13,10 @@ import pytest
 
 from palpbayes.bayes import fit_bayes
 from palpbayes.checks import checks_summary
+from palpbayes.compression import fit_modulus
 from palpbayes.contact.viscoelastic import PowerLawKernel
 from palpbayes.errors import InputError
 from palpbayes.fitdata import ModelSpec
-from palpbayes.groundtruth import fit_modulus
 from palpbayes.io.instron import CompressionTest
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.rheology import fit_rheology

@@ -1,6 +1,6 @@
 """One compression test in SI units (:class:`CompressionTest`) and its material label.
 
-The record every reader of :mod:`palpbayes.io.instron` returns and :mod:`palpbayes.groundtruth`
+The record every reader of :mod:`palpbayes.io.instron` returns and :mod:`palpbayes.compression`
 fits: validated, read-only arrays of time, platen travel and load, positive in compression, with
 the specimen's initial cross-section and height.
 """

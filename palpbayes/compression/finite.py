@@ -10,7 +10,7 @@ its slope at zero strain, is read from it.
 The model
 ---------
 The loading branch from twice the linear rule's toe offset (where a quadratic toe has joined
-the curve: :func:`~palpbayes.groundtruth.fit_modulus`'s ``skip_toe``) to the largest
+the curve: :func:`~palpbayes.compression.fit_modulus`'s ``skip_toe``) to the largest
 compression is reduced to :data:`N_BINS` means equally spaced in strain; the model is averaged
 over each bin's samples as the data are.  For the bins b::
 
@@ -24,7 +24,7 @@ over each bin's samples as the data are.  For the bins b::
 * eps0 is the strain at full contact, where the law's stress is 0 (uniform prior between
   −0.02 and the first bin: a test that started preloaded may have it below 0); the platens'
   travel before it is slack, not the block's strain, so the block's strain is eps − eps0 of its
-  measured height (the simulator's toe, :func:`~palpbayes.groundtruth.toe_compression`); no
+  measured height (the simulator's toe, :func:`~palpbayes.compression.toe_compression`); no
   stress offset is fitted (it would trade off with eps0 along the curve);
 * c (flat priors) and sigma (1/sigma) are integrated out in closed form given eps0, q and
   phi (prewhitened least squares); phi is summed over a grid on [−0.9, 0.99]; eps0 and q are

@@ -1,7 +1,7 @@
 """Ground-truth tables: every test fitted (:func:`analyse`) and summarised per material.
 
 :func:`analyse` reads the tests and fits each with
-:func:`~palpbayes.groundtruth.fit.fit_modulus` (the rule is in :mod:`palpbayes.groundtruth.fit`);
+:func:`~palpbayes.compression.fit.fit_modulus` (the rule is in :mod:`palpbayes.compression.fit`);
 :func:`summarise` gives one row per material.  Besides ``E_pa``, every test gets:
 
 * ``E_plain_pa`` (``E_plain_sd_pa``): the plain fit, the same window applied to the *measured*

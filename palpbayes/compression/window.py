@@ -1,7 +1,7 @@
 """The strain window of a ground-truth fit: its check, the sensitivity windows, the rule text.
 
 A window ``(lo, hi)`` is a pair of fractions of the specimen height (0.05 = 5 %), in
-toe-compensated strain unless ``toe_compensation`` is False (:mod:`palpbayes.groundtruth.fit`).
+toe-compensated strain unless ``toe_compensation`` is False (:mod:`palpbayes.compression.fit`).
 :func:`sensitivity_windows` gives the three nearby windows of ``E_window_spread_pa`` and
 :func:`describe_rule` the one-line rule written to the summary's ``rule`` column;
 :func:`toe_compression` is the smooth toe the rule's compensation is exact for (the

@@ -1,6 +1,6 @@
-"""Ground truth: Young's modulus from uniaxial compression tests (Instron exports).
+"""Young's modulus from uniaxial compression tests (Instron exports): the ground truth.
 
->>> from palpbayes.groundtruth import analyse                   # doctest: +SKIP
+>>> from palpbayes.compression import analyse                   # doctest: +SKIP
 >>> per_file, summary = analyse("groundtruth/")                 # doctest: +SKIP
 
 Engineering quantities: strain eps = compression / initial height [-], stress sigma = load /

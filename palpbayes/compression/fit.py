@@ -2,8 +2,8 @@
 
 Engineering quantities: strain eps = compression / initial height [-], stress sigma = load /
 initial cross-section [Pa], both positive in compression.  The standard error of the slope is
-:func:`~palpbayes.groundtruth.hac.hac_slope_se`; the window is checked and described by
-:mod:`palpbayes.groundtruth.window`.
+:func:`~palpbayes.compression.hac.hac_slope_se`; the window is checked and described by
+:mod:`palpbayes.compression.window`.
 
 The rule
 --------
@@ -20,7 +20,7 @@ The rule
 3. ``toe_compensation=False`` applies the window to the measured strain instead (the fitted line
    still has an intercept).  ``skip_toe=True`` further drops the points below ``2·eps0`` in
    measured strain: that is where a toe that grows quadratically and joins the line tangentially
-   ends (the simulator's toe model, :func:`palpbayes.groundtruth.toe_compression`), so on such
+   ends (the simulator's toe model, :func:`palpbayes.compression.toe_compression`), so on such
    curves the slope is exact, whereas the default keeps the upper half of the toe and reads a
    slope 1-2.3 % low when the toe spans 1.3-2 % strain (the simulator's 0.2 mm slack on its
    30 / 20 mm blocks; its campaigns are analysed exactly with ``skip_toe=True``).

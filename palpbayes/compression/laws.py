@@ -1,7 +1,7 @@
 """Which hyperelastic law a material's compression tests prefer, and the columns a law adds to
 the ground-truth tables (``palpbayes groundtruth --law NAME|auto``, issue 56 item 2).
 
-Every test is fitted with each law asked for (:func:`palpbayes.groundtruth.finite.fit_law`).
+Every test is fitted with each law asked for (:func:`palpbayes.compression.finite.fit_law`).
 A material's law is the one with the highest elpd_loo summed over its tests (PSIS-LOO on each
 test's bins; :mod:`.finite`); the difference to it and the difference's standard error,
 sqrt(sum over tests of n_t·var(pointwise differences)) as :func:`arviz.compare` computes it for
@@ -12,7 +12,7 @@ Columns of ``groundtruth.csv`` (:data:`LAW_COLUMNS`): ``law``; ``E0_pa``, ``E0_s
 90 % interval: for ``linear`` the line's slope ``E_pa`` ± 1.645 sd); ``law_params`` (the
 natural parameters' medians, ``name=value`` joined by ``;``); ``eps0`` (the contact strain the
 law places); ``E0_low_pa``, ``E0_low_lo_pa``, ``E0_low_hi_pa`` (the same law fitted up to
-:data:`~palpbayes.groundtruth.finite.LOW_STRAIN`: the small-strain check) and ``law_ok`` (the
+:data:`~palpbayes.compression.finite.LOW_STRAIN`: the small-strain check) and ``law_ok`` (the
 two intervals overlap: the law follows the curve); ``law_note``; with ``--strain LO,HI``
 ``chord_lo``, ``chord_hi``, ``E_chord_pa``, ``E_chord_lo_pa``, ``E_chord_hi_pa`` (the law's
 chord modulus over that window, where two tests — a palpation's and an Instron's — can be set

@@ -1,6 +1,6 @@
 """Comparison tables: ground truth vs the paper's least squares vs the Bayesian model.
 
-:func:`compare_campaign` reads a results folder written by :func:`palpbayes.campaign.fit_campaign`
+:func:`compare` reads a results folder written by :func:`palpbayes.campaign.fit_campaign`
 and writes, atomically,
 
 * ``comparison.csv`` — one row per material × tip × method (:data:`COMPARISON_COLUMNS`);
@@ -103,7 +103,7 @@ from .settings import read_settings
 from .stiffening_tables import fit_stiffening_tables
 
 __all__ = ["COMPARISON_COLUMNS", "POOLED_COLUMNS", "Comparison",
-           "compare_campaign", "load_groundtruth", "paper_estimates"]
+           "compare", "load_groundtruth", "paper_estimates"]
 
 COMPARISON_COLUMNS = [
     "material", "tip", "method", "n_traces", "E_pa", "E_sd_pa", "E_lo_pa", "E_hi_pa",
@@ -344,7 +344,7 @@ def _layer_means(g: pd.DataFrame) -> dict:
 # ----------------------------------------------------------------------------- main
 
 
-def compare_campaign(
+def compare(
     results_dir: str | os.PathLike,
     *,
     groundtruth: str | os.PathLike | None = None,

@@ -2,7 +2,7 @@
 
 :func:`linfit` is ordinary least squares (slope, intercept, OLS standard error, R²);
 :func:`hac_slope_se` the heteroskedasticity- and autocorrelation-consistent (HAC) standard error
-that :mod:`palpbayes.groundtruth.fit` reports as ``E_sd_pa``.
+that :mod:`palpbayes.compression.fit` reports as ``E_sd_pa``.
 
 Uncertainty
 -----------
