@@ -6,6 +6,10 @@ Usage::
 
     python tools/house_counts.py [REPO] [--list]
 
+A function with many parameters may say why beside it, in a comment line right above its
+``def`` (or its decorators) that starts ``# Many parameters:``; such functions are counted
+apart.
+
 ``REPO`` (default: this checkout) is a folder holding ``palpbayes/`` (a ``git worktree`` of an
 older commit, to print the counts before a change).  A parameter is a named one (positional or
 keyword; ``self``/``cls``, ``*args`` and ``**kwargs`` not counted); a function is public when
@@ -30,10 +34,26 @@ def _files(root: Path, pattern: str) -> list[Path]:
     return sorted(root.glob(pattern)) if root.exists() else []
 
 
+REASON = "# Many parameters:"
+
+
+def _has_reason(lines: list[str], node) -> bool:
+    first = min([node.lineno, *(d.lineno for d in node.decorator_list)])
+    k = first - 2
+    while k >= 0 and lines[k].strip().startswith("#"):
+        if lines[k].strip().startswith(REASON):
+            return True
+        k -= 1
+    return False
+
+
 def public_functions(pkg: Path):
-    """(module path, qualified name, parameter count) of every public function and method."""
+    """(module path, qualified name, parameter count, a reason is written) of every public
+    function and method."""
     for path in sorted(pkg.rglob("*.py")):
-        tree = ast.parse(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        lines = text.splitlines()
+        tree = ast.parse(text)
         stack = [(node, "") for node in tree.body]
         while stack:
             node, prefix = stack.pop()
@@ -45,7 +65,7 @@ def public_functions(pkg: Path):
                 a = node.args
                 names = [x.arg for x in a.posonlyargs + a.args + a.kwonlyargs]
                 n = len([x for x in names if x not in ("self", "cls")])
-                yield path, prefix + node.name, n
+                yield path, prefix + node.name, n, _has_reason(lines, node)
 
 
 def counts(repo: Path) -> dict:
@@ -54,7 +74,7 @@ def counts(repo: Path) -> dict:
     long = sorted(((n, p.relative_to(pkg).as_posix()) for p, n in modules.items()
                    if n > LONG_MODULE), reverse=True)
     funcs = list(public_functions(pkg))
-    many = sorted(((n, f"{p.relative_to(pkg).as_posix()}:{q}") for p, q, n in funcs
+    many = sorted(((n, f"{p.relative_to(pkg).as_posix()}:{q}", why) for p, q, n, why in funcs
                    if n >= MANY_PARAMETERS), reverse=True)
     texts = {p: p.read_text(encoding="utf-8", errors="replace") for p in [
         *modules, *_files(repo, "notebooks/*.py"), *_files(repo, "examples/**/*.py"),
@@ -63,7 +83,7 @@ def counts(repo: Path) -> dict:
     tests = "\n".join(p.read_text(encoding="utf-8", errors="replace")
                       for p in _files(repo, "tests/**/*.py"))
     test_only = []
-    for path, qual, _ in funcs:
+    for path, qual, _, _ in funcs:
         name = qual.rsplit(".", 1)[-1]
         if name.startswith("__") or len(name) < 4:
             continue
@@ -86,9 +106,12 @@ def main(argv=None) -> int:
     print(f"modules over {LONG_MODULE} lines: {len(c['long'])}")
     if args.list:
         print("\n".join(f"  {n:5d}  {m}" for n, m in c["long"]))
-    print(f"public functions with >= {MANY_PARAMETERS} parameters: {len(c['many'])}")
+    why = sum(w for _, _, w in c["many"])
+    print(f"public functions with >= {MANY_PARAMETERS} parameters: {len(c['many'])} "
+          f"({why} with the reason written beside them, {len(c['many']) - why} without)")
     if args.list:
-        print("\n".join(f"  {n:5d}  {f}" for n, f in c["many"]))
+        print("\n".join(f"  {n:5d}  {f}{'  (reason given)' if w else ''}"
+                         for n, f, w in c["many"]))
     print(f"public functions only the tests call: {len(c['test_only'])}")
     if args.list:
         print("\n".join(f"  {f}" for f in c["test_only"]))
