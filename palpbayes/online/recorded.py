@@ -25,8 +25,8 @@ from ..fitdata import ModelSpec
 from ..trace import IndentationTrace
 from .estimator import OnlineEstimator, OnlineState, StoppingRule
 
-__all__ = ["ReplayResult", "replay", "run_to_stop", "chunks", "needed_indentation",
-           "HISTORY_COLUMNS", "STUDY_COLUMNS"]
+__all__ = ["ReplayResult", "replay", "run_to_stop", "chunks", "check_chunk",
+           "needed_indentation", "HISTORY_COLUMNS", "STUDY_COLUMNS"]
 
 #: Columns of :attr:`ReplayResult.history` (one row per update after contact).
 HISTORY_COLUMNS = ("n", "t_s", "z_m", "depth_m", "peak_force_n", "E_pa", "E_lo_pa", "E_hi_pa",
@@ -160,6 +160,15 @@ def _row(s: OnlineState) -> dict:
             "total_rel_half_width": T.rel_half_width if T else np.nan}
 
 
+def check_chunk(chunk: int) -> None:
+    """Raise an :class:`~palpbayes.errors.InputError` unless ``chunk`` is a whole number of
+    samples >= 1 (:func:`chunks`' check, run by ``palpbayes replay`` on its options first)."""
+    if isinstance(chunk, bool) or not isinstance(chunk, int | np.integer):
+        raise InputError(f"chunk = {chunk!r} must be a whole number of samples (at least 1)")
+    if chunk < 1:
+        raise InputError(f"chunk = {chunk} samples must be at least 1")
+
+
 def chunks(trace: IndentationTrace, chunk: int,
            limit: Callable[[np.ndarray, np.ndarray], tuple[int, str] | None] | None = None):
     """The loading segment of ``trace`` as (t [s], z [m], F [N]) chunks of ``chunk`` samples,
@@ -169,8 +178,7 @@ def chunks(trace: IndentationTrace, chunk: int,
     every chunk after the previous one has been used) ends a chunk at the sample it names, as
     ``palpbayes follow`` does; the next chunk starts after it.
     """
-    if chunk < 1:
-        raise InputError(f"chunk = {chunk} samples must be at least 1")
+    check_chunk(chunk)
     seg = trace.loading_segment()
     a, n = 0, seg.time.size
     while a < n:
