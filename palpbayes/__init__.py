@@ -14,7 +14,8 @@ Reading and fitting: :func:`read`, :func:`fit` (a :class:`Fit`), :func:`load_fit
 :func:`fit_campaign`, :func:`compare`, :func:`run_pipeline`, :func:`load_results`,
 :func:`report` (the PDF); the model: :class:`Tip`, :class:`Specimen`, :class:`ModelSpec`,
 :class:`BudgetSpec`, :func:`force`; simulating: :func:`simulate` (a campaign folder),
-:func:`simulate_trace`; online: :class:`OnlineEstimator`, :class:`StoppingRule`; maps:
+:func:`simulate_trace`; online: :func:`replay` (a recorded trace as if live: where would the
+stopping rule have stopped?), :class:`OnlineEstimator`, :class:`StoppingRule`; maps:
 :func:`fit_map` (a manifest or an AFM map in one call; :func:`make_map` the step after
 reading); active search: :func:`next_presses` (the subpackage :mod:`active`);
 viscoelastic fits: :func:`fit_rheology`, :func:`compare_rheology` (PSIS-LOO),
@@ -56,6 +57,7 @@ _LAZY = {
     "Specimen": ("specimen", "Specimen"),
     "simulate": ("sim.campaign", "simulate"),
     "simulate_trace": ("sim.trace", "simulate_trace"),
+    "replay": ("api_replay", "replay"),
     "OnlineEstimator": ("online.estimator", "OnlineEstimator"),
     "StoppingRule": ("online.estimator", "StoppingRule"),
     "fit_map": ("api_map", "fit_map"),

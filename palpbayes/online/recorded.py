@@ -6,7 +6,9 @@ of ``chunk`` samples (100 by default: 0.125 s at the paper's 800 Hz, 0.2 s at a 
 estimate at the stop can be set beside the estimate from the whole trace, and the depth and
 peak force saved against the recorded protocol (the paper's fixed 10 % indentation) measured.
 The model checks of the offline fit (:mod:`palpbayes.checks`) are run on the samples up to the
-stop (:attr:`ReplayResult.checks_at_stop`).
+stop (:attr:`ReplayResult.checks_at_stop`).  :func:`palpbayes.replay` is the front door (a
+file or a trace, with the command line's options); its :class:`~palpbayes.api_replay.Replay`
+adds the figure and the files of ``palpbayes replay --out`` to a :class:`ReplayResult`.
 """
 
 from __future__ import annotations
@@ -53,6 +55,8 @@ class ReplayResult:
     checks_at_stop
         The model checks (:meth:`OnlineEstimator.model_checks`) on the samples up to the stop;
         empty when the rule never fired.
+    trace_id
+        The replayed trace's id (the title of :meth:`plot`).
     """
 
     history: pd.DataFrame
@@ -63,10 +67,14 @@ class ReplayResult:
     rule: StoppingRule
     model: ModelSpec | None = None
     checks_at_stop: list[CheckResult] = field(default_factory=list)
+    trace_id: str = ""
 
-    def summary(self) -> dict:
-        """Stop time, depth, peak force, E then and from the whole trace, savings [%], the
-        interval the target was tested on and the model checks at the stop."""
+    @property
+    def row(self) -> dict:
+        """The row of :meth:`summary` as a dict: stop time [s], depth [m], peak force [N],
+        E [Pa] then and from the whole trace with both intervals, savings [%], the interval
+        the target was tested on, the model (nu, thickness [m], base) and the model checks at
+        the stop (the stop's columns only when the rule fired)."""
         f, s = self.final, self.at_stop
         row = {"stopped": s is not None, "reason": s.stop if s else "",
                "target_on": self.rule.target_on,
@@ -95,6 +103,30 @@ class ReplayResult:
                         "misfit_effect_stop": checks["misfit_effect"],
                         "check_flags_stop": "; ".join(checks["flags"])})
         return row
+
+    def summary(self) -> pd.DataFrame:
+        """``replay_summary.csv`` (docs/outputs.md) as a one-row table: :attr:`row`'s columns
+        in its order (:meth:`palpbayes.api_replay.Replay.save` writes it)."""
+        return pd.DataFrame([self.row])
+
+    def __repr__(self) -> str:
+        from ..units import format_force, format_length, format_pressure
+
+        def interval(E, budget) -> str:
+            if E is None or budget is None:
+                return "no E yet"
+            return (f"E {format_pressure(E.median)} [{format_pressure(budget.lo)}, "
+                    f"{format_pressure(budget.hi)}]")
+
+        s, f = self.at_stop, self.final
+        if s is None:
+            where = "never stopped"
+        else:
+            where = (f"stopped ({s.stop}) at {format_length(s.depth)} deep, "
+                     f"{format_force(s.peak_force)}: {interval(s.E, self.budget_at_stop)}")
+        return (f"{type(self).__name__}({self.trace_id!r}: {where}; whole trace "
+                f"({format_length(f.depth)}): {interval(f.E, self.budget_final)}; 90 % "
+                "intervals with the budget)")
 
 
 #: Columns of :func:`needed_indentation` (one row per trace).
@@ -243,4 +275,5 @@ def replay(trace: IndentationTrace, model: ModelSpec | None = None, *,
     return ReplayResult(history=history, at_stop=at_stop, final=est.state,
                         budget_at_stop=budget_at_stop,
                         budget_final=est.state.E_total or est.budget_interval(seed=seed),
-                        rule=rule, model=model, checks_at_stop=found)
+                        rule=rule, model=model, checks_at_stop=found,
+                        trace_id=str(trace.trace_id))
