@@ -136,9 +136,9 @@ class Milestones:
 
 
 def run_active(ph, truth, criterion: str, budget: int) -> tuple[dict, list[dict]]:
-    from palpbayes.active import StopRule, next_presses
+    from palpbayes.active import SearchStopRule, next_presses
 
-    rule = StopRule(max_presses=budget)
+    rule = SearchStopRule(max_presses=budget)
     press, state, seq, times, ms = Presser(ph), _state(ph), [], [], Milestones(truth)
     while True:
         t0 = time.perf_counter()
@@ -162,10 +162,10 @@ def run_active(ph, truth, criterion: str, budget: int) -> tuple[dict, list[dict]
 
 
 def run_random(ph, truth, budget: int, seed: int) -> dict:
-    from palpbayes.active import StopRule
+    from palpbayes.active import SearchStopRule
     from palpbayes.active.search import decide, summary
 
-    rule = StopRule(max_presses=budget)
+    rule = SearchStopRule(max_presses=budget)
     rng = np.random.default_rng([seed, 7])
     press, state, ms = Presser(ph), _state(ph), Milestones(truth)
     x0, x1, y0, y1 = FOOTPRINT
@@ -186,10 +186,10 @@ def run_random(ph, truth, budget: int, seed: int) -> dict:
 
 
 def run_raster(ph, truth, budget: int) -> dict:
-    from palpbayes.active import StopRule
+    from palpbayes.active import SearchStopRule
     from palpbayes.active.search import decide, summary
 
-    rule = StopRule()
+    rule = SearchStopRule()
     x0, x1, y0, y1 = FOOTPRINT
     ms, last = Milestones(truth), None
     for m in range(3, int(math.isqrt(budget)) + 1):
@@ -268,7 +268,7 @@ def _milestone(v: pd.Series, budget: int) -> dict:
 def time_large_states(n: int, states: int, seed: int) -> np.ndarray:
     """Wall time [s] of next_presses (eig, k = 1) on ``states`` states of ``n`` random presses
     (simulated and fitted on lump phantoms, undecided so that the candidates are scored)."""
-    from palpbayes.active import StopRule, next_presses
+    from palpbayes.active import SearchStopRule, next_presses
 
     out = []
     for i in range(states):
@@ -279,7 +279,7 @@ def time_large_states(n: int, states: int, seed: int) -> np.ndarray:
         for j in range(n):
             x, y = rng.uniform(x0, x1), rng.uniform(y0, y1)
             state = state.with_press(x, y, *press(x, y, f"time-{j}"))
-        rule = StopRule(centre_radius=1e-6)  # never placed: always score the candidates
+        rule = SearchStopRule(centre_radius=1e-6)  # never placed: always score the candidates
         next_presses(state, rule=rule)  # the grid is built once per specimen: not timed
         t0 = time.perf_counter()
         next_presses(state, rule=rule)
@@ -335,7 +335,7 @@ def main(argv=None) -> int:
               f"{int(np.percentile(n, 90))} presses) median {1e3 * np.median(big):.0f} ms "
               f"(on {args.workers} busy workers)")
     if args.figure >= 0:
-        from palpbayes.active import StopRule
+        from palpbayes.active import SearchStopRule
         from palpbayes.plots.active import plot_search
 
         for i in (args.figure, args.figure + 1):
@@ -346,7 +346,7 @@ def main(argv=None) -> int:
             what = (f"lump {2e3 * ph.inclusion.radius:g} mm across, centre "
                     f"{1e3 * ph.inclusion.depth:.1f} mm deep" if truth["has_lump"] else
                     "no lump")
-            fig = plot_search(state, rule=StopRule(max_presses=args.budget), truth=where,
+            fig = plot_search(state, rule=SearchStopRule(max_presses=args.budget), truth=where,
                               title=f"phantom {i} ({what}): {state.n} presses, "
                                     f"{criteria[0]}")
             Path(args.out).mkdir(parents=True, exist_ok=True)

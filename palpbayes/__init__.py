@@ -15,9 +15,10 @@ Reading and fitting: :func:`read`, :func:`fit` (a :class:`Fit`), :func:`load_fit
 :func:`groundtruth` (Young's modulus of compression tests, as ``palpbayes groundtruth``); the
 model: :class:`Tip`, :class:`Specimen`, :class:`ModelSpec`, :class:`BudgetSpec`, :func:`force`;
 simulating: :func:`simulate` (a campaign folder), :func:`simulate_trace`; online:
-:class:`OnlineEstimator`, :class:`StoppingRule`; maps: :func:`fit_map` (a manifest or an AFM
-map in one call; :func:`make_map` the step after reading); active search: :func:`next_presses`
-(the subpackage :mod:`active`); viscoelastic fits: :func:`fit_rheology`,
+:func:`replay` (a recorded trace as if live: where would the stopping rule have
+stopped?), :class:`OnlineEstimator`, :class:`StoppingRule`; maps: :func:`fit_map` (a manifest
+or an AFM map in one call; :func:`make_map` the step after reading); active search:
+:func:`next_presses` (the subpackage :mod:`active`); viscoelastic fits: :func:`fit_rheology`,
 :func:`compare_rheology` (PSIS-LOO), :func:`pool_rheology` (one power law over speeds); the
 example campaign: :func:`example_campaign_dir`; the subpackages :mod:`contact` (the contact
 laws and their formulas), :mod:`errors`, :mod:`stiffening`, :mod:`plots`, :mod:`paper`,
@@ -56,6 +57,7 @@ _LAZY = {
     "Specimen": ("specimen", "Specimen"),
     "simulate": ("sim.campaign", "simulate"),
     "simulate_trace": ("sim.trace", "simulate_trace"),
+    "replay": ("api_replay", "replay"),
     "OnlineEstimator": ("online.estimator", "OnlineEstimator"),
     "StoppingRule": ("online.estimator", "StoppingRule"),
     "fit_map": ("api_map", "fit_map"),

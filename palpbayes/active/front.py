@@ -6,14 +6,14 @@ import os
 from dataclasses import replace
 
 from .files import read_state
-from .search import NextPresses, SearchState, StopRule
+from .search import NextPresses, SearchState, SearchStopRule
 from .search import next_presses as _next
 
 __all__ = ["next_presses"]
 
 
 def next_presses(state: SearchState | str | os.PathLike, k: int = 1, *,
-                 criterion: str = "eig", rule: StopRule | None = None,
+                 criterion: str = "eig", rule: SearchStopRule | None = None,
                  **overrides) -> NextPresses:
     """The next ``k`` presses of an active search for a lump, or the decision to stop.
 
@@ -28,7 +28,7 @@ def next_presses(state: SearchState | str | os.PathLike, k: int = 1, *,
         ``"eig"`` (expected information gain on presence and centre, the default), ``"lse"``
         (level-set estimation) or ``"ucb"`` (upper confidence bound, the baseline).
     rule
-        The :class:`~palpbayes.active.StopRule` (default: P(lump) >= 0.95 with the centre's
+        The :class:`~palpbayes.active.SearchStopRule` (default: P(lump) >= 0.95 with the centre's
         90 % radius <= 2 mm, or P(lump) <= 0.05).
     overrides
         :class:`~palpbayes.active.SearchState` fields to replace (``footprint``,

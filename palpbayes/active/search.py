@@ -3,7 +3,7 @@
 A search state is the presses so far (position and posterior of log E) and the specimen:
 its footprint, keep-out zones, the tip's contact radius and the block thickness.  After each
 press the lump posterior (:mod:`palpbayes.active.posterior`) is updated; the stopping rule
-(:class:`StopRule`) says whether a decision is reached; if not, the candidates of a regular
+(:class:`SearchStopRule`) says whether a decision is reached; if not, the candidates of a regular
 grid over the footprint (outside the keep-out zones and at least ``min_spacing`` from every
 press) are scored by a criterion (:mod:`palpbayes.active.criteria`) and the best is returned.
 A batch of k for a robot that plans a path is chosen greedily, each pick added to the state
@@ -23,7 +23,7 @@ from ..errors import InputError
 from .criteria import CRITERIA, level_probability, predictive
 from .posterior import LumpHypotheses, SearchPosterior, hypotheses, posterior
 
-__all__ = ["PRESS_COLUMNS", "SearchState", "StopRule", "NextPresses", "next_presses",
+__all__ = ["PRESS_COLUMNS", "SearchState", "SearchStopRule", "NextPresses", "next_presses",
            "decide", "summary", "history"]
 
 #: Columns of a search state's presses (``presses.csv``).
@@ -34,8 +34,9 @@ _MAX_CANDIDATES = 900
 
 
 @dataclass(frozen=True)
-class StopRule:
-    """When the search has decided.
+class SearchStopRule:
+    """When the search has decided (not :class:`~palpbayes.online.StoppingRule`, which says
+    when to stop one press).
 
     Parameters
     ----------
@@ -249,7 +250,7 @@ class NextPresses:
     posterior: SearchPosterior | None = field(default=None, repr=False)
 
 
-def summary(state: SearchState, post: SearchPosterior | None, rule: StopRule) -> dict:
+def summary(state: SearchState, post: SearchPosterior | None, rule: SearchStopRule) -> dict:
     """The posterior as plain numbers: ``n``, ``p_lump``, the centre ``x_m``/``y_m`` [m] and
     its credible radius ``centre_radius_m``, the apparent diameter ``size_m`` (FWHM),
     ``apparent_ratio``, ``tau`` and ``misclassified_area_m2`` of the level set (NaN before
@@ -277,7 +278,7 @@ def _area_grid(state: SearchState) -> tuple[np.ndarray, np.ndarray, float]:
     return X.ravel(), Y.ravel(), (x1 - x0) * (y1 - y0) / (nx * ny)
 
 
-def decide(post: SearchPosterior, rule: StopRule) -> tuple[str, str]:
+def decide(post: SearchPosterior, rule: SearchStopRule) -> tuple[str, str]:
     """(decision, reason) of the stopping rule; ("", "") while undecided."""
     p = post.p_lump
     if p >= rule.p_decide:
@@ -309,7 +310,7 @@ def _initial(state: SearchState, k: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
-                 rule: StopRule | None = None) -> NextPresses:
+                 rule: SearchStopRule | None = None) -> NextPresses:
     """The next ``k`` presses of an active search, or the decision to stop (module docstring).
 
     Parameters
@@ -321,13 +322,13 @@ def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
     criterion
         ``"eig"``, ``"lse"`` or ``"ucb"`` (:data:`palpbayes.active.criteria.CRITERIA`).
     rule
-        The stopping rule (default :class:`StopRule`).
+        The stopping rule (default :class:`SearchStopRule`).
     """
     if criterion not in CRITERIA:
         raise InputError(f"criterion {criterion!r}: choose one of {', '.join(CRITERIA)}")
     if int(k) < 1:
         raise InputError(f"k {k!r} must be >= 1")
-    k, rule = int(k), rule or StopRule()
+    k, rule = int(k), rule or SearchStopRule()
     cols = ["order", "x_m", "y_m", "score", "criterion"]
     if state.n == 0:
         x, y = _initial(state, k)
@@ -366,11 +367,11 @@ def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
     return NextPresses(pd.DataFrame(rows, columns=cols), False, "", "", info, post)
 
 
-def history(state: SearchState, rule: StopRule | None = None) -> pd.DataFrame:
+def history(state: SearchState, rule: SearchStopRule | None = None) -> pd.DataFrame:
     """The posterior after each press of ``state`` in order: ``n``, ``press_x_m``,
     ``press_y_m``, and the :func:`summary` fields except the misclassified area (one
     posterior per press: about 0.05-0.2 s each)."""
-    rule = rule or StopRule()
+    rule = rule or SearchStopRule()
     rows = []
     for n in range(1, state.n + 1):
         sub = replace(state, presses=state.presses.iloc[:n], _hyp=state._hyp)

@@ -43,8 +43,7 @@ from ..errors import InputError
 from ..intervals import normal_z
 from ..online import OnlineState
 from ..online.tcp import DEFAULT_HOST, SessionConnection, accept_session, listen, parse_address
-from .next import EXIT_DECIDED, EXIT_UNDECIDED, answer_json
-from .next import rule_from_args as search_rule_from_args
+from .next import EXIT_DECIDED, EXIT_UNDECIDED, answer_json, search_rule_from_args
 
 __all__ = ["live_loop", "parse_press_line", "press_posterior", "error_json", "CLOSE_GRACE",
            "NO_ESTIMATE", "PRESS_TIMEOUT"]

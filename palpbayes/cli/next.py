@@ -17,8 +17,9 @@ import textwrap
 from ..errors import InputError
 from .options import add_tip_options, tip_from_args
 
-__all__ = ["register", "run", "answer_json", "answer_text", "state_overrides", "rule_from_args",
-           "add_rule_options", "EXIT_DECIDED", "EXIT_GO_ON", "EXIT_UNDECIDED"]
+__all__ = ["register", "run", "answer_json", "answer_text", "state_overrides",
+           "search_rule_from_args", "add_rule_options", "EXIT_DECIDED", "EXIT_GO_ON",
+           "EXIT_UNDECIDED"]
 
 #: Exit status: the search has decided (lump or none).
 EXIT_DECIDED = 0
@@ -88,7 +89,7 @@ def register(subparsers) -> None:
 
 
 def add_rule_options(g) -> None:
-    """``--p-decide``, ``--centre-radius``, ``--budget`` (read by :func:`rule_from_args`;
+    """``--p-decide``, ``--centre-radius``, ``--budget`` (read by :func:`search_rule_from_args`;
     ``next``, ``follow --map``)."""
     g.add_argument("--p-decide", type=float, default=0.95, metavar="P",
                    help="decide at P(lump) >= P or <= 1 - P (default 0.95)")
@@ -109,11 +110,11 @@ def state_overrides(args: argparse.Namespace) -> dict:
     return out
 
 
-def rule_from_args(args: argparse.Namespace):
-    from ..active import StopRule
+def search_rule_from_args(args: argparse.Namespace):
+    from ..active import SearchStopRule
 
-    return StopRule(p_decide=args.p_decide, centre_radius=args.centre_radius,
-                    max_presses=args.budget)
+    return SearchStopRule(p_decide=args.p_decide, centre_radius=args.centre_radius,
+                          max_presses=args.budget)
 
 
 def _init(args: argparse.Namespace) -> int:
@@ -187,7 +188,7 @@ def run(args: argparse.Namespace) -> int:
     from ..active import next_presses
     from ..active.files import read_state
 
-    rule = rule_from_args(args)
+    rule = search_rule_from_args(args)
     state = read_state(args.state, thickness=args.thickness, **state_overrides(args))
     ans = next_presses(state, args.k, criterion=args.criterion, rule=rule)
     print(answer_json(ans) if args.json else answer_text(ans), flush=True)

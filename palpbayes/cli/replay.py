@@ -14,16 +14,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import pandas as pd
-
 from .. import outputs
 from ..checks import checks_summary
 from ..contact import DEFAULT_NU_NOTE
-from ..io.atomic import write_csv_atomic, write_with
-from ..online import replay
 from ..units import format_force, format_length, format_pressure
 from .console import _wrap
-from .online_options import add_online_options, model_from_args, parse_fraction, rule_from_args
+from .online_options import add_online_options, parse_fraction, request_from_args
 from .options import add_trace_options, trace_from_args
 
 __all__ = ["register", "run", "parse_fraction", "check_lines", "INTERVALS_NOTE", "MISFIT_NOTE"]
@@ -91,12 +87,10 @@ def check_lines(checks, where: str) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    rule = rule_from_args(args)
+    request = request_from_args(args)  # palpbayes.replay builds the same
     trace = trace_from_args(args)
-    model = model_from_args(args, trace.tip)
-    res = replay(trace, model, rule=rule, chunk=args.chunk, noise=args.noise,
-                 noise_pp=args.noise_pp, total=True)
-    s, f = res.at_stop, res.final
+    res = request.run(trace)
+    s, f, rule, model = res.at_stop, res.final, res.rule, res.model
     tested = ("the one with the budget (--target-on full)" if rule.target_on == "full"
               else "the statistical one (--target-on stat)")
     for line in _wrap(INTERVALS_NOTE):
@@ -115,25 +109,16 @@ def run(args: argparse.Namespace) -> int:
             for line in _wrap(MISFIT_NOTE):
                 print(line)
     print(_show("whole trace", f, res.budget_final))
-    summary = res.summary()
+    row = res.row
     if s is not None:
-        print(f"saved against the recorded protocol: {summary['depth_saved_pct']:.0f} % of the "
-              f"depth, {summary['force_saved_pct']:.0f} % of the peak force")
+        print(f"saved against the recorded protocol: {row['depth_saved_pct']:.0f} % of the "
+              f"depth, {row['force_saved_pct']:.0f} % of the peak force")
     for flag in f.flags:
         print(f"warning: {flag}")
     if args.nu is None:
         print(f"note: {DEFAULT_NU_NOTE.replace(', or a nu column in the manifest', '')}")
     if args.out:
-        from ..plots.online import plot_replay
-
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        write_csv_atomic(res.history, out / outputs.REPLAY_HISTORY)
-        write_csv_atomic(pd.DataFrame([summary]), out / outputs.REPLAY_SUMMARY)
-        fig = plot_replay(res.history, stop_n=None if s is None else s.n, target=args.target,
-                          truth=args.truth, title=trace.trace_id)
-        write_with(lambda tmp: fig.savefig(tmp, dpi=150, format="png"),
-                   out / outputs.REPLAY_FIGURE, suffix=".png")
+        out = res.save(Path(args.out), truth=args.truth)
         print(f"wrote {out / outputs.REPLAY_HISTORY}, {out / outputs.REPLAY_SUMMARY} and "
               f"{out / outputs.REPLAY_FIGURE}")
     return 0

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import stat
 import tempfile
 from collections.abc import Callable, Iterator
@@ -93,3 +94,29 @@ def write_netcdf_atomic(idata, path: str | os.PathLike) -> Path:
 
 
 __all__.append("write_netcdf_atomic")
+
+
+@contextlib.contextmanager
+def staged_folder(out: str | os.PathLike, prefix: str = ".partial-") -> Iterator[Path]:
+    """Yield a new, empty staging folder inside ``out`` (created if need be) for a group of
+    files written together; on success move each file written there onto ``out`` (keeping the
+    permissions of the file it replaces, as :func:`atomic_path` does) and remove the folder.
+
+    On an exception the folder is removed and ``out``'s files are left as they were: the group
+    is written all or nothing, up to the final renames (one per file, within one folder).
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=prefix, dir=out))
+    try:
+        yield stage
+        for f in sorted(stage.iterdir()):
+            os.chmod(f, _final_mode(out / f.name))
+            os.replace(f, out / f.name)
+        stage.rmdir()
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+
+
+__all__.append("staged_folder")

@@ -60,6 +60,7 @@ from __future__ import annotations
 
 import copy
 import math
+import numbers
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from types import SimpleNamespace
@@ -90,7 +91,7 @@ from ..noise import sigma_from_pp
 
 __all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE", "HOLD_WINDOW",
            "HOLD_TOLERANCE", "RELAX_N_SE", "TARGET_ON", "BUDGET_DRAWS", "PRE_CONTACT_SAMPLES",
-           "MAX_CONTACT_SAMPLES", "CHECK_SAMPLES"]
+           "MAX_CONTACT_SAMPLES", "CHECK_SAMPLES", "check_noise_options"]
 
 #: Nodes whose log density falls this far below the best are no longer updated.
 PRUNE = 28.0
@@ -150,8 +151,13 @@ class StoppingRule:
     def __post_init__(self) -> None:
         for name in ("target", "max_force", "max_depth"):
             v = getattr(self, name)
-            if v is not None and not (math.isfinite(v) and v > 0):
+            if v is not None and not (isinstance(v, numbers.Real) and not isinstance(v, bool)
+                                      and math.isfinite(v) and v > 0):
                 raise InputError(f"stopping rule: {name} = {v!r} must be a positive number")
+        if (isinstance(self.min_contact, bool)
+                or not isinstance(self.min_contact, int | np.integer) or self.min_contact < 1):
+            raise InputError(f"stopping rule: min_contact = {self.min_contact!r} must be a "
+                             "whole number of samples >= 1")
         if self.target_on not in TARGET_ON:
             raise InputError(f"stopping rule: target_on = {self.target_on!r} must be one of "
                              f"{', '.join(TARGET_ON)}")
@@ -172,6 +178,29 @@ class StoppingRule:
                 and E is not None and E.rel_half_width <= self.target):
             return "target precision"
         return ""
+
+
+def check_noise_options(noise: str = "gaussian", noise_pp: float | None = None,
+                        f_unc: float | None = None) -> None:
+    """The online estimator's checks of its noise model, the sensor's peak-to-peak noise [N]
+    and the contact threshold [N] (:class:`OnlineEstimator` runs them; ``palpbayes replay``
+    and :func:`palpbayes.replay` run them on their options before the trace is read).
+
+    Raises
+    ------
+    InputError
+        A force that is not a positive number, or a noise model the exact engine does not
+        take (:data:`~palpbayes.bayes.noisemodels.EXACT_NOISE_MODELS`).
+    """
+    for name, v in (("noise_pp", noise_pp), ("f_unc", f_unc)):
+        if v is not None and not (isinstance(v, numbers.Real) and not isinstance(v, bool)
+                                  and math.isfinite(v) and v > 0):
+            raise InputError(f"online estimation: {name} = {v!r} must be a positive force "
+                             "in newtons (the sensor's peak-to-peak noise), or None to "
+                             "read it from the baseline")
+    if noise not in EXACT_NOISE_MODELS:
+        raise InputError(f"online estimation takes noise "
+                         f"{' or '.join(map(repr, EXACT_NOISE_MODELS))}, not {noise!r}")
 
 
 @dataclass(frozen=True)
@@ -283,12 +312,7 @@ class OnlineEstimator:
     budget_draws: int = BUDGET_DRAWS
 
     def __post_init__(self) -> None:
-        for name in ("noise_pp", "f_unc"):
-            v = getattr(self, name)
-            if v is not None and not (math.isfinite(v) and v > 0):
-                raise InputError(f"online estimation: {name} = {v!r} must be a positive force "
-                                 "in newtons (the sensor's peak-to-peak noise), or None to "
-                                 "read it from the baseline")
+        check_noise_options(self.noise, self.noise_pp, self.f_unc)
         if not (isinstance(self.budget_draws, int) and self.budget_draws >= 100):
             raise InputError(f"online estimation: budget_draws = {self.budget_draws!r} must be "
                              "a whole number >= 100")
@@ -297,10 +321,6 @@ class OnlineEstimator:
                              "number of samples >= 1")
         if not 0 < self.level < 1:
             raise InputError(f"online estimation: level = {self.level!r} must lie in (0, 1)")
-        if self.noise not in EXACT_NOISE_MODELS:
-            raise InputError(f"online estimation takes noise "
-                             f"{' or '.join(map(repr, EXACT_NOISE_MODELS))}, not "
-                             f"{self.noise!r}")
         # the samples kept (module docstring, "Memory"): the first _n of _t, _z, _f; the
         # samples seen, those dropped before the contact, and the last one (t, z, F)
         self._t = np.empty(0)

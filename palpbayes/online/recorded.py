@@ -6,7 +6,9 @@ of ``chunk`` samples (100 by default: 0.125 s at the paper's 800 Hz, 0.2 s at a 
 estimate at the stop can be set beside the estimate from the whole trace, and the depth and
 peak force saved against the recorded protocol (the paper's fixed 10 % indentation) measured.
 The model checks of the offline fit (:mod:`palpbayes.checks`) are run on the samples up to the
-stop (:attr:`ReplayResult.checks_at_stop`).
+stop (:attr:`ReplayResult.checks_at_stop`).  :func:`palpbayes.replay` is the front door (a
+file or a trace, with the command line's options); its :class:`~palpbayes.api_replay.Replay`
+adds the figure and the files of ``palpbayes replay --out`` to a :class:`ReplayResult`.
 """
 
 from __future__ import annotations
@@ -25,8 +27,8 @@ from ..fitdata import ModelSpec
 from ..trace import IndentationTrace
 from .estimator import OnlineEstimator, OnlineState, StoppingRule
 
-__all__ = ["ReplayResult", "replay", "run_to_stop", "chunks", "needed_indentation",
-           "HISTORY_COLUMNS", "STUDY_COLUMNS"]
+__all__ = ["ReplayResult", "replay", "run_to_stop", "chunks", "check_chunk",
+           "needed_indentation", "HISTORY_COLUMNS", "STUDY_COLUMNS"]
 
 #: Columns of :attr:`ReplayResult.history` (one row per update after contact).
 HISTORY_COLUMNS = ("n", "t_s", "z_m", "depth_m", "peak_force_n", "E_pa", "E_lo_pa", "E_hi_pa",
@@ -53,6 +55,8 @@ class ReplayResult:
     checks_at_stop
         The model checks (:meth:`OnlineEstimator.model_checks`) on the samples up to the stop;
         empty when the rule never fired.
+    trace_id
+        The replayed trace's id (the title of :meth:`plot`).
     """
 
     history: pd.DataFrame
@@ -63,10 +67,14 @@ class ReplayResult:
     rule: StoppingRule
     model: ModelSpec | None = None
     checks_at_stop: list[CheckResult] = field(default_factory=list)
+    trace_id: str = ""
 
-    def summary(self) -> dict:
-        """Stop time, depth, peak force, E then and from the whole trace, savings [%], the
-        interval the target was tested on and the model checks at the stop."""
+    @property
+    def row(self) -> dict:
+        """The row of :meth:`summary` as a dict: stop time [s], depth [m], peak force [N],
+        E [Pa] then and from the whole trace with both intervals, savings [%], the interval
+        the target was tested on, the model (nu, thickness [m], base) and the model checks at
+        the stop (the stop's columns only when the rule fired)."""
         f, s = self.final, self.at_stop
         row = {"stopped": s is not None, "reason": s.stop if s else "",
                "target_on": self.rule.target_on,
@@ -95,6 +103,30 @@ class ReplayResult:
                         "misfit_effect_stop": checks["misfit_effect"],
                         "check_flags_stop": "; ".join(checks["flags"])})
         return row
+
+    def summary(self) -> pd.DataFrame:
+        """``replay_summary.csv`` (docs/outputs.md) as a one-row table: :attr:`row`'s columns
+        in its order (:meth:`palpbayes.api_replay.Replay.save` writes it)."""
+        return pd.DataFrame([self.row])
+
+    def __repr__(self) -> str:
+        from ..units import format_force, format_length, format_pressure
+
+        def interval(E, budget) -> str:
+            if E is None or budget is None:
+                return "no E yet"
+            return (f"E {format_pressure(E.median)} [{format_pressure(budget.lo)}, "
+                    f"{format_pressure(budget.hi)}]")
+
+        s, f = self.at_stop, self.final
+        if s is None:
+            where = "never stopped"
+        else:
+            where = (f"stopped ({s.stop}) at {format_length(s.depth)} deep, "
+                     f"{format_force(s.peak_force)}: {interval(s.E, self.budget_at_stop)}")
+        return (f"{type(self).__name__}({self.trace_id!r}: {where}; whole trace "
+                f"({format_length(f.depth)}): {interval(f.E, self.budget_final)}; 90 % "
+                "intervals with the budget)")
 
 
 #: Columns of :func:`needed_indentation` (one row per trace).
@@ -160,6 +192,15 @@ def _row(s: OnlineState) -> dict:
             "total_rel_half_width": T.rel_half_width if T else np.nan}
 
 
+def check_chunk(chunk: int) -> None:
+    """Raise an :class:`~palpbayes.errors.InputError` unless ``chunk`` is a whole number of
+    samples >= 1 (:func:`chunks`' check, run by ``palpbayes replay`` on its options first)."""
+    if isinstance(chunk, bool) or not isinstance(chunk, int | np.integer):
+        raise InputError(f"chunk = {chunk!r} must be a whole number of samples (at least 1)")
+    if chunk < 1:
+        raise InputError(f"chunk = {chunk} samples must be at least 1")
+
+
 def chunks(trace: IndentationTrace, chunk: int,
            limit: Callable[[np.ndarray, np.ndarray], tuple[int, str] | None] | None = None):
     """The loading segment of ``trace`` as (t [s], z [m], F [N]) chunks of ``chunk`` samples,
@@ -169,8 +210,7 @@ def chunks(trace: IndentationTrace, chunk: int,
     every chunk after the previous one has been used) ends a chunk at the sample it names, as
     ``palpbayes follow`` does; the next chunk starts after it.
     """
-    if chunk < 1:
-        raise InputError(f"chunk = {chunk} samples must be at least 1")
+    check_chunk(chunk)
     seg = trace.loading_segment()
     a, n = 0, seg.time.size
     while a < n:
@@ -235,4 +275,5 @@ def replay(trace: IndentationTrace, model: ModelSpec | None = None, *,
     return ReplayResult(history=history, at_stop=at_stop, final=est.state,
                         budget_at_stop=budget_at_stop,
                         budget_final=est.state.E_total or est.budget_interval(seed=seed),
-                        rule=rule, model=model, checks_at_stop=found)
+                        rule=rule, model=model, checks_at_stop=found,
+                        trace_id=str(trace.trace_id))

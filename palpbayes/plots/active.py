@@ -29,16 +29,16 @@ def plot_search(state, *, rule=None, hist: pd.DataFrame | None = None,
     state
         A :class:`~palpbayes.active.SearchState` with at least one press.
     rule
-        The :class:`~palpbayes.active.StopRule` (its thresholds are drawn).
+        The :class:`~palpbayes.active.SearchStopRule` (its thresholds are drawn).
     hist
         :func:`palpbayes.active.search.history` of ``state`` (computed when None).
     truth
         [m] The true lump centre of a phantom, marked when given.
     """
     from ..active.criteria import level_probability
-    from ..active.search import StopRule, history
+    from ..active.search import SearchStopRule, history
 
-    rule = rule or StopRule()
+    rule = rule or SearchStopRule()
     if state.n == 0:
         raise ValueError("plot_search: the state has no press yet")
     hist = history(state, rule) if hist is None else hist

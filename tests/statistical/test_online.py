@@ -92,7 +92,7 @@ def test_each_stopping_rule_fires_where_it_should(rule, reason):
     else:
         assert s.E.rel_half_width <= 0.03
         assert (before["rel_half_width"] > 0.03).all()
-    summary = res.summary()
+    summary = res.row  # the summary row as a dict
     assert summary["depth_saved_pct"] > 0 and summary["force_saved_pct"] > 0
     # the interval with the budget contains the statistical one
     assert res.budget_at_stop.lo <= s.E.lo and res.budget_at_stop.hi >= s.E.hi

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 import palpbayes as pb
-from palpbayes.active import SearchState, StopRule, next_presses
+from palpbayes.active import SearchState, SearchStopRule, next_presses
 from palpbayes.active.criteria import CRITERIA, eig, level_probability, predictive
 from palpbayes.active.search import PRESS_COLUMNS, decide, history
 from palpbayes.errors import InputError
@@ -61,13 +61,13 @@ def test_candidates_keep_out_of_zones_and_away_from_presses():
 
 def test_a_batch_is_k_distinct_presses_at_the_minimum_spacing():
     st = _state(*_raster(4), min_spacing=4e-3)
-    ans = next_presses(st, 3, rule=StopRule(centre_radius=1e-6))
+    ans = next_presses(st, 3, rule=SearchStopRule(centre_radius=1e-6))
     p = ans.presses
     assert list(p.order) == [1, 2, 3]
     xy = p[["x_m", "y_m"]].to_numpy()
     d = np.hypot(*(xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1))
     assert d[np.triu_indices(3, 1)].min() >= 4e-3
-    first = next_presses(st, 1, rule=StopRule(centre_radius=1e-6)).presses
+    first = next_presses(st, 1, rule=SearchStopRule(centre_radius=1e-6)).presses
     assert (first.x_m.iloc[0], first.y_m.iloc[0]) == (p.x_m.iloc[0], p.y_m.iloc[0])
 
 
@@ -147,30 +147,30 @@ def test_level_probability_matches_its_definition_on_the_grid():
 def test_each_criterion_chooses_a_candidate():
     st = _state(*_raster(5))
     for name in CRITERIA:
-        ans = next_presses(st, criterion=name, rule=StopRule(centre_radius=1e-6))
+        ans = next_presses(st, criterion=name, rule=SearchStopRule(centre_radius=1e-6))
         assert len(ans.presses) == 1 and ans.presses.criterion.iloc[0] == name
     # ucb chases the stiffest place: near the lump
-    p = next_presses(st, criterion="ucb", rule=StopRule(centre_radius=1e-6)).presses
+    p = next_presses(st, criterion="ucb", rule=SearchStopRule(centre_radius=1e-6)).presses
     assert math.hypot(p.x_m.iloc[0] - 0.014, p.y_m.iloc[0] - 0.027) < 0.008
 
 
 def test_the_rule_decides_a_lump_and_none():
     lump = _state(*_raster(11))
-    ans = next_presses(lump, rule=StopRule(centre_radius=3e-3))
+    ans = next_presses(lump, rule=SearchStopRule(centre_radius=3e-3))
     assert ans.stop and ans.decision == "lump" and ans.presses.empty
     assert math.hypot(ans.summary["x_m"] - 0.014, ans.summary["y_m"] - 0.027) < 2e-3
-    strict = next_presses(lump, rule=StopRule(centre_radius=1e-4))
+    strict = next_presses(lump, rule=SearchStopRule(centre_radius=1e-4))
     assert not strict.stop  # P(lump) is high, but the centre is not placed to 0.1 mm
     none = next_presses(_state(*_raster(14), lump=False, seed=3))
     assert none.stop and none.decision == "no lump", none.summary["p_lump"]
-    budget = next_presses(_state(*_raster(3)), rule=StopRule(max_presses=9))
+    budget = next_presses(_state(*_raster(3)), rule=SearchStopRule(max_presses=9))
     assert budget.stop and budget.decision == "" and "budget" in budget.reason
 
 
 def test_decide_uses_the_thresholds():
     post = _state(*_raster(11)).posterior()
-    assert decide(post, StopRule(p_decide=0.95, centre_radius=3e-3))[0] == "lump"
-    assert decide(post, StopRule(p_decide=0.95, centre_radius=1e-5)) == ("", "")
+    assert decide(post, SearchStopRule(p_decide=0.95, centre_radius=3e-3))[0] == "lump"
+    assert decide(post, SearchStopRule(p_decide=0.95, centre_radius=1e-5)) == ("", "")
 
 
 def test_eig_quadrature_holds_when_the_heterogeneity_is_small(monkeypatch):
@@ -205,7 +205,7 @@ def test_a_copy_for_another_specimen_builds_its_own_grid():
 
 
 def test_a_batch_stops_at_the_budget():
-    ans = next_presses(_state(*_raster(3)), 5, rule=StopRule(max_presses=11))
+    ans = next_presses(_state(*_raster(3)), 5, rule=SearchStopRule(max_presses=11))
     assert len(ans.presses) == 2
 
 
@@ -244,7 +244,7 @@ def test_bad_states_are_refused():
     with pytest.raises(InputError, match="keep-out zone 0"):
         _empty(keep_out=((0.01, 0.01),))
     with pytest.raises(InputError, match="p_decide"):
-        StopRule(p_decide=0.4)
+        SearchStopRule(p_decide=0.4)
     for kw, match in ((dict(footprint=(0, -0.01, 0, 0.01)), "footprint"),
                       (dict(footprint=(0, np.nan, 0, 0.01)), "footprint"),
                       (dict(thickness=0.0), "thickness"), (dict(prior_lump=1.0), "prior_lump"),
@@ -255,3 +255,15 @@ def test_bad_states_are_refused():
     every = _empty(keep_out=((0.021, 0.021, 0.05),))
     with pytest.raises(InputError, match="keep-out zones cover"):
         next_presses(every)
+
+
+def test_the_old_name_of_the_search_rule_warns_and_is_the_new_one():
+    """``StopRule`` became ``SearchStopRule`` (issue 57: beside the online ``StoppingRule`` the
+    two names did not say what they stop)."""
+    import palpbayes.active as active
+
+    with pytest.warns(DeprecationWarning, match="SearchStopRule"):
+        assert active.StopRule is SearchStopRule
+    assert "StopRule" not in active.__all__
+    with pytest.raises(AttributeError):
+        active.NoSuchRule  # noqa: B018

@@ -85,7 +85,7 @@ def test_replay_keeps_the_checks_and_the_full_interval_at_the_stop(trace):
                                                                   target_on="full"))
     s = res.at_stop
     assert res.budget_at_stop == s.E_total and len(res.checks_at_stop) == 4
-    row = res.summary()
+    row = res.row
     assert row["target_on"] == "full" and row["model_ok_stop"] is True
     assert (row["E_total_stop_hi_pa"] - row["E_total_stop_lo_pa"]) / (2 * row["E_stop_pa"]) \
         == pytest.approx(s.E_total.rel_half_width * s.E_total.median / s.E.median)
