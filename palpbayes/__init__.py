@@ -59,7 +59,7 @@ _LAZY = {
     "simulate_trace": ("sim.trace", "simulate_trace"),
     "replay": ("api_replay", "replay"),
     "OnlineEstimator": ("online.estimator", "OnlineEstimator"),
-    "StoppingRule": ("online.estimator", "StoppingRule"),
+    "StoppingRule": ("online.state", "StoppingRule"),
     "fit_map": ("api_map", "fit_map"),
     "make_map": ("maps.run", "make_map"),
     "next_presses": ("active.front", "next_presses"),

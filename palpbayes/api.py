@@ -206,6 +206,8 @@ def _trace_of(source, tip: Tip | None, thickness, reader_options: dict) -> Inden
                      f"{type(source).__name__}")
 
 
+# Many parameters: the tip's sizes and the specimen by name, as `palpbayes fit` takes them (the
+# rest in **options): the door a user types.
 def fit(source, *, tip: str | Tip | None = None, radius: float | None = None,
         half_angle: float | None = None, c: float | None = None, n: float | None = None,
         nu: float | None = None, thickness: float | str | None = None,
@@ -287,6 +289,8 @@ def fit(source, *, tip: str | Tip | None = None, radius: float | None = None,
     return Fit(trace=trace, options=opts, outcome=outcome)
 
 
+# Many parameters: the campaign door: fit_campaign's run settings, with pb.fit's keywords in
+# **fit_kw.
 def fit_campaign(source, out_dir: str | os.PathLike | None = None,
                  options: FitOptions | None = None, *, seed: int | None = None,
                  workers: int | None = None, resume: bool = False, force: bool = False,

@@ -276,6 +276,8 @@ def analyse_groundtruth(inputs: Inputs, options: GroundTruthOptions, *,
                        inputs=tuple(items), options=o)
 
 
+# Many parameters: the options of `palpbayes groundtruth` by their Python names (GroundTruthOptions
+# holds them): the door a user types.
 def groundtruth(
     inputs: Inputs,
     *,

@@ -325,6 +325,8 @@ class ReplayRequest:
 _REQUEST_KEYS = frozenset(f.name for f in fields(ReplayRequest))
 
 
+# Many parameters: the tip, specimen and stopping rule by name, as `palpbayes replay` takes them
+# (ReplayRequest holds them): the door a user types.
 def replay(source: str | os.PathLike | IndentationTrace | pd.DataFrame, *,
            tip: str | Tip | None = None, radius: float | None = None,
            half_angle: float | None = None, c: float | None = None, n: float | None = None,

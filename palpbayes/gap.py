@@ -113,6 +113,8 @@ class GapSettings:
     resolution: str = "default"
 
 
+# Many parameters: one case of the gap: modulus, tip, block, base, nu and the paper's fit settings,
+# each a physical setting.
 def paper_fit_ratio(E: float, tip: Tip, thickness: float, *, base: str | None, nu: float,
                     settings: GapSettings = GapSettings(), compliance: float = 0.0,
                     window: float | None = None, block: Specimen | None = None,

@@ -75,6 +75,8 @@ def _posterior_dict(samples: np.ndarray, prior: TracePrior, nu: float, like=None
     return post
 
 
+# Many parameters: as fit_bayes: the layer below FitOptions takes its parts as objects and the
+# engine's switches.
 def fit_bayes_data(
     data: FitData,
     *,
@@ -320,6 +322,9 @@ def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
     return result
 
 
+# Many parameters: bayes/ lies below campaign/ (FitOptions' home, which imports it), so its entry
+# point takes the model's parts as objects (ModelSpec, PriorSpec, BudgetSpec, SamplerSettings) plus
+# the fit window's scalars.
 def fit_bayes(
     trace: IndentationTrace,
     model: ModelSpec | None = None,

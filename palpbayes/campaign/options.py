@@ -233,6 +233,8 @@ class FitOptions:
         return replace(self, settings=replace(self.settings, progress=progress))
 
 
+# Many parameters: the command line's fit options by their Python names; this is the one builder of
+# a FitOptions, which every fit layer below passes on as one object.
 def fit_options(*, method: str = "bayes", nu: float | None = None,
                 nu_range: tuple[float, float] | None = None, layer: str = "auto",
                 bonding: str = "unknown", thickness_range: tuple[float, float] | None = None,

@@ -192,6 +192,8 @@ def _write_and_fit(traces: list[IndentationTrace], options: FitOptions, out: Pat
             _run(todo, options, out, workers, lambda: bar.update(1), prepared)
 
 
+# Many parameters: a campaign's source, folder and one FitOptions, plus how to run it (workers,
+# resume, scheduler, progress).
 def fit_campaign(
     source: str | os.PathLike | Sequence[IndentationTrace],
     out_dir: str | os.PathLike | None = None,

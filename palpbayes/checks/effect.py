@@ -98,6 +98,7 @@ def _largest(*effects: tuple[str, float]) -> tuple[str, float]:
     return max(finite, key=lambda kv: abs(kv[1]))
 
 
+# Many parameters: as run_checks: the point estimates that size each failed check's effect on E.
 def grade_checks(checks: list[CheckResult], z, force, model: ModelSpec, *, z_surf: float,
                  estar: float, f0: float = 0.0, f1: float = 0.0,
                  stat_rel_halfwidth: float | None = None,

@@ -12,6 +12,8 @@ from .core import THRESHOLDS, CheckResult, clip_phi, validated_arrays
 from .residuals import binned_residuals
 
 
+# Many parameters: the data, the posterior's curves and noise draws, and the check's bins and
+# level.
 def posterior_predictive_check(z, force, mean_curves, sigmas, *, phi=None,
                                rng: np.random.Generator | int | None = None,
                                z_surf: float | None = None, n_bins: int = 10,

@@ -16,6 +16,8 @@ from .rate import rate_dependence_check
 from .residuals import residual_structure_check
 
 
+# Many parameters: a fit's point estimates (surface, E*, offset, tilt, sigma) and draws are what
+# every check tests; checks/ lies below the fits' result objects.
 def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: float,
                f1: float = 0.0, sigma: float, draws: dict | None = None,
                baseline_lag1: float | None = None, baseline: str | None = None,
@@ -113,6 +115,7 @@ def run_checks(z, force, model: ModelSpec, *, z_surf: float, estar: float, f0: f
                         baseline=baseline, z_ref=z_ref, noise_lag1=phi)
 
 
+# Many parameters: as run_checks, from a FitData: the point estimates every check tests.
 def check_fit(data: FitData, *, z_surf: float, estar: float, f0: float, f1: float = 0.0,
               sigma: float, baseline: str = "constant", z_ref: float | None = None,
               draws: dict | None = None, stat_rel_halfwidth: float | None = None,

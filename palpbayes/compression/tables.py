@@ -163,6 +163,8 @@ def _variants(test: CompressionTest, fit: GroundTruthFit, window: tuple[float, f
     return out
 
 
+# Many parameters: the ground truth's rule (window, toe, geometry overrides, law, chord strains) by
+# the names of `palpbayes groundtruth`; GroundTruthOptions gathers them at the door.
 def analyse(
     paths_or_tests: str | os.PathLike | CompressionTest
     | Iterable[str | os.PathLike | CompressionTest],

@@ -129,6 +129,8 @@ class _History:
             lo[ii], hi[ii] = l, h
 
 
+# Many parameters: the arrays of one step of Ting's rule, passed as they are: a numerical inner
+# loop, where an object per call would cost.
 def ting_rule(t, d, dp, u, dt, m, soe, kernel, Hu, Hd, decay, G, rows, force, t1, C) -> None:
     """Ting's rule at the samples ``rows`` (depth below its running maximum), in place.
 

@@ -269,6 +269,8 @@ def _align(force: _Stream, pose: _Stream, z_pose: np.ndarray, max_gap: float,
     return inside, z
 
 
+# Many parameters: a ROS 2 bag's topics, axis, signs, time offset and tool geometry: each a reader
+# option of `palpbayes fit`, by its flag's name.
 def read_bag(
     path: str | os.PathLike,
     *,

@@ -31,6 +31,8 @@ def _ns(t: np.ndarray, t0_ns: int) -> np.ndarray:
     return np.round(np.asarray(t, dtype=float) * 1e9).astype(np.int64) + np.int64(t0_ns)
 
 
+# Many parameters: a bag's topics, frames and units, mirroring read_bag's options so a test writes
+# what the reader reads.
 def write_bag(
     path: str | os.PathLike,
     force: tuple[np.ndarray, np.ndarray],

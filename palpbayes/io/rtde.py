@@ -145,6 +145,8 @@ def _require(df: pd.DataFrame, columns: list[str], source: str, fix: str) -> Non
 
 
 # ---------------------------------------------------------------------------------- RTDE
+# Many parameters: a UR RTDE log's columns, axis, sign, tool geometry and kinematics: each a reader
+# option of `palpbayes fit`.
 def read_rtde(
     path: str | os.PathLike,
     *,

@@ -215,6 +215,8 @@ def _check_inputs(x, y, mean, sd) -> tuple[np.ndarray, ...]:
     return tuple(arrs)
 
 
+# Many parameters: the points (x, y, mean, sd) are the data; the prior, lattice step, grid and
+# margin control the field.
 def fit_field(x, y, mean, sd, *, prior: FieldPrior | None = None, step: float | None = None,
               grid_points: int = 7, progress: bool = False, margin: int | None = None,
               line: bool = False) -> FieldPosterior:

@@ -257,6 +257,8 @@ def _window(x: np.ndarray, y: np.ndarray, guess: dict, step: float, a: float,
     return keep
 
 
+# Many parameters: the points (x, y, mean, sd) and the specimen's geometry are the data; the rest
+# is emcee's run (steps, checks, draws), each with a default.
 def fit_lump(x: np.ndarray, y: np.ndarray, mean: np.ndarray, sd: np.ndarray, *,
              contact_radius: float, thickness: float, step: float, guess: dict,
              seed: int = 0, min_steps: int = 2000, max_steps: int = 20000,

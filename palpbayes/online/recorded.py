@@ -234,6 +234,8 @@ def run_to_stop(trace: IndentationTrace, estimator: OnlineEstimator,
     return state
 
 
+# Many parameters: a replay's trace, model, rule and stream settings (chunk, noise); ReplayRequest
+# gathers them at the door.
 def replay(trace: IndentationTrace, model: ModelSpec | None = None, *,
            rule: StoppingRule | None = None, chunk: int = 100, noise: str = "gaussian",
            noise_pp: float | None = None, f_unc: float | None = None,

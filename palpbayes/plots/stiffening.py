@@ -14,6 +14,8 @@ from .style import KPA, METHOD_COLORS, METHOD_LABELS, fig_ax, level_label
 __all__ = ["plot_stiffening"]
 
 
+# Many parameters: each optional layer of the figure (intervals, fitted curve and band, truth, the
+# rested level) is an array the caller may or may not have.
 def plot_stiffening(
     rest_time: np.ndarray,
     E: np.ndarray,

@@ -377,6 +377,8 @@ class PooledEstimate:
         return out
 
 
+# Many parameters: one group's repeated estimates (m, s), its labels, the data of its
+# representative fit and the budget's inputs.
 def pool_group(m, s, *, material: str = "", tip: str = "", data: FitData | None = None,
                z_surf: float | None = None, estar: float | None = None,
                budget: BudgetSpec | None = None, tau_prior_sd: float = TAU_PRIOR_SD,

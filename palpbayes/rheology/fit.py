@@ -309,6 +309,8 @@ def _baseline_terms(data: CycleData, draws: dict, idx: np.ndarray, out: np.ndarr
     return out
 
 
+# Many parameters: one cycle's viscoelastic model (law, segments, t0, drag, baseline, adhesion) and
+# its engine; rheology_options gathers them for files and manifests.
 def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
                  tip: Tip | None = None, segments=DEFAULT_SEGMENTS, t0: float = 1.0,
                  nu: float | None = None, drag: bool | None = None,

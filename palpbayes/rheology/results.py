@@ -143,6 +143,8 @@ class RheologyOptions:
     seed: int = 0
 
 
+# Many parameters: the builder: the options of `palpbayes fit --rheology` by their Python names,
+# checked into one RheologyOptions.
 def rheology_options(rheology: str | Sequence[str] = "power-law", *,
                      segments: str | Sequence[str] | None = None, t0: float = 1.0,
                      nu: float | None = None, drag: bool | str | None = None,

@@ -296,6 +296,8 @@ def _start(grid: GridPosterior, names: list[str], gen: np.random.Generator, n: i
     return np.column_stack(cols)
 
 
+# Many parameters: one cycle's model switches (drag, tilt, t0) and emcee's run (walkers, steps,
+# draws), each with a default.
 def sample_emcee(data: CycleData, rheology: str = "power-law", *, t0: float = 1.0,
                  drag: bool = False, tilt: bool = False, n_draws: int = 4000, rng=0,
                  n_walkers: int = 32, n_steps: int = 6000, progress: bool | None = None,

@@ -169,6 +169,8 @@ def _draw_modulus(gen: np.random.Generator, mat: Material) -> float:
     return float(E)
 
 
+# Many parameters: one `palpbayes simulate` option each (the campaign's design: materials, tips,
+# repetitions, compression tests, knobs), by the command's names.
 def simulate(
     out_dir: str | os.PathLike,
     *,

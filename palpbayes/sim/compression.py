@@ -28,6 +28,8 @@ from ._checks import nonneg, positive
 __all__ = ["toe_compression", "simulate_compression_test", "write_compression_export"]
 
 
+# Many parameters: one compression test's block, platens, cross-head motion and load-cell noise:
+# each a physical setting with its unit.
 def simulate_compression_test(
     E: float | None = None,
     *,

@@ -172,6 +172,8 @@ def blunted_paraboloid_shape(depth: ArrayLike, radius: float, flat_radius: float
     return 2.0 * (d * np.sqrt(a2) - np.clip(a2 - b * b, 0.0, None) ** 1.5 / (3.0 * R))
 
 
+# Many parameters: the contact law's inputs (depth, E, nu, tip) and each physics knob of the
+# simulator (layer, base, stiffening, blunt apex, block's twin).
 def true_force(
     depth: ArrayLike,
     E: float,

@@ -131,6 +131,8 @@ def _write_rows(job: dict) -> list[dict]:
     return rows
 
 
+# Many parameters: one `palpbayes simulate --map` option each (the phantom's grid, lump,
+# heterogeneity and sensor), by the command's names.
 def simulate_map(
     out_dir: str | os.PathLike,
     *,

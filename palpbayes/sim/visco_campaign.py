@@ -171,6 +171,8 @@ def _truth_row(trace: IndentationTrace, mat: ViscoMaterial, tip_name: str, nu: f
     }
 
 
+# Many parameters: one `palpbayes simulate --rheology` option each (materials, tips, speeds,
+# motion, sensor), by the command's names.
 def simulate_visco_campaign(
     out_dir: str | os.PathLike,
     *,

@@ -158,6 +158,8 @@ def _power_law_tip(tip) -> tuple[float, float]:
     return float(g), float(m)
 
 
+# Many parameters: the relaxation kernel, tip and the ramp-hold-retract motion with its sensor
+# noise: each a physical setting with its unit, by the simulator's names.
 def simulate_viscoelastic(
     kernel: PowerLawKernel | PronyKernel,
     tip: Tip,

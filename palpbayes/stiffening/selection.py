@@ -102,6 +102,8 @@ def single_law_reasons(draws, bic_s, bic_c, n_distinct, t_min, t_max, diag, leve
     return reasons
 
 
+# Many parameters: the numbers a model-selection sentence reports (BICs, reasons, the rested
+# level), each a fact the text names.
 def selection_message(n: int, draws: dict, single: dict, constant: dict, bic_d: float, bic_s: float,
              bic_c: float, reasons: list[str], single_reasons: list[str], mean: float, sd: float,
              level: float) -> str:

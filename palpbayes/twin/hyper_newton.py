@@ -127,6 +127,8 @@ def newton(solid: HyperSolid, x0: np.ndarray, fixed: np.ndarray, values: np.ndar
                    f"(residual {rnorm:.3g} of {scale:.3g})")
 
 
+# Many parameters: a load-stepping Newton solve: the solid, targets, constraints, callbacks and the
+# solver's controls.
 def march(solid: HyperSolid, targets: np.ndarray, fixed: np.ndarray,
           load: Callable[[float], tuple[np.ndarray, Callable | None]],
           record: Callable[[int, np.ndarray, NewtonResult], None], what: str,

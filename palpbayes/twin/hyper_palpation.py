@@ -154,6 +154,8 @@ def _mesh(radius, height, tip, depths, res: HyperResolution):
     return contact_grid(a_top / 1.3, radius, g), depth_grid(height, g.first * a_top, g)
 
 
+# Many parameters: one finite-strain solve: the block, tip, law with its parameters, base, depths
+# and the solver's controls.
 def solve_hyper_palpation(radius: float, height: float, tip: Tip, law: str | MaterialLaw,
                           params: dict, nu: float, base: str, depths: np.ndarray,
                           resolution: str | HyperResolution = "default",
