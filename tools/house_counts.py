@@ -24,6 +24,7 @@ import argparse
 import ast
 import re
 import sys
+from collections import Counter
 from pathlib import Path
 
 LONG_MODULE = 400
@@ -80,17 +81,22 @@ def counts(repo: Path) -> dict:
         *modules, *_files(repo, "notebooks/*.py"), *_files(repo, "examples/**/*.py"),
         *_files(repo, "tools/*.py"), *_files(repo, "benchmarks/**/*.py"),
         *_files(repo, "docs/*.md"), *_files(repo, "README.md")]}
-    tests = "\n".join(p.read_text(encoding="utf-8", errors="replace")
-                      for p in _files(repo, "tests/**/*.py"))
+    words = re.compile(r"\b\w+\b")
+    used: Counter = Counter()
+    for t in texts.values():
+        used.update(words.findall(t))
+    in_tests = set()
+    for p in _files(repo, "tests/**/*.py"):
+        in_tests.update(words.findall(p.read_text(encoding="utf-8", errors="replace")))
+    defs: Counter = Counter()
+    for t in texts.values():
+        defs.update(re.findall(r"def (\w+)\b", t))
     test_only = []
     for path, qual, _, _ in funcs:
         name = qual.rsplit(".", 1)[-1]
         if name.startswith("__") or len(name) < 4:
             continue
-        word = re.compile(rf"\b{re.escape(name)}\b")
-        uses = sum(len(word.findall(t)) for t in texts.values())
-        own = len(re.findall(rf"def {re.escape(name)}\b", texts[path]))
-        if uses - own == 0 and word.search(tests):
+        if used[name] - defs[name] == 0 and name in in_tests:
             test_only.append(f"{path.relative_to(pkg).as_posix()}:{qual}")
     return {"modules": len(modules), "lines": sum(modules.values()), "long": long,
             "many": many, "test_only": sorted(test_only)}
