@@ -14,7 +14,7 @@ deepest point, :func:`palpbayes.fitdata.first_passage`):
    noise sd ``s0`` from the median absolute successive difference,
    s0 = 1.4826·median|ΔF|/sqrt(2) (insensitive to a slow trend);
 2. the *provisional contact* is the last sample with |F − b0| <= 6·s0 (the ±3 sigma
-   peak-to-peak convention of :mod:`palpbayes.noise`); the baseline samples are those before
+   peak-to-peak convention of :mod:`palpbayes.sensor_noise`); the baseline samples are those before
    it, less a margin of 10 % of them (a gradual onset starts before the threshold is crossed);
 3. on those samples: a least-squares line F = level + slope·(z − z_ref) with z_ref their mean
    height, the level reported as their median, the noise sd as 1.4826·MAD of the residuals of
@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .noise import MAD_TO_SIGMA, acf1, mad_sd, pp_from_sigma
+from .sensor_noise import MAD_TO_SIGMA, acf1, mad_sd, pp_from_sigma
 
 __all__ = ["Baseline", "estimate_baseline", "sign_flipped", "MIN_BASELINE_POINTS"]
 

@@ -7,7 +7,7 @@ Rules (docs/design.md §2):
 * only the loading segment is used (approach + indentation, no hold/retract);
 * the force is read against the pre-contact *baseline* (:mod:`palpbayes.baseline`): a sensor
   that was not tared, or whose baseline drifts, is normal input.  F_unc, when not given, is
-  the baseline's noise read as a peak-to-peak spec (6·sd, :mod:`palpbayes.noise`);
+  the baseline's noise read as a peak-to-peak spec (6·sd, :mod:`palpbayes.sensor_noise`);
 * the *contact onset* z_c is where the measured force last lies within ±F_unc of its
   reference before it stays above it (linear interpolation between the two samples), read
   along the samples where the tip reaches a new deepest point (:func:`first_passage`; all
@@ -35,7 +35,7 @@ from .baseline import MIN_BASELINE_POINTS, Baseline, estimate_baseline
 from .contact import Tip, get_law, youngs_factor
 from .errors import FitError, InputError, NoContactError
 from .modelspec import BONDINGS, ModelSpec
-from .noise import PAPER_NOISE_PP
+from .sensor_noise import PAPER_NOISE_PP
 from .trace import IndentationTrace
 from .units import format_force
 
@@ -43,7 +43,7 @@ __all__ = ["ModelSpec", "BONDINGS", "FitData", "prepare", "tared", "prepare_trac
            "DEFAULT_F_UNC", "default_fit_fraction", "noise_from_baseline", "onset_reference"]
 
 #: The paper's sensor uncertainty F_unc [N]: 48 mN peak-to-peak
-#: (:data:`palpbayes.noise.PAPER_NOISE_PP`).
+#: (:data:`palpbayes.sensor_noise.PAPER_NOISE_PP`).
 DEFAULT_F_UNC = PAPER_NOISE_PP
 
 

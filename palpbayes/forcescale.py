@@ -4,9 +4,9 @@ A force read in the wrong unit (newtons declared as millinewtons) multiplies the
 noise and E by one power of 1,000.  The fit cannot see it: the contact law is linear in E, so a
 trace scaled by 1,000 is fitted as well as the true one, converges and passes every model check
 (``E 60 Pa`` for a 60 kPa block, ``model_ok True``).  Without a declared sensor noise
-(``--noise-pp``, :func:`palpbayes.noise.noise_scale_mismatch`) only what the tip says about the
-instrument is left: a 10 mm sphere is a robot's or a bench indenter's, a 10 µm sphere an AFM
-cantilever's, and each kind of instrument reads a known range of sensor noise and of modulus.
+(``--noise-pp``, :func:`palpbayes.sensor_noise.noise_scale_mismatch`) only what the tip says
+about the instrument is left: a 10 mm sphere is a robot's or a bench indenter's, a 10 µm sphere
+an AFM cantilever's, and each kind of instrument reads a known range of sensor noise and of modulus.
 
 The model (:data:`INSTRUMENTS`): three kinds of instrument, each with the range of tip sizes it
 uses and, as log-normal laws (median, sd in decades), the peak-to-peak force noise of its sensor
@@ -49,7 +49,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .noise import noise_scale_mismatch
+from .sensor_noise import noise_scale_mismatch
 from .units import format_force, format_length, format_pressure
 
 __all__ = ["Instrument", "INSTRUMENTS", "UNIT_FACTORS", "BAYES_FACTOR", "ForceScaleDoubt",
@@ -256,7 +256,7 @@ def force_scale_flag(tip, depth: float, modulus: float, noise_pp: float | None,
         [N] The peak-to-peak noise before contact (None: not measured).
     declared_pp
         [N] The sensor noise the user declared (``--noise-pp``), or None.  When given, the
-        measured noise is set against it (:func:`palpbayes.noise.noise_scale_mismatch`) and
+        measured noise is set against it (:func:`palpbayes.sensor_noise.noise_scale_mismatch`) and
         the tip is not asked: the declared noise is the better reference.
     """
     if declared_pp is not None:

@@ -56,8 +56,8 @@ from .contact import DEFAULT_NU, Tip, get_law, youngs_factor
 from .fitdata import ModelSpec
 from .intervals import Z_LEVEL
 from .lsq import fit_lsq
-from .noise import PAPER_NOISE_PP
 from .paper import PAPER_MATERIALS, PAPER_ROBOT_ESTIMATES, PAPER_TIPS
+from .sensor_noise import PAPER_NOISE_PP
 from .sim.trace import simulate_trace
 from .twin import Specimen, compression_factor
 

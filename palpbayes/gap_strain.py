@@ -45,9 +45,9 @@ from .fitdata import ModelSpec
 from .gap_text import strain_paragraph  # public here: the verdicts in sentences
 from .lsq import fit_lsq
 from .material import Solid
-from .noise import PAPER_NOISE_PP
 from .outputs import SHIPPED_GAP_STRAIN
 from .paper import PAPER_MATERIALS, PAPER_TIPS
+from .sensor_noise import PAPER_NOISE_PP
 from .specimen import Specimen
 from .trace import IndentationTrace
 

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ..noise import mad_sd
+from ..sensor_noise import mad_sd
 from ..units import format_length, format_pressure
 from .priors import TracePrior
 

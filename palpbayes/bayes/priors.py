@@ -12,8 +12,8 @@ Parameters, in the order of the sampler's vector θ (:func:`param_names`):
                   the least-squares baseline; ``surface="soft"`` adds it as a soft penalty,
                   −½·(max(0, |F_meas(z_s) − F0 − F1·u| − F_unc)/F_unc)², on the same support.
 ``log_sigma``     ln(sigma/N).  Normal(ln(pp/6), 1): centred on the noise spec read as ±3 sigma
-                  (:mod:`palpbayes.noise`) — the user's ``noise_pp``, or when none is given the
-                  pre-contact baseline's own noise (:mod:`palpbayes.baseline`); a factor e
+                  (:mod:`palpbayes.sensor_noise`) — the user's ``noise_pp``, or when none is
+                  given the pre-contact baseline's own noise (:mod:`palpbayes.baseline`); a factor e
                   either way is 1 sd.
 ``F0``            [N] Force offset, Normal(b, s): centred on the pre-contact baseline b (an
                   untared sensor is normal input) with s = F_unc (the sensor's peak-to-peak
@@ -44,7 +44,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..fitdata import FitData
-from ..noise import sigma_from_pp
+from ..sensor_noise import sigma_from_pp
 from .noisemodels import NOISE_MODELS, get_noise_model
 
 __all__ = ["NOISE_MODELS", "BASELINES", "SURFACE_PRIORS", "PriorSpec", "TracePrior",

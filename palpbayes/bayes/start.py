@@ -30,7 +30,7 @@ import numpy as np
 from scipy import optimize
 
 from ..fitdata import FitData
-from ..noise import acf1
+from ..sensor_noise import acf1
 from ..shapekernel import cross_sums
 from .priors import TracePrior
 

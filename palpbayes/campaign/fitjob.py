@@ -222,7 +222,7 @@ def force_scale_flag(data: FitData, options: FitOptions) -> str | None:
     and E by the same factor: the fit itself cannot see it.  Two references can:
 
     * the declared sensor noise ``--noise-pp`` (``options.priors.noise_pp``): the noise before
-      contact more than :data:`palpbayes.noise.NOISE_SCALE_FACTOR` times from it;
+      contact more than :data:`palpbayes.sensor_noise.NOISE_SCALE_FACTOR` times from it;
     * without one, the tip (:func:`palpbayes.forcescale.force_scale_doubt`): the noise before
       contact and E (:meth:`~palpbayes.fitdata.FitData.rough_modulus`) far more typical of
       an instrument of the tip's size with the force multiplied by a power of 1,000.

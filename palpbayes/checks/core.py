@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import FitError, InputError
 from ..fitdata import ModelSpec
-from ..noise import acf1
+from ..sensor_noise import acf1
 from ..shapekernel import compiled_shape
 
 #: Pass/fail thresholds (statistical and physical) of the checks; see :mod:`palpbayes.checks`.

@@ -9,7 +9,7 @@ import numpy as np
 from scipy import stats
 
 from ..errors import FitError, InputError
-from ..noise import acf1
+from ..sensor_noise import acf1
 from .core import (
     MIN_BIN,
     THRESHOLDS,

@@ -29,7 +29,7 @@ import math
 import re
 
 from ..errors import InputError
-from ..noise import PAPER_NOISE_PP
+from ..sensor_noise import PAPER_NOISE_PP
 from ..units import format_force, format_length, format_pressure
 
 __all__ = ["register", "run"]

@@ -53,7 +53,7 @@ import math
 
 import numpy as np
 
-from ..noise import acf1
+from ..sensor_noise import acf1
 
 __all__ = ["hac_slope_se", "resid_acf1", "linfit"]
 
@@ -72,7 +72,7 @@ def _lag1(a: np.ndarray) -> float:
 
 
 def resid_acf1(u: np.ndarray) -> float:
-    """Lag-1 autocorrelation of residuals (:func:`palpbayes.noise.acf1`), NaN where it is not
+    """Lag-1 autocorrelation of residuals (:func:`palpbayes.sensor_noise.acf1`), NaN where it is not
     defined (a table column)."""
     return acf1(u, undefined=math.nan)
 

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from ..errors import InputError
-from ..noise import mad_sd
+from ..sensor_noise import mad_sd
 from ..trace import SEGMENTS, IndentationTrace
 
 __all__ = ["segments_from_motion", "cycle_segments", "segment_durations", "default_hold_tolerance",

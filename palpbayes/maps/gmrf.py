@@ -45,7 +45,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import FitError, InputError
-from ..noise import mad_sd
+from ..sensor_noise import mad_sd
 from .hyper import HYPER_NAMES, explore, log_pc_prior, weighted_summary
 from .lattice import Lattice, lattice_from_positions, pad
 from .spde import SpdeModel

@@ -85,7 +85,7 @@ from ..errors import InputError
 from ..fitdata import ModelSpec
 from ..forcescale import force_scale_flag
 from ..intervals import LEVEL, central, hull
-from ..noise import sigma_from_pp
+from ..sensor_noise import sigma_from_pp
 from .state import TARGET_ON, OnlineState, StoppingRule, check_noise_options
 
 __all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE", "HOLD_WINDOW",

@@ -12,7 +12,7 @@ import pandas as pd
 
 from ..bayes.sampler import MOVES
 from ..campaign.results import ResultsFolder
-from ..noise import PAPER_NOISE_PP
+from ..sensor_noise import PAPER_NOISE_PP
 from ..units import format_length
 from .format import force_setting, wrap
 

@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 from .. import __version__
 from ..campaign.results import ResultsFolder
 from ..contact import DEFAULT_NU
-from ..noise import PAPER_NOISE_PP
+from ..sensor_noise import PAPER_NOISE_PP
 from ..units import format_length
 from .format import fmt, fmt_range, force_setting, shown_path
 from .layout import PAGE_SIZE, Page, fit_text_lines, text_lines

@@ -70,7 +70,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..io.motion_segments import cycle_segments
-from ..noise import mad_sd
+from ..sensor_noise import mad_sd
 from ..trace import IndentationTrace
 from .offcontact import ADHESION_WINDOW, N_SE, _long_run
 from .ting import RETRACT

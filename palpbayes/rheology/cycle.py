@@ -30,7 +30,7 @@ import numpy as np
 from ..baseline import estimate_baseline
 from ..contact import Tip, exponent, prefactor
 from ..errors import FitError, InputError, NoContactError
-from ..noise import mad_sd
+from ..sensor_noise import mad_sd
 from ..trace import IndentationTrace, parse_segments
 from .design import Windows
 

@@ -27,7 +27,7 @@ import numpy as np
 from ..checks.core import CheckResult
 from ..contact import youngs_factor
 from ..forcescale import force_scale_flag
-from ..noise import pp_from_sigma
+from ..sensor_noise import pp_from_sigma
 from ..units import format_force
 from .cycle import CycleData
 from .offcontact import N_SE, adhesion_dip, baseline_tilt, drag_gap

@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from ..noise import acf1
+from ..sensor_noise import acf1
 from .cycle import CycleData
 
 __all__ = ["drag_gap", "baseline_tilt", "adhesion_dip", "N_SE", "ADHESION_WINDOW",

@@ -23,7 +23,7 @@ One module per job, imports flowing one way (``map`` -> ``campaign``/``inclusion
   tips x speeds, with the segment column and the truth tables.
 
 The paper's numbers the simulator reproduces live in :mod:`palpbayes.paper`, the peak-to-peak
-noise convention in :mod:`palpbayes.noise` (both are shared with the fitting side).
+noise convention in :mod:`palpbayes.sensor_noise` (both are shared with the fitting side).
 
 >>> from palpbayes.paper import PAPER_TIPS
 >>> from palpbayes.sim import simulate_trace

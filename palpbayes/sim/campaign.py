@@ -32,8 +32,8 @@ from ..errors import InputError, OutputExistsError
 from ..io.atomic import write_csv_atomic
 from ..io.manifest import tip_columns, write_manifest
 from ..io.trace_csv import write_trace
-from ..noise import PAPER_NOISE_PP
 from ..paper import PAPER_MATERIALS, PAPER_TIPS, Material
+from ..sensor_noise import PAPER_NOISE_PP
 from ..trace import IndentationTrace
 from ..twin import Specimen, compression_factor
 from ..units import format_pressure

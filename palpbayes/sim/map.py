@@ -38,9 +38,9 @@ from ..errors import DataFileError, InputError
 from ..io.atomic import write_csv_atomic, write_text_atomic
 from ..io.manifest import tip_columns, write_manifest
 from ..io.trace_csv import write_trace
-from ..noise import PAPER_NOISE_PP, sigma_from_pp
 from ..paper import PAPER_TIPS
 from ..procs import lifeline
+from ..sensor_noise import PAPER_NOISE_PP, sigma_from_pp
 from ..trace import IndentationTrace
 from ._checks import finite, nonneg, positive
 from .campaign import check_count, check_seed, child_seed, prepare_out_dir

@@ -20,8 +20,8 @@ import numpy as np
 
 from ..contact import DEFAULT_NU, Tip
 from ..errors import InputError
-from ..noise import PAPER_NOISE_PP
 from ..paper import PAPER_TIPS
+from ..sensor_noise import PAPER_NOISE_PP
 from ..trace import IndentationTrace
 from .campaign import child_seed
 from .inclusion import Inclusion, apparent_ratio, contact_radius, sensitivity

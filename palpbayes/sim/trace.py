@@ -12,12 +12,13 @@ Model of one trace (every term optional except the contact law)::
     e(t)     = phi·e(t-1) + sqrt(1 - phi²)·sigma·w(t),  w ~ N(0, 1),  e(0) = sigma·w(0)
 
 F_true, F_on and the actual depth delta under series compliance are those of
-:mod:`palpbayes.sim.force`; sigma = noise_pp / :data:`palpbayes.noise.PP_TO_SIGMA`.  The drift
-is **per second** (``drift`` [N/s], t the sample time from the start of the trace, t_k = k/rate),
-so on the loading segment it is also a linear function of z with slope -drift/speed [N/m].
+:mod:`palpbayes.sim.force`; sigma = noise_pp / :data:`palpbayes.sensor_noise.PP_TO_SIGMA`.  The
+drift is **per second** (``drift`` [N/s], t the sample time from the start of the trace,
+t_k = k/rate), so on the loading segment it is also a linear function of z with slope
+-drift/speed [N/m].
 
 **Peak-to-peak to sigma.**  A sensor's "peak-to-peak noise" is read as ±3 sigma
-(:func:`palpbayes.noise.sigma_from_pp`): the paper's 48 mN gives sigma = 8 mN.  Note that the
+(:func:`palpbayes.sensor_noise.sigma_from_pp`): the paper's 48 mN gives sigma = 8 mN.  Note that the
 *observed* range of N samples grows with N (about 6.4 sigma for N = 800 and 7.2 sigma for
 N = 3840), so a range measured over a long record overstates the ±3 sigma convention;
 ``tests/unit/test_sim.py`` checks both facts.
@@ -33,7 +34,7 @@ import numpy as np
 from ..contact import DEFAULT_NU, Tip, check_nu, effective_modulus
 from ..errors import InputError
 from ..material import Solid
-from ..noise import PAPER_NOISE_PP, ar1_noise, sigma_from_pp
+from ..sensor_noise import PAPER_NOISE_PP, ar1_noise, sigma_from_pp
 from ..trace import IndentationTrace
 from ..twin import FOOTPRINT_COLUMNS, Specimen
 from ._checks import ar1_phi, finite, nonneg, positive
@@ -101,7 +102,8 @@ class TraceSpec:
     retract
         Move back up to the start after the hold.
     noise_pp
-        [N] Peak-to-peak force noise; sigma = noise_pp/6 (:func:`~palpbayes.noise.sigma_from_pp`).
+        [N] Peak-to-peak force noise; sigma = noise_pp/6
+        (:func:`~palpbayes.sensor_noise.sigma_from_pp`).
     noise_ar1
         AR(1) coefficient phi of the force noise, |phi| < 1 (marginal sd stays sigma).
     force_offset

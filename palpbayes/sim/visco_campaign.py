@@ -50,9 +50,9 @@ from ..errors import InputError
 from ..io.atomic import write_csv_atomic
 from ..io.manifest import write_manifest
 from ..io.trace_csv import write_trace
-from ..noise import PAPER_NOISE_PP, sigma_from_pp
 from ..paper import PAPER_TIPS
 from ..rheology.compression import PAPER_COMPRESSION_SPEED, compression_moduli
+from ..sensor_noise import PAPER_NOISE_PP, sigma_from_pp
 from ..trace import IndentationTrace
 from ._checks import ar1_phi, finite, nonneg, positive
 from .campaign import (

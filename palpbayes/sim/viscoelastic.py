@@ -43,7 +43,7 @@ import numpy as np
 from ..contact import PowerLawKernel, PronyKernel, Tip, exponent, get_law, hereditary_force
 from ..contact import prefactor as tip_prefactor
 from ..errors import GeometryError, InputError
-from ..noise import PAPER_NOISE_PP, ar1_noise, pp_from_sigma, sigma_from_pp
+from ..sensor_noise import PAPER_NOISE_PP, ar1_noise, pp_from_sigma, sigma_from_pp
 from ..trace import IndentationTrace
 from ._checks import ar1_phi, finite, nonneg, positive
 

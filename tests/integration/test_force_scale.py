@@ -15,7 +15,7 @@ from palpbayes.cli import main
 from palpbayes.contact import Tip
 from palpbayes.flagcodes import CODES
 from palpbayes.io.trace_csv import write_trace
-from palpbayes.noise import NOISE_SCALE_FACTOR, noise_scale_mismatch
+from palpbayes.sensor_noise import NOISE_SCALE_FACTOR, noise_scale_mismatch
 from palpbayes.sim import simulate_trace
 
 # a 10 mm sphere in a 136 kPa block, forces up to a few N, the paper's 48 mN p-p sensor

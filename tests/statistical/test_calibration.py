@@ -21,7 +21,7 @@ from palpbayes.bayes import BudgetSpec, PriorSpec, fit_bayes
 from palpbayes.contact import Tip
 from palpbayes.errors import ConvergenceWarning
 from palpbayes.fitdata import ModelSpec
-from palpbayes.noise import sigma_from_pp
+from palpbayes.sensor_noise import sigma_from_pp
 from palpbayes.sim import simulate_trace
 
 pytestmark = pytest.mark.slow

@@ -15,7 +15,7 @@ import pytest
 import palpbayes
 from palpbayes.compression import resid_acf1
 from palpbayes.contact import DEFAULT_NU, youngs_factor
-from palpbayes.noise import acf1
+from palpbayes.sensor_noise import acf1
 
 PACKAGE = Path(palpbayes.__file__).resolve().parent
 SOURCES = sorted(PACKAGE.rglob("*.py"))

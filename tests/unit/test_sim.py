@@ -18,13 +18,13 @@ from palpbayes.contact import Tip, effective_modulus, force, shape
 from palpbayes.errors import GeometryError, InputError, OutputExistsError
 from palpbayes.io.manifest import iter_traces, read_manifest
 from palpbayes.io.trace_csv import read_trace, write_trace
-from palpbayes.noise import PP_TO_SIGMA, sigma_from_pp
 from palpbayes.paper import (
     PAPER_MATERIALS,
     PAPER_ROBOT_ESTIMATES,
     PAPER_TIPS,
     paper_robot_estimates_frame,
 )
+from palpbayes.sensor_noise import PP_TO_SIGMA, sigma_from_pp
 from palpbayes.sim import (
     onset_force_profile,
     simulate,
