@@ -295,13 +295,14 @@ def fit_campaign(source, out_dir: str | os.PathLike | None = None,
                  options: FitOptions | None = None, *, seed: int | None = None,
                  workers: int | None = None, resume: bool = False, force: bool = False,
                  progress: bool | None = None, read_options: dict | None = None,
-                 scheduler: str | None = None, **fit_kw) -> pd.DataFrame:
+                 scheduler: str | None = None, on_plan=None, **fit_kw) -> pd.DataFrame:
     """Fit every trace of a campaign, as ``palpbayes fit MANIFEST --out DIR`` does
     (:func:`palpbayes.campaign.run.fit_campaign`: its parameters, the folder it writes).
 
     The fit options are :func:`fit_options`' keywords (``nu=``, ``engine=``, ``method=`` ...,
     and ``seed=``, default 0 as on the command line), or a built ``options`` object: one or
-    the other.  Returns the summary table, as written to ``summary.csv``.
+    the other; an unknown keyword is an InputError naming it.  Returns the summary table, as
+    written to ``summary.csv``.
     """
     from .campaign.run import fit_campaign as run_campaign
 
@@ -309,7 +310,16 @@ def fit_campaign(source, out_dir: str | os.PathLike | None = None,
         given = sorted(fit_kw) + (["seed"] if seed is not None else [])
         raise InputError(f"fit_campaign: give the fit options as keywords ({', '.join(given)}) "
                          "or as options=pb.fit_options(...), not both")
+    import inspect
+
+    known = set(inspect.signature(fit_options).parameters) - {"seed"}
+    unknown = sorted(set(fit_kw) - known)
+    if unknown:
+        raise InputError(f"fit_campaign: unknown option(s) {', '.join(unknown)}; a manifest "
+                         "gives each trace's tip and thickness, and the fit options are "
+                         f"{', '.join(sorted(known))}")
     if options is None:
         options = fit_options(seed=0 if seed is None else seed, **fit_kw)
     return run_campaign(source, out_dir, options, workers=workers, resume=resume, force=force,
-                        progress=progress, read_options=read_options, scheduler=scheduler)
+                        progress=progress, read_options=read_options, scheduler=scheduler,
+                        on_plan=on_plan)

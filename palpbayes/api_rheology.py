@@ -171,7 +171,7 @@ class RheologyRun:
         return out
 
 
-def _traces_of(source, tip: Tip | None, thickness, read_options: dict):
+def _traces_of(source, tip: Tip | None, thickness, read_options: dict, segments: str):
     """(manifest or None, the traces to fit) of a path."""
     from .io.manifest import is_manifest
     from .io.recording import read_recording, recording_kind
@@ -185,8 +185,8 @@ def _traces_of(source, tip: Tip | None, thickness, read_options: dict):
     from .api import _thickness
 
     opts = dict(read_options)
-    if recording_kind(path) == "afm":
-        opts.setdefault("segments", "all")
+    if recording_kind(path) == "afm":  # the fitted segments, as the command line reads them
+        opts.setdefault("segments", segments)
     return None, read_recording(path, tip=tip, thickness=_thickness(thickness), **opts)
 
 
@@ -259,7 +259,7 @@ def fit_rheology(source, rheology: str | Sequence[str] = "power-law", *,
     if not path.exists():
         raise InputError(f"{path}: file not found (a trace CSV, ROS 2 bag, AFM file or "
                          "manifest)")
-    manifest, traces = _traces_of(path, tip_obj, thickness, read_options or {})
+    manifest, traces = _traces_of(path, tip_obj, thickness, read_options or {}, opts.segments)
     folder = Path(tempfile.mkdtemp(prefix="palpbayes-rheology-"))
     try:
         table, pooled = run_rheology(traces, opts, folder, manifest=manifest,

@@ -235,7 +235,7 @@ def layout_block(root: Path = ROOT) -> str:
     module) with its modules, its lines (a subpackage's to the nearest 500, a module's to the
     nearest 50) and the parts it imports
     (:func:`layers`, ``errors`` and ``units`` left out as everywhere), then the modules over
-    :data:`LONG` lines (to the nearest 50)."""
+    :data:`LONG` lines (to the nearest 50, at least ~450)."""
     mods = modules(root)
     parts = layers(graph(root))
     count: dict[str, list[int]] = {}
@@ -254,7 +254,7 @@ def layout_block(root: Path = ROOT) -> str:
                     f"| {arrows} |")
     long = sorted(((_lines(p), m) for m, p in mods.items() if _lines(p) > LONG), reverse=True)
     over = "; ".join(f"`{m.removeprefix(PACKAGE + '.').replace('.', '/')}.py` "
-                     f"~{round(n / 50) * 50}" for n, m in long)
+                     f"~{max(450, round(n / 50) * 50)}" for n, m in long)
     return "\n".join([
         BEGIN, "", f"{len(mods)} modules in {len(parts)} parts; every part imports `errors` "
         "and `units` freely (not listed).", "", *rows, "",
@@ -266,6 +266,9 @@ def write_layout(path: Path = LAYOUT, root: Path = ROOT) -> bool:
     changed."""
     text = path.read_text(encoding="utf-8")
     head, _, rest = text.partition(BEGIN)
+    if BEGIN not in text or END not in rest:
+        raise SystemExit(f"{path}: the markers of the generated block are missing or broken "
+                         f"({BEGIN!r} ... {END!r}); put them back where the block goes")
     _, _, tail = rest.partition(END)
     new = head + layout_block(root) + tail
     if new != text:

@@ -6,7 +6,8 @@
 ...     if est.update(t, z, f).should_stop:
 ...         break
 
-:mod:`.estimator` holds the estimator and the rule, :mod:`.recorded` replays a recorded trace,
+:mod:`.estimator` holds the estimator, :mod:`.state` what an update says and the stopping rule
+(re-exported by :mod:`.estimator`), :mod:`.recorded` replays a recorded trace,
 :mod:`.stream` turns live lines (CSV or JSON) into chunks and :mod:`.tcp` a TCP connection into
 lines (``palpbayes follow``; import them from their modules).
 """

@@ -39,7 +39,7 @@ from ..outputs import RHEOLOGY_TABLE, rheology_fit_path
 from ..trace import IndentationTrace
 from .compression import PAPER_COMPRESSION_SPEED
 from .cycle import check_segments
-from .fit import RheologyFit, fit_rheology
+from .fit import ADHESION, BASELINES, ENGINES, RheologyFit, fit_rheology
 from .peer import PEERS, peer_compatible
 from .posterior import RHEOLOGIES
 from .store import clear_rheology_outputs, save_rheology_fit
@@ -179,6 +179,13 @@ def rheology_options(rheology: str | Sequence[str] = "power-law", *,
                          "positive speed in mm/min")
     if isinstance(seed, bool) or not (isinstance(seed, int) and seed >= 0):
         raise InputError(f"seed {seed!r} must be a non-negative whole number")
+    if engine not in (*ENGINES, "exact"):
+        raise InputError(f"engine {engine!r}: use one of {', '.join(ENGINES)} (or exact, "
+                         "which is grid)")
+    if baseline not in BASELINES:
+        raise InputError(f"baseline {baseline!r}: use one of {', '.join(BASELINES)}")
+    if adhesion not in ADHESION:
+        raise InputError(f"adhesion {adhesion!r}: use one of {', '.join(ADHESION)}")
     if isinstance(drag, str):
         if drag not in ("auto", "on", "off"):
             raise InputError(f"drag {drag!r}: use auto, on or off (or None, True, False)")

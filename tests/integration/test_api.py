@@ -269,3 +269,9 @@ def test_fit_campaign_takes_keywords_and_writes_the_command_line_s_summary(trace
     assert list(table["trace_id"]) == ["a", "b"] and table["E_pa"].notna().all()
     with pytest.raises(pb.errors.InputError, match="as keywords .*nu.* or as options="):
         pb.fit_campaign(manifest, tmp_path / "x", pb.fit_options(), nu=0.45)
+    with pytest.raises(pb.errors.InputError, match="unknown option.*thickness.*a manifest gives"):
+        pb.fit_campaign(manifest, tmp_path / "x", thickness=0.02)
+    plans = []
+    pb.fit_campaign(manifest, tmp_path / "y", engine="exact", workers=1, progress=False,
+                    on_plan=lambda reused, todo: plans.append((reused, todo)))
+    assert plans == [([], ["a", "b"])]

@@ -107,6 +107,11 @@ def test_a_trace_is_one_fit_and_options_are_checked_once(files):
         pb.fit_rheology(manifest, tip="sphere", radius=0.01)
     with pytest.raises(InputError, match="--t0 0 must be a positive time"):
         rheology_options(t0=0)
+    for bad, message in (({"engine": "emce"}, "engine 'emce': use one of grid, emcee"),
+                         ({"baseline": "tilted"}, "baseline 'tilted'"),
+                         ({"adhesion": "peel"}, "adhesion 'peel'")):
+        with pytest.raises(InputError, match=message):  # before any trace is read
+            pb.fit_rheology(path, tip="paraboloid", radius=0.0117, **bad)
     with pytest.raises(InputError, match="with the power law only"):
         rheology_options("sls", segments="approach,retract")
     opts = rheology_options("power-law", peer="pyfmrheo")
