@@ -238,11 +238,12 @@ def layout_block(root: Path = ROOT) -> str:
     :data:`LONG` lines (to the nearest 50, at least ~450)."""
     mods = modules(root)
     parts = layers(graph(root))
+    lines = {module: _lines(path) for module, path in mods.items()}  # each file read once
     count: dict[str, list[int]] = {}
-    for module, path in mods.items():
+    for module, n in lines.items():
         bits = module.split(".")
         part = bits[1] if len(bits) > 1 else PACKAGE
-        count.setdefault(part, []).append(_lines(path))
+        count.setdefault(part, []).append(n)
     rows = ["| part | modules | lines | imports |", "|---|---|---|---|"]
     for part in sorted(parts):
         name = f"`{part}/`" if (root / part).is_dir() else (
@@ -252,7 +253,7 @@ def layout_block(root: Path = ROOT) -> str:
         total, step = sum(count[part]), 500 if (root / part).is_dir() else 50
         rows.append(f"| {name} | {len(count[part])} | ~{max(step, round(total / step) * step):,} "
                     f"| {arrows} |")
-    long = sorted(((_lines(p), m) for m, p in mods.items() if _lines(p) > LONG), reverse=True)
+    long = sorted(((n, m) for m, n in lines.items() if n > LONG), reverse=True)
     over = "; ".join(f"`{m.removeprefix(PACKAGE + '.').replace('.', '/')}.py` "
                      f"~{max(450, round(n / 50) * 50)}" for n, m in long)
     return "\n".join([
