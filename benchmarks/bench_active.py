@@ -52,7 +52,7 @@ RANDOM_EVERY = 5
 
 
 def make_phantom(i: int, seed: int):
-    from palpbayes.sim.inclusion import Inclusion
+    from palpbayes.inclusion import Inclusion
     from palpbayes.sim.phantom import MapPhantom
 
     rng = np.random.default_rng([seed, i])

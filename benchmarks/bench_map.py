@@ -38,11 +38,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from palpbayes.inclusion import Inclusion
 from palpbayes.io.manifest import read_manifest
 from palpbayes.maps.pertrace import PointOptions, fit_points
 from palpbayes.maps.run import MapOptions, map_from_points
 from palpbayes.paper import PAPER_TIPS
-from palpbayes.sim.inclusion import Inclusion
 from palpbayes.sim.map import read_map_truth, simulate_map
 
 #: (module, function, stage) timed by :class:`StageClock`: the stages of ``palpbayes map``.

@@ -29,7 +29,7 @@ import threading
 import time
 from pathlib import Path
 
-from palpbayes.sim.inclusion import Inclusion
+from palpbayes.inclusion import Inclusion
 from palpbayes.sim.phantom import MapPhantom
 
 #: The phantom: a 20 mm block, E = 50 kPa, with a lump ten times as stiff, 5 mm in radius,

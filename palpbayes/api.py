@@ -23,10 +23,10 @@ import dataclasses
 import math
 import os
 
-import numpy as np
 import pandas as pd
 
 from .api_fit import Fit, load_fit
+from .arguments import check_seed
 from .campaign.fitjob import fit_trace_rows
 from .campaign.options import FitOptions, fit_options
 from .contact import TIP_PARAMETERS, Tip
@@ -270,9 +270,8 @@ def fit(source, *, tip: str | Tip | None = None, radius: float | None = None,
     if half_space and unknown:
         raise InputError("--half-space and --thickness unknown contradict each other; give "
                          "one of them")
-    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int | np.integer)
-                             or seed < 0):
-        raise InputError(f"seed {seed!r} must be a non-negative whole number")
+    if seed is not None:
+        check_seed(seed)
     block = check_specimen(specimen, thickness, half_space)
     layer = "off" if half_space else "unknown" if unknown else "auto"
     opts = fit_options(method=method, nu=nu, layer=layer, specimen=block, engine=engine,

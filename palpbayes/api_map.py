@@ -120,7 +120,7 @@ def prepare_map(source: str | os.PathLike, request: MapRequest | None = None, *,
     source = Path(source)
     req = request or MapRequest()
     nu = None if req.nu is None else check_nu(req.nu)
-    # each point a half-space: the lump's forward model (palpbayes.sim.inclusion) reads the
+    # each point a half-space: the lump's forward model (palpbayes.inclusion) reads the
     # block's thickness itself, and the map's per-point fits compare points with each other;
     # built first, so that its own checks (seed, f_unc, noise) come before any file is read
     fit = FitOptions(nu=nu, noise=req.noise, tare=req.tare, f_unc=req.f_unc, engine="exact",

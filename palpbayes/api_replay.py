@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from . import outputs
+from .arguments import check_seed
 from .contact import DEFAULT_NU, Tip, check_nu
 from .errors import InputError
 from .fitdata import ModelSpec
@@ -287,9 +288,7 @@ class ReplayRequest:
             object.__setattr__(self, "nu", check_nu(self.nu))
         object.__setattr__(self, "thickness", _known_thickness(self.thickness))
         _check_bonding(self.bonding)
-        if (isinstance(self.seed, bool) or not isinstance(self.seed, numbers.Integral)
-                or self.seed < 0):
-            raise InputError(f"seed {self.seed!r} must be a non-negative whole number")
+        check_seed(self.seed)
 
     @property
     def rule(self) -> StoppingRule:

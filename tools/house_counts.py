@@ -7,8 +7,8 @@ Usage::
     python tools/house_counts.py [REPO] [--list]
 
 A function with many parameters may say why beside it, in a comment line right above its
-``def`` (or its decorators) that starts ``# Many parameters:``; such functions are counted
-apart.
+``def`` (or its decorators) that starts ``# Many parameters:``; a long module in a comment line
+of its own that starts ``# Long module:`` (right after its docstring); both are counted apart.
 
 ``REPO`` (default: this checkout) is a folder holding ``palpbayes/`` (a ``git worktree`` of an
 older commit, to print the counts before a change).  A parameter is a named one (positional or
@@ -36,6 +36,7 @@ def _files(root: Path, pattern: str) -> list[Path]:
 
 
 REASON = "# Many parameters:"
+LONG_REASON = "# Long module:"
 
 
 def _has_reason(lines: list[str], node) -> bool:
@@ -71,9 +72,11 @@ def public_functions(pkg: Path):
 
 def counts(repo: Path) -> dict:
     pkg = repo / "palpbayes"
-    modules = {p: len(p.read_text(encoding="utf-8").splitlines()) for p in pkg.rglob("*.py")}
-    long = sorted(((n, p.relative_to(pkg).as_posix()) for p, n in modules.items()
-                   if n > LONG_MODULE), reverse=True)
+    sources = {p: p.read_text(encoding="utf-8").splitlines() for p in pkg.rglob("*.py")}
+    modules = {p: len(lines) for p, lines in sources.items()}
+    long = sorted(((n, p.relative_to(pkg).as_posix(),
+                    any(x.startswith(LONG_REASON) for x in sources[p]))
+                   for p, n in modules.items() if n > LONG_MODULE), reverse=True)
     funcs = list(public_functions(pkg))
     many = sorted(((n, f"{p.relative_to(pkg).as_posix()}:{q}", why) for p, q, n, why in funcs
                    if n >= MANY_PARAMETERS), reverse=True)
@@ -110,9 +113,12 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     c = counts(args.repo)
     print(f"{c['modules']} modules, {c['lines']:,} lines")
-    print(f"modules over {LONG_MODULE} lines: {len(c['long'])}")
+    said = sum(w for _, _, w in c["long"])
+    print(f"modules over {LONG_MODULE} lines: {len(c['long'])} ({said} with the reason "
+          f"written in them, {len(c['long']) - said} without)")
     if args.list:
-        print("\n".join(f"  {n:5d}  {m}" for n, m in c["long"]))
+        print("\n".join(f"  {n:5d}  {m}{'  (reason given)' if w else ''}"
+                         for n, m, w in c["long"]))
     why = sum(w for _, _, w in c["many"])
     print(f"public functions with >= {MANY_PARAMETERS} parameters: {len(c['many'])} "
           f"({why} with the reason written beside them, {len(c['many']) - why} without)")

@@ -11,7 +11,7 @@ them:
   c whose apparent log-excess at the surface is beta (= log of the apparent peak ratio A) at
   its centre and falls off with distance as the profile phi_k (phi_k(0) = 1).
 
-The profiles are those of the forward model of :mod:`palpbayes.sim.inclusion` (the
+The profiles are those of the forward model of :mod:`palpbayes.inclusion` (the
 Boussinesq-weighted Reuss average that :mod:`palpbayes.maps.lump` and the map simulator use)
 for a set of spheres (radius R, cover D − R) under the tip's contact radius: the set spans the
 sizes and depths the surface can tell apart.  phi_k is the log-excess profile of sphere k at
@@ -43,7 +43,7 @@ import numpy as np
 from scipy.special import logsumexp
 
 from ..errors import InputError
-from ..sim.inclusion import sensitivity
+from ..inclusion import sensitivity
 
 __all__ = ["A_REF", "LumpHypotheses", "SearchPosterior", "hypotheses", "posterior"]
 
@@ -155,7 +155,7 @@ def hypotheses(footprint: tuple[float, float, float, float], *, contact_radius: 
         [m] The specimen's palpable rectangle; lump centres are placed over it.
     contact_radius, thickness
         [m] The tip's contact radius at the indentation depth
-        (:func:`palpbayes.sim.inclusion.contact_radius`) and the block thickness.
+        (:func:`palpbayes.inclusion.contact_radius`) and the block thickness.
     resolution
         [m] Spacing of the centre grid (made coarser when the footprint would need more than
         ``max_centres`` centres).

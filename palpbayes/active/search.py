@@ -249,6 +249,24 @@ class NextPresses:
     summary: dict
     posterior: SearchPosterior | None = field(default=None, repr=False)
 
+    def table(self) -> pd.DataFrame:
+        """The answer as one table, the file ``palpbayes next DIR --out FILE`` writes: one row
+        per next press (``order``, ``x_m``, ``y_m`` [m], ``score``, ``criterion``), or one
+        row with those empty when the search stops, each row carrying ``event`` ("next" or
+        "done"), ``decision``, ``reason`` and the posterior's :attr:`summary` (``n``,
+        ``p_lump``, the centre ``x_m_centre``/``y_m_centre`` and its radius [m], ...).
+
+        (``summary`` is the posterior's numbers as a dict, so the table has its own name.)
+        """
+        head = {"event": "done" if self.stop else "next", "decision": self.decision,
+                "reason": self.reason}
+        post = {(f"{k}_centre" if k in ("x_m", "y_m") else k): v
+                for k, v in self.summary.items()}
+        cols = ["order", "x_m", "y_m", "score", "criterion"]
+        rows = self.presses[cols].to_dict("records") if len(self.presses) else [
+            dict.fromkeys(cols)]
+        return pd.DataFrame([{**head, **r, **post} for r in rows])
+
 
 def summary(state: SearchState, post: SearchPosterior | None, rule: SearchStopRule) -> dict:
     """The posterior as plain numbers: ``n``, ``p_lump``, the centre ``x_m``/``y_m`` [m] and

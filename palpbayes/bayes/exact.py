@@ -39,6 +39,9 @@ engine does not cover (Student-t noise, the soft surface prior, the uncertainty 
 inputs) stays with emcee.
 """
 
+# Long module: one job, the exact engine; the grid refinement and ExactPosterior (its moments,
+#   draws and marginals) are one computation.
+
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -1,5 +1,8 @@
 """Fit one trace: profile-scan start, emcee posterior, arviz diagnostics, flags, budget."""
 
+# Long module: one job, the fit pipeline of one trace (start, chains, checks, arviz groups,
+#   budget).
+
 from __future__ import annotations
 
 import warnings

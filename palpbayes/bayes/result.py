@@ -8,6 +8,9 @@ fitted data and the least-squares fit, which the caller supplies
 (:func:`palpbayes.campaign.results.load_fit`).
 """
 
+# Long module: one job, the Bayesian fit's result; BayesResult's tables and its netCDF round trip
+#   are its interface.
+
 from __future__ import annotations
 
 import dataclasses

@@ -63,6 +63,8 @@ Reference values are read by :mod:`palpbayes.campaign.reference`, the per-trace 
 :mod:`palpbayes.pooling.inputs`; the text layout is :mod:`palpbayes.campaign.compare_text`.
 """
 
+# Long module: one job, the comparison table; its row builders are private to compare().
+
 from __future__ import annotations
 
 import os

@@ -5,6 +5,9 @@ This is the unit of work that ``palpbayes fit`` runs for a single trace and that
 the per-trace netCDF when ``posterior_dir`` is given (written atomically).
 """
 
+# Long module: one job, fitting one trace of a campaign; the fittability checks and their hints
+#   are the job's first half.
+
 from __future__ import annotations
 
 import warnings

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..arguments import check_seed
 from ..bayes.budget import BudgetSpec
 from ..bayes.noisemodels import EXACT_NOISE_MODELS, NOISE_MODELS, get_noise_model
 from ..bayes.priors import BASELINES, PriorSpec
@@ -208,9 +209,7 @@ class FitOptions:
                                      ("baseline", self.baseline, BASELINES)):
             if value not in allowed:
                 raise InputError(f"unknown {what} {value!r}; use one of {', '.join(allowed)}")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int | np.integer) or (
-                self.seed < 0):
-            raise InputError(f"seed {self.seed!r} must be a non-negative whole number")
+        check_seed(self.seed)
         if self.f_unc is not None and not (np.isfinite(self.f_unc) and self.f_unc > 0):
             raise InputError(f"f_unc {self.f_unc!r} must be a positive force in newtons (the "
                              "contact threshold)")

@@ -10,6 +10,8 @@ tcp_z_mm --z-unit mm --force-column fz``), ``--force-sign -1`` when the data pre
 negative force, and the tip to fill in; a campaign manifest, the command that fits it.
 """
 
+# Long module: one job, the inspect command; one short printer per recording format.
+
 from __future__ import annotations
 
 import argparse

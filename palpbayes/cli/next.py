@@ -66,6 +66,8 @@ def register(subparsers) -> None:
     p.add_argument("--criterion", choices=("eig", "lse", "ucb"), default="eig",
                    help="how candidates are scored (default eig; below)")
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    p.add_argument("--out", metavar="FILE", help="also write the answer as a CSV table "
+                   "(NextPresses.table(): one row per next press with the posterior summary)")
     p.add_argument("--plot", metavar="FILE", help="write the press sequence with P(lump) "
                                                   "after each press (png or pdf)")
     add_rule_options(p.add_argument_group("stopping rule"))
@@ -119,7 +121,7 @@ def search_rule_from_args(args: argparse.Namespace):
 
 def _init(args: argparse.Namespace) -> int:
     from ..active.files import init_state
-    from ..sim.inclusion import contact_radius
+    from ..inclusion import contact_radius
 
     if args.footprint is None or args.thickness is None:
         raise InputError("--init needs --footprint X0,X1,Y0,Y1 and --thickness M (and the "
@@ -192,6 +194,11 @@ def run(args: argparse.Namespace) -> int:
     state = read_state(args.state, thickness=args.thickness, **state_overrides(args))
     ans = next_presses(state, args.k, criterion=args.criterion, rule=rule)
     print(answer_json(ans) if args.json else answer_text(ans), flush=True)
+    if args.out:
+        from ..io.atomic import write_csv_atomic
+
+        write_csv_atomic(ans.table(), args.out, index=False)
+        print(f"wrote {args.out}", file=sys.stderr)
     if args.plot and state.n == 0:
         print(f"note: no press yet, so no {args.plot}", file=sys.stderr)
     elif args.plot:

@@ -3,6 +3,8 @@
 columns, units and signs also ``map``), ``--nu`` (also ``map``), and what they become:
 :class:`~palpbayes.campaign.fitjob.FitOptions`, reader options and the traces themselves."""
 
+# Long module: one job, the options the commands share; 19 small functions, one per option group.
+
 from __future__ import annotations
 
 import argparse

@@ -305,8 +305,9 @@ def _run_visco(args: argparse.Namespace) -> int:
 
 def _run_map(args: argparse.Namespace) -> int:
     """The ``--map`` branch of :func:`run`."""
+    from ..inclusion import Inclusion
     from ..paper import PAPER_TIPS
-    from ..sim import Inclusion, default_inclusion, read_map_truth, simulate_map
+    from ..sim import default_inclusion, read_map_truth, simulate_map
 
     nx, ny = args.grid or (15, 15)
     step = 3e-3 if args.step is None else args.step

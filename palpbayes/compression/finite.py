@@ -41,6 +41,9 @@ Laws are compared by PSIS-LOO on the bins (Vehtari, Gelman & Gabry 2017, through
 in-sample error, which always favours more parameters.
 """
 
+# Long module: one job, the finite-strain law fit of a compression curve; the collapsed posterior
+#   (_Collapsed) and its draws are that fit's inside.
+
 from __future__ import annotations
 
 import math

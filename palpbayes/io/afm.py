@@ -65,6 +65,9 @@ traces carry their x, y.  Needs the optional extra ``afm`` (afmformats: ``pip in
 'palpbayes[afm]'`` from a package index; the error when it is missing says which).
 """
 
+# Long module: one job, reading AFM files through afmformats; segment classification, arrays and
+#   calibration are the three steps of one read.
+
 from __future__ import annotations
 
 import os

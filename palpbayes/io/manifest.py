@@ -36,6 +36,9 @@ checks that every trace file's header holds the columns the reader options ask f
 no data (``palpbayes map`` runs it before starting a cluster).
 """
 
+# Long module: one job, reading and writing campaign manifests; the header checks name the file,
+#   row and column of bad input.
+
 from __future__ import annotations
 
 import math

@@ -2,7 +2,7 @@
 
 The per-point posteriors of log E (mean y_i, sd s_i at palpation position p_i) are explained
 by one spherical inclusion in a homogeneous block, seen through the forward model of
-:mod:`palpbayes.sim.inclusion` (Boussinesq-weighted Reuss average):
+:mod:`palpbayes.inclusion` (Boussinesq-weighted Reuss average):
 
     y_i ~ Normal(log E_b − log(1 − (1 − 1/rho)·V(|p_i − c|; R, D)), s_i² + tau²)
 
@@ -23,8 +23,11 @@ What the data cannot tell is reported, not hidden: a deep or very stiff inclusio
 signature saturates at 1/(1 − V(0)), so rho is bounded below but often not above (its
 posterior then reaches the prior's upper end, and a flag says so); R and D trade off along a
 ridge.  The inclusion's true ratio is identified only through the forward model, whose limits
-are listed in :mod:`palpbayes.sim.inclusion`.
+are listed in :mod:`palpbayes.inclusion`.
 """
+
+# Long module: one job, the lump model's posterior; issue 59 may replace its emcee loop by the
+#   grid posterior of active/posterior.
 
 from __future__ import annotations
 
@@ -37,8 +40,8 @@ import pandas as pd
 from scipy import optimize
 
 from ..errors import InputError
+from ..inclusion_table import SensitivityTable
 from ..intervals import LEVEL, central
-from ..sim.sensitivity_table import SensitivityTable
 
 __all__ = ["RATIO_MAX", "LUMP_PARAMS", "LumpPosterior", "fit_lump", "lump_table"]
 
@@ -281,7 +284,7 @@ def fit_lump(x: np.ndarray, y: np.ndarray, mean: np.ndarray, sd: np.ndarray, *,
         Per-point posterior mean and sd of log(E/Pa).
     contact_radius
         [m] Contact radius of the tip at the indentation depth
-        (:func:`palpbayes.sim.inclusion.contact_radius`).
+        (:func:`palpbayes.inclusion.contact_radius`).
     thickness
         [m] Block thickness H.
     step

@@ -17,6 +17,8 @@ Three stages:
 Computation only: files are written by :mod:`~.files`, figures by :mod:`palpbayes.plots.maps`.
 """
 
+# Long module: one job, the map pipeline (per-point fits, field, lump) and its manifest check.
+
 from __future__ import annotations
 
 import math
@@ -29,9 +31,9 @@ import pandas as pd
 from ..contact import Tip
 from ..errors import InputError
 from ..flagcodes import scoped
+from ..inclusion import contact_radius as tip_contact_radius
 from ..intervals import LEVEL, central, central_band
 from ..io.manifest import check_trace_headers, tip_from_row
-from ..sim.inclusion import contact_radius as tip_contact_radius
 from .afm_source import NO_CURVE, is_afm_row
 from .gmrf import FieldPosterior, FieldPrior, fit_field, robust_spread
 from .lattice import lattice_from_positions

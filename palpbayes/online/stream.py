@@ -27,6 +27,9 @@ of the memory growing with the stream (~300 bytes a sample waiting: 240 MB for 4
 in); a live sender at the sensor's rate never meets the bound.
 """
 
+# Long module: one job, lines of text into (t, z, F) batches; the parser and the feed share the
+#   column and limit rules.
+
 from __future__ import annotations
 
 import json

@@ -82,6 +82,9 @@ Gelman, A. (2006). Prior distributions for variance parameters in hierarchical m
 Bayesian Analysis 1(3), 515–534.
 """
 
+# Long module: one job, the two-stage hierarchical model: its log posterior, sampler and pooled
+#   estimate.
+
 from __future__ import annotations
 
 import warnings

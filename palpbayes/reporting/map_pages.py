@@ -123,7 +123,7 @@ _METHODS = (
     "point (sparse LU, no dense matrix).  The map median is the median of the field over the "
     "map, per draw; P(E > k × map median) is the share of draws above it.",
     "The lump model explains the per-point values by one spherical inclusion seen through a "
-    "Boussinesq-weighted Reuss average (palpbayes.sim.inclusion), sampled with emcee.  It is a "
+    "Boussinesq-weighted Reuss average (palpbayes.inclusion), sampled with emcee.  It is a "
     "model: a real lump that is not spherical, or mechanics beyond the Reuss average, biases "
     "its depth and ratio.  The apparent peak ratio is what the surface shows and is the "
     "best-measured number; the inclusion's own ratio is often bounded only from below.",

@@ -41,6 +41,9 @@ kernel).  Ting's rule for a shrinking contact (the retract) has columns of its o
 :mod:`~palpbayes.rheology.ting`.
 """
 
+# Long module: one job, the Lee-Radok hereditary integral as regression columns; window kernels
+#   and their corrections are one design matrix.
+
 from __future__ import annotations
 
 import numpy as np

@@ -25,6 +25,9 @@ Moduli are reduced moduli E* [Pa] as everywhere in palpbayes; give ``nu`` to hav
 moduli E = E*(1 − nu²) in the table too.
 """
 
+# Long module: one job, a relaxation fit of one cycle; RheologyFit's accessors and fit_rheology
+#   share the force-curve and baseline helpers.
+
 from __future__ import annotations
 
 import time as _time
@@ -33,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..arguments import check_seed
 from ..checks import posterior_predictive_check
 from ..checks.core import CheckResult
 from ..compression import DEFAULT_STRAIN_WINDOW
@@ -387,9 +391,7 @@ def fit_rheology(trace: IndentationTrace, rheology: str = "power-law", *,
     if seed is not None:
         if rng not in (0, None):
             raise InputError("give the seed once: seed= or rng=, not both")
-        if isinstance(seed, bool) or not (isinstance(seed, int | np.integer) and seed >= 0):
-            raise InputError(f"seed {seed!r} must be a non-negative whole number")
-        rng = int(seed)
+        rng = check_seed(seed)
     if baseline not in BASELINES:
         raise InputError(f"baseline {baseline!r}: use one of {', '.join(BASELINES)}")
     if not (isinstance(n_draws, int | np.integer) and n_draws >= 100):

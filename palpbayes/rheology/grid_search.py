@@ -28,6 +28,9 @@ The density is evaluated by a ``NodeEvaluator`` (:mod:`~palpbayes.rheology.poste
 ``logp(thetas, z)`` on a product grid, ``logp_rows(thetas, z_rows)`` on a sheared one.
 """
 
+# Long module: one job, where the grid posterior's fine grid goes: the sheared box, its search and
+#   its climb.
+
 from __future__ import annotations
 
 import math

@@ -46,6 +46,9 @@ Priors on θ: alpha uniform on [0, :data:`ALPHA_MAX`]; tau log-uniform on
 its sd apart around its density at the climbed mode (:meth:`NodeEvaluator.focus_phi`).
 """
 
+# Long module: one job, the collapsed viscoelastic grid posterior; the node evaluator and the
+#   basin search are its inside.
+
 from __future__ import annotations
 
 import math

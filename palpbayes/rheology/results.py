@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..arguments import check_seed
 from ..contact import check_nu
 from ..errors import InputError, PalpbayesError
 from ..flagcodes import RHEOLOGY_CODES, listed_flag_columns
@@ -177,8 +178,7 @@ def rheology_options(rheology: str | Sequence[str] = "power-law", *,
             and math.isfinite(compression_speed_mm_min) and compression_speed_mm_min > 0):
         raise InputError(f"--compression-speed {compression_speed_mm_min!r} must be a "
                          "positive speed in mm/min")
-    if isinstance(seed, bool) or not (isinstance(seed, int) and seed >= 0):
-        raise InputError(f"seed {seed!r} must be a non-negative whole number")
+    seed = check_seed(seed)
     if engine not in (*ENGINES, "exact"):
         raise InputError(f"engine {engine!r}: use one of {', '.join(ENGINES)} (or exact, "
                          "which is grid)")

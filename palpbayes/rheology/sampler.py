@@ -47,6 +47,9 @@ Not here: the SLS on the retract (Ting's t1 depends on E1*/E_inf*: the force is 
 in the moduli, the grid gives no start and the table would need a third axis); refused.
 """
 
+# Long module: one job, the viscoelastic emcee engine; its target and independence move are
+#   private to sample_emcee.
+
 from __future__ import annotations
 
 import math

@@ -1,6 +1,6 @@
 """The simulator: synthetic palpation traces, compression tests and campaigns from a known truth.
 
-One module per job, imports flowing one way (``map`` -> ``campaign``/``inclusion``;
+One module per job, imports flowing one way (``map`` -> ``campaign``;
 ``campaign`` -> ``series``/``compression`` -> ``trace`` -> ``force``; ``visco_campaign`` ->
 ``campaign``/``viscoelastic``):
 
@@ -11,10 +11,9 @@ One module per job, imports flowing one way (``map`` -> ``campaign``/``inclusion
 * :mod:`~palpbayes.sim.compression` -- an Instron compression test and its export file;
 * :mod:`~palpbayes.sim.series` -- repeated palpation with rest-time stiffening;
 * :mod:`~palpbayes.sim.campaign` -- a whole campaign folder with its truth tables;
-* :mod:`~palpbayes.sim.inclusion` -- the apparent modulus over a buried stiff sphere (Reuss
-  average over the Boussinesq stress under the tip);
-* :mod:`~palpbayes.sim.sensitivity_table` -- its fast interpolation table (for the lump model);
-* :mod:`~palpbayes.sim.map` -- a stiffness-map phantom folder: a grid of palpations over it;
+* :mod:`~palpbayes.sim.map` -- a stiffness-map phantom folder: a grid of palpations over it,
+  the lump seen through :mod:`palpbayes.inclusion` (the forward model maps and the active
+  search own as well);
 * :mod:`~palpbayes.sim.misfit` -- palpations with a misfit the user did not model (an unknown
   layer, stiffening, a gradual onset, a blunted apex), the model-form calibration's traces;
 * :mod:`~palpbayes.sim.viscoelastic` -- a ramp–hold–retract on a viscoelastic half-space
@@ -40,17 +39,15 @@ from .._lazy import lazy_modules
 #: Submodules whose ``__all__`` make up the package's public names, in the order of
 #: ``__all__``; they are imported on first use (PEP 562), so that importing one submodule, or
 #: building the command line's parser, does not load the whole simulator (and scipy.signal).
-API_MODULES = ("force", "trace", "compression", "series", "campaign", "inclusion", "map",
-               "misfit", "sensitivity_table", "viscoelastic", "visco_campaign")
+API_MODULES = ("force", "trace", "compression", "series", "campaign", "map", "misfit",
+               "viscoelastic", "visco_campaign")
 
 if TYPE_CHECKING:  # the same names, for static tools
     from .campaign import *  # noqa: F403
     from .compression import *  # noqa: F403
     from .force import *  # noqa: F403
-    from .inclusion import *  # noqa: F403
     from .map import *  # noqa: F403
     from .misfit import *  # noqa: F403
-    from .sensitivity_table import *  # noqa: F403
     from .series import *  # noqa: F403
     from .trace import *  # noqa: F403
     from .visco_campaign import *  # noqa: F403

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..arguments import check_seed
 from ..contact import DEFAULT_NU, Tip, check_nu
 from ..errors import InputError, OutputExistsError
 from ..io.atomic import write_csv_atomic
@@ -62,13 +63,6 @@ def child_seed(seed: int, *keys: str | int) -> np.random.SeedSequence:
     """
     key = tuple(zlib.crc32(k.encode()) if isinstance(k, str) else int(k) for k in keys)
     return np.random.SeedSequence(seed, spawn_key=key)
-
-
-def check_seed(seed) -> int:
-    """``seed`` as an int; :class:`InputError` unless it is a non-negative integer."""
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise InputError(f"seed {seed!r} must be a non-negative integer")
-    return int(seed)
 
 
 def check_count(value, what: str, minimum: int) -> int:

@@ -17,13 +17,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..arguments import nonneg, positive
 from ..compression.window import toe_compression
 from ..contact import check_nu
 from ..errors import InputError
 from ..io.atomic import write_text_atomic
 from ..material import Solid
 from ..twin import Specimen, compression_factor
-from ._checks import nonneg, positive
 
 __all__ = ["toe_compression", "simulate_compression_test", "write_compression_export"]
 

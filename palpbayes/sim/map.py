@@ -10,9 +10,9 @@
       truth_lump.json   one record: the lump, the grid, the tip, the apparent peak and width
 
 The palpation at column i, row j sits at x_i = i·step, y_j = j·step (origin at the first
-palpation).  The smooth field E_app(x, y) is :func:`~palpbayes.sim.inclusion.apparent_modulus`
+palpation).  The smooth field E_app(x, y) is :func:`~palpbayes.inclusion.apparent_modulus`
 (a Reuss average over the Boussinesq stress under the tip; its limits are listed in
-:mod:`palpbayes.sim.inclusion`).  On top of it each point has its own material modulus,
+:mod:`palpbayes.inclusion`).  On top of it each point has its own material modulus,
 ln E_point = ln E_app + heterogeneity·N(0, 1) (the median is E_app; for small values the
 heterogeneity is the coefficient of variation), and each trace is simulated as a homogeneous
 block of modulus E_point by :func:`~palpbayes.sim.trace.simulate_trace`.  Every point has its
@@ -33,8 +33,10 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import brentq
 
+from ..arguments import finite, nonneg, positive
 from ..contact import DEFAULT_NU, Tip, check_nu
 from ..errors import DataFileError, InputError
+from ..inclusion import Inclusion, apparent_ratio, contact_radius, sensitivity
 from ..io.atomic import write_csv_atomic, write_text_atomic
 from ..io.manifest import tip_columns, write_manifest
 from ..io.trace_csv import write_trace
@@ -42,9 +44,7 @@ from ..paper import PAPER_TIPS
 from ..procs import lifeline
 from ..sensor_noise import PAPER_NOISE_PP, sigma_from_pp
 from ..trace import IndentationTrace
-from ._checks import finite, nonneg, positive
 from .campaign import check_count, check_seed, child_seed, prepare_out_dir
-from .inclusion import Inclusion, apparent_ratio, contact_radius, sensitivity
 from .trace import simulate_trace
 
 __all__ = ["simulate_map", "read_map_truth", "default_inclusion", "lump_summary", "press_trace"]

@@ -3,7 +3,7 @@
 :func:`palpbayes.sim.map.simulate_map` writes a raster of presses fixed in advance; an active
 search (:mod:`palpbayes.active`) chooses each press after the last.  :class:`MapPhantom` is
 the same phantom as an object that can be pressed at any (x, y): the smooth field E_app of
-:func:`~palpbayes.sim.inclusion.apparent_modulus`, each press's own material modulus
+:func:`~palpbayes.inclusion.apparent_modulus`, each press's own material modulus
 ln E = ln E_app + heterogeneity·N(0, 1), surface height, force offset and noise, drawn in the
 order and by the code that ``simulate_map`` uses for its grid
 (:func:`~palpbayes.sim.map.press_trace`): a press at a grid node with the node's random
@@ -20,11 +20,11 @@ import numpy as np
 
 from ..contact import DEFAULT_NU, Tip
 from ..errors import InputError
+from ..inclusion import Inclusion, apparent_ratio, contact_radius, sensitivity
 from ..paper import PAPER_TIPS
 from ..sensor_noise import PAPER_NOISE_PP
 from ..trace import IndentationTrace
 from .campaign import child_seed
-from .inclusion import Inclusion, apparent_ratio, contact_radius, sensitivity
 from .map import press_trace, read_map_truth
 
 __all__ = ["MapPhantom"]

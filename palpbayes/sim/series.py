@@ -14,11 +14,11 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..arguments import positive
 from ..contact import Tip
 from ..errors import InputError
 from ..trace import IndentationTrace
 from ..units import format_pressure
-from ._checks import positive
 from .trace import simulate_trace
 
 __all__ = ["rest_modulus", "simulate_palpation_series"]

@@ -31,13 +31,13 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
+from ..arguments import ar1_phi, finite, nonneg, positive
 from ..contact import DEFAULT_NU, Tip, check_nu, effective_modulus
 from ..errors import InputError
 from ..material import Solid
 from ..sensor_noise import PAPER_NOISE_PP, ar1_noise, sigma_from_pp
 from ..trace import IndentationTrace
 from ..twin import FOOTPRINT_COLUMNS, Specimen
-from ._checks import ar1_phi, finite, nonneg, positive
 from .force import onset_force_profile, solid_force, solve_series_compliance, true_force
 
 __all__ = ["ar1_noise", "TraceSpec", "trace_spec", "simulate_trace"]

@@ -38,6 +38,7 @@ from types import MappingProxyType
 import numpy as np
 import pandas as pd
 
+from ..arguments import ar1_phi, finite, nonneg, positive
 from ..contact import (
     DEFAULT_NU,
     PowerLawKernel,
@@ -54,7 +55,6 @@ from ..paper import PAPER_TIPS
 from ..rheology.compression import PAPER_COMPRESSION_SPEED, compression_moduli
 from ..sensor_noise import PAPER_NOISE_PP, sigma_from_pp
 from ..trace import IndentationTrace
-from ._checks import ar1_phi, finite, nonneg, positive
 from .campaign import (
     check_count,
     check_file_name,

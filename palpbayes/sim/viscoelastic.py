@@ -33,6 +33,9 @@ power law, use its Hertz paraboloid), a few mm deep at 50 mm/min, 800 Hz.
 (('approach', 'hold', 'retract'), 'power-law')
 """
 
+# Long module: one job, simulating a viscoelastic palpation; the motion, the kernel's truth,
+#   adhesion and baseline terms are parts of one trace.
+
 from __future__ import annotations
 
 import math
@@ -40,12 +43,12 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..arguments import ar1_phi, finite, nonneg, positive
 from ..contact import PowerLawKernel, PronyKernel, Tip, exponent, get_law, hereditary_force
 from ..contact import prefactor as tip_prefactor
 from ..errors import GeometryError, InputError
 from ..sensor_noise import PAPER_NOISE_PP, ar1_noise, pp_from_sigma, sigma_from_pp
 from ..trace import IndentationTrace
-from ._checks import ar1_phi, finite, nonneg, positive
 
 __all__ = ["ramp_hold_motion", "simulate_viscoelastic", "multi_speed", "adhesive_pull_off",
            "add_baseline_terms", "noise_free_force", "VISCO_BASELINE_TIME"]

@@ -50,6 +50,9 @@ squared: ~12 s for 30,000 unknowns, ~60 s and 2.5 GB for 75,000
 (``benchmarks/bench_twin_3d.py``).
 """
 
+# Long module: one job, the 3-D linear-elastic yardstick; its palpation and compression solves
+#   share the factorized solid, so they stay with it.
+
 from __future__ import annotations
 
 import math

@@ -3,7 +3,7 @@
 Phantoms are simulated at the level of the per-point summaries (the exact engine's calibration
 is tested in test_exact.py, and test_map_cli.py runs whole traces): log E_i = log E_app(p_i) +
 heterogeneity·N(0, 1) + s_i·N(0, 1), with E_app from the forward model of
-palpbayes.sim.inclusion, and go through the same spatial field and lump model as
+palpbayes.inclusion, and go through the same spatial field and lump model as
 ``palpbayes map`` (:func:`palpbayes.maps.run.map_from_points`).
 """
 
@@ -16,10 +16,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from palpbayes.inclusion import Inclusion, apparent_modulus, contact_radius
 from palpbayes.maps.pertrace import POINT_COLUMNS
 from palpbayes.maps.run import MapOptions, map_from_points
 from palpbayes.paper import PAPER_TIPS
-from palpbayes.sim.inclusion import Inclusion, apparent_modulus, contact_radius
 
 TIP = PAPER_TIPS["paraboloid"]
 H, DEPTH, STEP, E_B = 0.02, 2e-3, 3e-3, 50e3

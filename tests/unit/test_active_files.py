@@ -12,7 +12,7 @@ from palpbayes.active.files import PRESSES_FILE, SEARCH_FILE, append_press, init
 from palpbayes.cli import main
 from palpbayes.cli.next import EXIT_DECIDED, EXIT_GO_ON
 from palpbayes.errors import DataFileError, OutputExistsError
-from palpbayes.sim.inclusion import Inclusion
+from palpbayes.inclusion import Inclusion
 from palpbayes.sim.phantom import MapPhantom
 
 FOOT = (0.0, 0.042, 0.0, 0.042)
@@ -113,6 +113,38 @@ def test_cli_init_then_next_then_decide(tmp_path, capsys):
     assert len(ans["presses"]) == 2 and 0.99 < ans["p_lump"] <= 1
     for p in ans["presses"]:
         assert np.hypot(p["x_m"] - 0.014, p["y_m"] - 0.027) > 0.004
+
+
+def test_the_python_door_gives_the_commands_table(tmp_path, capsys):
+    """``pb.next_presses(DIR).table()`` is the file ``palpbayes next DIR --out`` writes, byte
+    for byte, going on (two presses) and decided (one row, no press)."""
+    import palpbayes as pb
+    from palpbayes.active import SearchStopRule
+
+    d = str(tmp_path / "s")
+    assert main(["next", d, *INIT]) == 0
+    _fill(d, 16)
+    cases = (("going on", 2, [], SearchStopRule(), EXIT_GO_ON),
+             ("decided", 1, ["--centre-radius", "0.003"], SearchStopRule(centre_radius=3e-3),
+              EXIT_DECIDED))
+    for what, k, flags, rule, code in cases:
+        if what == "decided":
+            _fill(d, 121 - 16, seed=1)
+        out = tmp_path / f"{what}.csv"
+        assert main(["next", d, "-k", str(k), "--out", str(out), *flags]) == code
+        mine = tmp_path / f"{what}-python.csv"
+        pb.next_presses(d, k, rule=rule).table().to_csv(mine, index=False)
+        assert mine.read_bytes() == out.read_bytes(), what
+        back = pd.read_csv(out)
+        if what == "going on":
+            assert len(back) == 2 and set(back["event"]) == {"next"}
+            assert back["n"].tolist() == [16, 16] and back["order"].tolist() == [1, 2]
+        else:
+            assert len(back) == 1 and back["event"][0] == "done"
+            assert back["decision"][0] == "lump" and back["n"][0] == 121
+            assert back["x_m"].isna().all() and back["x_m_centre"][0] == pytest.approx(0.014,
+                                                                                         abs=2e-3)
+    capsys.readouterr()
 
 
 @pytest.mark.parametrize("args, match", [

@@ -9,8 +9,8 @@ import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from palpbayes.active import SearchState
+from palpbayes.inclusion import Inclusion
 from palpbayes.plots.active import plot_search
-from palpbayes.sim.inclusion import Inclusion
 from palpbayes.sim.phantom import MapPhantom
 
 FOOT = (0.0, 0.042, 0.0, 0.042)

@@ -13,7 +13,7 @@ from scipy.special import logsumexp
 
 from palpbayes.active.posterior import hypotheses, posterior
 from palpbayes.errors import InputError
-from palpbayes.sim.inclusion import apparent_ratio, sensitivity
+from palpbayes.inclusion import apparent_ratio, sensitivity
 
 A = 0.004837  # the paper's paraboloid at 2 mm [m]
 H = 0.02

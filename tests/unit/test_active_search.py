@@ -13,7 +13,7 @@ from palpbayes.active import SearchState, SearchStopRule, next_presses
 from palpbayes.active.criteria import CRITERIA, eig, level_probability, predictive
 from palpbayes.active.search import PRESS_COLUMNS, decide, history
 from palpbayes.errors import InputError
-from palpbayes.sim.inclusion import Inclusion
+from palpbayes.inclusion import Inclusion
 from palpbayes.sim.phantom import MapPhantom
 
 FOOT = (0.0, 0.042, 0.0, 0.042)

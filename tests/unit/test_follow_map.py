@@ -23,8 +23,8 @@ from palpbayes.cli import main
 from palpbayes.cli.follow_map import parse_press_line, press_posterior
 from palpbayes.cli.next import EXIT_UNDECIDED
 from palpbayes.errors import InputError
+from palpbayes.inclusion import Inclusion
 from palpbayes.online import OnlineState
-from palpbayes.sim.inclusion import Inclusion
 from palpbayes.sim.phantom import MapPhantom
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -18,12 +18,13 @@ Literature checks not pinned here, and why (docs/layout.md, the twin's row):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
-from palpbayes.contact import Tip
+from palpbayes.contact import Tip, get_law, register, unregister
 from palpbayes.errors import FitError, GeometryError, InputError
 from palpbayes.material import compression_stress, material_law, registered_laws
 from palpbayes.twin import Specimen, solve_palpation
@@ -196,6 +197,22 @@ def test_profile_distance_gradient_and_hessian(tip):
         gm = surf.distance(r - dr, z - dz, 0.0)
         assert (gp[0] - gm[0]) / (2 * h) == pytest.approx(n[i], abs=1e-6)
         assert (gp[1] - gm[1]) / (2 * h) == pytest.approx(hess[:, i], abs=1e-4)
+
+
+def test_a_tip_registered_elsewhere_is_pressed_with_no_edit_here():
+    """A new tip kind is one file (its contact law with a profile): the twin takes the
+    surface from the law's profile with numerical derivatives, here the paraboloid's profile
+    under a new name against the analytic paraboloid surface."""
+    law = register(dataclasses.replace(get_law("paraboloid"), kind="bowl", order=99))
+    try:
+        bowl = tip_surface(Tip("bowl", radius=1.5))
+    finally:
+        unregister(law.kind)
+    exact = tip_surface(Tip("paraboloid", radius=1.5))
+    r = np.array([0.1, 0.3, 0.6, 0.8])
+    z = np.array([0.02, 0.05, 0.2, -0.05])
+    for got, want in zip(bowl.distance(r, z, 0.0), exact.distance(r, z, 0.0), strict=True):
+        np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-7)
 
 
 # ------------------------------------------------------------------------- errors

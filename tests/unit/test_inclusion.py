@@ -11,8 +11,7 @@ import pytest
 from palpbayes.contact import ContactLaw, Tip
 from palpbayes.contact.registry import register, unregister
 from palpbayes.errors import InputError
-from palpbayes.paper import PAPER_TIPS
-from palpbayes.sim.inclusion import (
+from palpbayes.inclusion import (
     Inclusion,
     _disk_fraction,
     apparent_modulus,
@@ -21,7 +20,8 @@ from palpbayes.sim.inclusion import (
     depth_weight,
     sensitivity,
 )
-from palpbayes.sim.sensitivity_table import SensitivityTable
+from palpbayes.inclusion_table import SensitivityTable
+from palpbayes.paper import PAPER_TIPS
 
 A = math.sqrt(0.0117 * 2e-3)  # the paper's paraboloid at 2 mm: a = 4.84 mm
 H = 0.02

@@ -8,11 +8,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from palpbayes.inclusion import contact_radius
 from palpbayes.maps.lump import RATIO_MAX, _Problem, lump_table
 from palpbayes.maps.pertrace import POINT_COLUMNS
 from palpbayes.maps.run import MapOptions, map_from_points
 from palpbayes.paper import PAPER_TIPS
-from palpbayes.sim.inclusion import contact_radius
 
 H, STEP = 0.02, 3e-3
 A = contact_radius(PAPER_TIPS["paraboloid"], 2e-3)

@@ -11,19 +11,21 @@ import pytest
 
 from palpbayes.cli import main
 from palpbayes.errors import DataFileError, InputError, OutputExistsError
+from palpbayes.inclusion import (
+    Inclusion,
+    apparent_modulus,
+    apparent_ratio,
+    contact_radius,
+    sensitivity,
+)
 from palpbayes.io.manifest import iter_traces, read_manifest
 from palpbayes.io.trace_csv import write_trace
 from palpbayes.lsq import fit_lsq
 from palpbayes.paper import PAPER_TIPS
 from palpbayes.sim import (
-    Inclusion,
-    apparent_modulus,
-    apparent_ratio,
     child_seed,
-    contact_radius,
     default_inclusion,
     read_map_truth,
-    sensitivity,
     simulate_map,
     simulate_trace,
 )

@@ -7,9 +7,9 @@ import pandas as pd
 import pytest
 
 from palpbayes.errors import InputError
+from palpbayes.inclusion import Inclusion
 from palpbayes.io.trace_csv import read_trace
 from palpbayes.sim.campaign import child_seed
-from palpbayes.sim.inclusion import Inclusion
 from palpbayes.sim.map import default_inclusion, simulate_map
 from palpbayes.sim.phantom import MapPhantom
 

@@ -1,14 +1,17 @@
-"""Argument checks shared by the simulator's modules (private).
+"""Argument checks shared by the package: a user's number, coefficient or seed.
 
-Each helper turns a user value into a float or raises :class:`~palpbayes.errors.InputError`
-with a message that names the quantity and its unit.
+Each helper turns a user value into a float (or an int, for a seed) or raises
+:class:`~palpbayes.errors.InputError` with a message that names the quantity and its unit.
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 
-from ..errors import InputError
+from .errors import InputError
+
+__all__ = ["finite", "positive", "nonneg", "ar1_phi", "check_seed"]
 
 
 def finite(value, what: str) -> float:
@@ -44,3 +47,11 @@ def ar1_phi(value) -> float:
     if not -1.0 < v < 1.0:
         raise InputError(f"AR(1) coefficient phi = {value!r} must lie in (-1, 1)")
     return v
+
+
+def check_seed(seed) -> int:
+    """``seed`` as an int: a non-negative whole number (a Python or numpy integer, not a
+    bool), the one rule of every ``seed=`` of the package."""
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
+        raise InputError(f"seed {seed!r} must be a non-negative whole number")
+    return int(seed)

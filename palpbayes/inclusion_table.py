@@ -1,4 +1,4 @@
-"""A fast table of the inclusion sensitivity V(s; R, D) of :mod:`palpbayes.sim.inclusion`.
+"""A fast table of the inclusion sensitivity V(s; R, D) of :mod:`palpbayes.inclusion`.
 
 The lump model of a stiffness map (:mod:`palpbayes.maps.lump`) evaluates V hundreds of
 thousands of times inside its sampler: :class:`SensitivityTable` tabulates it once per tip and
@@ -12,8 +12,8 @@ import math
 
 import numpy as np
 
-from ..errors import InputError
-from ._checks import positive
+from .arguments import positive
+from .errors import InputError
 from .inclusion import sensitivity
 
 __all__ = ["SensitivityTable"]

@@ -23,7 +23,7 @@ quadrature: depth slices z = D + R·sin t (smooth at the sphere's poles) and, on
 polar angle θ about the tip's axis over [0, π] (doubled by symmetry) with the radial integral
 of K done in closed form (for a disk that does not contain the axis, θ runs over the
 tangent angle through sin θ = (ρ/s)·sin φ, which removes the square-root endpoint).
-:class:`palpbayes.sim.sensitivity_table.SensitivityTable` tabulates V for fast use inside a
+:class:`palpbayes.inclusion_table.SensitivityTable` tabulates V for fast use inside a
 likelihood.
 
 **References.**  J. Boussinesq (1885), *Application des potentiels à l'étude de l'équilibre
@@ -52,9 +52,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..contact import Tip, get_law, registered_laws
-from ..errors import InputError
-from ._checks import finite, positive
+from .arguments import finite, positive
+from .contact import Tip, get_law, registered_laws
+from .errors import InputError
 
 __all__ = [
     "Inclusion",
