@@ -26,7 +26,7 @@ import os
 import pandas as pd
 
 from .api_fit import Fit, load_fit
-from .arguments import check_seed
+from .arguments import check_seed, check_thickness
 from .campaign.fitjob import fit_trace_rows
 from .campaign.options import FitOptions, fit_options
 from .contact import TIP_PARAMETERS, Tip
@@ -166,16 +166,8 @@ def read(path: str | os.PathLike, *, tip: str | Tip | None = None,
 
 def _thickness(thickness) -> float | None:
     """[m] A thickness given as a number (None and ``"unknown"``: None), or an InputError."""
-    if thickness is None or str(thickness).strip().lower() == "unknown":
-        return None
-    try:
-        h = float(thickness)
-    except (TypeError, ValueError):
-        raise InputError(f"thickness {thickness!r} must be a number of metres or "
-                         "'unknown'") from None
-    if not (math.isfinite(h) and h > 0):
-        raise InputError(f"thickness {thickness!r} m must be positive (or 'unknown')")
-    return h
+    h = check_thickness(thickness)
+    return None if h == "unknown" else h
 
 
 def _trace_of(source, tip: Tip | None, thickness, reader_options: dict) -> IndentationTrace:

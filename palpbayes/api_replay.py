@@ -15,7 +15,6 @@ the rule and the contact model; ``palpbayes follow`` builds its own from them to
 
 from __future__ import annotations
 
-import math
 import numbers
 import os
 from dataclasses import dataclass, fields
@@ -25,7 +24,7 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from . import outputs
-from .arguments import check_seed
+from .arguments import check_seed, check_thickness
 from .contact import DEFAULT_NU, Tip, check_nu
 from .errors import InputError
 from .fitdata import ModelSpec
@@ -117,19 +116,11 @@ def stopping_rule(target: float | str | None = None, max_force: float | None = N
 def _known_thickness(thickness: float | str | None) -> float | None:
     """[m] A layer's thickness (None: a half-space); ``"unknown"`` is refused (the online
     model takes a known one)."""
-    if thickness is None:
-        return None
-    if str(thickness).strip().lower() == "unknown":
+    h = check_thickness(thickness, "--thickness")
+    if h == "unknown":
         raise InputError("--thickness unknown: online estimation needs a known thickness "
                          "(or none, for a half-space); fit the whole trace with "
                          "'palpbayes fit ... --thickness unknown' to infer it")
-    try:
-        h = float(thickness)
-    except (TypeError, ValueError):
-        raise InputError(f"--thickness {thickness!r} is neither a thickness in metres nor "
-                         "'unknown'") from None
-    if not (math.isfinite(h) and h > 0):
-        raise InputError(f"--thickness {thickness!r} must be a positive thickness in metres")
     return h
 
 

@@ -11,7 +11,7 @@ import numbers
 
 from .errors import InputError
 
-__all__ = ["finite", "positive", "nonneg", "ar1_phi", "check_seed"]
+__all__ = ["finite", "positive", "nonneg", "ar1_phi", "check_seed", "check_thickness"]
 
 
 def finite(value, what: str) -> float:
@@ -55,3 +55,21 @@ def check_seed(seed) -> int:
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
         raise InputError(f"seed {seed!r} must be a non-negative whole number")
     return int(seed)
+
+
+def check_thickness(value, what: str = "thickness") -> float | str | None:
+    """A block's thickness as given [m]: None (none given), ``"unknown"`` (to be inferred) or
+    a positive number of metres; ``what`` names it in the message (``"--thickness"`` for the
+    command line)."""
+    if value is None:
+        return None
+    if str(value).strip().lower() == "unknown":
+        return "unknown"
+    try:
+        h = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{what} {value!r} is neither a thickness in metres nor "
+                         "'unknown'") from None
+    if not (math.isfinite(h) and h > 0):
+        raise InputError(f"{what} {value!r} must be a positive thickness in metres")
+    return h

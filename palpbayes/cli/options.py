@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import math
 
+from ..arguments import check_thickness
 from ..bayes.budget import BudgetSpec
 from ..bayes.noisemodels import NOISE_MODELS
 from ..bayes.priors import BASELINES, SURFACE_PRIORS
@@ -299,17 +300,8 @@ def specimen_from_args(args: argparse.Namespace):
 
 def thickness_from_args(args: argparse.Namespace) -> float | None:
     """The known thickness [m] of ``--thickness`` (None when absent or 'unknown')."""
-    value = getattr(args, "thickness", None)
-    if value is None or str(value).strip().lower() == "unknown":
-        return None
-    try:
-        h = float(value)
-    except ValueError:
-        raise InputError(f"--thickness {value!r} is neither a thickness in metres nor "
-                         "'unknown'") from None
-    if not (math.isfinite(h) and h > 0):
-        raise InputError(f"--thickness {value!r} must be a positive thickness in metres")
-    return h
+    h = check_thickness(getattr(args, "thickness", None), "--thickness")
+    return None if h == "unknown" else h
 
 
 def layer_from_args(args: argparse.Namespace) -> tuple[str, str]:

@@ -76,7 +76,7 @@ def test_sources_a_trace_and_a_dataframe_give_the_file_s_numbers(trace_file):
     ({"tip": "sphere", "radius": 0.01, "method": "lsq", "engine": "emcees"}, InputError,
      "unknown engine 'emcees'"),
     ({"tip": "sphere", "radius": 0.01, "thickness": "abc"}, InputError,
-     "thickness 'abc' must be a number of metres or 'unknown'"),
+     "thickness 'abc' is neither a thickness in metres nor 'unknown'"),
     ({"tip": "sphere", "radius": 0.01, "seed": -1}, InputError,
      "seed -1 must be a non-negative whole number"),
     ({"tip": "sphere", "radius": 0.01, "delimiter": ";", "nu": 0.45}, InputError, None),
