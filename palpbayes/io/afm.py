@@ -144,11 +144,12 @@ def _stem(path: Path) -> str:
 def curve_metadata(curve) -> dict:
     """The curve's afmformats metadata palpbayes keeps, under trace metadata names (SI)."""
     meta = {}
-    have = dict.keys(curve.metadata)  # its __getitem__ raises for keys it lacks
+    source = curve.metadata  # afmformats builds a copy of the whole metadata on each access
+    have = dict.keys(source)  # its __getitem__ raises for keys it lacks
     for key, name in _META.items():
         if key not in have:
             continue
-        value = curve.metadata[key]
+        value = source[key]
         if isinstance(value, np.generic):
             value = value.item()
         if isinstance(value, float) and not np.isfinite(value):
@@ -466,13 +467,14 @@ def afm_calibration(path: str | os.PathLike, meta_override: dict | None = None
     given = set(meta_override or {})
     out = []
     for c in data:
-        have = dict.keys(c.metadata)  # its __getitem__ raises for keys it lacks
+        source = c.metadata  # a copy of the whole metadata on each access: once per curve
+        have = dict.keys(source)  # its __getitem__ raises for keys it lacks
         values = {}
         for key in CALIBRATION_KEYS:
             if key in given or key not in have:
                 continue
             try:
-                value = float(c.metadata[key])
+                value = float(source[key])
             except (TypeError, ValueError):
                 continue
             if np.isfinite(value):
