@@ -23,6 +23,8 @@ __all__ = ["ModelSpec", "BONDINGS"]
 #: Base conditions of a layer that a fit can assume: bonded, free (frictionless) or unknown
 #: (both, weighted by the data: a two-component mixture).
 BONDINGS = ("bonded", "free", "unknown")
+#: How finely an unknown thickness may be integrated (:attr:`ModelSpec.thickness_grid`).
+THICKNESS_GRIDS = ("fine", "coarse")
 
 
 @dataclass(frozen=True)
@@ -64,6 +66,11 @@ class ModelSpec:
         geometry (the specimen, a wide cylinder of the known thickness, or a half-space
         proxy); None: linear elasticity, the paper's model.  Its free shape parameters make
         the model a mixture (not concrete); a foam's concrete variant takes its own nu.
+    thickness_grid
+        How finely an unknown thickness is integrated (:mod:`palpbayes.bayes.layers`):
+        ``"fine"`` (the default, a fit's own layer) or ``"coarse"`` (the model form's layer
+        alternative, whose interval counts only in an envelope: about 40 % fewer exact
+        posteriors, full intervals of the 22 real curves within 0.2 %).
     """
 
     tip: Tip
@@ -74,8 +81,12 @@ class ModelSpec:
     p_bonded: float = 0.5
     specimen: Specimen | None = None
     law: LawModel | None = None
+    thickness_grid: str = "fine"
 
     def __post_init__(self) -> None:
+        if self.thickness_grid not in THICKNESS_GRIDS:
+            raise InputError(f"unknown thickness grid {self.thickness_grid!r}; use one of "
+                             f"{', '.join(THICKNESS_GRIDS)}")
         object.__setattr__(self, "nu", check_nu(self.nu))
         if self.law is not None:
             if self.thickness_range is not None:

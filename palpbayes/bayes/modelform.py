@@ -232,7 +232,7 @@ def layer_alternative(fit: Callable[..., object], data: FitData, z_surf: float, 
     """
     try:
         model = replace(data.model, thickness_range=default_thickness_range(
-            z_surf - float(np.min(data.z))))
+            z_surf - float(np.min(data.z))), thickness_grid="coarse")
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ConvergenceWarning)
             res = fit(replace(data, model=model, cycle=None), engine="exact",

@@ -264,6 +264,37 @@ def test_thickness_components_start_from_fewer_surface_nodes_and_give_the_same_p
         np.testing.assert_allclose(qa, qb, rtol=2e-3)
 
 
+@pytest.mark.parametrize("case", ["paraboloid 30 mm", "sphere 20 mm"])
+def test_the_model_forms_coarse_thickness_grid_gives_nearly_the_same_mixture(case):
+    """``thickness_grid="coarse"`` (the model form's layer alternative: 7 first thickness
+    nodes, a log-evidence step of 2 between neighbours, 17 first surface nodes) evaluates
+    fewer components than the fine rule, and E*'s and the thickness's 5/50/95 % quantiles stay
+    within 1 % and 5 % of the fine grid's (on the 22 real AFM curves every full interval
+    moved by at most 0.15 %: the interval counts only in the model form's envelope)."""
+    from dataclasses import replace
+
+    tip, h, depth = CASES[case]
+    tr = simulate_trace(E_TRUE, tip, nu=NU, thickness=h, depth=depth, rng=4)
+    model = ModelSpec(tip, nu=NU, thickness_range=(1.5 * depth, 1000 * depth))
+    data = replace(prepare(tr, model.half_space()), model=model)
+    prior = PriorSpec().for_trace(data, "gaussian")
+    fine = layer_posterior(data, prior)
+    coarse = layer_posterior(replace(data, model=replace(model, thickness_grid="coarse")),
+                             prior)
+    assert len(coarse.components) < 0.8 * len(fine.components)
+    assert coarse.p_halfspace() == pytest.approx(fine.p_halfspace(), abs=0.02)
+    for name, rtol in (("E_star", 0.01), ("thickness", 0.05)):
+        qa, qb = (np.percentile(p.draws(np.random.default_rng(1), 20_000)[name], [5, 50, 95])
+                  for p in (coarse, fine))
+        np.testing.assert_allclose(qa, qb, rtol=rtol, err_msg=name)
+
+
+def test_an_unknown_thickness_grid_is_named():
+    with pytest.raises(InputError, match="unknown thickness grid 'rough'; use one of fine, "
+                                         "coarse"):
+        ModelSpec(Tip("sphere", radius=0.01), thickness_grid="rough")
+
+
 def test_a_layer_fit_without_its_log_posterior_draws_the_same():
     """``log_prob=False`` (the model form's layer alternative) leaves out only the exact
     mixture's log posterior of each draw: the same draws, summary and checks, no ``lp``."""
