@@ -13,6 +13,7 @@ import pytest
 
 from palpbayes.cli import follow as follow_cli
 from palpbayes.cli import main
+from palpbayes.cli.follow_lines import StopLine
 from palpbayes.fitdata import ModelSpec
 from palpbayes.io.trace_csv import read_trace, write_trace
 from palpbayes.online import OnlineEstimator, StoppingRule, replay
@@ -196,7 +197,7 @@ def test_a_limit_reached_while_an_update_runs_is_said_during_it(recorded, rule, 
         if line.startswith("{") and json.loads(line)["event"] == "stop":
             said.set()
 
-    stop_line = follow_cli.StopLine(emit, est, as_json=True)
+    stop_line = StopLine(emit, est, as_json=True)
     stream = batches(_gated(text, before, started), SampleParser(), chunk=100,
                      limit=est.limit, on_limit=stop_line.limit, current=est.limit_current)
     state, _ = follow_cli.follow(stream, est, emit, as_json=True, stop_line=stop_line)
