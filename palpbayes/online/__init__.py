@@ -7,7 +7,8 @@
 ...         break
 
 :mod:`.estimator` holds the estimator, :mod:`.state` what an update says and the stopping rule
-(re-exported by :mod:`.estimator`), :mod:`.recorded` replays a recorded trace,
+(re-exported by :mod:`.estimator`), :mod:`.full_interval` E with the uncertainty budget,
+:mod:`.recorded` replays a recorded trace,
 :mod:`.stream` turns live lines (CSV or JSON) into chunks and :mod:`.tcp` a TCP connection into
 lines (``palpbayes follow``; import them from their modules).
 """

@@ -29,16 +29,9 @@ factor of the baseline's lag-one correlation) and 1 % of the contact force below
 the state carries a relaxation flag naming the viscoelastic fit
 (``palpbayes fit --rheology``).
 
-**Two intervals.**  ``OnlineState.E`` is statistical (the data's noise and surface, what the
-offline fit calls ``E_stat``); ``OnlineState.E_total`` adds the uncertainty budget
-(:mod:`palpbayes.bayes.budget`: nu ± 0.05, tip radius, force gain, compliance, a layer's
-thickness), the full interval of the offline summary row (``E_lo_pa``/``E_hi_pa``, without the
-model-form envelope of a failed check): the budget draws' central interval widened to hold the
-statistical one, around the statistical median.  The budget does not shrink as the tip goes
-deeper, so the full interval has a floor (``OnlineState.floor``, the budget's width at an
-exact E*: ~±3.5 % for a half-space at nu 0.3, ~±7 % for a bonded layer at nu 0.45).  A
-:class:`StoppingRule` tests its target on either (``target_on``); a full target below the
-floor cannot fire, and the state says so.  :meth:`OnlineEstimator.model_checks` runs the
+**Two intervals.**  ``OnlineState.E`` is statistical; ``OnlineState.E_total`` adds the
+uncertainty budget, the full interval of the offline summary row, with its floor
+(:mod:`palpbayes.online.full_interval`).  :meth:`OnlineEstimator.model_checks` runs the
 offline fit's adequacy checks (:mod:`palpbayes.checks`) on the samples so far.
 
 **Memory.**  The sums are per node, but a node the refinement adds needs every sample fitted,
@@ -62,12 +55,11 @@ import copy
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from types import SimpleNamespace
 
 import numpy as np
 
 from ..baseline import MIN_BASELINE_POINTS, estimate_baseline
-from ..bayes.budget import BudgetSpec, propagate
+from ..bayes.budget import BudgetSpec
 from ..bayes.conjugate import Gram, fixed_columns, node_posterior
 from ..bayes.exact import (
     COARSE_NODES,
@@ -80,12 +72,19 @@ from ..bayes.exact import (
 from ..bayes.mixture import MixtureSummary
 from ..bayes.priors import PriorSpec, TracePrior, param_names
 from ..checks import CheckResult, run_checks
-from ..contact import youngs_factor
 from ..errors import InputError
 from ..fitdata import ModelSpec
 from ..forcescale import force_scale_flag
-from ..intervals import LEVEL, central, hull
+from ..intervals import LEVEL, central
 from ..sensor_noise import sigma_from_pp
+from .full_interval import (
+    BUDGET_DRAWS,
+    full_from_draws,
+    full_interval,
+    propagate_draws,
+    statistical_E,
+    warm_up_budget,
+)
 from .state import TARGET_ON, OnlineState, StoppingRule, check_noise_options
 
 __all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE", "HOLD_WINDOW",
@@ -100,8 +99,6 @@ HOLD_WINDOW = 20
 HOLD_TOLERANCE = 0.01
 #: Standard errors by which the force must fall over a hold to be flagged.
 RELAX_N_SE = 5.0
-#: Posterior draws (and budget input draws) behind the full interval of an update.
-BUDGET_DRAWS = 4000
 #: Samples kept from before the contact, the last ones (25 s at 800 Hz, 1 s at 20 kHz): the
 #: baseline, the contact onset and the fit read these (module docstring, "Memory").
 PRE_CONTACT_SAMPLES = 20_000
@@ -111,15 +108,6 @@ MAX_CONTACT_SAMPLES = 500_000
 #: Most samples the model checks run on, thinned evenly beyond (their posterior-predictive
 #: check held 3.2 GB for 400,000 samples).
 CHECK_SAMPLES = 20_000
-#: Fewer draws for an update whose full interval is only shown (``follow``'s lines): the draws
-#: cost ~5 ms per 1,000 (:meth:`palpbayes.bayes.exact.ExactPosterior.draws`); an update where
-#: a target on the full interval may fire (the statistical interval is within it) takes
-#: :data:`BUDGET_DRAWS`.
-SHOWN_BUDGET_DRAWS = 1000
-
-
-def _scaled(s: MixtureSummary, f: float) -> MixtureSummary:
-    return MixtureSummary(s.mean * f, s.sd * f, s.median * f, s.lo * f, s.hi * f, s.level)
 
 
 @dataclass
@@ -151,7 +139,8 @@ class OnlineEstimator:
         target is on the full interval.
     budget_draws
         Draws behind the full interval of an update that only shows it (default
-        :data:`BUDGET_DRAWS`; ``follow``: :data:`SHOWN_BUDGET_DRAWS`, ~4 times faster); an
+        :data:`BUDGET_DRAWS`; ``follow``:
+        :data:`~palpbayes.online.full_interval.SHOWN_BUDGET_DRAWS`, ~4 times faster); an
         update where a target on the full interval may fire (the statistical interval within
         the target) always takes :data:`BUDGET_DRAWS`.
     budget
@@ -510,9 +499,8 @@ class OnlineEstimator:
                                 force=force)
             return replace(early, stop=limit or self.rule.reason(early))
         post = self.posterior()
-        estar = post.estar_summary(self.level)
+        E = statistical_E(post, self.model.nu, self.level)
         zs = post.z_summary(self.level)
-        E = _scaled(estar, youngs_factor(self.model.nu))
         flags = []
         span = self._z_top - self._z_lo
         if zs.lo - self._z_lo < 0.01 * span:
@@ -564,57 +552,28 @@ class OnlineEstimator:
         full = replace(partial, flags=tuple(flags), E_total=total, floor=floor)
         return replace(full, stop=early or rule.reason(full))
 
-    def _summary(self, x: np.ndarray) -> MixtureSummary:
-        lo, hi = central(x, self.level)
-        return MixtureSummary(float(x.mean()), float(x.std()), float(np.median(x)), lo, hi,
-                              self.level)
-
-    def _propagate(self, post: ExactPosterior, budget: BudgetSpec | None, n_draws: int,
-                   seed: int) -> tuple[np.ndarray, np.ndarray]:
-        """Draws of E* [Pa] and of E with the budget [Pa], one budget input draw each."""
-        rng = np.random.default_rng(seed)
-        d = post.draws(rng, n_draws)
-        seen = SimpleNamespace(model=self.model, z=self._z[:self._n])  # what propagate reads
-        bud = propagate(d["E_star"], seen, float(np.median(d["z_surf"])),
-                        budget or self.budget or BudgetSpec(), rng)
-        return d["E_star"], bud.E
-
-    def _full(self, stat: MixtureSummary, E: np.ndarray) -> MixtureSummary:
-        """The full interval as the offline fit reports it
-        (:meth:`palpbayes.bayes.result.BayesResult.intervals`): the central interval of the
-        budget's draws ``E`` [Pa] widened where needed to hold the statistical one, around
-        the statistical median (the estimate at the stated inputs: the budget widens the
-        interval and does not move it)."""
-        b = self._summary(E)
-        return MixtureSummary(b.mean, b.sd, stat.median,
-                              *hull((b.lo, b.hi), (stat.lo, stat.hi)), self.level)
-
     def _total(self, post: ExactPosterior, stat: MixtureSummary, n_draws: int = BUDGET_DRAWS
                ) -> tuple[MixtureSummary, float]:
-        """The full interval of E [Pa] and the budget's floor [-] (the relative half-width
-        of the budget's factors alone: E / E* of the same draws), from ``n_draws`` draws."""
-        estar, E = self._propagate(post, None, n_draws, self.seed)
-        return self._full(stat, E), self._summary(E / estar).rel_half_width
+        """The full interval of E [Pa] and the budget's floor [-], from ``n_draws`` draws
+        (:func:`~palpbayes.online.full_interval.full_interval`)."""
+        return full_interval(post, stat, self.model, self._z[:self._n], self.budget, n_draws,
+                             self.seed, self.level)
 
     def budget_interval(self, budget: BudgetSpec | None = None, n_draws: int = BUDGET_DRAWS,
                         seed: int = 0) -> MixtureSummary:
         """E [Pa] with the uncertainty budget (:mod:`palpbayes.bayes.budget`) at this point
-        (``budget`` None: the estimator's): the full interval of :meth:`_full`."""
+        (``budget`` None: the estimator's): the full interval of
+        :func:`~palpbayes.online.full_interval.full_from_draws`."""
         post = self.posterior()
-        stat = _scaled(post.estar_summary(self.level), youngs_factor(self.model.nu))
-        return self._full(stat, self._propagate(post, budget, n_draws, seed)[1])
+        _, E = propagate_draws(post, self.model, self._z[:self._n], budget or self.budget,
+                               n_draws, seed)
+        return full_from_draws(statistical_E(post, self.model.nu, self.level), E, self.level)
 
     def warm_up(self) -> None:
         """Build what the budget of a layered model needs once per process (its profile
         tables at the Poisson ratios of the budget: seconds), so that the first update in
         contact does not pay for it.  Nothing to do for a half-space."""
-        if not self.model.has_layer:
-            return
-        h = float(self.model.thickness)
-        depth = np.geomspace(1e-4, 0.2, 32) * h
-        seen = SimpleNamespace(model=self.model, z=-depth)
-        propagate(np.ones(8), seen, 0.0, self.budget or BudgetSpec(),
-                  np.random.default_rng(0))
+        warm_up_budget(self.model, self.budget)
 
     def model_checks(self, seed: int = 0) -> list[CheckResult]:
         """The offline fit's adequacy checks (:func:`palpbayes.checks.run_checks`: exponent,
