@@ -8,9 +8,9 @@
 
 :mod:`.estimator` holds the estimator, :mod:`.state` what an update says and the stopping rule
 (re-exported by :mod:`.estimator`), :mod:`.full_interval` E with the uncertainty budget,
-:mod:`.recorded` replays a recorded trace,
-:mod:`.stream` turns live lines (CSV or JSON) into chunks and :mod:`.tcp` a TCP connection into
-lines (``palpbayes follow``; import them from their modules).
+:mod:`.adequacy` the relaxation flag and the model checks, :mod:`.recorded` replays a recorded
+trace, :mod:`.stream` turns live lines (CSV or JSON) into chunks and :mod:`.tcp` a TCP
+connection into lines (``palpbayes follow``; import them from their modules).
 """
 
 from . import estimator as _estimator

@@ -20,19 +20,13 @@ Updates are incremental: each surface node keeps the running cross-product sums 
 evaluations, plus n per node the refinement adds (the posterior narrows as the tip goes deeper).
 Nodes more than :data:`PRUNE` below the best log density stop being updated.
 
-The model is elastic.  On a viscoelastic material the estimate is the apparent modulus of the
-speed and depth pressed so far (it grows with speed, ~speed^alpha for a power law), and a hold
-shows what the model leaves out: when the tip has held its deepest point (within
-:data:`HOLD_TOLERANCE` of the depth) for two windows of :data:`HOLD_WINDOW` samples and the
-force of the last window lies more than :data:`RELAX_N_SE` standard errors (AR(1) long-run
-factor of the baseline's lag-one correlation) and 1 % of the contact force below the first,
-the state carries a relaxation flag naming the viscoelastic fit
-(``palpbayes fit --rheology``).
+The model is elastic: a hold that relaxes flags the state, naming the viscoelastic fit, and
+:meth:`OnlineEstimator.model_checks` runs the offline fit's adequacy checks on the samples so
+far (:mod:`palpbayes.online.adequacy`).
 
 **Two intervals.**  ``OnlineState.E`` is statistical; ``OnlineState.E_total`` adds the
 uncertainty budget, the full interval of the offline summary row, with its floor
-(:mod:`palpbayes.online.full_interval`).  :meth:`OnlineEstimator.model_checks` runs the
-offline fit's adequacy checks (:mod:`palpbayes.checks`) on the samples so far.
+(:mod:`palpbayes.online.full_interval`).
 
 **Memory.**  The sums are per node, but a node the refinement adds needs every sample fitted,
 and so do the relaxation flag and the model checks: the samples are kept, within bounds, so
@@ -43,10 +37,9 @@ recording that starts there.  From the contact on it keeps :data:`MAX_CONTACT_SA
 samples after them still update the sums of the surface nodes there are (exactly), but the
 grid is no longer refined and the relaxation flag sees the samples kept, which the state
 flags.  The model checks run on at most :data:`CHECK_SAMPLES` of the samples kept, thinned
-evenly beyond (the lag-one correlation of the noise taken to the stride's power): their
-posterior-predictive check holds ~8 kB per sample.  A press at the paper's 800 Hz (~4,000
-samples) or an AFM approach (~2,000-12,000) is within every bound, its estimates, stops and
-checks those of an estimator that keeps everything.
+evenly beyond (:func:`palpbayes.online.adequacy.model_checks`).  A press at the paper's 800 Hz
+(~4,000 samples) or an AFM approach (~2,000-12,000) is within every bound, its estimates, stops
+and checks those of an estimator that keeps everything.
 """
 
 from __future__ import annotations
@@ -71,12 +64,14 @@ from ..bayes.exact import (
 )
 from ..bayes.mixture import MixtureSummary
 from ..bayes.priors import PriorSpec, TracePrior, param_names
-from ..checks import CheckResult, run_checks
+from ..checks import CheckResult
 from ..errors import InputError
 from ..fitdata import ModelSpec
 from ..forcescale import force_scale_flag
-from ..intervals import LEVEL, central
+from ..intervals import LEVEL
 from ..sensor_noise import sigma_from_pp
+from . import adequacy
+from .adequacy import CHECK_SAMPLES, HOLD_TOLERANCE, HOLD_WINDOW, RELAX_N_SE
 from .full_interval import (
     BUDGET_DRAWS,
     full_from_draws,
@@ -93,21 +88,12 @@ __all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE", "HOLD_WIND
 
 #: Nodes whose log density falls this far below the best are no longer updated.
 PRUNE = 28.0
-#: Samples per window of the relaxation flag (the first and the last of a hold).
-HOLD_WINDOW = 20
-#: A hold: the tip within this share of the depth reached from its deepest point.
-HOLD_TOLERANCE = 0.01
-#: Standard errors by which the force must fall over a hold to be flagged.
-RELAX_N_SE = 5.0
 #: Samples kept from before the contact, the last ones (25 s at 800 Hz, 1 s at 20 kHz): the
 #: baseline, the contact onset and the fit read these (module docstring, "Memory").
 PRE_CONTACT_SAMPLES = 20_000
 #: Samples kept from the contact on (10 min at 800 Hz): later ones update the sums of the
 #: surface nodes there are, but the grid is no longer refined (flagged).
 MAX_CONTACT_SAMPLES = 500_000
-#: Most samples the model checks run on, thinned evenly beyond (their posterior-predictive
-#: check held 3.2 GB for 400,000 samples).
-CHECK_SAMPLES = 20_000
 
 
 @dataclass
@@ -440,33 +426,6 @@ class OnlineEstimator:
                               log_mass=node_log_mass(post.logp, g.z, self._phi),
                               complete=self._complete, prior=prior)
 
-    def _relaxation(self, z_surf: float) -> str:
-        """The relaxation flag of a hold (module docstring), '' when there is none."""
-        n, w = self._n, HOLD_WINDOW
-        z = self._z[self._contact:n]
-        if z.size < 2 * w:
-            return ""
-        depth = z_surf - float(z.min())
-        if not depth > 0:
-            return ""
-        near = z <= z.min() + HOLD_TOLERANCE * depth
-        first = int(np.argmax(near))
-        if n - self._contact - first < 2 * w or not near[first:].all():
-            return ""
-        f = self._f[self._contact + first:n]
-        a, b = float(f[:w].mean()), float(f[-w:].mean())
-        lag = min(max(self._base.lag1, 0.0), 0.9) if math.isfinite(self._base.lag1) else 0.0
-        se = self._base.sd * math.sqrt(2.0 / w * (1 + lag) / (1 - lag))
-        contact = a - self._base.level
-        drop = a - b
-        if not (drop > RELAX_N_SE * se and drop > 0.01 * contact):
-            return ""
-        held = float(self._t[n - 1] - self._t[self._contact + first])
-        return (f"relaxation: the force fell {100 * drop / contact:.1f} % of the contact force "
-                f"({drop / se:.0f} se) over the {held:.3g} s the tip held its depth: the "
-                "material is viscoelastic and this E is an apparent modulus of the speed "
-                "pressed (fit the recording with palpbayes fit --rheology power-law,sls)")
-
     def _make_state(self, limit: str = "",
                     on_stop: Callable[[OnlineState], None] | None = None) -> OnlineState:
         """The state after an update; ``limit`` the reason :meth:`limit` gave a new sample
@@ -507,7 +466,9 @@ class OnlineEstimator:
             flags.append("z_surf posterior at the lower end of the online surface prior")
         if not post.complete:
             flags.append("surface grid refinement cut short")
-        relax = self._relaxation(zs.median)
+        kept = slice(self._contact, self._n)
+        relax = adequacy.relaxation_flag(self._t[kept], self._z[kept], self._f[kept], self._base,
+                                         zs.median)
         if relax:
             flags.append(relax)
         # the force's unit, weighed once E is known to within a factor of about 1.5
@@ -590,21 +551,6 @@ class OnlineEstimator:
         """
         if self.state is None or self.state.E is None:
             return []
-        post = self.posterior()
-        draws = post.draws(np.random.default_rng(seed), 1000)
-        med = {k: float(np.median(v)) for k, v in draws.items()}
-        lo, hi = central(draws["E_star"], self.level)
-        lag1 = self._base.lag1 if self._base.reliable else None
         n = self._n
-        stride = -(-n // CHECK_SAMPLES)
-        rows = slice(None, n) if stride == 1 else np.arange(n - 1, -1, -stride)[::-1]
-        if lag1 is not None and stride > 1:
-            lag1 = lag1 ** stride  # AR(1): the correlation at lag k is phi^k
-        try:
-            return run_checks(self._z[rows], self._f[rows], self.model, z_surf=med["z_surf"],
-                              estar=med["E_star"], f0=med["F0"], sigma=med["sigma"],
-                              draws=draws, baseline_lag1=lag1, baseline="constant",
-                              z_ref=self._z_top, rng=seed,
-                              stat_rel_halfwidth=0.5 * (hi - lo) / med["E_star"])
-        except InputError:
-            return []
+        return adequacy.model_checks(self.posterior(), self._z[:n], self._f[:n], self.model,
+                                     self._base, self._z_top, self.level, seed)

@@ -12,6 +12,7 @@ import time
 import numpy as np
 import pytest
 
+import palpbayes.online.adequacy as adequacy
 import palpbayes.online.estimator as estimator
 from palpbayes.fitdata import ModelSpec
 from palpbayes.online import OnlineEstimator, StoppingRule
@@ -107,8 +108,9 @@ def test_a_press_within_the_bounds_is_what_it_was(press, monkeypatch):
 
     shipped = {k: run(tr, noise) for k, (tr, noise) in
                {"gaussian": (press, "gaussian"), "ar1": (ar1, "ar1")}.items()}
-    for name in ("PRE_CONTACT_SAMPLES", "MAX_CONTACT_SAMPLES", "CHECK_SAMPLES"):
+    for name in ("PRE_CONTACT_SAMPLES", "MAX_CONTACT_SAMPLES"):
         monkeypatch.setattr(estimator, name, 10**9)
+    monkeypatch.setattr(adequacy, "CHECK_SAMPLES", 10**9)
     for k, (tr, noise) in {"gaussian": (press, "gaussian"), "ar1": (ar1, "ar1")}.items():
         states, checks = run(tr, noise)
         assert len(states) == len(shipped[k][0]) and checks
@@ -124,19 +126,19 @@ def test_the_model_checks_see_at_most_check_samples(press, monkeypatch):
     the last sample, with the noise's lag-one correlation at the stride; a good press still
     passes them."""
     seen = {}
-    real = estimator.run_checks
+    real = adequacy.run_checks
 
     def spy(z, force, model, **kw):
         seen.update(n=len(z), last=float(z[-1]), lag1=kw["baseline_lag1"])
         return real(z, force, model, **kw)
 
-    monkeypatch.setattr(estimator, "run_checks", spy)
+    monkeypatch.setattr(adequacy, "run_checks", spy)
     est = OnlineEstimator(ModelSpec(TIP))
     _run(est, press.time, press.z, press.force, 100)
     full = est.model_checks()
     assert seen["n"] == press.n_points
     lag1 = seen["lag1"]
-    monkeypatch.setattr(estimator, "CHECK_SAMPLES", 1000)
+    monkeypatch.setattr(adequacy, "CHECK_SAMPLES", 1000)
     thinned = est.model_checks()
     assert seen["n"] == 960 and seen["last"] == press.z[-1]  # stride 4: 3840 / 4
     assert seen["lag1"] == pytest.approx(lag1**4)
