@@ -1,4 +1,10 @@
-"""Does the elastic model hold for the samples so far: the relaxation flag and the model checks.
+"""What an online estimate cannot vouch for: the flags of a state, and the model checks.
+
+:func:`state_flags` are the flags of an update's state (:attr:`OnlineState.flags
+<palpbayes.online.state.OnlineState.flags>`): the force's unit
+(:func:`palpbayes.forcescale.force_scale_flag`), a surface posterior at the lower end of its
+prior, a grid refinement cut short, a relaxing hold, samples not kept, the noise correlation at
+the end of its grid.
 
 The online estimate's model is elastic.  On a viscoelastic material the estimate is the
 apparent modulus of the speed and depth pressed so far (it grows with speed, ~speed^alpha for
@@ -12,9 +18,9 @@ below the first, the state carries a relaxation flag naming the viscoelastic fit
 :func:`model_checks` runs the offline fit's adequacy checks (:mod:`palpbayes.checks`) on the
 samples kept, at most :data:`CHECK_SAMPLES` of them, thinned evenly beyond (the lag-one
 correlation of the noise taken to the stride's power): their posterior-predictive check holds
-~8 kB per sample.  The estimator that asks for both is
-:class:`palpbayes.online.estimator.OnlineEstimator` (its docstring, "Memory": the samples
-kept).
+~8 kB per sample.  The estimator that asks for them is
+:class:`palpbayes.online.estimator.OnlineEstimator`; the samples it keeps,
+:mod:`palpbayes.online.samples`.
 """
 
 from __future__ import annotations
@@ -25,13 +31,16 @@ import numpy as np
 
 from ..baseline import Baseline
 from ..bayes.exact import ExactPosterior
+from ..bayes.mixture import MixtureSummary
 from ..checks import CheckResult, run_checks
 from ..errors import InputError
 from ..fitdata import ModelSpec
+from ..forcescale import force_scale_flag
 from ..intervals import central
+from .samples import KeptSamples
 
-__all__ = ["HOLD_WINDOW", "HOLD_TOLERANCE", "RELAX_N_SE", "CHECK_SAMPLES", "relaxation_flag",
-           "model_checks"]
+__all__ = ["HOLD_WINDOW", "HOLD_TOLERANCE", "RELAX_N_SE", "CHECK_SAMPLES", "state_flags",
+           "relaxation_flag", "model_checks"]
 
 #: Samples per window of the relaxation flag (the first and the last of a hold).
 HOLD_WINDOW = 20
@@ -42,6 +51,42 @@ RELAX_N_SE = 5.0
 #: Most samples the model checks run on, thinned evenly beyond (their posterior-predictive
 #: check held 3.2 GB for 400,000 samples).
 CHECK_SAMPLES = 20_000
+
+
+def state_flags(post: ExactPosterior, E: MixtureSummary, zs: MixtureSummary, model: ModelSpec,
+                base: Baseline, noise_pp: float | None, kept: KeptSamples, contact: int
+                ) -> list[str]:
+    """The flags of an update's state (module docstring), the force's unit first.
+
+    ``post`` is the posterior, ``E`` [Pa] and ``zs`` [m] its summaries of E and the surface
+    height; ``base`` the pre-contact baseline, ``noise_pp`` [N] the sensor's noise as given
+    (None: the baseline's); ``kept`` the samples kept, ``contact`` the index of the first in
+    contact among them."""
+    flags = []
+    z_lo, z_top = post.prior.z_bounds
+    if zs.lo - z_lo < 0.01 * (z_top - z_lo):
+        flags.append("z_surf posterior at the lower end of the online surface prior")
+    if not post.complete:
+        flags.append("surface grid refinement cut short")
+    t, z, f = kept.arrays()
+    relax = relaxation_flag(t[contact:], z[contact:], f[contact:], base, zs.median)
+    if relax:
+        flags.append(relax)
+    # the force's unit, weighed once E is known to within a factor of about 1.5
+    scale = force_scale_flag(model.tip, zs.median - float(z.min()), E.median,
+                             base.noise_pp if base.reliable else None,
+                             noise_pp) if E.rel_half_width < 0.5 else None
+    if scale:
+        flags.insert(0, scale)
+    unkept = kept.unkept_flag()
+    if unkept:
+        flags.append(unkept)
+    if post.phi.size > 1:
+        w_phi = np.exp(post.log_mass - post.log_mass.max()).sum(axis=0)
+        if w_phi[[0, -1]].max() > 0.5 * w_phi.sum():
+            flags.append("noise correlation phi at the end of its grid: the residuals wander "
+                         "like drift, or the noise is correlated beyond the prior's ±0.99")
+    return flags
 
 
 def relaxation_flag(t: np.ndarray, z: np.ndarray, f: np.ndarray, base: Baseline,

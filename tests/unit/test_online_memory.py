@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import palpbayes.online.adequacy as adequacy
-import palpbayes.online.estimator as estimator
+import palpbayes.online.samples as samples
 from palpbayes.fitdata import ModelSpec
 from palpbayes.online import OnlineEstimator, StoppingRule
 from palpbayes.online.stream import SampleParser, batches
@@ -50,7 +50,7 @@ def _run(est, t, z, f, chunk: int):
 
 def _stored(est) -> int:
     """The length of the estimator's sample arrays (what it holds, with their spare room)."""
-    return max(a.size for a in (est._t, est._z, est._f))
+    return max(a.size for a in (est._kept.t, est._kept.z, est._kept.f))
 
 
 def _same(a, b) -> bool:
@@ -79,9 +79,9 @@ def test_a_long_wait_before_the_press_keeps_a_bounded_window(press):
         s = est.update(t[i:i + chunk], z[i:i + chunk], f[i:i + chunk])
         biggest = max(biggest, _stored(est), est.n_kept)
         if not s.in_contact:
-            assert est.n_kept <= estimator.PRE_CONTACT_SAMPLES + chunk
-    assert biggest <= 2 * (estimator.PRE_CONTACT_SAMPLES + chunk) < 200_000
-    assert est.n_kept < estimator.PRE_CONTACT_SAMPLES + chunk + press.n_points
+            assert est.n_kept <= samples.PRE_CONTACT_SAMPLES + chunk
+    assert biggest <= 2 * (samples.PRE_CONTACT_SAMPLES + chunk) < 200_000
+    assert est.n_kept < samples.PRE_CONTACT_SAMPLES + chunk + press.n_points
     assert s.n == t.size and s.E.rel_half_width < 0.01
     assert s.E.lo < 1.25e5 < s.E.hi
     # the recording that starts with what was kept, fed at the same chunk ends
@@ -109,7 +109,7 @@ def test_a_press_within_the_bounds_is_what_it_was(press, monkeypatch):
     shipped = {k: run(tr, noise) for k, (tr, noise) in
                {"gaussian": (press, "gaussian"), "ar1": (ar1, "ar1")}.items()}
     for name in ("PRE_CONTACT_SAMPLES", "MAX_CONTACT_SAMPLES"):
-        monkeypatch.setattr(estimator, name, 10**9)
+        monkeypatch.setattr(samples, name, 10**9)
     monkeypatch.setattr(adequacy, "CHECK_SAMPLES", 10**9)
     for k, (tr, noise) in {"gaussian": (press, "gaussian"), "ar1": (ar1, "ar1")}.items():
         states, checks = run(tr, noise)
@@ -148,7 +148,7 @@ def test_the_model_checks_see_at_most_check_samples(press, monkeypatch):
 def test_samples_beyond_the_contact_cap_update_the_estimate_unkept(press, monkeypatch):
     """Past MAX_CONTACT_SAMPLES in contact the samples still update the nodes' sums (E goes
     on narrowing) but are not kept; the grid is no longer refined, and the state says so."""
-    monkeypatch.setattr(estimator, "MAX_CONTACT_SAMPLES", 1000)
+    monkeypatch.setattr(samples, "MAX_CONTACT_SAMPLES", 1000)
     est = OnlineEstimator(ModelSpec(TIP))
     states = _run(est, press.time, press.z, press.force, 100)
     contact = next(s for s in states if s.in_contact)
