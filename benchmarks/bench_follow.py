@@ -140,7 +140,7 @@ def stream(lines: list[str], rule: list[str], chunk: int, fast: bool, transport:
 def update_alone(tr, chunk: int) -> np.ndarray:
     """[s] The estimator's own update time per chunk of the whole trace in contact, in this
     process (as follow runs it: the full interval from 1,000 draws)."""
-    from palpbayes.online.estimator import SHOWN_BUDGET_DRAWS
+    from palpbayes.online.full_interval import SHOWN_BUDGET_DRAWS
 
     est = OnlineEstimator(ModelSpec(tr.tip, nu=0.3), rule=StoppingRule(max_force=50.0),
                           total=True, budget_draws=SHOWN_BUDGET_DRAWS)

@@ -250,14 +250,10 @@ class NextPresses:
     posterior: SearchPosterior | None = field(default=None, repr=False)
 
     def table(self) -> pd.DataFrame:
-        """The answer as one table, the file ``palpbayes next DIR --out FILE`` writes: one row
-        per next press (``order``, ``x_m``, ``y_m`` [m], ``score``, ``criterion``), or one
-        row with those empty when the search stops, each row carrying ``event`` ("next" or
-        "done"), ``decision``, ``reason`` and the posterior's :attr:`summary` (``n``,
-        ``p_lump``, the centre ``x_m_centre``/``y_m_centre`` and its radius [m], ...).
-
-        (``summary`` is the posterior's numbers as a dict, so the table has its own name.)
-        """
+        """The file of ``palpbayes next DIR --out FILE``: a row per next press (``order``,
+        ``x_m``, ``y_m`` [m], ``score``, ``criterion``; one empty row when the search stops),
+        each with ``event``, ``decision``, ``reason`` and :attr:`summary` (its centre as
+        ``x_m_centre``, ``y_m_centre``)."""
         head = {"event": "done" if self.stop else "next", "decision": self.decision,
                 "reason": self.reason}
         post = {(f"{k}_centre" if k in ("x_m", "y_m") else k): v

@@ -24,7 +24,7 @@ from ..contact import Tip
 from ..errors import InputError
 from ..fitdata import ModelSpec
 from ..online import TARGET_ON, OnlineEstimator, StoppingRule
-from ..online.estimator import SHOWN_BUDGET_DRAWS
+from ..online.full_interval import SHOWN_BUDGET_DRAWS
 from .options import add_nu_option
 
 __all__ = ["parse_fraction", "add_online_options", "rule_from_args", "model_from_args",
@@ -95,7 +95,7 @@ def request_from_args(args: argparse.Namespace) -> ReplayRequest:
 def estimator_from_args(args: argparse.Namespace, tip: Tip,
                         rule: StoppingRule) -> OnlineEstimator:
     """The online estimator ``follow`` runs for ``tip`` and ``rule``, with the full interval
-    (E with the budget) at every update: from :data:`~palpbayes.online.estimator.
+    (E with the budget) at every update: from :data:`~palpbayes.online.full_interval.
     SHOWN_BUDGET_DRAWS` draws where it is only shown, from all of them where a target on it
     may fire."""
     return OnlineEstimator(model_from_args(args, tip), noise=args.noise,

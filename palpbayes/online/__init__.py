@@ -7,9 +7,11 @@
 ...         break
 
 :mod:`.estimator` holds the estimator, :mod:`.state` what an update says and the stopping rule
-(re-exported by :mod:`.estimator`), :mod:`.recorded` replays a recorded trace,
-:mod:`.stream` turns live lines (CSV or JSON) into chunks and :mod:`.tcp` a TCP connection into
-lines (``palpbayes follow``; import them from their modules).
+(re-exported by :mod:`.estimator`), :mod:`.samples` the samples it keeps, :mod:`.surface` its
+posterior over the surface height, :mod:`.full_interval` E with the uncertainty budget,
+:mod:`.adequacy` a state's flags and the model checks, :mod:`.recorded` replays a recorded
+trace, :mod:`.stream` turns live lines (CSV or JSON) into chunks and :mod:`.tcp` a TCP
+connection into lines (``palpbayes follow``; import them from their modules).
 """
 
 from . import estimator as _estimator

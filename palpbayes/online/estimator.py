@@ -15,111 +15,59 @@ not at the end of the chunk.  The posterior is that of the exact engine
   yet; a posterior that reaches the lower end is flagged.  Every loading sample is fitted (no
   fit window), for every tip.
 
-Updates are incremental: each surface node keeps the running cross-product sums of
-:class:`palpbayes.bayes.conjugate.Gram`, so a chunk of k samples costs (nodes × k) shape
-evaluations, plus n per node the refinement adds (the posterior narrows as the tip goes deeper).
-Nodes more than :data:`PRUNE` below the best log density stop being updated.
+Updates are incremental: each surface node keeps running sums, and the grid of nodes is
+refined and pruned as the posterior narrows (:mod:`palpbayes.online.surface`).
 
-The model is elastic.  On a viscoelastic material the estimate is the apparent modulus of the
-speed and depth pressed so far (it grows with speed, ~speed^alpha for a power law), and a hold
-shows what the model leaves out: when the tip has held its deepest point (within
-:data:`HOLD_TOLERANCE` of the depth) for two windows of :data:`HOLD_WINDOW` samples and the
-force of the last window lies more than :data:`RELAX_N_SE` standard errors (AR(1) long-run
-factor of the baseline's lag-one correlation) and 1 % of the contact force below the first,
-the state carries a relaxation flag naming the viscoelastic fit
-(``palpbayes fit --rheology``).
+The model is elastic: a hold that relaxes flags the state, naming the viscoelastic fit, and
+:meth:`OnlineEstimator.model_checks` runs the offline fit's adequacy checks on the samples so
+far (:mod:`palpbayes.online.adequacy`).
 
-**Two intervals.**  ``OnlineState.E`` is statistical (the data's noise and surface, what the
-offline fit calls ``E_stat``); ``OnlineState.E_total`` adds the uncertainty budget
-(:mod:`palpbayes.bayes.budget`: nu ± 0.05, tip radius, force gain, compliance, a layer's
-thickness), the full interval of the offline summary row (``E_lo_pa``/``E_hi_pa``, without the
-model-form envelope of a failed check): the budget draws' central interval widened to hold the
-statistical one, around the statistical median.  The budget does not shrink as the tip goes
-deeper, so the full interval has a floor (``OnlineState.floor``, the budget's width at an
-exact E*: ~±3.5 % for a half-space at nu 0.3, ~±7 % for a bonded layer at nu 0.45).  A
-:class:`StoppingRule` tests its target on either (``target_on``); a full target below the
-floor cannot fire, and the state says so.  :meth:`OnlineEstimator.model_checks` runs the
-offline fit's adequacy checks (:mod:`palpbayes.checks`) on the samples so far.
+**Two intervals.**  ``OnlineState.E`` is statistical; ``OnlineState.E_total`` adds the
+uncertainty budget, the full interval of the offline summary row, with its floor
+(:mod:`palpbayes.online.full_interval`).
 
-**Memory.**  The sums are per node, but a node the refinement adds needs every sample fitted,
-and so do the relaxation flag and the model checks: the samples are kept, within bounds, so
-that a long stream (an hour at 800 Hz is 2.9 million samples) does not grow without end.
-Before the contact the estimator keeps the last :data:`PRE_CONTACT_SAMPLES` (with the chunk
-being added): the baseline, the contact onset and the fit read those, the same as reading a
-recording that starts there.  From the contact on it keeps :data:`MAX_CONTACT_SAMPLES`; the
-samples after them still update the sums of the surface nodes there are (exactly), but the
-grid is no longer refined and the relaxation flag sees the samples kept, which the state
-flags.  The model checks run on at most :data:`CHECK_SAMPLES` of the samples kept, thinned
-evenly beyond (the lag-one correlation of the noise taken to the stride's power): their
-posterior-predictive check holds ~8 kB per sample.  A press at the paper's 800 Hz (~4,000
-samples) or an AFM approach (~2,000-12,000) is within every bound, its estimates, stops and
-checks those of an estimator that keeps everything.
+**Memory.**  The samples are kept within bounds, however long the stream: the last
+:data:`PRE_CONTACT_SAMPLES` before the contact and :data:`MAX_CONTACT_SAMPLES` from it on
+(:mod:`palpbayes.online.samples`); the model checks run on at most :data:`CHECK_SAMPLES` of
+them.  A press within the bounds is estimated, stopped and checked as by an estimator that
+keeps everything.
 """
 
 from __future__ import annotations
 
-import copy
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from types import SimpleNamespace
 
 import numpy as np
 
 from ..baseline import MIN_BASELINE_POINTS, estimate_baseline
-from ..bayes.budget import BudgetSpec, propagate
-from ..bayes.conjugate import Gram, fixed_columns, node_posterior
-from ..bayes.exact import (
-    COARSE_NODES,
-    ExactPosterior,
-    log_marginal_phi,
-    node_log_mass,
-    phi_grid,
-    refine_grid,
-)
+from ..bayes.budget import BudgetSpec
+from ..bayes.exact import ExactPosterior, phi_grid
 from ..bayes.mixture import MixtureSummary
 from ..bayes.priors import PriorSpec, TracePrior, param_names
-from ..checks import CheckResult, run_checks
-from ..contact import youngs_factor
+from ..checks import CheckResult
 from ..errors import InputError
 from ..fitdata import ModelSpec
-from ..forcescale import force_scale_flag
-from ..intervals import LEVEL, central, hull
+from ..intervals import LEVEL
 from ..sensor_noise import sigma_from_pp
+from . import adequacy
+from .adequacy import CHECK_SAMPLES, HOLD_TOLERANCE, HOLD_WINDOW, RELAX_N_SE
+from .full_interval import (
+    BUDGET_DRAWS,
+    full_from_draws,
+    full_interval,
+    propagate_draws,
+    statistical_E,
+    warm_up_budget,
+)
+from .samples import MAX_CONTACT_SAMPLES, PRE_CONTACT_SAMPLES, KeptSamples, checked_samples
 from .state import TARGET_ON, OnlineState, StoppingRule, check_noise_options
+from .surface import PRUNE, SurfaceNodes
 
 __all__ = ["StoppingRule", "OnlineState", "OnlineEstimator", "PRUNE", "HOLD_WINDOW",
            "HOLD_TOLERANCE", "RELAX_N_SE", "TARGET_ON", "BUDGET_DRAWS", "PRE_CONTACT_SAMPLES",
            "MAX_CONTACT_SAMPLES", "CHECK_SAMPLES", "check_noise_options"]
-
-#: Nodes whose log density falls this far below the best are no longer updated.
-PRUNE = 28.0
-#: Samples per window of the relaxation flag (the first and the last of a hold).
-HOLD_WINDOW = 20
-#: A hold: the tip within this share of the depth reached from its deepest point.
-HOLD_TOLERANCE = 0.01
-#: Standard errors by which the force must fall over a hold to be flagged.
-RELAX_N_SE = 5.0
-#: Posterior draws (and budget input draws) behind the full interval of an update.
-BUDGET_DRAWS = 4000
-#: Samples kept from before the contact, the last ones (25 s at 800 Hz, 1 s at 20 kHz): the
-#: baseline, the contact onset and the fit read these (module docstring, "Memory").
-PRE_CONTACT_SAMPLES = 20_000
-#: Samples kept from the contact on (10 min at 800 Hz): later ones update the sums of the
-#: surface nodes there are, but the grid is no longer refined (flagged).
-MAX_CONTACT_SAMPLES = 500_000
-#: Most samples the model checks run on, thinned evenly beyond (their posterior-predictive
-#: check held 3.2 GB for 400,000 samples).
-CHECK_SAMPLES = 20_000
-#: Fewer draws for an update whose full interval is only shown (``follow``'s lines): the draws
-#: cost ~5 ms per 1,000 (:meth:`palpbayes.bayes.exact.ExactPosterior.draws`); an update where
-#: a target on the full interval may fire (the statistical interval is within it) takes
-#: :data:`BUDGET_DRAWS`.
-SHOWN_BUDGET_DRAWS = 1000
-
-
-def _scaled(s: MixtureSummary, f: float) -> MixtureSummary:
-    return MixtureSummary(s.mean * f, s.sd * f, s.median * f, s.lo * f, s.hi * f, s.level)
 
 
 @dataclass
@@ -151,7 +99,8 @@ class OnlineEstimator:
         target is on the full interval.
     budget_draws
         Draws behind the full interval of an update that only shows it (default
-        :data:`BUDGET_DRAWS`; ``follow``: :data:`SHOWN_BUDGET_DRAWS`, ~4 times faster); an
+        :data:`BUDGET_DRAWS`; ``follow``:
+        :data:`~palpbayes.online.full_interval.SHOWN_BUDGET_DRAWS`, ~4 times faster); an
         update where a target on the full interval may fire (the statistical interval within
         the target) always takes :data:`BUDGET_DRAWS`.
     budget
@@ -185,18 +134,12 @@ class OnlineEstimator:
                              "number of samples >= 1")
         if not 0 < self.level < 1:
             raise InputError(f"online estimation: level = {self.level!r} must lie in (0, 1)")
-        # the samples kept (module docstring, "Memory"): the first _n of _t, _z, _f; the
-        # samples seen, those dropped before the contact, and the last one (t, z, F)
-        self._t = np.empty(0)
-        self._z = np.empty(0)
-        self._f = np.empty(0)
-        self._n = 0
-        self._seen = self._dropped = 0
+        # the samples kept (module docstring, "Memory") and the last one (t, z, F)
+        self._kept = KeptSamples()
         self._last = (math.nan, math.nan, math.nan)
         self._peak = math.nan
         self._contact: int | None = None
-        self._gram: Gram | None = None
-        self._active: np.ndarray | None = None
+        self._nodes: SurfaceNodes | None = None  # from the contact on
         self._phi = phi_grid(self.priors.phi_bounds) if self.noise == "ar1" else np.zeros(1)
         self.state: OnlineState | None = None
         # what limit() judges against: the last update's state, or the running update's as
@@ -211,56 +154,12 @@ class OnlineEstimator:
         """[N] Pre-contact force level read at contact (NaN before contact)."""
         return float(self._base.level) if self._contact is not None else float("nan")
 
-    # ------------------------------------------------------------------ data in
-    @staticmethod
-    def _arrays(t, z, f) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        t, z, f = (np.atleast_1d(np.asarray(a, dtype=float)) for a in (t, z, f))
-        if not (t.shape == z.shape == f.shape and t.ndim == 1):
-            raise InputError(f"update: t, z and F must be 1-D of one length, got {t.shape}, "
-                             f"{z.shape}, {f.shape}")
-        if not (np.isfinite(t).all() and np.isfinite(z).all() and np.isfinite(f).all()):
-            raise InputError("update: t, z and F must be finite (drop NaN samples first)")
-        return t, z, f
-
     @property
     def n_kept(self) -> int:
         """Samples kept in memory (module docstring, "Memory"): at most
         :data:`PRE_CONTACT_SAMPLES` + a chunk before the contact, and
         :data:`MAX_CONTACT_SAMPLES` more from it on."""
-        return self._n
-
-    @property
-    def _unkept(self) -> int:
-        """Samples after the contact beyond :data:`MAX_CONTACT_SAMPLES`, not kept."""
-        return self._seen - self._dropped - self._n
-
-    def _keep(self, t: np.ndarray, z: np.ndarray, f: np.ndarray) -> None:
-        """Keep the new samples within the bounds of the module docstring ("Memory"): before
-        the contact, all of them and the last :data:`PRE_CONTACT_SAMPLES` of the older ones;
-        from the contact on, up to :data:`MAX_CONTACT_SAMPLES` samples."""
-        if self._contact is None and self._n > PRE_CONTACT_SAMPLES:
-            drop = self._n - PRE_CONTACT_SAMPLES
-            for name in ("_t", "_z", "_f"):
-                a = getattr(self, name)
-                a[:PRE_CONTACT_SAMPLES] = a[drop:self._n]
-            self._n = PRE_CONTACT_SAMPLES
-            self._dropped += drop
-        elif self._contact is not None:
-            room = max(self._contact + MAX_CONTACT_SAMPLES - self._n, 0)
-            t, z, f = t[:room], z[:room], f[:room]
-        self._append(t, z, f)
-
-    def _append(self, t: np.ndarray, z: np.ndarray, f: np.ndarray) -> None:
-        need = self._n + t.size
-        if need > self._t.size:
-            cap = max(need, 2 * self._t.size, 1024)
-            for name in ("_t", "_z", "_f"):
-                old = getattr(self, name)
-                new = np.empty(cap)
-                new[: self._n] = old[: self._n]
-                setattr(self, name, new)
-        self._t[self._n:need], self._z[self._n:need], self._f[self._n:need] = t, z, f
-        self._n = need
+        return self._kept.n
 
     def limit(self, z, force) -> tuple[int, str] | None:
         """The first of these new samples (tip heights [m], forces [N]) at which the rule's
@@ -285,14 +184,8 @@ class OnlineEstimator:
                 or (rule.max_force is None and rule.max_depth is None)):
             return None
         z, force = np.atleast_1d(np.asarray(z, dtype=float)), np.asarray(force, dtype=float)
-        hits = {}
-        if rule.max_force is not None:
-            hits["max force"] = force - self._base.level >= rule.max_force
-        if rule.max_depth is not None and s.z_surf is not None:
-            hits["max depth"] = s.z_surf.median - z >= rule.max_depth
-        first = [(int(np.argmax(h)), rank, why)
-                 for rank, (why, h) in enumerate(hits.items()) if h.any()]
-        return min(first)[::2] if first else None
+        return rule.first_limit(z, force, self._base.level,
+                                None if s.z_surf is None else s.z_surf.median)
 
     @property
     def limit_state(self) -> OnlineState | None:
@@ -327,22 +220,22 @@ class OnlineEstimator:
         computed, so with ``E_total`` None (the returned state has it); for a target on the
         full interval, with the returned state.
         """
-        t, z, force = self._arrays(t, z, force)
+        t, z, force = checked_samples(t, z, force)
         hit = self.limit(z, force)
         self._updates += 1
-        self._seen += t.size
         if t.size:
             self._last = (float(t[-1]), float(z[-1]), float(force[-1]))
         contact = self._contact is not None
-        self._keep(t, z, force)
+        self._kept.add(t, z, force, self._contact)
         if not contact:
             self._detect()
         elif t.size:  # every sample updates the sums, kept or not
             y = force - self._base.level
-            self._gram_active().extend(z, fixed_columns(y, None), self.model)
+            self._nodes.extend(z, y)
             self._peak = max(self._peak, float(y.max()))
         if self._contact is not None:
-            self._refresh()
+            _, z_kept, f_kept = self._kept.arrays()
+            self._nodes.refresh(z_kept, f_kept, frozen=bool(self._kept.unkept))
         self.state = self._make_state("" if hit is None else hit[1], on_stop)
         self._publish(self.state)
         return self.state
@@ -355,128 +248,44 @@ class OnlineEstimator:
 
     # ------------------------------------------------------------------ contact
     def _detect(self) -> None:
-        n, k = self._n, self.persist
+        _, z, f = self._kept.arrays()
+        n, k = z.size, self.persist
         if n < MIN_BASELINE_POINTS + k:
             return
-        base = estimate_baseline(self._z[:n], self._f[:n])
+        base = estimate_baseline(z, f)
         if not base.reliable:
             return
         f_unc = self.f_unc if self.f_unc is not None else (
             self.noise_pp if self.noise_pp is not None else base.noise_pp)
-        above = self._f[:n] - base.level > f_unc
+        above = f - base.level > f_unc
         if not above[-k:].all():
             return
-        inside = np.flatnonzero(np.abs(self._f[:n] - base.level) <= f_unc)
+        inside = np.flatnonzero(np.abs(f - base.level) <= f_unc)
         if inside.size < MIN_BASELINE_POINTS:
             raise InputError("online estimation needs an approach: fewer than "
                              f"{MIN_BASELINE_POINTS} samples before contact")
         self._contact = int(inside[-1]) + 1
         self._base, self._f_unc = base, float(f_unc)
-        self._peak = float(np.max(self._f[:n] - base.level))
+        self._peak = float(np.max(f - base.level))
         pp = self.noise_pp if self.noise_pp is not None else base.noise_pp
         self._sigma_c = sigma_from_pp(pp)
-        z_c = float(self._z[self._contact - 1])
-        self._z_top = float(self._z[:n].max())
-        self._z_lo = z_c - (self._z_top - z_c)
-        self._weights = np.array([(self._sigma_c / self._f_unc) ** 2])
-        nodes = np.linspace(self._z_lo, self._z_top, COARSE_NODES)
-        self._skeleton = nodes
-        self._gram = self._new_gram(nodes)
-        self._active = np.arange(nodes.size)
-
-    def _columns(self, rows: slice) -> np.ndarray:
-        return fixed_columns(self._f[rows] - self._base.level, None)
-
-    def _new_gram(self, nodes: np.ndarray) -> Gram:
-        all_rows = slice(0, self._n)
-        return Gram.empty(nodes, 2, self.noise == "ar1").extend(
-            self._z[all_rows], self._columns(all_rows), self.model)
-
-    def _gram_active(self) -> Gram:
-        if self._active.size != self._gram.z.size:
-            self._gram = self._gram.subset(self._active)
-            self._active = np.arange(self._gram.z.size)
-        return self._gram
-
-    # ------------------------------------------------------------------ posterior
-    def _node_posterior(self, g: Gram):
-        return node_posterior(g, self._phi, self._weights, np.zeros(1))
-
-    def _logp_nodes(self, g: Gram) -> np.ndarray:
-        return log_marginal_phi(self._node_posterior(g).logp, self._phi)
-
-    def _refresh(self) -> None:
-        added: list[Gram] = []
-
-        def evaluate(nodes: np.ndarray) -> np.ndarray:
-            g = self._new_gram(nodes)
-            added.append(g)
-            return self._logp_nodes(g)
-
-        g = self._gram_active()
-        post = self._node_posterior(g)
-        lp = log_marginal_phi(post.logp, self._phi)
-        # a node added now would miss the samples not kept: none is added once there are some
-        frozen = {"max_nodes": g.z.size} if self._unkept else {}
-        _, _, self._complete = refine_grid(self._z_lo, self._z_top, evaluate,
-                                           start=(g.z, lp), **frozen)
-        for other in added:
-            g = g.concat(other)
-        self._gram = g
-        if added:
-            post = self._node_posterior(g)
-        self._post = post
-        lp = log_marginal_phi(post.logp, self._phi)
-        best = np.max(lp)
-        # the first coarse nodes always stay, so refinement can reach any part of the range
-        keep = np.isin(g.z, self._skeleton)
-        if np.isfinite(best):
-            keep |= lp > best - PRUNE
-        self._active = np.flatnonzero(keep)
+        z_c = float(z[self._contact - 1])
+        z_top = float(z.max())
+        weights = np.array([(self._sigma_c / self._f_unc) ** 2])
+        self._nodes = SurfaceNodes(self.model, self.noise, self._phi, weights, base.level,
+                                   z_c - (z_top - z_c), z_top, z, f)
 
     def posterior(self) -> ExactPosterior:
         """The current posterior as an :class:`ExactPosterior` (draws, summaries)."""
-        if self._gram is None:
+        nodes = self._nodes
+        if nodes is None:
             raise InputError("no contact yet: no posterior of E")
-        g = self._gram
-        post = copy.copy(self._post)
-        post.beta = post.beta.copy()
-        post.beta[..., 1] += self._base.level
         prior = TracePrior(spec=self.priors, names=tuple(param_names(self.noise)),
                            noise=self.noise, baseline="constant",
-                           z_bounds=(self._z_lo, self._z_top), sigma_center=self._sigma_c,
+                           z_bounds=(nodes.z_lo, nodes.z_top), sigma_center=self._sigma_c,
                            f0_center=self._base.level, f0_sd=self._f_unc, f1_sd=np.nan,
-                           z_ref=self._z_top, f_unc=self._f_unc, data=None)
-        return ExactPosterior(z=g.z, phi=self._phi, post=post,
-                              log_mass=node_log_mass(post.logp, g.z, self._phi),
-                              complete=self._complete, prior=prior)
-
-    def _relaxation(self, z_surf: float) -> str:
-        """The relaxation flag of a hold (module docstring), '' when there is none."""
-        n, w = self._n, HOLD_WINDOW
-        z = self._z[self._contact:n]
-        if z.size < 2 * w:
-            return ""
-        depth = z_surf - float(z.min())
-        if not depth > 0:
-            return ""
-        near = z <= z.min() + HOLD_TOLERANCE * depth
-        first = int(np.argmax(near))
-        if n - self._contact - first < 2 * w or not near[first:].all():
-            return ""
-        f = self._f[self._contact + first:n]
-        a, b = float(f[:w].mean()), float(f[-w:].mean())
-        lag = min(max(self._base.lag1, 0.0), 0.9) if math.isfinite(self._base.lag1) else 0.0
-        se = self._base.sd * math.sqrt(2.0 / w * (1 + lag) / (1 - lag))
-        contact = a - self._base.level
-        drop = a - b
-        if not (drop > RELAX_N_SE * se and drop > 0.01 * contact):
-            return ""
-        held = float(self._t[n - 1] - self._t[self._contact + first])
-        return (f"relaxation: the force fell {100 * drop / contact:.1f} % of the contact force "
-                f"({drop / se:.0f} se) over the {held:.3g} s the tip held its depth: the "
-                "material is viscoelastic and this E is an apparent modulus of the speed "
-                "pressed (fit the recording with palpbayes fit --rheology power-law,sls)")
+                           z_ref=nodes.z_top, f_unc=self._f_unc, data=None)
+        return nodes.posterior(prior)
 
     def _make_state(self, limit: str = "",
                     on_stop: Callable[[OnlineState], None] | None = None) -> OnlineState:
@@ -495,7 +304,7 @@ class OnlineEstimator:
         return state
 
     def _state(self, limit: str, say: Callable[[OnlineState], None]) -> OnlineState:
-        n = self._seen
+        n = self._kept.seen
         if n == 0:  # an empty first chunk
             return OnlineState(0, float("nan"), float("nan"), False, 0, 0.0, 0.0, None, None, "")
         t, z, last_force = self._last
@@ -503,42 +312,17 @@ class OnlineEstimator:
             return OnlineState(n, t, z, False, 0, 0.0, 0.0, None, None, "")
         peak = self._peak
         force = last_force - float(self._base.level)
-        n_contact = n - self._dropped - self._contact
-        if not np.isfinite(self._post.logp).any():  # no surface has enough samples in contact
+        n_contact = n - self._kept.dropped - self._contact
+        if not np.isfinite(self._nodes.post.logp).any():  # no surface has enough samples in contact
             early = OnlineState(n, t, z, True, n_contact, 0.0, peak, None, None, "",
                                 ("no surface height has enough samples in contact yet",),
                                 force=force)
             return replace(early, stop=limit or self.rule.reason(early))
         post = self.posterior()
-        estar = post.estar_summary(self.level)
+        E = statistical_E(post, self.model.nu, self.level)
         zs = post.z_summary(self.level)
-        E = _scaled(estar, youngs_factor(self.model.nu))
-        flags = []
-        span = self._z_top - self._z_lo
-        if zs.lo - self._z_lo < 0.01 * span:
-            flags.append("z_surf posterior at the lower end of the online surface prior")
-        if not post.complete:
-            flags.append("surface grid refinement cut short")
-        relax = self._relaxation(zs.median)
-        if relax:
-            flags.append(relax)
-        # the force's unit, weighed once E is known to within a factor of about 1.5
-        scale = force_scale_flag(self.model.tip, zs.median - float(self._z[:self._n].min()),
-                                 E.median, self._base.noise_pp if self._base.reliable else None,
-                                 self.noise_pp) if E.rel_half_width < 0.5 else None
-        if scale:
-            flags.insert(0, scale)
-        if self._unkept:
-            flags.append(f"more than {MAX_CONTACT_SAMPLES:,} samples in contact: the later "
-                         f"{self._unkept:,} update the estimate but are not kept, so the "
-                         "surface grid is no longer refined and the relaxation flag and the "
-                         "model checks see the first ones (send the approach and the "
-                         "indentation only)")
-        if self._phi.size > 1:
-            w_phi = np.exp(post.log_mass - post.log_mass.max()).sum(axis=0)
-            if w_phi[[0, -1]].max() > 0.5 * w_phi.sum():
-                flags.append("noise correlation phi at the end of its grid: the residuals wander "
-                             "like drift, or the noise is correlated beyond the prior's ±0.99")
+        flags = adequacy.state_flags(post, E, zs, self.model, self._base, self.noise_pp,
+                                     self._kept, self._contact)
         rule = self.rule
         partial = OnlineState(n, t, z, True, n_contact, max(zs.median - z, 0.0),
                               peak, E, zs, "", tuple(flags), force=force)
@@ -564,57 +348,28 @@ class OnlineEstimator:
         full = replace(partial, flags=tuple(flags), E_total=total, floor=floor)
         return replace(full, stop=early or rule.reason(full))
 
-    def _summary(self, x: np.ndarray) -> MixtureSummary:
-        lo, hi = central(x, self.level)
-        return MixtureSummary(float(x.mean()), float(x.std()), float(np.median(x)), lo, hi,
-                              self.level)
-
-    def _propagate(self, post: ExactPosterior, budget: BudgetSpec | None, n_draws: int,
-                   seed: int) -> tuple[np.ndarray, np.ndarray]:
-        """Draws of E* [Pa] and of E with the budget [Pa], one budget input draw each."""
-        rng = np.random.default_rng(seed)
-        d = post.draws(rng, n_draws)
-        seen = SimpleNamespace(model=self.model, z=self._z[:self._n])  # what propagate reads
-        bud = propagate(d["E_star"], seen, float(np.median(d["z_surf"])),
-                        budget or self.budget or BudgetSpec(), rng)
-        return d["E_star"], bud.E
-
-    def _full(self, stat: MixtureSummary, E: np.ndarray) -> MixtureSummary:
-        """The full interval as the offline fit reports it
-        (:meth:`palpbayes.bayes.result.BayesResult.intervals`): the central interval of the
-        budget's draws ``E`` [Pa] widened where needed to hold the statistical one, around
-        the statistical median (the estimate at the stated inputs: the budget widens the
-        interval and does not move it)."""
-        b = self._summary(E)
-        return MixtureSummary(b.mean, b.sd, stat.median,
-                              *hull((b.lo, b.hi), (stat.lo, stat.hi)), self.level)
-
     def _total(self, post: ExactPosterior, stat: MixtureSummary, n_draws: int = BUDGET_DRAWS
                ) -> tuple[MixtureSummary, float]:
-        """The full interval of E [Pa] and the budget's floor [-] (the relative half-width
-        of the budget's factors alone: E / E* of the same draws), from ``n_draws`` draws."""
-        estar, E = self._propagate(post, None, n_draws, self.seed)
-        return self._full(stat, E), self._summary(E / estar).rel_half_width
+        """The full interval of E [Pa] and the budget's floor [-], from ``n_draws`` draws
+        (:func:`~palpbayes.online.full_interval.full_interval`)."""
+        _, z, _ = self._kept.arrays()
+        return full_interval(post, stat, self.model, z, self.budget, n_draws, self.seed,
+                             self.level)
 
     def budget_interval(self, budget: BudgetSpec | None = None, n_draws: int = BUDGET_DRAWS,
                         seed: int = 0) -> MixtureSummary:
         """E [Pa] with the uncertainty budget (:mod:`palpbayes.bayes.budget`) at this point
-        (``budget`` None: the estimator's): the full interval of :meth:`_full`."""
-        post = self.posterior()
-        stat = _scaled(post.estar_summary(self.level), youngs_factor(self.model.nu))
-        return self._full(stat, self._propagate(post, budget, n_draws, seed)[1])
+        (``budget`` None: the estimator's): the full interval of
+        :func:`~palpbayes.online.full_interval.full_from_draws`."""
+        post, (_, z, _) = self.posterior(), self._kept.arrays()
+        _, E = propagate_draws(post, self.model, z, budget or self.budget, n_draws, seed)
+        return full_from_draws(statistical_E(post, self.model.nu, self.level), E, self.level)
 
     def warm_up(self) -> None:
         """Build what the budget of a layered model needs once per process (its profile
         tables at the Poisson ratios of the budget: seconds), so that the first update in
         contact does not pay for it.  Nothing to do for a half-space."""
-        if not self.model.has_layer:
-            return
-        h = float(self.model.thickness)
-        depth = np.geomspace(1e-4, 0.2, 32) * h
-        seen = SimpleNamespace(model=self.model, z=-depth)
-        propagate(np.ones(8), seen, 0.0, self.budget or BudgetSpec(),
-                  np.random.default_rng(0))
+        warm_up_budget(self.model, self.budget)
 
     def model_checks(self, seed: int = 0) -> list[CheckResult]:
         """The offline fit's adequacy checks (:func:`palpbayes.checks.run_checks`: exponent,
@@ -631,21 +386,6 @@ class OnlineEstimator:
         """
         if self.state is None or self.state.E is None:
             return []
-        post = self.posterior()
-        draws = post.draws(np.random.default_rng(seed), 1000)
-        med = {k: float(np.median(v)) for k, v in draws.items()}
-        lo, hi = central(draws["E_star"], self.level)
-        lag1 = self._base.lag1 if self._base.reliable else None
-        n = self._n
-        stride = -(-n // CHECK_SAMPLES)
-        rows = slice(None, n) if stride == 1 else np.arange(n - 1, -1, -stride)[::-1]
-        if lag1 is not None and stride > 1:
-            lag1 = lag1 ** stride  # AR(1): the correlation at lag k is phi^k
-        try:
-            return run_checks(self._z[rows], self._f[rows], self.model, z_surf=med["z_surf"],
-                              estar=med["E_star"], f0=med["F0"], sigma=med["sigma"],
-                              draws=draws, baseline_lag1=lag1, baseline="constant",
-                              z_ref=self._z_top, rng=seed,
-                              stat_rel_halfwidth=0.5 * (hi - lo) / med["E_star"])
-        except InputError:
-            return []
+        _, z, f = self._kept.arrays()
+        return adequacy.model_checks(self.posterior(), z, f, self.model, self._base,
+                                     self._nodes.z_top, self.level, seed)

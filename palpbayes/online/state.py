@@ -83,6 +83,22 @@ class StoppingRule:
             return "target precision"
         return ""
 
+    def first_limit(self, z: np.ndarray, force: np.ndarray, level: float,
+                    z_surf: float | None) -> tuple[int, str] | None:
+        """The first of the samples (tip heights ``z`` [m], forces [N]) at which the max force
+        or the max depth is reached, and which: (index, "max force" | "max depth"; the force
+        first when both are reached at one sample, as :meth:`reason`), the force taken above
+        the baseline ``level`` [N] and the depth below the surface ``z_surf`` [m] (None: not
+        known yet, no depth judged); None when neither is reached."""
+        hits = {}
+        if self.max_force is not None:
+            hits["max force"] = force - level >= self.max_force
+        if self.max_depth is not None and z_surf is not None:
+            hits["max depth"] = z_surf - z >= self.max_depth
+        first = [(int(np.argmax(h)), rank, why)
+                 for rank, (why, h) in enumerate(hits.items()) if h.any()]
+        return min(first)[::2] if first else None
+
 
 def check_noise_options(noise: str = "gaussian", noise_pp: float | None = None,
                         f_unc: float | None = None) -> None:

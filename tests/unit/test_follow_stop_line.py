@@ -13,6 +13,7 @@ import pytest
 
 from palpbayes.cli import follow as follow_cli
 from palpbayes.cli import main
+from palpbayes.cli.follow_lines import StopLine
 from palpbayes.fitdata import ModelSpec
 from palpbayes.io.trace_csv import read_trace, write_trace
 from palpbayes.online import OnlineEstimator, StoppingRule, replay
@@ -48,12 +49,12 @@ def _events(monkeypatch):
 
     def spy_update(self, t, z, force, on_stop=None):
         with lock:
-            events.append(("update", self._n + len(t)))
+            events.append(("update", self.n_kept + len(t)))
         return update(self, t, z, force, on_stop=on_stop)
 
     def spy_total(self, *args, **kwargs):
         with lock:
-            events.append(("total", self._n))
+            events.append(("total", self.n_kept))
         return total(self, *args, **kwargs)
 
     monkeypatch.setattr(follow_cli, "_say", say)
@@ -183,7 +184,7 @@ def test_a_limit_reached_while_an_update_runs_is_said_during_it(recorded, rule, 
 
     def held_work(*args, **kwargs):
         # the update on the chunk before the crossing, before it begins or in its draws
-        if (est._n + len(args[0]) if hold == "update" else est._n) == before:
+        if (est.n_kept + len(args[0]) if hold == "update" else est.n_kept) == before:
             started.set()  # the robot's next samples arrive now
             held.append(said.wait(PATIENCE))
         return original(*args, **kwargs)
@@ -196,7 +197,7 @@ def test_a_limit_reached_while_an_update_runs_is_said_during_it(recorded, rule, 
         if line.startswith("{") and json.loads(line)["event"] == "stop":
             said.set()
 
-    stop_line = follow_cli.StopLine(emit, est, as_json=True)
+    stop_line = StopLine(emit, est, as_json=True)
     stream = batches(_gated(text, before, started), SampleParser(), chunk=100,
                      limit=est.limit, on_limit=stop_line.limit, current=est.limit_current)
     state, _ = follow_cli.follow(stream, est, emit, as_json=True, stop_line=stop_line)

@@ -12,7 +12,8 @@ import time
 import numpy as np
 import pytest
 
-import palpbayes.online.estimator as estimator
+import palpbayes.online.adequacy as adequacy
+import palpbayes.online.samples as samples
 from palpbayes.fitdata import ModelSpec
 from palpbayes.online import OnlineEstimator, StoppingRule
 from palpbayes.online.stream import SampleParser, batches
@@ -49,7 +50,7 @@ def _run(est, t, z, f, chunk: int):
 
 def _stored(est) -> int:
     """The length of the estimator's sample arrays (what it holds, with their spare room)."""
-    return max(a.size for a in (est._t, est._z, est._f))
+    return max(a.size for a in (est._kept.t, est._kept.z, est._kept.f))
 
 
 def _same(a, b) -> bool:
@@ -78,9 +79,9 @@ def test_a_long_wait_before_the_press_keeps_a_bounded_window(press):
         s = est.update(t[i:i + chunk], z[i:i + chunk], f[i:i + chunk])
         biggest = max(biggest, _stored(est), est.n_kept)
         if not s.in_contact:
-            assert est.n_kept <= estimator.PRE_CONTACT_SAMPLES + chunk
-    assert biggest <= 2 * (estimator.PRE_CONTACT_SAMPLES + chunk) < 200_000
-    assert est.n_kept < estimator.PRE_CONTACT_SAMPLES + chunk + press.n_points
+            assert est.n_kept <= samples.PRE_CONTACT_SAMPLES + chunk
+    assert biggest <= 2 * (samples.PRE_CONTACT_SAMPLES + chunk) < 200_000
+    assert est.n_kept < samples.PRE_CONTACT_SAMPLES + chunk + press.n_points
     assert s.n == t.size and s.E.rel_half_width < 0.01
     assert s.E.lo < 1.25e5 < s.E.hi
     # the recording that starts with what was kept, fed at the same chunk ends
@@ -107,8 +108,9 @@ def test_a_press_within_the_bounds_is_what_it_was(press, monkeypatch):
 
     shipped = {k: run(tr, noise) for k, (tr, noise) in
                {"gaussian": (press, "gaussian"), "ar1": (ar1, "ar1")}.items()}
-    for name in ("PRE_CONTACT_SAMPLES", "MAX_CONTACT_SAMPLES", "CHECK_SAMPLES"):
-        monkeypatch.setattr(estimator, name, 10**9)
+    for name in ("PRE_CONTACT_SAMPLES", "MAX_CONTACT_SAMPLES"):
+        monkeypatch.setattr(samples, name, 10**9)
+    monkeypatch.setattr(adequacy, "CHECK_SAMPLES", 10**9)
     for k, (tr, noise) in {"gaussian": (press, "gaussian"), "ar1": (ar1, "ar1")}.items():
         states, checks = run(tr, noise)
         assert len(states) == len(shipped[k][0]) and checks
@@ -124,19 +126,19 @@ def test_the_model_checks_see_at_most_check_samples(press, monkeypatch):
     the last sample, with the noise's lag-one correlation at the stride; a good press still
     passes them."""
     seen = {}
-    real = estimator.run_checks
+    real = adequacy.run_checks
 
     def spy(z, force, model, **kw):
         seen.update(n=len(z), last=float(z[-1]), lag1=kw["baseline_lag1"])
         return real(z, force, model, **kw)
 
-    monkeypatch.setattr(estimator, "run_checks", spy)
+    monkeypatch.setattr(adequacy, "run_checks", spy)
     est = OnlineEstimator(ModelSpec(TIP))
     _run(est, press.time, press.z, press.force, 100)
     full = est.model_checks()
     assert seen["n"] == press.n_points
     lag1 = seen["lag1"]
-    monkeypatch.setattr(estimator, "CHECK_SAMPLES", 1000)
+    monkeypatch.setattr(adequacy, "CHECK_SAMPLES", 1000)
     thinned = est.model_checks()
     assert seen["n"] == 960 and seen["last"] == press.z[-1]  # stride 4: 3840 / 4
     assert seen["lag1"] == pytest.approx(lag1**4)
@@ -146,7 +148,7 @@ def test_the_model_checks_see_at_most_check_samples(press, monkeypatch):
 def test_samples_beyond_the_contact_cap_update_the_estimate_unkept(press, monkeypatch):
     """Past MAX_CONTACT_SAMPLES in contact the samples still update the nodes' sums (E goes
     on narrowing) but are not kept; the grid is no longer refined, and the state says so."""
-    monkeypatch.setattr(estimator, "MAX_CONTACT_SAMPLES", 1000)
+    monkeypatch.setattr(samples, "MAX_CONTACT_SAMPLES", 1000)
     est = OnlineEstimator(ModelSpec(TIP))
     states = _run(est, press.time, press.z, press.force, 100)
     contact = next(s for s in states if s.in_contact)

@@ -97,7 +97,7 @@ def test_fewer_draws_where_the_full_interval_is_only_shown_leave_the_decision_al
     """follow shows the full interval from SHOWN_BUDGET_DRAWS draws (the draws cost ~5 ms per
     1,000); where a full target may fire (the statistical interval within it) the update takes
     all BUDGET_DRAWS: the stop and its interval are those of the full run."""
-    from palpbayes.online.estimator import BUDGET_DRAWS, SHOWN_BUDGET_DRAWS
+    from palpbayes.online.full_interval import BUDGET_DRAWS, SHOWN_BUDGET_DRAWS
 
     rule = StoppingRule(target=0.04, target_on="full")
     _, full = _run(trace, rule)
