@@ -21,9 +21,15 @@ fit with the factorisation as it was before issue 59 (the whole posterior precis
 beta's dense row and column included, ordered afresh at every theta) and the largest
 differences of the results (hyperparameter summaries, field mean and sd at the nodes, flags).
 
-Measured on the shared 2-core machine (load ~3 from other work, so times are upper bounds):
-100 x 100 before 259 s (786 evaluations: 252 mode search, 18 Hessian, 6 skewness, 510 grid),
-30 x 30 13.3 s -> 8.9 s with the same grid.
+Measured in one run each on the shared 2-core machine (load 3-4 from other work: wall times
+are upper bounds, CPU the steadier measure), before -> after:
+
+* 30 x 30: 11.3 -> 9.4 s wall, 1061 evaluations, 827 theta points;
+* 60 x 60: 42.3 -> 35.6 s wall, 52.9 -> 35.5 s CPU, 779 evaluations, 517 theta points;
+* 100 x 100: 237.8 -> 226.4 s wall, 288 -> 215 s CPU, 786 / 793 evaluations (252 / 259 in the
+  mode search, 18 Hessian, 516 skewness + grid), 510 theta points, 0.37 -> 0.27 s CPU per
+  evaluation; results within 7e-6 (hyperparameter summaries, relative), 6e-10 (field mean,
+  log E) and 1e-6 (field sd, relative), the same flags.
 """
 
 from __future__ import annotations
