@@ -87,6 +87,20 @@ def test_sampler_covariance_is_the_inverse_posterior_precision():
         np.diag(cov), np.diag(cov))).max())
 
 
+def test_factor_solves_and_log_det_match_the_whole_precision():
+    """The field block's LU (fixed order) and beta's Schur complement give P's solves and
+    log det."""
+    m = _small_model()
+    for theta in [(0.3, 4 * H, 0.05), (0.02, 30 * H, 0.001)]:
+        f = m.factor(*theta)
+        P = m.posterior_precision(*theta)[0].toarray()
+        b = np.random.default_rng(4).normal(size=(m.n_latent, 3))
+        np.testing.assert_allclose(f.solve(b), np.linalg.solve(P, b), rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(f.solve(b[:, 0]), np.linalg.solve(P, b[:, 0]), rtol=1e-9,
+                                   atol=1e-12)
+        assert f.log_det() == pytest.approx(np.linalg.slogdet(P)[1], rel=1e-10)
+
+
 def test_spde_scaling_gives_sigma_and_range_on_an_interior_node():
     """Marginal variance ≈ sigma_f² and Matérn(nu = 1) correlation at the centre of 41 × 41."""
     n, r_steps, sig = 41, 8, 0.5
