@@ -41,10 +41,11 @@ def test_import_palpbayes_is_light():
 
 def test_fit_parser_and_help_are_light():
     """``palpbayes fit --help`` (the parser ``palpbayes fit ...`` builds) loads neither the
-    fitting code nor the other subcommands."""
-    heavy = (*NEVER, "scipy.signal", "palpbayes.rheology", "palpbayes.online",
-             "palpbayes.checks.ppc", "palpbayes.compression", "palpbayes.cli.simulate",
-             "palpbayes.cli.report", "palpbayes.cli.map")
+    fitting code nor the other subcommands, nor emcee (which imports scipy.stats) for the
+    sampler's settings."""
+    heavy = (*NEVER, "scipy.signal", "scipy.stats", "emcee", "palpbayes.rheology",
+             "palpbayes.online", "palpbayes.checks.ppc", "palpbayes.compression",
+             "palpbayes.cli.simulate", "palpbayes.cli.report", "palpbayes.cli.map")
     code = """
         import contextlib, io
         from palpbayes.cli import main
