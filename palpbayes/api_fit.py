@@ -128,7 +128,9 @@ class Fit:
 
     @property
     def posterior(self):
-        """The arviz ``InferenceData`` of the Bayesian fit (None for ``lsq``)."""
+        """The arviz ``InferenceData`` of the Bayesian fit (None for ``lsq``), made on first
+        access (:attr:`BayesResult.idata <palpbayes.bayes.BayesResult.idata>`: importing
+        arviz, which a fit does not)."""
         return None if self.bayes is None else self.bayes.idata
 
     @property

@@ -1,4 +1,8 @@
-"""Fit one trace: profile-scan start, emcee posterior, arviz diagnostics, flags, budget."""
+"""Fit one trace: profile-scan start, emcee posterior, arviz-stats diagnostics, flags, budget.
+
+The draws stay numpy arrays (:class:`~palpbayes.bayes.posterior_data.PosteriorData`): a fit
+imports neither arviz nor xarray's dask plumbing; the arviz ``InferenceData`` is made when a
+user asks for it (:attr:`BayesResult.idata <palpbayes.bayes.BayesResult.idata>`)."""
 
 # Long module: one job, the fit pipeline of one trace (start, chains, checks, arviz groups,
 #   budget).
@@ -20,7 +24,7 @@ from ..intervals import central
 from ..lsq import LSQResult, fit_lsq_data
 from ..trace import IndentationTrace
 from .budget import BudgetSpec, law_nu_nodes, nu_nodes, propagate
-from .diagnostics import chain_passes, compute_diagnostics, import_arviz
+from .diagnostics import chain_passes, compute_diagnostics
 from .exact import exact_posterior, sampled_coordinates
 from .flags import bound_flags, is_bimodal, posterior_flags
 from .instron import instron_bonded_draws
@@ -37,6 +41,7 @@ from .layer_fit import (
 from .likelihood import TraceLikelihood
 from .modelform import layer_alternative, model_form
 from .noisemodels import EXACT_NOISE_MODELS
+from .posterior_data import PosteriorData
 from .priors import PriorSpec, TracePrior, log_posterior
 from .result import BayesResult
 from .sampler import ChainResult, SamplerSettings, run_emcee
@@ -155,17 +160,13 @@ def fit_bayes_data(
     if data.model.specimen is not None:  # what a compression test of the block would read
         post["E_instron_bonded"] = instron_bonded_draws(
             bud.E, bud.nu, data.model.specimen, nu_nodes(budget, data.model.nu))
-    az = import_arviz()
-    with warnings.catch_warnings():
-        # heavy thinning of a short chain can leave fewer draws than walkers: fine for us
-        warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
-        idata = _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed,
-                          lsq, noise, prior, modes)
-    idata.posterior.attrs["engine"] = engine
-    idata.posterior.attrs["model_fitted"] = best.describe()
-    idata.posterior.attrs["platens"] = platens
+    groups = _posterior_data(post, chains, data, trace_id, priors, budget, settings, seed, lsq,
+                             noise, prior, modes)
+    groups.posterior.attrs["engine"] = engine
+    groups.posterior.attrs["model_fitted"] = best.describe()
+    groups.posterior.attrs["platens"] = platens
     if mixture is not None and data.model.bonding == "unknown":
-        idata.posterior.attrs["log_bf_bonded"] = mixture.log_bayes_factor()
+        groups.posterior.attrs["log_bf_bonded"] = mixture.log_bayes_factor()
     law_cols, law_more = law_columns(post, data, best, mixture if extra else None, bud.E,
                                      bud.nu, platens, law_nu_nodes(budget, best.nu))
     flags = posterior_flags(post, post_theta, prior) + layer_warnings(post, data, best)
@@ -181,7 +182,7 @@ def fit_bayes_data(
         form = model_form(post["E_total"], checks, np.random.default_rng(form_ss), layer,
                           nonlinear=partial(strain_reading, fitted, post, priors, noise,
                                             baseline))
-    return _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
+    return _finish(groups, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
                    like, checks, notes, best, form, law_cols)
 
 
@@ -262,10 +263,10 @@ def _model_checks(post: dict, data: FitData, like, seed: int) -> list:
                      stat_rel_halfwidth=0.5 * float(hi - lo) / med["E_star"])
 
 
-def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, lsq, noise,
-              prior, modes):
-    """arviz InferenceData of the draws, with the fit's settings as attributes."""
-    return az.from_dict(
+def _posterior_data(post, chains, data, trace_id, priors, budget, settings, seed, lsq, noise,
+                    prior, modes) -> PosteriorData:
+    """The InferenceData's groups of the draws, with the fit's settings as attributes."""
+    return PosteriorData.from_dicts(
         posterior=post,
         sample_stats=None if chains.log_prob is None else {"lp": chains.log_prob},
         observed_data={"force": data.force},
@@ -302,15 +303,15 @@ def _to_idata(az, post, chains, data, trace_id, priors, budget, settings, seed, 
     )
 
 
-def _finish(idata, post, chains, data, trace_id, bud, lsq, noise, strict, flags, like,
-            checks, notes, best, form=None, law=None):
+def _finish(groups: PosteriorData, post, chains, data, trace_id, bud, lsq, noise, strict, flags,
+            like, checks, notes, best, form=None, law=None):
     """Diagnostics, flags and the warning (or error in strict mode)."""
     diag_names = [n for n in ("E_star", "z_surf", "sigma", "F0", "F1", "phi", "nu_t")
                   if n in post]
     # tau follows θ, whose first entries are these in this order (the layer's come last)
-    diag = compute_diagnostics(idata, diag_names, chains.tau[:len(diag_names)],
+    diag = compute_diagnostics(groups, diag_names, chains.tau[:len(diag_names)],
                                chains.acceptance, chains.n_steps, chains.hit_cap)
-    result = BayesResult(idata=idata, diagnostics=diag, budget=bud, data=data, noise=noise,
+    result = BayesResult(groups=groups, diagnostics=diag, budget=bud, data=data, noise=noise,
                          trace_id=trace_id, lsq=lsq, warnings=flags,
                          baseline=like.baseline, z_ref=like.z_ref, checks=checks,
                          notes=notes, fitted_model=best,

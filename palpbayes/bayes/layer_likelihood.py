@@ -36,14 +36,17 @@ acceptance is the posterior ratio times the map's Jacobian.
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
-import emcee
 import numpy as np
 
 from ..fitdata import FitData
 from ..refit import fitted_depths, refit_factor
 from .likelihood import TraceLikelihood
 from .priors import TracePrior, param_names
+
+if TYPE_CHECKING:  # emcee is imported where the move is made: an exact fit does not need it
+    import emcee
 
 __all__ = ["LayerLikelihood", "base_swap_move", "SWAP_WEIGHT"]
 
@@ -306,5 +309,7 @@ def base_swap_move(like: LayerLikelihood, z_surf: float) -> emcee.moves.MHMove:
             new[:, i_h] = new_h
         new[:, 0] = log_e - like.offset(new)  # back to the aligned coordinate
         return new, np.where(moved, log_jac, 0.0)
+
+    import emcee
 
     return emcee.moves.MHMove(proposal)

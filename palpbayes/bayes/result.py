@@ -6,6 +6,11 @@ details, diagnostics, the budget table, the model with its exact tip);
 :meth:`BayesResult.from_idata` rebuilds the result from them, equal in every field but the
 fitted data and the least-squares fit, which the caller supplies
 (:func:`palpbayes.campaign.results.load_fit`).
+
+A fresh fit keeps its draws as numpy arrays (:class:`~palpbayes.bayes.posterior_data.
+PosteriorData`) and writes its file with h5netcdf; its arviz ``InferenceData``
+(:attr:`BayesResult.idata`) is made on first use, so that a fit imports neither arviz (nor
+with it matplotlib) nor dask (issue 59).
 """
 
 # Long module: one job, the Bayesian fit's result; BayesResult's tables and its netCDF round trip
@@ -18,6 +23,7 @@ import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -33,11 +39,15 @@ from ..refit import ALTERNATIVE_COLUMNS, layer_alternatives
 from ..twin import Specimen
 from ..twin.hyper_shape import LawModel
 from .budget import Budget
-from .diagnostics import Diagnostics, import_arviz
+from .diagnostics import Diagnostics, hdi
 from .instron import instron_columns
 from .lawfit import law_columns_of
 from .layer_fit import concrete_draws
 from .modelform import ModelForm
+from .posterior_data import PosteriorData
+
+if TYPE_CHECKING:  # arviz only for the annotation: a fit does not import it
+    from arviz import InferenceData
 
 __all__ = ["BayesResult", "LEVEL", "STATE_ATTR", "saved_state", "saved_model",
            "saved_fitted_model"]
@@ -52,9 +62,14 @@ class BayesResult:
 
     Attributes
     ----------
-    idata
-        arviz ``InferenceData`` (posterior: ``E_star``, ``E`` (at the model's nu), ``E_total``
-        (with the budget), ``z_surf``, ``sigma``, ``F0`` [, ``phi`` | ``nu_t``]).
+    groups
+        The draws and the rest of the InferenceData's groups: a
+        :class:`~palpbayes.bayes.posterior_data.PosteriorData` (numpy arrays) for a fresh
+        fit, the arviz ``InferenceData`` for a fit read back from its file
+        (:meth:`from_idata`); either reads as ``groups.posterior[name]``,
+        ``groups.posterior.attrs``.  Posterior: ``E_star``, ``E`` (at the model's nu),
+        ``E_total`` (with the budget), ``z_surf``, ``sigma``, ``F0`` [, ``phi`` | ``nu_t``].
+        The arviz ``InferenceData`` itself is :attr:`idata`.
     diagnostics
         Convergence figures.
     budget
@@ -92,7 +107,7 @@ class BayesResult:
         law_columns`: ``law``, ``law_params``, ``E_instron_law_pa`` ...); empty: linear.
     """
 
-    idata: object
+    groups: PosteriorData | InferenceData
     diagnostics: Diagnostics
     budget: Budget
     data: FitData
@@ -108,10 +123,23 @@ class BayesResult:
     layer: dict = field(default_factory=dict)
     model_form: ModelForm | None = None
     law: dict = field(default_factory=dict)
+    _idata: object = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.fitted_model is None:
             self.fitted_model = self.data.model
+
+    @property
+    def idata(self) -> InferenceData:
+        """The arviz ``InferenceData`` of the fit (posterior: ``E_star``, ``E``, ``E_total``,
+        ``z_surf``, ``sigma``, ``F0`` ...; ``sample_stats``, ``observed_data``,
+        ``constant_data``): for a fresh fit made from :attr:`groups` on first access (this
+        imports arviz), then kept."""
+        if not isinstance(self.groups, PosteriorData):
+            return self.groups
+        if self._idata is None:
+            self._idata = self.groups.to_inference_data()
+        return self._idata
 
     def __repr__(self) -> str:
         """A line of what the fit says (its arrays are in :attr:`idata` and :meth:`summary`):
@@ -124,7 +152,7 @@ class BayesResult:
         if isinstance(ok, bool | np.bool_):
             state.append("model ok" if ok else "model check failed")
         state.append(f"{self.data.n_points} points")
-        engine = self.idata.posterior.attrs.get("engine", "emcee")
+        engine = self.groups.posterior.attrs.get("engine", "emcee")
         return (f"BayesResult({self.trace_id!r}: E {format_pressure(np.median(self.draws('E')))}"
                 f" [{format_pressure(lo)}, {format_pressure(hi)}] (90 %), {', '.join(state)}; "
                 f"{self.data.model.tip.describe()}, nu {self.data.model.nu:g}, {self.noise} "
@@ -133,7 +161,7 @@ class BayesResult:
     # ----------------------------------------------------------------- access
     def draws(self, name: str) -> np.ndarray:
         """All draws of a posterior variable, flattened over walkers."""
-        return np.asarray(self.idata.posterior[name]).ravel()
+        return np.asarray(self.groups.posterior[name]).ravel()
 
     @property
     def converged(self) -> bool:
@@ -146,10 +174,9 @@ class BayesResult:
         full interval (:meth:`intervals`: the budget's, widened to hold the statistical one,
         or after a material misfit the model form's envelope) — the summary row's ``E_lo_pa``
         and ``E_hi_pa``, so that a notebook and the command line quote one interval."""
-        az = import_arviz()
         names = [n for n in ("E_total", "E", "E_star", "z_surf", "sigma", "F0", "F1", "phi",
                              "nu_t", "thickness", "bonded")
-                 if n in self.idata.posterior]
+                 if n in self.groups.posterior]
         rows = []
         for n in names:
             x = self.draws(n)
@@ -158,12 +185,12 @@ class BayesResult:
                 continue
             lo, hi = central(x)
             reported = self.intervals()["full"] if n == "E_total" else (lo, hi)
-            hdi = np.asarray(az.hdi(x, hdi_prob=LEVEL))
+            hdi_lo, hdi_hi = hdi(x, LEVEL)
             rows.append({
                 "parameter": n, "unit": _UNITS[n], "mean": float(x.mean()),
                 "sd": float(x.std(ddof=1)), "median": float(np.median(x)),
                 "q05": lo, "q95": hi, "lo": float(reported[0]), "hi": float(reported[1]),
-                "hdi90_lo": float(hdi[0]), "hdi90_hi": float(hdi[1]),
+                "hdi90_lo": hdi_lo, "hdi90_hi": hdi_hi,
                 "rhat": self.diagnostics.rhat.get(_SAMPLED.get(n, n), np.nan),
                 "ess_bulk": self.diagnostics.ess_bulk.get(_SAMPLED.get(n, n), np.nan),
                 "ess_tail": self.diagnostics.ess_tail.get(_SAMPLED.get(n, n), np.nan),
@@ -207,16 +234,16 @@ class BayesResult:
         z_med = float(np.median(z))
         best = self.fitted_model
         sampled = {k: self.draws(k) for k in ("thickness", "bonded")
-                   if k in self.idata.posterior}
+                   if k in self.groups.posterior}
         if sampled:  # the E of the fitted model's own draws (its base, layer or none)
             sel = concrete_draws(best, E.size, sampled.get("thickness"), sampled.get("bonded"))
             if sel.any():
                 E_med = float(np.median(Es[sel]))
         checks = checks_summary(self.checks)
         bonded_draws = (self.draws("E_instron_bonded")
-                        if "E_instron_bonded" in self.idata.posterior else None)
+                        if "E_instron_bonded" in self.groups.posterior else None)
         instron = instron_columns(E, bonded_draws,
-                                  str(self.idata.posterior.attrs.get("platens", "unknown")),
+                                  str(self.groups.posterior.attrs.get("platens", "unknown")),
                                   (lo / blo, hi / bhi), float(np.median(Es) / np.median(E)))
         return {
             "trace_id": self.trace_id,
@@ -255,7 +282,7 @@ class BayesResult:
             "m_free": checks["m_free"],
             "misfit_effect": checks["misfit_effect"],
             "misfit_checks": checks["misfit_checks"],
-            "engine": self.idata.posterior.attrs.get("engine", "emcee"),
+            "engine": self.groups.posterior.attrs.get("engine", "emcee"),
             "model_fitted": best.describe_layer(),
             **self.layer,
             **self._alternatives(Es, E_med, z_med, best),
@@ -270,7 +297,7 @@ class BayesResult:
         if best.law is not None:  # the law's E0 read with linear models: not comparable
             return dict.fromkeys(ALTERNATIVE_COLUMNS, float("nan"))
         out = layer_alternatives(E_med, z_med, self.data.z, best, self.data.model)
-        if "bonded" in self.idata.posterior:
+        if "bonded" in self.groups.posterior:
             b = self.draws("bonded")
             for base, v in (("bonded", 1.0), ("free", 0.0)):
                 if (b == v).sum() >= 20:
@@ -288,7 +315,7 @@ class BayesResult:
         """
         z = self.data.z if z is None else np.asarray(z, dtype=float)
         rng = np.random.default_rng(seed)
-        post = self.idata.posterior
+        post = self.groups.posterior
         idx, curves = self.mean_curves(z, n_draws, rng)
         flat = {n: np.asarray(post[n]).ravel() for n in ("z_surf", "sigma")}
         if noise:
@@ -306,7 +333,7 @@ class BayesResult:
         """
         z = self.data.z if z is None else np.asarray(z, dtype=float)
         rng = rng or np.random.default_rng(0)
-        post = self.idata.posterior
+        post = self.groups.posterior
         names = [n for n in ("E_star", "z_surf", "F0", "F1", "thickness", "bonded")
                  if n in post]
         flat = {n: np.asarray(post[n]).ravel() for n in names}
@@ -323,19 +350,27 @@ class BayesResult:
 
     def median_theta(self) -> dict[str, float]:
         """Posterior medians of the mean-curve parameters (E_star, z_surf, F0, F1, sigma[, phi])."""
-        post = self.idata.posterior
+        post = self.groups.posterior
         return {n: float(np.median(np.asarray(post[n]))) for n in
                 ("E_star", "z_surf", "F0", "F1", "sigma", "phi") if n in post}
 
     # ----------------------------------------------------------------- persistence
     def to_netcdf(self, path: str | os.PathLike) -> Path:
-        """Write the InferenceData (h5netcdf engine) atomically; arviz can open it.
+        """Write the InferenceData (h5netcdf engine, arviz's layout) atomically; arviz can
+        open it (``az.from_netcdf``).
 
         The rest of the result goes into the posterior attribute :data:`STATE_ATTR` (also set
-        on ``self.idata``), so that :meth:`from_idata` can rebuild it.
+        on :attr:`groups` and, once made, :attr:`idata`), so that :meth:`from_idata` can
+        rebuild it.  A fresh fit whose :attr:`idata` nobody asked for is written from its
+        numpy arrays (:meth:`PosteriorData.to_netcdf
+        <palpbayes.bayes.posterior_data.PosteriorData.to_netcdf>`: no arviz, xarray or dask
+        import); otherwise the InferenceData is, as it may have been changed.
         """
-        self.idata.posterior.attrs[STATE_ATTR] = json.dumps(self._state(), default=_to_json,
-                                                            allow_nan=True)
+        state = json.dumps(self._state(), default=_to_json, allow_nan=True)
+        self.groups.posterior.attrs[STATE_ATTR] = state
+        if isinstance(self.groups, PosteriorData) and self._idata is None:
+            return self.groups.to_netcdf(path)
+        self.idata.posterior.attrs[STATE_ATTR] = state
         return write_netcdf_atomic(self.idata, path)
 
     def _state(self) -> dict:
@@ -370,7 +405,7 @@ class BayesResult:
         budget = None if table is None else Budget(
             E=np.asarray(idata.posterior["E_total"]), table=pd.DataFrame(table))
         fitted = state.get("fitted_model")
-        return cls(idata=idata, diagnostics=Diagnostics(**state["diagnostics"]), budget=budget,
+        return cls(groups=idata, diagnostics=Diagnostics(**state["diagnostics"]), budget=budget,
                    data=data, noise=state["noise"], trace_id=state["trace_id"], lsq=lsq,
                    warnings=list(state["warnings"]), baseline=state["baseline"],
                    z_ref=state["z_ref"], checks=[CheckResult(**c) for c in state["checks"]],

@@ -38,12 +38,17 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import emcee
 import numpy as np
-from scipy.stats import chi2
 
 from ..errors import InputError
+
+if TYPE_CHECKING:
+    import emcee
+
+# emcee (and with it scipy.stats, which emcee.moves.kde imports) is imported where it samples,
+# not here: the command line's parser imports SamplerSettings (``palpbayes --help``, issue 59).
 
 __all__ = ["seed_sampler", "SamplerSettings", "ChainResult", "run_emcee", "stuck_walkers", "MOVES",
            "MAX_RESTARTS"]
@@ -144,6 +149,8 @@ class ChainResult:
 
 
 def _moves(kind: str):
+    import emcee
+
     if kind == "stretch":
         return None
     if kind == "de":
@@ -167,6 +174,8 @@ def _with_extra(moves, extra: list | None):
     1 − Σ weights."""
     if not extra:
         return moves
+    import emcee
+
     base = [(emcee.moves.StretchMove(), 1.0)] if moves is None else (
         moves if isinstance(moves, list) else [(moves, 1.0)])
     rest = 1.0 - sum(w for _, w in extra)
@@ -206,6 +215,8 @@ def run_emcee(log_prob, p0: np.ndarray, settings: SamplerSettings, seed: int | N
         [(move, weight)] added to the configured moves (e.g. the layer's base swap,
         :func:`palpbayes.bayes.layer_likelihood.base_swap_move`).
     """
+    import emcee
+
     n_walkers, ndim = p0.shape
     sampler = emcee.EnsembleSampler(n_walkers, ndim, log_prob, vectorize=True,
                                     moves=_with_extra(_moves(settings.moves), extra_moves))
@@ -281,6 +292,8 @@ def stuck_walkers(log_prob: np.ndarray, ndim: int, chain: np.ndarray | None = No
     fewer than a quarter as many steps as the median walker (a walker exploring a broad mode
     of its own still moves; the stuck ones of real fits moved in 0–1 % of the steps, the others
     in 8–23 %)."""
+    from scipy.stats import chi2
+
     best = np.max(log_prob, axis=0)
     low = best < np.median(best) - 0.5 * float(chi2.isf(p, ndim))
     if chain is None or chain.shape[0] < 2:

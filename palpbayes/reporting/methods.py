@@ -165,7 +165,7 @@ def methods_lines(res: ResultsFolder) -> list[tuple[str, str]]:
         f"student: Student-t). Sampled with {_stopping_rule(smp)}"
         + (" (Sampler settings not recorded in settings.json: package defaults shown.)"
            if from_defaults else "")
-        + " Convergence is checked with arviz (rank-normalised split R-hat, bulk and tail "
+        + " Convergence is checked with arviz-stats (rank-normalised split R-hat, bulk and tail "
         "ESS, walkers as chains); a fit that fails is flagged in every table. Priors "
         "(palpbayes.bayes.priors):", W)]
     lines += [("m", ln) for ln in PRIORS_TABLE]

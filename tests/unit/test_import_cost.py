@@ -41,10 +41,11 @@ def test_import_palpbayes_is_light():
 
 def test_fit_parser_and_help_are_light():
     """``palpbayes fit --help`` (the parser ``palpbayes fit ...`` builds) loads neither the
-    fitting code nor the other subcommands."""
-    heavy = (*NEVER, "scipy.signal", "palpbayes.rheology", "palpbayes.online",
-             "palpbayes.checks.ppc", "palpbayes.compression", "palpbayes.cli.simulate",
-             "palpbayes.cli.report", "palpbayes.cli.map")
+    fitting code nor the other subcommands, nor emcee (which imports scipy.stats) for the
+    sampler's settings."""
+    heavy = (*NEVER, "scipy.signal", "scipy.stats", "emcee", "palpbayes.rheology",
+             "palpbayes.online", "palpbayes.checks.ppc", "palpbayes.compression",
+             "palpbayes.cli.simulate", "palpbayes.cli.report", "palpbayes.cli.map")
     code = """
         import contextlib, io
         from palpbayes.cli import main
@@ -92,3 +93,53 @@ def test_lazy_packages_export_their_names(package):
             assert getattr(importlib.import_module(home), name, value) is value
     with pytest.raises(AttributeError):
         mod.no_such_name  # noqa: B018
+
+
+#: Loaded by no fit (issue 59): full arviz imports matplotlib; xarray's netCDF writer and its
+#: ``Variable`` look up dask's arrays and scheduler (dask.array, distributed) when dask is
+#: installed.  The fit's R-hat and ESS come from arviz-stats, its file from h5netcdf.
+FIT_NEVER = ("matplotlib", "arviz", "dask", "distributed", "palpbayes.plots",
+             "palpbayes.reporting")
+
+
+@pytest.fixture(scope="module")
+def light_trace(tmp_path_factory):
+    """A simulated sphere press (Hertz, 120 kPa), written as palpbayes writes a trace."""
+    import palpbayes as pb
+
+    tr = pb.simulate_trace(120e3, pb.Tip("sphere", radius=0.01), nu=0.45, rng=6, depth=2e-3,
+                           trace_id="light")
+    return pb.write_trace(tr, tmp_path_factory.mktemp("light") / "light.csv")
+
+
+@pytest.mark.parametrize("engine", ["emcee", "exact"])
+def test_a_fit_on_the_command_line_imports_no_plotting_nor_dask(light_trace, tmp_path, engine):
+    """``palpbayes fit TRACE`` (either engine) writes its posterior file and summary without
+    importing matplotlib, arviz, dask or distributed; the file opens in arviz."""
+    out = tmp_path / "out"
+    code = f"""
+        import contextlib, io
+        from palpbayes.cli import main
+        with contextlib.redirect_stdout(io.StringIO()):
+            status = main(["fit", {str(light_trace)!r}, "--tip", "sphere", "--radius", "0.01",
+                           "--nu", "0.45", "--engine", {engine!r}, "--out", {str(out)!r},
+                           "--no-progress"])
+        assert status == 0, status
+        """
+    assert _loaded(code, FIT_NEVER) == []
+    from palpbayes.bayes.diagnostics import import_arviz
+
+    idata = import_arviz().from_netcdf(str(out / "posterior" / "light.nc"))
+    assert idata.posterior.attrs["engine"] == engine and "lp" in idata.sample_stats
+
+
+def test_pb_fit_and_save_import_no_plotting_nor_dask(light_trace, tmp_path):
+    """``pb.fit`` and ``Fit.save`` neither; ``Fit.posterior`` (the arviz InferenceData, made on
+    first use) imports arviz."""
+    code = (f"import palpbayes as pb\n"
+            f"f = pb.fit({str(light_trace)!r}, tip='sphere', radius=0.01, nu=0.45, "
+            f"engine='exact')\n"
+            f"f.save({str(tmp_path / 'out')!r})\n"
+            "assert f.bayes.converged and repr(f.bayes).startswith(\"BayesResult('light'\")\n")
+    assert _loaded(code, FIT_NEVER) == []
+    assert _loaded(code + "f.posterior.posterior\n", ("arviz",)) == ["arviz"]
