@@ -264,6 +264,7 @@ def test_thickness_components_start_from_fewer_surface_nodes_and_give_the_same_p
         np.testing.assert_allclose(qa, qb, rtol=2e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["paraboloid 30 mm", "sphere 20 mm"])
 def test_the_model_forms_coarse_thickness_grid_gives_nearly_the_same_mixture(case):
     """``thickness_grid="coarse"`` (the model form's layer alternative: 7 first thickness
