@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 
+from .arguments import finite
 from .errors import InputError
 
 __all__ = ["PP_TO_SIGMA", "PAPER_NOISE_PP", "MAD_TO_SIGMA", "NOISE_SCALE_FACTOR", "sigma_from_pp",
@@ -39,12 +40,7 @@ def sigma_from_pp(pp: float) -> float:
     InputError
         ``pp`` is not a finite, non-negative number.
     """
-    try:
-        v = float(pp)
-    except (TypeError, ValueError):
-        raise InputError(f"peak-to-peak noise [N] {pp!r} is not a number") from None
-    if not math.isfinite(v):
-        raise InputError(f"peak-to-peak noise [N] must be finite, got {pp!r}")
+    v = finite(pp, "peak-to-peak noise [N]")
     if v < 0:
         raise InputError(f"peak-to-peak noise {pp!r} N must be non-negative")
     return v / PP_TO_SIGMA
