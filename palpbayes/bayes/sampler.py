@@ -4,15 +4,15 @@ Moves: by default emcee's ``DEMove`` (differential evolution, ter Braak 2006).  
 paper-like 3,840-point traces (flat, sphere, paraboloid; 32 walkers): tau ~ 13 steps, against
 ~ 17 for 80 % ``DEMove`` + 20 % ``DESnookerMove`` (``"de-snooker"``, emcee's recommendation for
 multimodal targets, kept as an option; its snooker step loops over walkers in Python and costs
-~ 60 % more per step) and ~ 35-43 for the stretch move.  Walker R-hat <= 1.01 needs ~ 1,000
-steps: the ``accept`` test below keeps sampling until R-hat and ESS pass, so 50·tau is a
-floor, not the whole rule.
+~ 60 % more per step) and ~ 35-43 for the stretch move.  The chain length is set by 50·tau
+(and ``min_steps``): on the 22 real AFM curves 600-1,000 steps, at bulk/tail ESS >= 1,300.
 
 Stopping rule (emcee's autocorrelation tutorial): every ``check_every`` steps the integrated
 autocorrelation time tau of each parameter is estimated; sampling stops once the chain is longer
 than ``tau_factor``·tau (default 50: N > 50·tau, docs/design.md §3) for every parameter and tau
 changed by less than ``tau_rtol`` since the last check — and, when an ``accept`` test is given (the
-fit passes R-hat <= 1.01 and ESS >= 400), that test passes — or at ``max_steps``.  Burn-in
+fit's bulk and tail ESS >= 400, with R-hat <= 1.05 as a guard:
+:func:`palpbayes.bayes.diagnostics.chain_passes`), that test passes — or at ``max_steps``.  Burn-in
 ``ceil(2·max tau)`` is discarded and the chain thinned by ``max(1, floor(min tau / 2))``.
 
 Stuck walkers: a walker that starts in a poor spot of a narrow, curved posterior can stay

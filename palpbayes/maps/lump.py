@@ -270,7 +270,7 @@ def fit_lump(x: np.ndarray, y: np.ndarray, mean: np.ndarray, sd: np.ndarray, *,
     """Posterior of the one-inclusion model (module docstring) from per-point summaries.
 
     The ensemble runs in blocks of ``check_every`` steps from ``min_steps`` on, and stops when
-    the second half of the chain passes the package's convergence test (R-hat <= 1.01 and
+    the second half of the chain passes the package's convergence test (R-hat <= 1.05 and
     bulk/tail ESS >= 400, :func:`palpbayes.bayes.diagnostics.chain_passes`) for the identified
     coordinates (:data:`IDENTIFIED`) and the log posterior, or at ``max_steps`` (flagged); the
     first half is discarded as burn-in.  Radius, depth and ratio along the ridge are reported
@@ -358,7 +358,7 @@ def fit_lump(x: np.ndarray, y: np.ndarray, mean: np.ndarray, sd: np.ndarray, *,
     flags = _lump_flags(draws, p)
     if not passed:
         flags.append(f"sampler: not converged after {sampler.iteration} steps per walker "
-                     "(R-hat > 1.01 or ESS < 400); the intervals are rough")
+                     "(R-hat > 1.05 or ESS < 400); the intervals are rough")
     if not np.all(keep):
         flags.append(f"lump model used the {int(keep.sum())} points within "
                      f"{np.hypot(x - guess['x'], y - guess['y']).max() * 1e3:.3g} mm of the "

@@ -91,8 +91,8 @@ def _stopping_rule(smp: dict) -> str:
         f"stop when the chain is longer than {float(smp['tau_factor']):g} × the integrated "
         "autocorrelation time (tau) of every parameter, tau changed by less than "
         f"{100 * float(smp['tau_rtol']):g} % since the last check, and the post-burn-in "
-        f"chain passes max R-hat ≤ {RHAT_MAX:g} over every parameter and the log posterior, "
-        f"and bulk and tail ESS ≥ {ESS_MIN:.0f} for every parameter — or at "
+        f"chain has bulk and tail ESS ≥ {ESS_MIN:.0f} for every parameter, with max R-hat ≤ "
+        f"{RHAT_MAX:g} over every parameter and the log posterior as a guard — or at "
         f"{int(smp['max_steps'])} steps (then flagged). Burn-in 2·max tau, thinning "
         "floor(min tau / 2)."
     )

@@ -39,8 +39,8 @@ Moves: 50 % ``DEMove`` (differential evolution, affine invariant), 50 % an indep
 Metropolis–Hastings move from a t fitted to the start draws, folded into the box at its bounds
 (exact through its Hastings factor): autocorrelation times of 5–10 steps against 20–30 for
 ``DEMove`` alone.  Stopping
-and seeding: :func:`palpbayes.bayes.sampler.run_emcee` (50 tau, tau steady, R-hat <= 1.01 on
-every parameter and the log posterior, bulk and tail ESS >= 400, and ``n_draws`` thinned
+and seeding: :func:`palpbayes.bayes.sampler.run_emcee` (50 tau, tau steady, bulk and tail ESS
+>= 400, R-hat <= 1.05 on every parameter and the log posterior as a guard, and ``n_draws`` thinned
 draws; or ``n_steps``).  Diagnostics: arviz, walkers as chains.
 
 Not here: the SLS on the retract (Ting's t1 depends on E1*/E_inf*: the force is not linear
@@ -255,7 +255,7 @@ class EmceeRheology:
 
     @property
     def converged(self) -> bool:
-        """R-hat <= 1.01, ESS >= 400, the stopping rule met, the table within tolerance."""
+        """ESS >= 400, R-hat <= 1.05, the stopping rule met, the table within tolerance."""
         return self.diagnostics.converged and self.table_error <= TABLE_TOL
 
     def problems(self) -> list[str]:

@@ -330,8 +330,9 @@ def test_methods_text_is_built_from_the_settings(fitted):
     for frag in ("emcee, 24 walkers", "80 % DEMove + 20 % DESnookerMove",
                  "every 123 steps after 456", "longer than 37 × the integrated",
                  "less than 2 % since the last check",
-                 "max R-hat ≤ 1.01 over every parameter and the log posterior",
-                 "bulk and tail ESS ≥ 400 for every parameter", "or at 7890 steps (then flagged)",
+                 "bulk and tail ESS ≥ 400 for every parameter, with max R-hat ≤ 1.05 over "
+                 "every parameter and the log posterior as a guard",
+                 "or at 7890 steps (then flagged)",
                  "Burn-in 2·max tau, thinning floor(min tau / 2)", "the first 10 % of the",
                  "HalfNormal(0.25)"):
         assert frag in new, frag

@@ -95,14 +95,14 @@ def test_three_models_and_which_one_the_record_prefers(record_csv, tmp_path, cap
 
 @pytest.mark.slow
 def test_the_emcee_engine_from_the_command_line(record_csv, tmp_path):
-    """--rheology-engine emcee: the row says so, with converged chains (R-hat <= 1.01, ESS >=
+    """--rheology-engine emcee: the row says so, with converged chains (R-hat <= 1.05, ESS >=
     400) and the truth inside the intervals, as the grid engine's."""
     out = tmp_path / "emcee"
     assert main(["fit", str(record_csv), "--rheology", "power-law", "--rheology-engine",
                  "emcee", "--out", str(out), *PARA]) == 0
     row = pd.read_csv(out / "rheology.csv").iloc[0]
     assert row["engine"] == "emcee" and bool(row["converged"]) and bool(row["model_ok"])
-    assert row["rhat_max"] <= 1.01 and row["ess_min"] >= 400
+    assert row["rhat_max"] <= 1.05 and row["ess_min"] >= 400
     assert row["E0_star_lo_pa"] < 80e3 < row["E0_star_hi_pa"]
     assert row["alpha_lo"] < 0.2 < row["alpha_hi"]
 

@@ -31,7 +31,7 @@ REAL = {
     "info: depth_consistency check fails statistically but is negligible: moves E by 0.2 %, "
     "within ±1.0 %": "depth_consistency",
     "rate dependence: the hold relaxes 12 % -> the material is viscoelastic": "rate",
-    "R-hat 1.0300 > 1.01 (z_surf)": "rhat",
+    "R-hat 1.0600 > 1.05 (z_surf)": "rhat",
     "ESS 210 < 400": "ess",
     "step cap reached (400 steps) before tau was stable": "step_cap",
     "bimodal z_surf: two separated surface heights fit the data": "bimodal_surface",
