@@ -63,7 +63,7 @@ def _divergence(u, q, w):
 
 @BilinearForm
 def _mass(p, q, w):
-    return p * q * w.x[0]
+    return p * q * w["inv"] * w.x[0]
 
 
 @dataclass
@@ -121,9 +121,15 @@ class AxisymmetricSolid:
         axis).
     nu
         Poisson ratio, 0 <= nu <= 0.5.
+    modulus
+        Optional ``modulus(r, z)`` -> E / E_ref [-] at quadrature points (arrays of any
+        shape): a heterogeneous body (mu and lambda both scale with it, nu is uniform).
+        None: E = 1 everywhere.
     """
 
-    def __init__(self, r_nodes: np.ndarray, z_nodes: np.ndarray, nu: float) -> None:
+    def __init__(self, r_nodes: np.ndarray, z_nodes: np.ndarray, nu: float,
+                 modulus: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
+                 ) -> None:
         r_nodes = np.asarray(r_nodes, dtype=float)
         z_nodes = np.asarray(z_nodes, dtype=float)
         if r_nodes[0] != 0.0 or np.any(np.diff(r_nodes) <= 0) or np.any(np.diff(z_nodes) <= 0):
@@ -135,20 +141,33 @@ class AxisymmetricSolid:
         self.mesh = MeshTri.init_tensor(r_nodes, z_nodes)
         self.basis = Basis(self.mesh, ElementVector(ElementTriP2()), intorder=4)
         mu, lam = lame(self.nu)
-        a = asm(_deviatoric, self.basis, mu=mu)
+        scale = self._scale(self.basis, modulus)
+        a = asm(_deviatoric, self.basis, mu=mu if scale is None else mu * scale)
         n_u = self.basis.N
         if self.nu == 0.0:  # lambda = 0: no volumetric stiffness, the pressure is 0
             self.matrix = a.tocsr()
         else:
             pbasis = Basis(self.mesh, ElementTriP1(), intorder=4)
             b = asm(_divergence, self.basis, pbasis)
+            ps = self._scale(pbasis, modulus)
             c = (sp.csr_matrix((pbasis.N, pbasis.N)) if np.isinf(lam)
-                 else asm(_mass, pbasis) / lam)
+                 else asm(_mass, pbasis, inv=1.0 if ps is None else 1.0 / ps) / lam)
             self.matrix = sp.bmat([[a, b.T], [b, -c]], format="csr")
         self.n_u = n_u
         comp = self.basis.split_indices()
         self._dofs = {"r": comp[0], "z": comp[1]}
         self._locs = {k: self.basis.doflocs[:, v] for k, v in self._dofs.items()}
+
+    @staticmethod
+    def _scale(basis: Basis, modulus) -> np.ndarray | None:
+        """E / E_ref at ``basis``' quadrature points (elements, points); None if uniform."""
+        if modulus is None:
+            return None
+        x = basis.mapping.F(basis.X)
+        s = np.asarray(modulus(x[0], x[1]), dtype=float)
+        if s.shape != x[0].shape or not np.all(np.isfinite(s) & (s > 0)):
+            raise ValueError("modulus(r, z) must be positive and finite at every point")
+        return s
 
     @property
     def size(self) -> int:

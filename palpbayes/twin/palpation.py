@@ -19,9 +19,19 @@ the contact radius is solved, not imposed.  A flat punch is in contact over its 
 depth (its pressure is positive everywhere): its face is pushed down by d, and the force is the
 reaction there.
 
+**A lump under the tip** (:class:`CentredLump`): a sphere of another modulus on the axis,
+its centre ``depth`` below the top face — the one placement of an inclusion that keeps the
+body axisymmetric.  The mesh gets nodes across the sphere (:data:`LUMP_NODES` per radius) and
+every quadrature point inside it the lump's modulus, so the force is the linear-elastic
+answer to the inclusion that :mod:`palpbayes.inclusion`'s screening model (a Reuss average,
+a lower bound for a stiff lump) only estimates.
+
 Checked (``tests/unit/test_twin.py``): a paraboloid and a sphere in a deep, wide block against
 Hertz and Sneddon, a flat punch and a paraboloid in a wide layer against
-:mod:`palpbayes.contact.layer`, each within 0.1 %; the contact radius against Hertz's.
+:mod:`palpbayes.contact.layer`, each within 0.1 %; the contact radius against Hertz's.  The
+lump (``tests/unit/test_twin_lump.py``): a lump of ratio 1 is the homogeneous block on the same
+mesh, a stiff one raises the force and a soft one lowers it, and a stiff one's apparent ratio
+lies above the screening model's lower bound.
 """
 
 from __future__ import annotations
@@ -36,12 +46,67 @@ from ..contact import Tip, get_law, youngs_modulus
 from ..errors import GeometryError
 from .mesh import RESOLUTIONS, Resolution, contact_grid, depth_grid, punch_grid
 
-__all__ = ["PalpationCurve", "solve_palpation", "TWIN_BASES"]
+__all__ = ["PalpationCurve", "solve_palpation", "TWIN_BASES", "CentredLump", "lump_ratio"]
 
 #: Base conditions of the twin: bonded to the plate, or lying on it without friction.
 TWIN_BASES = ("bonded", "free")
 #: Candidate contact nodes reach this many times the deepest half-space contact radius.
 _REACH = 1.3
+#: Mesh nodes per lump radius, across the lump (radially and vertically).
+LUMP_NODES = 16
+
+
+@dataclass(frozen=True)
+class CentredLump:
+    """A sphere of modulus ``ratio`` × the block's on the tip's axis.
+
+    Parameters
+    ----------
+    radius
+        [L] The sphere's radius.
+    depth
+        [L] Its centre's depth below the top face (>= radius: under the surface).
+    ratio
+        E_lump / E_block [-], positive.
+    """
+
+    radius: float
+    depth: float
+    ratio: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.radius) and self.radius > 0 and math.isfinite(self.ratio)
+                and self.ratio > 0 and math.isfinite(self.depth)
+                and self.depth >= self.radius):
+            raise GeometryError(f"a lump needs a positive radius and ratio and its centre at "
+                                f"least one radius deep, got {self}")
+
+    def modulus(self, height: float):
+        """``modulus(r, z)`` [-] for :class:`~palpbayes.twin.fe.AxisymmetricSolid` in a body
+        whose top face is at z = ``height``."""
+        zc = height - self.depth
+
+        def field(r: np.ndarray, z: np.ndarray) -> np.ndarray:
+            return np.where(r**2 + (z - zc) ** 2 < self.radius**2, self.ratio, 1.0)
+
+        return field
+
+    def nodes(self, r_nodes: np.ndarray, z_nodes: np.ndarray, height: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """``r_nodes`` and ``z_nodes`` with :data:`LUMP_NODES` per radius across the lump
+        (nodes closer than 1e-3 of that spacing to one already there are not added)."""
+        h = self.radius / LUMP_NODES
+        zc = height - self.depth
+        r_new = np.arange(0.0, self.radius + 0.5 * h, h)
+        z_new = np.arange(max(zc - self.radius, 0.0), min(zc + self.radius, height) + 0.5 * h,
+                          h)
+        return _merge(r_nodes, r_new, 1e-3 * h), _merge(z_nodes, z_new[z_new <= height],
+                                                         1e-3 * h)
+
+
+def _merge(a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
+    far = np.min(np.abs(b[:, None] - a[None, :]), axis=1) > tol
+    return np.unique(np.r_[a, b[far]])
 
 
 @dataclass(frozen=True)
@@ -67,10 +132,18 @@ class PalpationCurve:
 
 
 def _solid(radius: float, height: float, nu: float, r_nodes: np.ndarray, first: float,
-           res: Resolution):
+           res: Resolution, lump: CentredLump | None = None):
     from .fe import AxisymmetricSolid  # scikit-fem is imported when a twin is first solved
 
-    return AxisymmetricSolid(r_nodes, depth_grid(height, first, res), nu)
+    z_nodes = depth_grid(height, first, res)
+    if lump is None:
+        return AxisymmetricSolid(r_nodes, z_nodes, nu)
+    if lump.depth + lump.radius > height or lump.radius >= radius:
+        raise GeometryError(f"the lump (radius {lump.radius:.4g}, centre {lump.depth:.4g} "
+                            f"deep) does not fit in the specimen ({height:.4g} high, radius "
+                            f"{radius:.4g})")
+    r_nodes, z_nodes = lump.nodes(r_nodes, z_nodes, height)
+    return AxisymmetricSolid(r_nodes, z_nodes, nu, modulus=lump.modulus(height))
 
 
 def _fixed(solid, base: str) -> np.ndarray:
@@ -83,8 +156,8 @@ def _fixed(solid, base: str) -> np.ndarray:
 
 
 def solve_palpation(radius: float, height: float, tip: Tip, nu: float, base: str,
-                    depths: np.ndarray, resolution: str | Resolution = "default"
-                    ) -> PalpationCurve:
+                    depths: np.ndarray, resolution: str | Resolution = "default",
+                    lump: CentredLump | None = None) -> PalpationCurve:
     """F/E* of ``tip`` pressed ``depths`` into the twin (module docstring).
 
     Parameters
@@ -102,6 +175,8 @@ def solve_palpation(radius: float, height: float, tip: Tip, nu: float, base: str
     resolution
         A name of :data:`~palpbayes.twin.mesh.RESOLUTIONS` or a
         :class:`~palpbayes.twin.mesh.Resolution`.
+    lump
+        A :class:`CentredLump` in the block (its modulus relative to the block's), or None.
 
     Raises
     ------
@@ -118,7 +193,7 @@ def solve_palpation(radius: float, height: float, tip: Tip, nu: float, base: str
     if not (depths.size and np.all(np.isfinite(depths)) and np.all(depths > 0)):
         raise GeometryError("twin depths must be positive and finite")
     if math.isinf(law.profile_exponent(tip)):
-        return _punch(radius, height, tip, nu, base, depths, res)
+        return _punch(radius, height, tip, nu, base, depths, res, lump)
     a_top = float(law.contact_radius(np.array([depths.max()]), tip)[0])
     reach = _REACH * a_top
     while True:
@@ -127,20 +202,22 @@ def solve_palpation(radius: float, height: float, tip: Tip, nu: float, base: str
                 f"a contact radius of {a_top:.4g} (half-space, at depth {depths.max():.4g}) "
                 f"does not fit well inside the specimen's radius {radius:.4g}: the twin needs "
                 "the contact well inside the top face (a shallower depth, a wider specimen)")
-        curve = _curved(radius, height, tip, nu, base, depths, res, reach)
+        curve = _curved(radius, height, tip, nu, base, depths, res, reach, lump)
         if curve is not None:
             return curve
         reach *= _REACH  # the contact reached the last candidate: a wider zone (pile-up)
 
 
+# Many parameters: the twin's geometry, tip, material and mesh, as solve_palpation's own.
 def _curved(radius: float, height: float, tip: Tip, nu: float, base: str, depths: np.ndarray,
-            res: Resolution, reach: float) -> PalpationCurve | None:
+            res: Resolution, reach: float, lump: CentredLump | None = None
+            ) -> PalpationCurve | None:
     """The complementarity solution with candidate nodes up to ``reach``; None when the
     contact reaches the last of them."""
     law = get_law(tip)
     a_mesh = reach / _REACH
     solid = _solid(radius, height, nu, contact_grid(a_mesh, radius, res), res.first * a_mesh,
-                   res)
+                   res, lump)
     fac = solid.factorize(_fixed(solid, base))
     cand = solid.dofs("z", lambda r, z: solid.on_top(r, z) & (r <= reach * (1 + 1e-9)))
     r_c = solid.location(cand)[0]
@@ -161,12 +238,13 @@ def _curved(radius: float, height: float, tip: Tip, nu: float, base: str, depths
 
 
 def _punch(radius: float, height: float, tip: Tip, nu: float, base: str, depths: np.ndarray,
-           res: Resolution) -> PalpationCurve:
+           res: Resolution, lump: CentredLump | None = None) -> PalpationCurve:
     a = float(tip.radius)
     if a >= radius:
         raise GeometryError(f"a flat punch of radius {a:.4g} does not fit on a specimen of "
                             f"radius {radius:.4g}")
-    solid = _solid(radius, height, nu, punch_grid(a, radius, res), res.punch_first * a, res)
+    solid = _solid(radius, height, nu, punch_grid(a, radius, res), res.punch_first * a, res,
+                   lump)
     face = solid.dofs("z", lambda r, z: solid.on_top(r, z) & (r <= a * (1 + 1e-9)))
     support = _fixed(solid, base)
     fac = solid.factorize(np.r_[support, face])
@@ -175,3 +253,19 @@ def _punch(radius: float, height: float, tip: Tip, nu: float, base: str, depths:
     x = fac.solve(np.zeros(solid.size), prescribed)
     s1 = youngs_modulus(-2.0 * math.pi * fac.reaction(x, face).sum(), nu)
     return PalpationCurve(depths, s1 * depths, np.full(depths.size, a), solid.size)
+
+
+# Many parameters: the twin's geometry, tip, material and mesh, as solve_palpation's own.
+def lump_ratio(radius: float, height: float, tip: Tip, nu: float, base: str,
+               depths: np.ndarray, lump: CentredLump,
+               resolution: str | Resolution = "default") -> np.ndarray:
+    """F_lump / F_block [-] at each of ``depths``: the force of ``tip`` over a centred
+    ``lump`` against the same block without it, on the same mesh (the lump's ratio set to
+    1), so that the mesh's own error cancels.  The apparent modulus ratio a fit of the press
+    to ``depths[i]`` reads is this ratio's weighted mean over the press (module docstring;
+    parameters as :func:`solve_palpation`).
+    """
+    with_lump = solve_palpation(radius, height, tip, nu, base, depths, resolution, lump)
+    same_mesh = CentredLump(lump.radius, lump.depth, 1.0)
+    without = solve_palpation(radius, height, tip, nu, base, depths, resolution, same_mesh)
+    return with_lump.shape / without.shape
