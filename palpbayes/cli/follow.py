@@ -46,7 +46,14 @@ from ..contact import DEFAULT_NU_NOTE
 from ..errors import InputError
 from ..online import OnlineEstimator, OnlineState
 from ..online.stream import Batch, SampleParser, batches
-from ..online.tcp import DEFAULT_HOST, accept_lines, connect_lines, listen, parse_address
+from ..online.tcp import (
+    DEFAULT_HOST,
+    SEND_TIMEOUT,
+    accept_lines,
+    connect_lines,
+    listen,
+    parse_address,
+)
 from .follow_lines import StopLine, final_json, final_text, update_json, update_text
 from .next import add_rule_options
 from .online_options import add_online_options, estimator_from_args, rule_from_args
@@ -152,6 +159,15 @@ def register(subparsers) -> None:
                         "DIR/presses.csv and answer with the next press or the decision")
     m.add_argument("--criterion", choices=("eig", "lse", "ucb"), default="eig",
                    help="how the next press is chosen (default eig; 'palpbayes next --help')")
+    m.add_argument("--depths", metavar="F1,F2,...", default=None,
+                   help="allowed indentation depths as fractions of the state's thickness "
+                        "(e.g. 0.1,0.2; default the state's, from 'next --init --depths'): a "
+                        "press at another depth is refused before it (--max-force, above, is "
+                        "the force limit: default the state's)")
+    m.add_argument("--send-timeout", type=float, default=SEND_TIMEOUT, metavar="S",
+                   help=f"longest wait to send one line to a robot that stopped reading "
+                        f"(default {SEND_TIMEOUT:g} s): the press is then dropped and its "
+                        "connection closed")
     add_rule_options(m)
     p.set_defaults(input="the stream", map_only=tuple(
         (a.option_strings[0], a.dest, a.default) for a in m._group_actions[1:]))
@@ -286,6 +302,13 @@ def _check_map_options(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     _check_map_options(args)
+    if args.map is not None:
+        from ..active.files import read_limits
+
+        if not (math.isfinite(args.send_timeout) and args.send_timeout > 0):
+            raise InputError(f"--send-timeout {args.send_timeout!r} must be a time > 0 [s]")
+        if args.max_force is None:  # the state's force limit stops a press too
+            args.max_force = read_limits(args.map).max_force
     rule = rule_from_args(args)
     tip = tip_from_args(args)
     estimator = estimator_from_args(args, tip, rule)
@@ -297,13 +320,20 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: {DEFAULT_NU_NOTE.replace(', or a nu column in the manifest', '')}",
               file=sys.stderr, flush=True)
     if args.map is not None:
-        from .follow_map import live_loop
+        from dataclasses import replace
 
-        def press(lines: Iterable[str], source: str, emit: Callable[[str], None]):
-            est = estimator_from_args(args, tip, rule)  # a fresh estimator per press
+        from .follow_map import live_loop
+        from .follow_safety import force_law
+        from .online_options import model_from_args
+
+        def press(lines: Iterable[str], source: str, emit: Callable[[str], None],
+                  depth: float | None):
+            stop = rule if depth is None else replace(rule, max_depth=min(
+                depth, rule.max_depth or depth))  # never past the press's depth
+            est = estimator_from_args(args, tip, stop)  # a fresh estimator per press
             return follow_stream(args, est, opts, lines, source, emit)
 
-        return live_loop(args, press, _say)
+        return live_loop(args, press, _say, force_at=force_law(model_from_args(args, tip)))
     if args.listen is not None:
         host, port = parse_address(args.listen)
         if host not in (DEFAULT_HOST, "localhost", "::1"):
