@@ -100,12 +100,21 @@ When the stream ends first, the last line starts with 'end:' ("event": "end").
 Input is parsed as numbers only (float, json.loads): nothing is evaluated or unpickled.
 
 live loop (--listen PORT --map DIR, DIR from 'palpbayes next DIR --init'): one connection
-per press.  The robot sends 'press X Y' [m], then the samples; every line above also comes
-back on the connection; at the stop (or when the robot shuts its sending side) the press's
-E is added to DIR/presses.csv and the answer follows, one JSON line with a "decision" key:
-"event" "next" (the next press: connect again) or "done" (exit 0 decided, 11 undecided: the
---budget is spent or no candidate is left).  A first line other than 'press X Y' gets
-{{"event": "error", "message": ...}} and exit status 2."""
+per press.  The robot sends 'press X Y' or 'press X Y DEPTH' [m] (no DEPTH: the state's
+depth), waits for the verdict, then sends the samples.  The verdict, one JSON line:
+  {{"event": "refused", "rule": ..., "message": ...}}: off the footprint, inside a keep-out
+     zone, a depth not allowed (--depths), or a predicted peak force over --max-force (the
+     contact law at the stiffest press so far x the prior's largest lump ratio); the press
+     is not recorded, the connection is closed, the loop takes the next one;
+  {{"event": "accepted", ..., "predicted_force_n": ...}}: press, to DEPTH at most.
+Every line above then also comes back on the connection; a sample reaching --max-force
+gives the stop line at once (the press is then not recorded); at the stop (or when the
+robot shuts its sending side) the press's E is added to DIR/presses.csv and the answer
+follows, one JSON line with a "decision" key: "event" "next" (the next press: connect
+again) or "done" (exit 0 decided, 11 undecided: the --budget is spent or no candidate is
+left).  A line that cannot be sent within --send-timeout (the robot stopped reading) drops
+the press (stderr says so) and closes its connection; the loop goes on.  A first line that
+is not a press line gets {{"event": "error", "message": ...}} and exit status 2."""
 
 #: [s] Longest a thread holds the interpreter while another waits for it, during the run
 #: (:func:`sys.setswitchinterval`; Python's default is 5 ms): the reader thread gets it within
@@ -155,8 +164,9 @@ def register(subparsers) -> None:
     m = p.add_argument_group("live loop of an active search (--map DIR, with --listen)")
     m.add_argument("--map", metavar="DIR", default=None,
                    help="a search state ('palpbayes next DIR --init'): take one connection "
-                        "per press ('press X Y', then its samples), add each press's E to "
-                        "DIR/presses.csv and answer with the next press or the decision")
+                        "per press ('press X Y [DEPTH]', then its samples), refuse an unsafe "
+                        "one, add each press's E to DIR/presses.csv and answer with the next "
+                        "press or the decision")
     m.add_argument("--criterion", choices=("eig", "lse", "ucb"), default="eig",
                    help="how the next press is chosen (default eig; 'palpbayes next --help')")
     m.add_argument("--depths", metavar="F1,F2,...", default=None,

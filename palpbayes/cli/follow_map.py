@@ -3,24 +3,51 @@
 One listener, one TCP connection per press, so that a robot program runs press → decide →
 move with nothing but a socket:
 
-1. the robot connects and sends ``press X Y`` (the press position [m], two numbers read
-   with ``float``) as the first non-blank line, then the press's samples exactly as to
-   ``palpbayes follow`` (CSV with a header, or JSON lines);
-2. follow runs a fresh online estimator on them (:func:`~.follow.follow_stream`) and writes
-   every line it prints (the updates, the stop line, the last line) to stdout **and** to the
-   connection, flushed, so the robot can stop on the stop line without reading stdout;
-3. at the stop (or when the robot shuts its sending side), the press's estimate of E becomes
+1. the robot connects and sends ``press X Y`` or ``press X Y DEPTH`` (the press position
+   [m] and its indentation depth below the surface [m], numbers read with ``float``) as the
+   first non-blank line; without DEPTH the press is at the search's depth (``depth_m`` of
+   ``search.json``);
+2. the press is checked before any sample is read (:mod:`palpbayes.active.safety`): off the
+   footprint, inside a keep-out zone, at a depth not in (0, thickness) or not one of the
+   allowed depths (``--depths``, fractions of the thickness), or with a predicted peak force
+   over ``--max-force`` (the contact law of follow's tip, nu and layer at the largest
+   plausible E: the stiffest press so far, the upper end of its one-sided 99 % interval,
+   times the search prior's largest lump ratio, 3 by default), it gets one line,
+   ``{"event": "refused", "rule": "footprint" | "keep-out" | "depth" | "force", "message":
+   ..., "x_m", "y_m", "depth_m"}`` (the message names the position, the rule broken and what
+   to do), is not recorded, and the connection is closed; the loop takes the next one
+   (exit status unchanged).  Otherwise it gets ``{"event": "accepted", "x_m", "y_m",
+   "depth_m", "max_force_n", "predicted_force_n"}`` (null where not known; no force is
+   predicted before the first press): a robot that waits for this line before it moves is
+   refused before the press;
+3. the press's samples, exactly as to ``palpbayes follow`` (CSV with a header, or JSON
+   lines), are followed by a fresh online estimator (:func:`~.follow.follow_stream`) that
+   stops at the press's depth too (the stricter of it and ``--max-depth``); every line it
+   prints (the updates, the stop line, the last line) goes to stdout **and** to the
+   connection, flushed, so the robot can stop on the stop line without reading stdout.  A
+   sample whose force above the baseline reaches ``--max-force`` gives the stop line at
+   once (``"stop": "max force"``);
+4. at the stop (or when the robot shuts its sending side), the press's estimate of E becomes
    its posterior of log(E/Pa) (:func:`press_posterior`), added to ``DIR/presses.csv`` with
-   P(lump) after it; a press without an estimate (no contact) is not added and the answer
-   says so (``"warning"``);
-4. the answer of :func:`palpbayes.active.next_presses` on the new state is one JSON line
+   P(lump) after it.  Not added, and said in the answer's ``"warning"``: a press without an
+   estimate (no contact; press again), and a press the force limit stopped
+   (:data:`FORCE_STOP`: it did not reach its depth, so its E would be read as the wrong
+   signature; the answer may name the same position again: press there shallower, or
+   elsewhere);
+5. the answer of :func:`palpbayes.active.next_presses` on the new state is one JSON line
    (:func:`~.next.answer_json`; ``"event"`` ``"next"`` with the next press, or ``"done"``)
    on the connection and stdout; then the connection is closed (after the robot closes its
    side, or a grace period) and, unless the answer is ``"done"``, the next one is accepted.
 
+Every line sent waits at most ``--send-timeout`` [s] (:data:`~palpbayes.online.tcp.
+SEND_TIMEOUT`, 10 s) for the robot to make room.  A robot that stops reading fills the
+sockets' buffers (some MB on loopback, so it shows only after many lines) and then loses its
+press: said on stderr (``error: ...``), not recorded, no answer, the connection closed at
+once, and the loop takes the next connection.
+
 The answer does not wait for the robot to stop sending: what it still sends after the stop
 line is read and dropped.  Line numbers in messages count the connection's lines, the press
-line included.  A first line other than ``press X Y`` gets ``{"event": "error", "message":
+line included.  A first line that is not a press line gets ``{"event": "error", "message":
 ...}`` and ends the loop with exit status 2, as does a bad sample line.  Exit status at the
 end: :data:`~.next.EXIT_DECIDED` (decided) or :data:`~.next.EXIT_UNDECIDED` (the budget is
 spent, or no candidate is left).
