@@ -1,7 +1,8 @@
 """A simulated robot finds a lump with ``palpbayes follow --listen 0 --map DIR``.
 
-The robot here is a plain socket client: for each press it connects, sends ``press X Y``
-and the press's samples (CSV lines, from a simulated phantom with a hard lump), stops
+The robot here is a plain socket client: for each press it connects, sends ``press X Y``,
+waits for the ``"accepted"`` line (a refused press gets ``"refused"`` and is not made), sends
+the press's samples (CSV lines, from a simulated phantom with a hard lump), stops
 sending when it reads the stop line back, shuts its sending side, reads lines until the
 answer (the JSON line with a ``"decision"`` key) and moves to the press it names, until the
 answer's ``"event"`` is ``"done"``.  A real robot does the same with its own samples.
@@ -89,7 +90,11 @@ def press(port: int, x: float, y: float, key: int, speed: float) -> tuple[dict, 
     got, stopped = [], False
     with socket.create_connection(("127.0.0.1", port), timeout=60) as s:
         reader = s.makefile("r", encoding="utf-8")
-        s.sendall(f"press {x!r} {y!r}\ntime_s,z_m,force_n\n".encode())
+        s.sendall(f"press {x!r} {y!r}\n".encode())
+        verdict = _json(reader.readline()) or {}  # accepted or refused, before any motion
+        if verdict.get("event") != "accepted":
+            raise SystemExit(f"follow did not accept the press: {verdict.get('message')}")
+        s.sendall(b"time_s,z_m,force_n\n")
         for i in range(0, len(rows), BLOCK):
             if speed > 0:  # the robot moves at its own pace: wait for the samples' time
                 ahead = trace.time[i] / speed - (time.perf_counter() - start)

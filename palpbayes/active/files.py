@@ -5,7 +5,9 @@ A search-state folder (``palpbayes next DIR --init``, then one row per press fro
 
     DIR/
       search.json   the specimen: footprint, keep-out zones, minimum spacing [m], the tip's
-                    contact radius and the block thickness [m], the tip and the depth
+                    contact radius and the block thickness [m], the tip and the depth, and
+                    the limits of a press (optional: the allowed depths as fractions of the
+                    thickness, the largest force [N]; :func:`read_limits`)
       presses.csv   one row per press: x_m, y_m, logE_mean, logE_sd (the press's
                     posterior of log(E/Pa)), and after each press p_lump (P(lump) after it)
 
@@ -26,9 +28,11 @@ import pandas as pd
 
 from ..errors import DataFileError, InputError
 from ..io.atomic import write_csv_atomic, write_text_atomic
+from .safety import PressLimits
 from .search import PRESS_COLUMNS, SearchState
 
-__all__ = ["SEARCH_FILE", "PRESSES_FILE", "init_state", "read_state", "append_press"]
+__all__ = ["SEARCH_FILE", "PRESSES_FILE", "init_state", "read_state", "append_press",
+           "read_limits"]
 
 SEARCH_FILE = "search.json"
 PRESSES_FILE = "presses.csv"
@@ -83,6 +87,31 @@ def _from_record(rec: dict, presses: pd.DataFrame, path: Path, **overrides) -> S
         return SearchState(presses, **kw)
     except InputError as exc:
         raise DataFileError(path, str(exc)) from None
+
+
+def read_limits(folder: str | os.PathLike) -> PressLimits:
+    """The limits of a press recorded in a state folder's ``search.json``: ``depths``
+    (fractions of the thickness), ``max_force_n`` [N] and ``depth_m`` [m], each optional (a
+    state written before they existed has none: no limit); a map folder has none either.
+
+    Raises
+    ------
+    DataFileError
+        ``search.json`` is not readable, or a limit in it is not a number of its kind.
+    """
+    path = Path(folder) / SEARCH_FILE
+    if not path.is_file():
+        return PressLimits()
+    try:
+        rec = json.loads(path.read_text(encoding="utf-8"))
+        depths = tuple(float(v) for v in (rec.get("depths") or ()))
+        F, d = rec.get("max_force_n"), rec.get("depth_m")
+        return PressLimits(depths=depths, max_force=None if F is None else float(F),
+                           depth=None if d is None else float(d))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, AttributeError, TypeError,
+            ValueError, InputError) as exc:
+        raise DataFileError(path, f"has no readable limits ({exc})",
+                            "create the state again with 'palpbayes next DIR --init'") from None
 
 
 def _read_table(path: Path) -> pd.DataFrame:

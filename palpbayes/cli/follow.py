@@ -46,7 +46,14 @@ from ..contact import DEFAULT_NU_NOTE
 from ..errors import InputError
 from ..online import OnlineEstimator, OnlineState
 from ..online.stream import Batch, SampleParser, batches
-from ..online.tcp import DEFAULT_HOST, accept_lines, connect_lines, listen, parse_address
+from ..online.tcp import (
+    DEFAULT_HOST,
+    SEND_TIMEOUT,
+    accept_lines,
+    connect_lines,
+    listen,
+    parse_address,
+)
 from .follow_lines import StopLine, final_json, final_text, update_json, update_text
 from .next import add_rule_options
 from .online_options import add_online_options, estimator_from_args, rule_from_args
@@ -93,12 +100,21 @@ When the stream ends first, the last line starts with 'end:' ("event": "end").
 Input is parsed as numbers only (float, json.loads): nothing is evaluated or unpickled.
 
 live loop (--listen PORT --map DIR, DIR from 'palpbayes next DIR --init'): one connection
-per press.  The robot sends 'press X Y' [m], then the samples; every line above also comes
-back on the connection; at the stop (or when the robot shuts its sending side) the press's
-E is added to DIR/presses.csv and the answer follows, one JSON line with a "decision" key:
-"event" "next" (the next press: connect again) or "done" (exit 0 decided, 11 undecided: the
---budget is spent or no candidate is left).  A first line other than 'press X Y' gets
-{{"event": "error", "message": ...}} and exit status 2."""
+per press.  The robot sends 'press X Y' or 'press X Y DEPTH' [m] (no DEPTH: the state's
+depth), waits for the verdict, then sends the samples.  The verdict, one JSON line:
+  {{"event": "refused", "rule": ..., "message": ...}}: off the footprint, inside a keep-out
+     zone, a depth not allowed (--depths), or a predicted peak force over --max-force (the
+     contact law at the stiffest press so far x the prior's largest lump ratio); the press
+     is not recorded, the connection is closed, the loop takes the next one;
+  {{"event": "accepted", ..., "predicted_force_n": ...}}: press, to DEPTH at most.
+Every line above then also comes back on the connection; a sample reaching --max-force
+gives the stop line at once (the press is then not recorded); at the stop (or when the
+robot shuts its sending side) the press's E is added to DIR/presses.csv and the answer
+follows, one JSON line with a "decision" key: "event" "next" (the next press: connect
+again) or "done" (exit 0 decided, 11 undecided: the --budget is spent or no candidate is
+left).  A line that cannot be sent within --send-timeout (the robot stopped reading) drops
+the press (stderr says so) and closes its connection; the loop goes on.  A first line that
+is not a press line gets {{"event": "error", "message": ...}} and exit status 2."""
 
 #: [s] Longest a thread holds the interpreter while another waits for it, during the run
 #: (:func:`sys.setswitchinterval`; Python's default is 5 ms): the reader thread gets it within
@@ -148,10 +164,20 @@ def register(subparsers) -> None:
     m = p.add_argument_group("live loop of an active search (--map DIR, with --listen)")
     m.add_argument("--map", metavar="DIR", default=None,
                    help="a search state ('palpbayes next DIR --init'): take one connection "
-                        "per press ('press X Y', then its samples), add each press's E to "
-                        "DIR/presses.csv and answer with the next press or the decision")
+                        "per press ('press X Y [DEPTH]', then its samples), refuse an unsafe "
+                        "one, add each press's E to DIR/presses.csv and answer with the next "
+                        "press or the decision")
     m.add_argument("--criterion", choices=("eig", "lse", "ucb"), default="eig",
                    help="how the next press is chosen (default eig; 'palpbayes next --help')")
+    m.add_argument("--depths", metavar="F1,F2,...", default=None,
+                   help="allowed indentation depths as fractions of the state's thickness "
+                        "(e.g. 0.1,0.2; default the state's, from 'next --init --depths'): a "
+                        "press at another depth is refused before it (--max-force, above, is "
+                        "the force limit: default the state's)")
+    m.add_argument("--send-timeout", type=float, default=SEND_TIMEOUT, metavar="S",
+                   help=f"longest wait to send one line to a robot that stopped reading "
+                        f"(default {SEND_TIMEOUT:g} s): the press is then dropped and its "
+                        "connection closed")
     add_rule_options(m)
     p.set_defaults(input="the stream", map_only=tuple(
         (a.option_strings[0], a.dest, a.default) for a in m._group_actions[1:]))
@@ -286,6 +312,13 @@ def _check_map_options(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     _check_map_options(args)
+    if args.map is not None:
+        from ..active.files import read_limits
+
+        if not (math.isfinite(args.send_timeout) and args.send_timeout > 0):
+            raise InputError(f"--send-timeout {args.send_timeout!r} must be a time > 0 [s]")
+        if args.max_force is None:  # the state's force limit stops a press too
+            args.max_force = read_limits(args.map).max_force
     rule = rule_from_args(args)
     tip = tip_from_args(args)
     estimator = estimator_from_args(args, tip, rule)
@@ -297,13 +330,20 @@ def run(args: argparse.Namespace) -> int:
         print(f"note: {DEFAULT_NU_NOTE.replace(', or a nu column in the manifest', '')}",
               file=sys.stderr, flush=True)
     if args.map is not None:
-        from .follow_map import live_loop
+        from dataclasses import replace
 
-        def press(lines: Iterable[str], source: str, emit: Callable[[str], None]):
-            est = estimator_from_args(args, tip, rule)  # a fresh estimator per press
+        from .follow_map import live_loop
+        from .follow_safety import force_law
+        from .online_options import model_from_args
+
+        def press(lines: Iterable[str], source: str, emit: Callable[[str], None],
+                  depth: float | None):
+            stop = rule if depth is None else replace(rule, max_depth=min(
+                depth, rule.max_depth or depth))  # never past the press's depth
+            est = estimator_from_args(args, tip, stop)  # a fresh estimator per press
             return follow_stream(args, est, opts, lines, source, emit)
 
-        return live_loop(args, press, _say)
+        return live_loop(args, press, _say, force_at=force_law(model_from_args(args, tip)))
     if args.listen is not None:
         host, port = parse_address(args.listen)
         if host not in (DEFAULT_HOST, "localhost", "::1"):

@@ -84,7 +84,14 @@ def register(subparsers) -> None:
     i = p.add_argument_group("--init: create the state folder DIR (no press yet)")
     i.add_argument("--init", action="store_true", help="create DIR's search.json")
     i.add_argument("--depth", type=float, metavar="M",
-                   help="[m] indentation depth of every press (default 10 %% of --thickness)")
+                   help="[m] indentation depth of a press that gives none (default the "
+                        "smallest of --depths, else 10 %% of --thickness)")
+    i.add_argument("--depths", metavar="F1,F2,...", default=None,
+                   help="allowed indentation depths as fractions of --thickness (e.g. "
+                        "0.1,0.2): 'follow --map' refuses a press at any other depth")
+    i.add_argument("--max-force", type=float, metavar="N", default=None,
+                   help="[N] largest force a press may reach: 'follow --map' refuses a press "
+                        "whose predicted peak force exceeds it and stops one that reaches it")
     i.add_argument("--force", action="store_true", help="replace DIR's state")
     add_tip_options(i)
     p.set_defaults(input="next --init")
@@ -126,10 +133,17 @@ def _init(args: argparse.Namespace) -> int:
     if args.footprint is None or args.thickness is None:
         raise InputError("--init needs --footprint X0,X1,Y0,Y1 and --thickness M (and the "
                          "tip: --tip and its size)")
+    from ..active.safety import PressLimits, parse_depths
+
     tip = tip_from_args(args)
-    depth = 0.1 * args.thickness if args.depth is None else args.depth
+    fractions = () if args.depths is None else parse_depths(args.depths)
+    depth = (args.depth if args.depth is not None else
+             min(fractions) * args.thickness if fractions else 0.1 * args.thickness)
     if not (math.isfinite(depth) and depth > 0):
         raise InputError(f"--depth {args.depth!r} must be > 0 [m]")
+    PressLimits(depths=fractions, max_force=args.max_force, depth=depth)  # checked
+    limits = {k: v for k, v in (("depths", list(fractions) or None),
+                                ("max_force_n", args.max_force)) if v is not None}
     a = contact_radius(tip, depth)
     over = {k: v for k, v in state_overrides(args).items() if v is not None}
     extra = {f"{k}_m" if k == "min_spacing" else k: v for k, v in over.items()
@@ -137,10 +151,12 @@ def _init(args: argparse.Namespace) -> int:
     init_state(args.state, footprint=over["footprint"], contact_radius=a,
                thickness=args.thickness, keep_out=over.get("keep_out", ()),
                overwrite=args.force, tip=tip.kind, tip_radius_m=tip.radius, depth_m=depth,
-               **extra)
+               **limits, **extra)
+    said = "".join([f"; depths {args.depths} of the thickness" if fractions else "",
+                    f"; max force {args.max_force:g} N" if args.max_force else ""])
     print(f"search state in {args.state}: footprint {args.footprint} m, contact radius "
-          f"{1e3 * a:.2f} mm at {1e3 * depth:.2f} mm, block {1e3 * args.thickness:g} mm; "
-          f"now press (palpbayes follow --map {args.state}) and ask 'palpbayes next "
+          f"{1e3 * a:.2f} mm at {1e3 * depth:.2f} mm, block {1e3 * args.thickness:g} mm"
+          f"{said}; now press (palpbayes follow --map {args.state}) and ask 'palpbayes next "
           f"{args.state}'")
     return 0
 
@@ -187,6 +203,11 @@ def answer_text(ans) -> str:
 def run(args: argparse.Namespace) -> int:
     if args.init:
         return _init(args)
+    used = [o for o, v in (("--depth", args.depth), ("--depths", args.depths),
+                           ("--max-force", args.max_force)) if v is not None]
+    if used:
+        raise InputError(f"{', '.join(used)} belong(s) to --init (they are recorded in the "
+                         "state's search.json); give --init, or leave them out")
     from ..active import next_presses
     from ..active.files import read_state
 

@@ -12,8 +12,10 @@ the port.  What arrives is only read as text (UTF-8 lines), never unpickled or e
 from __future__ import annotations
 
 import queue
+import selectors
 import socket
 import threading
+import time
 from collections.abc import Iterator
 from contextlib import suppress
 from typing import TextIO
@@ -21,10 +23,18 @@ from typing import TextIO
 from ..errors import InputError
 
 __all__ = ["DEFAULT_HOST", "listen", "accept_lines", "connect_lines", "parse_address",
-           "SessionConnection", "accept_session"]
+           "SessionConnection", "accept_session", "SEND_TIMEOUT"]
 
 #: The interface a listener binds to unless told otherwise: loopback only.
 DEFAULT_HOST = "127.0.0.1"
+
+#: [s] Longest a :meth:`SessionConnection.send` of one line may wait for the peer to make
+#: room (a peer that stops reading fills the socket's buffers; then the send gives up).
+SEND_TIMEOUT = 10.0
+
+#: ``send`` flag for a write that never blocks (POSIX); 0 elsewhere, where a write is only
+#: begun once the socket is writable (and may then block until it is done).
+_NO_WAIT = getattr(socket, "MSG_DONTWAIT", 0)
 
 
 def parse_address(text: str, default_host: str = DEFAULT_HOST) -> tuple[str, int]:
@@ -82,8 +92,8 @@ class SessionConnection:
     :meth:`lines` (for :func:`palpbayes.online.stream.batches`, whose own reader thread
     iterates it); once :meth:`close` has begun it reads on and drops what arrives, so that
     the connection is not reset with data unread.  :meth:`send` writes one line, flushed at
-    once (Nagle's algorithm off), from any thread.  What arrives is only decoded as UTF-8
-    text, never evaluated or unpickled.
+    once (Nagle's algorithm off), from any thread, within ``send_timeout``.  What arrives is
+    only decoded as UTF-8 text, never evaluated or unpickled.
 
     Parameters
     ----------
@@ -91,19 +101,30 @@ class SessionConnection:
         The accepted socket (the connection owns it from now on).
     peer
         The peer's ``host:port``, for messages.
+    send_timeout
+        [s] Longest wait of one :meth:`send` for room in the socket's buffers (a peer that
+        stops reading); None: :data:`SEND_TIMEOUT`.
 
     Attributes
     ----------
     lines_read
         Lines handed out so far (by :meth:`readline` and :meth:`lines`).
     broken
-        Why sending failed (the peer is gone); "" while sending works.
+        Why sending failed (the peer is gone, or stopped reading); "" while sending works.
+    send_timed_out
+        True once a send gave up after ``send_timeout`` (then :attr:`broken` says so too).
     """
 
-    def __init__(self, conn: socket.socket, peer: str) -> None:
+    def __init__(self, conn: socket.socket, peer: str,
+                 send_timeout: float | None = None) -> None:
         self.peer = peer
         self.lines_read = 0  # lines handed out so far (readline and lines())
         self.broken: str = ""  # why sending failed (the peer is gone), "" while it works
+        self.send_timed_out = False
+        self.send_timeout = SEND_TIMEOUT if send_timeout is None else float(send_timeout)
+        if not self.send_timeout > 0:
+            conn.close()
+            raise InputError(f"send timeout {send_timeout!r} must be > 0 [s]")
         self._conn = conn
         self._file = conn.makefile("r", encoding="utf-8", newline=None)
         self._queue: queue.SimpleQueue = queue.SimpleQueue()
@@ -168,18 +189,42 @@ class SessionConnection:
             yield line
 
     def send(self, line: str) -> bool:
-        """Write ``line`` and a newline to the peer at once; False (and :attr:`broken` set)
-        when the peer is gone, which is not an error: the caller goes on without it."""
+        """Write ``line`` and a newline to the peer at once, waiting at most
+        :attr:`send_timeout` [s] for room; False (and :attr:`broken` set) when the peer is
+        gone or has not made room in time (:attr:`send_timed_out`), which is not an error:
+        the caller goes on without it (every later send returns False at once)."""
         if self.broken:
             return False
         data = (line.rstrip("\n") + "\n").encode("utf-8")
         with self._send_lock:
+            if self.broken:
+                return False
             try:
-                self._conn.sendall(data)
+                self._send_within(memoryview(data), time.monotonic() + self.send_timeout)
+            except TimeoutError:
+                self.send_timed_out = True
+                self.broken = (f"a line could not be sent within {self.send_timeout:g} s: "
+                               "the peer stopped reading")
+                return False
             except OSError as exc:
                 self.broken = exc.strerror or type(exc).__name__
                 return False
         return True
+
+    def _send_within(self, view: memoryview, deadline: float) -> None:
+        """Write all of ``view`` before ``deadline`` (time.monotonic) or raise TimeoutError;
+        never blocks past it (the socket stays blocking for the pump's reads)."""
+        with selectors.DefaultSelector() as sel:
+            sel.register(self._conn, selectors.EVENT_WRITE)
+            while view:
+                left = deadline - time.monotonic()
+                if left <= 0 or not sel.select(left):
+                    raise TimeoutError
+                try:
+                    n = self._conn.send(view, _NO_WAIT)
+                except (BlockingIOError, InterruptedError):
+                    continue
+                view = view[n:]
 
     def close(self, grace: float = 2.0) -> None:
         """Say the end to the peer (FIN after what was sent), wait up to ``grace`` [s] for it
@@ -208,7 +253,8 @@ class SessionConnection:
         self.close(grace=2.0 if exc[0] is None else 0.0)
 
 
-def accept_session(server: socket.socket, timeout: float | None = None) -> SessionConnection:
+def accept_session(server: socket.socket, timeout: float | None = None,
+                   send_timeout: float | None = None) -> SessionConnection:
     """Wait for the next connection on ``server`` (a :func:`listen` socket) and return it as
     a :class:`SessionConnection`: its lines (:meth:`~SessionConnection.readline`,
     :meth:`~SessionConnection.lines`) and a line writer back to the peer
@@ -220,6 +266,8 @@ def accept_session(server: socket.socket, timeout: float | None = None) -> Sessi
         The listening socket.
     timeout
         [s] Longest wait for a connection (None: as long as it takes).
+    send_timeout
+        [s] The connection's longest wait to send one line (None: :data:`SEND_TIMEOUT`).
 
     Raises
     ------
@@ -232,4 +280,4 @@ def accept_session(server: socket.socket, timeout: float | None = None) -> Sessi
     finally:
         server.settimeout(None)
     conn.settimeout(None)
-    return SessionConnection(conn, f"{peer[0]}:{peer[1]}")
+    return SessionConnection(conn, f"{peer[0]}:{peer[1]}", send_timeout)

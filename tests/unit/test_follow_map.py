@@ -179,14 +179,17 @@ def session(tmp_path_factory):
 def test_every_press_is_answered_on_its_connection(session):
     events = [[r["event"] for r in got] for _, _, _, got in session["conns"]]
     assert [e[-1] for e in events] == ["next", "next", "next", "done"]
-    for (_, _, how, got), ev in zip(session["conns"], events, strict=True):
+    for (x, y, how, got), ev in zip(session["conns"], events, strict=True):
         assert "decision" in got[-1] and "decision" not in got[-2]
+        # the press is accepted before its samples are read, at the search's depth
+        assert got[0] == {"event": "accepted", "x_m": x, "y_m": y, "depth_m": 0.002,
+                          "max_force_n": None, "predicted_force_n": None}
         if how == "no_contact":
             assert got[-2]["event"] == "end" and not got[-2]["in_contact"]
             assert "stop" not in ev[:-1]
             continue
         # line numbers are the connection's: 'press X Y' is line 1, the header line 2
-        assert (got[0]["event"], got[0]["n"], got[0]["line"]) == ("update", 100, 102)
+        assert (got[1]["event"], got[1]["n"], got[1]["line"]) == ("update", 100, 102)
         # the stop line, the update up to it, the last line, then the answer
         assert ev.count("update") >= 10 and ev[-4:-1] == ["stop", "update", "stop"]
         assert (got[-4]["final"], got[-4]["stop"], got[-2]["final"]) == (
@@ -281,6 +284,8 @@ def test_a_folder_without_a_state_is_named_before_listening(tmp_path, capsys):
 @pytest.mark.parametrize("line, words", [
     ("", "ended before its first line"),
     ("press 0.01\n", "'press 0.01' is not a press line"),
+    ("press 0.01 0.02 0.002 5\n", "is not a press line"),
+    ("press 0.01 0.02 inf\n", "must be finite"),
     ("press 1e-3 0x10\n", "is not a press line"),
     ("PRESS nan 0.01\n", "must be finite"),
     ("move 0.01 0.02\n", "'move 0.01 0.02' is not a press line"),
@@ -292,7 +297,8 @@ def test_a_press_line_is_two_numbers(line, words):
 
 
 def test_a_press_line():
-    assert parse_press_line("  press 0.02  2.4e-2 \n", "tcp here", 1) == (0.02, 0.024)
+    assert parse_press_line("  press 0.02  2.4e-2 \n", "tcp here", 1) == (0.02, 0.024, None)
+    assert parse_press_line("press 0.02 0.024 2e-3\n", "tcp here", 1) == (0.02, 0.024, 0.002)
 
 
 def test_the_press_posterior_is_the_log_of_the_statistical_interval():
