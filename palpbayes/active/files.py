@@ -72,6 +72,8 @@ def _from_record(rec: dict, presses: pd.DataFrame, path: Path, **overrides) -> S
         a, H = float(rec["contact_radius_m"]), float(rec["thickness_m"])
         keep = tuple(tuple(float(v) for v in z) for z in rec.get("keep_out_m", ()))
         kw = {f: float(rec[k]) for k, f in _FIELDS.items() if rec.get(k) is not None}
+        if rec.get("background") is not None:
+            kw["background"] = str(rec["background"])
     except (KeyError, TypeError, ValueError) as exc:
         raise DataFileError(path, f"is not a search state ({type(exc).__name__}: {exc})",
                             "create one with 'palpbayes next DIR --init'") from None

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import InputError
+from .background import BACKGROUNDS
 from .criteria import CRITERIA, level_probability, predictive
 from .posterior import LumpHypotheses, SearchPosterior, hypotheses, posterior
 
@@ -96,6 +97,10 @@ class SearchState:
         Prior probability of a lump.
     press_sd
         sd of log E expected of the next press (None: the median of the presses').
+    background
+        The posterior's model of the heterogeneity: ``"white"`` (independent press to
+        press) or ``"correlated"`` (with a Gaussian random field integrated out,
+        :mod:`palpbayes.active.background`).
     """
 
     presses: pd.DataFrame
@@ -111,6 +116,7 @@ class SearchState:
     k_level: float | None = None
     prior_lump: float = 0.5
     press_sd: float | None = None
+    background: str = "white"
     _hyp: list = field(default_factory=list, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -155,11 +161,14 @@ class SearchState:
             raise InputError(f"k_level {self.k_level!r} must be > 1")
         if self.press_sd is not None and not self.press_sd > 0:
             raise InputError(f"press_sd {self.press_sd!r} must be > 0")
+        if self.background not in BACKGROUNDS:
+            raise InputError(f"background {self.background!r}: choose one of "
+                             + ", ".join(BACKGROUNDS))
 
     def _grid_key(self) -> tuple:
         return (tuple(map(float, self.footprint)), float(self.contact_radius),
                 float(self.thickness), float(self.resolution), float(self.min_excess),
-                float(self.max_ratio))
+                float(self.max_ratio), self.background)
 
     @property
     def hyp(self) -> LumpHypotheses:
@@ -170,7 +179,7 @@ class SearchState:
             self._hyp[:] = [(key, hypotheses(
                 self.footprint, contact_radius=self.contact_radius, thickness=self.thickness,
                 resolution=self.resolution, min_excess=self.min_excess,
-                max_ratio=self.max_ratio))]
+                max_ratio=self.max_ratio, background=self.background))]
         return self._hyp[0][1]
 
     @property
