@@ -48,8 +48,8 @@ from scipy.special import logsumexp
 from ..errors import InputError
 
 __all__ = ["BACKGROUNDS", "ELL_FACTORS", "FIELD_SCALE", "SIGMA_FS", "BackgroundFit",
-           "CorrelatedPart", "correlation", "field_grid", "correlated_posterior",
-           "correlated_terms", "sum_lump", "predictive"]
+           "CorrelatedPart", "check_background", "correlation", "field_grid",
+           "correlated_posterior", "correlated_terms", "sum_lump", "predictive"]
 
 #: Models of the background: independent press to press, or with a correlated field.
 BACKGROUNDS = ("white", "correlated")
@@ -66,6 +66,13 @@ def correlation(d: np.ndarray, ell: float) -> np.ndarray:
     """The Matérn-3/2 correlation at distances ``d`` [m] for length ``ell`` [m]."""
     r = math.sqrt(3.0) * np.asarray(d, dtype=float) / ell
     return (1.0 + r) * np.exp(-r)
+
+
+def check_background(name: str) -> str:
+    """``name`` if it is one of :data:`BACKGROUNDS`, else an InputError."""
+    if name not in BACKGROUNDS:
+        raise InputError(f"background {name!r}: choose one of {', '.join(BACKGROUNDS)}")
+    return name
 
 
 def field_grid(contact_radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -290,12 +297,12 @@ def predictive(post, qx: np.ndarray, qy: np.ndarray, press_sd: float
 
 
 def correlated_posterior(hyp, x: np.ndarray, y: np.ndarray, m: np.ndarray, s: np.ndarray, *,
-                         prior_lump: float, mass: float, max_kept: int):
-    """:func:`palpbayes.active.posterior.posterior` under the correlated model (its inputs
-    checked there).  The predictive moments (``moments``, ``null_moments``) are at the mode
-    of g given a lump and given none; ``beta_survival`` and the weights sum over g."""
-    from .posterior import SearchPosterior, _kept
-
+                         prior_lump: float, kept) -> dict:
+    """The fields of :class:`~palpbayes.active.posterior.SearchPosterior` under the
+    correlated model (inputs checked by :func:`~palpbayes.active.posterior.posterior`;
+    ``kept(centre_weights)`` chooses the kept centres).  The predictive moments
+    (``moments``, ``null_moments``) are at the mode of g given a lump and given none;
+    ``beta_survival`` and the weights sum over g."""
     n = m.size
     xy = np.column_stack([x, y])
     phis = hyp.profile(np.hypot(hyp.cx[:, None] - x[None, :], hyp.cy[:, None] - y[None, :]))
@@ -315,7 +322,7 @@ def correlated_posterior(hyp, x: np.ndarray, y: np.ndarray, m: np.ndarray, s: np
     w_kc = A3.sum(axis=2)
     ck = (w_kc / z).T  # (N_c, K)
     centre_w = ck.sum(axis=1)
-    keep, kept_w = _kept(centre_w, mass, max_kept)
+    keep, kept_w = kept(centre_w)
     nk = w_kc[:, keep][..., None]
     cond = A3[:, keep] / np.where(nk > 0, nk, 1.0)  # P(beta | c, k, lump), g summed
     surv = np.cumsum(cond[..., ::-1], axis=-1)[..., ::-1]
@@ -354,7 +361,7 @@ def correlated_posterior(hyp, x: np.ndarray, y: np.ndarray, m: np.ndarray, s: np
                          1.0 / null.s0 + null.tau ** 2 + null.sigma_f ** 2])
     part = CorrelatedPart(null=null, lump=lump, phi_solve=phi_solve, b1=b1,
                           field_weights=field_w, evaluated=int(np.isfinite(lg).sum()))
-    return SearchPosterior(
+    return dict(
         hyp=hyp, n=int(n), p_lump=p_lump, log_bayes_factor=lbf, centre_weights=centre_w,
         ck_weights=ck, kept=keep, kept_weights=kept_w, moments=mom, null_moments=null_mom,
         beta_weights=A3.sum(axis=(0, 1)) / z, beta_survival=surv,

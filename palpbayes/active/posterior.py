@@ -44,7 +44,7 @@ from scipy.special import logsumexp
 
 from ..errors import InputError
 from ..inclusion import sensitivity
-from .background import BACKGROUNDS, correlated_posterior, field_grid
+from .background import check_background, correlated_posterior, field_grid
 
 __all__ = ["A_REF", "LumpHypotheses", "SearchPosterior", "hypotheses", "posterior"]
 
@@ -185,8 +185,7 @@ def hypotheses(footprint: tuple[float, float, float, float], *, contact_radius: 
     if not (0 < min_excess and max_ratio > 1 + min_excess):
         raise InputError(f"need 0 < min_excess ({min_excess!r}) and max_ratio ({max_ratio!r})"
                          f" > 1 + min_excess")
-    if background not in BACKGROUNDS:
-        raise InputError(f"background {background!r}: choose one of {', '.join(BACKGROUNDS)}")
+    check_background(background)
     step = max(float(resolution), math.sqrt((x1 - x0) * (y1 - y0) / max_centres))
     nx = max(2, int(round((x1 - x0) / step)) + 1)
     ny = max(2, int(round((y1 - y0) / step)) + 1)
@@ -323,8 +322,8 @@ def posterior(hyp: LumpHypotheses, x: np.ndarray, y: np.ndarray, mean: np.ndarra
     if not 0.0 < prior_lump < 1.0:
         raise InputError(f"prior_lump {prior_lump!r} must lie in (0, 1)")
     if hyp.background == "correlated":
-        return correlated_posterior(hyp, x, y, m, s, prior_lump=prior_lump, mass=mass,
-                                    max_kept=max_kept)
+        return SearchPosterior(**correlated_posterior(
+            hyp, x, y, m, s, prior_lump=prior_lump, kept=lambda w: _kept(w, mass, max_kept)))
     W = 1.0 / (s[:, None] ** 2 + hyp.taus[None, :] ** 2)  # (n, T)
     wy = W * m[:, None]
     S0, Sy, Syy = W.sum(0), wy.sum(0), (wy * m[:, None]).sum(0)
