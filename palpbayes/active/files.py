@@ -5,7 +5,8 @@ A search-state folder (``palpbayes next DIR --init``, then one row per press fro
 
     DIR/
       search.json   the specimen: footprint, keep-out zones, minimum spacing [m], the tip's
-                    contact radius and the block thickness [m], the tip and the depth
+                    contact radius and the block thickness [m], the tip and the depth,
+                    and optionally "background": "correlated" (the posterior's model)
       presses.csv   one row per press: x_m, y_m, logE_mean, logE_sd (the press's
                     posterior of log(E/Pa)), and after each press p_lump (P(lump) after it)
 

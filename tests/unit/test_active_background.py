@@ -140,3 +140,16 @@ def test_phantom_field_is_off_by_default_and_matern_when_on():
     np.testing.assert_allclose(cov, [1.0, z * kv(1, z), 0.0], atol=0.15)
     with pytest.raises(InputError, match="field_sd"):
         MapPhantom(field_sd=-0.1)
+
+
+def test_state_folder_keeps_the_background(tmp_path):
+    from palpbayes.active.files import init_state, read_state
+    from palpbayes.errors import DataFileError
+
+    init_state(tmp_path / "s", footprint=FP, contact_radius=A, thickness=H,
+               background="correlated")
+    assert read_state(tmp_path / "s").background == "correlated"
+    assert read_state(tmp_path / "s", background="white").background == "white"
+    with pytest.raises(DataFileError, match="background"):
+        init_state(tmp_path / "t", footprint=FP, contact_radius=A, thickness=H,
+                   background="pink")
