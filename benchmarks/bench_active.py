@@ -5,15 +5,21 @@ Run from the repository root (~25 min on 2 cores with the defaults)::
     python benchmarks/bench_active.py                      # 50 phantoms, eig
     python benchmarks/bench_active.py --criteria eig,lse,ucb --phantoms 20
     python benchmarks/bench_active.py --phantoms 4 --budget 40   # a quick look
+    python benchmarks/bench_active.py --background correlated --model correlated --phantoms 10
 
 Phantoms: the map phantom of ``palpbayes simulate --map`` (:class:`palpbayes.sim.phantom.
 MapPhantom`: a 20 mm block of 50 kPa, heterogeneity 3 %, the paper's paraboloid pressed 2 mm,
 a 42 × 42 mm footprint as the default 15 × 15 map at 3 mm).  Phantom i has a lump when i is
 even: 10 mm across (radius 5 mm), its centre 5-10 mm deep (uniform), modulus ratio 10, its
-centre uniform over the footprint less 5 mm at each edge.  Every press is simulated as a
-whole trace (:func:`~palpbayes.sim.phantom.press_trace`, the code ``simulate --map`` uses) and
-fitted by the exact engine as ``palpbayes map`` fits a point (:func:`palpbayes.maps.pertrace.
-fit_point`); its posterior of log E goes into the search state.
+centre uniform over the footprint less 5 mm at each edge.  ``--background correlated`` adds a
+spatially correlated heterogeneity to every phantom (a Matérn-1 field of ln E, sd
+``--field-sd`` 0.03, length ``--field-length`` 5 mm, :class:`~palpbayes.sim.phantom.MapPhantom`)
+on top of the white 3 %; ``--model correlated`` makes every strategy's posterior carry one
+(:mod:`palpbayes.active.background`); the same stopping rule either way.  Every press is
+simulated as a whole trace (:func:`~palpbayes.sim.phantom.press_trace`, the code
+``simulate --map`` uses) and fitted by the exact engine as ``palpbayes map`` fits a point
+(:func:`palpbayes.maps.pertrace.fit_point`); its posterior of log E goes into the search
+state.
 
 Strategies, all judged by the same posterior and stopping rule (P(lump) >= 0.95 with the
 centre's 90 % radius <= 2 mm, or P(lump) <= 0.05):
@@ -51,7 +57,11 @@ FOOTPRINT = (0.0, 0.042, 0.0, 0.042)
 RANDOM_EVERY = 5
 
 
-def make_phantom(i: int, seed: int):
+#: The correlated background of ``--background correlated``: sd of ln E and length [m].
+FIELD = {"field_sd": 0.03, "field_length": 5e-3}
+
+
+def make_phantom(i: int, seed: int, background: str = "white", field: dict | None = None):
     from palpbayes.inclusion import Inclusion
     from palpbayes.sim.phantom import MapPhantom
 
@@ -61,7 +71,8 @@ def make_phantom(i: int, seed: int):
         x, y = rng.uniform(5e-3, 37e-3, 2)
         inc = Inclusion(x=float(x), y=float(y), depth=float(rng.uniform(5e-3, 10e-3)),
                         radius=5e-3, ratio=10.0)
-    return MapPhantom(inclusion=inc, seed=seed * 1000 + i)
+    extra = {**FIELD, **(field or {})} if background == "correlated" else {}
+    return MapPhantom(inclusion=inc, seed=seed * 1000 + i, **extra)
 
 
 def truth_of(ph) -> dict:
@@ -99,12 +110,16 @@ class Presser:
         return float(rec["logE_mean"]), float(rec["logE_sd"])
 
 
+#: The posterior's background model in this process (``--model``).
+MODEL = {"background": "white"}
+
+
 def _state(ph):
     from palpbayes.active import SearchState
     from palpbayes.active.search import PRESS_COLUMNS
 
     return SearchState(pd.DataFrame(columns=PRESS_COLUMNS), FOOTPRINT, ph.contact_radius,
-                       ph.thickness)
+                       ph.thickness, background=MODEL["background"])
 
 
 def _score(decision: str, info: dict, truth: dict, n: int) -> dict:
@@ -215,7 +230,8 @@ def run_phantom(job: dict) -> dict:
 
     warnings.simplefilter("ignore")
     i, seed, budget = job["i"], job["seed"], job["budget"]
-    ph = make_phantom(i, seed)
+    MODEL["background"] = job["model"]
+    ph = make_phantom(i, seed, job["background"], job["field"])
     truth = truth_of(ph)
     rows, seqs = [], {}
     for crit in job["criteria"]:
@@ -265,6 +281,31 @@ def _milestone(v: pd.Series, budget: int) -> dict:
             "reached": int(v.notna().sum())}
 
 
+def time_posteriors(n: int, states: int, seed: int) -> dict:
+    """Wall time [s] of one posterior on ``states`` states of ``n`` presses (simulated
+    readings on correlated-background phantoms, no fit: the posterior's cost only), per
+    model: {model: array}."""
+    from palpbayes.active.posterior import hypotheses, posterior
+
+    ph = make_phantom(0, seed, "correlated")
+    out = {}
+    for model in ("white", "correlated"):
+        hyp = hypotheses(FOOTPRINT, contact_radius=ph.contact_radius, thickness=ph.thickness,
+                         background=model)
+        t = []
+        for i in range(states):
+            rng = np.random.default_rng([seed, 98, i])
+            x, y = rng.uniform(FOOTPRINT[0], FOOTPRINT[1], (2, n))
+            s = rng.uniform(0.005, 0.015, n)
+            m = (np.log(ph.apparent_modulus(x, y)) + ph.background_field(x, y)
+                 + 0.03 * rng.standard_normal(n))
+            t0 = time.perf_counter()
+            posterior(hyp, x, y, m, s)
+            t.append(time.perf_counter() - t0)
+        out[model] = np.array(t)
+    return out
+
+
 def time_large_states(n: int, states: int, seed: int) -> np.ndarray:
     """Wall time [s] of next_presses (eig, k = 1) on ``states`` states of ``n`` random presses
     (simulated and fitted on lump phantoms, undecided so that the candidates are scored)."""
@@ -295,6 +336,14 @@ def main(argv=None) -> int:
     ap.add_argument("--budget", type=int, default=225)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--background", choices=("white", "correlated"), default="white",
+                    help="the phantoms' heterogeneity: white only, or with a correlated field")
+    ap.add_argument("--field-sd", type=float, default=FIELD["field_sd"],
+                    help="sd of ln E of the correlated field (--background correlated)")
+    ap.add_argument("--field-length", type=float, default=FIELD["field_length"],
+                    help="[m] its correlation length")
+    ap.add_argument("--model", choices=("white", "correlated"), default="white",
+                    help="the search posterior's background model")
     ap.add_argument("--out", default="reports/active")
     ap.add_argument("--figure", type=int, default=0, metavar="I",
                     help="draw the searches of phantoms I (a lump) and I + 1 (none); -1: none")
@@ -302,8 +351,11 @@ def main(argv=None) -> int:
                     help="states of 200 presses to time a decision on (0: skip)")
     args = ap.parse_args(argv)
     criteria = [c for c in args.criteria.split(",") if c]
+    field = {"field_sd": args.field_sd, "field_length": args.field_length}
+    MODEL["background"] = args.model
     jobs = [{"i": i, "seed": args.seed, "budget": args.budget, "criteria": criteria,
-             "baselines": not args.no_baselines} for i in range(args.phantoms)]
+             "baselines": not args.no_baselines, "background": args.background,
+             "field": field, "model": args.model} for i in range(args.phantoms)]
     t0 = time.perf_counter()
     results = []
     with cf.ProcessPoolExecutor(args.workers) as pool:
@@ -316,7 +368,10 @@ def main(argv=None) -> int:
     times = [t for r in rows for t in r.pop("times", [])]
     table = pd.DataFrame(rows)
     pd.set_option("display.width", 200)
-    print(f"\n{args.phantoms} phantoms, budget {args.budget}, "
+    print(f"\n{args.phantoms} phantoms ({args.background} background"
+          + (f", field sd {args.field_sd:g}, length {1e3 * args.field_length:g} mm"
+             if args.background == "correlated" else "")
+          + f"; {args.model} model), budget {args.budget}, "
           f"{time.perf_counter() - t0:.0f} s on {args.workers} workers")
     summ = report(table, args.budget)
     print(summ.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
@@ -339,7 +394,7 @@ def main(argv=None) -> int:
         from palpbayes.plots.active import plot_search
 
         for i in (args.figure, args.figure + 1):
-            ph = make_phantom(i, args.seed)
+            ph = make_phantom(i, args.seed, args.background, field)
             truth = truth_of(ph)
             _, _, state = run_active(ph, truth, criteria[0], args.budget)
             where = (truth["x"], truth["y"]) if truth["has_lump"] else None
@@ -354,6 +409,11 @@ def main(argv=None) -> int:
                         bbox_inches="tight")
             print(f"wrote {args.out}/search-phantom{i}.png")
     if args.time_states:
+        for n in (50, 200):
+            tp = time_posteriors(n, args.time_states, args.seed)
+            print(f"posterior at {n} presses, idle machine, {args.time_states} states: "
+                  + ", ".join(f"{k} median {1e3 * np.median(v):.0f} ms (max "
+                              f"{1e3 * v.max():.0f})" for k, v in tp.items()))
         t = time_large_states(200, args.time_states, args.seed)
         print(f"decision time at 200 presses, idle machine, {len(t)} states: median "
               f"{1e3 * np.median(t):.0f} ms, max {1e3 * t.max():.0f} ms (target <= 500 ms)")

@@ -5,7 +5,9 @@ positions and returns one score per candidate (higher: press there first).  The 
 of a new press at q under a kept centre c is Gaussian once b, tau, beta and the sphere are
 averaged (moment matched):  y_q | c ~ Normal(mu_c(q), sigma_c(q)²), with
 sigma² including the heterogeneity tau² and the new press's own sd; under no lump
-y_q ~ Normal(mu_0, sigma_0²).
+y_q ~ Normal(mu_0, sigma_0²).  Under a correlated background (:mod:`~.background`) mu and
+sigma² are the field's kriging from the presses: a press beside a soft patch is expected to
+read soft, and close to earlier presses it is expected to tell little.
 
 * ``"eig"`` — expected information gain (Lindley 1956, Ann. Math. Statist. 27, 986–1005) on
   the quantity the stopping rule decides on: while P(lump) < p_decide, whether there is a
@@ -36,6 +38,7 @@ import math
 
 import numpy as np
 
+from .background import predictive as background_predictive
 from .posterior import SearchPosterior
 
 __all__ = ["CRITERIA", "eig", "lse", "ucb", "predictive", "level_probability"]
@@ -55,7 +58,11 @@ def _phi(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray) -> np.ndarray:
 def predictive(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: float
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Group weights (N_kept + 1,) and the predictive mean and sd of log E of a press at each
-    candidate under each group, (N_kept + 1, N_q): row 0 no lump, then the kept centres."""
+    candidate under each group, (N_kept + 1, N_q): row 0 no lump, then the kept centres
+    (under a correlated background, :func:`palpbayes.active.background.predictive`: the
+    field kriged from the presses)."""
+    if post.background is not None:
+        return background_predictive(post, qx, qy, press_sd)
     pc, pkc = post.kept_mix()
     pk = pkc.T[..., None]  # (K, N_kept, 1) P(k | c)
     m = post.moments.transpose(1, 0, 2)[..., None, :]  # (K, N_kept, 1, 6)

@@ -5,9 +5,10 @@ A search-state folder (``palpbayes next DIR --init``, then one row per press fro
 
     DIR/
       search.json   the specimen: footprint, keep-out zones, minimum spacing [m], the tip's
-                    contact radius and the block thickness [m], the tip and the depth, and
-                    the limits of a press (optional: the allowed depths as fractions of the
-                    thickness, the largest force [N]; :func:`read_limits`)
+                    contact radius and the block thickness [m], the tip and the depth, the
+                    limits of a press (optional: the allowed depths as fractions of the
+                    thickness, the largest force [N]; :func:`read_limits`), and optionally
+                    "background": "correlated" (the posterior's model)
       presses.csv   one row per press: x_m, y_m, logE_mean, logE_sd (the press's
                     posterior of log(E/Pa)), and after each press p_lump (P(lump) after it)
 
@@ -76,6 +77,8 @@ def _from_record(rec: dict, presses: pd.DataFrame, path: Path, **overrides) -> S
         a, H = float(rec["contact_radius_m"]), float(rec["thickness_m"])
         keep = tuple(tuple(float(v) for v in z) for z in rec.get("keep_out_m", ()))
         kw = {f: float(rec[k]) for k, f in _FIELDS.items() if rec.get(k) is not None}
+        if rec.get("background") is not None:
+            kw["background"] = str(rec["background"])
     except (KeyError, TypeError, ValueError) as exc:
         raise DataFileError(path, f"is not a search state ({type(exc).__name__}: {exc})",
                             "create one with 'palpbayes next DIR --init'") from None

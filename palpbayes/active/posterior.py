@@ -44,6 +44,7 @@ from scipy.special import logsumexp
 
 from ..errors import InputError
 from ..inclusion import sensitivity
+from .background import check_background, correlated_posterior, field_grid
 
 __all__ = ["A_REF", "LumpHypotheses", "SearchPosterior", "hypotheses", "posterior"]
 
@@ -81,6 +82,9 @@ class LumpHypotheses:
         Grid of the heterogeneity tau and its log prior weights (normalised).
     contact_radius, thickness
         [m] Tip contact radius a and block thickness H.
+    background, sigma_fs, ells, log_field_prior
+        ``"white"`` or ``"correlated"`` (:mod:`~.background`), and the correlated field's
+        grids of sd (log E) and length [m] with their log prior weights (S, L).
     """
 
     cx: np.ndarray
@@ -97,6 +101,10 @@ class LumpHypotheses:
     thickness: float
     resolution: float
     footprint: tuple[float, float, float, float]
+    background: str = "white"
+    sigma_fs: np.ndarray | None = None
+    ells: np.ndarray | None = None
+    log_field_prior: np.ndarray | None = None
 
     def profile(self, d: np.ndarray) -> np.ndarray:
         """phi_k at distances ``d`` [m] >= 0 (any shape), linear between the table's nodes
@@ -146,7 +154,8 @@ def _profiles(a: float, thickness: float) -> tuple[np.ndarray, np.ndarray, np.nd
 
 def hypotheses(footprint: tuple[float, float, float, float], *, contact_radius: float,
                thickness: float, resolution: float = 1e-3, min_excess: float = 0.03,
-               max_ratio: float = 3.0, max_centres: int = 3600) -> LumpHypotheses:
+               max_ratio: float = 3.0, max_centres: int = 3600,
+               background: str = "white") -> LumpHypotheses:
     """The hypothesis grid (module docstring) over ``footprint`` (x0, x1, y0, y1) [m].
 
     Parameters
@@ -163,6 +172,9 @@ def hypotheses(footprint: tuple[float, float, float, float], *, contact_radius: 
         Smallest apparent peak excess A − 1 that counts as a lump (> 0).
     max_ratio
         Largest apparent peak ratio A of the prior (> 1 + ``min_excess``).
+    background
+        ``"white"`` (heterogeneity independent press to press) or ``"correlated"`` (with a
+        Gaussian random field, :mod:`palpbayes.active.background`).
     """
     x0, x1, y0, y1 = (float(v) for v in footprint)
     if not (all(map(math.isfinite, (x0, x1, y0, y1))) and x1 > x0 and y1 > y0):
@@ -173,18 +185,21 @@ def hypotheses(footprint: tuple[float, float, float, float], *, contact_radius: 
     if not (0 < min_excess and max_ratio > 1 + min_excess):
         raise InputError(f"need 0 < min_excess ({min_excess!r}) and max_ratio ({max_ratio!r})"
                          f" > 1 + min_excess")
+    check_background(background)
     step = max(float(resolution), math.sqrt((x1 - x0) * (y1 - y0) / max_centres))
     nx = max(2, int(round((x1 - x0) / step)) + 1)
     ny = max(2, int(round((y1 - y0) / step)) + 1)
     X, Y = np.meshgrid(np.linspace(x0, x1, nx), np.linspace(y0, y1, ny))
     s, prof, fwhm, radii, covers = _profiles(float(contact_radius), float(thickness))
     lt = np.log(_TAUS) - 0.5 * (_TAUS / TAU_SCALE) ** 2  # half-normal × tau (log grid)
+    sf, ell, lfp = field_grid(float(contact_radius))
     return LumpHypotheses(
         cx=X.ravel(), cy=Y.ravel(), s_grid=s, profiles=prof, fwhm=fwhm, radius=radii,
         cover=covers,
         betas=np.geomspace(math.log1p(min_excess), math.log(max_ratio), _N_BETA),
         taus=_TAUS.copy(), log_tau_prior=lt - logsumexp(lt), contact_radius=float(contact_radius),
-        thickness=float(thickness), resolution=step, footprint=(x0, x1, y0, y1))
+        thickness=float(thickness), resolution=step, footprint=(x0, x1, y0, y1),
+        background=background, sigma_fs=sf, ells=ell, log_field_prior=lfp)
 
 
 @dataclass
@@ -216,6 +231,8 @@ class SearchPosterior:
         (K, N_kept, B) P(beta >= betas[j] | kept centre, sphere, lump, presses).
     tau_weights
         (T,) P(tau | presses) (mixed over both hypotheses).
+    background
+        The correlated model's part (:class:`~.background.CorrelatedPart`); None when white.
     """
 
     hyp: LumpHypotheses
@@ -231,6 +248,7 @@ class SearchPosterior:
     beta_weights: np.ndarray
     beta_survival: np.ndarray
     tau_weights: np.ndarray
+    background: object | None = None
 
     @property
     def centre(self) -> tuple[float, float]:
@@ -303,6 +321,9 @@ def posterior(hyp: LumpHypotheses, x: np.ndarray, y: np.ndarray, mean: np.ndarra
         raise InputError("presses: positions, log E means and sds must be finite, sds > 0")
     if not 0.0 < prior_lump < 1.0:
         raise InputError(f"prior_lump {prior_lump!r} must lie in (0, 1)")
+    if hyp.background == "correlated":
+        return SearchPosterior(**correlated_posterior(
+            hyp, x, y, m, s, prior_lump=prior_lump, kept=lambda w: _kept(w, mass, max_kept)))
     W = 1.0 / (s[:, None] ** 2 + hyp.taus[None, :] ** 2)  # (n, T)
     wy = W * m[:, None]
     S0, Sy, Syy = W.sum(0), wy.sum(0), (wy * m[:, None]).sum(0)

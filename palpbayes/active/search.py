@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import InputError
+from .background import check_background
 from .criteria import CRITERIA, level_probability, predictive
 from .posterior import LumpHypotheses, SearchPosterior, hypotheses, posterior
 
@@ -43,10 +44,8 @@ class SearchStopRule:
     p_decide
         A lump is found when P(lump) >= ``p_decide`` and its centre is placed (below);
         there is none when P(lump) <= 1 − ``p_decide``.
-    centre_radius
-        [m] Target radius of the centre's ``level`` credible disc.
-    level
-        Credibility of that disc.
+    centre_radius, level
+        [m] Target radius of the centre's credible disc, and the disc's credibility.
     max_presses
         Stop after this many presses whatever the posterior (None: no budget).
     """
@@ -96,6 +95,8 @@ class SearchState:
         Prior probability of a lump.
     press_sd
         sd of log E expected of the next press (None: the median of the presses').
+    background
+        The heterogeneity's model: ``"white"`` or ``"correlated"`` (:mod:`~.background`).
     """
 
     presses: pd.DataFrame
@@ -111,6 +112,7 @@ class SearchState:
     k_level: float | None = None
     prior_lump: float = 0.5
     press_sd: float | None = None
+    background: str = "white"
     _hyp: list = field(default_factory=list, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -155,11 +157,12 @@ class SearchState:
             raise InputError(f"k_level {self.k_level!r} must be > 1")
         if self.press_sd is not None and not self.press_sd > 0:
             raise InputError(f"press_sd {self.press_sd!r} must be > 0")
+        check_background(self.background)
 
     def _grid_key(self) -> tuple:
         return (tuple(map(float, self.footprint)), float(self.contact_radius),
                 float(self.thickness), float(self.resolution), float(self.min_excess),
-                float(self.max_ratio))
+                float(self.max_ratio), self.background)
 
     @property
     def hyp(self) -> LumpHypotheses:
@@ -170,7 +173,7 @@ class SearchState:
             self._hyp[:] = [(key, hypotheses(
                 self.footprint, contact_radius=self.contact_radius, thickness=self.thickness,
                 resolution=self.resolution, min_excess=self.min_excess,
-                max_ratio=self.max_ratio))]
+                max_ratio=self.max_ratio, background=self.background))]
         return self._hyp[0][1]
 
     @property
@@ -265,15 +268,13 @@ class NextPresses:
 
 
 def summary(state: SearchState, post: SearchPosterior | None, rule: SearchStopRule) -> dict:
-    """The posterior as plain numbers: ``n``, ``p_lump``, the centre ``x_m``/``y_m`` [m] and
-    its credible radius ``centre_radius_m``, the apparent diameter ``size_m`` (FWHM),
-    ``apparent_ratio``, ``tau`` and ``misclassified_area_m2`` of the level set (NaN before
-    the first press)."""
+    """The posterior as plain numbers: ``n``, ``p_lump``, the centre ``x_m``/``y_m`` [m], its
+    credible radius ``centre_radius_m``, the apparent diameter ``size_m`` (FWHM),
+    ``apparent_ratio``, ``tau``, ``misclassified_area_m2`` of the level set (NaN: no press)."""
     if post is None:
-        nan = math.nan
-        return {"n": 0, "p_lump": state.prior_lump, "x_m": nan, "y_m": nan,
-                "centre_radius_m": nan, "size_m": nan, "apparent_ratio": nan, "tau": nan,
-                "misclassified_area_m2": nan}
+        keys = ("x_m", "y_m", "centre_radius_m", "size_m", "apparent_ratio", "tau",
+                "misclassified_area_m2")
+        return {"n": 0, "p_lump": state.prior_lump, **dict.fromkeys(keys, math.nan)}
     x, y = post.centre
     gx, gy, cell = _area_grid(state)
     p = level_probability(post, gx, gy, state.level)

@@ -80,6 +80,9 @@ def register(subparsers) -> None:
                    help="[m] no press closer than M to another (default 0.001)")
     s.add_argument("--min-excess", type=float, metavar="X",
                    help="smallest apparent peak excess that counts as a lump (default 0.03)")
+    s.add_argument("--background", choices=("white", "correlated"), default=None,
+                   help="the heterogeneity's model: independent press to press (white, the "
+                        "default) or with a spatially correlated field (correlated)")
     s.add_argument("--thickness", type=float, metavar="M", help="[m] block thickness")
     i = p.add_argument_group("--init: create the state folder DIR (no press yet)")
     i.add_argument("--init", action="store_true", help="create DIR's search.json")
@@ -111,7 +114,8 @@ def add_rule_options(g) -> None:
 
 def state_overrides(args: argparse.Namespace) -> dict:
     """The :class:`~palpbayes.active.SearchState` fields the options replace."""
-    out = {"min_spacing": args.min_spacing, "min_excess": args.min_excess}
+    out = {"min_spacing": args.min_spacing, "min_excess": args.min_excess,
+           "background": getattr(args, "background", None)}
     if args.footprint is not None:
         out["footprint"] = _floats(args.footprint, 4, "--footprint")
     if args.keep_out is not None:
@@ -147,7 +151,7 @@ def _init(args: argparse.Namespace) -> int:
     a = contact_radius(tip, depth)
     over = {k: v for k, v in state_overrides(args).items() if v is not None}
     extra = {f"{k}_m" if k == "min_spacing" else k: v for k, v in over.items()
-             if k in ("min_spacing", "min_excess")}
+             if k in ("min_spacing", "min_excess", "background")}
     init_state(args.state, footprint=over["footprint"], contact_radius=a,
                thickness=args.thickness, keep_out=over.get("keep_out", ()),
                overwrite=args.force, tip=tip.kind, tip_radius_m=tip.radius, depth_m=depth,

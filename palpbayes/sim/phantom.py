@@ -8,6 +8,22 @@ ln E = ln E_app + heterogeneity·N(0, 1), surface height, force offset and noise
 order and by the code that ``simulate_map`` uses for its grid
 (:func:`~palpbayes.sim.map.press_trace`): a press at a grid node with the node's random
 stream is that node's trace.
+
+A real specimen's heterogeneity is also spatially correlated: pressing beside a soft or stiff
+patch does not average it away.  ``field_sd`` > 0 adds a stationary Gaussian random field
+f(x, y) of ln E (Matérn, smoothness ``field_nu``, default 1 as the SPDE field of
+:mod:`palpbayes.maps.spde`, correlation length ``field_length``: covariance
+field_sd²·M_nu(sqrt(2 nu)·r / field_length), Rasmussen & Williams 2006, eq. 4.14), so a
+press reads ln E = ln E_app + f(x, y) + heterogeneity·N(0, 1).  f is the field as the press
+sees it (already averaged over the contact): its length should be at least about the contact
+radius.  It is drawn once per phantom by random Fourier features (Rahimi & Recht 2007, NIPS):
+f(x) = field_sd·sqrt(2/M)·Σ_j cos(w_j·x + u_j) with M = :data:`FIELD_FEATURES` frequencies
+w_j from the Matérn spectral density (a bivariate Student t with 2 nu degrees of freedom,
+scale 1/field_length) and phases u_j uniform, from the phantom's own stream
+``child_seed(seed, "field")``.  Its covariance is exactly the Matérn one at every pair of
+points, anywhere in the plane (no grid, no interpolation); its one-point law is a sum of M
+independent bounded terms, Gaussian to within the central limit theorem (excess kurtosis
+−1.5/M).  With ``field_sd`` = 0 (the default) no field is drawn and every press is as before.
 """
 
 from __future__ import annotations
@@ -15,6 +31,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -27,7 +44,10 @@ from ..trace import IndentationTrace
 from .campaign import child_seed
 from .map import press_trace, read_map_truth
 
-__all__ = ["MapPhantom"]
+__all__ = ["FIELD_FEATURES", "MapPhantom"]
+
+#: Random Fourier features of the correlated field (module docstring).
+FIELD_FEATURES = 2048
 
 
 @dataclass(frozen=True)
@@ -35,7 +55,9 @@ class MapPhantom:
     """A block of modulus ``E_background`` hiding ``inclusion`` (None: homogeneous).
 
     Parameters are those of :func:`palpbayes.sim.map.simulate_map` (SI units); ``depth``
-    is the commanded indentation depth (default 10 % of ``thickness``).
+    is the commanded indentation depth (default 10 % of ``thickness``).  ``field_sd`` (sd
+    of ln E), ``field_length`` [m] and ``field_nu`` set the spatially correlated part of the
+    heterogeneity (module docstring; off by default).
     """
 
     E_background: float = 50e3
@@ -51,6 +73,9 @@ class MapPhantom:
     z_surf_halfwidth: float = 1e-3
     approach: float = 5e-4
     seed: int = 0
+    field_sd: float = 0.0
+    field_length: float = 5e-3
+    field_nu: float = 1.0
 
     def __post_init__(self) -> None:
         if not (self.E_background > 0 and self.thickness > 0):
@@ -59,6 +84,11 @@ class MapPhantom:
         if inc is not None and inc.depth + inc.radius > self.thickness:
             raise InputError(f"phantom: the lump (centre depth {inc.depth:g} m + radius "
                              f"{inc.radius:g} m) reaches below the block ({self.thickness:g} m)")
+        if not (math.isfinite(self.field_sd) and self.field_sd >= 0
+                and self.field_length > 0 and self.field_nu > 0):
+            raise InputError(f"phantom: field_sd {self.field_sd!r} must be >= 0 (sd of ln E), "
+                             f"field_length {self.field_length!r} [m] and field_nu "
+                             f"{self.field_nu!r} > 0")
 
     @property
     def indentation(self) -> float:
@@ -87,6 +117,24 @@ class MapPhantom:
                         contact_radius=self.contact_radius, thickness=self.thickness)
         return self.E_background * apparent_ratio(V, inc.ratio)
 
+    @cached_property
+    def _features(self) -> tuple[np.ndarray, np.ndarray]:
+        """Frequencies (M, 2) [rad/m] and phases (M,) of the correlated field."""
+        gen = np.random.default_rng(child_seed(self.seed, "field"))
+        m, nu = FIELD_FEATURES, float(self.field_nu)
+        z = gen.standard_normal((m, 2))
+        scale = np.sqrt(2.0 * nu / gen.chisquare(2.0 * nu, m)) / self.field_length
+        return z * scale[:, None], gen.uniform(0.0, 2.0 * math.pi, m)
+
+    def background_field(self, x, y) -> np.ndarray:
+        """The correlated field f (ln E) at (``x``, ``y``) [m]: 0 when ``field_sd`` is 0."""
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        if self.field_sd == 0:
+            return np.zeros(x.shape)
+        w, u = self._features
+        arg = x[..., None] * w[:, 0] + y[..., None] * w[:, 1] + u
+        return self.field_sd * math.sqrt(2.0 / w.shape[0]) * np.cos(arg).sum(axis=-1)
+
     def press(self, x: float, y: float, key: int | str = 0,
               gen: np.random.Generator | None = None) -> IndentationTrace:
         """A simulated press at (``x``, ``y``) [m]; its random stream is
@@ -95,6 +143,8 @@ class MapPhantom:
             raise InputError(f"press position ({x!r}, {y!r}) must be finite [m]")
         gen = gen or np.random.default_rng(child_seed(self.seed, "press", key))
         E_app = float(self.apparent_modulus(x, y))
+        if self.field_sd:
+            E_app *= math.exp(float(self.background_field(x, y)))
         return press_trace(E_app, gen, self.tip, self.options(), f"press-{key}")
 
     @classmethod
