@@ -48,7 +48,7 @@ from scipy.special import logsumexp
 from ..errors import InputError
 
 __all__ = ["BACKGROUNDS", "ELL_FACTORS", "FIELD_SCALE", "SIGMA_FS", "BackgroundFit",
-           "CorrelatedPart", "check_background", "correlation", "field_grid",
+           "CorrelatedPart", "check_background", "correlation", "field_grid", "lump_probability",
            "correlated_posterior", "correlated_terms", "sum_lump", "predictive"]
 
 #: Models of the background: independent press to press, or with a correlated field.
@@ -66,6 +66,14 @@ def correlation(d: np.ndarray, ell: float) -> np.ndarray:
     """The Matérn-3/2 correlation at distances ``d`` [m] for length ``ell`` [m]."""
     r = math.sqrt(3.0) * np.asarray(d, dtype=float) / ell
     return (1.0 + r) * np.exp(-r)
+
+
+def lump_probability(log_bayes_factor: float, prior_lump: float) -> float:
+    """P(lump | presses) from the log Bayes factor lump : no lump and the prior P(lump)
+    (the logistic of the posterior log odds, written with tanh: no overflow at decisive
+    evidence); both background models use it."""
+    logit = log_bayes_factor + math.log(prior_lump) - math.log1p(-prior_lump)
+    return float(0.5 * (1.0 + math.tanh(0.5 * logit)))
 
 
 def check_background(name: str) -> str:
@@ -315,8 +323,7 @@ def correlated_posterior(hyp, x: np.ndarray, y: np.ndarray, m: np.ndarray, s: np
     A = A.astype(float)
     z = float(A.sum())
     lbf = ref + math.log(z) - math.log(Nc * K * B) - log_null
-    logit = lbf + math.log(prior_lump) - math.log1p(-prior_lump)
-    p_lump = float(0.5 * (1.0 + math.tanh(0.5 * logit)))
+    p_lump = lump_probability(lbf, prior_lump)
 
     A3 = A.reshape(K, Nc, B)
     w_kc = A3.sum(axis=2)

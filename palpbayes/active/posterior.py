@@ -44,7 +44,7 @@ from scipy.special import logsumexp
 
 from ..errors import InputError
 from ..inclusion import sensitivity
-from .background import check_background, correlated_posterior, field_grid
+from .background import check_background, correlated_posterior, field_grid, lump_probability
 
 __all__ = ["A_REF", "LumpHypotheses", "SearchPosterior", "hypotheses", "posterior"]
 
@@ -350,8 +350,7 @@ def posterior(hyp: LumpHypotheses, x: np.ndarray, y: np.ndarray, mean: np.ndarra
     z = float(w.sum())
     log_alt = top + math.log(z) - math.log(Nc * K * B)
     lbf = log_alt - log_null
-    logit = lbf + math.log(prior_lump) - math.log1p(-prior_lump)
-    p_lump = float(0.5 * (1.0 + math.tanh(0.5 * logit)))
+    p_lump = lump_probability(lbf, prior_lump)
 
     w_kc = w.sum(axis=(2, 3))  # (K, N_c)
     ck = (w_kc / z).T  # (N_c, K)
