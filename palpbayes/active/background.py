@@ -273,10 +273,11 @@ def sum_lump(L0: np.ndarray, U: np.ndarray, V: np.ndarray, betas: np.ndarray
     return ref, A, lg
 
 
-def predictive(post, qx: np.ndarray, qy: np.ndarray, press_sd: float
+def predictive(post, qx: np.ndarray, qy: np.ndarray, press_sd: float, depth: int = 0
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """As :func:`palpbayes.active.criteria.predictive` under the correlated model: the
-    kriging of the field given the presses, at the mode of g of each hypothesis.
+    kriging of the field given the presses, at the mode of g of each hypothesis (a press
+    at depth index ``depth``).
 
     Under a kept centre c and sphere k the reading's mean is A(q) + beta·B_ck(q) with
     B_ck(q) = phi_ck(q) − b1_ck·(1 − 1ᵀΣ⁻¹k_q) − phi_ckᵀΣ⁻¹k_q; its second moment takes
@@ -290,7 +291,7 @@ def predictive(post, qx: np.ndarray, qy: np.ndarray, press_sd: float
     kq1 = kq0 if bg.lump is bg.null else bg.lump.cross(qx, qy)
     a1, om1, var1 = bg.lump.krige(kq1)
     cx, cy = hyp.cx[post.kept], hyp.cy[post.kept]
-    phi = hyp.profile(np.hypot(cx[:, None] - qx[None, :], cy[:, None] - qy[None, :]))
+    phi = hyp.profile(np.hypot(cx[:, None] - qx[None, :], cy[:, None] - qy[None, :]), depth)
     B = phi - bg.b1[..., None] * om1[None, None, :] - bg.phi_solve @ kq1  # (K, N_kept, N_q)
     mom = post.moments.transpose(1, 0, 2)  # (K, N_kept, 6)
     eb, eb2 = mom[..., 3:4], mom[..., 4:5]
@@ -305,15 +306,17 @@ def predictive(post, qx: np.ndarray, qy: np.ndarray, press_sd: float
 
 
 def correlated_posterior(hyp, x: np.ndarray, y: np.ndarray, m: np.ndarray, s: np.ndarray, *,
-                         prior_lump: float, kept) -> dict:
+                         prior_lump: float, kept, depth: np.ndarray | None = None) -> dict:
     """The fields of :class:`~palpbayes.active.posterior.SearchPosterior` under the
     correlated model (inputs checked by :func:`~palpbayes.active.posterior.posterior`;
     ``kept(centre_weights)`` chooses the kept centres).  The predictive moments
     (``moments``, ``null_moments``) are at the mode of g given a lump and given none;
-    ``beta_survival`` and the weights sum over g."""
+    ``beta_survival`` and the weights sum over g.  ``depth``: each press's depth index (None:
+    the reference depth)."""
     n = m.size
     xy = np.column_stack([x, y])
-    phis = hyp.profile(np.hypot(hyp.cx[:, None] - x[None, :], hyp.cy[:, None] - y[None, :]))
+    phis = hyp.profile(np.hypot(hyp.cx[:, None] - x[None, :], hyp.cy[:, None] - y[None, :]),
+                       None if depth is None else depth[None, :])
     K, Nc, B = phis.shape[0], hyp.cx.size, hyp.betas.size
     L0, gi, rows_g, U, V = correlated_terms(hyp, phis, xy, m, s)
     log_null = float(logsumexp(L0))

@@ -48,25 +48,26 @@ _Y_NODES_MAX = 4096
 _BLOCK = 1 << 22  # elements of the (components, candidates, nodes) temporaries per block
 
 
-def _phi(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray) -> np.ndarray:
-    """phi_k(|q − c|) for kept centres c: (K, N_kept, N_q)."""
+def _phi(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, depth: int = 0
+         ) -> np.ndarray:
+    """phi_kj(|q − c|) for kept centres c at depth index j: (K, N_kept, N_q)."""
     hyp = post.hyp
     cx, cy = hyp.cx[post.kept], hyp.cy[post.kept]
-    return hyp.profile(np.hypot(cx[:, None] - qx[None, :], cy[:, None] - qy[None, :]))
+    return hyp.profile(np.hypot(cx[:, None] - qx[None, :], cy[:, None] - qy[None, :]), depth)
 
 
-def predictive(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: float
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def predictive(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: float,
+               depth: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Group weights (N_kept + 1,) and the predictive mean and sd of log E of a press at each
-    candidate under each group, (N_kept + 1, N_q): row 0 no lump, then the kept centres
-    (under a correlated background, :func:`palpbayes.active.background.predictive`: the
-    field kriged from the presses)."""
+    candidate (at depth index ``depth``) under each group, (N_kept + 1, N_q): row 0 no lump,
+    then the kept centres (under a correlated background,
+    :func:`palpbayes.active.background.predictive`: the field kriged from the presses)."""
     if post.background is not None:
-        return background_predictive(post, qx, qy, press_sd)
+        return background_predictive(post, qx, qy, press_sd, depth)
     pc, pkc = post.kept_mix()
     pk = pkc.T[..., None]  # (K, N_kept, 1) P(k | c)
     m = post.moments.transpose(1, 0, 2)[..., None, :]  # (K, N_kept, 1, 6)
-    phi = _phi(post, qx, qy)
+    phi = _phi(post, qx, qy, depth)
     mu_ck = m[..., 0] + m[..., 3] * phi
     e2_ck = m[..., 1] + 2 * m[..., 2] * phi + m[..., 4] * phi * phi + m[..., 5]
     mu = (pk * mu_ck).sum(axis=0)
@@ -79,19 +80,19 @@ def predictive(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: 
 
 
 def eig(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: float, *,
-        target: str = "auto", p_decide: float = 0.95) -> np.ndarray:
+        target: str = "auto", p_decide: float = 0.95, depth: int = 0) -> np.ndarray:
     """Expected information gain [nat] of a press at each candidate (module docstring).
 
     ``target``: ``"presence"`` (lump or not), ``"centre"`` (where, given a lump), ``"joint"``
     (both: G ∈ {no lump, centre c}; by the chain rule the sum of the presence term and
     P(lump) × the centre term), or ``"auto"``: presence while P(lump) < ``p_decide``, then
-    the centre — what the stopping rule is waiting for.
+    the centre — what the stopping rule is waiting for.  ``depth``: the press depth's index.
     """
     if target not in ("auto", "presence", "centre", "joint"):
         raise ValueError(f"target {target!r}: presence, centre, joint or auto")
     if target == "auto":
         target = "presence" if post.p_lump < p_decide else "centre"
-    w, mu, sd = predictive(post, qx, qy, press_sd)
+    w, mu, sd = predictive(post, qx, qy, press_sd, depth)
     keep = w > 1e-12 * w.max()
     keep[0] = True
     w, mu, sd = w[keep], mu[keep], sd[keep]
@@ -137,12 +138,12 @@ def _entropy(dens: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def level_probability(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray,
-                      k: float) -> np.ndarray:
-    """P(E_app(q) > k·E_b | presses) at each candidate: the lump's log-excess beta·phi above
-    log k (0 without a lump)."""
+                      k: float, depth: int = 0) -> np.ndarray:
+    """P(E_app(q) > k·E_b | presses) at each candidate, pressed at depth index ``depth``:
+    the lump's log-excess beta·phi above log k (0 without a lump)."""
     if not k > 1.0:
         raise ValueError(f"level k {k!r} must be > 1")
-    phi = _phi(post, qx, qy)  # (K, N_kept, N_q)
+    phi = _phi(post, qx, qy, depth)  # (K, N_kept, N_q)
     betas = post.hyp.betas
     with np.errstate(divide="ignore"):
         thr = math.log(k) / phi
@@ -157,16 +158,16 @@ def level_probability(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray,
 
 
 def lse(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: float, *,
-        k: float = 1.03) -> np.ndarray:
+        k: float = 1.03, depth: int = 0) -> np.ndarray:
     """Probability that the candidate's class in {E > k·E_b} is wrong, min(P, 1 − P)."""
-    p = level_probability(post, qx, qy, k)
+    p = level_probability(post, qx, qy, k, depth)
     return np.minimum(p, 1.0 - p)
 
 
 def ucb(post: SearchPosterior, qx: np.ndarray, qy: np.ndarray, press_sd: float, *,
-        kappa: float = 2.0) -> np.ndarray:
+        kappa: float = 2.0, depth: int = 0) -> np.ndarray:
     """Upper confidence bound of the lump's log-excess at each candidate: mean + kappa·sd."""
-    phi = _phi(post, qx, qy)
+    phi = _phi(post, qx, qy, depth)
     pc, pkc = post.kept_mix()
     w = (post.p_lump * pc[:, None] * pkc).T[..., None]  # (K, N_kept, 1)
     m = post.moments.transpose(1, 0, 2)

@@ -11,14 +11,14 @@ them:
   c whose apparent log-excess at the surface is beta (= log of the apparent peak ratio A) at
   its centre and falls off with distance as the profile phi_k (phi_k(0) = 1).
 
-The profiles are those of the forward model of :mod:`palpbayes.inclusion` (the
-Boussinesq-weighted Reuss average that :mod:`palpbayes.maps.lump` and the map simulator use)
-for a set of spheres (radius R, cover D − R) under the tip's contact radius: the set spans the
-sizes and depths the surface can tell apart.  phi_k is the log-excess profile of sphere k at
-the reference apparent ratio :data:`A_REF`, divided by log A_REF; at other amplitudes the
-shape is kept (linear in beta).  Against the forward model's own profile the error is at
-most 1.5 % of the peak log-excess for A <= 1.25 and 3.5 % for A <= 1.5
-(``tests/unit/test_active_posterior.py``); beyond, the model is a shape approximation.
+The profiles are those of :mod:`palpbayes.active.profiles`: the forward model of
+:mod:`palpbayes.inclusion` (the Boussinesq-weighted Reuss average) for a set of spheres
+(radius R, cover D − R) under the tip's contact radius, one set per press depth: the set
+spans the sizes and depths the surface can tell apart, and beta is the apparent peak
+log-excess at the first (reference) depth.  A press at another depth j reads
+beta·phi_kj(|p − c|): the same lump seen with a wider contact.  The block's log modulus b is
+shared by every depth: each press's log E is the modulus of a linear material, the same at any
+depth (a material that stiffens with strain needs its presses' E on one footing first).
 
 Priors: P(lump) = ``prior_lump`` (0.5); b flat (it cancels in the Bayes factor, both
 hypotheses share it); tau half-normal with scale 0.2 (as :mod:`palpbayes.maps.lump`) on a
@@ -37,27 +37,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 from scipy.special import logsumexp
 
 from ..errors import InputError
-from ..inclusion import sensitivity
 from .background import check_background, correlated_posterior, field_grid, lump_probability
+from .profiles import A_REF, profile_table
 
 __all__ = ["A_REF", "LumpHypotheses", "SearchPosterior", "hypotheses", "posterior"]
 
-#: Apparent peak ratio at which the profile shapes are taken.
-A_REF = 1.15
-#: Sphere radii [m] and covers (depth of the top below the surface) [m] of the profile set.
-RADII = (2.5e-3, 4e-3, 6e-3, 9e-3)
-COVERS = (0.0, 3e-3, 6e-3)
 #: Half-normal scale of the heterogeneity tau (as :mod:`palpbayes.maps.lump`).
 TAU_SCALE = 0.2
 _TAUS = np.geomspace(0.005, 0.4, 10)
 _N_BETA = 12
-_S_MAX_FACTOR = 8.0  # profiles tabulated out to this × (R + cover + a); zero beyond
 
 
 @dataclass(frozen=True)
@@ -70,8 +63,9 @@ class LumpHypotheses:
         [m] Lump centres (flattened grid over the footprint, spacing ``resolution``).
     s_grid
         [m] Lateral distances of the tabulated profiles.
-    profiles
-        (K, len(s_grid)) phi_k(s), 1 at s = 0.
+    depth_profiles
+        (D, K, len(s_grid)) phi_kj(s) at each press depth j (:mod:`~.profiles`);
+        :attr:`profiles` is the reference depth's, 1 at s = 0.
     fwhm
         [m] (K,) Full width at half maximum of each profile (the apparent lump diameter).
     radius, cover
@@ -81,7 +75,9 @@ class LumpHypotheses:
     taus, log_tau_prior
         Grid of the heterogeneity tau and its log prior weights (normalised).
     contact_radius, thickness
-        [m] Tip contact radius a and block thickness H.
+        [m] Tip contact radius a at the reference depth and block thickness H.
+    contact_radii
+        [m] (D,) The contact radius at each press depth, the reference's first.
     background, sigma_fs, ells, log_field_prior
         ``"white"`` or ``"correlated"`` (:mod:`~.background`), and the correlated field's
         grids of sd (log E) and length [m] with their log prior weights (S, L).
@@ -90,7 +86,7 @@ class LumpHypotheses:
     cx: np.ndarray
     cy: np.ndarray
     s_grid: np.ndarray
-    profiles: np.ndarray
+    depth_profiles: np.ndarray
     fwhm: np.ndarray
     radius: np.ndarray
     cover: np.ndarray
@@ -105,57 +101,38 @@ class LumpHypotheses:
     sigma_fs: np.ndarray | None = None
     ells: np.ndarray | None = None
     log_field_prior: np.ndarray | None = None
+    contact_radii: tuple[float, ...] = ()
 
-    def profile(self, d: np.ndarray) -> np.ndarray:
-        """phi_k at distances ``d`` [m] >= 0 (any shape), linear between the table's nodes
-        and 0 beyond it: shape (K, *d.shape)."""
+    @property
+    def profiles(self) -> np.ndarray:
+        """(K, len(s_grid)) phi_k(s) at the reference depth, 1 at s = 0."""
+        return self.depth_profiles[0]
+
+    @property
+    def n_depths(self) -> int:
+        return self.depth_profiles.shape[0]
+
+    def profile(self, d: np.ndarray, depth: int | np.ndarray | None = None) -> np.ndarray:
+        """phi_kj at distances ``d`` [m] >= 0 (any shape), linear between the table's nodes
+        and 0 beyond it: shape (K, *d.shape).  ``depth``: the press depth's index j (one
+        for all, or one per element of ``d``, broadcast); None: the reference depth."""
         u = np.asarray(d, dtype=float) * (1.0 / self.s_grid[1])
         last = self.s_grid.size - 1
         i = np.minimum(u.astype(np.intp), last)
         f = np.minimum(u - i, 1.0)
-        p = self.profiles
-        return p[:, i] + f * (p[:, np.minimum(i + 1, last)] - p[:, i])
+        i1 = np.minimum(i + 1, last)
+        if depth is None or np.ndim(depth) == 0:
+            p = self.depth_profiles[0 if depth is None else int(depth)]
+            return p[:, i] + f * (p[:, i1] - p[:, i])
+        j = np.broadcast_to(np.asarray(depth, dtype=np.intp), u.shape)
+        p = self.depth_profiles.transpose(1, 0, 2)  # (K, D, S)
+        return p[:, j, i] + f * (p[:, j, i1] - p[:, j, i])
 
 
-@lru_cache(maxsize=8)
-def _profiles(a: float, thickness: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
-                                                   np.ndarray, np.ndarray]:
-    """phi_k on a common distance grid for every sphere of :data:`RADII` × :data:`COVERS`
-    that fits in the block; their FWHM, radii and covers."""
-    reach = max(RADII) + max(COVERS) + a
-    s = np.linspace(0.0, _S_MAX_FACTOR * reach, 481)  # uniform: LumpHypotheses.profile
-    rows, fwhm, radii, covers = [], [], [], []
-    s = np.append(s, s[-1] + s[1])  # a last node of zeros: 0 beyond the table
-    for r in RADII:
-        for cover in COVERS:
-            if cover + 2.0 * r > thickness:
-                continue
-            V = sensitivity(s, radius=r, depth=r + cover, contact_radius=a,
-                            thickness=thickness)
-            if not V[0] > 1e-4:
-                continue
-            g = (1.0 - 1.0 / A_REF) / V[0]
-            if g >= 1.0:  # this sphere cannot look A_REF stiff: the linear shape is V's own
-                phi = V / V[0]
-            else:
-                phi = -np.log1p(-g * V) / math.log(A_REF)
-            j = int(np.argmax(phi <= 0.5))
-            half = s[j - 1] + (0.5 - phi[j - 1]) * (s[j] - s[j - 1]) / (phi[j] - phi[j - 1])
-            phi[-1] = 0.0
-            rows.append(phi)
-            fwhm.append(2.0 * half)
-            radii.append(r)
-            covers.append(cover)
-    if not rows:
-        raise InputError(f"the block ({thickness:g} m) is too thin for any lump of the set "
-                         f"(radii {RADII} m)")
-    return s, np.array(rows), np.array(fwhm), np.array(radii), np.array(covers)
-
-
-def hypotheses(footprint: tuple[float, float, float, float], *, contact_radius: float,
-               thickness: float, resolution: float = 1e-3, min_excess: float = 0.03,
-               max_ratio: float = 3.0, max_centres: int = 3600,
-               background: str = "white") -> LumpHypotheses:
+def hypotheses(footprint: tuple[float, float, float, float], *,
+               contact_radius: float | tuple[float, ...], thickness: float,
+               resolution: float = 1e-3, min_excess: float = 0.03, max_ratio: float = 3.0,
+               max_centres: int = 3600, background: str = "white") -> LumpHypotheses:
     """The hypothesis grid (module docstring) over ``footprint`` (x0, x1, y0, y1) [m].
 
     Parameters
@@ -164,7 +141,8 @@ def hypotheses(footprint: tuple[float, float, float, float], *, contact_radius: 
         [m] The specimen's palpable rectangle; lump centres are placed over it.
     contact_radius, thickness
         [m] The tip's contact radius at the indentation depth
-        (:func:`palpbayes.inclusion.contact_radius`) and the block thickness.
+        (:func:`palpbayes.inclusion.contact_radius`), or one per press depth (the reference
+        first), and the block thickness.
     resolution
         [m] Spacing of the centre grid (made coarser when the footprint would need more than
         ``max_centres`` centres).
@@ -176,11 +154,13 @@ def hypotheses(footprint: tuple[float, float, float, float], *, contact_radius: 
         ``"white"`` (heterogeneity independent press to press) or ``"correlated"`` (with a
         Gaussian random field, :mod:`palpbayes.active.background`).
     """
+    radii = tuple(np.atleast_1d(np.asarray(contact_radius, dtype=float)).tolist())
     x0, x1, y0, y1 = (float(v) for v in footprint)
     if not (all(map(math.isfinite, (x0, x1, y0, y1))) and x1 > x0 and y1 > y0):
         raise InputError(f"footprint {footprint!r} must be x0, x1, y0, y1 [m] with x1 > x0 "
                          "and y1 > y0")
-    if not (contact_radius > 0 and thickness > 0 and resolution > 0):
+    if not (radii and all(math.isfinite(v) and v > 0 for v in radii) and thickness > 0
+            and resolution > 0):
         raise InputError("contact radius, thickness and resolution must be > 0 [m]")
     if not (0 < min_excess and max_ratio > 1 + min_excess):
         raise InputError(f"need 0 < min_excess ({min_excess!r}) and max_ratio ({max_ratio!r})"
@@ -190,16 +170,17 @@ def hypotheses(footprint: tuple[float, float, float, float], *, contact_radius: 
     nx = max(2, int(round((x1 - x0) / step)) + 1)
     ny = max(2, int(round((y1 - y0) / step)) + 1)
     X, Y = np.meshgrid(np.linspace(x0, x1, nx), np.linspace(y0, y1, ny))
-    s, prof, fwhm, radii, covers = _profiles(float(contact_radius), float(thickness))
+    s, prof, fwhm, rad, covers = profile_table(radii, float(thickness))
     lt = np.log(_TAUS) - 0.5 * (_TAUS / TAU_SCALE) ** 2  # half-normal × tau (log grid)
-    sf, ell, lfp = field_grid(float(contact_radius))
+    sf, ell, lfp = field_grid(radii[0])
     return LumpHypotheses(
-        cx=X.ravel(), cy=Y.ravel(), s_grid=s, profiles=prof, fwhm=fwhm, radius=radii,
+        cx=X.ravel(), cy=Y.ravel(), s_grid=s, depth_profiles=prof, fwhm=fwhm, radius=rad,
         cover=covers,
         betas=np.geomspace(math.log1p(min_excess), math.log(max_ratio), _N_BETA),
-        taus=_TAUS.copy(), log_tau_prior=lt - logsumexp(lt), contact_radius=float(contact_radius),
+        taus=_TAUS.copy(), log_tau_prior=lt - logsumexp(lt), contact_radius=radii[0],
         thickness=float(thickness), resolution=step, footprint=(x0, x1, y0, y1),
-        background=background, sigma_fs=sf, ells=ell, log_field_prior=lfp)
+        background=background, sigma_fs=sf, ells=ell, log_field_prior=lfp,
+        contact_radii=radii)
 
 
 @dataclass
@@ -296,10 +277,11 @@ class SearchPosterior:
 
 
 def posterior(hyp: LumpHypotheses, x: np.ndarray, y: np.ndarray, mean: np.ndarray,
-              sd: np.ndarray, *, prior_lump: float = 0.5, mass: float = 0.999,
-              max_kept: int = 600) -> SearchPosterior:
+              sd: np.ndarray, *, depth: np.ndarray | None = None, prior_lump: float = 0.5,
+              mass: float = 0.999, max_kept: int = 600) -> SearchPosterior:
     """The posterior of the lump hypotheses given presses at (``x``, ``y``) [m] with
-    per-press posteriors of log E (``mean``, ``sd``) (module docstring).
+    per-press posteriors of log E (``mean``, ``sd``) (module docstring); ``depth``: each
+    press's depth index into ``hyp.contact_radii`` (None: all at the reference depth).
 
     The predictive moments (:attr:`SearchPosterior.moments`) are kept for the heaviest
     centres that hold ``mass`` of the centre's posterior when at most ``max_kept`` do, else
@@ -309,8 +291,8 @@ def posterior(hyp: LumpHypotheses, x: np.ndarray, y: np.ndarray, mean: np.ndarra
     Raises
     ------
     InputError
-        No press, arrays of different lengths, a non-finite value or an sd <= 0, or
-        ``prior_lump`` outside (0, 1).
+        No press, arrays of different lengths, a non-finite value or an sd <= 0, a depth
+        index out of range, or ``prior_lump`` outside (0, 1).
     """
     x, y, m, s = (np.asarray(v, dtype=float).ravel() for v in (x, y, mean, sd))
     if not (x.size == y.size == m.size == s.size) or x.size == 0:
@@ -321,9 +303,19 @@ def posterior(hyp: LumpHypotheses, x: np.ndarray, y: np.ndarray, mean: np.ndarra
         raise InputError("presses: positions, log E means and sds must be finite, sds > 0")
     if not 0.0 < prior_lump < 1.0:
         raise InputError(f"prior_lump {prior_lump!r} must lie in (0, 1)")
+    if depth is not None:
+        depth = np.asarray(depth).ravel()
+        if depth.size != x.size or not np.all((depth >= 0) & (depth < hyp.n_depths)
+                                              & (depth == np.round(depth))):
+            raise InputError(f"presses: depth indices must be one per press, integers in "
+                             f"[0, {hyp.n_depths}) (the state's depths)")
+        depth = depth.astype(np.intp)
+        if not depth.any():
+            depth = None
     if hyp.background == "correlated":
         return SearchPosterior(**correlated_posterior(
-            hyp, x, y, m, s, prior_lump=prior_lump, kept=lambda w: _kept(w, mass, max_kept)))
+            hyp, x, y, m, s, depth=depth, prior_lump=prior_lump,
+            kept=lambda w: _kept(w, mass, max_kept)))
     W = 1.0 / (s[:, None] ** 2 + hyp.taus[None, :] ** 2)  # (n, T)
     wy = W * m[:, None]
     S0, Sy, Syy = W.sum(0), wy.sum(0), (wy * m[:, None]).sum(0)
@@ -335,7 +327,7 @@ def posterior(hyp: LumpHypotheses, x: np.ndarray, y: np.ndarray, mean: np.ndarra
     log_null = float(logsumexp(log_null_t))
 
     d = np.hypot(hyp.cx[:, None] - x[None, :], hyp.cy[:, None] - y[None, :])  # (N_c, n)
-    phis = hyp.profile(d)  # (K, N_c, n)
+    phis = hyp.profile(d, None if depth is None else depth[None, :])  # (K, N_c, n)
     K, B, Nc = phis.shape[0], hyp.betas.size, hyp.cx.size
     beta = hyp.betas[None, None, :]
     Sp = phis @ W  # (K, N_c, T)

@@ -30,7 +30,7 @@ def _small(hyp):
     taus = hyp.taus[[2, 5, 8]]
     lt = np.log(taus) - 0.5 * (taus / 0.2) ** 2
     return replace(hyp, cx=np.array([0.01, 0.02, 0.03]), cy=np.array([0.02, 0.01, 0.03]),
-                   profiles=hyp.profiles[[0, 4]], fwhm=hyp.fwhm[[0, 4]],
+                   depth_profiles=hyp.depth_profiles[:, [0, 4]], fwhm=hyp.fwhm[[0, 4]],
                    radius=hyp.radius[[0, 4]], cover=hyp.cover[[0, 4]],
                    betas=hyp.betas[[1, 6, 10]], taus=taus, log_tau_prior=lt - logsumexp(lt))
 
