@@ -7,10 +7,13 @@ A search-state folder (``palpbayes next DIR --init``, then one row per press fro
       search.json   the specimen: footprint, keep-out zones, minimum spacing [m], the tip's
                     contact radius and the block thickness [m], the tip and the depth, the
                     limits of a press (optional: the allowed depths as fractions of the
-                    thickness, the largest force [N]; :func:`read_limits`), and optionally
-                    "background": "correlated" (the posterior's model)
+                    thickness, the largest force [N]; :func:`read_limits`), optionally
+                    "background": "correlated" (the posterior's model), and with a choice
+                    of depths "press_depths_m", "contact_radii_m" and "press_overhead_s"
+                    (:class:`~palpbayes.active.depth.PressDepths`)
       presses.csv   one row per press: x_m, y_m, logE_mean, logE_sd (the press's
-                    posterior of log(E/Pa)), and after each press p_lump (P(lump) after it)
+                    posterior of log(E/Pa)), depth_m [m] when the search chooses depths, and
+                    after each press p_lump (P(lump) after it)
 
 An output folder of ``palpbayes map`` (``points.csv`` and ``settings.json``) is read as a
 state too: its points with a fit are the presses, its lattice the footprint.  Files are
@@ -29,6 +32,7 @@ import pandas as pd
 
 from ..errors import DataFileError, InputError
 from ..io.atomic import write_csv_atomic, write_text_atomic
+from .depth import PressDepths
 from .safety import PressLimits
 from .search import PRESS_COLUMNS, SearchState
 
@@ -79,6 +83,12 @@ def _from_record(rec: dict, presses: pd.DataFrame, path: Path, **overrides) -> S
         kw = {f: float(rec[k]) for k, f in _FIELDS.items() if rec.get(k) is not None}
         if rec.get("background") is not None:
             kw["background"] = str(rec["background"])
+        depths = None
+        if rec.get("press_depths_m"):
+            more = {} if rec.get("press_overhead_s") is None else {
+                "overhead": float(rec["press_overhead_s"])}
+            depths = (tuple(float(v) for v in rec["press_depths_m"]),
+                      tuple(float(v) for v in rec["contact_radii_m"]), more)
     except (KeyError, TypeError, ValueError) as exc:
         raise DataFileError(path, f"is not a search state ({type(exc).__name__}: {exc})",
                             "create one with 'palpbayes next DIR --init'") from None
@@ -87,6 +97,8 @@ def _from_record(rec: dict, presses: pd.DataFrame, path: Path, **overrides) -> S
     kw.update(footprint=fp, contact_radius=a, thickness=H, keep_out=keep)
     kw.update({k: v for k, v in overrides.items() if v is not None})
     try:
+        if depths is not None:
+            kw["press_depths"] = PressDepths(depths[0], depths[1], **depths[2])
         return SearchState(presses, **kw)
     except InputError as exc:
         raise DataFileError(path, str(exc)) from None
@@ -142,6 +154,15 @@ def _read_presses(path: Path) -> pd.DataFrame:
             raise DataFileError(path, f"row {j + 2}, column {c}: {df[c].iloc[j]!r} is not "
                                 f"{what}", "remove the press or give its value")
         df[c] = v.astype(float)
+    if "depth_m" in df.columns:  # empty: the reference depth
+        v = pd.to_numeric(df["depth_m"], errors="coerce")
+        bad = v.isna() & df["depth_m"].notna()
+        if bad.any():
+            j = int(np.flatnonzero(bad.to_numpy())[0])
+            raise DataFileError(path, f"row {j + 2}, column depth_m: {df['depth_m'].iloc[j]!r} "
+                                "is not a number [m]", "give the press's depth or leave it "
+                                "empty")
+        df["depth_m"] = v.astype(float)
     return df
 
 

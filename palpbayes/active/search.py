@@ -9,6 +9,9 @@ press) are scored by a criterion (:mod:`palpbayes.active.criteria`) and the best
 A batch of k for a robot that plans a path is chosen greedily, each pick added to the state
 as a press that reads its predictive mean (the "kriging believer" of Ginsbourger, Le Riche &
 Carraro 2010, in *Computational Intelligence in Expensive Optimization Problems*, 131–162).
+With several press depths (:class:`~palpbayes.active.depth.PressDepths`) a press is
+(x, y, depth) and ``eig`` picks the most information per second of pressing
+(:mod:`palpbayes.active.depth`).
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ import pandas as pd
 from ..errors import InputError
 from .background import check_background
 from .criteria import CRITERIA, level_probability, predictive
+from .depth import PressDepths, choose
 from .posterior import LumpHypotheses, SearchPosterior, hypotheses, posterior
 
 __all__ = ["PRESS_COLUMNS", "SearchState", "SearchStopRule", "NextPresses", "next_presses",
@@ -97,6 +101,10 @@ class SearchState:
         sd of log E expected of the next press (None: the median of the presses').
     background
         The heterogeneity's model: ``"white"`` or ``"correlated"`` (:mod:`~.background`).
+    press_depths
+        The depths the search may choose and their cost (:class:`~.depth.PressDepths`; its
+        first contact radius is ``contact_radius``); a press's depth is its ``depth_m``
+        column (missing or NaN: the first).  None: one depth.
     """
 
     presses: pd.DataFrame
@@ -113,6 +121,7 @@ class SearchState:
     prior_lump: float = 0.5
     press_sd: float | None = None
     background: str = "white"
+    press_depths: PressDepths | None = None
     _hyp: list = field(default_factory=list, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -158,9 +167,16 @@ class SearchState:
         if self.press_sd is not None and not self.press_sd > 0:
             raise InputError(f"press_sd {self.press_sd!r} must be > 0")
         check_background(self.background)
+        pd_ = self.press_depths
+        if pd_ is not None and not math.isclose(pd_.contact_radii[0], self.contact_radius,
+                                                rel_tol=1e-9):
+            raise InputError(f"the first press depth's contact radius {pd_.contact_radii[0]:g}"
+                             f" m differs from contact_radius {self.contact_radius:g} m")
+        if pd_ is not None and "depth_m" in p.columns:
+            pd_.index(p["depth_m"])  # every press at one of the depths
 
     def _grid_key(self) -> tuple:
-        return (tuple(map(float, self.footprint)), float(self.contact_radius),
+        return (tuple(map(float, self.footprint)), self.radii,
                 float(self.thickness), float(self.resolution), float(self.min_excess),
                 float(self.max_ratio), self.background)
 
@@ -171,7 +187,7 @@ class SearchState:
         key = self._grid_key()
         if not self._hyp or self._hyp[0][0] != key:
             self._hyp[:] = [(key, hypotheses(
-                self.footprint, contact_radius=self.contact_radius, thickness=self.thickness,
+                self.footprint, contact_radius=self.radii, thickness=self.thickness,
                 resolution=self.resolution, min_excess=self.min_excess,
                 max_ratio=self.max_ratio, background=self.background))]
         return self._hyp[0][1]
@@ -181,20 +197,37 @@ class SearchState:
         return len(self.presses)
 
     @property
+    def radii(self) -> tuple[float, ...]:
+        """[m] The contact radius at each press depth (one without :attr:`press_depths`)."""
+        return ((float(self.contact_radius),) if self.press_depths is None
+                else self.press_depths.contact_radii)
+
+    def depth_index(self) -> np.ndarray | None:
+        """Each press's index in :attr:`press_depths` (None: one depth)."""
+        if self.press_depths is None or "depth_m" not in self.presses.columns:
+            return None
+        return self.press_depths.index(self.presses["depth_m"])
+
+    @property
     def level(self) -> float:
         return 1.0 + self.min_excess if self.k_level is None else float(self.k_level)
 
-    def expected_sd(self) -> float:
+    def expected_sd(self, depth: int = 0) -> float:
+        """sd of log E expected of a press at depth index ``depth``: ``press_sd``, else the
+        median of the presses at that depth, else of all presses."""
         if self.press_sd is not None:
             return float(self.press_sd)
         if self.n == 0:
             return _DEFAULT_PRESS_SD
-        return float(np.median(self.presses["logE_sd"].to_numpy(dtype=float)))
+        sd = self.presses["logE_sd"].to_numpy(dtype=float)
+        j = self.depth_index()
+        at = sd if j is None or not (j == depth).any() else sd[j == depth]
+        return float(np.median(at))
 
     def posterior(self) -> SearchPosterior:
         p = self.presses
         return posterior(self.hyp, p["x_m"], p["y_m"], p["logE_mean"], p["logE_sd"],
-                         prior_lump=self.prior_lump)
+                         depth=self.depth_index(), prior_lump=self.prior_lump)
 
     def with_press(self, x: float, y: float, mean: float, sd: float, **extra) -> SearchState:
         """A new state with one more press (the grid is shared, not rebuilt)."""
@@ -234,7 +267,8 @@ class NextPresses:
     ----------
     presses
         The next press(es) in order: ``order``, ``x_m``, ``y_m``, ``score`` (the
-        criterion's), ``criterion``; empty when the search stops.
+        criterion's; ``eig/s``: nat per second of pressing), ``criterion``, and ``depth_m``
+        [m] when the state has press depths; empty when the search stops.
     stop
         True when the rule has decided (or the budget or the candidates ran out).
     decision
@@ -254,14 +288,16 @@ class NextPresses:
 
     def table(self) -> pd.DataFrame:
         """The file of ``palpbayes next DIR --out FILE``: a row per next press (``order``,
-        ``x_m``, ``y_m`` [m], ``score``, ``criterion``; one empty row when the search stops),
+        ``x_m``, ``y_m`` [m], ``score``, ``criterion``, ``depth_m`` with press depths; one empty
+        row when the search stops),
         each with ``event``, ``decision``, ``reason`` and :attr:`summary` (its centre as
         ``x_m_centre``, ``y_m_centre``)."""
         head = {"event": "done" if self.stop else "next", "decision": self.decision,
                 "reason": self.reason}
         post = {(f"{k}_centre" if k in ("x_m", "y_m") else k): v
                 for k, v in self.summary.items()}
-        cols = ["order", "x_m", "y_m", "score", "criterion"]
+        cols = [c for c in ("order", "x_m", "y_m", "score", "criterion", "depth_m")
+                if c != "depth_m" or c in self.presses.columns]
         rows = self.presses[cols].to_dict("records") if len(self.presses) else [
             dict.fromkeys(cols)]
         return pd.DataFrame([{**head, **r, **post} for r in rows])
@@ -344,11 +380,15 @@ def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
     if int(k) < 1:
         raise InputError(f"k {k!r} must be >= 1")
     k, rule = int(k), rule or SearchStopRule()
-    cols = ["order", "x_m", "y_m", "score", "criterion"]
+    depths = state.press_depths
+    cols = ["order", "x_m", "y_m", "score", "criterion"] + ([] if depths is None
+                                                           else ["depth_m"])
     if state.n == 0:
         x, y = _initial(state, k)
         table = pd.DataFrame({"order": np.arange(1, x.size + 1), "x_m": x, "y_m": y,
                               "score": np.nan, "criterion": "start"})
+        if depths is not None:
+            table["depth_m"] = depths.depths[0]
         return NextPresses(table, False, "", "", summary(state, None, rule))
     post = state.posterior()
     decision, reason = decide(post, rule)
@@ -356,24 +396,33 @@ def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
     if reason:
         return NextPresses(pd.DataFrame(columns=cols), True, decision, reason, info, post)
     fn = CRITERIA[criterion][0]
-    sd = state.expected_sd()
+    # information per second over the depths (eig only: the others score no information)
+    n_d = 1 if depths is None or criterion != "eig" else len(depths.depths)
     if rule.max_presses is not None:
         k = max(1, min(k, int(rule.max_presses) - state.n))
+    kw = ({"k": state.level} if criterion == "lse" else
+          {"p_decide": rule.p_decide} if criterion == "eig" else {})
     rows, cur, cur_post, taken = [], state, post, np.empty((0, 2))
     for order in range(1, k + 1):
         qx, qy = state.candidates(taken)
         if qx.size == 0:
             break
-        kw = ({"k": state.level} if criterion == "lse" else
-              {"p_decide": rule.p_decide} if criterion == "eig" else {})
-        score = fn(cur_post, qx, qy, sd, **kw)
-        j = int(np.argmax(score))
-        rows.append({"order": order, "x_m": float(qx[j]), "y_m": float(qy[j]),
-                     "score": float(score[j]), "criterion": criterion})
+        sds = [cur.expected_sd(j) for j in range(n_d)]
+        scores = [fn(cur_post, qx, qy, sds[j], depth=j, **kw) for j in range(n_d)]
+        if n_d > 1:
+            d, j, score = choose(scores, depths.seconds())
+        else:
+            d, j = 0, int(np.argmax(scores[0]))
+            score = float(scores[0][j])
+        row = {"order": order, "x_m": float(qx[j]), "y_m": float(qy[j]), "score": score,
+               "criterion": criterion + ("/s" if n_d > 1 else "")}
+        extra = {} if depths is None else {"depth_m": depths.depths[d]}
+        rows.append({**row, **extra})
         taken = np.vstack([taken, [qx[j], qy[j]]])
         if order < k:  # believe the predictive mean, then choose the next
-            w, mu, _ = predictive(cur_post, qx[j:j + 1], qy[j:j + 1], sd)
-            cur = cur.with_press(float(qx[j]), float(qy[j]), float(w @ mu[:, 0]), sd)
+            w, mu, _ = predictive(cur_post, qx[j:j + 1], qy[j:j + 1], sds[d], d)
+            cur = cur.with_press(float(qx[j]), float(qy[j]), float(w @ mu[:, 0]), sds[d],
+                                 **extra)
             cur_post = cur.posterior()
     if not rows:
         return NextPresses(pd.DataFrame(columns=cols), True, "",

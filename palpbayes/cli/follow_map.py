@@ -358,8 +358,10 @@ def _one_press(conn: SessionConnection, state: SearchState, folder: Path, press:
         ans = answer(state)
         print(f"{where}: {warning}", file=sys.stderr, flush=True)
     else:
-        ans = answer(state.with_press(x, y, *post))  # P(lump) after it, for its row
-        state = append_press(folder, state, x, y, *post, p_lump=float(ans.summary["p_lump"]))
+        at = {} if state.press_depths is None or depth is None else {"depth_m": depth}
+        ans = answer(state.with_press(x, y, *post, **at))  # P(lump) after it, for its row
+        state = append_press(folder, state, x, y, *post, p_lump=float(ans.summary["p_lump"]),
+                             **at)
         print(f"press {state.n} at ({x:g}, {y:g}) m: log(E/Pa) = {post[0]:.4f} ± "
               f"{post[1]:.4f}; P(lump) = {ans.summary['p_lump']:.3f}", file=sys.stderr,
               flush=True)

@@ -91,7 +91,12 @@ def register(subparsers) -> None:
                         "smallest of --depths, else 10 %% of --thickness)")
     i.add_argument("--depths", metavar="F1,F2,...", default=None,
                    help="allowed indentation depths as fractions of --thickness (e.g. "
-                        "0.1,0.2): 'follow --map' refuses a press at any other depth")
+                        "0.1,0.2): 'follow --map' refuses a press at any other depth; with "
+                        "two or more the search chooses each press's depth (eig: the most "
+                        "information per second of pressing)")
+    i.add_argument("--press-overhead", type=float, metavar="S", default=None,
+                   help="[s] time of a press besides the indentation (move and approach; "
+                        "default 3), for the cost of each depth")
     i.add_argument("--max-force", type=float, metavar="N", default=None,
                    help="[N] largest force a press may reach: 'follow --map' refuses a press "
                         "whose predicted peak force exceeds it and stops one that reaches it")
@@ -149,6 +154,16 @@ def _init(args: argparse.Namespace) -> int:
     limits = {k: v for k, v in (("depths", list(fractions) or None),
                                 ("max_force_n", args.max_force)) if v is not None}
     a = contact_radius(tip, depth)
+    others = sorted(f * args.thickness for f in fractions
+                    if not math.isclose(f * args.thickness, depth, rel_tol=1e-9))
+    if others:  # the search chooses the depth: the reference first, then the others
+        ds = [depth, *others]
+        limits.update(press_depths_m=ds, contact_radii_m=[contact_radius(tip, d) for d in ds])
+        if args.press_overhead is not None:
+            limits["press_overhead_s"] = args.press_overhead
+    elif args.press_overhead is not None:
+        raise InputError("--press-overhead prices a choice of depths: give --depths with two "
+                         "or more")
     over = {k: v for k, v in state_overrides(args).items() if v is not None}
     extra = {f"{k}_m" if k == "min_spacing" else k: v for k, v in over.items()
              if k in ("min_spacing", "min_excess", "background")}
@@ -199,8 +214,10 @@ def answer_text(ans) -> str:
     else:
         for r in ans.presses.itertuples():
             score = "" if not math.isfinite(r.score) else f"  ({r.criterion} {r.score:.4g})"
+            depth = (f", depth {1e3 * r.depth_m:.2f} mm" if "depth_m" in ans.presses
+                     and math.isfinite(r.depth_m) else "")
             lines.append(f"next press {r.order}: x {1e3 * r.x_m:.2f} mm, y {1e3 * r.y_m:.2f} "
-                         f"mm{score}")
+                         f"mm{depth}{score}")
     return "\n".join(lines)
 
 
@@ -208,7 +225,8 @@ def run(args: argparse.Namespace) -> int:
     if args.init:
         return _init(args)
     used = [o for o, v in (("--depth", args.depth), ("--depths", args.depths),
-                           ("--max-force", args.max_force)) if v is not None]
+                           ("--max-force", args.max_force),
+                           ("--press-overhead", args.press_overhead)) if v is not None]
     if used:
         raise InputError(f"{', '.join(used)} belong(s) to --init (they are recorded in the "
                          "state's search.json); give --init, or leave them out")
