@@ -61,7 +61,31 @@ RANDOM_EVERY = 5
 FIELD = {"field_sd": 0.03, "field_length": 5e-3}
 
 
+#: The phantom's lumps: ``twin`` (the screening model's profile, its log excess scaled at each
+#: press depth to what the finite-element twin reads over the lump's centre) or ``screening``.
+LUMPS = {"kind": "twin", "depths": (0.1,)}
+
+
+def twin_gains(ph, inc, fractions) -> tuple[tuple[float, float], ...]:
+    """(press depth [m], gain) for each press depth: ln(twin's centre ratio) / ln(the
+    screening model's), the twin a 120 mm wide block bonded to its plate (coarse mesh)."""
+    from palpbayes.inclusion import apparent_ratio, contact_radius, sensitivity
+    from palpbayes.twin.palpation import CentredLump, pressed_ratio
+
+    depths = [f * ph.thickness for f in fractions]
+    twin = pressed_ratio(0.06, ph.thickness, ph.tip, ph.nu, "bonded", depths,
+                         CentredLump(inc.radius, inc.depth, inc.ratio), "coarse")
+    out = []
+    for d, t in zip(depths, twin, strict=True):
+        V = sensitivity(0.0, radius=inc.radius, depth=inc.depth,
+                        contact_radius=contact_radius(ph.tip, d), thickness=ph.thickness)
+        out.append((d, math.log(t) / math.log(float(apparent_ratio(V, inc.ratio)))))
+    return tuple(out)
+
+
 def make_phantom(i: int, seed: int, background: str = "white", field: dict | None = None):
+    from dataclasses import replace
+
     from palpbayes.inclusion import Inclusion
     from palpbayes.sim.phantom import MapPhantom
 
@@ -72,19 +96,27 @@ def make_phantom(i: int, seed: int, background: str = "white", field: dict | Non
         inc = Inclusion(x=float(x), y=float(y), depth=float(rng.uniform(5e-3, 10e-3)),
                         radius=5e-3, ratio=10.0)
     extra = {**FIELD, **(field or {})} if background == "correlated" else {}
-    return MapPhantom(inclusion=inc, seed=seed * 1000 + i, **extra)
+    ph = MapPhantom(inclusion=inc, seed=seed * 1000 + i, **extra)
+    if inc is not None and LUMPS["kind"] == "twin":
+        ph = replace(ph, lump_gain=twin_gains(ph, inc, LUMPS["depths"]))
+    return ph
 
 
 def truth_of(ph) -> dict:
+    from palpbayes.inclusion import apparent_ratio, sensitivity
     from palpbayes.sim.map import lump_summary
 
     inc = ph.inclusion
     if inc is None:
         return {"has_lump": False, "x": math.nan, "y": math.nan, "size": math.nan,
-                "A": 1.0, "depth": math.nan}
+                "A": 1.0, "A_screening": 1.0, "depth": math.nan}
     s = lump_summary(inc, contact_radius=ph.contact_radius, thickness=ph.thickness)
+    V = sensitivity(0.0, radius=inc.radius, depth=inc.depth, contact_radius=ph.contact_radius,
+                    thickness=ph.thickness)
+    screening = float(apparent_ratio(V, inc.ratio))
     return {"has_lump": True, "x": inc.x, "y": inc.y, "size": s["apparent_fwhm_diameter_m"],
-            "A": s["peak_apparent_ratio"], "depth": inc.depth}
+            "A": screening ** ph.gain(ph.indentation), "A_screening": screening,
+            "depth": inc.depth}
 
 
 class Presser:
@@ -98,10 +130,11 @@ class Presser:
         self.opts = PointOptions(fit=FitOptions(layer="off", nu=ph.nu), draws=1000)
         self.count = 0
 
-    def __call__(self, x: float, y: float, key: str) -> tuple[float, float]:
+    def __call__(self, x: float, y: float, key: str, depth: float | None = None
+                 ) -> tuple[float, float]:
         from palpbayes.maps.pertrace import fit_point
 
-        trace = self.ph.press(float(x), float(y), key)
+        trace = self.ph.press(float(x), float(y), key, depth=depth)
         row = pd.Series({"trace_id": key, "x_m": x, "y_m": y})
         rec = fit_point(row, self.opts, self.count, trace=trace)
         self.count += 1
@@ -114,12 +147,27 @@ class Presser:
 MODEL = {"background": "white"}
 
 
-def _state(ph):
+def _state(ph, depths: tuple[float, ...] | None = None):
+    """A search state with no press, at one depth [m] (None: the phantom's) or choosing
+    among ``depths`` (two or more)."""
     from palpbayes.active import SearchState
+    from palpbayes.active.depth import PressDepths
     from palpbayes.active.search import PRESS_COLUMNS
+    from palpbayes.inclusion import contact_radius
 
-    return SearchState(pd.DataFrame(columns=PRESS_COLUMNS), FOOTPRINT, ph.contact_radius,
-                       ph.thickness, background=MODEL["background"])
+    depths = depths or (ph.indentation,)
+    choice = PressDepths.for_tip(ph.tip, depths) if len(depths) > 1 else None
+    return SearchState(pd.DataFrame(columns=PRESS_COLUMNS), FOOTPRINT,
+                       contact_radius(ph.tip, depths[0]), ph.thickness,
+                       background=MODEL["background"], press_depths=choice)
+
+
+def seconds(depth: float) -> float:
+    """[s] The time of one press to ``depth`` [m] (:class:`palpbayes.active.depth.PressDepths`'
+    default overhead and speed)."""
+    from palpbayes.active.depth import PressDepths
+
+    return float(PressDepths((depth,), (1.0,)).seconds()[0])
 
 
 def _score(decision: str, info: dict, truth: dict, n: int) -> dict:
@@ -150,11 +198,14 @@ class Milestones:
         return {"centre_presses": self.centre, "size_presses": self.size}
 
 
-def run_active(ph, truth, criterion: str, budget: int) -> tuple[dict, list[dict]]:
+def run_active(ph, truth, criterion: str, budget: int, depths=None
+               ) -> tuple[dict, list[dict]]:
     from palpbayes.active import SearchStopRule, next_presses
 
     rule = SearchStopRule(max_presses=budget)
-    press, state, seq, times, ms = Presser(ph), _state(ph), [], [], Milestones(truth)
+    press, state, seq, times, ms = Presser(ph), _state(ph, depths), [], [], Milestones(truth)
+    used = 0.0
+    d0 = (depths or (ph.indentation,))[0]
     while True:
         t0 = time.perf_counter()
         r = next_presses(state, criterion=criterion, rule=rule)
@@ -166,27 +217,33 @@ def run_active(ph, truth, criterion: str, budget: int) -> tuple[dict, list[dict]
         if r.stop:
             break
         x, y = float(r.presses.x_m.iloc[0]), float(r.presses.y_m.iloc[0])
-        m, s = press(x, y, f"{criterion}-{state.n}")
-        state = state.with_press(x, y, m, s)
+        d = float(r.presses.depth_m.iloc[0]) if "depth_m" in r.presses else d0
+        tag = "" if len(depths or ()) < 2 else "depths-"
+        m, s = press(x, y, f"{criterion}-{tag}{state.n}", d)
+        used += seconds(d)
+        extra = {"depth_m": d} if "depth_m" in r.presses else {}
+        state = state.with_press(x, y, m, s, **extra)
     xy = state.presses[["x_m", "y_m"]].to_numpy(dtype=float)
     for row in seq:  # the summary after n presses, and where the n-th one was
         row.update(press_x_m=xy[row["n"] - 1, 0], press_y_m=xy[row["n"] - 1, 1])
     out = _score(r.decision, r.summary, truth, state.n)
-    out.update(**ms.row(), times=times)
+    deep = (state.presses["depth_m"].to_numpy(dtype=float) > d0 * 1.001).sum() if (
+        "depth_m" in state.presses) else 0
+    out.update(**ms.row(), times=times, press_s=used, deeper=int(deep))
     return out, seq, state
 
 
-def run_random(ph, truth, budget: int, seed: int) -> dict:
+def run_random(ph, truth, budget: int, seed: int, depth: float) -> dict:
     from palpbayes.active import SearchStopRule
     from palpbayes.active.search import decide, summary
 
     rule = SearchStopRule(max_presses=budget)
     rng = np.random.default_rng([seed, 7])
-    press, state, ms = Presser(ph), _state(ph), Milestones(truth)
+    press, state, ms = Presser(ph), _state(ph, (depth,)), Milestones(truth)
     x0, x1, y0, y1 = FOOTPRINT
     while True:
         x, y = rng.uniform(x0, x1), rng.uniform(y0, y1)
-        m, s = press(x, y, f"random-{state.n}")
+        m, s = press(x, y, f"random-{depth:g}-{state.n}", depth)
         state = state.with_press(x, y, m, s)
         if state.n % RANDOM_EVERY and state.n < budget:
             continue
@@ -196,11 +253,11 @@ def run_random(ph, truth, budget: int, seed: int) -> dict:
         if reason:
             break
     out = _score(decision, summary(state, post, rule), truth, state.n)
-    out.update(**ms.row())
+    out.update(**ms.row(), press_s=state.n * seconds(depth))
     return out
 
 
-def run_raster(ph, truth, budget: int) -> dict:
+def run_raster(ph, truth, budget: int, depth: float) -> dict:
     from palpbayes.active import SearchStopRule
     from palpbayes.active.search import decide, summary
 
@@ -208,11 +265,11 @@ def run_raster(ph, truth, budget: int) -> dict:
     x0, x1, y0, y1 = FOOTPRINT
     ms, last = Milestones(truth), None
     for m in range(3, int(math.isqrt(budget)) + 1):
-        press, state = Presser(ph), _state(ph)
+        press, state = Presser(ph), _state(ph, (depth,))
         g = (np.arange(m) + 0.5) / m
         for j, (gx, gy) in enumerate((a, b) for b in g for a in g):
             x, y = x0 + gx * (x1 - x0), y0 + gy * (y1 - y0)
-            mm, s = press(x, y, f"raster{m}-{j}")
+            mm, s = press(x, y, f"raster{m}-{depth:g}-{j}", depth)
             state = state.with_press(x, y, mm, s)
         post = state.posterior()
         decision, reason = decide(post, rule)
@@ -221,7 +278,7 @@ def run_raster(ph, truth, budget: int) -> dict:
         if reason:
             break
     out = _score(last[0], last[1], truth, last[2])
-    out.update(**ms.row())
+    out.update(**ms.row(), press_s=last[2] * seconds(depth))
     return out
 
 
@@ -231,24 +288,36 @@ def run_phantom(job: dict) -> dict:
     warnings.simplefilter("ignore")
     i, seed, budget = job["i"], job["seed"], job["budget"]
     MODEL["background"] = job["model"]
+    LUMPS.update(job["lumps"])
     ph = make_phantom(i, seed, job["background"], job["field"])
     truth = truth_of(ph)
+    depths = tuple(f * ph.thickness for f in LUMPS["depths"])
     rows, seqs = [], {}
     for crit in job["criteria"]:
         t0 = time.perf_counter()
         res, seq, _ = run_active(ph, truth, crit, budget)
         rows.append({"strategy": f"active-{crit}", **res, "wall_s": time.perf_counter() - t0})
         seqs[crit] = seq
+        if len(depths) > 1 and crit == "eig":
+            t0 = time.perf_counter()
+            res, seq, _ = run_active(ph, truth, crit, budget, depths)
+            rows.append({"strategy": f"active-{crit}-depths", **res,
+                         "wall_s": time.perf_counter() - t0})
+            seqs[f"{crit}-depths"] = seq
     if job["baselines"]:
-        t0 = time.perf_counter()
-        rows.append({"strategy": "random", **run_random(ph, truth, budget, seed * 1000 + i),
-                     "wall_s": time.perf_counter() - t0})
-        t0 = time.perf_counter()
-        rows.append({"strategy": "raster", **run_raster(ph, truth, budget),
-                     "wall_s": time.perf_counter() - t0})
+        for k, d in enumerate(depths):
+            tag = "" if k == 0 else f"@{d / ph.thickness:g}"
+            t0 = time.perf_counter()
+            rows.append({"strategy": "random" + tag,
+                         **run_random(ph, truth, budget, seed * 1000 + i, d),
+                         "wall_s": time.perf_counter() - t0})
+            t0 = time.perf_counter()
+            rows.append({"strategy": "raster" + tag, **run_raster(ph, truth, budget, d),
+                         "wall_s": time.perf_counter() - t0})
     for r in rows:
         r.update(phantom=i, has_lump=truth["has_lump"], A_true=truth["A"],
-                 depth_true_m=truth["depth"], size_true_m=truth["size"])
+                 A_screening=truth["A_screening"], depth_true_m=truth["depth"],
+                 size_true_m=truth["size"])
     return {"rows": rows, "seqs": seqs, "truth": truth}
 
 
@@ -259,6 +328,7 @@ def report(table: pd.DataFrame, budget: int) -> pd.DataFrame:
         n = np.where(decided, g["presses"], budget)
         lump = g[g["has_lump"] & (g["decision"] == "lump")]
         lumps = g[g["has_lump"]]
+        big = lump[lump["A_true"] >= 1.07]  # found lumps of >= 7 % excess at the first depth
         out.append({
             "strategy": name, "phantoms": len(g), "decided": int(decided.sum()),
             "presses_median": float(np.median(n)), "presses_mean": float(np.mean(n)),
@@ -268,6 +338,12 @@ def report(table: pd.DataFrame, budget: int) -> pd.DataFrame:
             "wrong_rate": float(g["wrong"].sum() / max(1, decided.sum())),
             "centre_2mm": f"{int((lump['centre_err_m'] <= 2e-3).sum())}/"
                           f"{int(g['has_lump'].sum())}",
+            "centre_2mm_7pct": f"{int((big['centre_err_m'] <= 2e-3).sum())}"
+                               f"/{int((lumps['A_true'] >= 1.07).sum())}",
+            "deep_found": f"{int((lump['A_screening'] < 1.065).sum())}/"
+                          f"{int((lumps['A_screening'] < 1.065).sum())}",
+            "press_s_mean": float(g["press_s"].mean()),
+            "deeper_mean": float(g["deeper"].mean()) if "deeper" in g else 0.0,
             **{f"{what}_{stat}": v for what in ("centre", "size")
                for stat, v in _milestone(lumps[f"{what}_presses"], budget).items()},
         })
@@ -344,6 +420,12 @@ def main(argv=None) -> int:
                     help="[m] its correlation length")
     ap.add_argument("--model", choices=("white", "correlated"), default="white",
                     help="the search posterior's background model")
+    ap.add_argument("--depths", default="0.1,0.2", metavar="F1,F2",
+                    help="press depths as fractions of the thickness, the first the fixed "
+                         "one; two or more add active-eig-depths and the baselines at each")
+    ap.add_argument("--lumps", choices=("twin", "screening"), default="twin",
+                    help="the phantoms' lumps: scaled to the twin's centre reading, or the "
+                         "screening model's")
     ap.add_argument("--out", default="reports/active")
     ap.add_argument("--figure", type=int, default=0, metavar="I",
                     help="draw the searches of phantoms I (a lump) and I + 1 (none); -1: none")
@@ -353,9 +435,12 @@ def main(argv=None) -> int:
     criteria = [c for c in args.criteria.split(",") if c]
     field = {"field_sd": args.field_sd, "field_length": args.field_length}
     MODEL["background"] = args.model
+    lumps = {"kind": args.lumps, "depths": tuple(float(v) for v in args.depths.split(","))}
+    LUMPS.update(lumps)
     jobs = [{"i": i, "seed": args.seed, "budget": args.budget, "criteria": criteria,
              "baselines": not args.no_baselines, "background": args.background,
-             "field": field, "model": args.model} for i in range(args.phantoms)]
+             "field": field, "model": args.model, "lumps": lumps}
+            for i in range(args.phantoms)]
     t0 = time.perf_counter()
     results = []
     with cf.ProcessPoolExecutor(args.workers) as pool:
@@ -371,16 +456,19 @@ def main(argv=None) -> int:
     print(f"\n{args.phantoms} phantoms ({args.background} background"
           + (f", field sd {args.field_sd:g}, length {1e3 * args.field_length:g} mm"
              if args.background == "correlated" else "")
-          + f"; {args.model} model), budget {args.budget}, "
+          + f"; {args.model} model; {args.lumps} lumps; depths {args.depths}), budget "
+          f"{args.budget}, "
           f"{time.perf_counter() - t0:.0f} s on {args.workers} workers")
     summ = report(table, args.budget)
     print(summ.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
     base = summ.set_index("strategy")
-    if "raster" in base.index:
+    for ref in (r for r in base.index if r.startswith("raster")):
         for name in base.index:
             if name.startswith("active"):
-                print(f"raster / {name}, mean presses to decide: "
-                      f"{base.loc['raster', 'presses_mean'] / base.loc[name, 'presses_mean']:.2f}")
+                b, a = base.loc[ref], base.loc[name]
+                print(f"{ref} / {name}: mean presses to decide "
+                      f"{b['presses_mean'] / a['presses_mean']:.2f}, mean press time "
+                      f"{b['press_s_mean'] / a['press_s_mean']:.2f}")
     if times:
         t = np.array([s for _, s in times])
         n = np.array([k for k, _ in times])

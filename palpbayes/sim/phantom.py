@@ -24,6 +24,14 @@ scale 1/field_length) and phases u_j uniform, from the phantom's own stream
 points, anywhere in the plane (no grid, no interpolation); its one-point law is a sum of M
 independent bounded terms, Gaussian to within the central limit theorem (excess kurtosis
 −1.5/M).  With ``field_sd`` = 0 (the default) no field is drawn and every press is as before.
+
+A press may go to another depth than the phantom's (``press(..., depth=)``): the field E_app
+is then the one under that depth's contact radius.  The screening model understates a stiff
+lump several times against the finite-element twin (:mod:`palpbayes.inclusion`, "Limits");
+``lump_gain`` scales the lump's log excess at each press depth,
+ln E_app = gain(depth)·ln E_app,screening, so that the centre reads what the twin reads
+(:func:`palpbayes.twin.palpation.pressed_ratio`; the profile's shape stays the screening
+model's: the axisymmetric twin has no off-axis answer).
 """
 
 from __future__ import annotations
@@ -57,7 +65,9 @@ class MapPhantom:
     Parameters are those of :func:`palpbayes.sim.map.simulate_map` (SI units); ``depth``
     is the commanded indentation depth (default 10 % of ``thickness``).  ``field_sd`` (sd
     of ln E), ``field_length`` [m] and ``field_nu`` set the spatially correlated part of the
-    heterogeneity (module docstring; off by default).
+    heterogeneity (module docstring; off by default).  ``lump_gain``: pairs (press depth
+    [m], gain) that scale the lump's log excess at each press depth (module docstring; empty:
+    the screening model as it is).
     """
 
     E_background: float = 50e3
@@ -76,6 +86,7 @@ class MapPhantom:
     field_sd: float = 0.0
     field_length: float = 5e-3
     field_nu: float = 1.0
+    lump_gain: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
         if not (self.E_background > 0 and self.thickness > 0):
@@ -89,6 +100,14 @@ class MapPhantom:
             raise InputError(f"phantom: field_sd {self.field_sd!r} must be >= 0 (sd of ln E), "
                              f"field_length {self.field_length!r} [m] and field_nu "
                              f"{self.field_nu!r} > 0")
+        try:
+            gains = tuple((float(d), float(g)) for d, g in self.lump_gain)
+        except (TypeError, ValueError):
+            gains = ((math.nan, math.nan),)
+        if not all(math.isfinite(d) and d > 0 and math.isfinite(g) and g > 0 for d, g in gains):
+            raise InputError(f"phantom: lump_gain {self.lump_gain!r} must be pairs (press "
+                             "depth [m] > 0, gain > 0)")
+        object.__setattr__(self, "lump_gain", gains)
 
     @property
     def indentation(self) -> float:
@@ -107,15 +126,29 @@ class MapPhantom:
                 "thickness": self.thickness, "depth": self.indentation,
                 "approach": self.approach, "noise_pp": self.noise_pp}
 
-    def apparent_modulus(self, x, y) -> np.ndarray:
-        """[Pa] The smooth field E_app at (``x``, ``y``) [m]."""
+    def gain(self, depth: float) -> float:
+        """The lump's log-excess gain at press depth ``depth`` [m] (1 without ``lump_gain``).
+
+        Raises InputError for a depth ``lump_gain`` does not hold."""
+        if not self.lump_gain:
+            return 1.0
+        for d, g in self.lump_gain:
+            if math.isclose(d, depth, rel_tol=1e-6):
+                return float(g)
+        raise InputError(f"phantom: no lump gain for press depth {depth:g} m (lump_gain holds "
+                         f"{', '.join(f'{d:g}' for d, _ in self.lump_gain)} m)")
+
+    def apparent_modulus(self, x, y, depth: float | None = None) -> np.ndarray:
+        """[Pa] The smooth field E_app at (``x``, ``y``) [m] under a press to ``depth`` [m]
+        (None: the phantom's)."""
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
         if self.inclusion is None:
             return np.full(x.shape, float(self.E_background))
+        d = self.indentation if depth is None else float(depth)
         inc = self.inclusion
         V = sensitivity(np.hypot(x - inc.x, y - inc.y), radius=inc.radius, depth=inc.depth,
-                        contact_radius=self.contact_radius, thickness=self.thickness)
-        return self.E_background * apparent_ratio(V, inc.ratio)
+                        contact_radius=contact_radius(self.tip, d), thickness=self.thickness)
+        return self.E_background * apparent_ratio(V, inc.ratio) ** self.gain(d)
 
     @cached_property
     def _features(self) -> tuple[np.ndarray, np.ndarray]:
@@ -136,16 +169,21 @@ class MapPhantom:
         return self.field_sd * math.sqrt(2.0 / w.shape[0]) * np.cos(arg).sum(axis=-1)
 
     def press(self, x: float, y: float, key: int | str = 0,
-              gen: np.random.Generator | None = None) -> IndentationTrace:
-        """A simulated press at (``x``, ``y``) [m]; its random stream is
-        ``child_seed(seed, "press", key)`` unless ``gen`` is given."""
+              gen: np.random.Generator | None = None, depth: float | None = None
+              ) -> IndentationTrace:
+        """A simulated press at (``x``, ``y``) [m] to ``depth`` [m] (None: the phantom's);
+        its random stream is ``child_seed(seed, "press", key)`` unless ``gen`` is given."""
         if not (math.isfinite(x) and math.isfinite(y)):
             raise InputError(f"press position ({x!r}, {y!r}) must be finite [m]")
+        if depth is not None and not (math.isfinite(depth) and 0 < depth < self.thickness):
+            raise InputError(f"press depth {depth!r} must be > 0 and less than the block's "
+                             f"thickness {self.thickness:g} [m]")
         gen = gen or np.random.default_rng(child_seed(self.seed, "press", key))
-        E_app = float(self.apparent_modulus(x, y))
+        E_app = float(self.apparent_modulus(x, y, depth))
         if self.field_sd:
             E_app *= math.exp(float(self.background_field(x, y)))
-        return press_trace(E_app, gen, self.tip, self.options(), f"press-{key}")
+        opts = self.options() if depth is None else {**self.options(), "depth": float(depth)}
+        return press_trace(E_app, gen, self.tip, opts, f"press-{key}")
 
     @classmethod
     def from_map(cls, folder: str | os.PathLike, **overrides) -> MapPhantom:

@@ -46,7 +46,8 @@ from ..contact import Tip, get_law, youngs_modulus
 from ..errors import GeometryError
 from .mesh import RESOLUTIONS, Resolution, contact_grid, depth_grid, punch_grid
 
-__all__ = ["PalpationCurve", "solve_palpation", "TWIN_BASES", "CentredLump", "lump_ratio"]
+__all__ = ["PalpationCurve", "solve_palpation", "TWIN_BASES", "CentredLump", "lump_ratio",
+           "pressed_ratio"]
 
 #: Base conditions of the twin: bonded to the plate, or lying on it without friction.
 TWIN_BASES = ("bonded", "free")
@@ -256,6 +257,13 @@ def _punch(radius: float, height: float, tip: Tip, nu: float, base: str, depths:
 
 
 # Many parameters: the twin's geometry, tip, material and mesh, as solve_palpation's own.
+def _with_and_without(radius, height, tip, nu, base, depths, lump, resolution):
+    with_lump = solve_palpation(radius, height, tip, nu, base, depths, resolution, lump)
+    same_mesh = CentredLump(lump.radius, lump.depth, 1.0)
+    without = solve_palpation(radius, height, tip, nu, base, depths, resolution, same_mesh)
+    return with_lump.shape, without.shape
+
+
 def lump_ratio(radius: float, height: float, tip: Tip, nu: float, base: str,
                depths: np.ndarray, lump: CentredLump,
                resolution: str | Resolution = "default") -> np.ndarray:
@@ -265,7 +273,24 @@ def lump_ratio(radius: float, height: float, tip: Tip, nu: float, base: str,
     to ``depths[i]`` reads is this ratio's weighted mean over the press (module docstring;
     parameters as :func:`solve_palpation`).
     """
-    with_lump = solve_palpation(radius, height, tip, nu, base, depths, resolution, lump)
-    same_mesh = CentredLump(lump.radius, lump.depth, 1.0)
-    without = solve_palpation(radius, height, tip, nu, base, depths, resolution, same_mesh)
-    return with_lump.shape / without.shape
+    lumped, block = _with_and_without(radius, height, tip, nu, base, depths, lump, resolution)
+    return lumped / block
+
+
+def pressed_ratio(radius: float, height: float, tip: Tip, nu: float, base: str,
+                  press_depths, lump: CentredLump, resolution: str | Resolution = "default",
+                  points: int = 20) -> np.ndarray:
+    """The apparent modulus ratio [-] a press to each of ``press_depths`` [m] reads over a
+    centred ``lump``: the least-squares scale k of F_lump(d) = k·F_block(d) over ``points``
+    depths evenly up to the press's (5 % to 100 %), i.e. k = Σ F_l·F_b / Σ F_b² — what a fit
+    of the press as a homogeneous block reads, relative to the block without the lump.
+    Parameters otherwise as :func:`solve_palpation`."""
+    p = np.atleast_1d(np.asarray(press_depths, dtype=float))
+    frac = np.linspace(0.05, 1.0, int(points))
+    d = np.unique(np.concatenate([frac * q for q in p]))
+    lumped, block = _with_and_without(radius, height, tip, nu, base, d, lump, resolution)
+    out = np.empty(p.size)
+    for i, q in enumerate(p):
+        m = d <= q * (1 + 1e-9)
+        out[i] = np.dot(lumped[m], block[m]) / np.dot(block[m], block[m])
+    return out
