@@ -27,6 +27,7 @@ from .background import check_background
 from .criteria import CRITERIA, level_probability, predictive
 from .depth import PressDepths, choose
 from .posterior import LumpHypotheses, SearchPosterior, hypotheses, posterior
+from .rule import SearchStopRule, decide
 
 __all__ = ["PRESS_COLUMNS", "SearchState", "SearchStopRule", "NextPresses", "next_presses",
            "decide", "summary", "history"]
@@ -36,37 +37,6 @@ PRESS_COLUMNS = ["x_m", "y_m", "logE_mean", "logE_sd"]
 #: sd of log E assumed for a press not made yet, when there is no press to take it from.
 _DEFAULT_PRESS_SD = 0.01
 _MAX_CANDIDATES = 900
-
-
-@dataclass(frozen=True)
-class SearchStopRule:
-    """When the search has decided (not :class:`~palpbayes.online.StoppingRule`, which says
-    when to stop one press).
-
-    Parameters
-    ----------
-    p_decide
-        A lump is found when P(lump) >= ``p_decide`` and its centre is placed (below);
-        there is none when P(lump) <= 1 − ``p_decide``.
-    centre_radius, level
-        [m] Target radius of the centre's credible disc, and the disc's credibility.
-    max_presses
-        Stop after this many presses whatever the posterior (None: no budget).
-    """
-
-    p_decide: float = 0.95
-    centre_radius: float = 2e-3
-    level: float = 0.9
-    max_presses: int | None = None
-
-    def __post_init__(self) -> None:
-        if not 0.5 < self.p_decide < 1.0:
-            raise InputError(f"p_decide (--p-decide) {self.p_decide!r} must lie in (0.5, 1)")
-        if not (self.centre_radius > 0 and 0 < self.level < 1):
-            raise InputError("centre_radius (--centre-radius) must be > 0 [m] and level in "
-                             "(0, 1)")
-        if self.max_presses is not None and int(self.max_presses) < 1:
-            raise InputError(f"max_presses (--budget) {self.max_presses!r} must be >= 1")
 
 
 @dataclass(frozen=True)
@@ -287,11 +257,9 @@ class NextPresses:
     posterior: SearchPosterior | None = field(default=None, repr=False)
 
     def table(self) -> pd.DataFrame:
-        """The file of ``palpbayes next DIR --out FILE``: a row per next press (``order``,
-        ``x_m``, ``y_m`` [m], ``score``, ``criterion``, ``depth_m`` with press depths; one empty
-        row when the search stops),
-        each with ``event``, ``decision``, ``reason`` and :attr:`summary` (its centre as
-        ``x_m_centre``, ``y_m_centre``)."""
+        """The file of ``palpbayes next DIR --out FILE``: a row per next press (the columns
+        of :attr:`presses`; one empty row when the search stops), each with ``event``,
+        ``decision``, ``reason`` and :attr:`summary` (its centre as ``x_m_centre``, ...)."""
         head = {"event": "done" if self.stop else "next", "decision": self.decision,
                 "reason": self.reason}
         post = {(f"{k}_centre" if k in ("x_m", "y_m") else k): v
@@ -327,22 +295,6 @@ def _area_grid(state: SearchState) -> tuple[np.ndarray, np.ndarray, float]:
     ny = int(min(16, max(2, round((y1 - y0) / 3e-3) + 1)))
     X, Y = np.meshgrid(np.linspace(x0, x1, nx), np.linspace(y0, y1, ny))
     return X.ravel(), Y.ravel(), (x1 - x0) * (y1 - y0) / (nx * ny)
-
-
-def decide(post: SearchPosterior, rule: SearchStopRule) -> tuple[str, str]:
-    """(decision, reason) of the stopping rule; ("", "") while undecided."""
-    p = post.p_lump
-    if p >= rule.p_decide:
-        r = post.centre_radius(rule.level)
-        if r <= rule.centre_radius:
-            return "lump", (f"P(lump) {p:.3f} >= {rule.p_decide:g} and the centre's "
-                            f"{100 * rule.level:g} % radius {1e3 * r:.2f} mm <= "
-                            f"{1e3 * rule.centre_radius:g} mm")
-    elif p <= 1.0 - rule.p_decide:
-        return "no lump", f"P(lump) {p:.3f} <= {1 - rule.p_decide:.3g}"
-    if rule.max_presses is not None and post.n >= rule.max_presses:
-        return "", f"the budget of {rule.max_presses} presses is spent, undecided"
-    return "", ""
 
 
 def _initial(state: SearchState, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -381,8 +333,7 @@ def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
         raise InputError(f"k {k!r} must be >= 1")
     k, rule = int(k), rule or SearchStopRule()
     depths = state.press_depths
-    cols = ["order", "x_m", "y_m", "score", "criterion"] + ([] if depths is None
-                                                           else ["depth_m"])
+    cols = ["order", "x_m", "y_m", "score", "criterion", *(["depth_m"] if depths else [])]
     if state.n == 0:
         x, y = _initial(state, k)
         table = pd.DataFrame({"order": np.arange(1, x.size + 1), "x_m": x, "y_m": y,
