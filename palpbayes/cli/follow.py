@@ -48,6 +48,7 @@ from ..online import OnlineEstimator, OnlineState
 from ..online.stream import Batch, SampleParser, batches
 from ..online.tcp import (
     DEFAULT_HOST,
+    SAMPLE_TIMEOUT,
     SEND_TIMEOUT,
     accept_lines,
     connect_lines,
@@ -178,6 +179,10 @@ def register(subparsers) -> None:
                    help=f"longest wait to send one line to a robot that stopped reading "
                         f"(default {SEND_TIMEOUT:g} s): the press is then dropped and its "
                         "connection closed")
+    m.add_argument("--sample-timeout", type=float, default=SAMPLE_TIMEOUT, metavar="S",
+                   help=f"longest wait for the next sample of a press (default "
+                        f"{SAMPLE_TIMEOUT:g} s): a robot that stops sending without closing "
+                        "loses its press, its connection is closed and the loop goes on")
     add_rule_options(m)
     p.set_defaults(input="the stream", map_only=tuple(
         (a.option_strings[0], a.dest, a.default) for a in m._group_actions[1:]))
@@ -315,8 +320,10 @@ def run(args: argparse.Namespace) -> int:
     if args.map is not None:
         from ..active.files import read_limits
 
-        if not (math.isfinite(args.send_timeout) and args.send_timeout > 0):
-            raise InputError(f"--send-timeout {args.send_timeout!r} must be a time > 0 [s]")
+        for opt, v in (("--send-timeout", args.send_timeout),
+                       ("--sample-timeout", args.sample_timeout)):
+            if not (math.isfinite(v) and v > 0):
+                raise InputError(f"{opt} {v!r} must be a time > 0 [s]")
         if args.max_force is None:  # the state's force limit stops a press too
             args.max_force = read_limits(args.map).max_force
     rule = rule_from_args(args)

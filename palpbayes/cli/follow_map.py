@@ -39,8 +39,11 @@ move with nothing but a socket:
    on the connection and stdout; then the connection is closed (after the robot closes its
    side, or a grace period) and, unless the answer is ``"done"``, the next one is accepted.
 
-Every line sent waits at most ``--send-timeout`` [s] (:data:`~palpbayes.online.tcp.
-SEND_TIMEOUT`, 10 s) for the robot to make room.  A robot that stops reading fills the
+A press whose next sample does not come within ``--sample-timeout`` [s] (30 s) is dropped
+the same way (one ``{"event": "error"}`` line, not recorded, the connection closed): a robot
+that stalls without closing does not hold the loop.  Every line sent waits at most
+``--send-timeout`` [s] (:data:`~palpbayes.online.tcp.SEND_TIMEOUT`, 10 s) for the robot to
+make room.  A robot that stops reading fills the
 sockets' buffers (some MB on loopback, so it shows only after many lines) and then loses its
 press: said on stderr (``error: ...``), not recorded, no answer, the connection closed at
 once, and the loop takes the next connection.
@@ -262,7 +265,8 @@ def live_loop(args: argparse.Namespace, press: PressFn, say: Callable[[str], Non
     note_limits(state, limits, force_at)
     with _listen(args.listen) as server:
         while True:
-            with accept_session(server, send_timeout=args.send_timeout) as conn:
+            with accept_session(server, send_timeout=args.send_timeout,
+                                read_timeout=getattr(args, "sample_timeout", None)) as conn:
                 state, ans = _one_press(conn, state, folder, press, answer, say,
                                         PressChecks(limits, force_at))
                 conn.close(CLOSE_GRACE)
@@ -342,6 +346,12 @@ def _one_press(conn: SessionConnection, state: SearchState, folder: Path, press:
         _fail(conn, exc)
         raise
     where = f"press at ({x:g}, {y:g}) m"
+    if conn.read_timed_out:  # the robot stalled mid-press: the press is incomplete
+        msg = (f"{source}: no sample for {conn.read_timeout:g} s (--sample-timeout); the "
+               f"{where} is not added; connection closed, waiting for the next press")
+        conn.send(error_json(msg))
+        print(f"error: {msg}", file=sys.stderr, flush=True)
+        return state, None
     if conn.send_timed_out:
         print(f"error: {source}: {conn.broken}; the {where} is not added (the robot may not "
               "have had its stop line); connection closed, waiting for the next press",

@@ -23,7 +23,7 @@ from typing import TextIO
 from ..errors import InputError
 
 __all__ = ["DEFAULT_HOST", "listen", "accept_lines", "connect_lines", "parse_address",
-           "SessionConnection", "accept_session", "SEND_TIMEOUT"]
+           "SessionConnection", "accept_session", "SEND_TIMEOUT", "SAMPLE_TIMEOUT"]
 
 #: The interface a listener binds to unless told otherwise: loopback only.
 DEFAULT_HOST = "127.0.0.1"
@@ -31,6 +31,9 @@ DEFAULT_HOST = "127.0.0.1"
 #: [s] Longest a :meth:`SessionConnection.send` of one line may wait for the peer to make
 #: room (a peer that stops reading fills the socket's buffers; then the send gives up).
 SEND_TIMEOUT = 10.0
+#: [s] Default longest wait for the next sample line of a press in ``follow --map`` (at
+#: 800 Hz lines come every 1.25 ms; a gap this long is a robot that stalled).
+SAMPLE_TIMEOUT = 30.0
 
 #: ``send`` flag for a write that never blocks (POSIX); 0 elsewhere, where a write is only
 #: begun once the socket is writable (and may then block until it is done).
@@ -104,6 +107,10 @@ class SessionConnection:
     send_timeout
         [s] Longest wait of one :meth:`send` for room in the socket's buffers (a peer that
         stops reading); None: :data:`SEND_TIMEOUT`.
+    read_timeout
+        [s] Longest wait of :meth:`lines` for the next line (a peer that stops sending
+        without closing): the iterator then ends and :attr:`read_timed_out` is True; None:
+        no limit.
 
     Attributes
     ----------
@@ -113,18 +120,22 @@ class SessionConnection:
         Why sending failed (the peer is gone, or stopped reading); "" while sending works.
     send_timed_out
         True once a send gave up after ``send_timeout`` (then :attr:`broken` says so too).
+    read_timed_out
+        True once :meth:`lines` waited ``read_timeout`` for a line that did not come.
     """
 
-    def __init__(self, conn: socket.socket, peer: str,
-                 send_timeout: float | None = None) -> None:
+    def __init__(self, conn: socket.socket, peer: str, send_timeout: float | None = None,
+                 read_timeout: float | None = None) -> None:
         self.peer = peer
         self.lines_read = 0  # lines handed out so far (readline and lines())
         self.broken: str = ""  # why sending failed (the peer is gone), "" while it works
-        self.send_timed_out = False
+        self.send_timed_out = self.read_timed_out = False
         self.send_timeout = SEND_TIMEOUT if send_timeout is None else float(send_timeout)
-        if not self.send_timeout > 0:
+        self.read_timeout = None if read_timeout is None else float(read_timeout)
+        if not (self.send_timeout > 0 and (read_timeout is None or self.read_timeout > 0)):
             conn.close()
-            raise InputError(f"send timeout {send_timeout!r} must be > 0 [s]")
+            raise InputError(f"send timeout {send_timeout!r} and read timeout "
+                             f"{read_timeout!r} must be > 0 [s]")
         self._conn = conn
         self._file = conn.makefile("r", encoding="utf-8", newline=None)
         self._queue: queue.SimpleQueue = queue.SimpleQueue()
@@ -180,10 +191,15 @@ class SessionConnection:
         return self._next(timeout)
 
     def lines(self) -> Iterator[str]:
-        """The lines the peer sends from here on, until it closes its side or :meth:`close`
-        begins (the iterator then ends, whichever thread is waiting on it)."""
+        """The lines the peer sends from here on, until it closes its side, :meth:`close`
+        begins (the iterator then ends, whichever thread is waiting on it) or no line comes
+        within ``read_timeout`` (then :attr:`read_timed_out` is set)."""
         while True:
-            line = self._next()
+            try:
+                line = self._next(self.read_timeout)
+            except TimeoutError:
+                self.read_timed_out = True
+                return
             if not line:
                 return
             yield line
@@ -254,7 +270,8 @@ class SessionConnection:
 
 
 def accept_session(server: socket.socket, timeout: float | None = None,
-                   send_timeout: float | None = None) -> SessionConnection:
+                   send_timeout: float | None = None,
+                   read_timeout: float | None = None) -> SessionConnection:
     """Wait for the next connection on ``server`` (a :func:`listen` socket) and return it as
     a :class:`SessionConnection`: its lines (:meth:`~SessionConnection.readline`,
     :meth:`~SessionConnection.lines`) and a line writer back to the peer
@@ -268,6 +285,9 @@ def accept_session(server: socket.socket, timeout: float | None = None,
         [s] Longest wait for a connection (None: as long as it takes).
     send_timeout
         [s] The connection's longest wait to send one line (None: :data:`SEND_TIMEOUT`).
+    read_timeout
+        [s] Its longest wait for the next line in :meth:`~SessionConnection.lines` (None: no
+        limit).
 
     Raises
     ------
@@ -280,4 +300,4 @@ def accept_session(server: socket.socket, timeout: float | None = None,
     finally:
         server.settimeout(None)
     conn.settimeout(None)
-    return SessionConnection(conn, f"{peer[0]}:{peer[1]}", send_timeout)
+    return SessionConnection(conn, f"{peer[0]}:{peer[1]}", send_timeout, read_timeout)

@@ -371,3 +371,49 @@ def test_a_robot_that_stops_reading_loses_its_press_and_the_loop_goes_on(tmp_pat
     assert lines[-1]["event"] == "done" and lines[-1]["n"] == 1
     df = pd.read_csv(folder / "presses.csv")
     assert len(df) == 1 and (df["x_m"].iloc[0], df["y_m"].iloc[0]) == (0.02, 0.03)
+
+
+def test_a_robot_that_stalls_mid_press_loses_it_and_the_loop_goes_on(tmp_path, capsys,
+                                                                       monkeypatch):
+    folder = tmp_path / "s"
+    assert main(["next", str(folder), "--init", "--footprint", "0,0.042,0,0.042",
+                 "--thickness", "0.02", *TIP, "--depth", "0.002"]) == 0
+    server = listen(0)
+    monkeypatch.setattr(follow_map, "_listen", lambda address: server)
+    said: list[str] = []
+
+    def press(lines, source, emit, depth):
+        n = sum(1 for _ in lines)  # ends when the robot closes, or stalls past the timeout
+        emit(json.dumps({"event": "update", "lines": n}))
+        return _state(5e4)
+
+    args = Namespace(map=str(folder), listen="0", criterion="eig", p_decide=0.95,
+                     centre_radius=2e-3, budget=1, json=True, tip="paraboloid",
+                     radius=0.0117, max_depth=None, depths=None, max_force=None,
+                     send_timeout=5.0, sample_timeout=0.5)
+    result: list[int] = []
+    loop = threading.Thread(target=lambda: result.append(
+        follow_map.live_loop(args, press, said.append)), daemon=True)
+    loop.start()
+    port = server.getsockname()[1]
+    with socket.create_connection(("127.0.0.1", port), timeout=PATIENCE) as stalled:
+        got = Received(stalled)
+        stalled.sendall(b"press 0.022 0.022\ntime_s,z_m,force_n\n0.0,0.1,0.0\n")
+        t0 = time.monotonic()
+        seen = [got.next()]
+        while seen[-1]["event"] != "error":
+            seen.append(got.next())
+        waited = time.monotonic() - t0
+        # and the robot never closes: the loop closes it and takes the next connection
+        lines = _connect(port, "press 0.02 0.03\n", [])
+    loop.join(PATIENCE)
+    err = capsys.readouterr().err
+    assert result == [EXIT_UNDECIDED], err
+    assert seen[0]["event"] == "accepted" and 0.5 <= waited < PATIENCE
+    assert ("no sample for 0.5 s (--sample-timeout); the press at (0.022, 0.022) m is not "
+            "added; connection closed, waiting for the next press") in seen[-1]["message"]
+    assert f"error: {seen[-1]['message']}" in err
+    assert not any("decision" in r for r in seen)  # the dropped press has no answer
+    assert lines[0]["event"] == "accepted" and lines[-1]["event"] == "done"
+    df = pd.read_csv(folder / "presses.csv")
+    assert len(df) == 1 and (df["x_m"].iloc[0], df["y_m"].iloc[0]) == (0.02, 0.03)
