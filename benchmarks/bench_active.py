@@ -484,14 +484,17 @@ def main(argv=None) -> int:
         for i in (args.figure, args.figure + 1):
             ph = make_phantom(i, args.seed, args.background, field)
             truth = truth_of(ph)
-            _, _, state = run_active(ph, truth, criteria[0], args.budget)
+            depths = tuple(f * ph.thickness for f in LUMPS["depths"])
+            _, _, state = run_active(ph, truth, criteria[0], args.budget,
+                                     depths if len(depths) > 1 else None)
             where = (truth["x"], truth["y"]) if truth["has_lump"] else None
             what = (f"lump {2e3 * ph.inclusion.radius:g} mm across, centre "
                     f"{1e3 * ph.inclusion.depth:.1f} mm deep" if truth["has_lump"] else
                     "no lump")
             fig = plot_search(state, rule=SearchStopRule(max_presses=args.budget), truth=where,
                               title=f"phantom {i} ({what}): {state.n} presses, "
-                                    f"{criteria[0]}")
+                                    f"{criteria[0]}"
+                                    + (" over depths" if len(depths) > 1 else ""))
             Path(args.out).mkdir(parents=True, exist_ok=True)
             fig.savefig(Path(args.out) / f"search-phantom{i}.png", dpi=130,
                         bbox_inches="tight")

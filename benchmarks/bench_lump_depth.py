@@ -19,8 +19,9 @@ screening model at the press's contact radius, with two averages of the same
 stress-weighted volume fraction V: the Reuss (series) average the model uses
 (:func:`palpbayes.inclusion.apparent_ratio`, ``screening_*``) and, as a tried alternative, the
 Hill average, the mean of the Reuss and the Voigt (parallel) 1 + (ratio − 1)·V (``hill_*``;
-R. Hill 1952, Proc. Phys. Soc. A 65, 349–354): it matched the twin at ratio 10 only.  Per row it also prints each average's error in log excess against the twin,
-log(model)/log(twin) − 1 (0: the same signature; −0.7: 70 % too little).  It writes the table
+R. Hill 1952, Proc. Phys. Soc. A 65, 349–354): it matched the twin at ratio 10 only.  Per row
+it also prints each average's error in log excess against the twin, log(model)/log(twin) − 1
+(0: the same signature; −0.7: 70 % too little).  It writes the table
 to ``reports/active/lump_depth.csv`` for ratio 10 and to
 ``reports/active/lump_depth_ratio{R:g}.csv`` for another ratio R (``--out`` overrides).
 

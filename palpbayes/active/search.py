@@ -189,10 +189,8 @@ class SearchState:
             return float(self.press_sd)
         if self.n == 0:
             return _DEFAULT_PRESS_SD
-        sd = self.presses["logE_sd"].to_numpy(dtype=float)
-        j = self.depth_index()
-        at = sd if j is None or not (j == depth).any() else sd[j == depth]
-        return float(np.median(at))
+        sd, j = self.presses["logE_sd"].to_numpy(dtype=float), self.depth_index()
+        return float(np.median(sd if j is None or not (j == depth).any() else sd[j == depth]))
 
     def posterior(self) -> SearchPosterior:
         p = self.presses
@@ -384,8 +382,8 @@ def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
 
 def history(state: SearchState, rule: SearchStopRule | None = None) -> pd.DataFrame:
     """The posterior after each press of ``state`` in order: ``n``, ``press_x_m``,
-    ``press_y_m``, and the :func:`summary` fields except the misclassified area (one
-    posterior per press: about 0.05-0.2 s each)."""
+    ``press_y_m`` (``press_depth_m`` with depths), the :func:`summary` fields but the
+    misclassified area (a posterior per press: about 0.05-0.2 s each)."""
     rule = rule or SearchStopRule()
     rows = []
     for n in range(1, state.n + 1):
@@ -396,5 +394,7 @@ def history(state: SearchState, rule: SearchStopRule | None = None) -> pd.DataFr
                      "press_y_m": float(state.presses["y_m"].iloc[n - 1]),
                      "p_lump": post.p_lump, "x_m": x, "y_m": y,
                      "centre_radius_m": post.centre_radius(rule.level), "size_m": post.size,
-                     "decision": decide(post, rule)[0]})
+                     "decision": decide(post, rule)[0],
+                     **({"press_depth_m": float(state.presses["depth_m"].iloc[n - 1])}
+                        if "depth_m" in state.presses else {})})
     return pd.DataFrame(rows)

@@ -1,7 +1,8 @@
 """An active search on paper: where it pressed, in what order, and P(lump) after each press.
 
 :func:`plot_search` draws two panels for a :class:`palpbayes.active.SearchState`: the
-footprint with the presses numbered in order over the posterior probability that the
+footprint with the presses numbered in order (one marker per press depth when the search
+chose them) over the posterior probability that the
 apparent modulus exceeds k × the background (the level set the search maps), the lump's
 posterior centre with its 90 % disc, keep-out zones and, for a phantom, the true centre;
 and P(lump) after each press against the decision thresholds.  Positions in mm.
@@ -55,8 +56,16 @@ def plot_search(state, *, rule=None, hist: pd.DataFrame | None = None,
     fig.colorbar(im, ax=ax, label=f"P(E > {state.level:.3g} × background)")
     px, py = state.presses["x_m"].to_numpy(float), state.presses["y_m"].to_numpy(float)
     ax.plot(px * MM, py * MM, "-", color="0.55", lw=0.6, zorder=2)
-    sc = ax.scatter(px * MM, py * MM, c=np.arange(1, px.size + 1), cmap="viridis", s=22,
-                    edgecolor="k", lw=0.4, zorder=3)
+    order = np.arange(1, px.size + 1)
+    depth = state.depth_index()
+    depth = np.zeros(px.size, int) if depth is None else depth
+    for j in np.unique(depth):  # one marker per press depth, when the search chose them
+        at = depth == j
+        label = (None if state.press_depths is None else
+                 f"pressed {state.press_depths.depths[j] * MM:g} mm ({at.sum()})")
+        sc = ax.scatter(px[at] * MM, py[at] * MM, c=order[at], cmap="viridis", s=22,
+                        vmin=1, vmax=max(2, px.size), edgecolor="k", lw=0.4, zorder=3,
+                        marker="os^D"[j % 4], label=label)
     fig.colorbar(sc, ax=ax, label="press number", location="left")
     xm, ym = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
     for i in range(0, px.size, max(1, px.size // 12)):

@@ -16,7 +16,6 @@ from palpbayes.active.depth import PAPER_SPEED, PressDepths
 from palpbayes.active.files import PRESSES_FILE, append_press, read_state
 from palpbayes.active.posterior import hypotheses, posterior
 from palpbayes.active.profiles import A_REF, profile_table
-from palpbayes.active.search import PRESS_COLUMNS
 from palpbayes.cli import main
 from palpbayes.cli.next import EXIT_GO_ON
 from palpbayes.contact import Tip

@@ -68,3 +68,25 @@ def test_the_legend_covers_no_data_and_names_what_is_drawn(long_search):
     labels = [t.get_text() for legend in legends for t in legend.get_texts()]
     assert set(labels) <= drawn and "P(lump)" in labels
     assert any(lab.startswith("centre, 90 %") for lab in labels)  # P(lump) >= 0.5: its disc
+
+
+def test_a_search_over_depths_marks_each_press_depth():
+    from palpbayes.active.depth import PressDepths
+
+    rng = np.random.default_rng(1)
+    x, y = rng.uniform(0, 0.042, (2, 30))
+    depth = np.where(np.arange(30) % 4 == 0, 0.004, 0.002)
+    presses = pd.DataFrame({"x_m": x, "y_m": y, "logE_sd": 0.0015, "depth_m": depth,
+                            "logE_mean": np.log([float(PH.apparent_modulus(a, b, d))
+                                                 for a, b, d in zip(x, y, depth,
+                                                                    strict=True)])})
+    choice = PressDepths.for_tip(PH.tip, (0.002, 0.004))
+    state = SearchState(presses, FOOT, choice.contact_radii[0], PH.thickness,
+                        press_depths=choice)
+    hist = pd.DataFrame({"n": np.arange(1, 31), "p_lump": 0.5, "centre_radius_m": 0.01})
+    fig = plot_search(state, hist=hist)
+    labels = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
+    assert "pressed 2 mm (22)" in labels and "pressed 4 mm (8)" in labels
+    ax = fig.axes[0]
+    sizes = sorted(len(c.get_offsets()) for c in ax.collections if len(c.get_offsets()))
+    assert sizes == [8, 22]
