@@ -80,6 +80,11 @@ class PressDepths:
         """[s] The time of a press at each depth, overhead + 2·depth/speed."""
         return self.overhead + 2.0 * np.asarray(self.depths) / self.speed
 
+    def usable(self, deepest: float | None = None) -> list[int]:
+        """Indices of the depths at most ``deepest`` [m] (None: all); the first always."""
+        return [j for j, d in enumerate(self.depths)
+                if j == 0 or deepest is None or d <= deepest * (1 + 1e-9)]
+
     def index(self, depth_m) -> np.ndarray:
         """Each press depth's index in :attr:`depths` (NaN: the reference, 0).
 

@@ -311,7 +311,8 @@ def _initial(state: SearchState, k: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
-                 rule: SearchStopRule | None = None) -> NextPresses:
+                 rule: SearchStopRule | None = None, deepest: float | None = None
+                 ) -> NextPresses:
     """The next ``k`` presses of an active search, or the decision to stop (module docstring).
 
     Parameters
@@ -324,6 +325,8 @@ def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
         ``"eig"``, ``"lse"`` or ``"ucb"`` (:data:`palpbayes.active.criteria.CRITERIA`).
     rule
         The stopping rule (default :class:`SearchStopRule`).
+    deepest
+        [m] The deepest press allowed now (a force limit; None: any of the state's depths).
     """
     if criterion not in CRITERIA:
         raise InputError(f"criterion {criterion!r}: choose one of {', '.join(CRITERIA)}")
@@ -346,7 +349,8 @@ def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
         return NextPresses(pd.DataFrame(columns=cols), True, decision, reason, info, post)
     fn = CRITERIA[criterion][0]
     # information per second over the depths (eig only: the others score no information)
-    n_d = 1 if depths is None or criterion != "eig" else len(depths.depths)
+    js = [0] if depths is None or criterion != "eig" else depths.usable(deepest)
+    secs = np.ones(1) if len(js) == 1 else depths.seconds()[js]
     if rule.max_presses is not None:
         k = max(1, min(k, int(rule.max_presses) - state.n))
     kw = ({"k": state.level} if criterion == "lse" else
@@ -356,15 +360,11 @@ def next_presses(state: SearchState, k: int = 1, *, criterion: str = "eig",
         qx, qy = state.candidates(taken)
         if qx.size == 0:
             break
-        sds = [cur.expected_sd(j) for j in range(n_d)]
-        scores = [fn(cur_post, qx, qy, sds[j], depth=j, **kw) for j in range(n_d)]
-        if n_d > 1:
-            d, j, score = choose(scores, depths.seconds())
-        else:
-            d, j = 0, int(np.argmax(scores[0]))
-            score = float(scores[0][j])
+        sds = {d: cur.expected_sd(d) for d in js}
+        d, j, score = choose([fn(cur_post, qx, qy, sds[d], depth=d, **kw) for d in js], secs)
+        d = js[d]
         row = {"order": order, "x_m": float(qx[j]), "y_m": float(qy[j]), "score": score,
-               "criterion": criterion + ("/s" if n_d > 1 else "")}
+               "criterion": criterion + ("/s" if len(js) > 1 else "")}
         extra = {} if depths is None else {"depth_m": depths.depths[d]}
         rows.append({**row, **extra})
         taken = np.vstack([taken, [qx[j], qy[j]]])

@@ -73,7 +73,7 @@ from ..errors import InputError
 from ..intervals import normal_z
 from ..online import OnlineState
 from ..online.tcp import DEFAULT_HOST, SessionConnection, accept_session, listen, parse_address
-from .follow_safety import PressChecks, map_limits, note_limits
+from .follow_safety import PressChecks, deepest_allowed, map_limits, note_limits
 from .next import EXIT_DECIDED, EXIT_UNDECIDED, answer_json, search_rule_from_args
 
 __all__ = ["live_loop", "parse_press_line", "press_posterior", "error_json", "CLOSE_GRACE",
@@ -253,8 +253,9 @@ def live_loop(args: argparse.Namespace, press: PressFn, say: Callable[[str], Non
     limits = map_limits(args)
     _note_state_record(folder, args)
 
-    def answer(s: SearchState) -> NextPresses:
-        return next_presses(s, 1, criterion=args.criterion, rule=rule)
+    def answer(s: SearchState) -> NextPresses:  # never a depth over the force limit
+        return next_presses(s, 1, criterion=args.criterion, rule=rule,
+                            deepest=deepest_allowed(s, limits, force_at))
 
     first = answer(state)
     if first.stop:  # nothing to press: say so, do not listen

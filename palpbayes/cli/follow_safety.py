@@ -15,7 +15,8 @@ from ..active import SearchState
 from ..active.files import read_limits
 from ..active.safety import PressLimits, Refusal, check_press, parse_depths, plausible_modulus
 
-__all__ = ["map_limits", "force_law", "state_modulus", "note_limits", "PressChecks"]
+__all__ = ["map_limits", "force_law", "state_modulus", "note_limits", "PressChecks",
+           "deepest_allowed"]
 
 
 def map_limits(args: argparse.Namespace) -> PressLimits:
@@ -59,6 +60,21 @@ def state_modulus(state: SearchState) -> float | None:
     plausible_modulus` of the presses so far)."""
     p = state.presses
     return plausible_modulus(p["logE_mean"], p["logE_sd"], state.max_ratio)
+
+
+def deepest_allowed(state: SearchState, limits: PressLimits, force_at) -> float | None:
+    """[m] The deepest of the search's press depths whose predicted peak force (at
+    :func:`state_modulus`) is within ``--max-force``, so that the search does not name a press
+    the loop would refuse; the shallowest when none is; None when there is nothing to limit
+    (one depth, no force limit, or no press yet)."""
+    pd_ = state.press_depths
+    if pd_ is None or limits.max_force is None or force_at is None:
+        return None
+    E = state_modulus(state)
+    if E is None:
+        return None
+    ok = [d for d in pd_.depths if force_at(E, d) <= limits.max_force]
+    return max(ok) if ok else min(pd_.depths)
 
 
 def note_limits(state: SearchState, limits: PressLimits, force_at) -> None:

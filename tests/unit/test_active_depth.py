@@ -141,6 +141,9 @@ def test_next_press_is_the_most_information_per_second_over_depths():
     # priced out: a deep press that takes 100 times longer is never chosen
     slow = _state(12, speed=PAPER_SPEED / 100)
     assert next_presses(slow).presses["depth_m"].iloc[0] == D1
+    # a force limit that allows only the first depth: eig at it, per press
+    only = next_presses(st, deepest=D1).presses.iloc[0]
+    assert (only["criterion"], only["depth_m"]) == ("eig", D1)
     # a batch carries a depth per press, believed at its depth
     batch = next_presses(st, k=3).presses
     assert len(batch) == 3 and batch["depth_m"].isin([D1, D2]).all()
@@ -215,3 +218,23 @@ def test_twin_pressed_ratio(ratio):
     else:  # reports/active/lump_depth.csv (F = k d^1.5 fits): 1.2597 and 1.2236
         assert r == pytest.approx([1.2597, 1.2236], rel=2e-3)
         assert r[1] < r[0]  # the centre's signature falls from a 10 % to a 20 % press
+
+
+def test_the_live_loop_names_no_depth_over_the_force_limit():
+    from palpbayes.active.safety import PressLimits
+    from palpbayes.cli.follow_safety import deepest_allowed, state_modulus
+
+    st = _state(12)
+    E = state_modulus(st)
+
+    def force(E_, d):  # [N] 1 N at 2 mm, 2.83 N at 4 mm (d^1.5), at the plausible E
+        assert E_ == E
+        return (d / D1) ** 1.5
+
+    lim = dict(depths=(0.1, 0.2), depth=D1)
+    assert deepest_allowed(st, PressLimits(max_force=3.0, **lim), force) == D2
+    assert deepest_allowed(st, PressLimits(max_force=2.0, **lim), force) == D1
+    assert deepest_allowed(st, PressLimits(max_force=0.5, **lim), force) == D1  # none: the
+    assert deepest_allowed(st, PressLimits(**lim), force) is None               # shallowest
+    empty = SearchState(st.presses.iloc[:0], FOOT, A1, H, press_depths=st.press_depths)
+    assert deepest_allowed(empty, PressLimits(max_force=2.0, **lim), force) is None  # no E
