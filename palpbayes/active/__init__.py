@@ -4,7 +4,8 @@
 and the specimen) by a stated criterion (:mod:`~.criteria`) against a fast grid posterior of
 one lump or none (:mod:`~.posterior`), and says when the search has decided
 (:class:`SearchStopRule`; the online estimator's :class:`~palpbayes.online.StoppingRule` says
-when to stop one press); the state's files are :mod:`~.files`.
+when to stop one press); the state's files are :mod:`~.files`.  With a set of press depths
+(:mod:`~.depth`) a press is (x, y, depth), chosen by the information per second.
 """
 
 import warnings

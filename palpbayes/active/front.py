@@ -37,7 +37,8 @@ def next_presses(state: SearchState | str | os.PathLike, k: int = 1, *,
     Returns
     -------
     NextPresses
-        ``presses`` (a DataFrame: order, x_m, y_m, score, criterion), ``stop``,
+        ``presses`` (a DataFrame: order, x_m, y_m, score, criterion, and depth_m when the
+        state has press depths, :class:`~palpbayes.active.depth.PressDepths`), ``stop``,
         ``decision`` ("lump", "no lump" or ""), ``reason`` and ``summary`` (P(lump), the
         centre [m] and its 90 % radius [m], the apparent diameter [m], ...).
 
