@@ -11,6 +11,7 @@ Run it from the repository (it starts ``python -m palpbayes``)::
 
     python examples/robot_search.py              # budget of 40 presses
     python examples/robot_search.py --budget 10
+    python examples/robot_search.py --depths 0.1,0.2   # the search chooses each press's depth
 
 It prints one line per press (n, x, y, P(lump) after it, how the press ended) and the
 decision; follow's own output goes to ``follow.log`` in the temporary search folder.
@@ -80,17 +81,18 @@ def _json(line: str) -> dict | None:
     return row if isinstance(row, dict) else None
 
 
-def press(port: int, x: float, y: float, key: int, speed: float) -> tuple[dict, bool]:
-    """One press at (x, y) [m], its samples sent at ``speed`` times their own pace: the
-    answer, and whether the press ended on the stop line."""
-    trace = PHANTOM.press(x, y, key=key)
+def press(port: int, x: float, y: float, key: int, speed: float,
+          depth: float = DEPTH) -> tuple[dict, bool]:
+    """One press at (x, y) [m] to ``depth`` [m], its samples sent at ``speed`` times their
+    own pace: the answer, and whether the press ended on the stop line."""
+    trace = PHANTOM.press(x, y, key=key, depth=depth)
     start = time.perf_counter()
     rows = [f"{float(t)!r},{float(z)!r},{float(f)!r}\n"
             for t, z, f in zip(trace.time, trace.z, trace.force, strict=True)]
     got, stopped = [], False
     with socket.create_connection(("127.0.0.1", port), timeout=60) as s:
         reader = s.makefile("r", encoding="utf-8")
-        s.sendall(f"press {x!r} {y!r}\n".encode())
+        s.sendall(f"press {x!r} {y!r} {depth!r}\n".encode())
         verdict = _json(reader.readline()) or {}  # accepted or refused, before any motion
         if verdict.get("event") != "accepted":
             raise SystemExit(f"follow did not accept the press: {verdict.get('message')}")
@@ -129,30 +131,41 @@ def main(argv: list[str] | None = None) -> int:
                     help=f"follow's stop [m] (default {DEPTH}, the depth of the simulated "
                          "presses, so the stop line comes at their last sample if at all; "
                          "try 0.0015 with --speed 4 to see it stop the motion)")
+    ap.add_argument("--depths", default=None, metavar="F1,F2",
+                    help="press depths as fractions of the thickness (e.g. 0.1,0.2): the "
+                         "search chooses each press's depth by information per second")
     args = ap.parse_args(argv)
+    depths = ([] if args.depths is None else ["--depths", args.depths])
+    deepest = max([DEPTH] + [float(f) * PHANTOM.thickness
+                             for f in (args.depths or "").split(",") if f])
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="robot_search_") as tmp:
         folder = Path(tmp) / "search"
         subprocess.run(palpbayes("next", str(folder), "--init", "--footprint", FOOTPRINT,
                                  "--thickness", str(PHANTOM.thickness), *TIP,
-                                 "--depth", str(DEPTH)), check=True, stdout=subprocess.DEVNULL)
+                                 "--depth", str(DEPTH), *depths), check=True,
+                       stdout=subprocess.DEVNULL)
         first = subprocess.run(palpbayes("next", str(folder), "--json"), capture_output=True,
                                text=True)
         answer = json.loads(first.stdout)
         with open(Path(tmp) / "follow.log", "w") as log:
-            proc, port = start_follow(folder, args.budget, args.max_depth, log)
+            proc, port = start_follow(folder, args.budget,
+                                      max(args.max_depth, deepest) if depths else
+                                      args.max_depth, log)
             print(f"follow listens on 127.0.0.1:{port}; the lump is at (20.0, 24.0) mm")
-            print("  n  x [mm]  y [mm]  P(lump)  press ended on")
+            print("  n  x [mm]  y [mm]  depth [mm]  P(lump)  press ended on")
             n = 0
             try:
                 while answer["event"] == "next":
                     p = answer["presses"][0]
                     n += 1
-                    answer, stopped = press(port, p["x_m"], p["y_m"], key=n, speed=args.speed)
+                    d = p.get("depth_m") or DEPTH
+                    answer, stopped = press(port, p["x_m"], p["y_m"], key=n, speed=args.speed,
+                                            depth=d)
                     how = "the stop line" if stopped else "the trace's end"
                     warn = f"  ({answer['warning']})" if "warning" in answer else ""
                     print(f"{n:3d}  {1e3 * p['x_m']:6.1f}  {1e3 * p['y_m']:6.1f}  "
-                          f"{answer['p_lump']:7.3f}  {how}{warn}", flush=True)
+                          f"{1e3 * d:10.1f}  {answer['p_lump']:7.3f}  {how}{warn}", flush=True)
                 status = proc.wait(timeout=60)
             finally:
                 if proc.poll() is None:
