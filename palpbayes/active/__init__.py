@@ -10,11 +10,12 @@ when to stop one press); the state's files are :mod:`~.files`.  With a set of pr
 
 import warnings
 
+from .depth import PressDepths
 from .posterior import LumpHypotheses, SearchPosterior, hypotheses, posterior
 from .search import NextPresses, SearchState, SearchStopRule, decide, next_presses
 
 __all__ = ["LumpHypotheses", "SearchPosterior", "hypotheses", "posterior", "NextPresses",
-           "SearchState", "SearchStopRule", "decide", "next_presses"]
+           "SearchState", "SearchStopRule", "decide", "next_presses", "PressDepths"]
 
 
 def __getattr__(name: str):
