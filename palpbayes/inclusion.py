@@ -44,7 +44,7 @@ solution):
   CentredLump`; ``benchmarks/bench_lump_depth.py``, ``reports/active/lump_depth*.csv``): a
   sphere of radius 5 mm, its centre 5-10 mm deep in a 20 mm block, under the paper's
   paraboloid pressed 2 mm, reads an apparent ratio of 2.14-1.20 in the twin and 1.24-1.04
-  here at ratio 10 (3.6-4.4 times less log excess), 1.49-1.11 and 1.17-1.03 at ratio 3
+  here at ratio 10 (3.4-4.4 times less log excess), 1.49-1.11 and 1.17-1.03 at ratio 3
   (2.6-3.6 times less); a soft lump (ratio 0.3) is within 14 %.  The Hill average on the same
   V matches ratio 10 within 19 % but is 33-47 % low at ratio 3: the weight V, not only the
   average, is too small near a stiff lump.  From a 10 % to a 20 % press the model's centre
