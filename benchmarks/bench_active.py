@@ -1,8 +1,9 @@
 """Active search for a lump against a raster and random presses, in a closed loop.
 
-Run from the repository root (~25 min on 2 cores with the defaults)::
+Run from the repository root (~80 min on 2 cores with the defaults; 37 min before press
+depths, with ``--depths 0.1``)::
 
-    python benchmarks/bench_active.py                      # 50 phantoms, eig
+    python benchmarks/bench_active.py                      # 50 phantoms, eig, 2 depths
     python benchmarks/bench_active.py --criteria eig,lse,ucb --phantoms 20
     python benchmarks/bench_active.py --phantoms 4 --budget 40   # a quick look
     python benchmarks/bench_active.py --background correlated --model correlated --phantoms 10
@@ -19,7 +20,12 @@ on top of the white 3 %; ``--model correlated`` makes every strategy's posterior
 simulated as a whole trace (:func:`~palpbayes.sim.phantom.press_trace`, the code
 ``simulate --map`` uses) and fitted by the exact engine as ``palpbayes map`` fits a point
 (:func:`palpbayes.maps.pertrace.fit_point`); its posterior of log E goes into the search
-state.
+state.  ``--lumps twin`` (the default) scales each lump's log excess at each press depth to
+what the finite-element twin reads over its centre (:func:`twin_gains`; ``screening``: the
+screening model's Reuss reading, several times weaker).  ``--depths 0.1,0.2`` (the default):
+the first is the fixed depth; with two or more, ``active-eig-depths`` chooses each press's
+depth by information per second (:mod:`palpbayes.active.depth`), and the raster and random
+presses run at each depth (``raster@0.2``, ...).
 
 Strategies, all judged by the same posterior and stopping rule (P(lump) >= 0.95 with the
 centre's 90 % radius <= 2 mm, or P(lump) <= 0.05):
@@ -30,8 +36,11 @@ centre's 90 % radius <= 2 mm, or P(lump) <= 0.05):
   presses it needs are m² for the first m whose raster decides.
 
 Prints per strategy: phantoms decided within the budget, presses to decide (median, mean;
-undecided count as the budget), wrong decisions, the centre within 2 mm of the truth on lump
-phantoms called "lump", presses until the apparent size (FWHM) is within 20 % of the truth,
+undecided count as the budget), the press time (:meth:`~palpbayes.active.depth.PressDepths.
+seconds`), wrong decisions, the centre within 2 mm of the truth on lump phantoms called
+"lump" (and on those of >= 7 % excess), the lumps below 6.5 % by the screening model found,
+presses deeper than the first, presses until the apparent size (FWHM) is within 20 % of the
+truth,
 and the wall time per decision (median, p90, and at the largest state).  Writes the
 per-phantom table and the press sequences to ``--out`` (default reports/active).
 """
