@@ -318,14 +318,28 @@ def _state(E: float) -> OnlineState:
                        peak_force=0.1, E=s, z_surf=None, stop="", E_total=s)
 
 
-def test_a_robot_that_stops_reading_loses_its_press_and_the_loop_goes_on(tmp_path, capsys,
-                                                                          monkeypatch):
+def _loop_in_process(tmp_path, monkeypatch, press, **timeouts):
+    """follow --map's loop in a thread of this process on a new search state (budget 1),
+    its presses made by ``press``: (folder, port, the lines it said, its exit status list,
+    the thread)."""
     folder = tmp_path / "s"
     assert main(["next", str(folder), "--init", "--footprint", "0,0.042,0,0.042",
                  "--thickness", "0.02", *TIP, "--depth", "0.002"]) == 0
     server = listen(0)
     monkeypatch.setattr(follow_map, "_listen", lambda address: server)
     said: list[str] = []
+    args = Namespace(map=str(folder), listen="0", criterion="eig", p_decide=0.95,
+                     centre_radius=2e-3, budget=1, json=True, tip="paraboloid",
+                     radius=0.0117, max_depth=None, depths=None, max_force=None, **timeouts)
+    result: list[int] = []
+    loop = threading.Thread(target=lambda: result.append(
+        follow_map.live_loop(args, press, said.append)), daemon=True)
+    loop.start()
+    return folder, server.getsockname()[1], said, result, loop
+
+
+def test_a_robot_that_stops_reading_loses_its_press_and_the_loop_goes_on(tmp_path, capsys,
+                                                                          monkeypatch):
     calls: list[int] = []
 
     def press(lines, source, emit, depth):
@@ -339,15 +353,8 @@ def test_a_robot_that_stops_reading_loses_its_press_and_the_loop_goes_on(tmp_pat
             emit(json.dumps({"event": "update"}))
         return _state(5e4)
 
-    args = Namespace(map=str(folder), listen="0", criterion="eig", p_decide=0.95,
-                     centre_radius=2e-3, budget=1, json=True, tip="paraboloid",
-                     radius=0.0117, max_depth=None, depths=None, max_force=None,
-                     send_timeout=0.3)
-    result: list[int] = []
-    loop = threading.Thread(target=lambda: result.append(
-        follow_map.live_loop(args, press, said.append)), daemon=True)
-    loop.start()
-    port = server.getsockname()[1]
+    folder, port, said, result, loop = _loop_in_process(tmp_path, monkeypatch, press,
+                                                        send_timeout=0.3)
     deaf = socket.socket()
     deaf.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
     deaf.connect(("127.0.0.1", port))
@@ -376,27 +383,13 @@ def test_a_robot_that_stops_reading_loses_its_press_and_the_loop_goes_on(tmp_pat
 
 def test_a_robot_that_stalls_mid_press_loses_it_and_the_loop_goes_on(tmp_path, capsys,
                                                                        monkeypatch):
-    folder = tmp_path / "s"
-    assert main(["next", str(folder), "--init", "--footprint", "0,0.042,0,0.042",
-                 "--thickness", "0.02", *TIP, "--depth", "0.002"]) == 0
-    server = listen(0)
-    monkeypatch.setattr(follow_map, "_listen", lambda address: server)
-    said: list[str] = []
-
     def press(lines, source, emit, depth):
         n = sum(1 for _ in lines)  # ends when the robot closes, or stalls past the timeout
         emit(json.dumps({"event": "update", "lines": n}))
         return _state(5e4)
 
-    args = Namespace(map=str(folder), listen="0", criterion="eig", p_decide=0.95,
-                     centre_radius=2e-3, budget=1, json=True, tip="paraboloid",
-                     radius=0.0117, max_depth=None, depths=None, max_force=None,
-                     send_timeout=5.0, sample_timeout=0.5)
-    result: list[int] = []
-    loop = threading.Thread(target=lambda: result.append(
-        follow_map.live_loop(args, press, said.append)), daemon=True)
-    loop.start()
-    port = server.getsockname()[1]
+    folder, port, said, result, loop = _loop_in_process(tmp_path, monkeypatch, press,
+                                                        send_timeout=5.0, sample_timeout=0.5)
     with socket.create_connection(("127.0.0.1", port), timeout=PATIENCE) as stalled:
         got = Received(stalled)
         stalled.sendall(b"press 0.022 0.022\ntime_s,z_m,force_n\n0.0,0.1,0.0\n")
