@@ -172,11 +172,10 @@ def _state(ph, depths: tuple[float, ...] | None = None):
 
 
 def seconds(depth: float) -> float:
-    """[s] The time of one press to ``depth`` [m] (:class:`palpbayes.active.depth.PressDepths`'
-    default overhead and speed)."""
-    from palpbayes.active.depth import PressDepths
+    """[s] The time of one press to ``depth`` [m] at the default overhead and speed."""
+    from palpbayes.active.depth import press_seconds
 
-    return float(PressDepths((depth,), (1.0,)).seconds()[0])
+    return float(press_seconds(depth))
 
 
 def _score(decision: str, info: dict, truth: dict, n: int) -> dict:

@@ -24,10 +24,12 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["PAPER_SPEED", "PressDepths"]
+__all__ = ["PAPER_SPEED", "PRESS_OVERHEAD", "PressDepths", "press_seconds"]
 
 #: [m/s] The paper's indentation speed, 50 mm/min.
 PAPER_SPEED = 50e-3 / 60.0
+#: [s] Default time of a press besides its indentation (the move and the approach).
+PRESS_OVERHEAD = 3.0
 _MATCH = 1e-6  # [m] a press's depth is one of the set when within this (or 1 %) of it
 
 
@@ -49,7 +51,7 @@ class PressDepths:
 
     depths: tuple[float, ...]
     contact_radii: tuple[float, ...]
-    overhead: float = 3.0
+    overhead: float = PRESS_OVERHEAD
     speed: float = PAPER_SPEED
 
     def __post_init__(self) -> None:
@@ -77,8 +79,8 @@ class PressDepths:
         return cls(tuple(depths), tuple(contact_radius(tip, d) for d in depths), **kw)
 
     def seconds(self) -> np.ndarray:
-        """[s] The time of a press at each depth, overhead + 2·depth/speed."""
-        return self.overhead + 2.0 * np.asarray(self.depths) / self.speed
+        """[s] The time of a press at each depth (:func:`press_seconds`)."""
+        return press_seconds(np.asarray(self.depths), self.overhead, self.speed)
 
     def usable(self, deepest: float | None = None) -> list[int]:
         """Indices of the depths at most ``deepest`` [m] (None: all); the first always."""
@@ -104,6 +106,12 @@ class PressDepths:
                              f"search's depths ({', '.join(f'{x:g}' for x in d)} m); record "
                              "presses at the depths the state was created with")
         return np.where(np.isnan(v), 0, j).astype(np.intp)
+
+
+def press_seconds(depth, overhead: float = PRESS_OVERHEAD, speed: float = PAPER_SPEED):
+    """[s] The time of a press to ``depth`` [m]: ``overhead`` [s] + 2·depth/``speed`` (down
+    and up at ``speed`` [m/s])."""
+    return overhead + 2.0 * depth / speed
 
 
 def choose(scores: list[np.ndarray], seconds: np.ndarray) -> tuple[int, int, float]:
